@@ -1,0 +1,1 @@
+"""Bundled robot descriptions (URDF); see README.md in this folder."""

@@ -1,0 +1,49 @@
+"""Error hierarchy of swarm_ik.
+
+Every error raised on bad user input is a :class:`SwarmIKError` and also inherits the
+matching built-in exception, so ``except ValueError`` keeps working.  Messages name the bad
+value and, where there is a set of valid values, list them.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Iterable
+
+
+class SwarmIKError(Exception):
+    """Base class of every error swarm_ik raises on purpose."""
+
+
+class RobotFileNotFoundError(SwarmIKError, FileNotFoundError):
+    """A URDF path that does not exist."""
+
+
+class RobotModelError(SwarmIKError, ValueError):
+    """A URDF that cannot be turned into a serial-chain robot (bad XML, loops, limits...)."""
+
+
+class UnknownNameError(SwarmIKError, KeyError):
+    """A name (robot, frame, solver, fitness, joint) that is not among the valid ones."""
+
+    def __str__(self) -> str:  # KeyError would otherwise repr() the message
+        return str(self.args[0]) if self.args else ""
+
+
+class InvalidTargetError(SwarmIKError, ValueError):
+    """A target pose that is not a finite rigid transform."""
+
+
+class InvalidArgumentError(SwarmIKError, ValueError):
+    """Any other bad argument: shapes, budgets, solver parameters, seeds."""
+
+
+def unknown(kind: str, name: object, valid: Iterable[str]) -> UnknownNameError:
+    """Build an :class:`UnknownNameError` naming ``name`` and listing the valid choices.
+
+    Args:
+        kind: What was looked up, e.g. ``"solver"`` or ``"frame"``.
+        name: The value the user gave.
+        valid: The names that would have been accepted.
+    """
+    choices = ", ".join(sorted(str(v) for v in valid))
+    return UnknownNameError(f"unknown {kind} {name!r}; valid {kind}s: {choices}")

@@ -1,0 +1,88 @@
+"""Batched fitness functions: end-effector poses ``(pop, 4, 4)`` against a target → ``(pop,)``.
+
+Positions in metres, angles in radians.  Lower is better, zero at the target.
+
+* ``"se3"``: ``‖Δp‖ + w_rot·θ`` with ``θ = ‖log(R_targetᵀ R)‖`` the geodesic rotation error.
+* ``"paper-l1"``: eq. 3 of paper 000 (HLFOA), ``λ·(|Δx|+|Δy|+|Δz|) + Σ|ΔR_ij|`` over the 9
+  rotation entries.  The paper uses millimetres with ``λ = 1e-2``; in metres ``λ = 10`` gives
+  the same values.
+* ``"euler-zyz"``: eq. 15 of paper 003 (MGWO), ``μ·(|Δx|+|Δy|+|Δz|) + |Δα|+|Δβ|+|Δγ|`` with
+  ZYZ Euler angles, differences wrapped to ``(−π, π]``, ``μ = 1``.
+* ``"paper-pso"``: eqs. 3–5 of paper 002, ``|Δp|² + (N·N* + O·O* + A·A* − 3)²`` (the printed
+  orientation term is garbled; this reading is zero when the frames agree).
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable
+from typing import Any
+
+import numpy as np
+from numpy.typing import NDArray
+
+from swarm_ik.errors import unknown
+from swarm_ik.pose import rotation_angle
+
+FloatArray = NDArray[np.float64]
+
+
+def wrap_angle(a: FloatArray) -> FloatArray:
+    """Angles wrapped to ``(−π, π]``."""
+    return np.pi - np.mod(np.pi - a, 2.0 * np.pi)
+
+
+def zyz_euler(rot: FloatArray) -> FloatArray:
+    """ZYZ Euler angles ``(α, β, γ)`` of rotations ``(..., 3, 3)`` → ``(..., 3)``; β ∈ [0, π]."""
+    r13, r23, r33 = rot[..., 0, 2], rot[..., 1, 2], rot[..., 2, 2]
+    r31, r32 = rot[..., 2, 0], rot[..., 2, 1]
+    beta = np.arctan2(np.hypot(r31, r32), r33)
+    alpha = np.arctan2(r23, r13)
+    gamma = np.arctan2(r32, -r31)
+    return np.stack([alpha, beta, gamma], axis=-1)
+
+
+def se3_fitness(poses: FloatArray, target: FloatArray, *, w_rot: float = 1.0, **_: Any) -> FloatArray:
+    """``‖Δp‖ [m] + w_rot·θ [rad]`` for poses ``(pop, 4, 4)``."""
+    dp = np.linalg.norm(poses[:, :3, 3] - target[:3, 3], axis=-1)
+    if w_rot == 0.0:
+        return dp
+    rot_err = np.einsum("ji,njk->nik", target[:3, :3], poses[:, :3, :3])
+    return dp + w_rot * rotation_angle(rot_err)
+
+
+def paper_l1_fitness(poses: FloatArray, target: FloatArray, *, lam: float = 10.0, **_: Any) -> FloatArray:
+    """Eq. 3 of paper 000: ``λ·L1(Δp [m]) + Σ|R − R_target|`` (λ = 10 per metre)."""
+    dp = np.abs(poses[:, :3, 3] - target[:3, 3]).sum(axis=-1)
+    dr = np.abs(poses[:, :3, :3] - target[:3, :3]).sum(axis=(-1, -2))
+    return lam * dp + dr
+
+
+def euler_zyz_fitness(poses: FloatArray, target: FloatArray, *, mu: float = 1.0, **_: Any) -> FloatArray:
+    """Eq. 15 of paper 003: ``μ·L1(Δp [m]) + L1(wrapped ΔZYZ [rad])``."""
+    dp = np.abs(poses[:, :3, 3] - target[:3, 3]).sum(axis=-1)
+    de = wrap_angle(zyz_euler(poses[:, :3, :3]) - zyz_euler(target[:3, :3]))
+    return mu * dp + np.abs(de).sum(axis=-1)
+
+
+def paper_pso_fitness(poses: FloatArray, target: FloatArray, **_: Any) -> FloatArray:
+    """Eqs. 3–5 of paper 002: ``|Δp|² + (tr(R_targetᵀR) − 3)²``."""
+    dp2 = np.sum((poses[:, :3, 3] - target[:3, 3]) ** 2, axis=-1)
+    tr = np.einsum("ij,nij->n", target[:3, :3], poses[:, :3, :3])
+    return dp2 + (tr - 3.0) ** 2
+
+
+FITNESS: dict[str, Callable[..., FloatArray]] = {
+    "se3": se3_fitness,
+    "paper-l1": paper_l1_fitness,
+    "euler-zyz": euler_zyz_fitness,
+    "paper-pso": paper_pso_fitness,
+}
+"""Fitness functions by name."""
+
+
+def get_fitness(name: str) -> Callable[..., FloatArray]:
+    """The fitness function called ``name``; the error lists the valid names."""
+    try:
+        return FITNESS[name]
+    except KeyError:
+        raise unknown("fitness", name, FITNESS) from None

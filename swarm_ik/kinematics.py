@@ -1,0 +1,208 @@
+"""Batched forward kinematics and frame Jacobian of a serial chain, derived from Pinocchio.
+
+The chain is read off a (reduced, serial) Pinocchio model: for each joint its placement in the
+parent joint frame (``model.jointPlacements``), its kind and its axis (from the joint's motion
+subspace), and the end-effector frame placement in the last joint's frame.  The kernels are
+compiled with numba (``cache=True``) and loop over the population and the joints with no
+allocation inside, so a population of 1000 costs a fraction of a millisecond and a single pose
+about a microsecond, against several microseconds per call of Pinocchio from Python
+(``docs/performance.md`` gives the measured ratios).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numba
+import numpy as np
+from numpy.typing import NDArray
+
+FloatArray = NDArray[np.float64]
+
+REVOLUTE = 0
+PRISMATIC = 1
+CONTINUOUS = 2
+KIND_NAMES = ("revolute", "prismatic", "continuous")
+
+
+@numba.njit(cache=True, fastmath=False)
+def _rodrigues(ax: FloatArray, angle: float, out: FloatArray) -> None:  # pragma: no cover
+    c = np.cos(angle)
+    s = np.sin(angle)
+    t = 1.0 - c
+    x, y, z = ax[0], ax[1], ax[2]
+    out[0, 0] = t * x * x + c
+    out[0, 1] = t * x * y - s * z
+    out[0, 2] = t * x * z + s * y
+    out[1, 0] = t * x * y + s * z
+    out[1, 1] = t * y * y + c
+    out[1, 2] = t * y * z - s * x
+    out[2, 0] = t * x * z - s * y
+    out[2, 1] = t * y * z + s * x
+    out[2, 2] = t * z * z + c
+
+
+@numba.njit(cache=True)
+def _chain(
+    q: FloatArray,
+    kinds: NDArray[np.int64],
+    axes: FloatArray,
+    rot_p: FloatArray,
+    pos_p: FloatArray,
+    rot_f: FloatArray,
+    pos_f: FloatArray,
+    out_t: FloatArray,
+    out_j: FloatArray,
+    want_jac: bool,
+) -> None:  # pragma: no cover - compiled
+    pop, n = q.shape
+    rot = np.empty((3, 3))
+    tmp = np.empty((3, 3))
+    mot = np.empty((3, 3))
+    pos = np.empty(3)
+    w_all = np.empty((n, 3))
+    o_all = np.empty((n, 3))
+    for k in range(pop):
+        for a in range(3):
+            pos[a] = 0.0
+            for b in range(3):
+                rot[a, b] = 1.0 if a == b else 0.0
+        for j in range(n):
+            # placement of joint j in its parent: pos += rot @ pos_p[j]; rot = rot @ rot_p[j]
+            for a in range(3):
+                pos[a] += rot[a, 0] * pos_p[j, 0] + rot[a, 1] * pos_p[j, 1] + rot[a, 2] * pos_p[j, 2]
+            for a in range(3):
+                for b in range(3):
+                    tmp[a, b] = (
+                        rot[a, 0] * rot_p[j, 0, b]
+                        + rot[a, 1] * rot_p[j, 1, b]
+                        + rot[a, 2] * rot_p[j, 2, b]
+                    )
+            for a in range(3):
+                for b in range(3):
+                    rot[a, b] = tmp[a, b]
+            if want_jac:
+                for a in range(3):
+                    w_all[j, a] = (
+                        rot[a, 0] * axes[j, 0] + rot[a, 1] * axes[j, 1] + rot[a, 2] * axes[j, 2]
+                    )
+                    o_all[j, a] = pos[a]
+            qj = q[k, j]
+            if kinds[j] == PRISMATIC:
+                for a in range(3):
+                    pos[a] += qj * (
+                        rot[a, 0] * axes[j, 0] + rot[a, 1] * axes[j, 1] + rot[a, 2] * axes[j, 2]
+                    )
+            else:
+                _rodrigues(axes[j], qj, mot)
+                for a in range(3):
+                    for b in range(3):
+                        tmp[a, b] = rot[a, 0] * mot[0, b] + rot[a, 1] * mot[1, b] + rot[a, 2] * mot[2, b]
+                for a in range(3):
+                    for b in range(3):
+                        rot[a, b] = tmp[a, b]
+        # end-effector frame in the last joint's frame
+        for a in range(3):
+            out_t[k, a, 3] = pos[a] + rot[a, 0] * pos_f[0] + rot[a, 1] * pos_f[1] + rot[a, 2] * pos_f[2]
+            for b in range(3):
+                out_t[k, a, b] = rot[a, 0] * rot_f[0, b] + rot[a, 1] * rot_f[1, b] + rot[a, 2] * rot_f[2, b]
+        out_t[k, 3, 0] = 0.0
+        out_t[k, 3, 1] = 0.0
+        out_t[k, 3, 2] = 0.0
+        out_t[k, 3, 3] = 1.0
+        if want_jac:
+            for j in range(n):
+                if kinds[j] == PRISMATIC:
+                    for a in range(3):
+                        out_j[k, a, j] = w_all[j, a]
+                        out_j[k, 3 + a, j] = 0.0
+                else:
+                    dx = out_t[k, 0, 3] - o_all[j, 0]
+                    dy = out_t[k, 1, 3] - o_all[j, 1]
+                    dz = out_t[k, 2, 3] - o_all[j, 2]
+                    wx, wy, wz = w_all[j, 0], w_all[j, 1], w_all[j, 2]
+                    out_j[k, 0, j] = wy * dz - wz * dy
+                    out_j[k, 1, j] = wz * dx - wx * dz
+                    out_j[k, 2, j] = wx * dy - wy * dx
+                    out_j[k, 3, j] = wx
+                    out_j[k, 4, j] = wy
+                    out_j[k, 5, j] = wz
+
+
+@dataclass(frozen=True)
+class ChainKinematics:
+    """A serial chain as arrays, with batched FK and Jacobian.
+
+    Attributes:
+        kinds: Joint kind codes (``REVOLUTE``, ``PRISMATIC``, ``CONTINUOUS``), shape ``(nq,)``.
+        axes: Unit joint axes in each joint's own frame, shape ``(nq, 3)``.
+        rot_p: Rotation of each joint's placement in its parent joint frame, ``(nq, 3, 3)``.
+        pos_p: Translation of each joint's placement [m], ``(nq, 3)``.
+        rot_f: Rotation of the end-effector frame in the last joint frame, ``(3, 3)``.
+        pos_f: Translation of the end-effector frame [m], ``(3,)``.
+    """
+
+    kinds: NDArray[np.int64]
+    axes: FloatArray
+    rot_p: FloatArray
+    pos_p: FloatArray
+    rot_f: FloatArray
+    pos_f: FloatArray
+
+    @property
+    def nq(self) -> int:
+        """Number of joints."""
+        return int(self.kinds.shape[0])
+
+    def _prep(self, q: FloatArray) -> tuple[FloatArray, bool]:
+        q = np.asarray(q, dtype=np.float64)
+        single = q.ndim == 1
+        q2 = np.ascontiguousarray(q.reshape(1, -1) if single else q)
+        if q2.ndim != 2 or q2.shape[1] != self.nq:
+            from swarm_ik.errors import InvalidArgumentError
+
+            raise InvalidArgumentError(
+                f"joint vector(s) must have shape (nq,) or (pop, nq) with nq = {self.nq}; "
+                f"got {q.shape}"
+            )
+        return q2, single
+
+    def fk(self, q: FloatArray) -> FloatArray:
+        """End-effector pose(s).
+
+        Args:
+            q: Joint values (rad or m), shape ``(nq,)`` or ``(pop, nq)``.
+
+        Returns:
+            Poses, shape ``(4, 4)`` or ``(pop, 4, 4)``.
+        """
+        q2, single = self._prep(q)
+        out = np.empty((q2.shape[0], 4, 4))
+        _chain(
+            q2, self.kinds, self.axes, self.rot_p, self.pos_p, self.rot_f, self.pos_f,
+            out, np.empty((1, 1, 1)), False,
+        )
+        return out[0] if single else out
+
+    def fk_jacobian(self, q: FloatArray) -> tuple[FloatArray, FloatArray]:
+        """End-effector pose(s) and frame Jacobian(s) in the LOCAL_WORLD_ALIGNED convention.
+
+        The Jacobian maps joint velocities to ``[v; ω]``: ``v`` the velocity of the
+        end-effector origin and ``ω`` the angular velocity, both in world axes (Pinocchio's
+        ``getFrameJacobian(..., LOCAL_WORLD_ALIGNED)``).
+
+        Args:
+            q: Joint values, shape ``(nq,)`` or ``(pop, nq)``.
+
+        Returns:
+            ``(poses (pop, 4, 4), jac (pop, 6, nq))``, without the ``pop`` axis for a single q.
+        """
+        q2, single = self._prep(q)
+        pop = q2.shape[0]
+        out_t = np.empty((pop, 4, 4))
+        out_j = np.empty((pop, 6, self.nq))
+        _chain(
+            q2, self.kinds, self.axes, self.rot_p, self.pos_p, self.rot_f, self.pos_f,
+            out_t, out_j, True,
+        )
+        return (out_t[0], out_j[0]) if single else (out_t, out_j)

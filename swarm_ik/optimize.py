@@ -1,0 +1,118 @@
+"""Run any registered solver on a plain objective with box bounds (no robot needed)."""
+
+from __future__ import annotations
+
+import time
+from dataclasses import dataclass
+from typing import Any
+
+import numpy as np
+
+from swarm_ik.errors import InvalidArgumentError
+from swarm_ik.solvers import base
+from swarm_ik.solvers.base import Evaluator, FloatArray, Objective
+
+
+@dataclass(frozen=True)
+class OptimizeResult:
+    """Outcome of :func:`minimize`.
+
+    Attributes:
+        x: Best point found, shape ``(n,)``.
+        fun: Its objective value.
+        n_evals: Objective evaluations spent (rows evaluated).
+        time_s: Wall-clock seconds.
+        history: Best value after each iteration, shape ``(iterations,)``.
+    """
+
+    x: FloatArray
+    fun: float
+    n_evals: int
+    time_s: float
+    history: FloatArray
+
+
+def make_rng(seed: int | np.random.Generator | None) -> np.random.Generator:
+    """A Generator from a seed (non-negative int), an existing Generator, or None (seed 0).
+
+    Raises:
+        InvalidArgumentError: the seed is negative, too large, or not an integer.
+    """
+    if isinstance(seed, np.random.Generator):
+        return seed
+    if seed is None:
+        seed = 0
+    if isinstance(seed, bool) or not isinstance(seed, (int, np.integer)):
+        raise InvalidArgumentError(f"seed must be a non-negative integer, got {seed!r}")
+    if seed < 0 or seed >= 2**63:
+        raise InvalidArgumentError(f"seed must be in [0, 2**63), got {seed}")
+    return np.random.default_rng(int(seed))
+
+
+def check_budget(max_evals: int | None, time_limit: float | None) -> None:
+    """Refuse a zero/negative evaluation budget or time limit."""
+    if max_evals is not None and (
+        isinstance(max_evals, bool) or not isinstance(max_evals, (int, np.integer)) or max_evals < 1
+    ):
+        raise InvalidArgumentError(f"max_evals must be a positive integer, got {max_evals!r}")
+    if time_limit is not None and not (np.isfinite(time_limit) and time_limit > 0):
+        raise InvalidArgumentError(f"time_limit must be a positive number of seconds, got {time_limit!r}")
+
+
+def minimize(
+    objective: Objective,
+    lower: Any,
+    upper: Any,
+    solver: str = "gwo",
+    *,
+    seed: int | np.random.Generator | None = 0,
+    max_evals: int | None = None,
+    time_limit: float | None = None,
+    f_target: float | None = None,
+    x0: Any = None,
+    **params: Any,
+) -> OptimizeResult:
+    """Minimise a batched objective within box bounds with a registered solver.
+
+    Args:
+        objective: Batched objective ``(pop, n) -> (pop,)``.
+        lower: Lower bounds, shape ``(n,)``.
+        upper: Upper bounds, shape ``(n,)``.
+        solver: Registry name (see :func:`swarm_ik.solvers.names`).
+        seed: Seed or Generator; the same seed gives the same result.
+        max_evals: Most objective evaluations (rows) allowed.
+        time_limit: Most wall-clock seconds.
+        f_target: Stop as soon as a value ``<= f_target`` is found.
+        x0: Optional starting point, shape ``(n,)``.
+        **params: The solver's parameters (unknown names are refused).
+
+    Returns:
+        The best point found and the run's bookkeeping.
+    """
+    spec = base.get(solver)
+    if spec.needs_jacobian:
+        raise InvalidArgumentError(
+            f"solver {solver!r} needs an IK problem (it uses the Jacobian); use swarm_ik.solve"
+        )
+    kwargs = spec.resolve(params)
+    check_budget(max_evals, time_limit)
+    lo = np.asarray(lower, dtype=float).ravel()
+    hi = np.asarray(upper, dtype=float).ravel()
+    if lo.shape != hi.shape or not (np.all(np.isfinite(lo)) and np.all(np.isfinite(hi))):
+        raise InvalidArgumentError("lower and upper must be finite arrays of the same shape")
+    if np.any(lo > hi):
+        raise InvalidArgumentError(f"lower > upper at indices {np.flatnonzero(lo > hi).tolist()}")
+    rng = make_rng(seed)
+    ev = Evaluator(
+        objective, lo, hi, max_evals=max_evals, time_limit=time_limit, f_target=f_target,
+        q0=None if x0 is None else np.asarray(x0, dtype=float),
+    )
+    t0 = time.perf_counter()
+    spec.run(ev, rng, **kwargs)
+    return OptimizeResult(
+        x=ev.best_x.copy(),
+        fun=float(ev.best_f),
+        n_evals=ev.n_evals,
+        time_s=time.perf_counter() - t0,
+        history=np.asarray(ev.history, dtype=float),
+    )

@@ -1,0 +1,147 @@
+"""Target poses: parsing, validation, projection onto SE(3), rotation helpers.
+
+All poses are 4x4 homogeneous transforms in metres.  Quaternions are ``(x, y, z, w)``.
+"""
+
+from __future__ import annotations
+
+from typing import Any
+
+import numpy as np
+from numpy.typing import NDArray
+
+from swarm_ik.errors import InvalidTargetError
+
+FloatArray = NDArray[np.float64]
+
+
+def quat_to_matrix(quat_xyzw: Any) -> FloatArray:
+    """Rotation matrix of a quaternion.
+
+    Args:
+        quat_xyzw: Quaternion ``(x, y, z, w)``, any non-zero norm (it is normalised).
+
+    Returns:
+        Rotation matrix, shape ``(3, 3)``.
+
+    Raises:
+        InvalidTargetError: not 4 finite numbers, or norm (almost) zero.
+    """
+    q = np.asarray(quat_xyzw, dtype=float).ravel()
+    if q.shape != (4,) or not np.all(np.isfinite(q)):
+        raise InvalidTargetError(f"quaternion must be 4 finite numbers (x, y, z, w), got {q.tolist()}")
+    n = np.linalg.norm(q)
+    if n < 1e-9:
+        raise InvalidTargetError(f"quaternion has zero norm: {q.tolist()}")
+    x, y, z, w = q / n
+    return np.array(
+        [
+            [1 - 2 * (y * y + z * z), 2 * (x * y - z * w), 2 * (x * z + y * w)],
+            [2 * (x * y + z * w), 1 - 2 * (x * x + z * z), 2 * (y * z - x * w)],
+            [2 * (x * z - y * w), 2 * (y * z + x * w), 1 - 2 * (x * x + y * y)],
+        ]
+    )
+
+
+def matrix_to_quat(rot: Any) -> FloatArray:
+    """Quaternion ``(x, y, z, w)`` with ``w >= 0`` of a rotation matrix ``(3, 3)``."""
+    from scipy.spatial.transform import Rotation
+
+    q = Rotation.from_matrix(np.asarray(rot, dtype=float)).as_quat()
+    return q if q[3] >= 0 else -q
+
+
+def make_pose(position: Any, quat_xyzw: Any) -> FloatArray:
+    """4x4 pose from a position ``(3,)`` [m] and a quaternion ``(x, y, z, w)``."""
+    p = np.asarray(position, dtype=float).ravel()
+    if p.shape != (3,) or not np.all(np.isfinite(p)):
+        raise InvalidTargetError(f"position must be 3 finite numbers, got {p.tolist()}")
+    pose = np.eye(4)
+    pose[:3, :3] = quat_to_matrix(quat_xyzw)
+    pose[:3, 3] = p
+    return pose
+
+
+def project_to_se3(matrix: Any) -> FloatArray:
+    """Nearest proper rigid transform to a 4x4 matrix (rotation block by SVD, det +1).
+
+    Use it for printed, rounded matrices such as the target of paper 000.
+
+    Args:
+        matrix: Almost-rigid transform, shape ``(4, 4)``.
+
+    Returns:
+        A valid pose, shape ``(4, 4)``, same translation, bottom row ``[0, 0, 0, 1]``.
+    """
+    m = np.asarray(matrix, dtype=float)
+    if m.shape != (4, 4) or not np.all(np.isfinite(m)):
+        raise InvalidTargetError(f"expected a finite 4x4 matrix, got shape {m.shape}")
+    u, _, vt = np.linalg.svd(m[:3, :3])
+    d = np.sign(np.linalg.det(u @ vt))
+    out = np.eye(4)
+    out[:3, :3] = u @ np.diag([1.0, 1.0, d]) @ vt
+    out[:3, 3] = m[:3, 3]
+    return out
+
+
+def as_pose(target: Any, *, orth_tol: float = 1e-6) -> FloatArray:
+    """Validate and convert a target to a 4x4 pose.
+
+    Args:
+        target: A ``(4, 4)`` array; a ``(position (3,), quaternion xyzw (4,))`` pair; a flat
+            array of 7 numbers ``x y z qx qy qz qw``; or a ``pinocchio.SE3``.
+        orth_tol: Largest accepted ``max |RᵀR − I|`` and ``|det R − 1|`` of the rotation block.
+
+    Returns:
+        The pose, shape ``(4, 4)`` (a copy).
+
+    Raises:
+        InvalidTargetError: wrong shape, non-finite values, a bottom row other than
+            ``[0, 0, 0, 1]``, or a rotation block further than ``orth_tol`` from a rotation.
+    """
+    if hasattr(target, "homogeneous"):  # pinocchio.SE3
+        target = np.asarray(target.homogeneous)
+    if isinstance(target, (tuple, list)) and len(target) == 2:
+        return make_pose(target[0], target[1])
+    m = np.array(target, dtype=float)
+    if m.shape == (7,):
+        return make_pose(m[:3], m[3:])
+    if m.shape != (4, 4):
+        raise InvalidTargetError(
+            f"target must be a 4x4 matrix, (position, quaternion) or 7 numbers; got shape {m.shape}"
+        )
+    if not np.all(np.isfinite(m)):
+        raise InvalidTargetError("target contains NaN or infinite values")
+    if not np.allclose(m[3], [0.0, 0.0, 0.0, 1.0], atol=1e-9):
+        raise InvalidTargetError(f"target's bottom row must be [0, 0, 0, 1], got {m[3].tolist()}")
+    rot = m[:3, :3]
+    orth = float(np.max(np.abs(rot.T @ rot - np.eye(3))))
+    det = float(np.linalg.det(rot))
+    if orth > orth_tol or abs(det - 1.0) > orth_tol:
+        raise InvalidTargetError(
+            f"target rotation is not orthonormal: max|RᵀR − I| = {orth:.3g}, det = {det:.9g} "
+            f"(tolerance {orth_tol:g}); fix it with swarm_ik.pose.project_to_se3 or raise "
+            "orth_tol"
+        )
+    return m
+
+
+def rotation_angle(rot_err: FloatArray) -> FloatArray:
+    """Angle [rad] of rotation matrices, accurate near 0 and π.
+
+    Args:
+        rot_err: Rotation matrices, shape ``(..., 3, 3)``.
+
+    Returns:
+        Angles in ``[0, π]``, shape ``(...)``.
+    """
+    tr = rot_err[..., 0, 0] + rot_err[..., 1, 1] + rot_err[..., 2, 2]
+    s = np.stack(
+        [
+            rot_err[..., 2, 1] - rot_err[..., 1, 2],
+            rot_err[..., 0, 2] - rot_err[..., 2, 0],
+            rot_err[..., 1, 0] - rot_err[..., 0, 1],
+        ],
+        axis=-1,
+    )
+    return np.arctan2(0.5 * np.linalg.norm(s, axis=-1), 0.5 * (tr - 1.0))

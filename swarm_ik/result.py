@@ -1,0 +1,61 @@
+"""The frozen outcome of an IK solve."""
+
+from __future__ import annotations
+
+from dataclasses import asdict, dataclass
+from typing import Any
+
+import numpy as np
+from numpy.typing import NDArray
+
+FloatArray = NDArray[np.float64]
+
+
+@dataclass(frozen=True)
+class Result:
+    """What :func:`swarm_ik.solve` returns.
+
+    The errors are recomputed with Pinocchio's own forward kinematics (not the solver's
+    batched kernel), so they can be trusted independently of the solver.
+
+    Attributes:
+        q: Best joint vector found (rad / m, one value per joint), shape ``(nq,)``.
+        fitness: Its fitness under the problem's fitness function.
+        position_error: ‖p − p_target‖ [m].
+        rotation_error: Geodesic angle between reached and target orientation [rad].
+        n_evals: Fitness evaluations spent (a Jacobian evaluation counts as one).
+        time_s: Wall-clock time of the solve [s].
+        success: Both errors within the tolerances given to ``solve`` (rotation ignored for
+            position-only problems) and ``within_limits``.
+        within_limits: ``q`` lies within the problem's bounds.
+        history: Best fitness after each iteration of the solver, shape ``(iterations,)``.
+        solver: Registry name of the solver.
+        seed: The seed used (``None`` if a Generator was passed).
+    """
+
+    q: FloatArray
+    fitness: float
+    position_error: float
+    rotation_error: float
+    n_evals: int
+    time_s: float
+    success: bool
+    within_limits: bool
+    history: FloatArray
+    solver: str = ""
+    seed: int | None = None
+
+    def to_dict(self) -> dict[str, Any]:
+        """JSON-ready dict (arrays as lists)."""
+        d = asdict(self)
+        d["q"] = [float(v) for v in self.q]
+        d["history"] = [float(v) for v in self.history]
+        return d
+
+    def __repr__(self) -> str:
+        return (
+            f"Result(success={self.success}, position_error={self.position_error:.3g} m, "
+            f"rotation_error={self.rotation_error:.3g} rad, fitness={self.fitness:.3g}, "
+            f"n_evals={self.n_evals}, time_s={self.time_s:.4f}, solver={self.solver!r}, "
+            f"q={np.round(self.q, 6).tolist()})"
+        )
