@@ -1,0 +1,161 @@
+"""Command line: ``swarm-ik robots | solve | bench …``.
+
+Exit codes: 0 success, 1 target not reached (the best found is still printed), 2 bad input
+(one line on stderr, no traceback).
+"""
+
+from __future__ import annotations
+
+import argparse
+import importlib
+import json
+import sys
+import warnings
+from collections.abc import Sequence
+from typing import Any
+
+import numpy as np
+
+from swarm_ik.errors import SwarmIKError
+
+BENCHMARKS = {"paper": "swarm_ik.bench.paper", "ik": "swarm_ik.bench.ik"}
+
+
+def _parse_param(text: str) -> tuple[str, Any]:
+    """``name=value`` → (name, value); the value parsed as JSON when possible."""
+    if "=" not in text:
+        raise argparse.ArgumentTypeError(f"solver parameter must look like name=value, got {text!r}")
+    key, raw = text.split("=", 1)
+    try:
+        value = json.loads(raw)
+    except json.JSONDecodeError:
+        value = raw
+    return key.strip(), value
+
+
+def _build_parser() -> argparse.ArgumentParser:
+    from swarm_ik import solvers
+    from swarm_ik.api import DEFAULT_SOLVER
+
+    parser = argparse.ArgumentParser(
+        prog="swarm-ik",
+        description="Inverse kinematics for URDF robots with swarm optimisers and Pinocchio.",
+    )
+    sub = parser.add_subparsers(dest="command", required=True)
+
+    sub.add_parser("robots", help="list the robots loadable by name")
+
+    p = sub.add_parser("solve", help="solve one IK target")
+    p.add_argument("--robot", required=True, help="bundled or example-robot-data name, or a .urdf path")
+    p.add_argument("--frame", default=None, help="end-effector frame (default: the robot's tool frame)")
+    tgt = p.add_mutually_exclusive_group(required=True)
+    tgt.add_argument("--pose", nargs=7, type=float, metavar=("X", "Y", "Z", "QX", "QY", "QZ", "QW"),
+                     help="target position [m] and quaternion (x, y, z, w)")
+    tgt.add_argument("--from-q", nargs="+", type=float, metavar="Q",
+                     help="target = FK of these joint values (rad / m), one per joint")
+    p.add_argument("--solver", default=DEFAULT_SOLVER, help=f"one of: {', '.join(solvers.names())}")
+    p.add_argument("--fitness", default="se3", help="se3, paper-l1, euler-zyz or paper-pso")
+    p.add_argument("--seed", type=int, default=0)
+    p.add_argument("--max-evals", type=int, default=None)
+    p.add_argument("--time-limit", type=float, default=None, help="seconds")
+    p.add_argument("--tol-pos", type=float, default=1e-5, help="position tolerance [m]")
+    p.add_argument("--tol-rot", type=float, default=1e-5, help="rotation tolerance [rad]")
+    p.add_argument("--q0", nargs="+", type=float, default=None, help="starting joint values")
+    p.add_argument("--param", action="append", type=_parse_param, default=[], metavar="NAME=VALUE",
+                   help="solver parameter, repeatable (e.g. --param pop_size=50)")
+    p.add_argument("--json", action="store_true", help="print one JSON object")
+
+    b = sub.add_parser("bench", help="benchmarks: 'paper' (the papers' tables) or 'ik' (TRAC-IK protocol)")
+    bsub = b.add_subparsers(dest="bench", required=True)
+    for name, module in BENCHMARKS.items():
+        bp = bsub.add_parser(name, help=f"benchmark {name}")
+        try:
+            importlib.import_module(module).add_arguments(bp)
+        except ModuleNotFoundError:
+            bp.set_defaults(_missing=module)
+    return parser
+
+
+def _cmd_robots() -> int:
+    from swarm_ik.robot import BUNDLED, EXAMPLE_ROBOTS
+
+    print("bundled (robots/):")
+    for name, (fname, frame) in sorted(BUNDLED.items()):
+        print(f"  {name:28s} {fname}  (end effector: {frame})")
+    print("example-robot-data:")
+    for name, (rel, frame) in sorted(EXAMPLE_ROBOTS.items()):
+        print(f"  {name:28s} {rel}  (end effector: {frame})")
+    return 0
+
+
+def _cmd_solve(args: argparse.Namespace) -> int:
+    import swarm_ik
+
+    robot = swarm_ik.load_robot(args.robot, ee_frame=args.frame)
+    if args.from_q is not None:
+        target = robot.fk(robot.check_q(args.from_q, "--from-q"))
+    else:
+        target = np.asarray(args.pose, dtype=float)
+    problem = swarm_ik.IKProblem(robot, target, args.fitness)
+    res = swarm_ik.solve(
+        problem,
+        args.solver,
+        seed=args.seed,
+        max_evals=args.max_evals,
+        time_limit=args.time_limit,
+        q0=args.q0,
+        tol_pos=args.tol_pos,
+        tol_rot=args.tol_rot,
+        **dict(args.param),
+    )
+    if args.json:
+        d = res.to_dict()
+        d.pop("history")
+        d.update(robot=robot.name, joint_names=list(robot.joint_names), ee_frame=robot.ee_frame)
+        print(json.dumps(d))
+    else:
+        status = "reached" if res.success else "NOT reached (best found below)"
+        print(f"robot {robot.name} ({robot.nq} joints), frame {robot.ee_frame}, solver {res.solver}")
+        print(f"target {status}")
+        for name, kind, v in zip(robot.joint_names, robot.joint_kinds, res.q, strict=True):
+            unit = "m" if kind == "prismatic" else "rad"
+            print(f"  {name:24s} {v: .10f} {unit}")
+        print(f"position error {res.position_error:.3e} m, rotation error {res.rotation_error:.3e} rad")
+        print(f"evaluations {res.n_evals}, time {res.time_s * 1e3:.2f} ms, within limits {res.within_limits}")
+    return 0 if res.success else 1
+
+
+def main(argv: Sequence[str] | None = None) -> int:
+    """Entry point of the ``swarm-ik`` console script; returns the exit code."""
+    parser = _build_parser()
+    args = parser.parse_args(argv)
+    try:
+        with warnings.catch_warnings():
+            warnings.simplefilter("default")
+            if args.command == "robots":
+                return _cmd_robots()
+            if args.command == "solve":
+                return _cmd_solve(args)
+            if args.command == "bench":
+                missing = getattr(args, "_missing", None)
+                if missing:
+                    print(f"swarm-ik: error: benchmark module {missing} is not available", file=sys.stderr)
+                    return 2
+                return int(importlib.import_module(BENCHMARKS[args.bench]).run(args))
+            extra = _extra_commands().get(args.command)
+            if extra is not None:
+                return int(extra(args))
+    except SwarmIKError as exc:
+        print(f"swarm-ik: error: {exc}", file=sys.stderr)
+        return 2
+    parser.error(f"unknown command {args.command!r}")
+    return 2
+
+
+def _extra_commands() -> dict[str, Any]:
+    """Commands added by optional modules (none yet)."""
+    return {}
+
+
+if __name__ == "__main__":
+    raise SystemExit(main())
