@@ -19,6 +19,10 @@ import numpy as np
 from swarm_ik.errors import SwarmIKError
 
 BENCHMARKS = {"paper": "swarm_ik.bench.paper", "ik": "swarm_ik.bench.ik"}
+COMMAND_MODULES = ("swarm_ik.viz_cli", "swarm_ik.batch_cli")
+"""Modules adding sub-commands: each has ``add_commands(subparsers) -> {name: handler}``, a
+handler taking the parsed ``argparse.Namespace`` and returning the exit code."""
+_HANDLERS: dict[str, Any] = {}
 
 
 def _parse_param(text: str) -> tuple[str, Any]:
@@ -73,6 +77,14 @@ def _build_parser() -> argparse.ArgumentParser:
             importlib.import_module(module).add_arguments(bp)
         except ModuleNotFoundError:
             bp.set_defaults(_missing=module)
+    for module in COMMAND_MODULES:
+        try:
+            mod = importlib.import_module(module)
+        except ModuleNotFoundError as exc:
+            if exc.name != module:
+                raise
+            continue
+        _HANDLERS.update(mod.add_commands(sub))
     return parser
 
 
@@ -142,7 +154,7 @@ def main(argv: Sequence[str] | None = None) -> int:
                     print(f"swarm-ik: error: benchmark module {missing} is not available", file=sys.stderr)
                     return 2
                 return int(importlib.import_module(BENCHMARKS[args.bench]).run(args))
-            extra = _extra_commands().get(args.command)
+            extra = _HANDLERS.get(args.command)
             if extra is not None:
                 return int(extra(args))
     except SwarmIKError as exc:
@@ -150,11 +162,6 @@ def main(argv: Sequence[str] | None = None) -> int:
         return 2
     parser.error(f"unknown command {args.command!r}")
     return 2
-
-
-def _extra_commands() -> dict[str, Any]:
-    """Commands added by optional modules (none yet)."""
-    return {}
 
 
 if __name__ == "__main__":
