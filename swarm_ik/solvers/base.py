@@ -32,6 +32,7 @@ if TYPE_CHECKING:
     from swarm_ik.problem import IKProblem
 
 FloatArray = NDArray[np.float64]
+_UNLIMITED = int(np.iinfo(np.int64).max)
 Objective = Callable[[FloatArray], FloatArray]
 """A batched objective: ``(pop, n) -> (pop,)``; lower is better."""
 
@@ -98,7 +99,7 @@ class Evaluator:
     def remaining(self) -> int:
         """Evaluations left in the budget (a large number when unlimited)."""
         if self.max_evals is None:
-            return np.iinfo(np.int64).max
+            return _UNLIMITED
         return max(0, self.max_evals - self.n_evals)
 
     @property

@@ -1,0 +1,129 @@
+"""Basic fruit fly optimisation algorithm (Pan 2012), as described in paper 000, eqs. 4-9.
+
+This is the *baseline* the HLFOA paper (000, Shi et al. 2021) improves on, implemented
+faithfully, weaknesses included: the candidate solution ``S = 1/Dist`` is always positive, so
+basic FOA cannot reach joint values below zero (paper 000, section 2.2.1).  On the YuMi target
+the paper shows it stuck near fitness 5.2 (Table 2: mean 5.27143).  Do not "fix" it here; the
+fixed algorithm is :mod:`swarm_ik.solvers.hlfoa`.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from swarm_ik.errors import InvalidArgumentError
+from swarm_ik.solvers.base import Evaluator, FloatArray, register
+
+
+def _axis_unit(ev: Evaluator) -> FloatArray:
+    """Per-dimension scale ``s_j = max(|l_j|, |u_j|)`` (1 where both bounds are 0), shape (n,)."""
+    s = np.maximum(np.abs(ev.lower), np.abs(ev.upper))
+    return np.where(s > 0.0, s, 1.0)
+
+
+def smell_candidates(
+    x_axis: FloatArray, y_axis: FloatArray, scale: FloatArray, ev: Evaluator
+) -> FloatArray:
+    """Candidate solutions ``S = 1/Dist`` of flies at axis positions (eqs. 5-6 of 000).
+
+    Args:
+        x_axis: X axis coordinates of the flies, dimensionless, shape ``(pop, n)``.
+        y_axis: Y axis coordinates, shape ``(pop, n)``.
+        scale: Axis unit per dimension, ``s_j`` (see :func:`run`), shape ``(n,)``.
+        ev: The evaluator (for the bounds).
+
+    Returns:
+        ``clip(s_j / sqrt(X² + Y²))``, shape ``(pop, n)``: always ``>= 0`` when the bounds allow
+        it (``+inf`` at ``Dist = 0`` is clipped to the upper bound).
+    """
+    dist = np.sqrt(x_axis * x_axis + y_axis * y_axis)
+    with np.errstate(divide="ignore"):
+        s = scale / dist
+    return ev.clip(s)
+
+
+def run(
+    ev: Evaluator,
+    rng: np.random.Generator,
+    *,
+    pop_size: int = 100,
+    iterations: int = 1000,
+    init_range: float = 10.0,
+    step: float = 1.0,
+) -> None:
+    """Basic FOA (Pan 2012) in the per-dimension form, paper 000 eqs. 4-9.
+
+    D-dimensional form: every dimension ``j`` has its own pair of axes ``(X_j, Y_j)``; all the
+    formulas act elementwise.  The swarm location ``(X_b, Y_b)`` (shape ``(n,)`` each) starts at
+    ``U[0, init_range]`` per component (Pan's ``10*rand()``) and is evaluated once.  Each
+    iteration:
+
+    * eq. 4: fly ``i`` at ``X_i = X_b + step*U[-1, 1]``, ``Y_i = Y_b + step*U[-1, 1]``
+      (independent draws per component; Pan's ``RandomValue = 2*rand() - 1``);
+    * eq. 5: ``Dist_i = sqrt(X_i² + Y_i²)`` (elementwise);
+    * eq. 6: ``S_i = 1/Dist_i`` measured in axis units of ``1/s_j`` with
+      ``s_j = max(|l_j|, |u_j|)``, i.e. the joint vector is ``S_ij = s_j / Dist_ij``, clipped to
+      the bounds.  This scaling (our choice; Pan's example had no bounds) makes ``Dist = 1`` land
+      on the largest bound magnitude, so Pan's unit step and ``[0, 10]`` start carry over to any
+      joint range.  It does not change the algorithm: it is Pan's FOA with the axes measured in
+      units of ``1/s_j``, equivalently an initial location in ``U[0, 10/s_j]`` and a step of
+      ``U[-1, 1]/s_j`` in raw axis units;
+    * eqs. 7-8: ``Smell_i = f(S_i)`` for the whole swarm in one batch; best fly;
+    * eq. 9 / step 7: the swarm location moves to the best fly only if its smell improves on
+      the best so far (strictly).
+
+    ``S_ij > 0`` always: the algorithm never evaluates a negative joint value (unless a bound
+    forces it) and so cannot reach optima with negative coordinates.  This is the weakness
+    paper 000 reports, reproduced on purpose.
+
+    Evaluations: ``pop_size * iterations + 1`` (paper 000, section 2.2.5).  A starting point
+    ``q0`` is ignored: a fly location cannot represent an arbitrary joint vector.
+
+    Args:
+        ev: Budgeted objective (see :class:`swarm_ik.solvers.base.Evaluator`).
+        rng: Source of all randomness.
+        pop_size: Flies per iteration ``m`` (paper 000: 100).
+        iterations: Iterations ``t_max`` (paper 000: 1000).
+        init_range: Initial swarm location drawn from ``U[0, init_range]`` per axis component,
+            in axis units (Pan: 10; not given in paper 000).
+        step: Half-width of the random flight, ``RandomValue = step*U[-1, 1]``, axis units
+            (Pan: 1; not given in paper 000).
+
+    Raises:
+        InvalidArgumentError: ``pop_size < 1``, ``iterations < 0``, or a non-positive
+            ``init_range``/``step``.
+    """
+    if pop_size < 1:
+        raise InvalidArgumentError(f"pop_size must be >= 1, got {pop_size}")
+    if iterations < 0:
+        raise InvalidArgumentError(f"iterations must be >= 0, got {iterations}")
+    if not (init_range > 0 and step > 0):
+        raise InvalidArgumentError(
+            f"init_range and step must be positive, got init_range={init_range}, step={step}"
+        )
+    n = ev.dim
+    scale = _axis_unit(ev)
+    x_b = init_range * rng.random(n)
+    y_b = init_range * rng.random(n)
+    smell_best = float(ev(smell_candidates(x_b[None], y_b[None], scale, ev))[0])
+
+    for _ in range(iterations):
+        if ev.done:
+            break
+        x = x_b + step * rng.uniform(-1.0, 1.0, size=(pop_size, n))  # eq. 4
+        y = y_b + step * rng.uniform(-1.0, 1.0, size=(pop_size, n))
+        smell = ev(smell_candidates(x, y, scale, ev))  # eqs. 5-7
+        i = int(np.argmin(smell))  # eq. 8
+        if smell[i] < smell_best:  # step 7 -> eq. 9
+            smell_best = float(smell[i])
+            x_b = x[i].copy()
+            y_b = y[i].copy()
+        ev.end_iteration()
+
+
+register(
+    "foa",
+    run,
+    description="basic fruit fly optimisation (Pan; paper 000 eqs. 4-9); cannot reach negative "
+    "values, kept as the paper's baseline",
+)
