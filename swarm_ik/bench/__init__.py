@@ -1,0 +1,1 @@
+"""Benchmarks: experiment generators writing CSV, Markdown reports, and plots (kept separate)."""
