@@ -1,0 +1,222 @@
+"""Cuckoo search (Yang & Deb, 2009) and paper 004's cuckoo search + Newton polish (Zhao).
+
+Two registrations of the same :func:`run`:
+
+* ``cs``: Yang–Deb cuckoo search as in paper 004 (eqs. 8–13): Lévy flights drawn by
+  Mantegna's algorithm (β = 1.5), discovery of alien eggs with probability ``pa = 0.25``,
+  greedy replacement; 50 nests, 3000 iterations.
+* ``cs-newton``: paper 004's combination: the same search until the best fitness drops below
+  ``ε = 0.2``, then Newton / pseudo-inverse iterations ``θ ← θ + η_n·J⁺·e`` on the best nest
+  with an exponentially decaying learning rate (eqs. 6, 15, 16).  Needs an IK problem (the
+  Jacobian).
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+
+from swarm_ik.errors import InvalidArgumentError
+from swarm_ik.solvers.base import Evaluator, FloatArray, register
+
+_PINV_RCOND = 1e-10
+"""Relative cut-off of small singular values in the pseudo-inverse ``J⁺``."""
+
+
+def mantegna_sigma(beta: float) -> float:
+    """Scale ``σ_u`` of Mantegna's algorithm for a Lévy index ``β`` (paper 004, eq. 12)::
+
+        σ_u = [Γ(1+β)·sin(πβ/2) / (Γ((1+β)/2)·β·2^((β−1)/2))]^(1/β)
+
+    Raises:
+        InvalidArgumentError: ``β`` outside ``(0, 2)``.
+    """
+    if not 0.0 < beta < 2.0:
+        raise InvalidArgumentError(f"the Levy index beta must lie in (0, 2), got {beta!r}")
+    num = math.gamma(1.0 + beta) * math.sin(math.pi * beta / 2.0)
+    den = math.gamma((1.0 + beta) / 2.0) * beta * 2.0 ** ((beta - 1.0) / 2.0)
+    return float((num / den) ** (1.0 / beta))
+
+
+def levy_steps(rng: np.random.Generator, shape: tuple[int, ...], beta: float = 1.5) -> FloatArray:
+    """Lévy-stable steps by Mantegna's algorithm (paper 004, eqs. 10–13).
+
+    ``L = u / |v|^(1/β)`` with ``u ~ N(0, σ_u²)`` and ``v ~ N(0, 1)`` (``σ_v = 1``, eq. 13).
+    The distribution is symmetric with a power-law tail ``P(|L| > s) ~ s^(−β)``.
+
+    Args:
+        rng: Source of ``u`` and ``v``.
+        shape: Output shape.
+        beta: Lévy index ``β`` in ``(0, 2)`` (paper 004: 1.5).
+
+    Returns:
+        Steps of the given shape (finite: ``|v|`` is floored at the smallest normal double).
+    """
+    sigma_u = mantegna_sigma(beta)
+    u = rng.normal(0.0, sigma_u, size=shape)
+    v = rng.normal(0.0, 1.0, size=shape)
+    return u / np.maximum(np.abs(v), np.finfo(float).tiny) ** (1.0 / beta)
+
+
+def newton_rate(n: int, eta0: float, eta_t: float, tau: float) -> float:
+    """Learning rate of the ``n``-th Newton step: ``η_t + (η0 − η_t)·exp(−n/τ)``."""
+    return eta_t + (eta0 - eta_t) * math.exp(-n / tau)
+
+
+def run(
+    ev: Evaluator,
+    rng: np.random.Generator,
+    *,
+    pop_size: int = 50,
+    iterations: int = 3000,
+    pa: float = 0.25,
+    beta: float = 1.5,
+    alpha: float = 0.01,
+    newton: bool = False,
+    eps: float = 0.2,
+    eta0: float = 1.0,
+    eta_t: float = 0.001,
+    tau: float = 100.0,
+) -> None:
+    """Cuckoo search (paper 004, eqs. 8–13), optionally followed by a Newton polish (eqs. 15–16).
+
+    Cuckoo search as in Yang & Deb's reference code (which paper 004 follows).  Nests start
+    uniform within the bounds (row 0 = ``q0`` when given) and are evaluated once; then each
+    iteration makes two batched evaluations of the whole population:
+
+    1. Lévy flights (eq. 8): ``x' = x + α·L·(x − x_best)·N(0, 1)`` per coordinate, with
+       ``L`` from :func:`levy_steps` (Mantegna, β = 1.5, eqs. 10–13) and ``α = 0.01``; the
+       extra standard-normal factor is the reference code's; the best nest itself does not
+       move.  A new nest replaces the old one when it is not worse (greedy, ``<=``).
+    2. Discovery (eq. 9): ``x' = x + r·(x_j − x_k)·K`` with ``j, k`` two random permutations
+       of the nests, one ``r ~ U[0, 1]`` per iteration and ``K_id = [rand > pa]`` per
+       coordinate, exactly as the reference code (and niapy) write it; note that this changes
+       each coordinate with probability ``1 − pa``, although the papers describe ``pa`` as the
+       probability that an egg is discovered.  Greedy replacement again.
+
+    New points are clipped to the bounds (the reference code's ``simplebounds``).
+    Evaluations: ``pop_size·(2·iterations + 1)``; paper 004's 3000 iterations of 50 nests
+    make 300 050 evaluations, so in practice ``max_evals`` or the stop criterion ends the run.
+
+    With ``newton=True`` (paper 004's combination, fig. 1): as soon as the best fitness is
+    below ``eps`` (checked before each iteration, so also right after the initial
+    population), the search stops and the remaining iterations are Newton / pseudo-inverse
+    steps on the best nest (eqs. 6, 15)::
+
+        θ ← clip(θ + η_n·J⁺(θ)·e(θ)),   η_n = η_t + (η0 − η_t)·exp(−n/τ)   (n = 0, 1, …)
+
+    ``e = [p_target − p; log(R_target Rᵀ)]`` and ``J`` the world-aligned frame Jacobian, from
+    ``ev.residual_jacobian`` (one evaluation per step); ``J⁺`` cuts singular values below
+    ``1e-10·σ_max``.  Eq. 16 of paper 004 is not legible in our copy; the text says the rate
+    decays exponentially from ``η0 = 1`` with a parameter ``η_t = 0.001``; the schedule above
+    is our reading (it tends to ``η_t``).  ``τ = 100`` steps: the first ~10 steps are nearly
+    full Gauss–Newton steps, which converge quadratically near a solution, so the decay only
+    damps the steps of a polish that wanders.  Measured (30 random reachable targets, se3
+    fitness, 20 000 evaluations): success 93 % / 57 % / 60 % on loading_manipulator_long /
+    yumi_left / panda with τ = 100, against 83 % / 37 % / 57 % with τ = 10, whose rate is
+    below 0.01 after 50 steps.  Each step's point is evaluated by
+    the next step; ``ev`` keeps the best point, so a diverging polish cannot lose the
+    search's answer.  Faithful to the paper, the polish runs only once the threshold is
+    reached: if the search never gets below ``eps``, no Newton step is made (set
+    ``eps=inf`` to polish the best initial nest at once).  The polish does not go back to the
+    search when it stalls (e.g. at a joint limit or in a local minimum of a redundant arm).
+
+    ``eps`` is compared with the problem's fitness (``"se3"``: metres + radians by default).
+    Paper 004's fitness is instead the squared norm of the Newton step (its eq. 7), so its
+    ``ε = 0.2`` is not the same threshold; 0.2 is kept as the default because in our trials
+    Gauss–Newton from ``se3 < 0.2`` converged in most cases.
+
+    Args:
+        ev: Budgeted objective (see :class:`swarm_ik.solvers.base.Evaluator`).
+        rng: Source of all randomness.
+        pop_size: Number of nests (paper 004: 50).
+        iterations: Iterations, search and Newton steps together (paper 004: 3000).
+        pa: Discovery probability ``pa`` (paper 004: 0.25).
+        beta: Lévy index ``β`` (paper 004: 1.5).
+        alpha: Step scale ``α`` of the Lévy flights (reference code: 0.01).
+        newton: Switch to the Newton polish once the best fitness is below ``eps``.
+        eps: Threshold ``ε`` of the switch (paper 004: 0.2).
+        eta0: Initial learning rate ``η0`` (paper 004: 1).
+        eta_t: Final learning rate ``η_t`` (paper 004: 0.001).
+        tau: Decay constant ``τ`` of the learning rate, in Newton steps (not in the paper).
+
+    Raises:
+        InvalidArgumentError: ``pop_size < 2``, ``iterations < 0``, ``pa`` outside ``[0, 1]``,
+            ``alpha <= 0``, ``beta`` outside ``(0, 2)``, or (with ``newton``) ``eps <= 0``,
+            ``tau <= 0`` or not ``0 < eta_t <= eta0``.
+    """
+    m = int(pop_size)
+    if m < 2 or iterations < 0:
+        raise InvalidArgumentError(
+            f"need pop_size >= 2 and iterations >= 0; got pop_size={pop_size}, "
+            f"iterations={iterations}"
+        )
+    if not (0.0 <= pa <= 1.0 and alpha > 0):
+        raise InvalidArgumentError(f"need 0 <= pa <= 1 and alpha > 0; got pa={pa}, alpha={alpha}")
+    mantegna_sigma(beta)  # validates beta
+    if newton and not (eps > 0 and 0 < eta_t <= eta0 and tau > 0):
+        raise InvalidArgumentError(
+            f"need eps > 0, 0 < eta_t <= eta0 and tau > 0; got eps={eps}, eta0={eta0}, "
+            f"eta_t={eta_t}, tau={tau}"
+        )
+    n = ev.dim
+    nest = ev.initial_population(rng, m)
+    fit = ev(nest)
+    ib = int(np.argmin(fit))
+    best = nest[ib].copy()
+    best_f = float(fit[ib])
+
+    t = 0
+    while t < iterations and not ev.done:
+        if newton and best_f < eps:
+            break
+        # Global search by Lévy flights around each nest, scaled by its distance to the best.
+        step = alpha * levy_steps(rng, (m, n), beta) * (nest - best)
+        new = ev.clip(nest + step * rng.standard_normal((m, n)))
+        f_new = ev(new)
+        better = f_new <= fit
+        nest[better] = new[better]
+        fit[better] = f_new[better]
+        # Discovery (eq. 9): biased random walk; mask as in Yang's reference code (rand > pa).
+        found = rng.random((m, n)) > pa
+        j = rng.permutation(m)
+        k = rng.permutation(m)
+        new = ev.clip(nest + rng.random() * (nest[j] - nest[k]) * found)
+        f_new = ev(new)
+        better = f_new <= fit
+        nest[better] = new[better]
+        fit[better] = f_new[better]
+        ib = int(np.argmin(fit))
+        if fit[ib] < best_f:
+            best = nest[ib].copy()
+            best_f = float(fit[ib])
+        ev.end_iteration()
+        t += 1
+
+    if not newton:
+        return
+    theta = best.copy()
+    for k_step in range(iterations - t):
+        if ev.done:
+            break
+        _, err, jac = ev.residual_jacobian(theta[None])
+        eta = newton_rate(k_step, eta0, eta_t, tau)
+        theta = ev.clip(theta + eta * (np.linalg.pinv(jac[0], rcond=_PINV_RCOND) @ err[0]))
+        ev.end_iteration()
+
+
+register(
+    "cs",
+    run,
+    newton=False,
+    description="Yang-Deb cuckoo search (paper 004: Levy flights beta=1.5, pa=0.25, 50 nests)",
+)
+register(
+    "cs-newton",
+    run,
+    newton=True,
+    needs_jacobian=True,
+    description="paper 004: cuckoo search until fitness < 0.2, then Newton/pseudo-inverse "
+    "steps with an exponentially decaying learning rate",
+)
