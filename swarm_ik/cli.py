@@ -68,6 +68,14 @@ def _build_parser() -> argparse.ArgumentParser:
     p.add_argument("--param", action="append", type=_parse_param, default=[], metavar="NAME=VALUE",
                    help="solver parameter, repeatable (e.g. --param pop_size=50)")
     p.add_argument("--json", action="store_true", help="print one JSON object")
+    p.add_argument("--show", action="store_true",
+                   help="look at the solution in meshcat (prints the viewer's URL; needs [viz])")
+    p.add_argument("--animate", action="store_true",
+                   help="replay the optimiser's best-so-far configuration over its iterations")
+    p.add_argument("--html", default=None, metavar="FILE",
+                   help="write the scene to a self-contained HTML file (no server needed)")
+    p.add_argument("--compare", default=None, metavar="SOLVER",
+                   help="also solve with SOLVER (e.g. dls) and draw its answer ghosted")
 
     b = sub.add_parser("bench", help="benchmarks: 'paper' (the papers' tables) or 'ik' (TRAC-IK protocol)")
     bsub = b.add_subparsers(dest="bench", required=True)
@@ -134,6 +142,10 @@ def _cmd_solve(args: argparse.Namespace) -> int:
             print(f"  {name:24s} {v: .10f} {unit}")
         print(f"position error {res.position_error:.3e} m, rotation error {res.rotation_error:.3e} rad")
         print(f"evaluations {res.n_evals}, time {res.time_s * 1e3:.2f} ms, within limits {res.within_limits}")
+    if args.show or args.animate or args.html or args.compare:
+        from swarm_ik import viz_cli
+
+        viz_cli.after_solve(args, problem, res)
     return 0 if res.success else 1
 
 
