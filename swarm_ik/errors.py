@@ -46,4 +46,5 @@ def unknown(kind: str, name: object, valid: Iterable[str]) -> UnknownNameError:
         valid: The names that would have been accepted.
     """
     choices = ", ".join(sorted(str(v) for v in valid))
-    return UnknownNameError(f"unknown {kind} {name!r}; valid {kind}s: {choices}")
+    plural = kind + ("es" if kind.endswith("s") else "s")  # "fitnesses", "solvers"
+    return UnknownNameError(f"unknown {kind} {name!r}; valid {plural}: {choices}")

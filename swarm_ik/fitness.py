@@ -35,9 +35,18 @@ def zyz_euler(rot: FloatArray) -> FloatArray:
     """ZYZ Euler angles ``(α, β, γ)`` of rotations ``(..., 3, 3)`` → ``(..., 3)``; β ∈ [0, π]."""
     r13, r23, r33 = rot[..., 0, 2], rot[..., 1, 2], rot[..., 2, 2]
     r31, r32 = rot[..., 2, 0], rot[..., 2, 1]
-    beta = np.arctan2(np.hypot(r31, r32), r33)
+    sin_b = np.hypot(r31, r32)
+    beta = np.arctan2(sin_b, r33)
     alpha = np.arctan2(r23, r13)
     gamma = np.arctan2(r32, -r31)
+    # At β = 0 (R = Rz(α+γ)) or β = π (R = Rz(α)·Ry(π)·Rz(γ), only α−γ matters) the split
+    # between α and γ is arbitrary: take α = 0 so the whole yaw lands in γ and is not lost.
+    singular = sin_b < 1e-12
+    if np.any(singular):
+        r10, r00, r11 = rot[..., 1, 0], rot[..., 0, 0], rot[..., 1, 1]
+        gamma_sing = np.where(r33 > 0, np.arctan2(r10, r00), np.arctan2(r10, r11))
+        alpha = np.where(singular, 0.0, alpha)
+        gamma = np.where(singular, gamma_sing, gamma)
     return np.stack([alpha, beta, gamma], axis=-1)
 
 

@@ -3,12 +3,14 @@
 from __future__ import annotations
 
 import time
+import warnings
 from dataclasses import dataclass
 from typing import Any
 
 import numpy as np
 
 from swarm_ik.errors import InvalidArgumentError
+from swarm_ik.pose import is_finite_nonneg
 from swarm_ik.solvers import base
 from swarm_ik.solvers.base import Evaluator, FloatArray, Objective
 
@@ -55,8 +57,31 @@ def check_budget(max_evals: int | None, time_limit: float | None) -> None:
         isinstance(max_evals, bool) or not isinstance(max_evals, (int, np.integer)) or max_evals < 1
     ):
         raise InvalidArgumentError(f"max_evals must be a positive integer, got {max_evals!r}")
-    if time_limit is not None and not (np.isfinite(time_limit) and time_limit > 0):
-        raise InvalidArgumentError(f"time_limit must be a positive number of seconds, got {time_limit!r}")
+    if time_limit is not None and not (is_finite_nonneg(time_limit) and float(time_limit) > 0):
+        raise InvalidArgumentError(
+            f"time_limit must be a positive number of seconds, got {time_limit!r}"
+        )
+
+
+def _check_x0(x0: Any, lo: FloatArray, hi: FloatArray) -> FloatArray:
+    """``x0`` of :func:`minimize`: refused when not ``(n,)`` finite numbers, clipped into
+    ``[lo, hi]`` with a warning when outside (the same rule as ``q0`` of ``solve``)."""
+    try:
+        x = np.array(x0, dtype=float)
+    except (TypeError, ValueError):
+        raise InvalidArgumentError(f"x0 must be {lo.size} numbers, got {x0!r:.80}") from None
+    if x.shape != lo.shape or not np.all(np.isfinite(x)):
+        raise InvalidArgumentError(
+            f"x0 must hold {lo.size} finite numbers (one per bound), got {x.tolist()!r}"
+        )
+    fixed = np.clip(x, lo, hi)
+    outside = np.flatnonzero(fixed != x)
+    if outside.size:
+        warnings.warn(
+            f"x0 lies outside the bounds at indices {outside.tolist()}; clipped into them",
+            stacklevel=3,
+        )
+    return fixed
 
 
 def minimize(
@@ -89,6 +114,10 @@ def minimize(
     Returns:
         The best point found and the run's bookkeeping.
     """
+    if not callable(objective):
+        raise InvalidArgumentError(
+            f"objective must be a callable (pop, n) -> (pop,), got {type(objective).__name__}"
+        )
     spec = base.get(solver)
     if spec.needs_jacobian:
         raise InvalidArgumentError(
@@ -96,16 +125,29 @@ def minimize(
         )
     kwargs = spec.resolve(params)
     check_budget(max_evals, time_limit)
-    lo = np.asarray(lower, dtype=float).ravel()
-    hi = np.asarray(upper, dtype=float).ravel()
-    if lo.shape != hi.shape or not (np.all(np.isfinite(lo)) and np.all(np.isfinite(hi))):
-        raise InvalidArgumentError("lower and upper must be finite arrays of the same shape")
+    try:
+        lo = np.array(lower, dtype=float).ravel()
+        hi = np.array(upper, dtype=float).ravel()
+    except (TypeError, ValueError):
+        raise InvalidArgumentError("lower and upper must be arrays of numbers") from None
+    if lo.size == 0 or lo.shape != hi.shape or not (
+        np.all(np.isfinite(lo)) and np.all(np.isfinite(hi))
+    ):
+        raise InvalidArgumentError(
+            "lower and upper must be non-empty finite arrays of the same shape, got shapes "
+            f"{lo.shape} and {hi.shape}"
+        )
     if np.any(lo > hi):
         raise InvalidArgumentError(f"lower > upper at indices {np.flatnonzero(lo > hi).tolist()}")
+    if f_target is not None and not (
+        isinstance(f_target, (int, float, np.integer, np.floating)) and np.isfinite(f_target)
+    ):
+        raise InvalidArgumentError(f"f_target must be a finite number, got {f_target!r}")
+    start = None if x0 is None else _check_x0(x0, lo, hi)
     rng = make_rng(seed)
     ev = Evaluator(
         objective, lo, hi, max_evals=max_evals, time_limit=time_limit, f_target=f_target,
-        q0=None if x0 is None else np.asarray(x0, dtype=float),
+        q0=start,
     )
     t0 = time.perf_counter()
     spec.run(ev, rng, **kwargs)

@@ -5,14 +5,35 @@ All poses are 4x4 homogeneous transforms in metres.  Quaternions are ``(x, y, z,
 
 from __future__ import annotations
 
+import reprlib
 from typing import Any
 
 import numpy as np
 from numpy.typing import NDArray
 
-from swarm_ik.errors import InvalidTargetError
+from swarm_ik.errors import InvalidArgumentError, InvalidTargetError
 
 FloatArray = NDArray[np.float64]
+
+
+def _floats(value: Any, what: str) -> FloatArray:
+    """``value`` as a float array, or :class:`InvalidTargetError` naming it (strings, ragged
+    nesting, None...)."""
+    try:
+        return np.array(value, dtype=float)
+    except (TypeError, ValueError):
+        raise InvalidTargetError(f"{what} must be numbers, got {reprlib.repr(value)}") from None
+
+
+def is_finite_nonneg(value: Any) -> bool:
+    """Whether ``value`` is a finite number ``>= 0`` (strings, booleans and None are not)."""
+    if isinstance(value, (str, bytes, bool, np.bool_)):
+        return False
+    try:
+        v = float(value)
+    except (TypeError, ValueError):
+        return False
+    return bool(0.0 <= v < np.inf)
 
 
 def quat_to_matrix(quat_xyzw: Any) -> FloatArray:
@@ -27,9 +48,11 @@ def quat_to_matrix(quat_xyzw: Any) -> FloatArray:
     Raises:
         InvalidTargetError: not 4 finite numbers, or norm (almost) zero.
     """
-    q = np.asarray(quat_xyzw, dtype=float).ravel()
+    q = _floats(quat_xyzw, "quaternion").ravel()
     if q.shape != (4,) or not np.all(np.isfinite(q)):
-        raise InvalidTargetError(f"quaternion must be 4 finite numbers (x, y, z, w), got {q.tolist()}")
+        raise InvalidTargetError(
+            f"quaternion must be 4 finite numbers (x, y, z, w), got {q.tolist()}"
+        )
     n = np.linalg.norm(q)
     if n < 1e-9:
         raise InvalidTargetError(f"quaternion has zero norm: {q.tolist()}")
@@ -53,7 +76,7 @@ def matrix_to_quat(rot: Any) -> FloatArray:
 
 def make_pose(position: Any, quat_xyzw: Any) -> FloatArray:
     """4x4 pose from a position ``(3,)`` [m] and a quaternion ``(x, y, z, w)``."""
-    p = np.asarray(position, dtype=float).ravel()
+    p = _floats(position, "position").ravel()
     if p.shape != (3,) or not np.all(np.isfinite(p)):
         raise InvalidTargetError(f"position must be 3 finite numbers, got {p.tolist()}")
     pose = np.eye(4)
@@ -73,7 +96,7 @@ def project_to_se3(matrix: Any) -> FloatArray:
     Returns:
         A valid pose, shape ``(4, 4)``, same translation, bottom row ``[0, 0, 0, 1]``.
     """
-    m = np.asarray(matrix, dtype=float)
+    m = _floats(matrix, "matrix")
     if m.shape != (4, 4) or not np.all(np.isfinite(m)):
         raise InvalidTargetError(f"expected a finite 4x4 matrix, got shape {m.shape}")
     u, _, vt = np.linalg.svd(m[:3, :3])
@@ -99,19 +122,25 @@ def as_pose(target: Any, *, orth_tol: float = 1e-6) -> FloatArray:
         InvalidTargetError: wrong shape, non-finite values, a bottom row other than
             ``[0, 0, 0, 1]``, or a rotation block further than ``orth_tol`` from a rotation.
     """
+    if not is_finite_nonneg(orth_tol):
+        raise InvalidArgumentError(
+            f"orth_tol must be a finite non-negative number, got {orth_tol!r}"
+        )
     if hasattr(target, "homogeneous"):  # pinocchio.SE3
         target = np.asarray(target.homogeneous)
     if isinstance(target, (tuple, list)) and len(target) == 2:
         return make_pose(target[0], target[1])
-    m = np.array(target, dtype=float)
+    m = _floats(target, "target")
     if m.shape == (7,):
         return make_pose(m[:3], m[3:])
     if m.shape != (4, 4):
+        got = f"shape {m.shape}" if m.ndim else reprlib.repr(target)
         raise InvalidTargetError(
-            f"target must be a 4x4 matrix, (position, quaternion) or 7 numbers; got shape {m.shape}"
+            f"target must be a 4x4 matrix, (position, quaternion) or 7 numbers; got {got}"
         )
     if not np.all(np.isfinite(m)):
-        raise InvalidTargetError("target contains NaN or infinite values")
+        where = [tuple(ij) for ij in np.argwhere(~np.isfinite(m)).tolist()]
+        raise InvalidTargetError(f"target contains NaN or infinite values at (row, column) {where}")
     if not np.allclose(m[3], [0.0, 0.0, 0.0, 1.0], atol=1e-9):
         raise InvalidTargetError(f"target's bottom row must be [0, 0, 0, 1], got {m[3].tolist()}")
     rot = m[:3, :3]

@@ -8,9 +8,9 @@ import numpy as np
 import pinocchio as pin
 from numpy.typing import NDArray
 
-from swarm_ik.errors import InvalidArgumentError
-from swarm_ik.fitness import get_fitness
-from swarm_ik.pose import as_pose, rotation_angle
+from swarm_ik.errors import InvalidArgumentError, unknown
+from swarm_ik.fitness import FITNESS, get_fitness
+from swarm_ik.pose import as_pose, is_finite_nonneg, rotation_angle
 from swarm_ik.robot import RobotModel
 
 FloatArray = NDArray[np.float64]
@@ -71,11 +71,15 @@ class IKProblem:
             )
         self.robot = robot
         self.target = as_pose(target, orth_tol=orth_tol)
+        if not isinstance(fitness, str):
+            raise unknown("fitness", fitness, FITNESS)
         self.fitness_name = fitness
         self._fitness = get_fitness(fitness)
         for label, v in (("w_rot", w_rot), ("lam", lam), ("mu", mu)):
-            if not (np.isfinite(v) and v >= 0):
-                raise InvalidArgumentError(f"{label} must be a finite non-negative number, got {v!r}")
+            if not is_finite_nonneg(v):
+                raise InvalidArgumentError(
+                    f"{label} must be a finite non-negative number, got {v!r}"
+                )
         self.w_rot = float(w_rot)
         self._weights = {"w_rot": self.w_rot, "lam": float(lam), "mu": float(mu)}
         self.lower = robot.lower.copy() if lower is None else robot.check_q(lower, "lower")
@@ -83,6 +87,14 @@ class IKProblem:
         if np.any(self.lower > self.upper):
             raise InvalidArgumentError("lower bounds exceed upper bounds at joints "
                                        f"{np.flatnonzero(self.lower > self.upper).tolist()}")
+        outside = np.flatnonzero((self.lower < robot.lower) | (self.upper > robot.upper))
+        if outside.size:  # wider bounds would let a "success" break the joint limits
+            j = int(outside[0])
+            raise InvalidArgumentError(
+                f"bounds may only narrow the joint limits; joint {robot.joint_names[j]!r}: "
+                f"bounds [{self.lower[j]:g}, {self.upper[j]:g}] exceed its limits "
+                f"[{robot.lower[j]:g}, {robot.upper[j]:g}]"
+            )
         self.position_only = fitness == "se3" and self.w_rot == 0.0
         self._rot_target = np.ascontiguousarray(self.target[:3, :3])
 

@@ -9,6 +9,7 @@
 from __future__ import annotations
 
 import os
+import reprlib
 import sys
 import warnings
 import xml.etree.ElementTree as ET
@@ -81,16 +82,49 @@ def robot_names() -> dict[str, list[str]]:
     return {"bundled": sorted(BUNDLED), "example-robot-data": sorted(EXAMPLE_ROBOTS)}
 
 
-def _check_urdf_xml(path: Path) -> None:
-    """Refuse files that are not URDF XML, and limits that are NaN/inf or inverted."""
+def _xyz(path: Path, joint: str | None, el: ET.Element | None, attr: str) -> FloatArray | None:
+    """The 3 numbers of attribute ``attr`` of ``el`` (``None`` when absent); refuses
+    malformed or non-finite values, naming the joint."""
+    if el is None:
+        return None
+    raw = el.get(attr)
+    if raw is None:
+        return None
+    try:
+        vals = np.array([float(v) for v in raw.split()])
+    except ValueError:
+        vals = np.array([])
+    if vals.shape != (3,) or not np.all(np.isfinite(vals)):
+        raise RobotModelError(
+            f"{path}: joint {joint!r}: <{el.tag} {attr}={raw!r}> must be 3 finite numbers"
+        )
+    return vals
+
+
+def _check_urdf_xml(path: Path) -> dict[str, str]:
+    """Refuse files that are not URDF XML, and what urdfdom would refuse with no useful
+    message: duplicate names, missing or non-finite limits, malformed origins and axes.
+
+    Returns:
+        The mimic joints: name -> the joint it mimics.
+    """
     try:
         root = ET.parse(path).getroot()
     except ET.ParseError as exc:
         raise RobotModelError(f"{path}: not a valid XML file ({exc})") from None
     if root.tag != "robot":
-        raise RobotModelError(f"{path}: not a URDF (root element is <{root.tag}>, expected <robot>)")
-    links = {link.get("name") for link in root.findall("link")}
+        raise RobotModelError(
+            f"{path}: not a URDF (root element is <{root.tag}>, expected <robot>)"
+        )
+    link_list = [link.get("name") for link in root.findall("link")]
+    links = set(link_list)
+    joint_list = [joint.get("name") for joint in root.findall("joint")]
+    for label, names in (("link", link_list), ("joint", joint_list)):
+        dup = sorted({str(n) for n in names if names.count(n) > 1})
+        if dup:
+            raise RobotModelError(f"{path}: {label} name(s) {dup} defined more than once")
     children: set[str] = set()
+    mimic: dict[str, str] = {}
     for joint in root.findall("joint"):
         name = joint.get("name")
         jtype = joint.get("type")
@@ -105,29 +139,54 @@ def _check_urdf_xml(path: Path) -> None:
         for tag, el in (("parent", parent), ("child", child)):
             link = None if el is None else el.get("link")
             if link not in links:
-                raise RobotModelError(f"{path}: joint {name!r} names {tag} link {link!r}, which is not defined")
+                raise RobotModelError(
+                    f"{path}: joint {name!r} names {tag} link {link!r}, which is not defined"
+                )
         assert child is not None
         c = child.get("link")
         if c in children:
-            raise RobotModelError(f"{path}: link {c!r} is the child of two joints (a kinematic loop)")
+            raise RobotModelError(
+                f"{path}: link {c!r} is the child of two joints (a kinematic loop)"
+            )
         children.add(str(c))
+        origin = joint.find("origin")
+        _xyz(path, name, origin, "xyz")
+        _xyz(path, name, origin, "rpy")
+        axis = _xyz(path, name, joint.find("axis"), "xyz")
+        if axis is not None and jtype not in ("fixed", "floating") and np.linalg.norm(axis) < 1e-9:
+            raise RobotModelError(f"{path}: joint {name!r} has a zero axis {axis.tolist()}")
+        el_mimic = joint.find("mimic")
+        if el_mimic is not None:
+            mimic[str(name)] = str(el_mimic.get("joint"))
         limit = joint.find("limit")
-        if limit is not None and jtype in ("revolute", "prismatic"):
+        if jtype in ("revolute", "prismatic"):
+            if limit is None:
+                raise RobotModelError(
+                    f"{path}: {jtype} joint {name!r} has no <limit lower=... upper=...>; "
+                    "URDF requires limits on revolute and prismatic joints (use type "
+                    "'continuous' for a revolute joint without limits)"
+                )
             try:
                 lo = float(limit.get("lower", "0"))
                 hi = float(limit.get("upper", "0"))
             except ValueError:
-                raise RobotModelError(f"{path}: joint {name!r} has non-numeric limits") from None
+                raise RobotModelError(
+                    f"{path}: joint {name!r} has non-numeric limits "
+                    f"[{limit.get('lower')!r}, {limit.get('upper')!r}]"
+                ) from None
             if not (np.isfinite(lo) and np.isfinite(hi)):
                 raise RobotModelError(f"{path}: joint {name!r} has non-finite limits [{lo}, {hi}]")
             if lo > hi:
-                raise RobotModelError(f"{path}: joint {name!r} has lower limit {lo} > upper limit {hi}")
+                raise RobotModelError(
+                    f"{path}: joint {name!r} has lower limit {lo} > upper limit {hi}"
+                )
     roots = links - children
     if len(roots) != 1:
         raise RobotModelError(
-            f"{path}: a URDF needs exactly one root link, found {sorted(map(str, roots)) or 'none'} "
-            "(a loop or a disconnected link)"
+            f"{path}: a URDF needs exactly one root link, found "
+            f"{sorted(map(str, roots)) or 'none'} (a loop or a disconnected link)"
         )
+    return mimic
 
 
 def _joint_kind_axis(jmodel: Any) -> tuple[int, FloatArray]:
@@ -209,7 +268,7 @@ class RobotModel:
         p = Path(path)
         if not p.is_file():
             raise RobotFileNotFoundError(f"URDF file not found: {str(p)!r}")
-        _check_urdf_xml(p)
+        mimic = _check_urdf_xml(p)
         try:
             full = pin.buildModelFromUrdf(str(p))
         except Exception as exc:  # Pinocchio raises plain ValueError/RuntimeError
@@ -243,7 +302,20 @@ class RobotModel:
             if reduced.parents[j] != j - 1:
                 raise RobotModelError(f"{p}: the reduced model is not a serial chain")
             jm = reduced.joints[j]
-            kind, axis = _joint_kind_axis(jm)
+            jname = reduced.names[j]
+            if jname in mimic:
+                raise RobotModelError(
+                    f"{p}: joint {jname!r} on the chain to {ee_frame!r} mimics joint "
+                    f"{mimic[jname]!r}; mimic joints on the chain are not supported (they would "
+                    "be solved as independent joints)"
+                )
+            try:
+                kind, axis = _joint_kind_axis(jm)
+            except RobotModelError as exc:
+                raise RobotModelError(
+                    f"{p}: joint {jname!r} on the chain to {ee_frame!r}: {exc}; supported: "
+                    "revolute, continuous, prismatic (and fixed)"
+                ) from None
             names.append(reduced.names[j])
             kinds.append(kind)
             axes.append(axis)
@@ -361,11 +433,10 @@ class RobotModel:
         data = self.model.createData()
         pin.computeJointJacobians(self.model, data, self.to_pinocchio(q))
         pin.updateFramePlacements(self.model, data)
-        return np.array(
-            pin.getFrameJacobian(
-                self.model, data, self.ee_frame_id, pin.ReferenceFrame.LOCAL_WORLD_ALIGNED
-            )
+        jac = pin.getFrameJacobian(
+            self.model, data, self.ee_frame_id, pin.ReferenceFrame.LOCAL_WORLD_ALIGNED
         )
+        return np.array(jac).reshape(6, self.model.nv)  # eigenpy gives (6,) when nv == 1
 
     # ----------------------------------------------------------------- limits
     def within_limits(self, q: FloatArray, tol: float = 1e-9) -> bool:
@@ -392,11 +463,16 @@ class RobotModel:
 
     def check_q(self, q: Any, what: str = "q") -> FloatArray:
         """Validate a joint vector: shape ``(nq,)`` and finite; returns it as floats."""
-        arr = np.asarray(q, dtype=float)
+        try:
+            arr = np.array(q, dtype=float)
+        except (TypeError, ValueError):
+            raise InvalidArgumentError(
+                f"{what} must be {self.nq} numbers (one per joint), got {reprlib.repr(q)}"
+            ) from None
         if arr.shape != (self.nq,):
             raise InvalidArgumentError(
-                f"{what} must hold {self.nq} values (one per joint: {', '.join(self.joint_names)}); "
-                f"got shape {arr.shape}"
+                f"{what} must hold {self.nq} values (one per joint: "
+                f"{', '.join(self.joint_names)}); got shape {arr.shape}"
             )
         if not np.all(np.isfinite(arr)):
             raise InvalidArgumentError(f"{what} contains NaN or infinite values: {arr.tolist()}")

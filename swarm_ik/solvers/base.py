@@ -33,6 +33,8 @@ if TYPE_CHECKING:
 
 FloatArray = NDArray[np.float64]
 _UNLIMITED = int(np.iinfo(np.int64).max)
+MIN_POP_SIZE = 4
+"""Smallest ``pop_size`` any population solver accepts (HLFOA needs 4 distinct members)."""
 Objective = Callable[[FloatArray], FloatArray]
 """A batched objective: ``(pop, n) -> (pop,)``; lower is better."""
 
@@ -52,6 +54,8 @@ class Evaluator:
         stop: Optional predicate on the best point; when it returns True the run is done
             (e.g. "position and rotation errors within tolerance").
         f_target: Optional fitness value; reaching it (``<=``) ends the run.
+        tolerance: Optional ``(tol_pos [m], tol_rot [rad])`` of the success test behind
+            ``stop``, for solvers that stop their own compiled loops at it (``None``: unknown).
     """
 
     def __init__(
@@ -66,8 +70,10 @@ class Evaluator:
         q0: FloatArray | None = None,
         stop: Callable[[FloatArray], bool] | None = None,
         f_target: float | None = None,
+        tolerance: tuple[float, float] | None = None,
     ) -> None:
         self.objective = objective
+        self.tolerance = tolerance
         self.lower = np.asarray(lower, dtype=float)
         self.upper = np.asarray(upper, dtype=float)
         self.dim = int(self.lower.shape[0])
@@ -130,7 +136,13 @@ class Evaluator:
         k = 0 if self.time_up or self.stopped else min(pop, self.remaining)
         if k <= 0:
             return out
-        f = np.asarray(self.objective(x_batch[:k]), dtype=float).reshape(k)
+        f = np.asarray(self.objective(x_batch[:k]), dtype=float)
+        if f.size != k:
+            raise InvalidArgumentError(
+                f"the objective returned shape {f.shape} for {k} points; a batched objective "
+                "maps (pop, n) -> (pop,)"
+            )
+        f = f.reshape(k)
         self.n_evals += k
         f = np.where(np.isfinite(f), f, np.inf)
         out[:k] = f
@@ -189,6 +201,38 @@ class Evaluator:
         out[:k] = np.where(np.isfinite(f[:k]), f[:k], np.inf)
         self._update_best(x_batch[:k], out[:k])
         return out
+
+    def add_evals(self, n: int, x: FloatArray | None = None, f: float | None = None) -> None:
+        """Count ``n`` evaluations a solver made itself (e.g. in a compiled kernel), and
+        offer the best point among them.
+
+        The caller must check :attr:`done` before starting the work and must not compute more
+        than :attr:`remaining` evaluations; work started before the time limit is counted and
+        its point considered even if the limit passed meanwhile.
+
+        Args:
+            n: Evaluations spent, ``0 <= n <= remaining``.
+            x: Optional point, shape ``(dim,)``, inside the bounds.
+            f: Its fitness under the problem's own fitness (required with ``x``).
+
+        Raises:
+            InvalidArgumentError: ``n`` is negative or exceeds the remaining budget, or ``x``
+                comes without ``f``.
+        """
+        n = int(n)
+        if n < 0 or n > self.remaining:
+            raise InvalidArgumentError(
+                f"add_evals: n must be in [0, {self.remaining}] (the remaining budget), got {n}"
+            )
+        self.n_evals += n
+        if x is None:
+            return
+        if f is None:
+            raise InvalidArgumentError("add_evals: a point x needs its fitness f")
+        if self.stopped:
+            return
+        fx = float(f) if np.isfinite(f) else np.inf
+        self._update_best(np.asarray(x, dtype=float).reshape(1, self.dim), np.array([fx]))
 
     def _update_best(self, x_batch: FloatArray, f: FloatArray) -> None:
         i = int(np.argmin(f))
@@ -253,7 +297,16 @@ class SolverSpec:
     needs_jacobian: bool = False
 
     def resolve(self, overrides: Mapping[str, Any]) -> dict[str, Any]:
-        """Defaults updated with ``overrides``; unknown names are refused, listing valid ones."""
+        """Defaults updated with ``overrides``; unknown names are refused, listing valid ones.
+
+        The sizes shared by the population solvers are checked here, for every solver that
+        has them: ``pop_size`` must be an integer ``>= MIN_POP_SIZE`` and ``iterations`` an
+        integer ``>= 1``.
+
+        Raises:
+            InvalidArgumentError: an unknown parameter name, or a bad ``pop_size`` /
+                ``iterations``.
+        """
         bad = [k for k in overrides if k not in self.params]
         if bad:
             valid = ", ".join(sorted(self.params)) or "(none)"
@@ -261,7 +314,16 @@ class SolverSpec:
                 f"unknown parameter(s) {', '.join(map(repr, bad))} for solver {self.name!r}; "
                 f"its parameters: {valid}"
             )
-        return {**self.params, **overrides}
+        out = {**self.params, **overrides}
+        for key, least in (("pop_size", MIN_POP_SIZE), ("iterations", 1)):
+            if key not in out:
+                continue
+            v = out[key]
+            if isinstance(v, bool) or not isinstance(v, (int, np.integer)) or v < least:
+                raise InvalidArgumentError(
+                    f"{key} must be >= {least} (an integer) for solver {self.name!r}, got {v!r}"
+                )
+        return out
 
 
 _REGISTRY: dict[str, SolverSpec] = {}
@@ -310,5 +372,5 @@ def get(name: str) -> SolverSpec:
     """
     try:
         return _REGISTRY[name]
-    except KeyError:
+    except (KeyError, TypeError):  # TypeError: an unhashable name such as a list
         raise unknown("solver", name, _REGISTRY) from None

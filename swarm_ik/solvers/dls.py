@@ -71,7 +71,9 @@ def run(
         if ev.done:
             break
         err = pin.log6(pose.actInv(o_m_target)).vector
-        jac = pin.computeFrameJacobian(model, data, q_pin, fid, pin.ReferenceFrame.LOCAL)
+        jac = np.asarray(
+            pin.computeFrameJacobian(model, data, q_pin, fid, pin.ReferenceFrame.LOCAL)
+        ).reshape(6, robot.nq)
         if problem.position_only:  # position error and Jacobian in world axes
             err = np.concatenate([o_m_target.translation - pose.translation, np.zeros(3)])
             jac = np.vstack([pose.rotation @ jac[:3], np.zeros_like(jac[3:])])

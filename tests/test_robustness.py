@@ -1,0 +1,689 @@
+"""Bad input is refused with a clear message; degenerate targets give an honest Result.
+
+Every bad input listed in ``docs/robustness.md`` has a test here.  Bad URDFs are written to
+``tmp_path``; no test data files are needed.
+"""
+
+from __future__ import annotations
+
+import time
+import warnings
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+import swarm_ik
+from swarm_ik import (
+    IKProblem,
+    InvalidArgumentError,
+    InvalidTargetError,
+    RobotFileNotFoundError,
+    RobotModelError,
+    SwarmIKError,
+    UnknownNameError,
+)
+from swarm_ik.cli import main
+from swarm_ik.fitness import FITNESS
+from swarm_ik.solvers import base
+
+SOLVERS = swarm_ik.solvers.names()
+POP_SOLVERS = [n for n in SOLVERS if "pop_size" in base.get(n).params]
+ITER_SOLVERS = [n for n in SOLVERS if "iterations" in base.get(n).params]
+
+LIMIT = '<limit lower="-1" upper="1" effort="1" velocity="1"/>'
+
+
+def _joint(
+    name: str,
+    parent: str,
+    child: str,
+    jtype: str = "revolute",
+    *,
+    limit: str = LIMIT,
+    axis: str = '<axis xyz="0 0 1"/>',
+    origin: str = '<origin xyz="0 0 0.1" rpy="0 0 0"/>',
+    extra: str = "",
+) -> str:
+    return (
+        f'<joint name="{name}" type="{jtype}"><parent link="{parent}"/><child link="{child}"/>'
+        f"{origin}{axis}{limit}{extra}</joint>"
+    )
+
+
+def _links(*names: str) -> str:
+    return "".join(f'<link name="{n}"/>' for n in names)
+
+
+def _robot(*parts: str) -> str:
+    return '<?xml version="1.0"?><robot name="bad">' + "".join(parts) + "</robot>"
+
+
+GOOD = _robot(_links("a", "b", "c"), _joint("j1", "a", "b"), _joint("j2", "b", "c"))
+
+BAD_URDFS: dict[str, tuple[str, str]] = {
+    # id: (file text, regex the message must match)
+    "empty file": ("", r"not a valid XML file"),
+    "not XML": ("this is <<< not xml", r"not a valid XML file"),
+    "XML but not URDF": ("<sdf><model/></sdf>", r"not a URDF \(root element is <sdf>"),
+    "loop (cycle)": (
+        _robot(
+            _links("a", "b", "c"),
+            _joint("j1", "a", "b"),
+            _joint("j2", "b", "c"),
+            _joint("j3", "c", "a"),
+        ),
+        r"exactly one root link, found none \(a loop",
+    ),
+    "loop (two parents)": (
+        _robot(
+            _links("a", "b", "c"),
+            _joint("j1", "a", "b"),
+            _joint("j2", "b", "c"),
+            _joint("j3", "a", "c"),
+        ),
+        r"link 'c' is the child of two joints \(a kinematic loop\)",
+    ),
+    "missing parent link": (
+        _robot(_links("a", "b"), _joint("j1", "nowhere", "b")),
+        r"joint 'j1' names parent link 'nowhere', which is not defined",
+    ),
+    "missing child element": (
+        _robot(
+            _links("a", "b"),
+            '<joint name="j1" type="revolute"><parent link="a"/>' + LIMIT + "</joint>",
+        ),
+        r"joint 'j1' names child link None",
+    ),
+    "two root links": (
+        _robot(_links("a", "b", "c"), _joint("j1", "a", "b")),
+        r"exactly one root link, found \['a', 'c'\]",
+    ),
+    "unknown joint type": (
+        _robot(_links("a", "b"), _joint("j1", "a", "b", "screw")),
+        r"joint 'j1' has unknown type 'screw'; valid types: revolute, continuous, prismatic",
+    ),
+    "NaN limit": (
+        _robot(_links("a", "b"), _joint("j1", "a", "b", limit=LIMIT.replace('"-1"', '"nan"'))),
+        r"joint 'j1' has non-finite limits \[nan, 1.0\]",
+    ),
+    "inf limit": (
+        _robot(
+            _links("a", "b"),
+            _joint("j1", "a", "b", "prismatic", limit=LIMIT.replace('"1"', '"inf"', 1)),
+        ),
+        r"joint 'j1' has non-finite limits",
+    ),
+    "lower > upper": (
+        _robot(_links("a", "b"), _joint("j1", "a", "b", limit=LIMIT.replace('"-1"', '"2"'))),
+        r"joint 'j1' has lower limit 2.0 > upper limit 1.0",
+    ),
+    "non-numeric limit": (
+        _robot(_links("a", "b"), _joint("j1", "a", "b", limit=LIMIT.replace('"-1"', '"abc"'))),
+        r"joint 'j1' has non-numeric limits \['abc', '1'\]",
+    ),
+    "revolute without limit": (
+        _robot(_links("a", "b"), _joint("j1", "a", "b", limit="")),
+        r"revolute joint 'j1' has no <limit.*use type 'continuous'",
+    ),
+    "no movable joint (fixed only)": (
+        _robot(_links("a", "b"), _joint("j1", "a", "b", "fixed", limit="")),
+        r"no movable joint between the root and frame 'b'",
+    ),
+    "no joint at all": (_robot(_links("a")), r"no movable joint between the root and frame 'a'"),
+    "no link at all": (_robot(), r"exactly one root link, found none"),
+    "zero axis": (
+        _robot(_links("a", "b"), _joint("j1", "a", "b", axis='<axis xyz="0 0 0"/>')),
+        r"joint 'j1' has a zero axis",
+    ),
+    "NaN axis": (
+        _robot(_links("a", "b"), _joint("j1", "a", "b", axis='<axis xyz="nan 0 1"/>')),
+        r"joint 'j1': <axis xyz='nan 0 1'> must be 3 finite numbers",
+    ),
+    "malformed origin": (
+        _robot(_links("a", "b"), _joint("j1", "a", "b", origin='<origin xyz="0 0"/>')),
+        r"joint 'j1': <origin xyz='0 0'> must be 3 finite numbers",
+    ),
+    "duplicate joint name": (
+        _robot(_links("a", "b", "c"), _joint("j1", "a", "b"), _joint("j1", "b", "c")),
+        r"joint name\(s\) \['j1'\] defined more than once",
+    ),
+    "duplicate link name": (
+        _robot(_links("a", "a", "b"), _joint("j1", "a", "b")),
+        r"link name\(s\) \['a'\] defined more than once",
+    ),
+    "floating joint on the chain": (
+        _robot(
+            _links("a", "b", "c"),
+            _joint("j0", "a", "b", "floating", limit=""),
+            _joint("j1", "b", "c"),
+        ),
+        r"joint 'j0' on the chain to 'c': .*not supported.*supported: revolute, continuous",
+    ),
+    "planar joint on the chain": (
+        _robot(
+            _links("a", "b", "c"),
+            _joint("j0", "a", "b", "planar", limit=""),
+            _joint("j1", "b", "c"),
+        ),
+        r"joint 'j0' on the chain to 'c': .*Planar.*not supported",
+    ),
+    "mimic joint on the chain": (
+        _robot(
+            _links("a", "b", "c"),
+            _joint("j1", "a", "b"),
+            _joint("j2", "b", "c", extra='<mimic joint="j1"/>'),
+        ),
+        r"joint 'j2' on the chain to 'c' mimics joint 'j1'; mimic joints on the chain are not",
+    ),
+}
+
+
+def _write(tmp_path: Path, text: str, name: str = "robot.urdf") -> Path:
+    path = tmp_path / name
+    path.write_text(text)
+    return path
+
+
+# ------------------------------------------------------------------------- error hierarchy
+@pytest.mark.parametrize(
+    ("cls", "builtin"),
+    [
+        (RobotFileNotFoundError, FileNotFoundError),
+        (RobotModelError, ValueError),
+        (UnknownNameError, KeyError),
+        (InvalidTargetError, ValueError),
+        (InvalidArgumentError, ValueError),
+    ],
+)
+def test_every_error_is_a_swarmik_error_and_its_builtin(cls: type, builtin: type) -> None:
+    assert issubclass(cls, SwarmIKError) and issubclass(cls, builtin)
+    assert getattr(swarm_ik, cls.__name__) is cls
+
+
+def test_unknown_name_error_prints_its_message_not_a_repr() -> None:
+    err = swarm_ik.errors.unknown("fitness", "l2", FITNESS)
+    # KeyError would print "'unknown fitness ...'" with quotes; the plural is spelled right
+    assert str(err) == "unknown fitness 'l2'; valid fitnesses: euler-zyz, paper-l1, paper-pso, se3"
+
+
+# ------------------------------------------------------------------------------- URDF files
+@pytest.mark.parametrize("case", list(BAD_URDFS))
+def test_bad_urdf_is_refused_with_a_message_naming_the_problem(
+    case: str, tmp_path: Path, capfd: pytest.CaptureFixture[str]
+) -> None:
+    text, message = BAD_URDFS[case]
+    path = _write(tmp_path, text)
+    with pytest.raises(RobotModelError, match=message) as info:
+        swarm_ik.RobotModel.from_urdf(path)
+    assert str(path) in str(info.value)  # the message names the file
+    # the user sees one message: nothing printed by urdfdom / Pinocchio on the side
+    assert capfd.readouterr().err == ""
+    # load_robot (the entry point of the CLI) refuses it the same way
+    with pytest.raises(RobotModelError, match=message):
+        swarm_ik.load_robot(path)
+
+
+def test_the_valid_reference_urdf_loads(tmp_path: Path) -> None:
+    # the bad cases above are small edits of this file: make sure the base itself is fine
+    robot = swarm_ik.RobotModel.from_urdf(_write(tmp_path, GOOD))
+    assert robot.nq == 2 and robot.ee_frame == "c"
+    np.testing.assert_array_equal(robot.lower, [-1.0, -1.0])
+
+
+def test_mimic_joint_off_the_chain_is_accepted(tmp_path: Path) -> None:
+    # a gripper finger mimicking another one is locked (off the chain): no reason to refuse
+    text = _robot(
+        _links("a", "b", "c", "f1", "f2"),
+        _joint("j1", "a", "b"),
+        _joint("j2", "b", "c"),
+        _joint("finger1", "c", "f1", "prismatic"),
+        _joint("finger2", "c", "f2", "prismatic", extra='<mimic joint="finger1"/>'),
+    )
+    robot = swarm_ik.RobotModel.from_urdf(_write(tmp_path, text), ee_frame="c")
+    assert robot.joint_names == ("j1", "j2")
+    assert set(robot.locked_joints) == {"finger1", "finger2"}
+
+
+def test_missing_file_is_refused(tmp_path: Path) -> None:
+    missing = tmp_path / "nothere.urdf"
+    with pytest.raises(RobotFileNotFoundError, match=r"URDF file not found: .*nothere.urdf"):
+        swarm_ik.RobotModel.from_urdf(missing)
+    with pytest.raises(FileNotFoundError, match="nothere.urdf"):  # the built-in still catches
+        swarm_ik.load_robot(str(missing))
+
+
+def test_unknown_robot_name_lists_the_robots() -> None:
+    with pytest.raises(UnknownNameError) as info:
+        swarm_ik.load_robot("yumi")
+    msg = str(info.value)
+    assert msg.startswith("unknown robot 'yumi'; valid robots: ")
+    for name in ("yumi_left", "loading_manipulator", "panda", "ur5"):
+        assert name in msg
+
+
+def test_unknown_end_effector_frame_lists_the_frames(tmp_path: Path) -> None:
+    with pytest.raises(UnknownNameError) as info:
+        swarm_ik.RobotModel.from_urdf(_write(tmp_path, GOOD), ee_frame="tool1")
+    assert str(info.value) == "unknown frame 'tool1'; valid frames: a, b, c"
+    with pytest.raises(KeyError):  # a built-in KeyError too
+        swarm_ik.load_robot("yumi_left", ee_frame="tool1")
+
+
+# ----------------------------------------------------------------------------------- targets
+@pytest.fixture(scope="module")
+def yumi() -> swarm_ik.RobotModel:
+    return swarm_ik.load_robot("yumi_left")
+
+
+def _pose_with(change: object) -> np.ndarray:
+    pose = np.eye(4)
+    pose[:3, 3] = [0.3, 0.1, 0.4]
+    change(pose)  # type: ignore[operator]
+    return pose
+
+
+BAD_TARGETS: dict[str, tuple[object, str]] = {
+    "NaN in the matrix": (
+        _pose_with(lambda p: p.__setitem__((0, 3), np.nan)),
+        r"NaN or infinite values at \(row, column\) \[\(0, 3\)\]",
+    ),
+    "inf in the matrix": (
+        _pose_with(lambda p: p.__setitem__((1, 1), np.inf)),
+        r"NaN or infinite values",
+    ),
+    "3x3 matrix": (np.eye(3), r"4x4 matrix.*got shape \(3, 3\)"),
+    "3 numbers": ([0.1, 0.2, 0.3], r"got shape \(3,\)"),
+    "None": (None, r"got None"),
+    "a string": ("abc", r"target must be numbers, got 'abc'"),
+    "strings in a matrix": ([["a"] * 4] * 4, r"target must be numbers"),
+    "scaled rotation (not orthonormal)": (
+        _pose_with(lambda p: p.__setitem__((slice(0, 3), slice(0, 3)), 1.01 * np.eye(3))),
+        r"not orthonormal: max\|RᵀR − I\| = 0.0201.*tolerance 1e-06.*project_to_se3",
+    ),
+    "reflection (det -1)": (
+        _pose_with(lambda p: p.__setitem__((2, 2), -1.0)),
+        r"not orthonormal: .*det = -1",
+    ),
+    "bottom row not 0 0 0 1": (
+        _pose_with(lambda p: p.__setitem__((3, 2), 1.0)),
+        r"bottom row must be \[0, 0, 0, 1\]",
+    ),
+    "zero quaternion": (([0.3, 0.1, 0.4], [0, 0, 0, 0]), r"quaternion has zero norm"),
+    "zero quaternion (7 numbers)": ([0.3, 0.1, 0.4, 0, 0, 0, 0], r"quaternion has zero norm"),
+    "NaN in the quaternion": (
+        ([0.3, 0.1, 0.4], [0, 0, np.nan, 1]),
+        r"quaternion must be 4 finite numbers",
+    ),
+    "3-number quaternion": (([0.3, 0.1, 0.4], [0, 0, 1]), r"quaternion must be 4 finite numbers"),
+    "2-number position": (([0.3, 0.1], [0, 0, 0, 1]), r"position must be 3 finite numbers"),
+    "NaN in the position": (
+        ([0.3, np.nan, 0.4], [0, 0, 0, 1]),
+        r"position must be 3 finite numbers",
+    ),
+}
+
+
+@pytest.mark.parametrize("case", list(BAD_TARGETS))
+def test_bad_target_is_refused(case: str, yumi: swarm_ik.RobotModel) -> None:
+    target, message = BAD_TARGETS[case]
+    with pytest.raises(InvalidTargetError, match=message):
+        IKProblem(yumi, target)
+
+
+def test_rotation_within_tolerance_is_accepted_and_beyond_is_refused(
+    yumi: swarm_ik.RobotModel,
+) -> None:
+    pose = yumi.fk(yumi.mid_q())
+    slightly = pose.copy()
+    slightly[:3, :3] *= 1 + 1e-8  # a rounded matrix: within the default tolerance 1e-6
+    IKProblem(yumi, slightly)
+    rounded = np.round(pose, 3)  # printed with 3 decimals, as paper 000's target
+    with pytest.raises(InvalidTargetError, match="not orthonormal"):
+        IKProblem(yumi, rounded)
+    IKProblem(yumi, rounded, orth_tol=1e-2)  # the user may raise the tolerance...
+    fixed = swarm_ik.project_to_se3(rounded)  # ...or project the matrix onto SE(3)
+    np.testing.assert_allclose(fixed[:3, :3].T @ fixed[:3, :3], np.eye(3), atol=1e-12)
+    IKProblem(yumi, fixed)
+    for bad in (np.nan, -1.0, "1e-3"):
+        with pytest.raises(InvalidArgumentError, match="orth_tol must be a finite"):
+            IKProblem(yumi, pose, orth_tol=bad)  # type: ignore[arg-type]
+
+
+# --------------------------------------------------------------------- problem arguments
+def test_bad_problem_arguments_are_refused(yumi: swarm_ik.RobotModel) -> None:
+    pose = yumi.fk(yumi.mid_q())
+    with pytest.raises(UnknownNameError, match="unknown fitness 'l2'; valid fitnesses: euler-zyz"):
+        IKProblem(yumi, pose, fitness="l2")
+    with pytest.raises(UnknownNameError, match=r"unknown fitness \['se3'\]"):
+        IKProblem(yumi, pose, fitness=["se3"])  # type: ignore[arg-type]
+    for label in ("w_rot", "lam", "mu"):
+        for bad in (-1.0, np.nan, np.inf, "a", None):
+            with pytest.raises(InvalidArgumentError, match=f"{label} must be a finite non-neg"):
+                IKProblem(yumi, pose, **{label: bad})  # type: ignore[arg-type]
+    with pytest.raises(InvalidArgumentError, match="robot must be a RobotModel"):
+        IKProblem("yumi_left", pose)  # type: ignore[arg-type]
+    with pytest.raises(InvalidArgumentError, match="lower bounds exceed upper bounds"):
+        IKProblem(yumi, pose, lower=yumi.mid_q() + 0.1, upper=yumi.mid_q())
+    with pytest.raises(
+        InvalidArgumentError, match="bounds may only narrow the joint limits; joint"
+    ):
+        IKProblem(yumi, pose, lower=yumi.lower - 1.0)
+    with pytest.raises(InvalidArgumentError, match="upper must hold 7 values"):
+        IKProblem(yumi, pose, upper=[1.0, 2.0])
+
+
+# ---------------------------------------------------------------------- solve arguments
+@pytest.fixture(scope="module")
+def problem(yumi: swarm_ik.RobotModel) -> IKProblem:
+    return IKProblem(yumi, yumi.fk(yumi.mid_q() + 0.2))
+
+
+def test_unknown_solver_lists_every_solver(problem: IKProblem) -> None:
+    with pytest.raises(UnknownNameError) as info:
+        swarm_ik.solve(problem, "abc")
+    assert str(info.value) == f"unknown solver 'abc'; valid solvers: {', '.join(SOLVERS)}"
+    with pytest.raises(UnknownNameError, match="unknown solver"):
+        swarm_ik.solve(problem, ["dls"])  # type: ignore[arg-type]
+
+
+@pytest.mark.parametrize(
+    ("q0", "message"),
+    [
+        ([0.0, 0.0], r"q0 must hold 7 values \(one per joint: yumi_joint_1, .*got shape \(2,\)"),
+        (np.zeros((7, 1)), r"q0 must hold 7 values .*got shape \(7, 1\)"),
+        ([np.nan] * 7, r"q0 contains NaN or infinite values"),
+        ([0, 0, 0, np.inf, 0, 0, 0], r"q0 contains NaN or infinite values"),
+        ("abc", r"q0 must be 7 numbers \(one per joint\), got 'abc'"),
+    ],
+)
+def test_bad_q0_is_refused(problem: IKProblem, q0: object, message: str) -> None:
+    with pytest.raises(InvalidArgumentError, match=message):
+        swarm_ik.solve(problem, "dls", q0=q0, max_evals=10)
+
+
+def test_q0_outside_the_limits_is_clipped_with_a_warning(
+    problem: IKProblem, yumi: swarm_ik.RobotModel
+) -> None:
+    q0 = yumi.mid_q().copy()
+    q0[1] = yumi.upper[1] + 0.5
+    q0[4] = yumi.lower[4] - 2.0
+    given = q0.copy()
+    with pytest.warns(
+        UserWarning,
+        match=r"q0 lies outside the joint limits at \['yumi_joint_2', "
+        r"'yumi_joint_5'\]; clipped into them",
+    ):
+        # one evaluation: dls's first point is the (clipped) start itself
+        res = swarm_ik.solve(problem, "dls", q0=q0, max_evals=1)
+    np.testing.assert_array_equal(res.q, np.clip(q0, yumi.lower, yumi.upper))
+    assert res.within_limits and res.n_evals == 1
+    np.testing.assert_array_equal(q0, given)  # the caller's array is not modified
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")  # a q0 within the limits: no warning
+        swarm_ik.solve(problem, "dls", q0=yumi.mid_q(), max_evals=1)
+
+
+@pytest.mark.parametrize(
+    ("kwargs", "message"),
+    [
+        ({"max_evals": 0}, r"max_evals must be a positive integer, got 0"),
+        ({"max_evals": -5}, r"max_evals must be a positive integer, got -5"),
+        ({"max_evals": 1.5}, r"max_evals must be a positive integer, got 1.5"),
+        ({"max_evals": True}, r"max_evals must be a positive integer, got True"),
+        ({"time_limit": 0}, r"time_limit must be a positive number of seconds, got 0"),
+        ({"time_limit": -1.0}, r"time_limit must be a positive number of seconds, got -1.0"),
+        ({"time_limit": float("nan")}, r"time_limit must be a positive number of seconds"),
+        ({"time_limit": float("inf")}, r"time_limit must be a positive number of seconds"),
+        ({"time_limit": "1"}, r"time_limit must be a positive number of seconds, got '1'"),
+        ({"seed": -1}, r"seed must be in \[0, 2\*\*63\), got -1"),
+        ({"seed": 1.5}, r"seed must be a non-negative integer, got 1.5"),
+        ({"seed": "7"}, r"seed must be a non-negative integer, got '7'"),
+        ({"tol_pos": 0.0}, r"tol_pos must be a positive number, got 0.0"),
+        ({"tol_rot": -1e-3}, r"tol_rot must be a positive number"),
+    ],
+)
+def test_bad_budget_seed_or_tolerance_is_refused(
+    problem: IKProblem, kwargs: dict[str, object], message: str
+) -> None:
+    with pytest.raises(InvalidArgumentError, match=message):
+        swarm_ik.solve(problem, "gwo", **kwargs)  # type: ignore[arg-type]
+
+
+def test_problem_must_be_an_ikproblem(yumi: swarm_ik.RobotModel) -> None:
+    with pytest.raises(InvalidArgumentError, match="problem must be an IKProblem, got ndarray"):
+        swarm_ik.solve(yumi.fk(yumi.mid_q()))  # type: ignore[arg-type]
+
+
+@pytest.mark.parametrize("name", POP_SOLVERS)
+def test_population_below_four_is_refused_for_every_population_solver(
+    name: str, problem: IKProblem
+) -> None:
+    for bad in (3, 0, -1, 4.5, "8", True):
+        with pytest.raises(InvalidArgumentError, match=rf"pop_size must be >= 4 .*{name!r}"):
+            swarm_ik.solve(problem, name, pop_size=bad, max_evals=50)
+    res = swarm_ik.solve(problem, name, pop_size=4, max_evals=50)  # the smallest one runs
+    assert 0 < res.n_evals <= 50 and res.within_limits
+
+
+@pytest.mark.parametrize("name", ITER_SOLVERS)
+def test_non_positive_iterations_are_refused(name: str, problem: IKProblem) -> None:
+    for bad in (0, -3, 2.5):
+        with pytest.raises(InvalidArgumentError, match=rf"iterations must be >= 1 .*{name!r}"):
+            swarm_ik.solve(problem, name, iterations=bad)
+
+
+@pytest.mark.parametrize("name", SOLVERS)
+def test_unknown_solver_parameter_lists_the_valid_ones(name: str, problem: IKProblem) -> None:
+    with pytest.raises(InvalidArgumentError) as info:
+        swarm_ik.solve(problem, name, popsize=10, max_evals=10)
+    msg = str(info.value)
+    valid = ", ".join(sorted(base.get(name).params)) or "(none)"
+    assert msg == f"unknown parameter(s) 'popsize' for solver {name!r}; its parameters: {valid}"
+
+
+def test_minimize_refuses_bad_objectives_bounds_and_starts() -> None:
+    def sphere(x: np.ndarray) -> np.ndarray:
+        return (x**2).sum(axis=1)
+
+    lo, hi = [-1.0, -1.0], [1.0, 1.0]
+    with pytest.raises(InvalidArgumentError, match="objective must be a callable"):
+        swarm_ik.minimize(3, lo, hi)  # type: ignore[arg-type]
+    with pytest.raises(InvalidArgumentError, match=r"returned shape \(30, 2\) for 30 points"):
+        swarm_ik.minimize(lambda x: x, lo, hi, "gwo", max_evals=60)
+    with pytest.raises(InvalidArgumentError, match=r"lower > upper at indices \[0, 1\]"):
+        swarm_ik.minimize(sphere, hi, lo)
+    with pytest.raises(InvalidArgumentError, match="non-empty finite arrays of the same shape"):
+        swarm_ik.minimize(sphere, [], [])
+    with pytest.raises(InvalidArgumentError, match="non-empty finite arrays of the same shape"):
+        swarm_ik.minimize(sphere, [-1.0, np.nan], hi)
+    with pytest.raises(InvalidArgumentError, match="non-empty finite arrays of the same shape"):
+        swarm_ik.minimize(sphere, [-1.0], hi)
+    with pytest.raises(InvalidArgumentError, match="lower and upper must be arrays of numbers"):
+        swarm_ik.minimize(sphere, ["a", "b"], hi)
+    with pytest.raises(InvalidArgumentError, match=r"x0 must hold 2 finite numbers"):
+        swarm_ik.minimize(sphere, lo, hi, x0=[0.0, 0.0, 0.0])
+    with pytest.raises(InvalidArgumentError, match="f_target must be a finite number"):
+        swarm_ik.minimize(sphere, lo, hi, f_target=float("nan"))
+    with pytest.raises(InvalidArgumentError, match="needs an IK problem"):
+        swarm_ik.minimize(sphere, lo, hi, "dls")
+    with pytest.raises(InvalidArgumentError, match="pop_size must be >= 4"):
+        swarm_ik.minimize(sphere, lo, hi, "gwo", pop_size=3)
+    with pytest.warns(UserWarning, match=r"x0 lies outside the bounds at indices \[0\]"):
+        res = swarm_ik.minimize(sphere, lo, hi, "gwo", x0=[5.0, 0.0], max_evals=1, pop_size=4)
+    np.testing.assert_array_equal(res.x, [1.0, 0.0])  # the clipped start, evaluated first
+
+
+# ------------------------------------------------------------------------------ time limit
+class _SlowProblem(IKProblem):
+    """An IK problem whose every fitness / Jacobian call takes ``DELAY`` seconds longer."""
+
+    DELAY = 0.01
+
+    def fitness(self, q_batch: np.ndarray) -> np.ndarray:
+        time.sleep(self.DELAY)
+        return super().fitness(q_batch)
+
+    def fitness_of_poses(self, poses: np.ndarray) -> np.ndarray:
+        time.sleep(self.DELAY)
+        return super().fitness_of_poses(poses)
+
+    def residual_jacobian(self, q_batch: np.ndarray) -> tuple[np.ndarray, ...]:  # type: ignore[override]
+        time.sleep(self.DELAY)
+        return super().residual_jacobian(q_batch)
+
+
+@pytest.mark.parametrize("name", SOLVERS)
+def test_time_limit_is_honoured_within_ten_percent_on_a_slow_fitness(
+    name: str, yumi: swarm_ik.RobotModel
+) -> None:
+    target = yumi.fk(yumi.mid_q())
+    target[:3, 3] += 1.0  # out of reach: nothing stops the run but the clock
+    slow = _SlowProblem(yumi, target)
+    limit = 0.4
+    # an iteration count that would run for minutes: only the time limit can end the run
+    params = {"iterations": 10**6} if "iterations" in base.get(name).params else {}
+    t0 = time.perf_counter()
+    res = swarm_ik.solve(slow, name, time_limit=limit, **params)  # type: ignore[arg-type]
+    wall = time.perf_counter() - t0
+    assert wall <= 1.1 * limit, f"{name} ran {wall:.3f} s for a {limit} s limit"
+    assert res.n_evals > 0 and not res.success and np.isfinite(res.fitness)
+
+
+# ------------------------------------------------------------ unreachable / degenerate targets
+@pytest.fixture(scope="module")
+def planar(tmp_path_factory: pytest.TempPathFactory) -> swarm_ik.RobotModel:
+    """Two links of 1 m and 0.8 m about z: reach 1.8 m, stretched = singular."""
+    text = _robot(
+        _links("base", "l1", "l2", "tip"),
+        _joint(
+            "j1",
+            "base",
+            "l1",
+            limit=LIMIT.replace('"-1"', '"-3.1"').replace('"1"', '"3.1"'),
+            origin='<origin xyz="0 0 0"/>',
+        ),
+        _joint(
+            "j2",
+            "l1",
+            "l2",
+            limit=LIMIT.replace('"-1"', '"-3.1"').replace('"1"', '"3.1"'),
+            origin='<origin xyz="1 0 0"/>',
+        ),
+        '<joint name="tool" type="fixed"><parent link="l2"/><child link="tip"/>'
+        '<origin xyz="0.8 0 0"/></joint>',
+    )
+    path = tmp_path_factory.mktemp("planar") / "planar.urdf"
+    path.write_text(text)
+    return swarm_ik.load_robot(path)
+
+
+def _planar_pose(radius: float, angle: float = 0.7) -> np.ndarray:
+    """Pose at ``radius`` from the base, arm pointing outwards (the stretched orientation)."""
+    c, s = np.cos(angle), np.sin(angle)
+    pose = np.eye(4)
+    pose[:2, :2] = [[c, -s], [s, c]]
+    pose[:2, 3] = [radius * c, radius * s]
+    return pose
+
+
+def _degenerate_cases(yumi: swarm_ik.RobotModel, planar: swarm_ik.RobotModel):  # noqa: ANN202
+    far = yumi.fk(yumi.mid_q())
+    far[:3, 3] = [5.0, 5.0, 5.0]
+    one_free_lo = np.r_[yumi.mid_q()[:6], yumi.lower[6]]
+    one_free_hi = np.r_[yumi.mid_q()[:6], yumi.upper[6]]
+    turned = yumi.fk(np.r_[yumi.mid_q()[:6], 0.5 * yumi.upper[6]])
+    return {
+        # id: (problem, reachable?)
+        "yumi: 5 m away": (IKProblem(yumi, far), False),
+        "yumi: 5 m away, paper-l1": (IKProblem(yumi, far, "paper-l1"), False),
+        "yumi: 5 m away, euler-zyz": (IKProblem(yumi, far, "euler-zyz"), False),
+        "yumi: 5 m away, paper-pso": (IKProblem(yumi, far, "paper-pso"), False),
+        "yumi: stretched (q = 0, singular)": (IKProblem.from_q(yumi, np.zeros(7)), True),
+        "planar: on the boundary (singular)": (IKProblem(planar, _planar_pose(1.8)), True),
+        "planar: 1 mm beyond the boundary": (IKProblem(planar, _planar_pose(1.801)), False),
+        "planar: beyond, position only": (IKProblem(planar, _planar_pose(1.801), w_rot=0), False),
+        "planar: folded to the joint limit (inner boundary)": (
+            IKProblem.from_q(planar, [0.7, 3.1]),
+            True,
+        ),
+        "yumi: all joints fixed but one, reachable": (
+            IKProblem(yumi, turned, lower=one_free_lo, upper=one_free_hi),
+            True,
+        ),
+        "yumi: all joints fixed but one, unreachable": (
+            IKProblem(yumi, far, lower=one_free_lo, upper=one_free_hi),
+            False,
+        ),
+        "yumi: every joint fixed": (
+            IKProblem(yumi, far, lower=yumi.mid_q(), upper=yumi.mid_q()),
+            False,
+        ),
+    }
+
+
+@pytest.mark.parametrize("name", SOLVERS)
+def test_unreachable_and_degenerate_targets_give_an_honest_result(
+    name: str, yumi: swarm_ik.RobotModel, planar: swarm_ik.RobotModel
+) -> None:
+    for case, (prob, reachable) in _degenerate_cases(yumi, planar).items():
+        with warnings.catch_warnings():
+            warnings.simplefilter("error")  # no RuntimeWarning (0/0, overflow...) either
+            res = swarm_ik.solve(prob, name, seed=1, max_evals=300)
+        where = f"{name} on {case}: {res}"
+        assert isinstance(res, swarm_ik.Result), where
+        values = [res.fitness, res.position_error, res.rotation_error, res.time_s]
+        assert np.all(np.isfinite(res.q)) and np.all(np.isfinite(values)), where
+        assert np.all(np.isfinite(res.history)) and 0 < res.n_evals <= 300, where
+        assert res.within_limits and np.all(res.q >= prob.lower), where
+        assert np.all(res.q <= prob.upper), where
+        # the best found is reported honestly: its fitness is recomputed from q...
+        recomputed = float(prob.fitness(res.q[None])[0])
+        assert res.fitness == pytest.approx(recomputed, rel=1e-9, abs=1e-12), where
+        # ...and success is checked, never claimed
+        dp, dr = swarm_ik.verify(prob, res.q)
+        ok = dp <= 1e-5 and (prob.position_only or dr <= 1e-5)
+        assert res.success == ok, where
+        if not reachable:
+            assert not res.success, where
+
+
+# ------------------------------------------------------------------------------------ CLI
+@pytest.mark.parametrize(
+    ("args", "message"),
+    [
+        (["--robot", "yumi"], "unknown robot 'yumi'; valid robots:"),
+        (["--robot", "{bad}"], "not a valid XML file"),
+        (["--robot", "{missing}"], "URDF file not found"),
+        (["--robot", "yumi_left", "--frame", "tool1"], "unknown frame 'tool1'; valid frames:"),
+        (["--robot", "yumi_left", "--fitness", "l2"], "unknown fitness 'l2'; valid fitnesses:"),
+        (["--robot", "yumi_left", "--solver", "nope"], "unknown solver 'nope'; valid solvers:"),
+        (["--robot", "yumi_left", "--param", "popsize=3"], "its parameters: "),
+        (["--robot", "yumi_left", "--solver", "pso", "--param", "pop_size=2"], "pop_size must be"),
+        (["--robot", "yumi_left", "--max-evals", "0"], "max_evals must be a positive integer"),
+        (["--robot", "yumi_left", "--time-limit", "-1"], "time_limit must be a positive"),
+        (["--robot", "yumi_left", "--q0", "1", "2"], "q0 must hold 7 values"),
+        (["--robot", "yumi_left", "--seed", "-1"], "seed must be in"),
+        (
+            ["--robot", "yumi_left", "--pose", "0.3", "0", "0.3", "0", "0", "0", "0"],
+            "quaternion has zero norm",
+        ),
+        (
+            ["--robot", "yumi_left", "--pose", "nan", "0", "0.3", "0", "0", "0", "1"],
+            "position must be 3 finite numbers",
+        ),
+    ],
+)
+def test_cli_turns_every_error_into_one_line_and_exit_code_2(
+    args: list[str], message: str, tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    bad = _write(tmp_path, "not xml", "bad.urdf")
+    args = [a.format(bad=bad, missing=tmp_path / "missing.urdf") for a in args]
+    if "--pose" not in args:
+        args += ["--from-q", "0.1", "-0.5", "0.2", "0.3", "-0.2", "0.4", "0.1"]
+    rc = main(["solve", *args])
+    err = capsys.readouterr().err
+    assert rc == 2, err
+    lines = err.strip().splitlines()
+    assert len(lines) == 1 and lines[0].startswith("swarm-ik: error: "), err
+    assert message in lines[0]
