@@ -1,0 +1,338 @@
+"""The paper benchmark: CSV schema, resume after interruption, statistics, verdicts, report."""
+
+from __future__ import annotations
+
+import csv
+import math
+import pickle
+import subprocess
+import sys
+import textwrap
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+import swarm_ik
+from swarm_ik.bench import common, paper, published
+from swarm_ik.bench.common import RUN_FIELDS, RunSpec, judge, summarize
+from swarm_ik.bench.report import Comparison, Headline, render_comparison
+from swarm_ik.errors import InvalidArgumentError, UnknownNameError
+
+
+def tiny_specs(n: int = 5, experiment: str = "t-func") -> list[RunSpec]:
+    """``n`` GWO runs on Hartmann-3 with 6 wolves and 8 iterations (milliseconds each)."""
+    return [RunSpec(experiment, "F4", "min", "gwo", seed, "function", None, 6, 8)
+            for seed in range(n)]
+
+
+def ik_spec(get_robot, solver: str = "dls", seed: int = 0) -> RunSpec:
+    robot = get_robot("yumi_left")
+    target = robot.fk(np.array([0.3, -0.8, 0.4, 0.6, -0.5, 1.2, 0.7]))
+    return RunSpec("t-ik", "yumi_left", "pose0", solver, seed, "se3",
+                   tuple(float(v) for v in target.ravel()), iterations=60, max_evals=60)
+
+
+def comparable(rows: list[dict]) -> dict[str, tuple]:
+    """Rows by key without the wall-clock time (the only non-deterministic column)."""
+    return {r["key"]: tuple(r[f] for f in RUN_FIELDS if f != "time_s") for r in rows}
+
+
+# --------------------------------------------------------------------------- CSV schema
+def test_csv_schema_one_typed_row_per_run(tmp_path: Path) -> None:
+    specs = tiny_specs(4)
+    summary = common.execute(specs, tmp_path, jobs=1, progress=False)
+    assert (summary.total, summary.new, summary.skipped, summary.interrupted) == (4, 4, 0, False)
+    path = common.csv_path(tmp_path, "t-func")
+    with open(path, newline="") as fh:
+        raw = list(csv.reader(fh))
+    assert tuple(raw[0]) == RUN_FIELDS
+    assert len(raw) == 1 + 4
+    rows = common.read_rows(path)
+    assert sorted(r["key"] for r in rows) == sorted(s.key for s in specs)
+    f4 = swarm_ik.testfunctions.FUNCTIONS["F4"]
+    for r in rows:
+        assert isinstance(r["seed"], int) and isinstance(r["n_evals"], int)
+        assert isinstance(r["success"], bool) and r["within_limits"] is True
+        assert r["pop_size"] == 6 and r["iterations"] == 8 and r["max_evals"] is None
+        assert r["n_evals"] == 6 * 8
+        assert math.isnan(r["position_error"]) and math.isnan(r["rotation_error"])
+        assert r["fitness"] >= f4.f_min - 1e-5
+        assert r["success"] == (r["fitness"] - f4.f_min <= common.FUNCTION_SUCCESS_GAP)
+    hist = common.read_histories(common.history_path(tmp_path, "t-func"))
+    assert set(hist) == {s.key for s in specs}
+    for r in rows:
+        h = hist[r["key"]]
+        assert h["n_iter"] == 8 and h["n_evals"] == 48
+        f = np.array(h["f"], dtype=float)
+        assert np.all(np.diff(f) <= 0)  # best-so-far never increases
+        assert f[-1] == pytest.approx(r["fitness"], rel=1e-4)
+
+
+def test_ik_row_errors_are_pinocchio_checked(tmp_path: Path, get_robot) -> None:
+    spec = ik_spec(get_robot)
+    outcome = common.run_one(spec)
+    row = outcome.row
+    assert set(row) == set(RUN_FIELDS)
+    robot = get_robot("yumi_left")
+    problem = swarm_ik.IKProblem(robot, np.array(spec.target).reshape(4, 4))
+    res = swarm_ik.solve(problem, "dls", seed=0, iterations=60, max_evals=60,
+                         stop_on_success=False)
+    assert row["fitness"] == res.fitness
+    assert row["position_error"] == res.position_error
+    assert row["success"] == (row["position_error"] <= 1e-5 and row["rotation_error"] <= 1e-5
+                              and row["within_limits"])
+    assert row["n_evals"] <= 60
+    assert outcome.history is not None and outcome.history["n_iter"] == len(res.history)
+
+
+def test_keys_distinguish_settings() -> None:
+    a = RunSpec("e", "F1", "min", "gwo", 0, "function", None, 30, 200)
+    assert a.key != RunSpec("e", "F1", "min", "gwo", 0, "function", None, 30, 100).key
+    assert a.key != RunSpec("e", "F1", "min", "gwo", 1, "function", None, 30, 200).key
+    assert a.key != RunSpec("e", "F1", "min", "mgwo", 0, "function", None, 30, 200).key
+    with pytest.raises(InvalidArgumentError, match="duplicate"):
+        common.execute([a, a], Path("/nonexistent"), progress=False)
+
+
+def test_compact_history_keeps_last_point_and_bounds_size() -> None:
+    h = np.geomspace(1.0, 1e-12, 1000)
+    c = common.compact_history(h, 100_000, max_points=50)
+    assert len(c["it"]) == len(c["f"]) <= 50
+    assert c["it"][0] == 0 and c["it"][-1] == 999
+    assert c["f"][-1] == pytest.approx(1e-12, rel=1e-4)
+    assert common.compact_history([np.inf, 1.0], 2)["f"] == [None, 1.0]
+
+
+# --------------------------------------------------------------------------- resume
+class _Interrupt:
+    """A worker that raises KeyboardInterrupt on its ``k``-th call (a Ctrl-C mid-run)."""
+
+    def __init__(self, k: int) -> None:
+        self.k, self.calls = k, 0
+
+    def __call__(self, spec: RunSpec) -> common.RunOutcome:
+        self.calls += 1
+        if self.calls == self.k:
+            raise KeyboardInterrupt
+        return common.run_one(spec)
+
+
+def test_resume_after_keyboard_interrupt(tmp_path: Path) -> None:
+    specs = tiny_specs(6)
+    first = common.execute(specs, tmp_path / "a", jobs=1, progress=False, worker=_Interrupt(4))
+    assert first.interrupted and first.new == 3
+    assert len(common.read_rows(common.csv_path(tmp_path / "a", "t-func"))) == 3
+    calls: list[str] = []
+
+    def counting(spec: RunSpec) -> common.RunOutcome:
+        calls.append(spec.key)
+        return common.run_one(spec)
+
+    second = common.execute(specs, tmp_path / "a", jobs=1, progress=False, worker=counting)
+    assert (second.skipped, second.new, second.interrupted) == (3, 3, False)
+    assert calls == [s.key for s in specs[3:]]  # finished runs are not redone
+    resumed = common.read_rows(common.csv_path(tmp_path / "a", "t-func"))
+    common.execute(specs, tmp_path / "b", jobs=1, progress=False)
+    straight = common.read_rows(common.csv_path(tmp_path / "b", "t-func"))
+    assert comparable(resumed) == comparable(straight)
+    assert len(common.read_histories(common.history_path(tmp_path / "a", "t-func"))) == 6
+
+
+def test_resume_after_killed_process(tmp_path: Path) -> None:
+    specs = tiny_specs(5)
+    (tmp_path / "specs.pkl").write_bytes(pickle.dumps(specs))
+    script = tmp_path / "killed.py"
+    script.write_text(textwrap.dedent(f"""
+        import os, pickle, signal
+        from swarm_ik.bench import common
+
+        specs = pickle.loads(open({str(tmp_path / "specs.pkl")!r}, "rb").read())
+        calls = [0]
+
+        def worker(spec):
+            calls[0] += 1
+            if calls[0] == 3:
+                os.kill(os.getpid(), signal.SIGKILL)
+            return common.run_one(spec)
+
+        common.execute(specs, {str(tmp_path / "out")!r}, jobs=1, progress=False, worker=worker,
+                       initializer=None)
+    """))
+    proc = subprocess.run([sys.executable, str(script)], capture_output=True, timeout=120)
+    assert proc.returncode == -9, proc.stderr.decode()
+    path = common.csv_path(tmp_path / "out", "t-func")
+    before = common.read_rows(path)
+    assert len(before) == 2
+    with open(path, "a") as fh:  # and a row torn in the middle of its write
+        fh.write("t-func|F4|torn,t-func,F4")
+    assert len(common.read_rows(path)) == 2
+    summary = common.execute(specs, tmp_path / "out", jobs=1, progress=False)
+    assert (summary.skipped, summary.new) == (2, 3)
+    after = common.read_rows(path)
+    assert sorted(r["key"] for r in after) == sorted(s.key for s in specs)
+    assert "torn" not in path.read_text()
+    assert {k: v for k, v in comparable(after).items() if k in comparable(before)} == \
+        comparable(before)
+
+
+def test_results_do_not_depend_on_jobs(tmp_path: Path) -> None:
+    specs = tiny_specs(4)
+    common.execute(specs, tmp_path / "one", jobs=1, progress=False)
+    s2 = common.execute(specs, tmp_path / "two", jobs=2, progress=False, initializer=None)
+    assert s2.new == 4
+    one = common.read_rows(common.csv_path(tmp_path / "one", "t-func"))
+    two = common.read_rows(common.csv_path(tmp_path / "two", "t-func"))
+    assert comparable(one) == comparable(two)
+
+
+# --------------------------------------------------------------------------- statistics
+def test_summarize_uses_population_std() -> None:
+    st = summarize([4.0, 1.0, 3.0, 2.0])
+    assert (st.n, st.best, st.worst, st.mean, st.median) == (4, 1.0, 4.0, 2.5, 2.5)
+    assert st.var == pytest.approx(1.25)  # ddof = 0; ddof = 1 would give 5/3
+    assert st.std == pytest.approx(math.sqrt(1.25))
+    assert st.get("worst") == 4.0
+    with pytest.raises(InvalidArgumentError, match="valid"):
+        st.get("max")
+    with pytest.raises(InvalidArgumentError):
+        summarize([])
+    assert common.success_rate([True, False, True, True]) == 0.75
+    assert math.isnan(common.success_rate([]))
+
+
+def test_verdict_rule() -> None:
+    assert judge(5.3, 5.27).label == "reproduced"
+    assert judge(0.05, 0.43).label == "reproduced"  # factor 8.6: same order of magnitude
+    assert judge(0.04, 0.43).label == "better"
+    worse = judge(2.2, 0.0122, why_worse="unreachable")
+    assert worse.label == "worse" and "unreachable" in worse.text and worse.reason == "unreachable"
+    assert "cause not identified" in judge(1.0, 1e-3).text
+    # both at machine precision: equal under the IK floor, very different without it
+    assert judge(7.6e-16, 4.04e-16, floor=1e-12).label == "reproduced"
+    assert judge(1e-10, 4.04e-16, floor=1e-12).label == "worse"
+    # negative minimum (Hartmann-3): distances to f_min, at the printed resolution
+    fmin = published.HARTMANN3_MIN
+    assert judge(-3.86244, -3.8628, f_min=fmin, floor=5e-5).label == "reproduced"
+    assert judge(-3.8609, -3.8628, f_min=fmin, floor=5e-5).label == "worse"
+    assert judge(-3.8628, -3.8609, f_min=fmin, floor=5e-5).label == "better"
+
+
+def _rows(solver: str, values: list[float], **extra) -> list[dict]:
+    return [{"key": f"{solver}{i}", "solver": solver, "fitness": v, "success": False,
+             "position_error": 1.0, **extra} for i, v in enumerate(values)]
+
+
+def test_report_puts_published_numbers_beside_ours() -> None:
+    table = published.P000_TABLE2
+    rows = _rows("foa", [5.2, 5.3, 5.4]) + _rows("hlfoa", [1e-15, 2e-15, 3e-16]) \
+        + _rows("dls", [1e-16])
+    hl = Headline()
+    md = render_comparison(Comparison("t", lambda r: True, ("foa", "hlfoa", "dls"), table,
+                                      floor=1e-12), rows, hl, "exp")
+    head = next(line for line in md.splitlines() if line.startswith("| algorithm"))
+    cols = [c.strip() for c in head.strip("|").split("|")]
+    assert cols.index("mean (paper)") == cols.index("mean (ours)") + 1
+    foa = next(line for line in md.splitlines() if line.startswith("| FOA"))
+    assert "| 5.3 | 5.27 |" in foa and "reproduced" in foa  # mean 5.3 beside the paper's 5.27
+    assert "reproduced" in next(line for line in md.splitlines() if line.startswith("| HLFOA"))
+    assert "no published number" in next(line for line in md.splitlines() if "`dls`" in line)
+    sfoa = next(line for line in md.splitlines() if line.startswith("| SFOA"))
+    assert "published only" in sfoa and "6.93" in sfoa
+    assert [r[2] for r in hl.rows] == ["FOA", "HLFOA"]
+
+
+def test_unattainable_published_value_is_worse_with_reason() -> None:
+    rows = _rows("gwo", [2.2, 2.3])
+    comp = Comparison("t", lambda r: True, ("gwo",), published.P003_TABLE4,
+                      stats=("mean", "best"), attainable=2.1,
+                      why_worse=lambda s, st: "unreachable within the stated limits")
+    line = next(x for x in render_comparison(comp, rows).splitlines() if "`gwo`" in x)
+    assert "worse" in line and "unreachable" in line  # ratio 5.2 alone would say reproduced
+
+
+# --------------------------------------------------------------------------- experiments
+def test_paper_targets(get_robot) -> None:
+    robot = get_robot("yumi_left")
+    printed = paper.printed_target()
+    problem = swarm_ik.IKProblem(robot, printed, "paper-l1", orth_tol=1e-4)
+    assert np.array_equal(problem.target, printed)  # kept as printed, not projected
+    q = np.asarray(paper.Q_EXACT)
+    assert robot.within_limits(q)
+    assert np.allclose(np.rad2deg(q), published.P000_Q_PRINTED_DEG, atol=0.1)
+    floor, q_floor = paper.printed_floor()
+    assert 1e-5 < floor < 1.6e-5  # the rounding floor of the printed pose
+    assert robot.within_limits(np.asarray(q_floor))
+    assert float(problem.fitness(q[None])[0]) < 1.6e-5
+    exact = swarm_ik.IKProblem(robot, paper.exact_target(), "paper-l1")
+    assert float(exact.fitness(q[None])[0]) < 1e-14
+    x = np.asarray(published.P003_X_STAR)
+    for name in ("loading_manipulator", "loading_manipulator_long"):
+        assert not get_robot(name).within_limits(x)  # x* violates the limits of both
+
+
+def test_configs_and_specs() -> None:
+    full, quick = paper.FULL, paper.QUICK
+    assert (full.pop_000, full.iterations_000, full.runs_000) == (100, 1000, 10)
+    assert (full.pop_003, full.iterations_003, full.runs_003) == (30, 200, 50)
+    specs = paper.specs_000_table2(quick)
+    assert len({s.key for s in specs}) == len(specs)
+    assert {s.target_id for s in specs} == {"printed", "exact"}
+    assert all(not s.stop_on_success for s in specs)
+    full_keys = {s.key for s in paper.specs_000_table2(full)}
+    assert not full_keys & {s.key for s in specs}  # quick rows never pass for full ones
+    budget = paper.specs_budget(quick)
+    for s in budget:
+        assert s.stop_on_success and s.max_evals in quick.budgets
+        if s.solver == "dls":
+            assert s.iterations == s.max_evals
+    assert paper.QUICK.with_runs(2).runs_003 == 2
+    with pytest.raises(InvalidArgumentError):
+        paper.QUICK.with_runs(0)
+
+
+def test_cli_runs_an_experiment_and_writes_report(tmp_path: Path) -> None:
+    from swarm_ik.cli import main
+
+    argv = ["bench", "paper", "--quick", "--experiments", "003-table3", "--runs", "1",
+            "--jobs", "1", "--out", str(tmp_path), "--no-progress"]
+    assert main(argv) == 0
+    rows = common.read_rows(common.csv_path(tmp_path, "003-table3"))
+    assert len(rows) == 4 * 2  # F1..F4 x {gwo, mgwo}
+    report = (tmp_path / "report.md").read_text()
+    assert "QUICK run" in report and "Table 3" in report and "| GWO (`gwo`)" in report
+    pytest.importorskip("matplotlib")
+    assert (tmp_path / "convergence_003-table3.png").stat().st_size > 10_000
+    assert (tmp_path / "box_003-table3.png").stat().st_size > 10_000
+    assert main(argv) == 0  # rerun: resumes, nothing new
+    assert len(common.read_rows(common.csv_path(tmp_path, "003-table3"))) == 8
+
+
+def test_unknown_experiment_lists_valid_ones(tmp_path: Path) -> None:
+    import argparse
+
+    parser = argparse.ArgumentParser()
+    paper.add_arguments(parser)
+    args = parser.parse_args(["--experiments", "table9", "--out", str(tmp_path)])
+    with pytest.raises(UnknownNameError, match="000-table2"):
+        paper.run(args)
+
+
+# --------------------------------------------------------------------------- plots
+def test_resample_is_a_step_function_of_the_stored_points() -> None:
+    from swarm_ik.bench import plots
+
+    x, f = plots.run_curve({"n_iter": 4, "n_evals": 40, "it": [0, 1, 3], "f": [3.0, None, 1.0]})
+    assert x.tolist() == [10.0, 20.0, 40.0] and np.isnan(f[1])
+    out = plots.resample([(np.array([1.0, 2.0, 3.0]), np.array([3.0, 2.0, 1.0]))],
+                         np.array([0.5, 1.0, 2.5, 3.0, 4.0]))
+    assert np.isnan(out[0, 0]) and out[0, 1:].tolist() == [3.0, 2.0, 1.0, 1.0]
+
+
+def test_missing_matplotlib_is_reported_by_name(monkeypatch, tmp_path: Path) -> None:
+    from swarm_ik.bench import plots
+
+    monkeypatch.setitem(sys.modules, "matplotlib.figure", None)  # import fails
+    with pytest.raises(plots.PlotExtraMissingError, match=r"swarm_ik\[plot\]"):
+        plots.boxes(tmp_path / "x.png", _rows("gwo", [1.0]), [("p", lambda r: True, 0.0)],
+                    ["gwo"])
