@@ -9,6 +9,7 @@ True
 
 from swarm_ik import solvers
 from swarm_ik.api import solve, verify
+from swarm_ik.batch import solve_batch
 from swarm_ik.errors import (
     InvalidArgumentError,
     InvalidTargetError,
@@ -17,6 +18,7 @@ from swarm_ik.errors import (
     SwarmIKError,
     UnknownNameError,
 )
+from swarm_ik.many import solve_many
 from swarm_ik.optimize import OptimizeResult, minimize
 from swarm_ik.pose import make_pose, project_to_se3
 from swarm_ik.problem import IKProblem
@@ -42,6 +44,8 @@ __all__ = [
     "project_to_se3",
     "robot_names",
     "solve",
+    "solve_batch",
+    "solve_many",
     "solvers",
     "verify",
 ]

@@ -9,13 +9,16 @@ from typing import Any
 import numpy as np
 import pinocchio as pin
 
-from swarm_ik.errors import InvalidArgumentError
+from swarm_ik.errors import InvalidArgumentError, unknown
 from swarm_ik.optimize import check_budget, make_rng
 from swarm_ik.problem import IKProblem
 from swarm_ik.result import Result
 from swarm_ik.solvers import base
 
-DEFAULT_SOLVER = "dls"
+DEFAULT_SOLVER = "swarm"
+
+PREFER = ("best", "nearest")
+"""Answer selection modes of :func:`solve`."""
 
 
 def verify(problem: IKProblem, q: Any) -> tuple[float, float]:
@@ -51,6 +54,7 @@ def solve(
     tol_pos: float = 1e-5,
     tol_rot: float = 1e-5,
     stop_on_success: bool = True,
+    prefer: str = "best",
     **params: Any,
 ) -> Result:
     """Solve an IK problem with a registered solver.
@@ -69,6 +73,11 @@ def solve(
         tol_rot: Rotation tolerance for success [rad].
         stop_on_success: Stop as soon as the tolerances are met (False runs the whole budget,
             as the papers' experiments do).
+        prefer: ``"best"`` (default: the lowest fitness found) or ``"nearest"``: among the
+            solutions found, the one nearest to ``q0`` in joint space (continuous joints
+            wrapped), so that successive targets along a Cartesian path give a smooth joint
+            path.  ``"nearest"`` needs ``q0`` and a solver with a ``prefer`` parameter
+            (``swarm``).
         **params: The solver's own parameters; unknown names are refused with the valid list.
 
     Returns:
@@ -80,6 +89,18 @@ def solve(
             f"problem must be an IKProblem, got {type(problem).__name__}"
         )
     spec = base.get(solver)
+    if prefer not in PREFER:
+        raise unknown("prefer mode", prefer, PREFER)
+    if prefer != "best":
+        if q0 is None:
+            raise InvalidArgumentError(f"prefer={prefer!r} needs a starting point q0")
+        if "prefer" not in spec.params:
+            able = [n for n in base.names() if "prefer" in base.get(n).params]
+            raise InvalidArgumentError(
+                f"solver {solver!r} has no prefer={prefer!r} mode; solvers that have one: "
+                + ", ".join(able)
+            )
+        params = {**params, "prefer": prefer}
     kwargs = spec.resolve(params)
     check_budget(max_evals, time_limit)
     for label, tol in (("tol_pos", tol_pos), ("tol_rot", tol_rot)):
@@ -100,6 +121,7 @@ def solve(
         problem=problem,
         q0=q_start,
         stop=stop if stop_on_success else None,
+        tolerance=(float(tol_pos), float(tol_rot)),
     )
     t0 = time.perf_counter()
     spec.run(ev, rng, **kwargs)

@@ -18,7 +18,11 @@ import numpy as np
 
 from swarm_ik.errors import SwarmIKError
 
-BENCHMARKS = {"paper": "swarm_ik.bench.paper", "ik": "swarm_ik.bench.ik"}
+BENCHMARKS = {
+    "paper": "swarm_ik.bench.paper",
+    "ik": "swarm_ik.bench.ik",
+    "throughput": "swarm_ik.bench.throughput",
+}
 COMMAND_MODULES = ("swarm_ik.viz_cli", "swarm_ik.batch_cli")
 """Modules adding sub-commands: each has ``add_commands(subparsers) -> {name: handler}``, a
 handler taking the parsed ``argparse.Namespace`` and returning the exit code."""
@@ -77,7 +81,7 @@ def _build_parser() -> argparse.ArgumentParser:
     p.add_argument("--compare", default=None, metavar="SOLVER",
                    help="also solve with SOLVER (e.g. dls) and draw its answer ghosted")
 
-    b = sub.add_parser("bench", help="benchmarks: 'paper' (the papers' tables) or 'ik' (TRAC-IK protocol)")
+    b = sub.add_parser("bench", help="benchmarks: 'paper' (the papers' tables), 'ik' (TRAC-IK protocol), 'throughput' (batched IK)")
     bsub = b.add_subparsers(dest="bench", required=True)
     for name, module in BENCHMARKS.items():
         bp = bsub.add_parser(name, help=f"benchmark {name}")

@@ -206,3 +206,108 @@ class ChainKinematics:
             out_t, out_j, True,
         )
         return (out_t[0], out_j[0]) if single else (out_t, out_j)
+
+
+@numba.njit(cache=True)
+def fk_jac_one(
+    q: FloatArray,
+    kinds: NDArray[np.int64],
+    axes: FloatArray,
+    rot_p: FloatArray,
+    pos_p: FloatArray,
+    rot_f: FloatArray,
+    pos_f: FloatArray,
+    rot_out: FloatArray,
+    pos_out: FloatArray,
+    jac_out: FloatArray,
+    w_buf: FloatArray,
+    o_buf: FloatArray,
+    mot: FloatArray,
+    tmp: FloatArray,
+    want_jac: bool,
+) -> None:  # pragma: no cover - compiled
+    """FK (and Jacobian) of ONE configuration into caller-owned buffers, no allocation.
+
+    The same computation as the batched kernel behind :meth:`ChainKinematics.fk_jacobian`
+    (identical results), for compiled loops that evaluate one configuration at a time (the
+    Levenberg–Marquardt polish of :mod:`swarm_ik.solvers.hybrid`).
+
+    Args:
+        q: Joint values, shape ``(nq,)``.
+        kinds, axes, rot_p, pos_p, rot_f, pos_f: The chain (see :class:`ChainKinematics`).
+        rot_out: Output end-effector rotation, shape ``(3, 3)``.
+        pos_out: Output end-effector position [m], shape ``(3,)``.
+        jac_out: Output LOCAL_WORLD_ALIGNED Jacobian ``[v; ω]``, shape ``(6, nq)`` (untouched
+            when ``want_jac`` is False).
+        w_buf, o_buf: Scratch, shape ``(nq, 3)`` each.
+        mot, tmp: Scratch, shape ``(3, 3)`` each.
+        want_jac: Whether to fill ``jac_out``.
+    """
+    n = q.shape[0]
+    rot = rot_out
+    pos = pos_out
+    for a in range(3):
+        pos[a] = 0.0
+        for b in range(3):
+            rot[a, b] = 1.0 if a == b else 0.0
+    for j in range(n):
+        for a in range(3):
+            pos[a] += rot[a, 0] * pos_p[j, 0] + rot[a, 1] * pos_p[j, 1] + rot[a, 2] * pos_p[j, 2]
+        for a in range(3):
+            for b in range(3):
+                tmp[a, b] = (
+                    rot[a, 0] * rot_p[j, 0, b]
+                    + rot[a, 1] * rot_p[j, 1, b]
+                    + rot[a, 2] * rot_p[j, 2, b]
+                )
+        for a in range(3):
+            for b in range(3):
+                rot[a, b] = tmp[a, b]
+        if want_jac:
+            for a in range(3):
+                w_buf[j, a] = (
+                    rot[a, 0] * axes[j, 0] + rot[a, 1] * axes[j, 1] + rot[a, 2] * axes[j, 2]
+                )
+                o_buf[j, a] = pos[a]
+        qj = q[j]
+        if kinds[j] == PRISMATIC:
+            for a in range(3):
+                pos[a] += qj * (
+                    rot[a, 0] * axes[j, 0] + rot[a, 1] * axes[j, 1] + rot[a, 2] * axes[j, 2]
+                )
+        else:
+            _rodrigues(axes[j], qj, mot)
+            for a in range(3):
+                for b in range(3):
+                    tmp[a, b] = (
+                        rot[a, 0] * mot[0, b] + rot[a, 1] * mot[1, b] + rot[a, 2] * mot[2, b]
+                    )
+            for a in range(3):
+                for b in range(3):
+                    rot[a, b] = tmp[a, b]
+    # end-effector frame in the last joint's frame
+    for a in range(3):
+        pos[a] = pos[a] + rot[a, 0] * pos_f[0] + rot[a, 1] * pos_f[1] + rot[a, 2] * pos_f[2]
+    for a in range(3):
+        for b in range(3):
+            tmp[a, b] = rot[a, 0] * rot_f[0, b] + rot[a, 1] * rot_f[1, b] + rot[a, 2] * rot_f[2, b]
+    for a in range(3):
+        for b in range(3):
+            rot[a, b] = tmp[a, b]
+    if want_jac:
+        for j in range(n):
+            if kinds[j] == PRISMATIC:
+                for a in range(3):
+                    jac_out[a, j] = w_buf[j, a]
+                    jac_out[3 + a, j] = 0.0
+            else:
+                dx = pos[0] - o_buf[j, 0]
+                dy = pos[1] - o_buf[j, 1]
+                dz = pos[2] - o_buf[j, 2]
+                wx, wy, wz = w_buf[j, 0], w_buf[j, 1], w_buf[j, 2]
+                jac_out[0, j] = wy * dz - wz * dy
+                jac_out[1, j] = wz * dx - wx * dz
+                jac_out[2, j] = wx * dy - wy * dx
+                jac_out[3, j] = wx
+                jac_out[4, j] = wy
+                jac_out[5, j] = wz

@@ -13,6 +13,7 @@ from swarm_ik.solvers import dls  # noqa: E402,F401  isort: skip
 from swarm_ik.solvers import gwo  # noqa: E402,F401  isort: skip
 from swarm_ik.solvers import foa  # noqa: E402,F401  isort: skip
 from swarm_ik.solvers import hlfoa  # noqa: E402,F401  isort: skip
+from swarm_ik.solvers import hybrid  # noqa: E402,F401  isort: skip
 from swarm_ik.solvers import mgwo  # noqa: E402,F401  isort: skip
 from swarm_ik.solvers import pso  # noqa: E402,F401  isort: skip
 

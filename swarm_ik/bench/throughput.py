@@ -1,0 +1,402 @@
+"""``swarm-ik bench throughput``: poses per second of :func:`swarm_ik.solve_batch` against
+loops over :func:`swarm_ik.solve` and over TRAC-IK.
+
+Protocol: for each robot, ``N`` joint vectors drawn uniformly within the limits (seeded);
+their forward kinematics are the targets (all reachable).  Every method starts from the
+middle of the joint ranges and is judged by the same strict test: ``‖Δp‖ ≤ tol`` [m] and
+geodesic angle ``≤ tol`` [rad], within the limits (``solve_batch`` checks it with the batched
+FK; the loops with Pinocchio's FK through :func:`swarm_ik.verify`).
+
+Methods (one CSV row per robot, method and N):
+
+* ``batch-1proc``: ``solve_batch`` in this process (no Dask), one core;
+* ``batch-dask``: ``solve_batch`` on ``--scheduler`` (default: an embedded LocalCluster with
+  one worker process per core).  The cluster is started and the workers warmed up (kernels
+  loaded) before timing; its start-up time is reported separately (``setup_s``);
+* ``loop-solve``: ``[solve(IKProblem(robot, T)) for T in targets]`` with the default solver,
+  for ``N ≤ --loop-max``;
+* ``loop-tracik``: ``[pytracik.ik(T) for T in targets]`` (TRAC-IK, Speed mode, 5 ms timeout,
+  ε = tol) for ``N ≤ --loop-max``, when ``pytracik`` is installed.
+
+Writes ``throughput.csv`` (the experiment), then ``throughput.md`` and ``throughput.png``
+(log-log time vs N) from the CSV, plus ``profile.csv`` (where the time of one batch goes).
+"""
+
+from __future__ import annotations
+
+import argparse
+import csv
+import os
+import platform
+import time
+from collections.abc import Sequence
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+import swarm_ik
+from swarm_ik import distributed
+from swarm_ik.batch import (
+    BatchChain,
+    BatchSettings,
+    _seed_starts,
+    _solve_targets,
+    check_targets,
+    pose_errors,
+    solve_batch,
+)
+from swarm_ik.robot import RobotModel
+
+DEFAULT_ROBOTS = ("panda", "yumi_left")
+DEFAULT_SIZES = (100, 1000, 10_000, 100_000)
+QUICK_SIZES = (100, 1000)
+FIELDS = (
+    "robot", "nq", "method", "n", "workers", "time_s", "setup_s", "poses_per_s",
+    "success_rate", "n_success", "mean_evals", "mean_starts", "tol",
+)
+PROFILE_FIELDS = ("robot", "n", "part", "seconds", "share", "note")
+TARGET_RATE = 10_000.0
+"""The issue's target [poses/s]."""
+
+
+def add_arguments(parser: argparse.ArgumentParser) -> None:
+    """Options of ``swarm-ik bench throughput``."""
+    parser.add_argument("--robots", nargs="+", default=list(DEFAULT_ROBOTS))
+    parser.add_argument("--sizes", nargs="+", type=int, default=None,
+                        help=f"numbers of targets (default {' '.join(map(str, DEFAULT_SIZES))}; "
+                             f"{' '.join(map(str, QUICK_SIZES))} with --quick)")
+    parser.add_argument("--loop-max", type=int, default=1000,
+                        help="largest N for the loops over solve and TRAC-IK (default 1000)")
+    parser.add_argument("--tol", type=float, default=1e-5, help="tolerance [m] and [rad]")
+    parser.add_argument("--seed", type=int, default=0)
+    parser.add_argument("--repeat", type=int, default=3,
+                        help="timed runs of each batch measurement; the fastest is kept (the "
+                             "results are identical run to run)")
+    parser.add_argument("--scheduler", default="local", metavar="local|none|tcp://HOST:PORT",
+                        help="where batch-dask runs ('none' skips it; default: an embedded "
+                             "LocalCluster, one worker process per core)")
+    parser.add_argument("--no-tracik", action="store_true", help="skip TRAC-IK")
+    parser.add_argument("--quick", action="store_true", help="small sizes (a smoke test)")
+    parser.add_argument("--out", type=Path, default=Path("docs/results/batch"))
+
+
+def make_targets(robot: RobotModel, n: int, seed: int) -> np.ndarray:
+    """FK of ``n`` joint vectors drawn uniformly within the limits, ``(n, 4, 4)``."""
+    rng = np.random.default_rng([seed, n])
+    return robot.fk(robot.random_q(rng, n))
+
+
+def _row(robot: RobotModel, method: str, n: int, workers: int, time_s: float, setup_s: float,
+         success: np.ndarray, evals: float, starts: float, tol: float) -> dict[str, Any]:
+    return {
+        "robot": robot.name, "nq": robot.nq, "method": method, "n": n, "workers": workers,
+        "time_s": f"{time_s:.6f}", "setup_s": f"{setup_s:.3f}",
+        "poses_per_s": f"{n / time_s:.1f}", "success_rate": f"{float(success.mean()):.6f}",
+        "n_success": int(success.sum()),
+        "mean_evals": "" if not np.isfinite(evals) else f"{evals:.2f}",
+        "mean_starts": "" if not np.isfinite(starts) else f"{starts:.3f}",
+        "tol": f"{tol:g}",
+    }
+
+
+def loop_solve(robot: RobotModel, targets: np.ndarray, tol: float, seed: int
+               ) -> tuple[float, np.ndarray, float]:
+    """Time a Python loop over :func:`swarm_ik.solve` (default solver).
+
+    Returns:
+        ``(seconds, success (n,), mean evaluations)``.
+    """
+    ok = np.zeros(len(targets), dtype=bool)
+    evals = np.zeros(len(targets))
+    swarm_ik.solve(swarm_ik.IKProblem(robot, targets[0]), seed=seed)  # compile outside timing
+    t0 = time.perf_counter()
+    for i, t in enumerate(targets):
+        res = swarm_ik.solve(swarm_ik.IKProblem(robot, t), seed=seed, tol_pos=tol, tol_rot=tol)
+        ok[i] = res.success
+        evals[i] = res.n_evals
+    return time.perf_counter() - t0, ok, float(evals.mean())
+
+
+def loop_tracik(robot: RobotModel, targets: np.ndarray, tol: float
+                ) -> tuple[float, np.ndarray] | None:
+    """Time a Python loop over TRAC-IK (Speed, 5 ms timeout, ε = tol) from mid-range, judged
+    afterwards with Pinocchio's FK; ``None`` when pytracik is not installed."""
+    try:
+        from swarm_ik.bench.ik import TracIK, tracik_available
+    except ImportError:  # pragma: no cover - the other benchmark module is missing
+        return None
+    if not tracik_available():
+        return None
+    from swarm_ik.pose import matrix_to_quat
+
+    trac = TracIK(robot, 5e-3, tol)
+    quats = [matrix_to_quat(t[:3, :3]) for t in targets]
+    seed_q = robot.mid_q()
+    answers: list[np.ndarray | None] = []
+    t0 = time.perf_counter()
+    for t, qu in zip(targets, quats, strict=True):
+        answers.append(trac.solve(t, qu, seed_q)[0])
+    elapsed = time.perf_counter() - t0
+    ok = np.zeros(len(targets), dtype=bool)
+    for i, (t, q) in enumerate(zip(targets, answers, strict=True)):
+        if q is not None and robot.within_limits(q, tol=1e-12):
+            dp, dr = swarm_ik.verify(swarm_ik.IKProblem(robot, t), q)
+            ok[i] = dp <= tol and dr <= tol
+    return elapsed, ok
+
+
+def profile_batch(robot: RobotModel, n: int, seed: int, tol: float) -> list[dict[str, Any]]:
+    """Where the time of one in-process batch of ``n`` targets goes: target validation, the
+    compiled kernel (split into targets solved from the first start, restarted, failed), and
+    the independent check."""
+    targets = make_targets(robot, n, seed)
+    settings = BatchSettings(tol_pos=tol, tol_rot=tol, seed=seed)
+    bc = BatchChain.from_robot(robot)
+    c = bc.chain
+    t0 = time.perf_counter()
+    poses = check_targets(targets)
+    seeds = _seed_starts(bc, None, n)
+    t1 = time.perf_counter()
+    q = np.empty((n, robot.nq))
+    evals = np.zeros(n, dtype=np.int64)
+    starts = np.zeros(n, dtype=np.int64)
+    _solve_targets(
+        np.ascontiguousarray(poses[:, :3, :3]), np.ascontiguousarray(poses[:, :3, 3]), seeds,
+        np.arange(n, dtype=np.int64), c.kinds, c.axes, c.rot_p, c.pos_p, c.rot_f, c.pos_f,
+        bc.lower, bc.upper, bc.wrap, 1.0, tol * settings.tol_margin, tol * settings.tol_margin,
+        settings.max_starts, settings.max_iters, settings.lam0, settings.max_step,
+        settings.stall_rel, settings.stall_iters, seed, q, evals, starts,
+    )
+    t2 = time.perf_counter()
+    dp, dr = pose_errors(c, q, poses)
+    ok = (dp <= tol) & (dr <= tol)
+    t3 = time.perf_counter()
+    total = t3 - t0
+    kernel = t2 - t1
+    per_eval = kernel / max(int(evals.sum()), 1)
+    first = ok & (starts == 1)
+    restarted = ok & (starts > 1)
+    failed = ~ok
+    rows = []
+
+    def add(part: str, seconds: float, note: str) -> None:
+        rows.append({"robot": robot.name, "n": n, "part": part, "seconds": f"{seconds:.5f}",
+                     "share": f"{seconds / total:.4f}", "note": note})
+
+    add("validate targets + seeds", t1 - t0, "check_targets, mid-range seeds")
+    add("kernel: solved from the first start", per_eval * evals[first].sum(),
+        f"{first.mean():.1%} of targets, {evals[first].mean():.1f} evaluations each")
+    ev_r = float(evals[restarted].mean()) if restarted.any() else 0.0
+    st_r = float(starts[restarted].mean()) if restarted.any() else 0.0
+    add("kernel: solved after restarts", per_eval * evals[restarted].sum(),
+        f"{restarted.mean():.1%} of targets, {ev_r:.1f} evaluations and {st_r:.1f} starts each")
+    add("kernel: not solved", per_eval * evals[failed].sum(),
+        f"{failed.mean():.2%} of targets, {evals[failed].mean() if failed.any() else 0:.0f} "
+        "evaluations each")
+    add("independent check (batched FK)", t3 - t2, "pose_errors")
+    add("total", total, f"{n / total:.0f} poses/s; {per_eval * 1e6:.2f} µs per LM iteration "
+        f"(FK + Jacobian + {robot.nq}x{robot.nq} Cholesky), {evals.mean():.1f} per target")
+    return rows
+
+
+def _cpu_name() -> str:
+    try:
+        for line in Path("/proc/cpuinfo").read_text().splitlines():
+            if line.startswith("model name"):
+                return line.split(":", 1)[1].strip()
+    except OSError:  # pragma: no cover
+        pass
+    return platform.processor() or "unknown CPU"
+
+
+def run_experiment(
+    robots: Sequence[str], sizes: Sequence[int], loop_max: int, tol: float, seed: int,
+    scheduler: Any, with_tracik: bool, out: Path, repeat: int = 3,
+) -> tuple[Path, Path]:
+    """Run every method on every robot and size; write ``throughput.csv`` and
+    ``profile.csv``; returns their paths.  Batch measurements are repeated ``repeat`` times
+    and the fastest kept (the machine may be shared; the answers are identical each time)."""
+
+    def fastest(**kwargs: Any) -> Any:
+        runs = [solve_batch(robot, targets, seed=seed, tol_pos=tol, tol_rot=tol, **kwargs)
+                for _ in range(max(1, repeat))]
+        return min(runs, key=lambda r: r.time_s)
+
+    out.mkdir(parents=True, exist_ok=True)
+    rows: list[dict[str, Any]] = []
+    prof: list[dict[str, Any]] = []
+    loaded = [swarm_ik.load_robot(name) for name in robots]
+    for robot in loaded:  # compile / load the kernels once
+        solve_batch(robot, make_targets(robot, 10, seed), tol_pos=tol, tol_rot=tol)
+    use_dask = distributed.check_scheduler(scheduler) is not None
+    t_setup = time.perf_counter()
+    with distributed.connect(scheduler) as client:
+        setup_s = time.perf_counter() - t_setup
+        workers = distributed.n_workers(client)
+        for robot in loaded:
+            print(f"[throughput] {robot.name}", flush=True)
+            if use_dask:  # warm the workers up (kernels loaded in every process)
+                solve_batch(robot, make_targets(robot, 64 * workers, seed), scheduler=client,
+                            chunk_size=32)
+            for n in sizes:
+                targets = make_targets(robot, n, seed)
+                res = fastest()
+                rows.append(_row(robot, "batch-1proc", n, 1, res.time_s, 0.0, res.success,
+                                 res.n_evals.mean(), res.n_starts.mean(), tol))
+                print(f"  batch-1proc  N={n:>7d} {res.poses_per_s:9.0f} poses/s "
+                      f"success {res.success_rate:.4f}", flush=True)
+                if use_dask:
+                    res_d = fastest(scheduler=client)
+                    if not np.array_equal(res_d.q, res.q):  # pragma: no cover - a bug
+                        raise RuntimeError("Dask and in-process results differ")
+                    rows.append(_row(robot, "batch-dask", n, workers, res_d.time_s, setup_s,
+                                     res_d.success, res_d.n_evals.mean(), res_d.n_starts.mean(),
+                                     tol))
+                    print(f"  batch-dask   N={n:>7d} {res_d.poses_per_s:9.0f} poses/s "
+                          f"({workers} workers)", flush=True)
+                if n <= loop_max:
+                    t, ok, ev = loop_solve(robot, targets, tol, seed)
+                    rows.append(_row(robot, "loop-solve", n, 1, t, 0.0, ok, ev, np.nan, tol))
+                    print(f"  loop-solve   N={n:>7d} {n / t:9.0f} poses/s success "
+                          f"{ok.mean():.4f}", flush=True)
+                    trac = loop_tracik(robot, targets, tol) if with_tracik else None
+                    if trac is not None:
+                        rows.append(_row(robot, "loop-tracik", n, 1, trac[0], 0.0, trac[1],
+                                         np.nan, np.nan, tol))
+                        print(f"  loop-tracik  N={n:>7d} {n / trac[0]:9.0f} poses/s success "
+                              f"{trac[1].mean():.4f}", flush=True)
+            prof += profile_batch(robot, min(max(sizes), 10_000), seed, tol)
+    csv_path = out / "throughput.csv"
+    with csv_path.open("w", newline="") as fh:
+        w = csv.DictWriter(fh, fieldnames=FIELDS)
+        w.writeheader()
+        w.writerows(rows)
+    prof_path = out / "profile.csv"
+    with prof_path.open("w", newline="") as fh:
+        w = csv.DictWriter(fh, fieldnames=PROFILE_FIELDS)
+        w.writeheader()
+        w.writerows(prof)
+    return csv_path, prof_path
+
+
+def _read(path: Path) -> list[dict[str, str]]:
+    with path.open(newline="") as fh:
+        return list(csv.DictReader(fh))
+
+
+METHOD_LABELS = {
+    "batch-1proc": "solve_batch, 1 process",
+    "batch-dask": "solve_batch on Dask",
+    "loop-solve": "loop over solve()",
+    "loop-tracik": "loop over TRAC-IK",
+}
+
+
+def plot(csv_path: Path, png_path: Path) -> Path:
+    """Per robot: log-log time vs N (top) and poses/s vs N (bottom), one line per method, from
+    ``throughput.csv``."""
+    import matplotlib
+
+    matplotlib.use("Agg", force=False)
+    import matplotlib.pyplot as plt
+
+    rows = _read(csv_path)
+    robots = list(dict.fromkeys(r["robot"] for r in rows))
+    fig, axs = plt.subplots(2, len(robots), figsize=(6.2 * len(robots), 8.4), squeeze=False,
+                            constrained_layout=True)
+    for col, robot in enumerate(robots):
+        top, bottom = axs[0][col], axs[1][col]
+        mine = [r for r in rows if r["robot"] == robot]
+        for method, label in METHOD_LABELS.items():
+            pts = sorted((int(r["n"]), float(r["time_s"]), r["workers"]) for r in mine
+                         if r["method"] == method)
+            if not pts:
+                continue
+            n, t, w = zip(*pts, strict=True)
+            if method == "batch-dask":
+                label += f" ({w[0]} workers)"
+            top.loglog(n, t, "o-", label=label)
+            bottom.semilogx(n, np.array(n) / np.array(t), "o-", label=label)
+        ns = sorted({int(r["n"]) for r in mine})
+        top.loglog(ns, np.array(ns) / TARGET_RATE, "k--", lw=1, label="10,000 poses/s")
+        bottom.axhline(TARGET_RATE, color="k", ls="--", lw=1, label="10,000 poses/s")
+        top.set_title(f"{robot}: FK-sampled targets, tolerance {mine[0]['tol']} m / rad")
+        top.set_ylabel("wall-clock time [s]")
+        bottom.set_ylabel("throughput [poses/s]")
+        bottom.set_ylim(bottom=0)
+        for ax in (top, bottom):
+            ax.set_xlabel("N (targets)")
+            ax.grid(True, which="both", alpha=0.3)
+            ax.legend(fontsize=8)
+    fig.savefig(png_path, dpi=110)
+    plt.close(fig)
+    return png_path
+
+
+def report(csv_path: Path, prof_path: Path, md_path: Path, png_name: str, scheduler: str) -> Path:
+    """Markdown summary of ``throughput.csv`` and ``profile.csv``."""
+    rows = _read(csv_path)
+    prof = _read(prof_path)
+    lines = [
+        "# Batched IK throughput (`swarm-ik bench throughput`)",
+        "",
+        f"Machine: {_cpu_name()}, {distributed.available_cores()} cores, Python "
+        f"{platform.python_version()}; swarm_ik {swarm_ik.__version__}.  Dask scheduler: "
+        f"`{scheduler}`.",
+        "",
+        "Targets: forward kinematics of joint vectors drawn uniformly within the limits "
+        "(all reachable); every method starts from the middle of the joint ranges; success = "
+        "‖Δp‖ ≤ tol and geodesic angle ≤ tol, within the limits (strict, the same test for "
+        "every method).  Times are wall-clock for the whole call (validation and the "
+        "independent check included), the fastest of `--repeat` runs for the batch methods "
+        "(one run for the loops); the Dask cluster's start-up (`setup_s`) is not in `time_s`.  "
+        "TRAC-IK runs in Speed mode with a 5 ms timeout and ε = tol; its own convergence test "
+        "(per twist component, in its own frame) is looser than the strict one, so some "
+        "answers it returns as solved fail here.  The machine may be shared: compare rows of "
+        "one run only.",
+        "",
+        f"![time vs N]({png_name})",
+        "",
+        "| robot | method | N | workers | time [s] | poses/s | success | LM iterations / "
+        "target | starts / target |",
+        "|---|---|---:|---:|---:|---:|---:|---:|---:|",
+    ]
+    for r in rows:
+        lines.append(
+            f"| {r['robot']} | {METHOD_LABELS.get(r['method'], r['method'])} | {int(r['n']):,} | "
+            f"{r['workers']} | {float(r['time_s']):.3f} | {float(r['poses_per_s']):,.0f} | "
+            f"{100 * float(r['success_rate']):.2f} % | {r['mean_evals'] or '–'} | "
+            f"{r['mean_starts'] or '–'} |"
+        )
+    setups = {r["setup_s"] for r in rows if r["method"] == "batch-dask"}
+    if setups:
+        lines += ["", f"Dask LocalCluster start-up (not in the times above): "
+                  f"{', '.join(sorted(setups))} s."]
+    lines += [
+        "",
+        "## Where the time goes (one in-process batch)",
+        "",
+        "| robot | N | part | seconds | share | note |",
+        "|---|---:|---|---:|---:|---|",
+    ]
+    for r in prof:
+        lines.append(f"| {r['robot']} | {int(r['n']):,} | {r['part']} | {float(r['seconds']):.4f} "
+                     f"| {100 * float(r['share']):.1f} % | {r['note']} |")
+    md_path.write_text("\n".join(lines) + "\n")
+    return md_path
+
+
+def run(args: argparse.Namespace) -> int:
+    """Entry point of ``swarm-ik bench throughput``; returns the exit code."""
+    quick = args.quick or os.environ.get("SWARM_IK_QUICK") == "1"
+    sizes = args.sizes or (QUICK_SIZES if quick else DEFAULT_SIZES)
+    loop_max = min(args.loop_max, 100) if quick else args.loop_max
+    csv_path, prof_path = run_experiment(
+        args.robots, sizes, loop_max, args.tol, args.seed, args.scheduler,
+        not args.no_tracik, args.out, args.repeat,
+    )
+    png = plot(csv_path, args.out / "throughput.png")
+    md = report(csv_path, prof_path, args.out / "throughput.md", png.name, str(args.scheduler))
+    print(f"wrote {csv_path}, {prof_path}, {png}, {md}")
+    return 0

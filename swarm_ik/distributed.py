@@ -1,0 +1,228 @@
+"""Scale-out on Dask: run chunks of work in this process, on an embedded local cluster, or on
+an existing Dask scheduler.
+
+``scheduler`` (the ``--scheduler`` option of ``swarm-ik batch | reach | bench``) is one of:
+
+* ``None`` or ``"none"``: no Dask; the chunks run one after the other in this process.
+* ``"local"``: an embedded :class:`dask.distributed.LocalCluster` on 127.0.0.1, one
+  single-threaded worker *process* per core (the compiled kernels hold the GIL, so processes,
+  not threads, give parallelism).  Needs no set-up; it starts in a few seconds.
+* an address ``"tcp://host:port"`` (or ``tls://…``): an existing scheduler, e.g. one started
+  with ``dask scheduler`` and workers started with ``dask worker tcp://host:port`` on other
+  machines (each with swarm_ik installed).
+* a ``distributed.Client``: used as is (not closed).
+
+Each chunk is one Dask task with a deterministic ("pure") key built from the function and the
+chunk's content, so resubmitting a chunk never computes it twice, and the results come back in
+the order of the chunks.  When a worker dies, the scheduler recomputes its unfinished tasks on
+the remaining workers (Dask's own fault tolerance); nothing is lost or duplicated.  Whatever
+runs in the chunks must not depend on which worker runs it: :func:`swarm_ik.solve_batch`
+keys its random streams by target index for that reason.
+
+Dask is an optional dependency: ``pip install "swarm_ik[dask]"`` (``dask[distributed]``).
+A script that uses ``"local"`` must guard its entry point with ``if __name__ == "__main__":``
+(the worker processes are spawned and import the main module).
+"""
+
+from __future__ import annotations
+
+import logging
+import os
+from collections.abc import Callable, Iterator, Sequence
+from contextlib import contextmanager
+from typing import Any, TypeVar
+
+from swarm_ik.errors import InvalidArgumentError
+
+T = TypeVar("T")
+R = TypeVar("R")
+
+LOCAL = "local"
+"""``scheduler`` value for an embedded LocalCluster."""
+IN_PROCESS = "none"
+"""``scheduler`` value for no Dask at all (chunks run in this process)."""
+SCHEMES = ("tcp://", "tls://", "inproc://")
+"""Accepted prefixes of a scheduler address."""
+
+
+def _import_distributed() -> Any:
+    try:
+        import distributed
+    except ImportError:  # pragma: no cover - depends on the environment
+        raise InvalidArgumentError(
+            "a Dask scheduler was requested but dask.distributed is not installed; install it "
+            "with `pip install \"swarm_ik[dask]\"` (or `pip install \"dask[distributed]\"`), "
+            "or use --scheduler none"
+        ) from None
+    return distributed
+
+
+def available_cores() -> int:
+    """Cores this process may run on (affinity mask where available)."""
+    try:
+        return max(1, len(os.sched_getaffinity(0)))
+    except AttributeError:  # pragma: no cover - macOS / Windows
+        return max(1, os.cpu_count() or 1)
+
+
+def check_scheduler(scheduler: Any) -> Any:
+    """Validate a ``scheduler`` value; returns it (``None`` for "no Dask").
+
+    Raises:
+        InvalidArgumentError: not ``None``, ``"none"``, ``"local"``, an address with one of
+            :data:`SCHEMES`, or a ``distributed.Client``; the message lists the choices.
+    """
+    if scheduler is None or scheduler == IN_PROCESS:
+        return None
+    if isinstance(scheduler, str):
+        if scheduler == LOCAL or scheduler.startswith(SCHEMES):
+            return scheduler
+        raise InvalidArgumentError(
+            f"unknown scheduler {scheduler!r}; valid choices: 'none' (in this process), "
+            "'local' (embedded LocalCluster), or an address starting with "
+            + ", ".join(SCHEMES) + " (e.g. tcp://127.0.0.1:8786)"
+        )
+    if hasattr(scheduler, "submit") and hasattr(scheduler, "gather"):
+        return scheduler
+    raise InvalidArgumentError(
+        f"scheduler must be None, 'none', 'local', an address or a distributed.Client; got "
+        f"{type(scheduler).__name__}"
+    )
+
+
+@contextmanager
+def connect(
+    scheduler: Any = None,
+    *,
+    n_workers: int | None = None,
+    timeout: float = 30.0,
+) -> Iterator[Any]:
+    """A Dask client for ``scheduler`` (``None`` when no Dask is wanted), closed on exit.
+
+    Args:
+        scheduler: See the module docstring.
+        n_workers: Worker processes of an embedded LocalCluster (default: the cores).
+        timeout: Seconds to wait for a remote scheduler.
+
+    Yields:
+        ``None`` (in-process), or a ``distributed.Client``.  A Client passed in is yielded
+        and left open; clusters and clients created here are closed at exit.
+    """
+    scheduler = check_scheduler(scheduler)
+    if scheduler is None:
+        yield None
+        return
+    if not isinstance(scheduler, str):
+        yield scheduler
+        return
+    distributed = _import_distributed()
+    if scheduler == LOCAL:
+        cluster = distributed.LocalCluster(
+            n_workers=n_workers or available_cores(),
+            threads_per_worker=1,
+            processes=True,
+            host="127.0.0.1",
+            dashboard_address=None,
+            silence_logs=logging.ERROR,
+        )
+        try:
+            client = distributed.Client(cluster)
+            try:
+                yield client
+            finally:
+                client.close()
+        finally:
+            cluster.close()
+        return
+    try:
+        client = distributed.Client(scheduler, timeout=timeout)
+    except OSError as exc:
+        raise InvalidArgumentError(
+            f"could not reach the Dask scheduler at {scheduler!r} ({exc})"
+        ) from None
+    try:
+        yield client
+    finally:
+        client.close()
+
+
+def n_workers(client: Any) -> int:
+    """Workers behind ``client`` (1 for ``None``, in-process)."""
+    if client is None:
+        return 1
+    return max(1, len(client.scheduler_info().get("workers", {})))
+
+
+def _progress_bar(enabled: bool, total: int, desc: str | None, unit: str) -> Any:
+    from tqdm.auto import tqdm
+
+    return tqdm(total=total, desc=desc, disable=not enabled, unit=unit, dynamic_ncols=True)
+
+
+def map_chunks(
+    func: Callable[[T], R],
+    items: Sequence[T],
+    *,
+    client: Any = None,
+    scheduler: Any = None,
+    name: str = "swarm-ik",
+    progress: bool = False,
+    desc: str | None = None,
+    sizes: Sequence[int] | None = None,
+    unit: str = "item",
+) -> list[R]:
+    """``[func(item) for item in items]``, on Dask workers when a client or scheduler is given.
+
+    Helper for anything that splits work into independent chunks (batched IK, reachability
+    maps, benchmark sweeps).  ``func`` and the items must be picklable and ``func`` must be
+    importable on the workers (a module-level function or a ``functools.partial`` of one).
+
+    Args:
+        func: Function of one item.
+        items: The chunks.
+        client: A ``distributed.Client`` to use (takes precedence over ``scheduler``).
+        scheduler: Otherwise a scheduler spec (see the module docstring); a cluster or
+            connection made for it is closed before returning.
+        name: Prefix of the Dask task keys.
+        progress: Show a progress bar (tqdm).
+        desc: Label of the progress bar.
+        sizes: Weight of each item in the progress bar (e.g. targets per chunk); default 1.
+        unit: Unit of the progress bar (e.g. ``"pose"``).
+
+    Returns:
+        ``func(item)`` for each item, in the order of ``items`` (each exactly once).
+    """
+    if sizes is not None and len(sizes) != len(items):
+        raise InvalidArgumentError(
+            f"sizes must have one entry per item ({len(items)}), got {len(sizes)}"
+        )
+    weights = list(sizes) if sizes is not None else [1] * len(items)
+    if client is None and check_scheduler(scheduler) is not None:
+        with connect(scheduler) as c:
+            return map_chunks(func, items, client=c, name=name, progress=progress, desc=desc,
+                              sizes=sizes, unit=unit)
+    bar = _progress_bar(progress, int(sum(weights)), desc, unit)
+    try:
+        if client is None:
+            out = []
+            for item, w in zip(items, weights, strict=True):
+                out.append(func(item))
+                bar.update(w)
+            return out
+        distributed = _import_distributed()
+        from dask.base import tokenize
+
+        token = tokenize(func)
+        keys = [f"{name}-{i}-{tokenize(token, item)}" for i, item in enumerate(items)]
+        futures = [client.submit(func, item, key=k, pure=True)
+                   for k, item in zip(keys, items, strict=True)]
+        position = {f.key: i for i, f in enumerate(futures)}
+        try:
+            for f in distributed.as_completed(futures):
+                bar.update(weights[position[f.key]])
+            return list(client.gather(futures))
+        except BaseException:
+            client.cancel(futures)
+            raise
+    finally:
+        bar.close()

@@ -1,0 +1,398 @@
+"""Reachability maps: which points of the workspace the end effector reaches, and in how many
+orientations.
+
+:func:`reach_map` lays a voxel grid over the workspace, tries the same ``K`` orientations
+(uniform random rotations, seeded) at the centre of every voxel with
+:func:`swarm_ik.solve_batch`, and stores the *reachability index* of each voxel: the fraction
+of the ``K`` orientations solved (Zacharias, Borst & Hirzinger, "Capturing robot workspace
+structure: representing robot capabilities", IROS 2007, define the index the same way over a
+sphere of directions).  The index is a lower bound: a pose counts as unreachable when
+``max_starts`` starts of the compiled Levenberg–Marquardt polish all fail.
+
+Voxels whose centre lies farther from the first joint than the sum of the chain's link
+lengths (plus the prismatic strokes) cannot be reached and are not solved (index 0).  The
+default bounds are a cube around the first joint, 1.1 × the largest distance of the end
+effector from it over random configurations.
+
+Pictures: :func:`plot_slices` (matplotlib heat maps of three orthogonal slices through the
+first joint) and :func:`export_html` (a self-contained meshcat page with the reachable voxels
+as a coloured point cloud; needs ``meshcat``).
+"""
+
+from __future__ import annotations
+
+import base64
+import time
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+from numpy.typing import NDArray
+
+from swarm_ik.batch import solve_batch
+from swarm_ik.errors import InvalidArgumentError
+from swarm_ik.robot import RobotModel
+
+FloatArray = NDArray[np.float64]
+
+
+@dataclass(frozen=True)
+class ReachMap:
+    """A reachability map on a regular voxel grid.
+
+    Attributes:
+        robot: Robot name.
+        ee_frame: End-effector frame.
+        x: Voxel centres along x [m], shape ``(nx,)``.
+        y: Voxel centres along y [m], shape ``(ny,)``.
+        z: Voxel centres along z [m], shape ``(nz,)``.
+        index: Reachability index per voxel (fraction of orientations solved, 0–1),
+            shape ``(nx, ny, nz)``.
+        solved: Whether each voxel was solved (False: beyond the chain's reach), same shape.
+        hits: Which orientations were reached at each voxel, shape ``(nx, ny, nz, K)``.
+        orientations: The rotations tried at every voxel, shape ``(K, 3, 3)``.
+        resolution: Voxel edge [m].
+        base: Position of the first joint [m], shape ``(3,)``.
+        seed: Seed of the orientations and of the solver.
+        tol_pos: Position tolerance [m]; ``tol_rot``: rotation tolerance [rad].
+        max_starts: Starts per pose before it counts as unreachable.
+        time_s: Wall-clock seconds of the computation.
+    """
+
+    robot: str
+    ee_frame: str
+    x: FloatArray
+    y: FloatArray
+    z: FloatArray
+    index: FloatArray
+    solved: NDArray[np.bool_]
+    hits: NDArray[np.bool_]
+    orientations: FloatArray
+    resolution: float
+    base: FloatArray
+    seed: int
+    tol_pos: float
+    tol_rot: float
+    max_starts: int
+    time_s: float
+
+    @property
+    def centres(self) -> FloatArray:
+        """Voxel centres [m], shape ``(nx, ny, nz, 3)``."""
+        gx, gy, gz = np.meshgrid(self.x, self.y, self.z, indexing="ij")
+        return np.stack([gx, gy, gz], axis=-1)
+
+    @property
+    def n_orientations(self) -> int:
+        """Orientations tried per voxel (K)."""
+        return int(self.orientations.shape[0])
+
+    def save(self, path: str | Path) -> Path:
+        """Write the map to ``.npz`` (arrays ``x, y, z, index, solved, hits, centres,
+        orientations, base`` and the scalars); :meth:`load` reads it back."""
+        p = Path(path)
+        if p.suffix.lower() != ".npz":
+            raise InvalidArgumentError(
+                f"reachability maps are written as .npz; got {str(p)!r} (valid suffix: .npz)"
+            )
+        np.savez_compressed(
+            p, robot=self.robot, ee_frame=self.ee_frame, x=self.x, y=self.y, z=self.z,
+            index=self.index, solved=self.solved, hits=self.hits, centres=self.centres,
+            orientations=self.orientations, resolution=self.resolution, base=self.base,
+            seed=self.seed, tol_pos=self.tol_pos, tol_rot=self.tol_rot,
+            max_starts=self.max_starts, time_s=self.time_s,
+        )
+        return p
+
+    @classmethod
+    def load(cls, path: str | Path) -> ReachMap:
+        """Read a map written by :meth:`save`."""
+        d = np.load(Path(path), allow_pickle=False)
+        return cls(
+            robot=str(d["robot"]), ee_frame=str(d["ee_frame"]), x=d["x"], y=d["y"], z=d["z"],
+            index=d["index"], solved=d["solved"], hits=d["hits"], orientations=d["orientations"],
+            resolution=float(d["resolution"]), base=d["base"], seed=int(d["seed"]),
+            tol_pos=float(d["tol_pos"]), tol_rot=float(d["tol_rot"]),
+            max_starts=int(d["max_starts"]), time_s=float(d["time_s"]),
+        )
+
+    def __repr__(self) -> str:
+        reach = self.index > 0
+        return (
+            f"ReachMap(robot={self.robot!r}, grid={self.index.shape}, "
+            f"resolution={self.resolution} m, K={self.n_orientations}, "
+            f"reachable voxels={int(reach.sum())}, mean index of reachable="
+            f"{float(self.index[reach].mean()) if reach.any() else 0.0:.3f})"
+        )
+
+
+def chain_reach_bound(robot: RobotModel) -> tuple[FloatArray, float]:
+    """A sphere holding every end-effector position: centre (the first joint) and radius.
+
+    The radius is the sum of the joint placement offsets after the first joint, the
+    end-effector offset, and the largest travel of every prismatic joint: a rigorous bound,
+    whatever the joint values.
+
+    Returns:
+        ``(centre (3,) [m], radius [m])``.
+    """
+    c = robot.chain
+    radius = float(np.linalg.norm(c.pos_p[1:], axis=1).sum() + np.linalg.norm(c.pos_f))
+    for j, kind in enumerate(robot.joint_kinds):
+        if kind == "prismatic":
+            radius += float(max(abs(robot.lower[j]), abs(robot.upper[j])))
+            if j == 0:  # the first joint's own travel moves the centre as well
+                radius += float(max(abs(robot.lower[0]), abs(robot.upper[0])))
+    return np.array(c.pos_p[0], dtype=float), radius
+
+
+def default_bounds(
+    robot: RobotModel, seed: int = 0, n_samples: int = 20000, margin: float = 1.1
+) -> tuple[FloatArray, FloatArray]:
+    """Default workspace box: a cube around the first joint with half-edge ``margin`` × the
+    largest distance of the end effector from it over ``n_samples`` random configurations.
+
+    Returns:
+        ``(lower (3,), upper (3,))`` corners [m].
+    """
+    rng = np.random.default_rng(seed)
+    centre, _ = chain_reach_bound(robot)
+    pos = robot.fk(robot.random_q(rng, n_samples))[:, :3, 3]
+    r = margin * float(np.linalg.norm(pos - centre, axis=1).max())
+    return centre - r, centre + r
+
+
+def random_rotations(rng: np.random.Generator, k: int) -> FloatArray:
+    """``k`` rotations drawn uniformly on SO(3) (normalised Gaussian quaternions),
+    shape ``(k, 3, 3)``."""
+    from scipy.spatial.transform import Rotation
+
+    quat = rng.standard_normal((k, 4))
+    quat /= np.linalg.norm(quat, axis=1, keepdims=True)
+    return np.asarray(Rotation.from_quat(quat).as_matrix()).reshape(k, 3, 3)
+
+
+def grid_axes(
+    lower: Any, upper: Any, resolution: float
+) -> tuple[FloatArray, FloatArray, FloatArray]:
+    """Voxel centres per axis for the box ``[lower, upper]`` [m] and edge ``resolution``:
+    ``ceil(extent / resolution)`` voxels per axis (at least one), centred on the box."""
+    lo = np.asarray(lower, dtype=float).reshape(3)
+    hi = np.asarray(upper, dtype=float).reshape(3)
+    axes = []
+    for a in range(3):
+        n = max(1, int(np.ceil((hi[a] - lo[a]) / resolution - 1e-9)))
+        mid = 0.5 * (lo[a] + hi[a])
+        axes.append(mid + (np.arange(n) - 0.5 * (n - 1)) * resolution)
+    return axes[0], axes[1], axes[2]
+
+
+def reach_map(
+    robot: RobotModel,
+    *,
+    resolution: float = 0.1,
+    bounds: Any = None,
+    n_orientations: int = 8,
+    seed: int = 0,
+    tol_pos: float = 1e-5,
+    tol_rot: float = 1e-5,
+    max_starts: int = 16,
+    max_iters: int = 60,
+    scheduler: Any = None,
+    progress: bool = False,
+    max_targets: int = 20_000_000,
+) -> ReachMap:
+    """Compute the reachability map of ``robot``.
+
+    Args:
+        robot: The robot.
+        resolution: Voxel edge [m].
+        bounds: ``(lower (3,), upper (3,))`` corners of the box [m], or 6 numbers
+            ``xmin ymin zmin xmax ymax zmax``; default :func:`default_bounds`.
+        n_orientations: Orientations tried per voxel (K), the same for every voxel.
+        seed: Seed of the orientations and of the solver's restarts.
+        tol_pos: Position tolerance [m]; tol_rot: rotation tolerance [rad].
+        max_starts: Starts per pose before it counts as unreachable (the cost of an
+            unreachable pose grows with it).
+        max_iters: LM evaluations per start.
+        scheduler: Where to solve (see :mod:`swarm_ik.distributed`); ``None``: this process.
+        progress: Show a progress bar.
+        max_targets: Refuse grids needing more poses than this (voxels × K), to catch a
+            resolution typed in the wrong unit.
+
+    Returns:
+        The :class:`ReachMap`.
+
+    Raises:
+        InvalidArgumentError: non-positive resolution or K, empty/inverted bounds, or more
+            than ``max_targets`` poses.
+    """
+    t0 = time.perf_counter()
+    if not (np.isfinite(resolution) and resolution > 0):
+        raise InvalidArgumentError(f"resolution must be a positive length [m], got {resolution!r}")
+    if isinstance(n_orientations, bool) or not isinstance(n_orientations, (int, np.integer)) \
+            or n_orientations < 1:
+        raise InvalidArgumentError(
+            f"n_orientations must be a positive integer, got {n_orientations!r}"
+        )
+    if bounds is None:
+        lo, hi = default_bounds(robot, seed=seed)
+    else:
+        b = np.asarray(bounds, dtype=float).reshape(-1)
+        if b.shape != (6,) or not np.all(np.isfinite(b)):
+            raise InvalidArgumentError(
+                "bounds must be 6 finite numbers (xmin ymin zmin xmax ymax zmax) or "
+                f"(lower, upper); got {np.asarray(bounds).tolist()}"
+            )
+        lo, hi = b[:3], b[3:]
+        if np.any(lo >= hi):
+            raise InvalidArgumentError(
+                f"bounds: lower corner {lo.tolist()} must be below upper corner {hi.tolist()} "
+                "on every axis"
+            )
+    x, y, z = grid_axes(lo, hi, resolution)
+    shape = (x.size, y.size, z.size)
+    gx, gy, gz = np.meshgrid(x, y, z, indexing="ij")
+    centres = np.stack([gx, gy, gz], axis=-1).reshape(-1, 3)
+    base, radius = chain_reach_bound(robot)
+    inside = np.linalg.norm(centres - base, axis=1) <= radius + 1e-12
+    k = int(n_orientations)
+    n_targets = int(inside.sum()) * k
+    if n_targets > max_targets:
+        raise InvalidArgumentError(
+            f"the grid needs {n_targets} poses ({int(inside.sum())} voxels × {k} orientations), "
+            f"more than max_targets={max_targets}; use a coarser resolution (given "
+            f"{resolution} m) or smaller bounds"
+        )
+    rots = random_rotations(np.random.default_rng(seed), k)
+    pts = centres[inside]
+    targets = np.zeros((pts.shape[0], k, 4, 4))
+    targets[:, :, :3, :3] = rots[None]
+    targets[:, :, :3, 3] = pts[:, None, :]
+    targets[:, :, 3, 3] = 1.0
+    res = solve_batch(
+        robot, targets.reshape(-1, 4, 4), seed=seed, tol_pos=tol_pos, tol_rot=tol_rot,
+        max_starts=max_starts, max_iters=max_iters, scheduler=scheduler, progress=progress,
+    )
+    hits = np.zeros((centres.shape[0], k), dtype=bool)
+    hits[inside] = res.success.reshape(-1, k)
+    index = hits.mean(axis=1)
+    return ReachMap(
+        robot=robot.name, ee_frame=robot.ee_frame, x=x, y=y, z=z,
+        index=index.reshape(shape), solved=inside.reshape(shape), hits=hits.reshape(*shape, k),
+        orientations=rots,
+        resolution=float(resolution), base=base, seed=int(seed), tol_pos=float(tol_pos),
+        tol_rot=float(tol_rot), max_starts=int(max_starts), time_s=time.perf_counter() - t0,
+    )
+
+
+# --------------------------------------------------------------------------- pictures
+def plot_slices(rmap: ReachMap, path: str | Path, dpi: int = 120) -> Path:
+    """Heat maps of the index on three orthogonal slices through the first joint (XY, XZ,
+    YZ), written as a PNG (matplotlib, imported here)."""
+    try:
+        import matplotlib
+
+        matplotlib.use("Agg", force=False)
+        import matplotlib.pyplot as plt
+    except ImportError:  # pragma: no cover - depends on the environment
+        raise InvalidArgumentError(
+            "plotting needs matplotlib: pip install \"swarm_ik[plot]\""
+        ) from None
+    ix = int(np.argmin(np.abs(rmap.x - rmap.base[0])))
+    iy = int(np.argmin(np.abs(rmap.y - rmap.base[1])))
+    iz = int(np.argmin(np.abs(rmap.z - rmap.base[2])))
+    h = 0.5 * rmap.resolution
+    panels = [
+        (rmap.index[:, :, iz].T, rmap.x, rmap.y, "x", "y", f"XY slice, z = {rmap.z[iz]:.2f} m"),
+        (rmap.index[:, iy, :].T, rmap.x, rmap.z, "x", "z", f"XZ slice, y = {rmap.y[iy]:.2f} m"),
+        (rmap.index[ix, :, :].T, rmap.y, rmap.z, "y", "z", f"YZ slice, x = {rmap.x[ix]:.2f} m"),
+    ]
+    fig, axs = plt.subplots(1, 3, figsize=(15, 4.8), constrained_layout=True)
+    im: Any = None
+    for ax, (img, u, v, lu, lv, title) in zip(axs, panels, strict=True):
+        im = ax.imshow(img, origin="lower", vmin=0.0, vmax=1.0, cmap="viridis",
+                       extent=(u[0] - h, u[-1] + h, v[0] - h, v[-1] + h), interpolation="nearest")
+        ax.set_xlabel(f"{lu} [m]")
+        ax.set_ylabel(f"{lv} [m]")
+        ax.set_title(title)
+        ax.set_aspect("equal")
+    fig.colorbar(im, ax=axs, shrink=0.85,
+                 label=f"reachability index (of K = {rmap.n_orientations})")
+    fig.suptitle(
+        f"{rmap.robot} ({rmap.ee_frame}): reachability, {rmap.resolution:g} m voxels, "
+        f"tolerance {rmap.tol_pos:g} m / {rmap.tol_rot:g} rad"
+    )
+    p = Path(path)
+    fig.savefig(p, dpi=dpi)
+    plt.close(fig)
+    return p
+
+
+def _viridis(values: FloatArray) -> FloatArray:
+    """RGB colours ``(n, 3)`` in [0, 1] of values in [0, 1] (matplotlib's viridis when
+    available, else a blue → yellow ramp)."""
+    v = np.clip(values, 0.0, 1.0)
+    try:
+        from matplotlib import colormaps
+
+        return np.asarray(colormaps["viridis"](v))[:, :3]
+    except ImportError:  # pragma: no cover - depends on the environment
+        return np.stack([v, 0.3 + 0.6 * v, 1.0 - v], axis=1)
+
+
+def export_html(rmap: ReachMap, path: str | Path, point_size: float | None = None) -> Path:
+    """A self-contained HTML page (meshcat's viewer, no server) showing the voxels with a
+    non-zero index as a point cloud coloured by the index (viridis), with a triad at the first
+    joint.
+
+    Raises:
+        InvalidArgumentError: meshcat is not installed.
+    """
+    try:
+        import meshcat
+        import meshcat.geometry as mg
+        import umsgpack
+        from meshcat.commands import SetObject, SetTransform
+        from meshcat.path import Path as MeshcatPath
+    except ImportError:  # pragma: no cover - depends on the environment
+        raise InvalidArgumentError(
+            "the HTML export needs meshcat: pip install \"swarm_ik[viz]\""
+        ) from None
+    reach = rmap.index > 0
+    pts = rmap.centres[reach].astype(np.float32)
+    colours = _viridis(rmap.index[reach]).astype(np.float32)
+    size = float(point_size) if point_size is not None else 0.6 * rmap.resolution
+    root = MeshcatPath(("meshcat", "reachability"))
+    cloud = mg.PointCloud(pts.T.copy(), colours.T.copy(), size=size)
+    triad = mg.triad(scale=0.2)
+    place = np.eye(4)
+    place[:3, 3] = rmap.base
+    commands = [
+        SetObject(cloud, path=root.append("voxels")),
+        SetObject(triad, path=root.append("base")),
+        SetTransform(place, path=root.append("base")),
+    ]
+    blobs = []
+    for cmd in commands:
+        data = base64.b64encode(umsgpack.packb(cmd.lower())).decode("ascii")
+        blobs.append(
+            f'fetch("data:application/octet-binary;base64,{data}")'
+            ".then(r => r.arrayBuffer())"
+            ".then(b => viewer.handle_command_bytearray(new Uint8Array(b)));"
+        )
+    # the viewer's code, as meshcat's own server embeds it in its static export
+    js = (Path(meshcat.__file__).parent / "viewer" / "dist" / "main.min.js").read_text()
+    title = f"{rmap.robot} reachability ({int(reach.sum())} voxels, K = {rmap.n_orientations})"
+    html = (
+        "<!DOCTYPE html>\n<html>\n<head><meta charset=utf-8><title>" + title + "</title>\n"
+        "<style>body {margin: 0;} #meshcat-pane {width: 100vw; height: 100vh; "
+        "overflow: hidden;}</style></head>\n<body>\n<div id=\"meshcat-pane\"></div>\n"
+        "<script>" + js + "</script>\n<script>\n"
+        "var viewer = new MeshCat.Viewer(document.getElementById(\"meshcat-pane\"));\n"
+        + "\n".join(blobs) + "\n</script>\n</body>\n</html>\n"
+    )
+    p = Path(path)
+    p.write_text(html)
+    return p

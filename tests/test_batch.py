@@ -1,0 +1,363 @@
+"""Batched IK (solve_batch), target files, reachability maps and the batch/reach CLI."""
+
+from __future__ import annotations
+
+import base64
+import re
+import warnings
+
+import numpy as np
+import pytest
+
+import swarm_ik
+from swarm_ik.batch import (
+    BatchChain,
+    BatchSettings,
+    check_targets,
+    read_targets,
+    solve_batch,
+    solve_chunk,
+    target_uniforms,
+    write_targets,
+)
+from swarm_ik.cli import main
+from swarm_ik.errors import InvalidArgumentError, InvalidTargetError
+from swarm_ik.reach import (
+    ReachMap,
+    chain_reach_bound,
+    export_html,
+    grid_axes,
+    random_rotations,
+    reach_map,
+)
+
+TOL = 1e-5
+
+
+def fk_targets(robot: swarm_ik.RobotModel, n: int, seed: int) -> tuple[np.ndarray, np.ndarray]:
+    q = robot.random_q(np.random.default_rng(seed), n)
+    return q, robot.fk(q)
+
+
+@pytest.mark.parametrize("name", ["panda", "yumi_left"])
+def test_fk_sampled_targets_are_solved_and_pinocchio_agrees(get_robot, name):
+    robot = get_robot(name)
+    _, targets = fk_targets(robot, 300, seed=7)
+    res = solve_batch(robot, targets, seed=0)
+    assert res.q.shape == (300, robot.nq)
+    assert res.success_rate >= 0.99
+    ok = res.success
+    assert np.all(res.position_error[ok] <= TOL) and np.all(res.rotation_error[ok] <= TOL)
+    assert np.all(res.q >= robot.lower - 1e-12) and np.all(res.q <= robot.upper + 1e-12)
+    # an independent check of a sample with Pinocchio's own FK
+    for i in np.flatnonzero(ok)[:: max(1, int(ok.sum()) // 12)]:
+        dp, dr = swarm_ik.verify(swarm_ik.IKProblem(robot, targets[i]), res.q[i])
+        assert dp <= TOL and dr <= TOL
+        assert dp == pytest.approx(res.position_error[i], abs=1e-12)
+
+
+def test_errors_reported_are_those_of_the_answer(get_robot):
+    robot = get_robot("panda")
+    _, targets = fk_targets(robot, 40, seed=3)
+    res = solve_batch(robot, targets, seed=0, max_starts=1, max_iters=3)  # stopped early
+    assert not res.success.all()
+    pose = robot.fk(res.q)
+    dp = np.linalg.norm(pose[:, :3, 3] - targets[:, :3, 3], axis=1)
+    np.testing.assert_allclose(res.position_error, dp, atol=1e-12)
+    bad = ~res.success
+    assert np.all((res.position_error[bad] > TOL) | (res.rotation_error[bad] > TOL))
+
+
+def test_result_does_not_depend_on_chunking(get_robot):
+    robot = get_robot("yumi_left")
+    _, targets = fk_targets(robot, 240, seed=11)
+    whole = solve_batch(robot, targets, seed=5)
+    small = solve_batch(robot, targets, seed=5, chunk_size=17)
+    np.testing.assert_array_equal(whole.q, small.q)
+    np.testing.assert_array_equal(whole.n_evals, small.n_evals)
+    np.testing.assert_array_equal(whole.success, small.success)
+    assert (whole.n_starts > 1).any()  # restarts were used, so their streams were compared
+    # a chunk solved on its own (as on a worker) gives the rows of the whole batch
+    bc = BatchChain.from_robot(robot)
+    seeds = np.tile(robot.mid_q(), (60, 1))
+    part = solve_chunk(bc, BatchSettings(seed=5), 100, targets[100:160], seeds)
+    np.testing.assert_array_equal(part.q, whole.q[100:160])
+
+
+def test_seed_changes_restarts_only_where_restarts_happen(get_robot):
+    robot = get_robot("panda")
+    _, targets = fk_targets(robot, 200, seed=2)
+    a = solve_batch(robot, targets, seed=0)
+    b = solve_batch(robot, targets, seed=1)
+    first = (a.n_starts == 1) & (b.n_starts == 1)  # solved from the shared mid-range start
+    np.testing.assert_array_equal(a.q[first], b.q[first])
+    restarted = (a.n_starts > 1) & (b.n_starts > 1)
+    assert restarted.any()
+    assert not np.array_equal(a.q[restarted], b.q[restarted])
+
+
+def test_restart_streams_are_keyed_by_seed_and_index():
+    u = target_uniforms(3, 10, 1000)
+    assert np.all((u >= 0) & (u < 1)) and abs(u.mean() - 0.5) < 0.05
+    np.testing.assert_array_equal(u, target_uniforms(3, 10, 1000))
+    assert not np.array_equal(u[:8], target_uniforms(3, 11, 8))
+    assert not np.array_equal(u[:8], target_uniforms(4, 10, 8))
+
+
+def test_unreachable_targets_fail_after_all_starts(get_robot):
+    robot = get_robot("yumi_left")
+    _, targets = fk_targets(robot, 4, seed=1)
+    targets[:2, :3, 3] += 5.0  # 5 m away: out of reach
+    res = solve_batch(robot, targets, max_starts=40)
+    np.testing.assert_array_equal(res.success, [False, False, True, True])
+    np.testing.assert_array_equal(res.n_starts[:2], [40, 40])
+    assert np.all(res.position_error[:2] > 4.0)
+
+
+def test_q0_seeds_each_target(get_robot):
+    robot = get_robot("panda")
+    q_true, targets = fk_targets(robot, 30, seed=4)
+    res = solve_batch(robot, targets, q0=q_true)
+    assert res.success.all()
+    np.testing.assert_array_equal(res.n_starts, 1)
+    assert res.n_evals.max() <= 2  # the seed is already a solution: one check, maybe one step
+    with pytest.raises(InvalidArgumentError, match=r"q0 must have shape \(7,\) or \(30, 7\)"):
+        solve_batch(robot, targets, q0=q_true[:3])
+    with pytest.warns(UserWarning, match="outside the joint limits for 30 target"):
+        solve_batch(robot, targets, q0=robot.upper + 1.0, max_starts=2)
+
+
+def test_continuous_joints_are_wrapped(get_robot):
+    robot = get_robot("kinova")
+    assert "continuous" in robot.joint_kinds
+    _, targets = fk_targets(robot, 100, seed=9)
+    res = solve_batch(robot, targets)
+    assert res.success_rate >= 0.97
+    m = robot.continuous_mask
+    assert np.all(np.abs(res.q[:, m]) <= np.pi + 1e-12)
+
+
+def test_position_only(get_robot):
+    robot = get_robot("yumi_left")
+    _, targets = fk_targets(robot, 50, seed=6)
+    rots = random_rotations(np.random.default_rng(0), 50)
+    targets[:, :3, :3] = rots  # orientations the arm mostly cannot take at these points
+    res = solve_batch(robot, targets, position_only=True)
+    assert res.success.all()
+    assert np.all(res.position_error <= TOL)
+    assert np.median(res.rotation_error) > 0.1
+
+
+def test_does_not_loop_over_solve(get_robot, monkeypatch):
+    def forbidden(*args, **kwargs):
+        raise AssertionError("solve_batch must not call swarm_ik.solve")
+
+    monkeypatch.setattr(swarm_ik.api, "solve", forbidden)
+    monkeypatch.setattr(swarm_ik, "solve", forbidden)
+    robot = get_robot("yumi_left")
+    assert solve_batch(robot, fk_targets(robot, 20, 0)[1]).success.all()
+
+
+def test_empty_batch(get_robot):
+    robot = get_robot("yumi_left")
+    res = solve_batch(robot, np.empty((0, 4, 4)))
+    assert res.q.shape == (0, 7) and res.success.shape == (0,) and res.success_rate == 0.0
+
+
+def test_settings_are_validated(get_robot):
+    robot = get_robot("yumi_left")
+    t = robot.fk(robot.mid_q())[None]
+    for kwargs, msg in [
+        ({"tol_pos": 0.0}, "tol_pos must be a positive"),
+        ({"max_starts": 0}, "max_starts must be an integer >= 1"),
+        ({"seed": -1}, r"seed must be an integer in \[0, 2\*\*63\)"),
+        ({"chunk_size": 0}, "chunk_size must be a positive integer"),
+        ({"scheduler": "udp://x"}, "valid choices: 'none'"),
+    ]:
+        with pytest.raises(InvalidArgumentError, match=msg):
+            solve_batch(robot, t, **kwargs)
+    with pytest.raises(InvalidArgumentError, match="RobotModel"):
+        solve_batch("panda", t)  # type: ignore[arg-type]
+
+
+def test_check_targets():
+    good = np.tile(np.eye(4), (3, 1, 1))
+    assert check_targets(good).shape == (3, 4, 4)
+    rows = np.array([[0.1, 0.2, 0.3, 0.0, 0.0, np.sin(0.25), np.cos(0.25)]])
+    pose = check_targets(rows)[0]
+    np.testing.assert_allclose(pose[:3, 3], [0.1, 0.2, 0.3])
+    assert np.isclose(np.arctan2(pose[1, 0], pose[0, 0]), 0.5)
+    bad = good.copy()
+    bad[2, 0, 3] = np.nan
+    with pytest.raises(InvalidTargetError, match="target 2 contains NaN"):
+        check_targets(bad)
+    bad = good.copy()
+    bad[1, :3, :3] *= 1.01
+    with pytest.raises(InvalidTargetError, match="target 1: rotation is not orthonormal"):
+        check_targets(bad)
+    bad = good.copy()
+    bad[0, 3, 0] = 1.0
+    with pytest.raises(InvalidTargetError, match="target 0: bottom row"):
+        check_targets(bad)
+    with pytest.raises(InvalidTargetError, match=r"shape \(N, 4, 4\) or \(N, 7\)"):
+        check_targets(np.zeros((3, 3, 3)))
+
+
+def test_target_files_round_trip(get_robot, tmp_path):
+    robot = get_robot("yumi_left")
+    _, targets = fk_targets(robot, 25, seed=1)
+    for suffix in (".csv", ".npz"):
+        path = write_targets(tmp_path / f"t{suffix}", targets)
+        np.testing.assert_allclose(read_targets(path), targets, atol=1e-12)
+    # 16 columns, no header; a .npy file; columns in another order
+    np.savetxt(tmp_path / "m.csv", targets.reshape(25, 16), delimiter=",")
+    np.testing.assert_allclose(read_targets(tmp_path / "m.csv"), targets, atol=1e-12)
+    np.save(tmp_path / "t.npy", targets)
+    np.testing.assert_allclose(read_targets(tmp_path / "t.npy"), targets)
+    (tmp_path / "o.csv").write_text("qw,qx,qy,qz,x,y,z\n1,0,0,0,0.1,0.2,0.3\n")
+    np.testing.assert_allclose(read_targets(tmp_path / "o.csv")[0, :3, 3], [0.1, 0.2, 0.3])
+    (tmp_path / "h.csv").write_text("a,b,c\n1,2,3\n")
+    with pytest.raises(InvalidArgumentError, match="header lacks column"):
+        read_targets(tmp_path / "h.csv")
+    (tmp_path / "t.txt").write_text("1")
+    with pytest.raises(InvalidArgumentError, match="valid suffixes: .csv, .npy, .npz"):
+        read_targets(tmp_path / "t.txt")
+    with pytest.raises(InvalidArgumentError, match="not found"):
+        read_targets(tmp_path / "missing.csv")
+
+
+def test_result_files(get_robot, tmp_path):
+    robot = get_robot("yumi_left")
+    _, targets = fk_targets(robot, 10, seed=1)
+    res = solve_batch(robot, targets)
+    d = np.load(res.save(tmp_path / "r.npz", targets=targets))
+    np.testing.assert_array_equal(d["q"], res.q)
+    np.testing.assert_array_equal(d["targets"], targets)
+    assert list(d["joint_names"]) == list(robot.joint_names)
+    res.save(tmp_path / "r.csv")
+    table = np.genfromtxt(tmp_path / "r.csv", delimiter=",", names=True)
+    np.testing.assert_array_equal(table[robot.joint_names[0]], res.q[:, 0])
+    np.testing.assert_array_equal(table["success"].astype(bool), res.success)
+    with pytest.raises(InvalidArgumentError, match="valid suffixes: .csv, .npz"):
+        res.save(tmp_path / "r.json")
+
+
+# ---------------------------------------------------------------------------- reach
+def test_grid_axes():
+    x, y, z = grid_axes([0, 0, 0], [1.0, 0.5, 0.05], 0.1)
+    assert (x.size, y.size, z.size) == (10, 5, 1)
+    np.testing.assert_allclose(np.diff(x), 0.1)
+    assert x[0] == pytest.approx(0.05) and x[-1] == pytest.approx(0.95)
+
+
+def test_chain_reach_bound_holds(get_robot):
+    for name in ("panda", "loading_manipulator"):
+        robot = get_robot(name)
+        centre, radius = chain_reach_bound(robot)
+        pos = robot.fk(robot.random_q(np.random.default_rng(0), 5000))[:, :3, 3]
+        dist = np.linalg.norm(pos - centre, axis=1)
+        assert dist.max() <= radius
+        assert dist.max() > 0.6 * radius  # a bound, but not a vacuous one
+
+
+def test_reach_map(get_robot, tmp_path):
+    robot = get_robot("yumi_left")
+    rmap = reach_map(robot, resolution=0.2, n_orientations=4, max_starts=8, seed=1)
+    assert rmap.index.shape == (rmap.x.size, rmap.y.size, rmap.z.size)
+    np.testing.assert_array_equal(rmap.index, rmap.hits.mean(axis=-1))
+    assert np.all(rmap.index[~rmap.solved] == 0)
+    assert 0 < (rmap.index > 0).sum() < rmap.solved.sum()
+    # a voxel counted reachable in some orientation is reached by the single-pose solver too
+    i = np.argwhere(rmap.hits)[0]
+    target = np.eye(4)
+    target[:3, :3] = rmap.orientations[i[3]]
+    target[:3, 3] = rmap.centres[tuple(i[:3])]
+    assert swarm_ik.solve(swarm_ik.IKProblem(robot, target), "swarm").success
+    # save / load round trip
+    back = ReachMap.load(rmap.save(tmp_path / "m.npz"))
+    np.testing.assert_array_equal(back.index, rmap.index)
+    np.testing.assert_array_equal(back.hits, rmap.hits)
+    assert back.robot == rmap.robot and back.n_orientations == 4
+    with pytest.raises(InvalidArgumentError, match="coarser resolution"):
+        reach_map(robot, resolution=0.01, max_targets=1000)
+    with pytest.raises(InvalidArgumentError, match="lower corner"):
+        reach_map(robot, bounds=[0, 0, 0, 1, -1, 1])
+
+
+def test_reach_html_holds_the_point_cloud(get_robot, tmp_path):
+    pytest.importorskip("meshcat")
+    import umsgpack
+
+    robot = get_robot("yumi_left")
+    rmap = reach_map(robot, resolution=0.25, n_orientations=2, max_starts=4)
+    html = export_html(rmap, tmp_path / "m.html").read_text()
+    assert "MeshCat.Viewer" in html
+    scene = html[html.index("new MeshCat.Viewer"):]  # the commands, after the viewer's code
+    blobs = re.findall(r"base64,([A-Za-z0-9+/=]+)", scene)
+    assert len(blobs) == 3  # point cloud, triad, its placement
+    cmd = umsgpack.unpackb(base64.b64decode(blobs[0]))
+    assert cmd["type"] == "set_object" and cmd["path"] == "/meshcat/reachability/voxels"
+    geometry = cmd["object"]["geometries"][0]
+    n_points = len(geometry["data"]["attributes"]["position"]["array"].data) // (4 * 3)
+    assert n_points == int((rmap.index > 0).sum())
+
+
+# ---------------------------------------------------------------------------- CLI
+def test_cli_batch(tmp_path, capsys):
+    out = tmp_path / "r.csv"
+    code = main(["batch", "--robot", "yumi_left", "--random", "50", "--out", str(out),
+                 "--scheduler", "none", "--seed", "3"])
+    text = capsys.readouterr().out
+    assert code == 0 and "solved 50/50" in text
+    table = np.genfromtxt(out, delimiter=",", names=True)
+    assert table.shape == (50,) and table["success"].all()
+    # a targets file in, an npz out; one unreachable target -> exit code 1
+    robot = swarm_ik.load_robot("yumi_left")
+    targets = robot.fk(robot.random_q(np.random.default_rng(0), 5))
+    targets[0, :3, 3] = [3.0, 0.0, 0.0]
+    write_targets(tmp_path / "t.csv", targets)
+    code = main(["batch", "--robot", "yumi_left", "--targets", str(tmp_path / "t.csv"),
+                 "--out", str(tmp_path / "r.npz"), "--scheduler", "none", "--max-starts", "40"])
+    assert code == 1 and "solved 4/5" in capsys.readouterr().out
+    assert np.load(tmp_path / "r.npz")["success"].tolist() == [False, True, True, True, True]
+    code = main(["batch", "--robot", "yumi_left", "--random", "5",
+                 "--out", str(tmp_path / "x.json"), "--scheduler", "none"])
+    assert code == 2 and "valid: .csv, .npz" in capsys.readouterr().err
+
+
+def test_cli_reach(tmp_path, capsys):
+    out = tmp_path / "yumi.npz"
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        code = main(["reach", "--robot", "yumi_left", "--resolution", "0.25", "--orientations", "2",
+                     "--max-starts", "4", "--out", str(out), "--scheduler", "none"])
+    assert code == 0
+    assert "reachable voxels" in capsys.readouterr().out
+    rmap = ReachMap.load(out)
+    assert rmap.n_orientations == 2 and rmap.resolution == 0.25
+    assert out.with_suffix(".png").stat().st_size > 10_000
+    try:
+        import meshcat  # noqa: F401
+    except ImportError:  # pragma: no cover
+        return
+    assert out.with_suffix(".html").is_file()
+
+
+def test_throughput_benchmark_smoke(tmp_path):
+    import argparse
+
+    from swarm_ik.bench import throughput
+
+    parser = argparse.ArgumentParser()
+    throughput.add_arguments(parser)
+    args = parser.parse_args(["--robots", "yumi_left", "--sizes", "20", "40", "--loop-max", "20",
+                              "--scheduler", "none", "--out", str(tmp_path)])
+    assert throughput.run(args) == 0
+    rows = throughput._read(tmp_path / "throughput.csv")
+    methods = {(r["method"], int(r["n"])) for r in rows}
+    assert {("batch-1proc", 20), ("batch-1proc", 40), ("loop-solve", 20)} <= methods
+    assert ("loop-solve", 40) not in methods  # above --loop-max
+    assert all(float(r["success_rate"]) > 0.8 for r in rows)
+    md = (tmp_path / "throughput.md").read_text()
+    assert "| yumi_left | solve_batch, 1 process | 40 |" in md and "Where the time goes" in md
+    assert (tmp_path / "throughput.png").stat().st_size > 10_000

@@ -1,0 +1,171 @@
+"""Scale-out on Dask: identical results whatever the workers, and a killed worker's chunks
+recomputed (scheduler and workers started as separate processes on 127.0.0.1)."""
+
+from __future__ import annotations
+
+import functools
+import os
+import subprocess
+import sys
+import time
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from swarm_ik import distributed
+from swarm_ik.batch import BatchChain, BatchSettings, _run_chunk, solve_batch
+from swarm_ik.errors import InvalidArgumentError
+
+dask_distributed = pytest.importorskip("distributed")
+
+
+def _targets(robot, n: int, seed: int) -> np.ndarray:
+    return robot.fk(robot.random_q(np.random.default_rng(seed), n))
+
+
+def _square(x: int) -> int:
+    return x * x
+
+
+def test_check_scheduler_lists_choices():
+    assert distributed.check_scheduler(None) is None
+    assert distributed.check_scheduler("none") is None
+    assert distributed.check_scheduler("local") == "local"
+    assert distributed.check_scheduler("tcp://127.0.0.1:8786") == "tcp://127.0.0.1:8786"
+    with pytest.raises(InvalidArgumentError, match="'local' .* tcp://"):
+        distributed.check_scheduler("127.0.0.1:8786")
+    with pytest.raises(InvalidArgumentError, match="distributed.Client"):
+        distributed.check_scheduler(3)
+
+
+def test_map_chunks_in_process_keeps_order():
+    assert distributed.map_chunks(_square, [3, 1, 2]) == [9, 1, 4]
+    with pytest.raises(InvalidArgumentError, match="one entry per item"):
+        distributed.map_chunks(_square, [1, 2], sizes=[1])
+
+
+def test_unreachable_scheduler_is_reported():
+    with pytest.raises(InvalidArgumentError, match="could not reach the Dask scheduler"):
+        with distributed.connect("tcp://127.0.0.1:1", timeout=1):
+            pass
+
+
+def test_local_cluster_of_two_workers_gives_identical_results(get_robot):
+    robot = get_robot("panda")
+    targets = _targets(robot, 1500, seed=21)
+    ref = solve_batch(robot, targets, seed=4)
+    assert (ref.n_starts > 1).any()
+    with distributed.connect("local", n_workers=2) as client:
+        assert distributed.n_workers(client) == 2
+        a = solve_batch(robot, targets, seed=4, scheduler=client)
+        b = solve_batch(robot, targets, seed=4, scheduler=client, chunk_size=101)
+        # the same chunks again: pure keys, served from the cluster, same answer
+        c = solve_batch(robot, targets, seed=4, scheduler=client, chunk_size=101)
+        used = client.run(os.getpid)
+    assert len(set(used.values())) == 2  # two worker processes
+    for res in (a, b, c):
+        np.testing.assert_array_equal(res.q, ref.q)
+        np.testing.assert_array_equal(res.success, ref.success)
+        np.testing.assert_array_equal(res.n_evals, ref.n_evals)
+
+
+def _free_port() -> int:
+    import socket
+
+    with socket.socket() as s:
+        s.bind(("127.0.0.1", 0))
+        return int(s.getsockname()[1])
+
+
+def _dask_cli() -> list[str]:
+    exe = Path(sys.executable).with_name("dask")
+    return [str(exe)] if exe.exists() else [sys.executable, "-m", "dask"]
+
+
+def _stop(procs: list[subprocess.Popen]) -> None:
+    """Stop the processes this test started: workers first, then the scheduler (last in
+    ``procs`` order reversed), each given 5 s to exit before it is killed."""
+    for p in reversed(procs):
+        if p.poll() is None:
+            p.terminate()
+        try:
+            p.wait(timeout=5)
+        except subprocess.TimeoutExpired:
+            p.kill()
+            p.wait(timeout=5)
+
+
+def test_killed_worker_chunks_are_recomputed(get_robot, tmp_path):
+    robot = get_robot("yumi_left")
+    # every 4th target is out of reach, so each chunk costs a few tens of milliseconds
+    targets = _targets(robot, 2400, seed=5)
+    targets[::4, :3, 3] += 2.0
+    settings = BatchSettings(seed=9, max_starts=24)
+    bc = BatchChain.from_robot(robot)
+    size = 100
+    items = [(s, targets[s:s + size], np.tile(robot.mid_q(), (len(targets[s:s + size]), 1)))
+             for s in range(0, len(targets), size)]
+    func = functools.partial(_run_chunk, bc, settings)  # importable on the workers
+    ref = [func(it) for it in items]
+
+    port = _free_port()
+    address = f"tcp://127.0.0.1:{port}"
+    env = {**os.environ, "DASK_DISTRIBUTED__WORKER__DAEMON": "False"}
+    log = (tmp_path / "dask.log").open("w")
+    procs: list[subprocess.Popen] = []
+    client = None
+    try:
+        procs.append(subprocess.Popen(
+            [*_dask_cli(), "scheduler", "--host", "127.0.0.1", "--port", str(port),
+             "--no-dashboard"], stdout=log, stderr=log, env=env))
+        for _ in range(2):
+            procs.append(subprocess.Popen(
+                [*_dask_cli(), "worker", address, "--host", "127.0.0.1", "--nthreads", "1",
+                 "--nworkers", "1", "--no-nanny", "--no-dashboard",
+                 "--local-directory", str(tmp_path / "scratch")],
+                stdout=log, stderr=log, env=env))
+        client = dask_distributed.Client(address, timeout=30)
+        client.wait_for_workers(2, timeout=45)
+        victim = procs[1]
+        victim_addr = [w for w, pid in client.run(os.getpid).items() if pid == victim.pid]
+        assert len(victim_addr) == 1
+        client.run(func, items[0])  # compile / load the kernels on both workers first
+        futures = [client.submit(func, it, key=f"chunk-{i}", pure=True)
+                   for i, it in enumerate(items)]
+        deadline = time.monotonic() + 30
+        while True:  # kill the victim while it holds unfinished work
+            busy = client.processing(workers=victim_addr).get(victim_addr[0], ())
+            done = sum(f.done() for f in futures)
+            if done >= 1 and busy:
+                break
+            assert time.monotonic() < deadline, "the workers never started"
+            time.sleep(0.005)
+        assert done < len(futures) - 2  # most of the work is still ahead
+        victim.kill()
+        victim.wait(timeout=10)
+        results = client.gather(futures)
+        assert len(client.scheduler_info()["workers"]) == 1
+        # the victim's unfinished chunks went back to the queue and were computed again
+        stories = {k: [t[2] for t in client.story(k) if len(t) > 3] for k in busy}
+        assert all(st.count("processing") >= 2 for st in stories.values()), stories
+    finally:
+        if client is not None:
+            client.close()
+        _stop(procs)
+        log.close()
+    assert [r.start for r in results] == [it[0] for it in items]  # each chunk once, in order
+    for got, want in zip(results, ref, strict=True):
+        np.testing.assert_array_equal(got.q, want.q)
+        np.testing.assert_array_equal(got.success, want.success)
+    assert not all(r.success.all() for r in results)  # the unreachable targets stay failed
+
+
+def test_map_chunks_on_a_scheduler_address(get_robot):
+    """``scheduler="tcp://…"``: map_chunks connects, computes in order, and disconnects."""
+    with dask_distributed.LocalCluster(n_workers=1, threads_per_worker=1, processes=False,
+                                       protocol="tcp", host="127.0.0.1",
+                                       dashboard_address=None) as cluster:
+        assert cluster.scheduler_address.startswith("tcp://127.0.0.1:")
+        out = distributed.map_chunks(_square, list(range(7)), scheduler=cluster.scheduler_address)
+        assert out == [i * i for i in range(7)]
