@@ -11,6 +11,7 @@ import pinocchio as pin
 
 from swarm_ik.errors import InvalidArgumentError, unknown
 from swarm_ik.optimize import check_budget, make_rng
+from swarm_ik.pose import is_finite_nonneg
 from swarm_ik.problem import IKProblem
 from swarm_ik.result import Result
 from swarm_ik.solvers import base
@@ -104,7 +105,7 @@ def solve(
     kwargs = spec.resolve(params)
     check_budget(max_evals, time_limit)
     for label, tol in (("tol_pos", tol_pos), ("tol_rot", tol_rot)):
-        if not (np.isfinite(tol) and tol > 0):
+        if not (is_finite_nonneg(tol) and float(tol) > 0):
             raise InvalidArgumentError(f"{label} must be a positive number, got {tol!r}")
     rng = make_rng(seed)
     q_start = prepare_q0(problem, q0)

@@ -157,9 +157,16 @@ class IKProblem:
 
     def is_success(self, q: FloatArray, tol_pos: float, tol_rot: float) -> bool:
         """Both errors within tolerance (rotation ignored when position-only), within limits."""
-        dp, dr = self.errors(np.asarray(q)[None])
-        ok = dp[0] <= tol_pos and (self.position_only or dr[0] <= tol_rot)
-        return bool(ok and np.all(q >= self.lower - 1e-12) and np.all(q <= self.upper + 1e-12))
+        q = np.asarray(q, dtype=float)
+        if np.any(q < self.lower - 1e-12) or np.any(q > self.upper + 1e-12):
+            return False
+        pose = self.robot.fk(q)
+        d = pose[:3, 3] - self.target[:3, 3]
+        if float(np.sqrt(d @ d)) > tol_pos:
+            return False
+        if self.position_only:
+            return True
+        return bool(rotation_angle(self._rot_target.T @ pose[:3, :3]) <= tol_rot)
 
     def __repr__(self) -> str:
         p = self.target[:3, 3]

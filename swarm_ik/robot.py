@@ -11,6 +11,7 @@ from __future__ import annotations
 import os
 import reprlib
 import sys
+import threading
 import warnings
 import xml.etree.ElementTree as ET
 from dataclasses import dataclass, field
@@ -248,7 +249,7 @@ class RobotModel:
     upper: FloatArray
     chain: ChainKinematics
     ee_frame_id: int = field(default=0)
-    _pin_data: Any = field(default=None, repr=False)
+    _local: threading.local = field(default_factory=threading.local, repr=False)
 
     # --------------------------------------------------------------- building
     @classmethod
@@ -358,7 +359,6 @@ class RobotModel:
             upper=np.array(upper),
             chain=chain,
             ee_frame_id=rfid,
-            _pin_data=reduced.createData(),
         )
 
     # ------------------------------------------------------------- properties
@@ -389,6 +389,8 @@ class RobotModel:
     def to_pinocchio(self, q: FloatArray) -> FloatArray:
         """Pinocchio configuration of the chain model for ``q`` (continuous → cos, sin)."""
         q = np.asarray(q, dtype=float).reshape(self.nq)
+        if self.model.nq == self.nq:  # no continuous joint: the same vector
+            return q.copy()
         out = np.empty(self.model.nq)
         for j in range(1, self.model.njoints):
             jm = self.model.joints[j]
@@ -412,6 +414,22 @@ class RobotModel:
                 out[j - 1] = q_pin[jm.idx_q]
         return out
 
+    def __getstate__(self) -> dict[str, Any]:
+        state = dict(self.__dict__)
+        state.pop("_local", None)  # per-thread Pinocchio Data: rebuilt on demand
+        return state
+
+    def __setstate__(self, state: dict[str, Any]) -> None:
+        self.__dict__.update(state)
+        object.__setattr__(self, "_local", threading.local())
+
+    def _data(self) -> Any:
+        """Pinocchio ``Data`` of the chain model, one per thread (reused between calls)."""
+        data = getattr(self._local, "data", None)
+        if data is None:
+            data = self._local.data = self.model.createData()
+        return data
+
     def fk_pinocchio(self, q: FloatArray) -> FloatArray:
         """Reference FK through ``pinocchio.forwardKinematics`` + ``updateFramePlacements``.
 
@@ -423,14 +441,14 @@ class RobotModel:
         Returns:
             Pose, shape ``(4, 4)``.
         """
-        data = self.model.createData()
+        data = self._data()
         pin.forwardKinematics(self.model, data, self.to_pinocchio(q))
         pin.updateFramePlacements(self.model, data)
         return np.array(data.oMf[self.ee_frame_id].homogeneous)
 
     def jacobian_pinocchio(self, q: FloatArray) -> FloatArray:
         """Reference frame Jacobian ``(6, nq)`` from Pinocchio, LOCAL_WORLD_ALIGNED."""
-        data = self.model.createData()
+        data = self._data()
         pin.computeJointJacobians(self.model, data, self.to_pinocchio(q))
         pin.updateFramePlacements(self.model, data)
         jac = pin.getFrameJacobian(

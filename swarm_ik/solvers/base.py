@@ -109,6 +109,11 @@ class Evaluator:
         return max(0, self.max_evals - self.n_evals)
 
     @property
+    def stops_on_success(self) -> bool:
+        """Whether the run ends at the success criterion (False: the whole budget runs)."""
+        return self._stop is not None or self.f_target is not None
+
+    @property
     def time_up(self) -> bool:
         """Whether the time limit has passed."""
         return self.time_limit is not None and self.elapsed >= self.time_limit

@@ -45,6 +45,10 @@ from swarm_ik.solvers.gwo import gwo_move
 
 IntArray = NDArray[np.int64]
 
+FULL_BUDGET_TOL = 1e-14
+"""Polish tolerance [m, rad] when the run is not to stop at success (``stop_on_success=False``,
+as in the papers' experiments): each start is polished to round-off."""
+
 # Status codes of a polished start (``status`` output of :func:`lm_polish`).
 NOT_RUN = 0
 """The start was not reached (budget spent, or an earlier start succeeded)."""
@@ -870,6 +874,8 @@ def run(
     _check_params(pop_size, iterations, swarm_fraction, max_iters, prefer, nearest_starts,
                   tol_margin)
     tol_pos, tol_rot = ev.tolerance if ev.tolerance is not None else (1e-5, 1e-5)
+    if not ev.stops_on_success:  # the whole budget runs: polish down to round-off
+        tol_pos, tol_rot = min(tol_pos, FULL_BUDGET_TOL), min(tol_rot, FULL_BUDGET_TOL)
     pol = Polisher.from_problem(
         problem, ev.lower, ev.upper, tol_pos, tol_rot, wrap=ev.wrap_mask, tol_margin=tol_margin,
         max_iters=max_iters, lam0=lam0, max_step=max_step, stall_rel=stall_rel,
