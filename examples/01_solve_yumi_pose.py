@@ -23,8 +23,13 @@ QUICK = os.environ.get("SWARM_IK_QUICK") == "1"
 def main() -> None:
     robot = swarm_ik.load_robot("yumi_left")
     print(robot)
-    print("joints:", ", ".join(f"{n} [{lo:.2f}, {hi:.2f}] rad" for n, lo, hi
-                               in zip(robot.joint_names, robot.lower, robot.upper, strict=True)))
+    print(
+        "joints:",
+        ", ".join(
+            f"{n} [{lo:.2f}, {hi:.2f}] rad"
+            for n, lo, hi in zip(robot.joint_names, robot.lower, robot.upper, strict=True)
+        ),
+    )
 
     q_true = np.array([0.3, -0.8, 0.4, 0.6, -0.5, 1.2, 0.7])  # rad
     target = robot.fk(q_true)  # 4x4 pose in metres
@@ -33,9 +38,11 @@ def main() -> None:
     problem = swarm_ik.IKProblem(robot, target)  # fitness "se3": |dp| + theta
     for solver, budget in (("swarm", None), ("hlfoa", 5_000 if QUICK else 50_000)):
         res = swarm_ik.solve(problem, solver, seed=0, max_evals=budget)
-        print(f"\n{solver}: success={res.success}  position error {res.position_error:.2e} m  "
-              f"rotation error {res.rotation_error:.2e} rad  {res.n_evals} evaluations  "
-              f"{res.time_s * 1e3:.1f} ms")
+        print(
+            f"\n{solver}: success={res.success}  position error {res.position_error:.2e} m  "
+            f"rotation error {res.rotation_error:.2e} rad  {res.n_evals} evaluations  "
+            f"{res.time_s * 1e3:.1f} ms"
+        )
         print("  q =", np.round(res.q, 4).tolist())
     # a redundant arm has many answers: the one found need not be q_true, only reach the pose
     assert swarm_ik.solve(problem, seed=0).success

@@ -26,16 +26,19 @@ X_STAR = np.array([np.pi / 4, np.pi / 6, np.pi / 4, 0.8, 1.0, 1.0, np.pi / 6, -n
 
 
 def report(label: str, res: swarm_ik.Result) -> None:
-    print(f"{label}: success={res.success}  position error {res.position_error:.3e} m  "
-          f"rotation error {res.rotation_error:.3e} rad  within limits {res.within_limits}")
+    print(
+        f"{label}: success={res.success}  position error {res.position_error:.3e} m  "
+        f"rotation error {res.rotation_error:.3e} rad  within limits {res.within_limits}"
+    )
     print("   q =", np.round(res.q, 4).tolist())
 
 
 def main() -> None:
     robot = swarm_ik.load_robot("loading_manipulator")
     print(robot)
-    for name, kind, lo, hi in zip(robot.joint_names, robot.joint_kinds, robot.lower, robot.upper,
-                                  strict=True):
+    for name, kind, lo, hi in zip(
+        robot.joint_names, robot.joint_kinds, robot.lower, robot.upper, strict=True
+    ):
         unit = "m" if kind == "prismatic" else "rad"
         print(f"  {name:8s} {kind:10s} [{lo: .3f}, {hi: .3f}] {unit}")
 
@@ -51,8 +54,9 @@ def main() -> None:
     assert not res.success, "x* lies outside the limits: the target should be unreachable"
 
     long_robot = swarm_ik.load_robot("loading_manipulator_long")
-    res_long = swarm_ik.solve(swarm_ik.IKProblem(long_robot, paper_target), seed=0,
-                              max_evals=BUDGET)
+    res_long = swarm_ik.solve(
+        swarm_ik.IKProblem(long_robot, paper_target), seed=0, max_evals=BUDGET
+    )
     report("paper target, loading_manipulator_long", res_long)
 
 

@@ -58,8 +58,10 @@ def main() -> None:
         # 3 joints cannot set a full orientation: ask for the position only (w_rot=0)
         problem = swarm_ik.IKProblem(arm, target, w_rot=0.0)
         res = swarm_ik.solve(problem, seed=0)
-        print(f"position-only target: success={res.success}, "
-              f"position error {res.position_error:.2e} m, q = {np.round(res.q, 4).tolist()}")
+        print(
+            f"position-only target: success={res.success}, "
+            f"position error {res.position_error:.2e} m, q = {np.round(res.q, 4).tolist()}"
+        )
 
     by_name = swarm_ik.load_robot("ur5")
     print("\nby name:", by_name)
@@ -68,8 +70,10 @@ def main() -> None:
     print("by path:", by_path, "from", ur5_file.name)
     q = np.array([0.2, -1.2, 1.4, -0.6, 1.1, 0.3])
     res = swarm_ik.solve(swarm_ik.IKProblem(by_path, by_path.fk(q)), seed=0)
-    print(f"UR5 to wrist_3_link: success={res.success}, position error "
-          f"{res.position_error:.2e} m, rotation error {res.rotation_error:.2e} rad")
+    print(
+        f"UR5 to wrist_3_link: success={res.success}, position error "
+        f"{res.position_error:.2e} m, rotation error {res.rotation_error:.2e} rad"
+    )
 
     try:  # a wrong frame name is refused with the list of valid ones
         swarm_ik.load_robot("ur5", ee_frame="tool1")

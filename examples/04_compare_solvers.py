@@ -53,12 +53,16 @@ def run(out: Path) -> None:
     names = [s for s in SOLVERS if s in swarm_ik.solvers.names()]
 
     fig, ax = plt.subplots(figsize=(7, 4.5))
-    print(f"{'solver':14s} {'success':>7s} {'pos. err [m]':>12s} {'rot. err [rad]':>14s} "
-          f"{'evals':>6s} {'time [ms]':>9s}")
+    print(
+        f"{'solver':14s} {'success':>7s} {'pos. err [m]':>12s} {'rot. err [rad]':>14s} "
+        f"{'evals':>6s} {'time [ms]':>9s}"
+    )
     for name in names:
         res = swarm_ik.solve(problem, name, seed=0, max_evals=BUDGET, stop_on_success=False)
-        print(f"{name:14s} {res.success!s:>7s} {res.position_error:12.2e} "
-              f"{res.rotation_error:14.2e} {res.n_evals:6d} {res.time_s * 1e3:9.1f}")
+        print(
+            f"{name:14s} {res.success!s:>7s} {res.position_error:12.2e} "
+            f"{res.rotation_error:14.2e} {res.n_evals:6d} {res.time_s * 1e3:9.1f}"
+        )
         h = np.asarray(res.history)
         if h.size:
             evals = np.arange(1, h.size + 1) * res.n_evals / h.size

@@ -41,8 +41,9 @@ def circle_path(start: np.ndarray, radius: float, n: int) -> np.ndarray:
     return poses
 
 
-def follow(robot: swarm_ik.RobotModel, poses: np.ndarray, q_start: np.ndarray,
-           prefer: str) -> tuple[np.ndarray, int, float]:
+def follow(
+    robot: swarm_ik.RobotModel, poses: np.ndarray, q_start: np.ndarray, prefer: str
+) -> tuple[np.ndarray, int, float]:
     """Solve every pose seeded by the previous solution.
 
     Returns:
@@ -53,8 +54,9 @@ def follow(robot: swarm_ik.RobotModel, poses: np.ndarray, q_start: np.ndarray,
     ok = 0
     t0 = time.perf_counter()
     for i, pose in enumerate(poses):
-        res = swarm_ik.solve(swarm_ik.IKProblem(robot, pose), q0=q, prefer=prefer, seed=i,
-                             time_limit=0.02)
+        res = swarm_ik.solve(
+            swarm_ik.IKProblem(robot, pose), q0=q, prefer=prefer, seed=i, time_limit=0.02
+        )
         ok += res.success
         q = res.q
         path.append(q)

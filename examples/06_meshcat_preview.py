@@ -32,8 +32,13 @@ Q_YUMI = np.array([0.3, -0.8, 0.4, 0.6, -0.5, 1.2, 0.7])  # rad
 
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    parser.add_argument("--html", type=Path, default=None, metavar="DIR",
-                        help="write HTML pages into DIR instead of opening the live viewer")
+    parser.add_argument(
+        "--html",
+        type=Path,
+        default=None,
+        metavar="DIR",
+        help="write HTML pages into DIR instead of opening the live viewer",
+    )
     args = parser.parse_args()
     if args.html is None and QUICK:
         with tempfile.TemporaryDirectory() as tmp:
@@ -48,8 +53,10 @@ def run(out_dir: Path | None) -> None:
     problem = swarm_ik.IKProblem(yumi, yumi.fk(Q_YUMI))
     result, trace = viz.solve_traced(problem, "hlfoa", seed=1, max_evals=20_000)
     dls = swarm_ik.solve(problem, "dls", seed=0)
-    print(f"hlfoa: success={result.success}, {len(trace)} iterations recorded; "
-          f"dls: success={dls.success}")
+    print(
+        f"hlfoa: success={result.success}, {len(trace)} iterations recorded; "
+        f"dls: success={dls.success}"
+    )
     scene = viz.show_result(problem, result, trace=trace, compare=dls)
 
     # the Panda's Collada meshes make a 40 MB page; the quick run uses YuMi's cylinders

@@ -40,7 +40,9 @@ def prepare_q0(problem: IKProblem, q0: Any) -> np.ndarray | None:
     outside = np.flatnonzero(fixed != q)
     if outside.size:
         names = [problem.robot.joint_names[i] for i in outside]
-        warnings.warn(f"q0 lies outside the joint limits at {names}; clipped into them", stacklevel=3)
+        warnings.warn(
+            f"q0 lies outside the joint limits at {names}; clipped into them", stacklevel=3
+        )
     return fixed
 
 
@@ -86,9 +88,7 @@ def solve(
         FK, never taken from the solver.
     """
     if not isinstance(problem, IKProblem):
-        raise InvalidArgumentError(
-            f"problem must be an IKProblem, got {type(problem).__name__}"
-        )
+        raise InvalidArgumentError(f"problem must be an IKProblem, got {type(problem).__name__}")
     spec = base.get(solver)
     if prefer not in PREFER:
         raise unknown("prefer mode", prefer, PREFER)

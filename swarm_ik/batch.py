@@ -151,9 +151,33 @@ def _solve_targets(
         converged = False
         while True:
             used = lm_polish(
-                starts[:k], kinds, axes, rot_p, pos_p, rot_f, pos_f, t_rot[i], t_pos[i], lower,
-                upper, wrap, rot_w, tol_pos, tol_rot, max_iters, k * max_iters, True, lam0,
-                max_step, stall_rel, stall_iters, pq[:k], pdp[:k], pdr[:k], pst[:k], pev[:k],
+                starts[:k],
+                kinds,
+                axes,
+                rot_p,
+                pos_p,
+                rot_f,
+                pos_f,
+                t_rot[i],
+                t_pos[i],
+                lower,
+                upper,
+                wrap,
+                rot_w,
+                tol_pos,
+                tol_rot,
+                max_iters,
+                k * max_iters,
+                True,
+                lam0,
+                max_step,
+                stall_rel,
+                stall_iters,
+                pq[:k],
+                pdp[:k],
+                pdr[:k],
+                pst[:k],
+                pev[:k],
             )
             evals += used
             for s in range(k):
@@ -352,11 +376,15 @@ class BatchResult:
         suffix = p.suffix.lower()
         if suffix == ".npz":
             arrays: dict[str, Any] = {
-                "q": self.q, "position_error": self.position_error,
-                "rotation_error": self.rotation_error, "success": self.success,
-                "n_evals": self.n_evals, "n_starts": self.n_starts,
+                "q": self.q,
+                "position_error": self.position_error,
+                "rotation_error": self.rotation_error,
+                "success": self.success,
+                "n_evals": self.n_evals,
+                "n_starts": self.n_starts,
                 "joint_names": np.array(self.joint_names, dtype=str),
-                "tol_pos": self.settings.tol_pos, "tol_rot": self.settings.tol_rot,
+                "tol_pos": self.settings.tol_pos,
+                "tol_rot": self.settings.tol_rot,
                 "seed": self.settings.seed,
             }
             if targets is not None:
@@ -366,13 +394,20 @@ class BatchResult:
             names = self.joint_names or tuple(f"q{j}" for j in range(self.q.shape[1]))
             with p.open("w", newline="") as fh:
                 w = csv.writer(fh)
-                w.writerow(["index", *names, "position_error", "rotation_error", "success",
-                            "n_evals"])
+                w.writerow(
+                    ["index", *names, "position_error", "rotation_error", "success", "n_evals"]
+                )
                 for i in range(self.n):
-                    w.writerow([i, *(repr(float(v)) for v in self.q[i]),
-                                repr(float(self.position_error[i])),
-                                repr(float(self.rotation_error[i])), int(self.success[i]),
-                                int(self.n_evals[i])])
+                    w.writerow(
+                        [
+                            i,
+                            *(repr(float(v)) for v in self.q[i]),
+                            repr(float(self.position_error[i])),
+                            repr(float(self.rotation_error[i])),
+                            int(self.success[i]),
+                            int(self.n_evals[i]),
+                        ]
+                    )
         else:
             raise InvalidArgumentError(
                 f"cannot write results to {str(p)!r}: unknown suffix {p.suffix!r}; "
@@ -417,8 +452,7 @@ def check_targets(targets: Any, orth_tol: float = 1e-6) -> FloatArray:
         return out
     if arr.ndim != 3 or arr.shape[1:] != (4, 4):
         raise InvalidTargetError(
-            "targets must have shape (N, 4, 4) or (N, 7) (x y z qx qy qz qw); "
-            f"got {arr.shape}"
+            f"targets must have shape (N, 4, 4) or (N, 7) (x y z qx qy qz qw); got {arr.shape}"
         )
     finite = np.isfinite(arr).all(axis=(1, 2))
     if not finite.all():
@@ -455,8 +489,7 @@ def _seed_starts(bc: BatchChain, q0: Any, n: int) -> FloatArray:
         arr = np.tile(arr, (n, 1))
     if arr.shape != (n, bc.nq):
         raise InvalidArgumentError(
-            f"q0 must have shape ({bc.nq},) or ({n}, {bc.nq}) (one row per target); "
-            f"got {arr.shape}"
+            f"q0 must have shape ({bc.nq},) or ({n}, {bc.nq}) (one row per target); got {arr.shape}"
         )
     if not np.all(np.isfinite(arr)):
         raise InvalidArgumentError("q0 contains NaN or infinite values")
@@ -466,8 +499,10 @@ def _seed_starts(bc: BatchChain, q0: Any, n: int) -> FloatArray:
     fixed = np.clip(arr, bc.lower, bc.upper)
     outside = int(np.any(fixed != arr, axis=1).sum())
     if outside:
-        warnings.warn(f"q0 lies outside the joint limits for {outside} target(s); clipped into "
-                      "them", stacklevel=3)
+        warnings.warn(
+            f"q0 lies outside the joint limits for {outside} target(s); clipped into them",
+            stacklevel=3,
+        )
     return np.ascontiguousarray(fixed)
 
 
@@ -512,14 +547,32 @@ def solve_chunk(
     rot_w = 0.0 if settings.position_only else 1.0
     if n:
         _solve_targets(
-            np.ascontiguousarray(targets[:, :3, :3]), np.ascontiguousarray(targets[:, :3, 3]),
+            np.ascontiguousarray(targets[:, :3, :3]),
+            np.ascontiguousarray(targets[:, :3, 3]),
             np.ascontiguousarray(q_seed, dtype=float),
-            np.arange(start, start + n, dtype=np.int64), c.kinds, c.axes, c.rot_p, c.pos_p,
-            c.rot_f, c.pos_f, bc.lower, bc.upper, bc.wrap, rot_w,
-            settings.tol_pos * settings.tol_margin, settings.tol_rot * settings.tol_margin,
-            int(settings.max_starts), int(settings.max_iters), float(settings.lam0),
-            float(settings.max_step), float(settings.stall_rel), int(settings.stall_iters),
-            int(settings.seed), q, evals, starts,
+            np.arange(start, start + n, dtype=np.int64),
+            c.kinds,
+            c.axes,
+            c.rot_p,
+            c.pos_p,
+            c.rot_f,
+            c.pos_f,
+            bc.lower,
+            bc.upper,
+            bc.wrap,
+            rot_w,
+            settings.tol_pos * settings.tol_margin,
+            settings.tol_rot * settings.tol_margin,
+            int(settings.max_starts),
+            int(settings.max_iters),
+            float(settings.lam0),
+            float(settings.max_step),
+            float(settings.stall_rel),
+            int(settings.stall_iters),
+            int(settings.seed),
+            q,
+            evals,
+            starts,
         )
     dp, dr = pose_errors(c, q, targets)
     within = np.all((q >= bc.lower - 1e-12) & (q <= bc.upper + 1e-12), axis=1)
@@ -529,8 +582,9 @@ def solve_chunk(
     return ChunkResult(start, q, dp, dr, ok, evals, starts, time.perf_counter() - t0)
 
 
-def _run_chunk(bc: BatchChain, settings: BatchSettings, item: tuple[int, FloatArray, FloatArray]
-               ) -> ChunkResult:
+def _run_chunk(
+    bc: BatchChain, settings: BatchSettings, item: tuple[int, FloatArray, FloatArray]
+) -> ChunkResult:
     start, targets, q_seed = item
     return solve_chunk(bc, settings, start, targets, q_seed)
 
@@ -598,15 +652,20 @@ def solve_batch(
         )
     t0 = time.perf_counter()
     settings = BatchSettings(
-        tol_pos=float(tol_pos), tol_rot=float(tol_rot), position_only=bool(position_only),
-        max_starts=max_starts, max_iters=max_iters, seed=seed,
+        tol_pos=float(tol_pos),
+        tol_rot=float(tol_rot),
+        position_only=bool(position_only),
+        max_starts=max_starts,
+        max_iters=max_iters,
+        seed=seed,
     )
     poses = check_targets(targets)
     n = poses.shape[0]
     bc = BatchChain.from_robot(robot)
     seeds = _seed_starts(bc, q0, n)
     if chunk_size is not None and (
-        isinstance(chunk_size, bool) or not isinstance(chunk_size, (int, np.integer))
+        isinstance(chunk_size, bool)
+        or not isinstance(chunk_size, (int, np.integer))
         or chunk_size < 1
     ):
         raise InvalidArgumentError(f"chunk_size must be a positive integer, got {chunk_size!r}")
@@ -615,11 +674,16 @@ def solve_batch(
         setup_s = time.perf_counter() - t_setup
         workers = distributed.n_workers(client)
         size = int(chunk_size) if chunk_size is not None else default_chunk_size(n, workers)
-        items = [(s, poses[s:s + size], seeds[s:s + size]) for s in range(0, n, size)]
+        items = [(s, poses[s : s + size], seeds[s : s + size]) for s in range(0, n, size)]
         parts: list[ChunkResult] = distributed.map_chunks(
-            functools.partial(_run_chunk, bc, settings), items, client=client,
-            name="swarm-ik-batch", progress=progress, desc=f"IK {robot.name}",
-            sizes=[len(it[1]) for it in items], unit="pose",
+            functools.partial(_run_chunk, bc, settings),
+            items,
+            client=client,
+            name="swarm-ik-batch",
+            progress=progress,
+            desc=f"IK {robot.name}",
+            sizes=[len(it[1]) for it in items],
+            unit="pose",
         )
     nq = robot.nq
 

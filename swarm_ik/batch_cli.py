@@ -29,24 +29,32 @@ SCHEDULER_HELP = (
 
 def add_scheduler_argument(parser: argparse.ArgumentParser, default: str = "local") -> None:
     """Add ``--scheduler`` (for any command that distributes work with Dask)."""
-    parser.add_argument("--scheduler", default=default, metavar="local|none|tcp://HOST:PORT",
-                        help=SCHEDULER_HELP)
+    parser.add_argument(
+        "--scheduler", default=default, metavar="local|none|tcp://HOST:PORT", help=SCHEDULER_HELP
+    )
 
 
 def _add_robot(p: argparse.ArgumentParser) -> None:
-    p.add_argument("--robot", required=True,
-                   help="bundled or example-robot-data name, or a .urdf path")
-    p.add_argument("--frame", default=None,
-                   help="end-effector frame (default: the robot's tool frame)")
+    p.add_argument(
+        "--robot", required=True, help="bundled or example-robot-data name, or a .urdf path"
+    )
+    p.add_argument(
+        "--frame", default=None, help="end-effector frame (default: the robot's tool frame)"
+    )
 
 
 def _add_solver_options(p: argparse.ArgumentParser, max_starts: int) -> None:
-    p.add_argument("--seed", type=int, default=0,
-                   help="seed of the restarts (and of sampled targets)")
+    p.add_argument(
+        "--seed", type=int, default=0, help="seed of the restarts (and of sampled targets)"
+    )
     p.add_argument("--tol-pos", type=float, default=1e-5, help="position tolerance [m]")
     p.add_argument("--tol-rot", type=float, default=1e-5, help="rotation tolerance [rad]")
-    p.add_argument("--max-starts", type=int, default=max_starts,
-                   help=f"most LM starts per target, the seed included (default {max_starts})")
+    p.add_argument(
+        "--max-starts",
+        type=int,
+        default=max_starts,
+        help=f"most LM starts per target, the seed included (default {max_starts})",
+    )
     p.add_argument("--max-iters", type=int, default=60, help="most LM iterations per start")
     add_scheduler_argument(p)
     p.add_argument("--no-progress", action="store_true", help="no progress bar")
@@ -55,43 +63,80 @@ def _add_solver_options(p: argparse.ArgumentParser, max_starts: int) -> None:
 def add_commands(subparsers: Any) -> dict[str, Any]:
     """Add ``batch`` and ``reach`` to the ``swarm-ik`` sub-parsers; returns their handlers."""
     b = subparsers.add_parser(
-        "batch", help="solve many targets at once (vectorised, optionally on Dask)",
+        "batch",
+        help="solve many targets at once (vectorised, optionally on Dask)",
         description="Solve many target poses of one robot; writes one row per target.",
     )
     _add_robot(b)
     src = b.add_mutually_exclusive_group(required=True)
-    src.add_argument("--targets", type=Path, metavar="FILE",
-                     help="targets: .npz/.npy ((N,4,4) or (N,7) array) or .csv "
-                          "(x,y,z,qx,qy,qz,qw or 16 matrix columns)")
-    src.add_argument("--random", type=int, metavar="N",
-                     help="N targets = FK of configurations drawn uniformly within the limits")
-    b.add_argument("--out", type=Path, required=True, metavar="FILE",
-                   help="result file: .npz (q, errors, success, ...) or .csv")
-    b.add_argument("--q0", nargs="+", type=float, default=None,
-                   help="first start for every target (one value per joint); default mid-range")
+    src.add_argument(
+        "--targets",
+        type=Path,
+        metavar="FILE",
+        help="targets: .npz/.npy ((N,4,4) or (N,7) array) or .csv "
+        "(x,y,z,qx,qy,qz,qw or 16 matrix columns)",
+    )
+    src.add_argument(
+        "--random",
+        type=int,
+        metavar="N",
+        help="N targets = FK of configurations drawn uniformly within the limits",
+    )
+    b.add_argument(
+        "--out",
+        type=Path,
+        required=True,
+        metavar="FILE",
+        help="result file: .npz (q, errors, success, ...) or .csv",
+    )
+    b.add_argument(
+        "--q0",
+        nargs="+",
+        type=float,
+        default=None,
+        help="first start for every target (one value per joint); default mid-range",
+    )
     b.add_argument("--position-only", action="store_true", help="ignore the target orientation")
     b.add_argument("--chunk-size", type=int, default=None, help="targets per Dask task")
     _add_solver_options(b, max_starts=128)
 
     r = subparsers.add_parser(
-        "reach", help="reachability map on a voxel grid (npz + PNG slices + HTML point cloud)",
+        "reach",
+        help="reachability map on a voxel grid (npz + PNG slices + HTML point cloud)",
         description="Reachability index per voxel: the fraction of K orientations solved at "
-                    "its centre.",
+        "its centre.",
     )
     _add_robot(r)
     r.add_argument("--resolution", type=float, default=0.1, help="voxel edge [m] (default 0.1)")
-    r.add_argument("--bounds", nargs=6, type=float, default=None,
-                   metavar=("XMIN", "YMIN", "ZMIN", "XMAX", "YMAX", "ZMAX"),
-                   help="workspace box [m] (default: cube around the first joint, 1.1 × the "
-                        "sampled reach)")
-    r.add_argument("--orientations", type=int, default=8, metavar="K",
-                   help="orientations tried per voxel (default 8, seeded random rotations)")
-    r.add_argument("--out", type=Path, default=None, metavar="FILE.npz",
-                   help="map file (default reach_<robot>.npz)")
+    r.add_argument(
+        "--bounds",
+        nargs=6,
+        type=float,
+        default=None,
+        metavar=("XMIN", "YMIN", "ZMIN", "XMAX", "YMAX", "ZMAX"),
+        help="workspace box [m] (default: cube around the first joint, 1.1 × the sampled reach)",
+    )
+    r.add_argument(
+        "--orientations",
+        type=int,
+        default=8,
+        metavar="K",
+        help="orientations tried per voxel (default 8, seeded random rotations)",
+    )
+    r.add_argument(
+        "--out",
+        type=Path,
+        default=None,
+        metavar="FILE.npz",
+        help="map file (default reach_<robot>.npz)",
+    )
     r.add_argument("--png", type=Path, default=None, help="slices picture (default: next to --out)")
-    r.add_argument("--html", type=Path, default=None,
-                   help="meshcat point cloud page (default: next to --out, when meshcat is "
-                        "installed)")
+    r.add_argument(
+        "--html",
+        type=Path,
+        default=None,
+        help="meshcat point cloud page (default: next to --out, when meshcat is installed)",
+    )
     r.add_argument("--no-html", action="store_true", help="do not write the HTML page")
     _add_solver_options(r, max_starts=16)
     return {"batch": run_batch, "reach": run_reach}
@@ -123,21 +168,33 @@ def run_batch(args: argparse.Namespace) -> int:
         targets = robot.fk(robot.random_q(rng, args.random))
         source = f"{args.random} FK-sampled targets (seed {args.seed})"
     res = solve_batch(
-        robot, targets, seed=args.seed, q0=args.q0, tol_pos=args.tol_pos, tol_rot=args.tol_rot,
-        position_only=args.position_only, max_starts=args.max_starts, max_iters=args.max_iters,
-        scheduler=args.scheduler, chunk_size=args.chunk_size,
+        robot,
+        targets,
+        seed=args.seed,
+        q0=args.q0,
+        tol_pos=args.tol_pos,
+        tol_rot=args.tol_rot,
+        position_only=args.position_only,
+        max_starts=args.max_starts,
+        max_iters=args.max_iters,
+        scheduler=args.scheduler,
+        chunk_size=args.chunk_size,
         progress=not args.no_progress and sys.stderr.isatty(),
     )
     res.save(args.out, targets=targets)
     n_ok = int(res.success.sum())
     print(f"robot {robot.name} ({robot.nq} joints), frame {robot.ee_frame}; targets: {source}")
-    print(f"solved {n_ok}/{res.n} ({100 * res.success_rate:.2f} %) within "
-          f"{args.tol_pos:g} m / {args.tol_rot:g} rad in {res.time_s:.3f} s "
-          f"({res.poses_per_s:.0f} poses/s, scheduler {args.scheduler}"
-          + (f", of which {res.setup_s:.2f} s cluster start-up)" if res.setup_s > 0.01 else ")"))
+    print(
+        f"solved {n_ok}/{res.n} ({100 * res.success_rate:.2f} %) within "
+        f"{args.tol_pos:g} m / {args.tol_rot:g} rad in {res.time_s:.3f} s "
+        f"({res.poses_per_s:.0f} poses/s, scheduler {args.scheduler}"
+        + (f", of which {res.setup_s:.2f} s cluster start-up)" if res.setup_s > 0.01 else ")")
+    )
     if res.n:
-        print(f"LM evaluations per target: mean {res.n_evals.mean():.1f}, starts per target: "
-              f"mean {res.n_starts.mean():.2f}")
+        print(
+            f"LM evaluations per target: mean {res.n_evals.mean():.1f}, starts per target: "
+            f"mean {res.n_starts.mean():.2f}"
+        )
     print(f"wrote {args.out}")
     return 0 if n_ok == res.n else 1
 
@@ -151,9 +208,16 @@ def run_reach(args: argparse.Namespace) -> int:
     if out.suffix.lower() != ".npz":
         out = out.with_suffix(".npz")
     rmap = reach.reach_map(
-        robot, resolution=args.resolution, bounds=args.bounds, n_orientations=args.orientations,
-        seed=args.seed, tol_pos=args.tol_pos, tol_rot=args.tol_rot, max_starts=args.max_starts,
-        max_iters=args.max_iters, scheduler=args.scheduler,
+        robot,
+        resolution=args.resolution,
+        bounds=args.bounds,
+        n_orientations=args.orientations,
+        seed=args.seed,
+        tol_pos=args.tol_pos,
+        tol_rot=args.tol_rot,
+        max_starts=args.max_starts,
+        max_iters=args.max_iters,
+        scheduler=args.scheduler,
         progress=not args.no_progress and sys.stderr.isatty(),
     )
     rmap.save(out)
@@ -164,16 +228,22 @@ def run_reach(args: argparse.Namespace) -> int:
             import meshcat  # noqa: F401
         except ImportError:
             if args.html is not None:
-                print("swarm-ik: error: --html needs meshcat (pip install \"swarm_ik[viz]\")",
-                      file=sys.stderr)
+                print(
+                    'swarm-ik: error: --html needs meshcat (pip install "swarm_ik[viz]")',
+                    file=sys.stderr,
+                )
                 return 2
         else:
             written.append(str(reach.export_html(rmap, args.html or out.with_suffix(".html"))))
     reachable = rmap.index > 0
-    print(f"robot {robot.name}, frame {robot.ee_frame}: grid {rmap.index.shape} of "
-          f"{rmap.resolution:g} m voxels, K = {rmap.n_orientations} orientations")
+    print(
+        f"robot {robot.name}, frame {robot.ee_frame}: grid {rmap.index.shape} of "
+        f"{rmap.resolution:g} m voxels, K = {rmap.n_orientations} orientations"
+    )
     mean = float(rmap.index[reachable].mean()) if reachable.any() else 0.0
-    print(f"reachable voxels {int(reachable.sum())} of {int(rmap.solved.sum())} within the "
-          f"chain's reach; mean index {mean:.3f} ({rmap.time_s:.1f} s)")
+    print(
+        f"reachable voxels {int(reachable.sum())} of {int(rmap.solved.sum())} within the "
+        f"chain's reach; mean index {mean:.3f} ({rmap.time_s:.1f} s)"
+    )
     print("wrote " + ", ".join(written))
     return 0

@@ -32,7 +32,9 @@ _HANDLERS: dict[str, Any] = {}
 def _parse_param(text: str) -> tuple[str, Any]:
     """``name=value`` → (name, value); the value parsed as JSON when possible."""
     if "=" not in text:
-        raise argparse.ArgumentTypeError(f"solver parameter must look like name=value, got {text!r}")
+        raise argparse.ArgumentTypeError(
+            f"solver parameter must look like name=value, got {text!r}"
+        )
     key, raw = text.split("=", 1)
     try:
         value = json.loads(raw)
@@ -54,13 +56,27 @@ def _build_parser() -> argparse.ArgumentParser:
     sub.add_parser("robots", help="list the robots loadable by name")
 
     p = sub.add_parser("solve", help="solve one IK target")
-    p.add_argument("--robot", required=True, help="bundled or example-robot-data name, or a .urdf path")
-    p.add_argument("--frame", default=None, help="end-effector frame (default: the robot's tool frame)")
+    p.add_argument(
+        "--robot", required=True, help="bundled or example-robot-data name, or a .urdf path"
+    )
+    p.add_argument(
+        "--frame", default=None, help="end-effector frame (default: the robot's tool frame)"
+    )
     tgt = p.add_mutually_exclusive_group(required=True)
-    tgt.add_argument("--pose", nargs=7, type=float, metavar=("X", "Y", "Z", "QX", "QY", "QZ", "QW"),
-                     help="target position [m] and quaternion (x, y, z, w)")
-    tgt.add_argument("--from-q", nargs="+", type=float, metavar="Q",
-                     help="target = FK of these joint values (rad / m), one per joint")
+    tgt.add_argument(
+        "--pose",
+        nargs=7,
+        type=float,
+        metavar=("X", "Y", "Z", "QX", "QY", "QZ", "QW"),
+        help="target position [m] and quaternion (x, y, z, w)",
+    )
+    tgt.add_argument(
+        "--from-q",
+        nargs="+",
+        type=float,
+        metavar="Q",
+        help="target = FK of these joint values (rad / m), one per joint",
+    )
     p.add_argument("--solver", default=DEFAULT_SOLVER, help=f"one of: {', '.join(solvers.names())}")
     p.add_argument("--fitness", default="se3", help="se3, paper-l1, euler-zyz or paper-pso")
     p.add_argument("--seed", type=int, default=0)
@@ -69,19 +85,43 @@ def _build_parser() -> argparse.ArgumentParser:
     p.add_argument("--tol-pos", type=float, default=1e-5, help="position tolerance [m]")
     p.add_argument("--tol-rot", type=float, default=1e-5, help="rotation tolerance [rad]")
     p.add_argument("--q0", nargs="+", type=float, default=None, help="starting joint values")
-    p.add_argument("--param", action="append", type=_parse_param, default=[], metavar="NAME=VALUE",
-                   help="solver parameter, repeatable (e.g. --param pop_size=50)")
+    p.add_argument(
+        "--param",
+        action="append",
+        type=_parse_param,
+        default=[],
+        metavar="NAME=VALUE",
+        help="solver parameter, repeatable (e.g. --param pop_size=50)",
+    )
     p.add_argument("--json", action="store_true", help="print one JSON object")
-    p.add_argument("--show", action="store_true",
-                   help="look at the solution in meshcat (prints the viewer's URL; needs [viz])")
-    p.add_argument("--animate", action="store_true",
-                   help="replay the optimiser's best-so-far configuration over its iterations")
-    p.add_argument("--html", default=None, metavar="FILE",
-                   help="write the scene to a self-contained HTML file (no server needed)")
-    p.add_argument("--compare", default=None, metavar="SOLVER",
-                   help="also solve with SOLVER (e.g. dls) and draw its answer ghosted")
+    p.add_argument(
+        "--show",
+        action="store_true",
+        help="look at the solution in meshcat (prints the viewer's URL; needs [viz])",
+    )
+    p.add_argument(
+        "--animate",
+        action="store_true",
+        help="replay the optimiser's best-so-far configuration over its iterations",
+    )
+    p.add_argument(
+        "--html",
+        default=None,
+        metavar="FILE",
+        help="write the scene to a self-contained HTML file (no server needed)",
+    )
+    p.add_argument(
+        "--compare",
+        default=None,
+        metavar="SOLVER",
+        help="also solve with SOLVER (e.g. dls) and draw its answer ghosted",
+    )
 
-    b = sub.add_parser("bench", help="benchmarks: 'paper' (the papers' tables), 'ik' (TRAC-IK protocol), 'throughput' (batched IK)")
+    b = sub.add_parser(
+        "bench",
+        help="benchmarks: 'paper' (the papers' tables), 'ik' (TRAC-IK protocol), "
+        "'throughput' (batched IK)",
+    )
     bsub = b.add_subparsers(dest="bench", required=True)
     for name, module in BENCHMARKS.items():
         bp = bsub.add_parser(name, help=f"benchmark {name}")
@@ -139,13 +179,21 @@ def _cmd_solve(args: argparse.Namespace) -> int:
         print(json.dumps(d))
     else:
         status = "reached" if res.success else "NOT reached (best found below)"
-        print(f"robot {robot.name} ({robot.nq} joints), frame {robot.ee_frame}, solver {res.solver}")
+        print(
+            f"robot {robot.name} ({robot.nq} joints), frame {robot.ee_frame}, solver {res.solver}"
+        )
         print(f"target {status}")
         for name, kind, v in zip(robot.joint_names, robot.joint_kinds, res.q, strict=True):
             unit = "m" if kind == "prismatic" else "rad"
             print(f"  {name:24s} {v: .10f} {unit}")
-        print(f"position error {res.position_error:.3e} m, rotation error {res.rotation_error:.3e} rad")
-        print(f"evaluations {res.n_evals}, time {res.time_s * 1e3:.2f} ms, within limits {res.within_limits}")
+        print(
+            f"position error {res.position_error:.3e} m, "
+            f"rotation error {res.rotation_error:.3e} rad"
+        )
+        print(
+            f"evaluations {res.n_evals}, time {res.time_s * 1e3:.2f} ms, "
+            f"within limits {res.within_limits}"
+        )
     if args.show or args.animate or args.html or args.compare:
         from swarm_ik import viz_cli
 
@@ -167,7 +215,10 @@ def main(argv: Sequence[str] | None = None) -> int:
             if args.command == "bench":
                 missing = getattr(args, "_missing", None)
                 if missing:
-                    print(f"swarm-ik: error: benchmark module {missing} is not available", file=sys.stderr)
+                    print(
+                        f"swarm-ik: error: benchmark module {missing} is not available",
+                        file=sys.stderr,
+                    )
                     return 2
                 return int(importlib.import_module(BENCHMARKS[args.bench]).run(args))
             extra = _HANDLERS.get(args.command)

@@ -51,7 +51,7 @@ def _import_distributed() -> Any:
     except ImportError:  # pragma: no cover - depends on the environment
         raise InvalidArgumentError(
             "a Dask scheduler was requested but dask.distributed is not installed; install it "
-            "with `pip install \"swarm_ik[dask]\"` (or `pip install \"dask[distributed]\"`), "
+            'with `pip install "swarm_ik[dask]"` (or `pip install "dask[distributed]"`), '
             "or use --scheduler none"
         ) from None
     return distributed
@@ -80,7 +80,8 @@ def check_scheduler(scheduler: Any) -> Any:
         raise InvalidArgumentError(
             f"unknown scheduler {scheduler!r}; valid choices: 'none' (in this process), "
             "'local' (embedded LocalCluster), or an address starting with "
-            + ", ".join(SCHEMES) + " (e.g. tcp://127.0.0.1:8786)"
+            + ", ".join(SCHEMES)
+            + " (e.g. tcp://127.0.0.1:8786)"
         )
     if hasattr(scheduler, "submit") and hasattr(scheduler, "gather"):
         return scheduler
@@ -199,8 +200,16 @@ def map_chunks(
     weights = list(sizes) if sizes is not None else [1] * len(items)
     if client is None and check_scheduler(scheduler) is not None:
         with connect(scheduler) as c:
-            return map_chunks(func, items, client=c, name=name, progress=progress, desc=desc,
-                              sizes=sizes, unit=unit)
+            return map_chunks(
+                func,
+                items,
+                client=c,
+                name=name,
+                progress=progress,
+                desc=desc,
+                sizes=sizes,
+                unit=unit,
+            )
     bar = _progress_bar(progress, int(sum(weights)), desc, unit)
     try:
         if client is None:
@@ -214,8 +223,9 @@ def map_chunks(
 
         token = tokenize(func)
         keys = [f"{name}-{i}-{tokenize(token, item)}" for i, item in enumerate(items)]
-        futures = [client.submit(func, item, key=k, pure=True)
-                   for k, item in zip(keys, items, strict=True)]
+        futures = [
+            client.submit(func, item, key=k, pure=True) for k, item in zip(keys, items, strict=True)
+        ]
         position = {f.key: i for i, f in enumerate(futures)}
         try:
             for f in distributed.as_completed(futures):

@@ -50,7 +50,9 @@ def zyz_euler(rot: FloatArray) -> FloatArray:
     return np.stack([alpha, beta, gamma], axis=-1)
 
 
-def se3_fitness(poses: FloatArray, target: FloatArray, *, w_rot: float = 1.0, **_: Any) -> FloatArray:
+def se3_fitness(
+    poses: FloatArray, target: FloatArray, *, w_rot: float = 1.0, **_: Any
+) -> FloatArray:
     """``‖Δp‖ [m] + w_rot·θ [rad]`` for poses ``(pop, 4, 4)``."""
     dp = np.linalg.norm(poses[:, :3, 3] - target[:3, 3], axis=-1)
     if w_rot == 0.0:
@@ -59,14 +61,18 @@ def se3_fitness(poses: FloatArray, target: FloatArray, *, w_rot: float = 1.0, **
     return dp + w_rot * rotation_angle(rot_err)
 
 
-def paper_l1_fitness(poses: FloatArray, target: FloatArray, *, lam: float = 10.0, **_: Any) -> FloatArray:
+def paper_l1_fitness(
+    poses: FloatArray, target: FloatArray, *, lam: float = 10.0, **_: Any
+) -> FloatArray:
     """Eq. 3 of paper 000: ``λ·L1(Δp [m]) + Σ|R − R_target|`` (λ = 10 per metre)."""
     dp = np.abs(poses[:, :3, 3] - target[:3, 3]).sum(axis=-1)
     dr = np.abs(poses[:, :3, :3] - target[:3, :3]).sum(axis=(-1, -2))
     return lam * dp + dr
 
 
-def euler_zyz_fitness(poses: FloatArray, target: FloatArray, *, mu: float = 1.0, **_: Any) -> FloatArray:
+def euler_zyz_fitness(
+    poses: FloatArray, target: FloatArray, *, mu: float = 1.0, **_: Any
+) -> FloatArray:
     """Eq. 15 of paper 003: ``μ·L1(Δp [m]) + L1(wrapped ΔZYZ [rad])``."""
     dp = np.abs(poses[:, :3, 3] - target[:3, 3]).sum(axis=-1)
     de = wrap_angle(zyz_euler(poses[:, :3, :3]) - zyz_euler(target[:3, :3]))

@@ -70,7 +70,9 @@ def _chain(
         for j in range(n):
             # placement of joint j in its parent: pos += rot @ pos_p[j]; rot = rot @ rot_p[j]
             for a in range(3):
-                pos[a] += rot[a, 0] * pos_p[j, 0] + rot[a, 1] * pos_p[j, 1] + rot[a, 2] * pos_p[j, 2]
+                pos[a] += (
+                    rot[a, 0] * pos_p[j, 0] + rot[a, 1] * pos_p[j, 1] + rot[a, 2] * pos_p[j, 2]
+                )
             for a in range(3):
                 for b in range(3):
                     tmp[a, b] = (
@@ -97,15 +99,21 @@ def _chain(
                 _rodrigues(axes[j], qj, mot)
                 for a in range(3):
                     for b in range(3):
-                        tmp[a, b] = rot[a, 0] * mot[0, b] + rot[a, 1] * mot[1, b] + rot[a, 2] * mot[2, b]
+                        tmp[a, b] = (
+                            rot[a, 0] * mot[0, b] + rot[a, 1] * mot[1, b] + rot[a, 2] * mot[2, b]
+                        )
                 for a in range(3):
                     for b in range(3):
                         rot[a, b] = tmp[a, b]
         # end-effector frame in the last joint's frame
         for a in range(3):
-            out_t[k, a, 3] = pos[a] + rot[a, 0] * pos_f[0] + rot[a, 1] * pos_f[1] + rot[a, 2] * pos_f[2]
+            out_t[k, a, 3] = (
+                pos[a] + rot[a, 0] * pos_f[0] + rot[a, 1] * pos_f[1] + rot[a, 2] * pos_f[2]
+            )
             for b in range(3):
-                out_t[k, a, b] = rot[a, 0] * rot_f[0, b] + rot[a, 1] * rot_f[1, b] + rot[a, 2] * rot_f[2, b]
+                out_t[k, a, b] = (
+                    rot[a, 0] * rot_f[0, b] + rot[a, 1] * rot_f[1, b] + rot[a, 2] * rot_f[2, b]
+                )
         out_t[k, 3, 0] = 0.0
         out_t[k, 3, 1] = 0.0
         out_t[k, 3, 2] = 0.0
@@ -179,8 +187,16 @@ class ChainKinematics:
         q2, single = self._prep(q)
         out = np.empty((q2.shape[0], 4, 4))
         _chain(
-            q2, self.kinds, self.axes, self.rot_p, self.pos_p, self.rot_f, self.pos_f,
-            out, np.empty((1, 1, 1)), False,
+            q2,
+            self.kinds,
+            self.axes,
+            self.rot_p,
+            self.pos_p,
+            self.rot_f,
+            self.pos_f,
+            out,
+            np.empty((1, 1, 1)),
+            False,
         )
         return out[0] if single else out
 
@@ -202,8 +218,16 @@ class ChainKinematics:
         out_t = np.empty((pop, 4, 4))
         out_j = np.empty((pop, 6, self.nq))
         _chain(
-            q2, self.kinds, self.axes, self.rot_p, self.pos_p, self.rot_f, self.pos_f,
-            out_t, out_j, True,
+            q2,
+            self.kinds,
+            self.axes,
+            self.rot_p,
+            self.pos_p,
+            self.rot_f,
+            self.pos_f,
+            out_t,
+            out_j,
+            True,
         )
         return (out_t[0], out_j[0]) if single else (out_t, out_j)
 

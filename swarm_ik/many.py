@@ -103,8 +103,9 @@ def solve_many(
     robot = problem.robot
     lower, upper = problem.lower, problem.upper
     wrap = robot.continuous_mask
-    pol = Polisher.from_problem(problem, lower, upper, tol_pos, tol_rot, wrap=wrap,
-                                max_iters=max_iters)
+    pol = Polisher.from_problem(
+        problem, lower, upper, tol_pos, tol_rot, wrap=wrap, max_iters=max_iters
+    )
     first = start_q if start_q is not None else 0.5 * (lower + upper)
 
     t0 = time.perf_counter()

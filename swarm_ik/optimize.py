@@ -130,8 +130,10 @@ def minimize(
         hi = np.array(upper, dtype=float).ravel()
     except (TypeError, ValueError):
         raise InvalidArgumentError("lower and upper must be arrays of numbers") from None
-    if lo.size == 0 or lo.shape != hi.shape or not (
-        np.all(np.isfinite(lo)) and np.all(np.isfinite(hi))
+    if (
+        lo.size == 0
+        or lo.shape != hi.shape
+        or not (np.all(np.isfinite(lo)) and np.all(np.isfinite(hi)))
     ):
         raise InvalidArgumentError(
             "lower and upper must be non-empty finite arrays of the same shape, got shapes "
@@ -146,7 +148,12 @@ def minimize(
     start = None if x0 is None else _check_x0(x0, lo, hi)
     rng = make_rng(seed)
     ev = Evaluator(
-        objective, lo, hi, max_evals=max_evals, time_limit=time_limit, f_target=f_target,
+        objective,
+        lo,
+        hi,
+        max_evals=max_evals,
+        time_limit=time_limit,
+        f_target=f_target,
         q0=start,
     )
     t0 = time.perf_counter()

@@ -85,8 +85,10 @@ class IKProblem:
         self.lower = robot.lower.copy() if lower is None else robot.check_q(lower, "lower")
         self.upper = robot.upper.copy() if upper is None else robot.check_q(upper, "upper")
         if np.any(self.lower > self.upper):
-            raise InvalidArgumentError("lower bounds exceed upper bounds at joints "
-                                       f"{np.flatnonzero(self.lower > self.upper).tolist()}")
+            raise InvalidArgumentError(
+                "lower bounds exceed upper bounds at joints "
+                f"{np.flatnonzero(self.lower > self.upper).tolist()}"
+            )
         outside = np.flatnonzero((self.lower < robot.lower) | (self.upper > robot.upper))
         if outside.size:  # wider bounds would let a "success" break the joint limits
             j = int(outside[0])

@@ -97,11 +97,24 @@ class ReachMap:
                 f"reachability maps are written as .npz; got {str(p)!r} (valid suffix: .npz)"
             )
         np.savez_compressed(
-            p, robot=self.robot, ee_frame=self.ee_frame, x=self.x, y=self.y, z=self.z,
-            index=self.index, solved=self.solved, hits=self.hits, centres=self.centres,
-            orientations=self.orientations, resolution=self.resolution, base=self.base,
-            seed=self.seed, tol_pos=self.tol_pos, tol_rot=self.tol_rot,
-            max_starts=self.max_starts, time_s=self.time_s,
+            p,
+            robot=self.robot,
+            ee_frame=self.ee_frame,
+            x=self.x,
+            y=self.y,
+            z=self.z,
+            index=self.index,
+            solved=self.solved,
+            hits=self.hits,
+            centres=self.centres,
+            orientations=self.orientations,
+            resolution=self.resolution,
+            base=self.base,
+            seed=self.seed,
+            tol_pos=self.tol_pos,
+            tol_rot=self.tol_rot,
+            max_starts=self.max_starts,
+            time_s=self.time_s,
         )
         return p
 
@@ -110,11 +123,22 @@ class ReachMap:
         """Read a map written by :meth:`save`."""
         d = np.load(Path(path), allow_pickle=False)
         return cls(
-            robot=str(d["robot"]), ee_frame=str(d["ee_frame"]), x=d["x"], y=d["y"], z=d["z"],
-            index=d["index"], solved=d["solved"], hits=d["hits"], orientations=d["orientations"],
-            resolution=float(d["resolution"]), base=d["base"], seed=int(d["seed"]),
-            tol_pos=float(d["tol_pos"]), tol_rot=float(d["tol_rot"]),
-            max_starts=int(d["max_starts"]), time_s=float(d["time_s"]),
+            robot=str(d["robot"]),
+            ee_frame=str(d["ee_frame"]),
+            x=d["x"],
+            y=d["y"],
+            z=d["z"],
+            index=d["index"],
+            solved=d["solved"],
+            hits=d["hits"],
+            orientations=d["orientations"],
+            resolution=float(d["resolution"]),
+            base=d["base"],
+            seed=int(d["seed"]),
+            tol_pos=float(d["tol_pos"]),
+            tol_rot=float(d["tol_rot"]),
+            max_starts=int(d["max_starts"]),
+            time_s=float(d["time_s"]),
         )
 
     def __repr__(self) -> str:
@@ -231,8 +255,11 @@ def reach_map(
     t0 = time.perf_counter()
     if not (np.isfinite(resolution) and resolution > 0):
         raise InvalidArgumentError(f"resolution must be a positive length [m], got {resolution!r}")
-    if isinstance(n_orientations, bool) or not isinstance(n_orientations, (int, np.integer)) \
-            or n_orientations < 1:
+    if (
+        isinstance(n_orientations, bool)
+        or not isinstance(n_orientations, (int, np.integer))
+        or n_orientations < 1
+    ):
         raise InvalidArgumentError(
             f"n_orientations must be a positive integer, got {n_orientations!r}"
         )
@@ -272,18 +299,36 @@ def reach_map(
     targets[:, :, :3, 3] = pts[:, None, :]
     targets[:, :, 3, 3] = 1.0
     res = solve_batch(
-        robot, targets.reshape(-1, 4, 4), seed=seed, tol_pos=tol_pos, tol_rot=tol_rot,
-        max_starts=max_starts, max_iters=max_iters, scheduler=scheduler, progress=progress,
+        robot,
+        targets.reshape(-1, 4, 4),
+        seed=seed,
+        tol_pos=tol_pos,
+        tol_rot=tol_rot,
+        max_starts=max_starts,
+        max_iters=max_iters,
+        scheduler=scheduler,
+        progress=progress,
     )
     hits = np.zeros((centres.shape[0], k), dtype=bool)
     hits[inside] = res.success.reshape(-1, k)
     index = hits.mean(axis=1)
     return ReachMap(
-        robot=robot.name, ee_frame=robot.ee_frame, x=x, y=y, z=z,
-        index=index.reshape(shape), solved=inside.reshape(shape), hits=hits.reshape(*shape, k),
+        robot=robot.name,
+        ee_frame=robot.ee_frame,
+        x=x,
+        y=y,
+        z=z,
+        index=index.reshape(shape),
+        solved=inside.reshape(shape),
+        hits=hits.reshape(*shape, k),
         orientations=rots,
-        resolution=float(resolution), base=base, seed=int(seed), tol_pos=float(tol_pos),
-        tol_rot=float(tol_rot), max_starts=int(max_starts), time_s=time.perf_counter() - t0,
+        resolution=float(resolution),
+        base=base,
+        seed=int(seed),
+        tol_pos=float(tol_pos),
+        tol_rot=float(tol_rot),
+        max_starts=int(max_starts),
+        time_s=time.perf_counter() - t0,
     )
 
 
@@ -298,7 +343,7 @@ def plot_slices(rmap: ReachMap, path: str | Path, dpi: int = 120) -> Path:
         import matplotlib.pyplot as plt
     except ImportError:  # pragma: no cover - depends on the environment
         raise InvalidArgumentError(
-            "plotting needs matplotlib: pip install \"swarm_ik[plot]\""
+            'plotting needs matplotlib: pip install "swarm_ik[plot]"'
         ) from None
     ix = int(np.argmin(np.abs(rmap.x - rmap.base[0])))
     iy = int(np.argmin(np.abs(rmap.y - rmap.base[1])))
@@ -312,14 +357,22 @@ def plot_slices(rmap: ReachMap, path: str | Path, dpi: int = 120) -> Path:
     fig, axs = plt.subplots(1, 3, figsize=(15, 4.8), constrained_layout=True)
     im: Any = None
     for ax, (img, u, v, lu, lv, title) in zip(axs, panels, strict=True):
-        im = ax.imshow(img, origin="lower", vmin=0.0, vmax=1.0, cmap="viridis",
-                       extent=(u[0] - h, u[-1] + h, v[0] - h, v[-1] + h), interpolation="nearest")
+        im = ax.imshow(
+            img,
+            origin="lower",
+            vmin=0.0,
+            vmax=1.0,
+            cmap="viridis",
+            extent=(u[0] - h, u[-1] + h, v[0] - h, v[-1] + h),
+            interpolation="nearest",
+        )
         ax.set_xlabel(f"{lu} [m]")
         ax.set_ylabel(f"{lv} [m]")
         ax.set_title(title)
         ax.set_aspect("equal")
-    fig.colorbar(im, ax=axs, shrink=0.85,
-                 label=f"reachability index (of K = {rmap.n_orientations})")
+    fig.colorbar(
+        im, ax=axs, shrink=0.85, label=f"reachability index (of K = {rmap.n_orientations})"
+    )
     fig.suptitle(
         f"{rmap.robot} ({rmap.ee_frame}): reachability, {rmap.resolution:g} m voxels, "
         f"tolerance {rmap.tol_pos:g} m / {rmap.tol_rot:g} rad"
@@ -358,7 +411,7 @@ def export_html(rmap: ReachMap, path: str | Path, point_size: float | None = Non
         from meshcat.path import Path as MeshcatPath
     except ImportError:  # pragma: no cover - depends on the environment
         raise InvalidArgumentError(
-            "the HTML export needs meshcat: pip install \"swarm_ik[viz]\""
+            'the HTML export needs meshcat: pip install "swarm_ik[viz]"'
         ) from None
     reach = rmap.index > 0
     pts = rmap.centres[reach].astype(np.float32)
@@ -388,10 +441,11 @@ def export_html(rmap: ReachMap, path: str | Path, point_size: float | None = Non
     html = (
         "<!DOCTYPE html>\n<html>\n<head><meta charset=utf-8><title>" + title + "</title>\n"
         "<style>body {margin: 0;} #meshcat-pane {width: 100vw; height: 100vh; "
-        "overflow: hidden;}</style></head>\n<body>\n<div id=\"meshcat-pane\"></div>\n"
+        'overflow: hidden;}</style></head>\n<body>\n<div id="meshcat-pane"></div>\n'
         "<script>" + js + "</script>\n<script>\n"
-        "var viewer = new MeshCat.Viewer(document.getElementById(\"meshcat-pane\"));\n"
-        + "\n".join(blobs) + "\n</script>\n</body>\n</html>\n"
+        'var viewer = new MeshCat.Viewer(document.getElementById("meshcat-pane"));\n'
+        + "\n".join(blobs)
+        + "\n</script>\n</body>\n</html>\n"
     )
     p = Path(path)
     p.write_text(html)

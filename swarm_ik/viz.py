@@ -209,7 +209,9 @@ def visual_model(robot: RobotModel) -> Any:
 
     try:
         return pin.buildGeomFromUrdf(
-            robot.full_model, str(robot.urdf_path), pin.GeometryType.VISUAL,
+            robot.full_model,
+            str(robot.urdf_path),
+            pin.GeometryType.VISUAL,
             package_dirs=package_dirs(robot),
         )
     except ValueError as exc:
@@ -240,8 +242,11 @@ def full_configuration(robot: RobotModel, q: Any) -> FloatArray:
 
 def _reach(robot: RobotModel) -> float:
     """A length scale of the robot [m]: the sum of its joint offsets (at least 0.2)."""
-    return max(0.2, float(np.sum(np.linalg.norm(robot.chain.pos_p, axis=-1)))
-               + float(np.linalg.norm(robot.chain.pos_f)))
+    return max(
+        0.2,
+        float(np.sum(np.linalg.norm(robot.chain.pos_p, axis=-1)))
+        + float(np.linalg.norm(robot.chain.pos_f)),
+    )
 
 
 def _translation(p: Any) -> FloatArray:
@@ -264,8 +269,9 @@ class RobotDrawing:
         q: Configuration shown (rad / m), shape ``(nq,)``.
     """
 
-    def __init__(self, scene: Scene, robot: RobotModel, path: str, geom: Any,
-                 color: Sequence[float] | None) -> None:
+    def __init__(
+        self, scene: Scene, robot: RobotModel, path: str, geom: Any, color: Sequence[float] | None
+    ) -> None:
         self.robot = robot
         self.path = path
         self._scene = scene
@@ -331,14 +337,18 @@ def _shape_loader() -> type:
             import meshcat.geometry as mg
 
             ext = Path(geometry_object.meshPath).suffix.lower()
-            kinds = {".dae": mg.DaeMeshGeometry, ".stl": mg.StlMeshGeometry,
-                     ".obj": mg.ObjMeshGeometry}
+            kinds = {
+                ".dae": mg.DaeMeshGeometry,
+                ".stl": mg.StlMeshGeometry,
+                ".obj": mg.ObjMeshGeometry,
+            }
             if color is None or ext not in kinds or not Path(geometry_object.meshPath).is_file():
                 super().loadViewerGeometryObject(geometry_object, geometry_type, color)
                 return
             rgba = np.asarray(color, dtype=float)
-            material = mg.MeshPhongMaterial(color=_rgb_int(rgba), opacity=float(rgba[3]),
-                                            transparent=float(rgba[3]) < 1.0)
+            material = mg.MeshPhongMaterial(
+                color=_rgb_int(rgba), opacity=float(rgba[3]), transparent=float(rgba[3]) < 1.0
+            )
             shape = kinds[ext].from_file(geometry_object.meshPath)
             self.viewer[self.getViewerNodeName(geometry_object, geometry_type)].set_object(
                 shape, material
@@ -396,9 +406,15 @@ class Scene:
         return self.visualizer[f"{ROOT}/{name}"]
 
     # ----------------------------------------------------------------- content
-    def add_robot(self, robot: RobotModel, q: Any, *, name: str = "robot",
-                  color: Sequence[float] | None = None,
-                  offset: Any = None) -> RobotDrawing:
+    def add_robot(
+        self,
+        robot: RobotModel,
+        q: Any,
+        *,
+        name: str = "robot",
+        color: Sequence[float] | None = None,
+        offset: Any = None,
+    ) -> RobotDrawing:
         """Draw ``robot`` at chain configuration ``q``.
 
         Args:
@@ -423,9 +439,16 @@ class Scene:
         self.robots[name] = drawing
         return drawing
 
-    def add_triad(self, name: str, pose: Any, *, length: float = 0.1,
-                  radius: float | None = None, opacity: float = 1.0,
-                  sphere: Sequence[float] | None = None) -> None:
+    def add_triad(
+        self,
+        name: str,
+        pose: Any,
+        *,
+        length: float = 0.1,
+        radius: float | None = None,
+        opacity: float = 1.0,
+        sphere: Sequence[float] | None = None,
+    ) -> None:
         """Draw a coordinate frame: x, y, z axes as red, green, blue rods.
 
         Args:
@@ -451,18 +474,25 @@ class Scene:
             t = np.eye(4)
             t[:3, :3] = rot
             t[:3, 3] = 0.5 * length * np.eye(3)[k]
-            mat = mg.MeshLambertMaterial(color=colour, opacity=opacity,
-                                         transparent=opacity < 1.0)
+            mat = mg.MeshLambertMaterial(color=colour, opacity=opacity, transparent=opacity < 1.0)
             node[axis]["shape"].set_object(mg.Cylinder(length, r), mat)
             node[axis].set_transform(t)
         if sphere is not None:
-            mat = mg.MeshLambertMaterial(color=_rgb_int(sphere), opacity=float(sphere[3]),
-                                         transparent=float(sphere[3]) < 1.0)
+            mat = mg.MeshLambertMaterial(
+                color=_rgb_int(sphere), opacity=float(sphere[3]), transparent=float(sphere[3]) < 1.0
+            )
             node["origin"]["shape"].set_object(mg.Sphere(length / 5.0), mat)
         node.set_transform(np.asarray(pose, dtype=float))
 
-    def add_label(self, name: str, lines: Sequence[str], *, position: Any,
-                  height: float = 0.1, facing: Any = (1.0, 0.0, 0.0)) -> None:
+    def add_label(
+        self,
+        name: str,
+        lines: Sequence[str],
+        *,
+        position: Any,
+        height: float = 0.1,
+        facing: Any = (1.0, 0.0, 0.0),
+    ) -> None:
         """A flat sign with text (a texture), standing upright.
 
         Args:
@@ -517,8 +547,13 @@ class Scene:
         )
 
     # ------------------------------------------------------------------ camera
-    def frame_camera(self, points: Any, *, direction: Sequence[float] = (1.0, 0.75, 0.45),
-                     distance: float | None = None) -> FloatArray:
+    def frame_camera(
+        self,
+        points: Any,
+        *,
+        direction: Sequence[float] = (1.0, 0.75, 0.45),
+        distance: float | None = None,
+    ) -> FloatArray:
         """Centre the scene on ``points`` and place the camera to see them all.
 
         meshcat's camera orbits the origin, so the scene's root node is shifted by minus the
@@ -574,8 +609,9 @@ class Scene:
         """Write :meth:`to_html` to ``path``; returns the path written."""
         p = Path(path)
         if p.parent and not p.parent.is_dir():
-            raise InvalidArgumentError(f"cannot write {str(p)!r}: folder {str(p.parent)!r} "
-                                       "does not exist")
+            raise InvalidArgumentError(
+                f"cannot write {str(p)!r}: folder {str(p.parent)!r} does not exist"
+            )
         p.write_text(self.to_html(), encoding="utf-8")
         return p
 
@@ -637,7 +673,8 @@ def _text_png(lines: Sequence[str], font_px: int = 28) -> tuple[bytes, float]:
 def error_lines(result: Result, label: str | None = None) -> list[str]:
     """Text lines stating a result's solver, status and errors."""
     head = label or (result.solver or "solver") + (
-        f" (seed {result.seed})" if result.seed is not None else "")
+        f" (seed {result.seed})" if result.seed is not None else ""
+    )
     status = "reached" if result.success else "NOT reached"
     return [
         f"{head}: {status}",
@@ -699,14 +736,20 @@ def show_pose(
         q_list.append(ghost_q)
     if target is not None:
         target = np.asarray(target, dtype=float)
-        scene.add_triad("target", target, length=length, radius=length / 18,
-                        sphere=(1.0, 0.85, 0.1, 0.45))
+        scene.add_triad(
+            "target", target, length=length, radius=length / 18, sphere=(1.0, 0.85, 0.1, 0.45)
+        )
     _label_and_frame(scene, _view_points(robot, q_list, target), lines, _reach(robot))
     return scene
 
 
-def _label_and_frame(scene: Scene, pts: FloatArray, lines: Sequence[str], reach: float,
-                     direction: Sequence[float] = (1.0, 0.75, 0.45)) -> None:
+def _label_and_frame(
+    scene: Scene,
+    pts: FloatArray,
+    lines: Sequence[str],
+    reach: float,
+    direction: Sequence[float] = (1.0, 0.75, 0.45),
+) -> None:
     """Put the text sign above ``pts`` facing the camera, then frame the camera on both."""
     d = np.asarray(direction, dtype=float)
     d = d / np.linalg.norm(d)
@@ -716,21 +759,31 @@ def _label_and_frame(scene: Scene, pts: FloatArray, lines: Sequence[str], reach:
         size = max(float(np.linalg.norm(hi - lo)), 0.5 * reach)
         # a few hundredths of the scene per line, and no wider than most of the scene
         height = min(0.07 * size * len(lines), 0.9 * size / aspect)
-        centre = np.array([0.5 * (lo[0] + hi[0]), 0.5 * (lo[1] + hi[1]),
-                           hi[2] + 0.12 * reach + 0.5 * height])
+        centre = np.array(
+            [0.5 * (lo[0] + hi[0]), 0.5 * (lo[1] + hi[1]), hi[2] + 0.12 * reach + 0.5 * height]
+        )
         scene.add_label("label", lines, position=centre, height=height, facing=d)
         right = np.cross([0.0, 0.0, 1.0], d)
         right /= np.linalg.norm(right) or 1.0
         up = np.cross(d, right)
         half_w, half_h = 0.5 * height * aspect, 0.5 * height
-        corners = [centre + sx * half_w * right + sz * half_h * up
-                   for sx in (-1, 1) for sz in (-1, 1)]
+        corners = [
+            centre + sx * half_w * right + sz * half_h * up for sx in (-1, 1) for sz in (-1, 1)
+        ]
         pts = np.vstack([pts, corners])
     scene.frame_camera(pts, direction=d)
 
 
-def animate_trace(scene: Scene, robot: RobotModel, trace: Trace, *, name: str = "robot",
-                  fps: int = 20, max_frames: int = 200, hold_s: float = 1.0) -> int:
+def animate_trace(
+    scene: Scene,
+    robot: RobotModel,
+    trace: Trace,
+    *,
+    name: str = "robot",
+    fps: int = 20,
+    max_frames: int = 200,
+    hold_s: float = 1.0,
+) -> int:
     """Replay the best-so-far configuration of each iteration as a meshcat animation.
 
     Args:
@@ -789,8 +842,14 @@ def show_result(
         lines += error_lines(compare, f"{compare.solver} (ghost, orange)")
     if trace is not None:
         lines.append(f"animation: best-so-far over {len(trace.fitness)} iterations")
-    scene = show_pose(problem.robot, result.q, target=problem.target, lines=lines,
-                      ghost_q=None if compare is None else compare.q, scene=scene)
+    scene = show_pose(
+        problem.robot,
+        result.q,
+        target=problem.target,
+        lines=lines,
+        ghost_q=None if compare is None else compare.q,
+        scene=scene,
+    )
     if trace is not None:
         animate_trace(scene, problem.robot, trace, fps=fps)
     return scene
@@ -862,11 +921,17 @@ def show_configurations(
         # the camera looks from +x: +y is on the left, so the first robot gets the largest y
         off = np.array([0.0, (0.5 * (len(qs) - 1) - k) * step, 0.0])
         scene.add_robot(robot, q, name=f"solutions/{k}/robot", offset=off)
-        scene.add_triad(f"solutions/{k}/reached", _translation(off) @ robot.fk(q),
-                        length=0.8 * length)
+        scene.add_triad(
+            f"solutions/{k}/reached", _translation(off) @ robot.fk(q), length=0.8 * length
+        )
         if target is not None:
-            scene.add_triad(f"solutions/{k}/target", _translation(off) @ np.asarray(target),
-                            length=length, radius=length / 18, sphere=(1.0, 0.85, 0.1, 0.45))
+            scene.add_triad(
+                f"solutions/{k}/target",
+                _translation(off) @ np.asarray(target),
+                length=length,
+                radius=length / 18,
+                sphere=(1.0, 0.85, 0.1, 0.45),
+            )
         pts.append(_view_points(robot, [q], target) + off)
     _label_and_frame(scene, np.vstack(pts), lines, _reach(robot), direction=(1.0, 0.15, 0.35))
     return scene
@@ -892,13 +957,26 @@ def show_solutions(
     order = "left to right" if layout == "side" else f"{hold_s:g} s each"
     lines = [f"{len(results)} solutions of one target ({order}):"]
     lines += [f"#{k + 1}: " + error_lines(r)[1].strip() for k, r in enumerate(results)]
-    return show_configurations(problem.robot, [r.q for r in results], target=problem.target,
-                               lines=lines, layout=layout, hold_s=hold_s, scene=scene)
+    return show_configurations(
+        problem.robot,
+        [r.q for r in results],
+        target=problem.target,
+        lines=lines,
+        layout=layout,
+        hold_s=hold_s,
+        scene=scene,
+    )
 
 
-def several_solutions(problem: IKProblem, n: int, *, solver: str | None = None,
-                      min_distance: float = 0.5, seed: int = 0,
-                      **solve_kwargs: Any) -> list[Result]:
+def several_solutions(
+    problem: IKProblem,
+    n: int,
+    *,
+    solver: str | None = None,
+    min_distance: float = 0.5,
+    seed: int = 0,
+    **solve_kwargs: Any,
+) -> list[Result]:
     """Up to ``n`` distinct solutions of ``problem``.
 
     Without ``solver``, :func:`swarm_ik.solve_many` (when this version has it); with one (or
@@ -921,16 +999,16 @@ def several_solutions(problem: IKProblem, n: int, *, solver: str | None = None,
     if isinstance(n, bool) or not isinstance(n, (int, np.integer)) or n < 1:
         raise InvalidArgumentError(f"n must be a positive integer, got {n!r}")
     if solver is None and hasattr(swarm_ik, "solve_many"):
-        found = list(swarm_ik.solve_many(problem, n, min_distance=min_distance, seed=seed,
-                                         **solve_kwargs))
+        found = list(
+            swarm_ik.solve_many(problem, n, min_distance=min_distance, seed=seed, **solve_kwargs)
+        )
         if found:
             return found
         return [swarm_ik.solve(problem, seed=seed, **solve_kwargs)]
     kept: list[Result] = []
     best: Result | None = None
     for s in range(seed, seed + 4 * n):
-        r = swarm_ik.solve(problem, solver or swarm_ik.api.DEFAULT_SOLVER, seed=s,
-                           **solve_kwargs)
+        r = swarm_ik.solve(problem, solver or swarm_ik.api.DEFAULT_SOLVER, seed=s, **solve_kwargs)
         if best is None or r.fitness < best.fitness:
             best = r
         if r.success and all(np.linalg.norm(r.q - k.q) >= min_distance for k in kept):

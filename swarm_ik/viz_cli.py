@@ -28,34 +28,66 @@ def add_commands(subparsers: Any) -> dict[str, Any]:
     p = subparsers.add_parser(
         "show",
         help="look at a robot configuration, or at several solutions of a target, in meshcat "
-             "(live, or exported to a self-contained HTML file)",
+        "(live, or exported to a self-contained HTML file)",
         description="Draw a robot at given joint values (--q, repeatable) and/or a target pose "
-                    "(--pose or --from-q); with a target and no --q, solve it first "
-                    "(--solutions N distinct solutions).",
+        "(--pose or --from-q); with a target and no --q, solve it first "
+        "(--solutions N distinct solutions).",
     )
-    p.add_argument("--robot", required=True,
-                   help="bundled or example-robot-data name, or a .urdf path")
-    p.add_argument("--frame", default=None,
-                   help="end-effector frame (default: the robot's tool frame)")
-    p.add_argument("--q", nargs="+", type=float, action="append", default=None, metavar="Q",
-                   help="joint values (rad / m, one per joint); repeat --q for several")
+    p.add_argument(
+        "--robot", required=True, help="bundled or example-robot-data name, or a .urdf path"
+    )
+    p.add_argument(
+        "--frame", default=None, help="end-effector frame (default: the robot's tool frame)"
+    )
+    p.add_argument(
+        "--q",
+        nargs="+",
+        type=float,
+        action="append",
+        default=None,
+        metavar="Q",
+        help="joint values (rad / m, one per joint); repeat --q for several",
+    )
     tgt = p.add_mutually_exclusive_group()
-    tgt.add_argument("--pose", nargs=7, type=float, metavar=("X", "Y", "Z", "QX", "QY", "QZ", "QW"),
-                     help="target position [m] and quaternion (x, y, z, w)")
-    tgt.add_argument("--from-q", nargs="+", type=float, metavar="Q",
-                     help="target = FK of these joint values")
-    p.add_argument("--solutions", type=int, default=1, metavar="N",
-                   help="with a target and no --q: how many distinct solutions to find and show")
-    p.add_argument("--min-distance", type=float, default=0.5,
-                   help="smallest joint-space distance between two shown solutions (rad / m)")
-    p.add_argument("--solver", default=None,
-                   help="solver for the target (default: swarm_ik.solve_many / the default solver)")
+    tgt.add_argument(
+        "--pose",
+        nargs=7,
+        type=float,
+        metavar=("X", "Y", "Z", "QX", "QY", "QZ", "QW"),
+        help="target position [m] and quaternion (x, y, z, w)",
+    )
+    tgt.add_argument(
+        "--from-q", nargs="+", type=float, metavar="Q", help="target = FK of these joint values"
+    )
+    p.add_argument(
+        "--solutions",
+        type=int,
+        default=1,
+        metavar="N",
+        help="with a target and no --q: how many distinct solutions to find and show",
+    )
+    p.add_argument(
+        "--min-distance",
+        type=float,
+        default=0.5,
+        help="smallest joint-space distance between two shown solutions (rad / m)",
+    )
+    p.add_argument(
+        "--solver",
+        default=None,
+        help="solver for the target (default: swarm_ik.solve_many / the default solver)",
+    )
     p.add_argument("--seed", type=int, default=0)
-    p.add_argument("--layout", default="side", choices=["side", "steps"],
-                   help="several configurations: side by side, or one robot stepping through them")
+    p.add_argument(
+        "--layout",
+        default="side",
+        choices=["side", "steps"],
+        help="several configurations: side by side, or one robot stepping through them",
+    )
     p.add_argument("--html", default=None, metavar="FILE", help="write a self-contained HTML page")
-    p.add_argument("--show", action="store_true",
-                   help="also keep the live viewer open when --html is given")
+    p.add_argument(
+        "--show", action="store_true", help="also keep the live viewer open when --html is given"
+    )
     p.add_argument("--open", action="store_true", help="open the live viewer in a web browser")
     return {"show": run_show}
 
@@ -96,8 +128,9 @@ def present(scene: Any, args: argparse.Namespace, *, live: bool) -> None:
         if html:
             path = scene.save_html(html)
             size = path.stat().st_size / 1e6
-            _say(args, f"wrote {path} ({size:.1f} MB): a self-contained page, open it in any "
-                       "browser")
+            _say(
+                args, f"wrote {path} ({size:.1f} MB): a self-contained page, open it in any browser"
+            )
         if live:
             _say(args, f"meshcat viewer: {scene.url}")
             if getattr(args, "open", False):
@@ -123,9 +156,11 @@ def solve_kwargs(args: argparse.Namespace) -> dict[str, Any]:
 
 def _result_line(res: Any) -> str:
     status = "reached" if res.success else "NOT reached"
-    return (f"{res.solver}: {status}, position error {res.position_error:.3e} m, rotation error "
-            f"{res.rotation_error:.3e} rad, {res.n_evals} evaluations, "
-            f"{res.time_s * 1e3:.2f} ms")
+    return (
+        f"{res.solver}: {status}, position error {res.position_error:.3e} m, rotation error "
+        f"{res.rotation_error:.3e} rad, {res.n_evals} evaluations, "
+        f"{res.time_s * 1e3:.2f} ms"
+    )
 
 
 # ------------------------------------------------------------------------- solve hook
@@ -144,11 +179,17 @@ def after_solve(args: argparse.Namespace, problem: Any, result: Any) -> None:
     if args.animate:
         traced, trace = viz.solve_traced(problem, args.solver, **kwargs, **dict(args.param))
         if not np.allclose(traced.q, result.q):  # e.g. a time limit cut the runs differently
-            _say(args, "note: the recorded run ended elsewhere than the one printed; showing "
-                       "the recorded one")
+            _say(
+                args,
+                "note: the recorded run ended elsewhere than the one printed; showing "
+                "the recorded one",
+            )
             result = traced
-        _say(args, f"animation: best-so-far configuration over {len(trace.fitness)} iterations "
-                   f"({trace.improvements} improvements)")
+        _say(
+            args,
+            f"animation: best-so-far configuration over {len(trace.fitness)} iterations "
+            f"({trace.improvements} improvements)",
+        )
     compare = None
     if args.compare:
         import swarm_ik
@@ -178,8 +219,11 @@ def run_show(args: argparse.Namespace) -> int:
         qs = [robot.check_q(q, "--q") for q in args.q]
         if target is None:
             lines = [f"{robot.name}: " + ", ".join(f"{v:.3f}" for v in q) for q in qs]
-            scene = (viz.show_pose(robot, qs[0], lines=lines) if len(qs) == 1 else
-                     viz.show_configurations(robot, qs, lines=lines, layout=args.layout))
+            scene = (
+                viz.show_pose(robot, qs[0], lines=lines)
+                if len(qs) == 1
+                else viz.show_configurations(robot, qs, lines=lines, layout=args.layout)
+            )
             present(scene, args, live=live)
             return 0
         problem = swarm_ik.IKProblem(robot, target)
@@ -188,11 +232,15 @@ def run_show(args: argparse.Namespace) -> int:
         if target is None:
             raise InvalidArgumentError("show needs --q, or a target (--pose or --from-q)")
         problem = swarm_ik.IKProblem(robot, target)
-        results = viz.several_solutions(problem, args.solutions, solver=args.solver,
-                                        min_distance=args.min_distance, seed=args.seed)
+        results = viz.several_solutions(
+            problem,
+            args.solutions,
+            solver=args.solver,
+            min_distance=args.min_distance,
+            seed=args.seed,
+        )
     for k, r in enumerate(results):
-        print(f"#{k + 1} " + _result_line(r) + "\n   q = "
-              + " ".join(f"{v:.6f}" for v in r.q))
+        print(f"#{k + 1} " + _result_line(r) + "\n   q = " + " ".join(f"{v:.6f}" for v in r.q))
     if len(results) == 1:
         scene = viz.show_result(problem, results[0])
     else:
@@ -209,7 +257,16 @@ def _as_result(problem: Any, q: Any) -> Any:
     q = np.asarray(q, dtype=float)
     dp, dr = verify(problem, q)
     within = problem.robot.within_limits(q)
-    return Result(q=q, fitness=float(problem.fitness(q[None])[0]), position_error=dp,
-                  rotation_error=dr, n_evals=0, time_s=0.0,
-                  success=bool(within and dp <= 1e-5 and dr <= 1e-5), within_limits=within,
-                  history=np.empty(0), solver="given q", seed=None)
+    return Result(
+        q=q,
+        fitness=float(problem.fitness(q[None])[0]),
+        position_error=dp,
+        rotation_error=dr,
+        n_evals=0,
+        time_s=0.0,
+        success=bool(within and dp <= 1e-5 and dr <= 1e-5),
+        within_limits=within,
+        history=np.empty(0),
+        solver="given q",
+        seed=None,
+    )

@@ -292,7 +292,7 @@ def test_reach_html_holds_the_point_cloud(get_robot, tmp_path):
     rmap = reach_map(robot, resolution=0.25, n_orientations=2, max_starts=4)
     html = export_html(rmap, tmp_path / "m.html").read_text()
     assert "MeshCat.Viewer" in html
-    scene = html[html.index("new MeshCat.Viewer"):]  # the commands, after the viewer's code
+    scene = html[html.index("new MeshCat.Viewer") :]  # the commands, after the viewer's code
     blobs = re.findall(r"base64,([A-Za-z0-9+/=]+)", scene)
     assert len(blobs) == 3  # point cloud, triad, its placement
     cmd = umsgpack.unpackb(base64.b64decode(blobs[0]))
@@ -305,8 +305,21 @@ def test_reach_html_holds_the_point_cloud(get_robot, tmp_path):
 # ---------------------------------------------------------------------------- CLI
 def test_cli_batch(tmp_path, capsys):
     out = tmp_path / "r.csv"
-    code = main(["batch", "--robot", "yumi_left", "--random", "50", "--out", str(out),
-                 "--scheduler", "none", "--seed", "3"])
+    code = main(
+        [
+            "batch",
+            "--robot",
+            "yumi_left",
+            "--random",
+            "50",
+            "--out",
+            str(out),
+            "--scheduler",
+            "none",
+            "--seed",
+            "3",
+        ]
+    )
     text = capsys.readouterr().out
     assert code == 0 and "solved 50/50" in text
     table = np.genfromtxt(out, delimiter=",", names=True)
@@ -316,12 +329,36 @@ def test_cli_batch(tmp_path, capsys):
     targets = robot.fk(robot.random_q(np.random.default_rng(0), 5))
     targets[0, :3, 3] = [3.0, 0.0, 0.0]
     write_targets(tmp_path / "t.csv", targets)
-    code = main(["batch", "--robot", "yumi_left", "--targets", str(tmp_path / "t.csv"),
-                 "--out", str(tmp_path / "r.npz"), "--scheduler", "none", "--max-starts", "40"])
+    code = main(
+        [
+            "batch",
+            "--robot",
+            "yumi_left",
+            "--targets",
+            str(tmp_path / "t.csv"),
+            "--out",
+            str(tmp_path / "r.npz"),
+            "--scheduler",
+            "none",
+            "--max-starts",
+            "40",
+        ]
+    )
     assert code == 1 and "solved 4/5" in capsys.readouterr().out
     assert np.load(tmp_path / "r.npz")["success"].tolist() == [False, True, True, True, True]
-    code = main(["batch", "--robot", "yumi_left", "--random", "5",
-                 "--out", str(tmp_path / "x.json"), "--scheduler", "none"])
+    code = main(
+        [
+            "batch",
+            "--robot",
+            "yumi_left",
+            "--random",
+            "5",
+            "--out",
+            str(tmp_path / "x.json"),
+            "--scheduler",
+            "none",
+        ]
+    )
     assert code == 2 and "valid: .csv, .npz" in capsys.readouterr().err
 
 
@@ -329,8 +366,23 @@ def test_cli_reach(tmp_path, capsys):
     out = tmp_path / "yumi.npz"
     with warnings.catch_warnings():
         warnings.simplefilter("ignore")
-        code = main(["reach", "--robot", "yumi_left", "--resolution", "0.25", "--orientations", "2",
-                     "--max-starts", "4", "--out", str(out), "--scheduler", "none"])
+        code = main(
+            [
+                "reach",
+                "--robot",
+                "yumi_left",
+                "--resolution",
+                "0.25",
+                "--orientations",
+                "2",
+                "--max-starts",
+                "4",
+                "--out",
+                str(out),
+                "--scheduler",
+                "none",
+            ]
+        )
     assert code == 0
     assert "reachable voxels" in capsys.readouterr().out
     rmap = ReachMap.load(out)
@@ -350,8 +402,21 @@ def test_throughput_benchmark_smoke(tmp_path):
 
     parser = argparse.ArgumentParser()
     throughput.add_arguments(parser)
-    args = parser.parse_args(["--robots", "yumi_left", "--sizes", "20", "40", "--loop-max", "20",
-                              "--scheduler", "none", "--out", str(tmp_path)])
+    args = parser.parse_args(
+        [
+            "--robots",
+            "yumi_left",
+            "--sizes",
+            "20",
+            "40",
+            "--loop-max",
+            "20",
+            "--scheduler",
+            "none",
+            "--out",
+            str(tmp_path),
+        ]
+    )
     assert throughput.run(args) == 0
     rows = throughput._read(tmp_path / "throughput.csv")
     methods = {(r["method"], int(r["n"])) for r in rows}

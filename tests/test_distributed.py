@@ -104,8 +104,10 @@ def test_killed_worker_chunks_are_recomputed(get_robot, tmp_path):
     settings = BatchSettings(seed=9, max_starts=24)
     bc = BatchChain.from_robot(robot)
     size = 100
-    items = [(s, targets[s:s + size], np.tile(robot.mid_q(), (len(targets[s:s + size]), 1)))
-             for s in range(0, len(targets), size)]
+    items = [
+        (s, targets[s : s + size], np.tile(robot.mid_q(), (len(targets[s : s + size]), 1)))
+        for s in range(0, len(targets), size)
+    ]
     func = functools.partial(_run_chunk, bc, settings)  # importable on the workers
     ref = [func(it) for it in items]
 
@@ -116,23 +118,54 @@ def test_killed_worker_chunks_are_recomputed(get_robot, tmp_path):
     procs: list[subprocess.Popen] = []
     client = None
     try:
-        procs.append(subprocess.Popen(
-            [*_dask_cli(), "scheduler", "--host", "127.0.0.1", "--port", str(port),
-             "--no-dashboard"], stdout=log, stderr=log, env=env))
+        procs.append(
+            subprocess.Popen(
+                [
+                    *_dask_cli(),
+                    "scheduler",
+                    "--host",
+                    "127.0.0.1",
+                    "--port",
+                    str(port),
+                    "--no-dashboard",
+                ],
+                stdout=log,
+                stderr=log,
+                env=env,
+            )
+        )
         for _ in range(2):
-            procs.append(subprocess.Popen(
-                [*_dask_cli(), "worker", address, "--host", "127.0.0.1", "--nthreads", "1",
-                 "--nworkers", "1", "--no-nanny", "--no-dashboard",
-                 "--local-directory", str(tmp_path / "scratch")],
-                stdout=log, stderr=log, env=env))
+            procs.append(
+                subprocess.Popen(
+                    [
+                        *_dask_cli(),
+                        "worker",
+                        address,
+                        "--host",
+                        "127.0.0.1",
+                        "--nthreads",
+                        "1",
+                        "--nworkers",
+                        "1",
+                        "--no-nanny",
+                        "--no-dashboard",
+                        "--local-directory",
+                        str(tmp_path / "scratch"),
+                    ],
+                    stdout=log,
+                    stderr=log,
+                    env=env,
+                )
+            )
         client = dask_distributed.Client(address, timeout=30)
         client.wait_for_workers(2, timeout=45)
         victim = procs[1]
         victim_addr = [w for w, pid in client.run(os.getpid).items() if pid == victim.pid]
         assert len(victim_addr) == 1
         client.run(func, items[0])  # compile / load the kernels on both workers first
-        futures = [client.submit(func, it, key=f"chunk-{i}", pure=True)
-                   for i, it in enumerate(items)]
+        futures = [
+            client.submit(func, it, key=f"chunk-{i}", pure=True) for i, it in enumerate(items)
+        ]
         deadline = time.monotonic() + 30
         while True:  # kill the victim while it holds unfinished work
             busy = client.processing(workers=victim_addr).get(victim_addr[0], ())
@@ -163,9 +196,14 @@ def test_killed_worker_chunks_are_recomputed(get_robot, tmp_path):
 
 def test_map_chunks_on_a_scheduler_address(get_robot):
     """``scheduler="tcp://…"``: map_chunks connects, computes in order, and disconnects."""
-    with dask_distributed.LocalCluster(n_workers=1, threads_per_worker=1, processes=False,
-                                       protocol="tcp", host="127.0.0.1",
-                                       dashboard_address=None) as cluster:
+    with dask_distributed.LocalCluster(
+        n_workers=1,
+        threads_per_worker=1,
+        processes=False,
+        protocol="tcp",
+        host="127.0.0.1",
+        dashboard_address=None,
+    ) as cluster:
         assert cluster.scheduler_address.startswith("tcp://127.0.0.1:")
         out = distributed.map_chunks(_square, list(range(7)), scheduler=cluster.scheduler_address)
         assert out == [i * i for i in range(7)]

@@ -64,8 +64,23 @@ def test_cli_solve_exit_codes(capsys: pytest.CaptureFixture[str]) -> None:
     rc = main(["solve", "--robot", "panda", "--from-q", *map(str, q), "--json"])
     out = json.loads(capsys.readouterr().out)
     assert rc == 0 and out["success"] and out["position_error"] <= 1e-5
-    rc = main(["solve", "--robot", "ur5", "--pose", "5", "0", "0", "0", "0", "0", "1",
-               "--max-evals", "100"])
+    rc = main(
+        [
+            "solve",
+            "--robot",
+            "ur5",
+            "--pose",
+            "5",
+            "0",
+            "0",
+            "0",
+            "0",
+            "0",
+            "1",
+            "--max-evals",
+            "100",
+        ]
+    )
     assert rc == 1
     assert "NOT reached" in capsys.readouterr().out
     rc = main(["solve", "--robot", "nope", "--from-q", "1"])

@@ -53,14 +53,24 @@ def screenshot(html_path: Path, png_path: Path, budget_ms: int = 4000) -> np.nda
         pytest.skip("no Chromium found (install Debian's with `apt-get install -y chromium`)")
     profile = png_path.parent / f"profile-{png_path.stem}"
     cmd = [
-        browser, "--headless", "--no-sandbox", "--disable-gpu", "--disable-quic",
-        "--no-first-run", "--disable-background-networking", "--disable-component-update",
-        "--disable-sync", f"--user-data-dir={profile}", f"--screenshot={png_path}",
-        "--window-size=800,600", f"--virtual-time-budget={budget_ms}",
+        browser,
+        "--headless",
+        "--no-sandbox",
+        "--disable-gpu",
+        "--disable-quic",
+        "--no-first-run",
+        "--disable-background-networking",
+        "--disable-component-update",
+        "--disable-sync",
+        f"--user-data-dir={profile}",
+        f"--screenshot={png_path}",
+        "--window-size=800,600",
+        f"--virtual-time-budget={budget_ms}",
         html_path.resolve().as_uri(),
     ]
-    proc = subprocess.run(cmd, capture_output=True, text=True, timeout=120,
-                          stdin=subprocess.DEVNULL)
+    proc = subprocess.run(
+        cmd, capture_output=True, text=True, timeout=120, stdin=subprocess.DEVNULL
+    )
     assert png_path.is_file(), (
         f"Chromium wrote no screenshot (rc {proc.returncode}): {proc.stderr[-2000:]}"
     )
@@ -84,8 +94,10 @@ def _no_wait(monkeypatch: pytest.MonkeyPatch) -> None:
 
 # ------------------------------------------------------------------------- lazy import
 def test_import_swarm_ik_does_not_import_meshcat() -> None:
-    code = ("import sys, swarm_ik, swarm_ik.viz, swarm_ik.cli; "
-            "assert 'meshcat' not in sys.modules, sorted(m for m in sys.modules if 'meshcat' in m)")
+    code = (
+        "import sys, swarm_ik, swarm_ik.viz, swarm_ik.cli; "
+        "assert 'meshcat' not in sys.modules, sorted(m for m in sys.modules if 'meshcat' in m)"
+    )
     proc = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True)
     assert proc.returncode == 0, proc.stderr
 
@@ -181,8 +193,11 @@ def test_show_result_scene_content(yumi: swarm_ik.RobotModel) -> None:
     with viz.show_result(problem, res, trace=trace, compare=dls) as scene:
         assert scene.url.startswith("http://127.0.0.1:")
         cmds = html_commands(scene.to_html())
-    transforms = {c["path"]: np.array(c["matrix"]).reshape(4, 4).T
-                  for c in cmds if c["type"] == "set_transform"}
+    transforms = {
+        c["path"]: np.array(c["matrix"]).reshape(4, 4).T
+        for c in cmds
+        if c["type"] == "set_transform"
+    }
     objects = {c["path"] for c in cmds if c["type"] == "set_object"}
     geom = viz.visual_model(yumi)
     data, gdata = yumi.full_model.createData(), pin.GeometryData(geom)
@@ -225,9 +240,24 @@ def test_show_solutions_side_by_side_and_steps(yumi: swarm_ik.RobotModel) -> Non
 # ---------------------------------------------------------------------------------- CLI
 def test_cli_solve_html_animate_compare(tmp_path: Path, capsys: Any) -> None:
     out = tmp_path / "scene.html"
-    rc = cli.main(["solve", "--robot", "yumi_left", "--from-q", *map(str, Q_YUMI),
-                   "--solver", "pso", "--max-evals", "1500", "--animate", "--compare", "dls",
-                   "--html", str(out)])
+    rc = cli.main(
+        [
+            "solve",
+            "--robot",
+            "yumi_left",
+            "--from-q",
+            *map(str, Q_YUMI),
+            "--solver",
+            "pso",
+            "--max-evals",
+            "1500",
+            "--animate",
+            "--compare",
+            "dls",
+            "--html",
+            str(out),
+        ]
+    )
     text = capsys.readouterr().out
     assert rc in (0, 1)
     assert "compare dls: reached" in text
@@ -239,8 +269,9 @@ def test_cli_solve_html_animate_compare(tmp_path: Path, capsys: Any) -> None:
 
 
 def test_cli_show_prints_url_and_keeps_json_clean(capsys: Any) -> None:
-    rc = cli.main(["solve", "--robot", "yumi_left", "--from-q", *map(str, Q_YUMI),
-                   "--show", "--json"])
+    rc = cli.main(
+        ["solve", "--robot", "yumi_left", "--from-q", *map(str, Q_YUMI), "--show", "--json"]
+    )
     cap = capsys.readouterr()
     assert rc == 0
     assert json.loads(cap.out)["success"] is True  # stdout is the JSON object alone
@@ -250,11 +281,23 @@ def test_cli_show_prints_url_and_keeps_json_clean(capsys: Any) -> None:
 def test_cli_show_command(tmp_path: Path, capsys: Any) -> None:
     out = tmp_path / "two.html"
     q2 = Q_YUMI + 0.3
-    rc = cli.main(["show", "--robot", "yumi_left", "--q", *map(str, Q_YUMI),
-                   "--q", *map(str, q2), "--html", str(out)])
+    rc = cli.main(
+        [
+            "show",
+            "--robot",
+            "yumi_left",
+            "--q",
+            *map(str, Q_YUMI),
+            "--q",
+            *map(str, q2),
+            "--html",
+            str(out),
+        ]
+    )
     assert rc == 0 and out.is_file()
-    rc = cli.main(["show", "--robot", "yumi_left", "--from-q", *map(str, Q_YUMI),
-                   "--solutions", "2"])
+    rc = cli.main(
+        ["show", "--robot", "yumi_left", "--from-q", *map(str, Q_YUMI), "--solutions", "2"]
+    )
     text = capsys.readouterr().out
     assert rc == 0
     assert "#1 " in text and "meshcat viewer: http://127.0.0.1:" in text
@@ -264,8 +307,9 @@ def test_cli_show_command(tmp_path: Path, capsys: Any) -> None:
 
 
 # ------------------------------------------------------------------- headless browser
-def test_static_html_draws_the_robot_in_a_browser(yumi: swarm_ik.RobotModel,
-                                                  tmp_path: Path) -> None:
+def test_static_html_draws_the_robot_in_a_browser(
+    yumi: swarm_ik.RobotModel, tmp_path: Path
+) -> None:
     """The exported page, opened from a file with no server, draws the robot mid-image: the
     robot's pixels are what differs from the same page with the robot hidden."""
     if find_browser() is None:

@@ -29,8 +29,9 @@ class PlotExtraMissingError(SwarmIKError, ImportError):
     """matplotlib is not installed."""
 
 
-def _figure(n: int, ncols: int = 2,
-            size: tuple[float, float] = (6.0, 4.2)) -> tuple[Any, list[Any]]:
+def _figure(
+    n: int, ncols: int = 2, size: tuple[float, float] = (6.0, 4.2)
+) -> tuple[Any, list[Any]]:
     try:
         from matplotlib.figure import Figure
     except ImportError:  # pragma: no cover - depends on the environment
@@ -150,8 +151,11 @@ def convergence(
     if not drawn:
         return None
     if title:
-        fig.suptitle(f"{title}\nmean over runs (line), inter-quartile range (band); "
-                     f"values ≤ {CLIP:g} drawn at {CLIP:g}", fontsize=10)
+        fig.suptitle(
+            f"{title}\nmean over runs (line), inter-quartile range (band); "
+            f"values ≤ {CLIP:g} drawn at {CLIP:g}",
+            fontsize=10,
+        )
     path.parent.mkdir(parents=True, exist_ok=True)
     fig.savefig(path, dpi=110)
     return path
@@ -173,8 +177,9 @@ def boxes(
     for ax, (ptitle, select, f_min) in zip(axes, panels, strict=True):
         data, labels, cols = [], [], []
         for solver in solvers:
-            vals = [float(r["fitness"]) - f_min for r in rows
-                    if select(r) and r["solver"] == solver]
+            vals = [
+                float(r["fitness"]) - f_min for r in rows if select(r) and r["solver"] == solver
+            ]
             if vals:
                 data.append(np.maximum(vals, CLIP))
                 labels.append(solver)
@@ -223,8 +228,11 @@ def budget_success(
         for k, b in enumerate(budgets):
             rate = []
             for solver in solvers:
-                runs = [r for r in rows if r["robot"] == robot and r["solver"] == solver
-                        and r["max_evals"] == b]
+                runs = [
+                    r
+                    for r in rows
+                    if r["robot"] == robot and r["solver"] == solver and r["max_evals"] == b
+                ]
                 rate.append(100.0 * np.mean([r["success"] for r in runs]) if runs else np.nan)
             pos = y - 0.4 + (k + 0.5) * height
             ax.barh(pos, rate, height=height, color=shades[k], label=f"{b:,} evaluations")

@@ -87,17 +87,22 @@ P000_TABLE2 = PublishedTable(
     "Table 2",
     "YuMi left arm, the given pose; population 100, 1000 iterations, 10 runs",
     (
-        PublishedRow("FOA", "foa", {"best": 5.21425, "mean": 5.27143, "worst": 5.35291,
-                                    "std": 4.57e-2}),
-        PublishedRow("LGMS-FOA", None, {"best": 0.207373, "mean": 0.540788, "worst": 1.20566,
-                                        "std": 0.265}),
-        PublishedRow("AE-LGMS-FOA", None, {"best": 3.42e-2, "mean": 0.3495, "worst": 0.7838,
-                                           "std": 0.2151}),
-        PublishedRow("IFOA", None, {"best": 5.426, "mean": 5.515, "worst": 5.585,
-                                    "std": 5.85e-2}),
+        PublishedRow(
+            "FOA", "foa", {"best": 5.21425, "mean": 5.27143, "worst": 5.35291, "std": 4.57e-2}
+        ),
+        PublishedRow(
+            "LGMS-FOA", None, {"best": 0.207373, "mean": 0.540788, "worst": 1.20566, "std": 0.265}
+        ),
+        PublishedRow(
+            "AE-LGMS-FOA", None, {"best": 3.42e-2, "mean": 0.3495, "worst": 0.7838, "std": 0.2151}
+        ),
+        PublishedRow("IFOA", None, {"best": 5.426, "mean": 5.515, "worst": 5.585, "std": 5.85e-2}),
         PublishedRow("SFOA", None, {"best": 6.149, "mean": 6.935, "worst": 7.772, "std": 0.583}),
-        PublishedRow("HLFOA", "hlfoa", {"best": 2.22e-16, "mean": 4.04e-16, "worst": 5.07e-16,
-                                        "std": 8.02e-17}),
+        PublishedRow(
+            "HLFOA",
+            "hlfoa",
+            {"best": 2.22e-16, "mean": 4.04e-16, "worst": 5.07e-16, "std": 8.02e-17},
+        ),
     ),
 )
 """Paper 000, Table 2: best / mean / worst / std of the fitness over 10 runs."""
@@ -124,22 +129,43 @@ HARTMANN3_MIN = -3.86278214782076
 """Global minimum of Hartmann-3 (F4) to full precision (Dixon & Szegő's test set)."""
 
 P003_TABLE3: dict[str, PublishedTable] = {
-    "F1": PublishedTable("003", "Table 3", "F1 sphere (30-D)", (
-        PublishedRow("GWO", "gwo", {"mean": 9.38e-9}),
-        PublishedRow("MGWO", "mgwo", {"mean": 5.89e-14}),
-    )),
-    "F2": PublishedTable("003", "Table 3", "F2 Schwefel 2.22 (30-D)", (
-        PublishedRow("GWO", "gwo", {"mean": 6.76e-6}),
-        PublishedRow("MGWO", "mgwo", {"mean": 5.16e-9}),
-    )),
-    "F3": PublishedTable("003", "Table 3", "F3 Rastrigin (30-D)", (
-        PublishedRow("GWO", "gwo", {"mean": 14.75}),
-        PublishedRow("MGWO", "mgwo", {"mean": 1.30}),
-    )),
-    "F4": PublishedTable("003", "Table 3", "F4 Hartmann-3 (3-D)", (
-        PublishedRow("GWO", "gwo", {"mean": -3.8609}),
-        PublishedRow("MGWO", "mgwo", {"mean": -3.8628}),
-    ), resolution=5e-5),
+    "F1": PublishedTable(
+        "003",
+        "Table 3",
+        "F1 sphere (30-D)",
+        (
+            PublishedRow("GWO", "gwo", {"mean": 9.38e-9}),
+            PublishedRow("MGWO", "mgwo", {"mean": 5.89e-14}),
+        ),
+    ),
+    "F2": PublishedTable(
+        "003",
+        "Table 3",
+        "F2 Schwefel 2.22 (30-D)",
+        (
+            PublishedRow("GWO", "gwo", {"mean": 6.76e-6}),
+            PublishedRow("MGWO", "mgwo", {"mean": 5.16e-9}),
+        ),
+    ),
+    "F3": PublishedTable(
+        "003",
+        "Table 3",
+        "F3 Rastrigin (30-D)",
+        (
+            PublishedRow("GWO", "gwo", {"mean": 14.75}),
+            PublishedRow("MGWO", "mgwo", {"mean": 1.30}),
+        ),
+    ),
+    "F4": PublishedTable(
+        "003",
+        "Table 3",
+        "F4 Hartmann-3 (3-D)",
+        (
+            PublishedRow("GWO", "gwo", {"mean": -3.8609}),
+            PublishedRow("MGWO", "mgwo", {"mean": -3.8628}),
+        ),
+        resolution=5e-5,
+    ),
 }
 """Paper 003, Table 3: mean best value over 50 runs (30 wolves, 200 iterations), per function.
 F4 is printed to four decimals, hence its resolution."""
@@ -152,8 +178,9 @@ P003_TABLE4 = PublishedTable(
         PublishedRow("GWO", "gwo", {"mean": 0.4292, "best": 0.0115, "worst": 1.0613}),
         PublishedRow("VAGWO", "vagwo", {"mean": 1.0043, "best": 8.04e-5, "worst": 6.2053}),
         PublishedRow("PGWO", None, {"mean": 0.3986, "best": 0.0015, "worst": 2.5655}),
-        PublishedRow("MGWO", "mgwo", {"mean": 0.0122, "best": 0.0064, "worst": 0.0226,
-                                      "var": 8.04e-5}),
+        PublishedRow(
+            "MGWO", "mgwo", {"mean": 0.0122, "best": 0.0064, "worst": 0.0226, "var": 8.04e-5}
+        ),
     ),
 )
 """Paper 003, Table 4: mean / best / worst / variance of the fitness over 50 runs."""

@@ -52,8 +52,19 @@ DEFAULT_ROBOTS = ("panda", "yumi_left")
 DEFAULT_SIZES = (100, 1000, 10_000, 100_000)
 QUICK_SIZES = (100, 1000)
 FIELDS = (
-    "robot", "nq", "method", "n", "workers", "time_s", "setup_s", "poses_per_s",
-    "success_rate", "n_success", "mean_evals", "mean_starts", "tol",
+    "robot",
+    "nq",
+    "method",
+    "n",
+    "workers",
+    "time_s",
+    "setup_s",
+    "poses_per_s",
+    "success_rate",
+    "n_success",
+    "mean_evals",
+    "mean_starts",
+    "tol",
 )
 PROFILE_FIELDS = ("robot", "n", "part", "seconds", "share", "note")
 TARGET_RATE = 10_000.0
@@ -63,19 +74,36 @@ TARGET_RATE = 10_000.0
 def add_arguments(parser: argparse.ArgumentParser) -> None:
     """Options of ``swarm-ik bench throughput``."""
     parser.add_argument("--robots", nargs="+", default=list(DEFAULT_ROBOTS))
-    parser.add_argument("--sizes", nargs="+", type=int, default=None,
-                        help=f"numbers of targets (default {' '.join(map(str, DEFAULT_SIZES))}; "
-                             f"{' '.join(map(str, QUICK_SIZES))} with --quick)")
-    parser.add_argument("--loop-max", type=int, default=1000,
-                        help="largest N for the loops over solve and TRAC-IK (default 1000)")
+    parser.add_argument(
+        "--sizes",
+        nargs="+",
+        type=int,
+        default=None,
+        help=f"numbers of targets (default {' '.join(map(str, DEFAULT_SIZES))}; "
+        f"{' '.join(map(str, QUICK_SIZES))} with --quick)",
+    )
+    parser.add_argument(
+        "--loop-max",
+        type=int,
+        default=1000,
+        help="largest N for the loops over solve and TRAC-IK (default 1000)",
+    )
     parser.add_argument("--tol", type=float, default=1e-5, help="tolerance [m] and [rad]")
     parser.add_argument("--seed", type=int, default=0)
-    parser.add_argument("--repeat", type=int, default=3,
-                        help="timed runs of each batch measurement; the fastest is kept (the "
-                             "results are identical run to run)")
-    parser.add_argument("--scheduler", default="local", metavar="local|none|tcp://HOST:PORT",
-                        help="where batch-dask runs ('none' skips it; default: an embedded "
-                             "LocalCluster, one worker process per core)")
+    parser.add_argument(
+        "--repeat",
+        type=int,
+        default=3,
+        help="timed runs of each batch measurement; the fastest is kept (the "
+        "results are identical run to run)",
+    )
+    parser.add_argument(
+        "--scheduler",
+        default="local",
+        metavar="local|none|tcp://HOST:PORT",
+        help="where batch-dask runs ('none' skips it; default: an embedded "
+        "LocalCluster, one worker process per core)",
+    )
     parser.add_argument("--no-tracik", action="store_true", help="skip TRAC-IK")
     parser.add_argument("--quick", action="store_true", help="small sizes (a smoke test)")
     parser.add_argument("--out", type=Path, default=Path("docs/results/batch"))
@@ -87,12 +115,28 @@ def make_targets(robot: RobotModel, n: int, seed: int) -> np.ndarray:
     return robot.fk(robot.random_q(rng, n))
 
 
-def _row(robot: RobotModel, method: str, n: int, workers: int, time_s: float, setup_s: float,
-         success: np.ndarray, evals: float, starts: float, tol: float) -> dict[str, Any]:
+def _row(
+    robot: RobotModel,
+    method: str,
+    n: int,
+    workers: int,
+    time_s: float,
+    setup_s: float,
+    success: np.ndarray,
+    evals: float,
+    starts: float,
+    tol: float,
+) -> dict[str, Any]:
     return {
-        "robot": robot.name, "nq": robot.nq, "method": method, "n": n, "workers": workers,
-        "time_s": f"{time_s:.6f}", "setup_s": f"{setup_s:.3f}",
-        "poses_per_s": f"{n / time_s:.1f}", "success_rate": f"{float(success.mean()):.6f}",
+        "robot": robot.name,
+        "nq": robot.nq,
+        "method": method,
+        "n": n,
+        "workers": workers,
+        "time_s": f"{time_s:.6f}",
+        "setup_s": f"{setup_s:.3f}",
+        "poses_per_s": f"{n / time_s:.1f}",
+        "success_rate": f"{float(success.mean()):.6f}",
         "n_success": int(success.sum()),
         "mean_evals": "" if not np.isfinite(evals) else f"{evals:.2f}",
         "mean_starts": "" if not np.isfinite(starts) else f"{starts:.3f}",
@@ -100,8 +144,9 @@ def _row(robot: RobotModel, method: str, n: int, workers: int, time_s: float, se
     }
 
 
-def loop_solve(robot: RobotModel, targets: np.ndarray, tol: float, seed: int
-               ) -> tuple[float, np.ndarray, float]:
+def loop_solve(
+    robot: RobotModel, targets: np.ndarray, tol: float, seed: int
+) -> tuple[float, np.ndarray, float]:
     """Time a Python loop over :func:`swarm_ik.solve` (default solver).
 
     Returns:
@@ -118,8 +163,9 @@ def loop_solve(robot: RobotModel, targets: np.ndarray, tol: float, seed: int
     return time.perf_counter() - t0, ok, float(evals.mean())
 
 
-def loop_tracik(robot: RobotModel, targets: np.ndarray, tol: float
-                ) -> tuple[float, np.ndarray] | None:
+def loop_tracik(
+    robot: RobotModel, targets: np.ndarray, tol: float
+) -> tuple[float, np.ndarray] | None:
     """Time a Python loop over TRAC-IK (Speed, 5 ms timeout, ε = tol) from mid-range, judged
     afterwards with Pinocchio's FK; ``None`` when pytracik is not installed."""
     try:
@@ -162,11 +208,32 @@ def profile_batch(robot: RobotModel, n: int, seed: int, tol: float) -> list[dict
     evals = np.zeros(n, dtype=np.int64)
     starts = np.zeros(n, dtype=np.int64)
     _solve_targets(
-        np.ascontiguousarray(poses[:, :3, :3]), np.ascontiguousarray(poses[:, :3, 3]), seeds,
-        np.arange(n, dtype=np.int64), c.kinds, c.axes, c.rot_p, c.pos_p, c.rot_f, c.pos_f,
-        bc.lower, bc.upper, bc.wrap, 1.0, tol * settings.tol_margin, tol * settings.tol_margin,
-        settings.max_starts, settings.max_iters, settings.lam0, settings.max_step,
-        settings.stall_rel, settings.stall_iters, seed, q, evals, starts,
+        np.ascontiguousarray(poses[:, :3, :3]),
+        np.ascontiguousarray(poses[:, :3, 3]),
+        seeds,
+        np.arange(n, dtype=np.int64),
+        c.kinds,
+        c.axes,
+        c.rot_p,
+        c.pos_p,
+        c.rot_f,
+        c.pos_f,
+        bc.lower,
+        bc.upper,
+        bc.wrap,
+        1.0,
+        tol * settings.tol_margin,
+        tol * settings.tol_margin,
+        settings.max_starts,
+        settings.max_iters,
+        settings.lam0,
+        settings.max_step,
+        settings.stall_rel,
+        settings.stall_iters,
+        seed,
+        q,
+        evals,
+        starts,
     )
     t2 = time.perf_counter()
     dp, dr = pose_errors(c, q, poses)
@@ -181,22 +248,43 @@ def profile_batch(robot: RobotModel, n: int, seed: int, tol: float) -> list[dict
     rows = []
 
     def add(part: str, seconds: float, note: str) -> None:
-        rows.append({"robot": robot.name, "n": n, "part": part, "seconds": f"{seconds:.5f}",
-                     "share": f"{seconds / total:.4f}", "note": note})
+        rows.append(
+            {
+                "robot": robot.name,
+                "n": n,
+                "part": part,
+                "seconds": f"{seconds:.5f}",
+                "share": f"{seconds / total:.4f}",
+                "note": note,
+            }
+        )
 
     add("validate targets + seeds", t1 - t0, "check_targets, mid-range seeds")
-    add("kernel: solved from the first start", per_eval * evals[first].sum(),
-        f"{first.mean():.1%} of targets, {evals[first].mean():.1f} evaluations each")
+    add(
+        "kernel: solved from the first start",
+        per_eval * evals[first].sum(),
+        f"{first.mean():.1%} of targets, {evals[first].mean():.1f} evaluations each",
+    )
     ev_r = float(evals[restarted].mean()) if restarted.any() else 0.0
     st_r = float(starts[restarted].mean()) if restarted.any() else 0.0
-    add("kernel: solved after restarts", per_eval * evals[restarted].sum(),
-        f"{restarted.mean():.1%} of targets, {ev_r:.1f} evaluations and {st_r:.1f} starts each")
-    add("kernel: not solved", per_eval * evals[failed].sum(),
+    add(
+        "kernel: solved after restarts",
+        per_eval * evals[restarted].sum(),
+        f"{restarted.mean():.1%} of targets, {ev_r:.1f} evaluations and {st_r:.1f} starts each",
+    )
+    add(
+        "kernel: not solved",
+        per_eval * evals[failed].sum(),
         f"{failed.mean():.2%} of targets, {evals[failed].mean() if failed.any() else 0:.0f} "
-        "evaluations each")
+        "evaluations each",
+    )
     add("independent check (batched FK)", t3 - t2, "pose_errors")
-    add("total", total, f"{n / total:.0f} poses/s; {per_eval * 1e6:.2f} µs per LM iteration "
-        f"(FK + Jacobian + {robot.nq}x{robot.nq} Cholesky), {evals.mean():.1f} per target")
+    add(
+        "total",
+        total,
+        f"{n / total:.0f} poses/s; {per_eval * 1e6:.2f} µs per LM iteration "
+        f"(FK + Jacobian + {robot.nq}x{robot.nq} Cholesky), {evals.mean():.1f} per target",
+    )
     return rows
 
 
@@ -211,16 +299,25 @@ def _cpu_name() -> str:
 
 
 def run_experiment(
-    robots: Sequence[str], sizes: Sequence[int], loop_max: int, tol: float, seed: int,
-    scheduler: Any, with_tracik: bool, out: Path, repeat: int = 3,
+    robots: Sequence[str],
+    sizes: Sequence[int],
+    loop_max: int,
+    tol: float,
+    seed: int,
+    scheduler: Any,
+    with_tracik: bool,
+    out: Path,
+    repeat: int = 3,
 ) -> tuple[Path, Path]:
     """Run every method on every robot and size; write ``throughput.csv`` and
     ``profile.csv``; returns their paths.  Batch measurements are repeated ``repeat`` times
     and the fastest kept (the machine may be shared; the answers are identical each time)."""
 
     def fastest(**kwargs: Any) -> Any:
-        runs = [solve_batch(robot, targets, seed=seed, tol_pos=tol, tol_rot=tol, **kwargs)
-                for _ in range(max(1, repeat))]
+        runs = [
+            solve_batch(robot, targets, seed=seed, tol_pos=tol, tol_rot=tol, **kwargs)
+            for _ in range(max(1, repeat))
+        ]
         return min(runs, key=lambda r: r.time_s)
 
     out.mkdir(parents=True, exist_ok=True)
@@ -237,35 +334,82 @@ def run_experiment(
         for robot in loaded:
             print(f"[throughput] {robot.name}", flush=True)
             if use_dask:  # warm the workers up (kernels loaded in every process)
-                solve_batch(robot, make_targets(robot, 64 * workers, seed), scheduler=client,
-                            chunk_size=32)
+                solve_batch(
+                    robot, make_targets(robot, 64 * workers, seed), scheduler=client, chunk_size=32
+                )
             for n in sizes:
                 targets = make_targets(robot, n, seed)
                 res = fastest()
-                rows.append(_row(robot, "batch-1proc", n, 1, res.time_s, 0.0, res.success,
-                                 res.n_evals.mean(), res.n_starts.mean(), tol))
-                print(f"  batch-1proc  N={n:>7d} {res.poses_per_s:9.0f} poses/s "
-                      f"success {res.success_rate:.4f}", flush=True)
+                rows.append(
+                    _row(
+                        robot,
+                        "batch-1proc",
+                        n,
+                        1,
+                        res.time_s,
+                        0.0,
+                        res.success,
+                        res.n_evals.mean(),
+                        res.n_starts.mean(),
+                        tol,
+                    )
+                )
+                print(
+                    f"  batch-1proc  N={n:>7d} {res.poses_per_s:9.0f} poses/s "
+                    f"success {res.success_rate:.4f}",
+                    flush=True,
+                )
                 if use_dask:
                     res_d = fastest(scheduler=client)
                     if not np.array_equal(res_d.q, res.q):  # pragma: no cover - a bug
                         raise RuntimeError("Dask and in-process results differ")
-                    rows.append(_row(robot, "batch-dask", n, workers, res_d.time_s, setup_s,
-                                     res_d.success, res_d.n_evals.mean(), res_d.n_starts.mean(),
-                                     tol))
-                    print(f"  batch-dask   N={n:>7d} {res_d.poses_per_s:9.0f} poses/s "
-                          f"({workers} workers)", flush=True)
+                    rows.append(
+                        _row(
+                            robot,
+                            "batch-dask",
+                            n,
+                            workers,
+                            res_d.time_s,
+                            setup_s,
+                            res_d.success,
+                            res_d.n_evals.mean(),
+                            res_d.n_starts.mean(),
+                            tol,
+                        )
+                    )
+                    print(
+                        f"  batch-dask   N={n:>7d} {res_d.poses_per_s:9.0f} poses/s "
+                        f"({workers} workers)",
+                        flush=True,
+                    )
                 if n <= loop_max:
                     t, ok, ev = loop_solve(robot, targets, tol, seed)
                     rows.append(_row(robot, "loop-solve", n, 1, t, 0.0, ok, ev, np.nan, tol))
-                    print(f"  loop-solve   N={n:>7d} {n / t:9.0f} poses/s success "
-                          f"{ok.mean():.4f}", flush=True)
+                    print(
+                        f"  loop-solve   N={n:>7d} {n / t:9.0f} poses/s success {ok.mean():.4f}",
+                        flush=True,
+                    )
                     trac = loop_tracik(robot, targets, tol) if with_tracik else None
                     if trac is not None:
-                        rows.append(_row(robot, "loop-tracik", n, 1, trac[0], 0.0, trac[1],
-                                         np.nan, np.nan, tol))
-                        print(f"  loop-tracik  N={n:>7d} {n / trac[0]:9.0f} poses/s success "
-                              f"{trac[1].mean():.4f}", flush=True)
+                        rows.append(
+                            _row(
+                                robot,
+                                "loop-tracik",
+                                n,
+                                1,
+                                trac[0],
+                                0.0,
+                                trac[1],
+                                np.nan,
+                                np.nan,
+                                tol,
+                            )
+                        )
+                        print(
+                            f"  loop-tracik  N={n:>7d} {n / trac[0]:9.0f} poses/s success "
+                            f"{trac[1].mean():.4f}",
+                            flush=True,
+                        )
             prof += profile_batch(robot, min(max(sizes), 10_000), seed, tol)
     csv_path = out / "throughput.csv"
     with csv_path.open("w", newline="") as fh:
@@ -303,14 +447,18 @@ def plot(csv_path: Path, png_path: Path) -> Path:
 
     rows = _read(csv_path)
     robots = list(dict.fromkeys(r["robot"] for r in rows))
-    fig, axs = plt.subplots(2, len(robots), figsize=(6.2 * len(robots), 8.4), squeeze=False,
-                            constrained_layout=True)
+    fig, axs = plt.subplots(
+        2, len(robots), figsize=(6.2 * len(robots), 8.4), squeeze=False, constrained_layout=True
+    )
     for col, robot in enumerate(robots):
         top, bottom = axs[0][col], axs[1][col]
         mine = [r for r in rows if r["robot"] == robot]
         for method, label in METHOD_LABELS.items():
-            pts = sorted((int(r["n"]), float(r["time_s"]), r["workers"]) for r in mine
-                         if r["method"] == method)
+            pts = sorted(
+                (int(r["n"]), float(r["time_s"]), r["workers"])
+                for r in mine
+                if r["method"] == method
+            )
             if not pts:
                 continue
             n, t, w = zip(*pts, strict=True)
@@ -371,8 +519,10 @@ def report(csv_path: Path, prof_path: Path, md_path: Path, png_name: str, schedu
         )
     setups = {r["setup_s"] for r in rows if r["method"] == "batch-dask"}
     if setups:
-        lines += ["", f"Dask LocalCluster start-up (not in the times above): "
-                  f"{', '.join(sorted(setups))} s."]
+        lines += [
+            "",
+            f"Dask LocalCluster start-up (not in the times above): {', '.join(sorted(setups))} s.",
+        ]
     lines += [
         "",
         "## Where the time goes (one in-process batch)",
@@ -381,8 +531,10 @@ def report(csv_path: Path, prof_path: Path, md_path: Path, png_name: str, schedu
         "|---|---:|---|---:|---:|---|",
     ]
     for r in prof:
-        lines.append(f"| {r['robot']} | {int(r['n']):,} | {r['part']} | {float(r['seconds']):.4f} "
-                     f"| {100 * float(r['share']):.1f} % | {r['note']} |")
+        lines.append(
+            f"| {r['robot']} | {int(r['n']):,} | {r['part']} | {float(r['seconds']):.4f} "
+            f"| {100 * float(r['share']):.1f} % | {r['note']} |"
+        )
     md_path.write_text("\n".join(lines) + "\n")
     return md_path
 
@@ -393,8 +545,15 @@ def run(args: argparse.Namespace) -> int:
     sizes = args.sizes or (QUICK_SIZES if quick else DEFAULT_SIZES)
     loop_max = min(args.loop_max, 100) if quick else args.loop_max
     csv_path, prof_path = run_experiment(
-        args.robots, sizes, loop_max, args.tol, args.seed, args.scheduler,
-        not args.no_tracik, args.out, args.repeat,
+        args.robots,
+        sizes,
+        loop_max,
+        args.tol,
+        args.seed,
+        args.scheduler,
+        not args.no_tracik,
+        args.out,
+        args.repeat,
     )
     png = plot(csv_path, args.out / "throughput.png")
     md = report(csv_path, prof_path, args.out / "throughput.md", png.name, str(args.scheduler))

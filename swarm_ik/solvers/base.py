@@ -154,9 +154,7 @@ class Evaluator:
         self._update_best(x_batch[:k], f)
         return out
 
-    def residual_jacobian(
-        self, q_batch: FloatArray
-    ) -> tuple[FloatArray, FloatArray, FloatArray]:
+    def residual_jacobian(self, q_batch: FloatArray) -> tuple[FloatArray, FloatArray, FloatArray]:
         """Fitness, pose error twist and Jacobian of an IK problem, counted as evaluations.
 
         Args:

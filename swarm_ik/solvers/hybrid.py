@@ -145,8 +145,9 @@ def _residual(
     Returns:
         ``(cost ‖r‖², position error [m], rotation angle [rad])``.
     """
-    fk_jac_one(q, kinds, axes, rot_p, pos_p, rot_f, pos_f, rot, pos, jraw, w_buf, o_buf,
-               mot, tmp, want_jac)
+    fk_jac_one(
+        q, kinds, axes, rot_p, pos_p, rot_f, pos_f, rot, pos, jraw, w_buf, o_buf, mot, tmp, want_jac
+    )
     for a in range(3):
         res[a] = t_pos[a] - pos[a]
     # M = R* Rᵀ
@@ -325,8 +326,28 @@ def lm_polish(
             break
         for j in range(n):
             q[j] = starts[s, j]
-        cost, dp, dr = _residual(q, kinds, axes, rot_p, pos_p, rot_f, pos_f, t_rot, t_pos,
-                                 rot_w, True, res, jac, rot, pos, jraw, w_buf, o_buf, mot, tmp)
+        cost, dp, dr = _residual(
+            q,
+            kinds,
+            axes,
+            rot_p,
+            pos_p,
+            rot_f,
+            pos_f,
+            t_rot,
+            t_pos,
+            rot_w,
+            True,
+            res,
+            jac,
+            rot,
+            pos,
+            jraw,
+            w_buf,
+            o_buf,
+            mot,
+            tmp,
+        )
         used += 1
         ev_s = 1
         status = ITER_CAP
@@ -400,9 +421,28 @@ def lm_polish(
                 elif v > upper[j]:
                     v = upper[j]
                 q_t[j] = v
-            cost_t, dp_t, dr_t = _residual(q_t, kinds, axes, rot_p, pos_p, rot_f, pos_f, t_rot,
-                                           t_pos, rot_w, True, res_t, jac_t, rot, pos, jraw,
-                                           w_buf, o_buf, mot, tmp)
+            cost_t, dp_t, dr_t = _residual(
+                q_t,
+                kinds,
+                axes,
+                rot_p,
+                pos_p,
+                rot_f,
+                pos_f,
+                t_rot,
+                t_pos,
+                rot_w,
+                True,
+                res_t,
+                jac_t,
+                rot,
+                pos,
+                jraw,
+                w_buf,
+                o_buf,
+                mot,
+                tmp,
+            )
             used += 1
             ev_s += 1
             if cost_t < cost:
@@ -418,9 +458,7 @@ def lm_polish(
                         jac[a, j] = jac_t[a, j]
                 cost, dp, dr = cost_t, dp_t, dr_t
                 lam = max(lam * 0.1, 1e-12)
-                if stall >= stall_iters and not (
-                    dp <= tol_pos and (rot_w == 0.0 or dr <= tol_rot)
-                ):
+                if stall >= stall_iters and not (dp <= tol_pos and (rot_w == 0.0 or dr <= tol_rot)):
                     status = LOCAL_MIN
                     break
             else:
@@ -504,8 +542,28 @@ def nullspace_toward(
         out_q[j] = q[j]
     if max_evals < 1:
         return 0
-    _residual(q, kinds, axes, rot_p, pos_p, rot_f, pos_f, t_rot, t_pos, rot_w, True, res, jac,
-              rot, pos, jraw, w_buf, o_buf, mot, tmp)
+    _residual(
+        q,
+        kinds,
+        axes,
+        rot_p,
+        pos_p,
+        rot_f,
+        pos_f,
+        t_rot,
+        t_pos,
+        rot_w,
+        True,
+        res,
+        jac,
+        rot,
+        pos,
+        jraw,
+        w_buf,
+        o_buf,
+        mot,
+        tmp,
+    )
     used = 1
     dist = 0.0
     for j in range(n):
@@ -551,9 +609,28 @@ def nullspace_toward(
             elif v > upper[j]:
                 v = upper[j]
             q_t[j] = v
-        _c, dp_t, dr_t = _residual(q_t, kinds, axes, rot_p, pos_p, rot_f, pos_f, t_rot, t_pos,
-                                   rot_w, True, res_t, jac_t, rot, pos, jraw, w_buf, o_buf, mot,
-                                   tmp)
+        _c, dp_t, dr_t = _residual(
+            q_t,
+            kinds,
+            axes,
+            rot_p,
+            pos_p,
+            rot_f,
+            pos_f,
+            t_rot,
+            t_pos,
+            rot_w,
+            True,
+            res_t,
+            jac_t,
+            rot,
+            pos,
+            jraw,
+            w_buf,
+            o_buf,
+            mot,
+            tmp,
+        )
         used += 1
         dist_t = 0.0
         for j in range(n):
@@ -696,24 +773,62 @@ class Polisher(NamedTuple):
         status = np.empty(k, dtype=np.int64)
         evals = np.empty(k, dtype=np.int64)
         used = lm_polish(
-            starts, self.kinds, self.axes, self.rot_p, self.pos_p, self.rot_f, self.pos_f,
-            self.t_rot, self.t_pos, self.lower, self.upper, self.wrap, self.rot_w,
-            self.kernel_tol_pos, self.kernel_tol_rot, self.max_iters, int(max_evals),
-            bool(stop_first), self.lam0, self.max_step, self.stall_rel, self.stall_iters,
-            out_q, dp, dr, status, evals,
+            starts,
+            self.kinds,
+            self.axes,
+            self.rot_p,
+            self.pos_p,
+            self.rot_f,
+            self.pos_f,
+            self.t_rot,
+            self.t_pos,
+            self.lower,
+            self.upper,
+            self.wrap,
+            self.rot_w,
+            self.kernel_tol_pos,
+            self.kernel_tol_rot,
+            self.max_iters,
+            int(max_evals),
+            bool(stop_first),
+            self.lam0,
+            self.max_step,
+            self.stall_rel,
+            self.stall_iters,
+            out_q,
+            dp,
+            dr,
+            status,
+            evals,
         )
         return PolishOutcome(out_q, dp, dr, status, evals, int(used))
 
-    def toward(self, q: FloatArray, q_ref: FloatArray, max_evals: int,
-               gain: float = 0.5) -> tuple[FloatArray, int]:
+    def toward(
+        self, q: FloatArray, q_ref: FloatArray, max_evals: int, gain: float = 0.5
+    ) -> tuple[FloatArray, int]:
         """Move the solution ``q`` along its self-motion towards ``q_ref`` (see
         :func:`nullspace_toward`); returns ``(q', evaluations used)``."""
         out = np.empty_like(q)
         used = nullspace_toward(
-            np.ascontiguousarray(q, dtype=float), np.ascontiguousarray(q_ref, dtype=float),
-            self.kinds, self.axes, self.rot_p, self.pos_p, self.rot_f, self.pos_f, self.t_rot,
-            self.t_pos, self.lower, self.upper, self.wrap, self.rot_w, self.kernel_tol_pos,
-            self.kernel_tol_rot, float(gain), int(max_evals), out,
+            np.ascontiguousarray(q, dtype=float),
+            np.ascontiguousarray(q_ref, dtype=float),
+            self.kinds,
+            self.axes,
+            self.rot_p,
+            self.pos_p,
+            self.rot_f,
+            self.pos_f,
+            self.t_rot,
+            self.t_pos,
+            self.lower,
+            self.upper,
+            self.wrap,
+            self.rot_w,
+            self.kernel_tol_pos,
+            self.kernel_tol_rot,
+            float(gain),
+            int(max_evals),
+            out,
         )
         return out, int(used)
 
@@ -725,9 +840,25 @@ class Polisher(NamedTuple):
         res = np.empty(6)
         jac = np.empty((6, n))
         _c, dp, dr = _residual(
-            q, self.kinds, self.axes, self.rot_p, self.pos_p, self.rot_f, self.pos_f, self.t_rot,
-            self.t_pos, self.rot_w, True, res, jac, np.empty((3, 3)), np.empty(3),
-            np.empty((6, n)), np.empty((n, 3)), np.empty((n, 3)), np.empty((3, 3)),
+            q,
+            self.kinds,
+            self.axes,
+            self.rot_p,
+            self.pos_p,
+            self.rot_f,
+            self.pos_f,
+            self.t_rot,
+            self.t_pos,
+            self.rot_w,
+            True,
+            res,
+            jac,
+            np.empty((3, 3)),
+            np.empty(3),
+            np.empty((6, n)),
+            np.empty((n, 3)),
+            np.empty((n, 3)),
+            np.empty((3, 3)),
             np.empty((3, 3)),
         )
         return res, jac, float(dp), float(dr)
@@ -742,8 +873,15 @@ def wrapped_distance(a: FloatArray, b: FloatArray, wrap: NDArray[np.bool_]) -> F
     return np.linalg.norm(d, axis=-1)
 
 
-def _check_params(pop_size: int, iterations: int, swarm_fraction: float, max_iters: int,
-                  prefer: str, nearest_starts: int, tol_margin: float) -> None:
+def _check_params(
+    pop_size: int,
+    iterations: int,
+    swarm_fraction: float,
+    max_iters: int,
+    prefer: str,
+    nearest_starts: int,
+    tol_margin: float,
+) -> None:
     if pop_size < 1 or iterations < 0 or max_iters < 2 or nearest_starts < 0:
         raise InvalidArgumentError(
             "need pop_size >= 1, iterations >= 0, max_iters >= 2 and nearest_starts >= 0; got "
@@ -871,14 +1009,24 @@ def run(
     problem = ev.problem
     if problem is None:
         raise InvalidArgumentError("solver 'swarm' needs an IK problem (it uses the Jacobian)")
-    _check_params(pop_size, iterations, swarm_fraction, max_iters, prefer, nearest_starts,
-                  tol_margin)
+    _check_params(
+        pop_size, iterations, swarm_fraction, max_iters, prefer, nearest_starts, tol_margin
+    )
     tol_pos, tol_rot = ev.tolerance if ev.tolerance is not None else (1e-5, 1e-5)
     if not ev.stops_on_success:  # the whole budget runs: polish down to round-off
         tol_pos, tol_rot = min(tol_pos, FULL_BUDGET_TOL), min(tol_rot, FULL_BUDGET_TOL)
     pol = Polisher.from_problem(
-        problem, ev.lower, ev.upper, tol_pos, tol_rot, wrap=ev.wrap_mask, tol_margin=tol_margin,
-        max_iters=max_iters, lam0=lam0, max_step=max_step, stall_rel=stall_rel,
+        problem,
+        ev.lower,
+        ev.upper,
+        tol_pos,
+        tol_rot,
+        wrap=ev.wrap_mask,
+        tol_margin=tol_margin,
+        max_iters=max_iters,
+        lam0=lam0,
+        max_step=max_step,
+        stall_rel=stall_rel,
         stall_iters=stall_iters,
     )
     # the se3 fitness is dp + w_rot·θ, which the kernel computes; any other fitness (or an
