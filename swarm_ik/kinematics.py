@@ -42,101 +42,6 @@ def _rodrigues(ax: FloatArray, angle: float, out: FloatArray) -> None:  # pragma
     out[2, 2] = t * z * z + c
 
 
-@numba.njit(cache=True)
-def _chain(
-    q: FloatArray,
-    kinds: NDArray[np.int64],
-    axes: FloatArray,
-    rot_p: FloatArray,
-    pos_p: FloatArray,
-    rot_f: FloatArray,
-    pos_f: FloatArray,
-    out_t: FloatArray,
-    out_j: FloatArray,
-    want_jac: bool,
-) -> None:  # pragma: no cover - compiled
-    pop, n = q.shape
-    rot = np.empty((3, 3))
-    tmp = np.empty((3, 3))
-    mot = np.empty((3, 3))
-    pos = np.empty(3)
-    w_all = np.empty((n, 3))
-    o_all = np.empty((n, 3))
-    for k in range(pop):
-        for a in range(3):
-            pos[a] = 0.0
-            for b in range(3):
-                rot[a, b] = 1.0 if a == b else 0.0
-        for j in range(n):
-            # placement of joint j in its parent: pos += rot @ pos_p[j]; rot = rot @ rot_p[j]
-            for a in range(3):
-                pos[a] += (
-                    rot[a, 0] * pos_p[j, 0] + rot[a, 1] * pos_p[j, 1] + rot[a, 2] * pos_p[j, 2]
-                )
-            for a in range(3):
-                for b in range(3):
-                    tmp[a, b] = (
-                        rot[a, 0] * rot_p[j, 0, b]
-                        + rot[a, 1] * rot_p[j, 1, b]
-                        + rot[a, 2] * rot_p[j, 2, b]
-                    )
-            for a in range(3):
-                for b in range(3):
-                    rot[a, b] = tmp[a, b]
-            if want_jac:
-                for a in range(3):
-                    w_all[j, a] = (
-                        rot[a, 0] * axes[j, 0] + rot[a, 1] * axes[j, 1] + rot[a, 2] * axes[j, 2]
-                    )
-                    o_all[j, a] = pos[a]
-            qj = q[k, j]
-            if kinds[j] == PRISMATIC:
-                for a in range(3):
-                    pos[a] += qj * (
-                        rot[a, 0] * axes[j, 0] + rot[a, 1] * axes[j, 1] + rot[a, 2] * axes[j, 2]
-                    )
-            else:
-                _rodrigues(axes[j], qj, mot)
-                for a in range(3):
-                    for b in range(3):
-                        tmp[a, b] = (
-                            rot[a, 0] * mot[0, b] + rot[a, 1] * mot[1, b] + rot[a, 2] * mot[2, b]
-                        )
-                for a in range(3):
-                    for b in range(3):
-                        rot[a, b] = tmp[a, b]
-        # end-effector frame in the last joint's frame
-        for a in range(3):
-            out_t[k, a, 3] = (
-                pos[a] + rot[a, 0] * pos_f[0] + rot[a, 1] * pos_f[1] + rot[a, 2] * pos_f[2]
-            )
-            for b in range(3):
-                out_t[k, a, b] = (
-                    rot[a, 0] * rot_f[0, b] + rot[a, 1] * rot_f[1, b] + rot[a, 2] * rot_f[2, b]
-                )
-        out_t[k, 3, 0] = 0.0
-        out_t[k, 3, 1] = 0.0
-        out_t[k, 3, 2] = 0.0
-        out_t[k, 3, 3] = 1.0
-        if want_jac:
-            for j in range(n):
-                if kinds[j] == PRISMATIC:
-                    for a in range(3):
-                        out_j[k, a, j] = w_all[j, a]
-                        out_j[k, 3 + a, j] = 0.0
-                else:
-                    dx = out_t[k, 0, 3] - o_all[j, 0]
-                    dy = out_t[k, 1, 3] - o_all[j, 1]
-                    dz = out_t[k, 2, 3] - o_all[j, 2]
-                    wx, wy, wz = w_all[j, 0], w_all[j, 1], w_all[j, 2]
-                    out_j[k, 0, j] = wy * dz - wz * dy
-                    out_j[k, 1, j] = wz * dx - wx * dz
-                    out_j[k, 2, j] = wx * dy - wy * dx
-                    out_j[k, 3, j] = wx
-                    out_j[k, 4, j] = wy
-                    out_j[k, 5, j] = wz
-
-
 @dataclass(frozen=True)
 class ChainKinematics:
     """A serial chain as arrays, with batched FK and Jacobian.
@@ -335,3 +240,42 @@ def fk_jac_one(
                 jac_out[3, j] = wx
                 jac_out[4, j] = wy
                 jac_out[5, j] = wz
+
+
+@numba.njit(cache=True)
+def _chain(
+    q: FloatArray,
+    kinds: NDArray[np.int64],
+    axes: FloatArray,
+    rot_p: FloatArray,
+    pos_p: FloatArray,
+    rot_f: FloatArray,
+    pos_f: FloatArray,
+    out_t: FloatArray,
+    out_j: FloatArray,
+    want_jac: bool,
+) -> None:  # pragma: no cover - compiled
+    """Batched FK (and Jacobian): :func:`fk_jac_one` for each row of ``q`` ``(pop, nq)``."""
+    pop, n = q.shape
+    rot = np.empty((3, 3))
+    pos = np.empty(3)
+    tmp = np.empty((3, 3))
+    mot = np.empty((3, 3))
+    w_buf = np.empty((n, 3))
+    o_buf = np.empty((n, 3))
+    jac = np.empty((6, n))
+    for k in range(pop):
+        fk_jac_one(
+            q[k], kinds, axes, rot_p, pos_p, rot_f, pos_f,
+            rot, pos, jac, w_buf, o_buf, mot, tmp, want_jac,
+        )  # fmt: skip
+        for a in range(3):
+            out_t[k, a, 3] = pos[a]
+            for b in range(3):
+                out_t[k, a, b] = rot[a, b]
+            out_t[k, 3, a] = 0.0
+        out_t[k, 3, 3] = 1.0
+        if want_jac:
+            for a in range(6):
+                for j in range(n):
+                    out_j[k, a, j] = jac[a, j]
