@@ -42,6 +42,19 @@ def _rodrigues(ax: FloatArray, angle: float, out: FloatArray) -> None:  # pragma
     out[2, 2] = t * z * z + c
 
 
+def _rotation_z_to(axis: FloatArray) -> FloatArray:
+    """A rotation matrix taking the z axis onto the unit vector ``axis``."""
+    a = np.asarray(axis, dtype=float) / np.linalg.norm(axis)
+    if np.array_equal(a, [0.0, 0.0, 1.0]):
+        return np.eye(3)
+    if a[2] < 0.0:  # a half turn about x first keeps the formula below well conditioned
+        half = np.diag([1.0, -1.0, -1.0])
+        return half @ _rotation_z_to(half @ a)
+    v = np.cross([0.0, 0.0, 1.0], a)  # sin θ · unit rotation axis
+    k = np.array([[0.0, -v[2], v[1]], [v[2], 0.0, -v[0]], [-v[1], v[0], 0.0]])
+    return np.eye(3) + k + k @ k / (1.0 + float(a[2]))
+
+
 @dataclass(frozen=True)
 class ChainKinematics:
     """A serial chain as arrays, with batched FK and Jacobian.
@@ -61,6 +74,50 @@ class ChainKinematics:
     pos_p: FloatArray
     rot_f: FloatArray
     pos_f: FloatArray
+
+    @classmethod
+    def canonical(
+        cls,
+        kinds: NDArray[np.int64],
+        axes: FloatArray,
+        rot_p: FloatArray,
+        pos_p: FloatArray,
+        rot_f: FloatArray,
+        pos_f: FloatArray,
+    ) -> ChainKinematics:
+        """The same chain with every joint axis turned onto z (so FK needs no Rodrigues).
+
+        With ``B_j`` a rotation taking z onto axis ``a_j``, the motion about (along) ``a_j`` is
+        ``B_j · motion_z · B_jᵀ``; the ``B``'s are folded into the placements:
+        ``R'_j = B_{j-1}ᵀ R_j B_j``, ``p'_j = B_{j-1}ᵀ p_j`` and the end-effector frame
+        ``(B_nᵀ R_f, B_nᵀ p_f)``.  Poses and Jacobians are unchanged (joint origins and world
+        axes are the same); each revolute step costs a 2-column update instead of a 3x3
+        product.
+
+        Args:
+            kinds, axes, rot_p, pos_p, rot_f, pos_f: As the attributes, any unit axes.
+        """
+        n = kinds.shape[0]
+        basis = np.empty((n, 3, 3))
+        for j in range(n):
+            basis[j] = _rotation_z_to(axes[j])
+        new_rot = np.empty((n, 3, 3))
+        new_pos = np.empty((n, 3))
+        prev = np.eye(3)
+        for j in range(n):
+            new_rot[j] = prev.T @ rot_p[j] @ basis[j]
+            new_pos[j] = prev.T @ pos_p[j]
+            prev = basis[j]
+        z = np.zeros((n, 3))
+        z[:, 2] = 1.0
+        return cls(
+            kinds=np.ascontiguousarray(kinds, dtype=np.int64),
+            axes=z,
+            rot_p=np.ascontiguousarray(new_rot),
+            pos_p=np.ascontiguousarray(new_pos),
+            rot_f=np.ascontiguousarray(prev.T @ rot_f),
+            pos_f=np.ascontiguousarray(prev.T @ pos_f),
+        )
 
     @property
     def nq(self) -> int:
@@ -204,6 +261,15 @@ def fk_jac_one(
                 pos[a] += qj * (
                     rot[a, 0] * axes[j, 0] + rot[a, 1] * axes[j, 1] + rot[a, 2] * axes[j, 2]
                 )
+        elif axes[j, 2] == 1.0 and axes[j, 0] == 0.0 and axes[j, 1] == 0.0:
+            # rotation about z (every joint of a canonical chain): rot <- rot @ Rz(qj)
+            c = np.cos(qj)
+            s = np.sin(qj)
+            for a in range(3):
+                r0 = rot[a, 0]
+                r1 = rot[a, 1]
+                rot[a, 0] = c * r0 + s * r1
+                rot[a, 1] = c * r1 - s * r0
         else:
             _rodrigues(axes[j], qj, mot)
             for a in range(3):

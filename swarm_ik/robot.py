@@ -337,13 +337,13 @@ class RobotModel:
         frame = reduced.frames[rfid]
         if frame.parentJoint != reduced.njoints - 1:
             raise RobotModelError(f"{p}: frame {ee_frame!r} is not at the end of the chain")
-        chain = ChainKinematics(
+        chain = ChainKinematics.canonical(
             kinds=np.array(kinds, dtype=np.int64),
-            axes=np.ascontiguousarray(axes, dtype=float),
-            rot_p=np.ascontiguousarray(rot_p, dtype=float),
-            pos_p=np.ascontiguousarray(pos_p, dtype=float),
-            rot_f=np.ascontiguousarray(frame.placement.rotation, dtype=float),
-            pos_f=np.ascontiguousarray(frame.placement.translation, dtype=float),
+            axes=np.asarray(axes, dtype=float),
+            rot_p=np.asarray(rot_p, dtype=float),
+            pos_p=np.asarray(pos_p, dtype=float),
+            rot_f=np.asarray(frame.placement.rotation, dtype=float),
+            pos_f=np.asarray(frame.placement.translation, dtype=float),
         )
         return cls(
             name=full.name or p.stem,
