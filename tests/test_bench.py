@@ -22,15 +22,25 @@ from swarm_ik.errors import InvalidArgumentError, UnknownNameError
 
 def tiny_specs(n: int = 5, experiment: str = "t-func") -> list[RunSpec]:
     """``n`` GWO runs on Hartmann-3 with 6 wolves and 8 iterations (milliseconds each)."""
-    return [RunSpec(experiment, "F4", "min", "gwo", seed, "function", None, 6, 8)
-            for seed in range(n)]
+    return [
+        RunSpec(experiment, "F4", "min", "gwo", seed, "function", None, 6, 8) for seed in range(n)
+    ]
 
 
 def ik_spec(get_robot, solver: str = "dls", seed: int = 0) -> RunSpec:
     robot = get_robot("yumi_left")
     target = robot.fk(np.array([0.3, -0.8, 0.4, 0.6, -0.5, 1.2, 0.7]))
-    return RunSpec("t-ik", "yumi_left", "pose0", solver, seed, "se3",
-                   tuple(float(v) for v in target.ravel()), iterations=60, max_evals=60)
+    return RunSpec(
+        "t-ik",
+        "yumi_left",
+        "pose0",
+        solver,
+        seed,
+        "se3",
+        tuple(float(v) for v in target.ravel()),
+        iterations=60,
+        max_evals=60,
+    )
 
 
 def comparable(rows: list[dict]) -> dict[str, tuple]:
@@ -76,12 +86,12 @@ def test_ik_row_errors_are_pinocchio_checked(tmp_path: Path, get_robot) -> None:
     assert set(row) == set(RUN_FIELDS)
     robot = get_robot("yumi_left")
     problem = swarm_ik.IKProblem(robot, np.array(spec.target).reshape(4, 4))
-    res = swarm_ik.solve(problem, "dls", seed=0, iterations=60, max_evals=60,
-                         stop_on_success=False)
+    res = swarm_ik.solve(problem, "dls", seed=0, iterations=60, max_evals=60, stop_on_success=False)
     assert row["fitness"] == res.fitness
     assert row["position_error"] == res.position_error
-    assert row["success"] == (row["position_error"] <= 1e-5 and row["rotation_error"] <= 1e-5
-                              and row["within_limits"])
+    assert row["success"] == (
+        row["position_error"] <= 1e-5 and row["rotation_error"] <= 1e-5 and row["within_limits"]
+    )
     assert row["n_evals"] <= 60
     assert outcome.history is not None and outcome.history["n_iter"] == len(res.history)
 
@@ -143,7 +153,8 @@ def test_resume_after_killed_process(tmp_path: Path) -> None:
     specs = tiny_specs(5)
     (tmp_path / "specs.pkl").write_bytes(pickle.dumps(specs))
     script = tmp_path / "killed.py"
-    script.write_text(textwrap.dedent(f"""
+    script.write_text(
+        textwrap.dedent(f"""
         import os, pickle, signal
         from swarm_ik.bench import common
 
@@ -158,7 +169,8 @@ def test_resume_after_killed_process(tmp_path: Path) -> None:
 
         common.execute(specs, {str(tmp_path / "out")!r}, jobs=1, progress=False, worker=worker,
                        initializer=None)
-    """))
+    """)
+    )
     proc = subprocess.run([sys.executable, str(script)], capture_output=True, timeout=120)
     assert proc.returncode == -9, proc.stderr.decode()
     path = common.csv_path(tmp_path / "out", "t-func")
@@ -172,8 +184,9 @@ def test_resume_after_killed_process(tmp_path: Path) -> None:
     after = common.read_rows(path)
     assert sorted(r["key"] for r in after) == sorted(s.key for s in specs)
     assert "torn" not in path.read_text()
-    assert {k: v for k, v in comparable(after).items() if k in comparable(before)} == \
-        comparable(before)
+    assert {k: v for k, v in comparable(after).items() if k in comparable(before)} == comparable(
+        before
+    )
 
 
 def test_results_do_not_depend_on_jobs(tmp_path: Path) -> None:
@@ -219,17 +232,33 @@ def test_verdict_rule() -> None:
 
 
 def _rows(solver: str, values: list[float], **extra) -> list[dict]:
-    return [{"key": f"{solver}{i}", "solver": solver, "fitness": v, "success": False,
-             "position_error": 1.0, **extra} for i, v in enumerate(values)]
+    return [
+        {
+            "key": f"{solver}{i}",
+            "solver": solver,
+            "fitness": v,
+            "success": False,
+            "position_error": 1.0,
+            **extra,
+        }
+        for i, v in enumerate(values)
+    ]
 
 
 def test_report_puts_published_numbers_beside_ours() -> None:
     table = published.P000_TABLE2
-    rows = _rows("foa", [5.2, 5.3, 5.4]) + _rows("hlfoa", [1e-15, 2e-15, 3e-16]) \
+    rows = (
+        _rows("foa", [5.2, 5.3, 5.4])
+        + _rows("hlfoa", [1e-15, 2e-15, 3e-16])
         + _rows("dls", [1e-16])
+    )
     hl = Headline()
-    md = render_comparison(Comparison("t", lambda r: True, ("foa", "hlfoa", "dls"), table,
-                                      floor=1e-12), rows, hl, "exp")
+    md = render_comparison(
+        Comparison("t", lambda r: True, ("foa", "hlfoa", "dls"), table, floor=1e-12),
+        rows,
+        hl,
+        "exp",
+    )
     head = next(line for line in md.splitlines() if line.startswith("| algorithm"))
     cols = [c.strip() for c in head.strip("|").split("|")]
     assert cols.index("mean (paper)") == cols.index("mean (ours)") + 1
@@ -244,9 +273,15 @@ def test_report_puts_published_numbers_beside_ours() -> None:
 
 def test_unattainable_published_value_is_worse_with_reason() -> None:
     rows = _rows("gwo", [2.2, 2.3])
-    comp = Comparison("t", lambda r: True, ("gwo",), published.P003_TABLE4,
-                      stats=("mean", "best"), attainable=2.1,
-                      why_worse=lambda s, st: "unreachable within the stated limits")
+    comp = Comparison(
+        "t",
+        lambda r: True,
+        ("gwo",),
+        published.P003_TABLE4,
+        stats=("mean", "best"),
+        attainable=2.1,
+        why_worse=lambda s, st: "unreachable within the stated limits",
+    )
     line = next(x for x in render_comparison(comp, rows).splitlines() if "`gwo`" in x)
     assert "worse" in line and "unreachable" in line  # ratio 5.2 alone would say reproduced
 
@@ -294,8 +329,20 @@ def test_configs_and_specs() -> None:
 def test_cli_runs_an_experiment_and_writes_report(tmp_path: Path) -> None:
     from swarm_ik.cli import main
 
-    argv = ["bench", "paper", "--quick", "--experiments", "003-table3", "--runs", "1",
-            "--jobs", "1", "--out", str(tmp_path), "--no-progress"]
+    argv = [
+        "bench",
+        "paper",
+        "--quick",
+        "--experiments",
+        "003-table3",
+        "--runs",
+        "1",
+        "--jobs",
+        "1",
+        "--out",
+        str(tmp_path),
+        "--no-progress",
+    ]
     assert main(argv) == 0
     rows = common.read_rows(common.csv_path(tmp_path, "003-table3"))
     assert len(rows) == 4 * 2  # F1..F4 x {gwo, mgwo}
@@ -324,8 +371,10 @@ def test_resample_is_a_step_function_of_the_stored_points() -> None:
 
     x, f = plots.run_curve({"n_iter": 4, "n_evals": 40, "it": [0, 1, 3], "f": [3.0, None, 1.0]})
     assert x.tolist() == [10.0, 20.0, 40.0] and np.isnan(f[1])
-    out = plots.resample([(np.array([1.0, 2.0, 3.0]), np.array([3.0, 2.0, 1.0]))],
-                         np.array([0.5, 1.0, 2.5, 3.0, 4.0]))
+    out = plots.resample(
+        [(np.array([1.0, 2.0, 3.0]), np.array([3.0, 2.0, 1.0]))],
+        np.array([0.5, 1.0, 2.5, 3.0, 4.0]),
+    )
     assert np.isnan(out[0, 0]) and out[0, 1:].tolist() == [3.0, 2.0, 1.0, 1.0]
 
 
@@ -334,5 +383,136 @@ def test_missing_matplotlib_is_reported_by_name(monkeypatch, tmp_path: Path) -> 
 
     monkeypatch.setitem(sys.modules, "matplotlib.figure", None)  # import fails
     with pytest.raises(plots.PlotExtraMissingError, match=r"swarm_ik\[plot\]"):
-        plots.boxes(tmp_path / "x.png", _rows("gwo", [1.0]), [("p", lambda r: True, 0.0)],
-                    ["gwo"])
+        plots.boxes(tmp_path / "x.png", _rows("gwo", [1.0]), [("p", lambda r: True, 0.0)], ["gwo"])
+
+
+# --------------------------------------------------------------------------- --scheduler (Dask)
+@pytest.fixture(scope="module")
+def dask_client():
+    """An embedded LocalCluster of two worker processes, shared by the Dask tests below."""
+    pytest.importorskip("distributed")
+    from swarm_ik import distributed
+
+    with distributed.connect("local", n_workers=2) as client:
+        yield client
+
+
+def test_execute_on_dask_equals_the_inline_run_and_resumes(
+    tmp_path: Path, get_robot, dask_client
+) -> None:
+    specs = tiny_specs(5) + [
+        ik_spec(get_robot, s, seed) for s in ("dls", "swarm") for seed in (0, 1)
+    ]
+    common.execute(specs, tmp_path / "ref", jobs=1, progress=False)
+    # batches of 2 runs (1 per worker); the 8th run fails on its worker: the 3 batches before
+    # it are on disk, the batch holding it is lost, nothing after it ran
+    bad = RunSpec("t-func", "F4", "min", "no-such-solver", 0, "function", None, 6, 8)
+    with pytest.raises(UnknownNameError, match="no-such-solver"):
+        common.execute(
+            specs[:7] + [bad] + specs[7:],
+            tmp_path / "dask",
+            progress=False,
+            client=dask_client,
+            batch_per_worker=1,
+        )
+    done = {
+        r["key"]
+        for e in ("t-func", "t-ik")
+        for r in common.read_rows(common.csv_path(tmp_path / "dask", e))
+    }
+    assert done == {s.key for s in specs[:6]}
+    summary = common.execute(
+        specs, tmp_path / "dask", progress=False, client=dask_client, batch_per_worker=2
+    )
+    assert (summary.skipped, summary.new, summary.interrupted) == (6, 3, False)
+    for e in ("t-func", "t-ik"):
+        ref = common.read_rows(common.csv_path(tmp_path / "ref", e))
+        got = common.read_rows(common.csv_path(tmp_path / "dask", e))
+        assert comparable(got) == comparable(ref)
+        hist_ref = common.read_histories(common.history_path(tmp_path / "ref", e))
+        assert common.read_histories(common.history_path(tmp_path / "dask", e)) == hist_ref
+
+
+def test_bench_paper_scheduler_option(tmp_path: Path, dask_client) -> None:
+    import argparse
+
+    parser = argparse.ArgumentParser()
+    paper.add_arguments(parser)
+    base = ["--quick", "--experiments", "003-table3", "--runs", "2", "--no-progress", "--no-plots"]
+    assert parser.parse_args(base).scheduler == "none"  # default: the process pool
+    with pytest.raises(InvalidArgumentError, match="'local'.*tcp://"):
+        paper.config_from_args(parser.parse_args([*base, "--scheduler", "127.0.0.1:8786"]))
+    assert paper.run(parser.parse_args([*base, "--jobs", "1", "--out", str(tmp_path / "a")])) == 0
+    args = parser.parse_args([*base, "--out", str(tmp_path / "b")])
+    args.scheduler = dask_client  # what --scheduler local / tcp://… connects to
+    assert paper.run(args) == 0
+    a = common.read_rows(common.csv_path(tmp_path / "a", "003-table3"))
+    b = common.read_rows(common.csv_path(tmp_path / "b", "003-table3"))
+    assert len(a) == 4 * 2 * 2 and comparable(a) == comparable(b)
+    assert "2 Dask workers" in (tmp_path / "b" / "report.md").read_text()
+
+
+def test_bench_ik_scheduler_runs_chunks_on_workers(tmp_path: Path, dask_client) -> None:
+    import argparse
+
+    from swarm_ik.bench import ik
+
+    parser = argparse.ArgumentParser()
+    ik.add_arguments(parser)
+    argv = [
+        "--robots",
+        "ur5",
+        "--n",
+        "4",
+        "--n-other",
+        "2",
+        "--budgets-ms",
+        "50",
+        "--full-budget-ms",
+        "50",
+        "--solvers",
+        "swarm",
+        "dls",
+        "--n-precise",
+        "2",
+        "--many-robots",
+        "ur5",
+        "--n-many",
+        "1",
+        "--seed",
+        "3",
+    ]
+    assert parser.parse_args(argv).scheduler == "none"  # default: in process, sequential
+    assert ik.run(parser.parse_args([*argv, "--out", str(tmp_path / "a")])) == 0
+    args = parser.parse_args([*argv, "--out", str(tmp_path / "b")])
+    args.scheduler = dask_client
+    assert ik.run(args) == 0
+    chunks = ik.dask_chunks(
+        ik.Plan(("ur5",), ("swarm", "dls"), (50.0,), 1e-5, 1e-10, 3, 4, 2, 50.0, 2, ("ur5",), 1)
+    )
+    assert [(c.kind, c.solver) for c in chunks] == [
+        ("runs", "swarm"),
+        ("runs", "dls"),
+        ("precise", "swarm"),
+        ("precise", "dls"),
+        ("many", ""),
+    ]
+    rows = {}
+    for d in ("a", "b"):
+        with open(tmp_path / d / "runs.csv", newline="") as fh:
+            rows[d] = list(csv.DictReader(fh))
+    key = ("robot", "target_id", "solver", "budget_ms", "tol", "seed")
+    assert [tuple(r[k] for k in key) for r in rows["b"]] == [
+        tuple(r[k] for k in key) for r in rows["a"]
+    ]  # same runs, in the order of the in-process run
+    assert len(rows["a"]) == 2 * 4 + 2 * 2
+    same = ("success", "solver_says", "position_error", "rotation_error", "n_evals")
+    for ra, rb in zip(rows["a"], rows["b"], strict=True):
+        if ra["solver"] == "swarm":  # deterministic (done long before the 50 ms budget)
+            assert tuple(ra[k] for k in same) == tuple(rb[k] for k in same)
+    with open(tmp_path / "b" / "many.csv", newline="") as fh:
+        many = list(csv.DictReader(fh))
+    assert [r["method"] for r in many] == ["swarm_ik.solve_many", "dls restarts"]
+    summary_b = (tmp_path / "b" / "summary.md").read_text()
+    assert "Run on Dask" in summary_b and "share the machine" in summary_b
+    assert "Run on Dask" not in (tmp_path / "a" / "summary.md").read_text()

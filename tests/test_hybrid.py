@@ -33,8 +33,23 @@ def test_single_pose_kernel_equals_batched_fk_and_jacobian(name: str) -> None:
     n = r.nq
     for i in range(5):
         rot, pos, jac = np.empty((3, 3)), np.empty(3), np.empty((6, n))
-        fk_jac_one(q[i], c.kinds, c.axes, c.rot_p, c.pos_p, c.rot_f, c.pos_f, rot, pos, jac,
-                   np.empty((n, 3)), np.empty((n, 3)), np.empty((3, 3)), np.empty((3, 3)), True)
+        fk_jac_one(
+            q[i],
+            c.kinds,
+            c.axes,
+            c.rot_p,
+            c.pos_p,
+            c.rot_f,
+            c.pos_f,
+            rot,
+            pos,
+            jac,
+            np.empty((n, 3)),
+            np.empty((n, 3)),
+            np.empty((3, 3)),
+            np.empty((3, 3)),
+            True,
+        )
         np.testing.assert_allclose(rot, poses[i, :3, :3], atol=1e-15)
         np.testing.assert_allclose(pos, poses[i, :3, 3], atol=1e-15)
         np.testing.assert_allclose(jac, jacs[i], atol=1e-15)
@@ -44,8 +59,18 @@ def test_single_pose_kernel_equals_batched_fk_and_jacobian(name: str) -> None:
 def test_log3_matches_pinocchio_near_zero_generic_and_near_pi() -> None:
     rng = np.random.default_rng(4)
     out = np.empty(3)
-    for angle in [0.0, 1e-12, 1e-7, 1e-3, 0.5, 2.0, np.pi - 1e-2, np.pi - 1e-4, np.pi - 1e-9,
-                  np.pi]:
+    for angle in [
+        0.0,
+        1e-12,
+        1e-7,
+        1e-3,
+        0.5,
+        2.0,
+        np.pi - 1e-2,
+        np.pi - 1e-4,
+        np.pi - 1e-9,
+        np.pi,
+    ]:
         for _ in range(5):
             axis = rng.normal(size=3)
             axis /= np.linalg.norm(axis)
@@ -61,8 +86,13 @@ def test_log3_matches_pinocchio_near_zero_generic_and_near_pi() -> None:
 
 @pytest.mark.parametrize(
     "name,position_only",
-    [("panda", False), ("kinova", False), ("loading_manipulator_long", False),
-     ("yumi_left", False), ("ur5", True)],
+    [
+        ("panda", False),
+        ("kinova", False),
+        ("loading_manipulator_long", False),
+        ("yumi_left", False),
+        ("ur5", True),
+    ],
 )
 def test_residual_jacobian_matches_central_differences(name: str, position_only: bool) -> None:
     """The Jacobian the polish uses, ``[J_v; J_r⁻¹(φ) J_ω]`` with ``r(q+δ) ≈ r − J δ``,
@@ -236,8 +266,16 @@ def test_prefer_nearest_returns_the_known_solution_closest_to_q0(planar2_urdf: s
         assert res.success
         np.testing.assert_allclose(res.q, near, atol=1e-4)
     # starts from which the plain polish falls into the farther solution's basin
-    hard = np.array([[1.599, 0.079], [2.364, 0.066], [0.399, -0.096], [2.045, 0.148],
-                     [0.162, -0.221], [2.252, 0.257]])
+    hard = np.array(
+        [
+            [1.599, 0.079],
+            [2.364, 0.066],
+            [0.399, -0.096],
+            [2.045, 0.148],
+            [0.162, -0.221],
+            [2.252, 0.257],
+        ]
+    )
     plain_farther = 0
     for i, q0 in enumerate(hard):
         near = qa if np.linalg.norm(q0 - qa) < np.linalg.norm(q0 - qb) else qb
@@ -279,11 +317,31 @@ def test_benchmark_code_path_on_a_small_n(tmp_path: Path) -> None:
 
     parser = argparse.ArgumentParser()
     ik.add_arguments(parser)
-    args = parser.parse_args([
-        "--quick", "--robots", "ur5", "--n", "4", "--n-other", "2", "--budgets-ms", "5",
-        "--solvers", "swarm", "dls", "gwo", "--n-precise", "3", "--many-robots", "yumi_left",
-        "--n-many", "1", "--out", str(tmp_path),
-    ])
+    args = parser.parse_args(
+        [
+            "--quick",
+            "--robots",
+            "ur5",
+            "--n",
+            "4",
+            "--n-other",
+            "2",
+            "--budgets-ms",
+            "5",
+            "--solvers",
+            "swarm",
+            "dls",
+            "gwo",
+            "--n-precise",
+            "3",
+            "--many-robots",
+            "yumi_left",
+            "--n-many",
+            "1",
+            "--out",
+            str(tmp_path),
+        ]
+    )
     assert ik.run(args) == 0
     with open(tmp_path / "runs.csv", newline="") as fh:
         rows = list(csv.DictReader(fh))

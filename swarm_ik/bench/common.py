@@ -2,9 +2,11 @@
 
 A benchmark is a list of :class:`RunSpec` (one independent, seeded run each).  :func:`execute`
 runs the ones whose :attr:`RunSpec.key` is not yet in the experiment's CSV, over a process pool
-(``jobs``), and **appends one row per finished run and flushes it at once**, so an interrupted
-benchmark (Ctrl-C, a killed process) loses only the runs in flight; running it again skips the
-rows already there.  Each run's best-fitness-per-iteration history goes to a JSON-lines file
+(``jobs``) or on Dask workers (``client``, through :func:`swarm_ik.distributed.map_chunks`, in
+batches of a few runs per worker), and **appends one row per finished run and flushes it at
+once** (on Dask: the rows of each batch as the batch comes back), so an interrupted benchmark
+(Ctrl-C, a killed process) loses only the runs in flight; running it again skips the rows
+already there.  Each run's best-fitness-per-iteration history goes to a JSON-lines file
 beside the CSV (written *before* its CSV row, so every row has its history); plots read these
 files, never rerun anything.
 
@@ -56,9 +58,23 @@ import numpy as np
 from swarm_ik.errors import InvalidArgumentError
 
 RUN_FIELDS = (
-    "key", "experiment", "robot", "target_id", "solver", "seed", "fitness_name", "pop_size",
-    "iterations", "max_evals", "fitness", "position_error", "rotation_error", "n_evals",
-    "time_s", "success", "within_limits",
+    "key",
+    "experiment",
+    "robot",
+    "target_id",
+    "solver",
+    "seed",
+    "fitness_name",
+    "pop_size",
+    "iterations",
+    "max_evals",
+    "fitness",
+    "position_error",
+    "rotation_error",
+    "n_evals",
+    "time_s",
+    "success",
+    "within_limits",
 )
 """Columns of every experiment CSV, in order."""
 
@@ -68,6 +84,9 @@ _BOOL_FIELDS = frozenset({"success", "within_limits"})
 
 HISTORY_POINTS = 120
 """Most points kept of a run's history (evenly spaced over the iterations, last included)."""
+
+DASK_BATCH_PER_WORKER = 8
+"""Runs per Dask worker submitted at a time by :func:`execute` (rows are written per batch)."""
 
 FUNCTION_SUCCESS_GAP = 1e-8
 """A benchmark-function run counts as a success when ``f − f_min`` is at most this."""
@@ -120,9 +139,15 @@ class RunSpec:
         """Unique key of the run within an output folder (settings included, so runs made
         with other settings are never mistaken for this one)."""
         parts = [
-            self.experiment, self.robot, self.target_id, self.solver, self.fitness_name,
-            f"pop={_blank(self.pop_size)}", f"it={_blank(self.iterations)}",
-            f"budget={_blank(self.max_evals)}", f"stop={int(self.stop_on_success)}",
+            self.experiment,
+            self.robot,
+            self.target_id,
+            self.solver,
+            self.fitness_name,
+            f"pop={_blank(self.pop_size)}",
+            f"it={_blank(self.iterations)}",
+            f"budget={_blank(self.max_evals)}",
+            f"stop={int(self.stop_on_success)}",
             f"seed={self.seed}",
         ]
         return "|".join(parts)
@@ -179,7 +204,12 @@ def run_one(spec: RunSpec) -> RunOutcome:
         fn = get_function(spec.robot)
         lo, hi = fn.bounds
         res = swarm_ik.minimize(
-            fn.function, lo, hi, spec.solver, seed=spec.seed, max_evals=spec.max_evals,
+            fn.function,
+            lo,
+            hi,
+            spec.solver,
+            seed=spec.seed,
+            max_evals=spec.max_evals,
             **spec.solver_params(),
         )
         fit, hist, n_evals, t = float(res.fun), res.history, res.n_evals, res.time_s
@@ -193,19 +223,35 @@ def run_one(spec: RunSpec) -> RunOutcome:
         target = np.asarray(spec.target, dtype=float).reshape(4, 4)
         problem = swarm_ik.IKProblem(robot, target, spec.fitness_name, orth_tol=spec.orth_tol)
         r = swarm_ik.solve(
-            problem, spec.solver, seed=spec.seed, max_evals=spec.max_evals,
-            tol_pos=spec.tol_pos, tol_rot=spec.tol_rot, stop_on_success=spec.stop_on_success,
+            problem,
+            spec.solver,
+            seed=spec.seed,
+            max_evals=spec.max_evals,
+            tol_pos=spec.tol_pos,
+            tol_rot=spec.tol_rot,
+            stop_on_success=spec.stop_on_success,
             **spec.solver_params(),
         )
         fit, hist, n_evals, t = r.fitness, r.history, r.n_evals, r.time_s
         pos, rot, success, within = r.position_error, r.rotation_error, r.success, r.within_limits
     row = {
-        "key": spec.key, "experiment": spec.experiment, "robot": spec.robot,
-        "target_id": spec.target_id, "solver": spec.solver, "seed": spec.seed,
-        "fitness_name": spec.fitness_name, "pop_size": spec.pop_size,
-        "iterations": spec.iterations, "max_evals": spec.max_evals, "fitness": float(fit),
-        "position_error": float(pos), "rotation_error": float(rot), "n_evals": int(n_evals),
-        "time_s": float(t), "success": bool(success), "within_limits": bool(within),
+        "key": spec.key,
+        "experiment": spec.experiment,
+        "robot": spec.robot,
+        "target_id": spec.target_id,
+        "solver": spec.solver,
+        "seed": spec.seed,
+        "fitness_name": spec.fitness_name,
+        "pop_size": spec.pop_size,
+        "iterations": spec.iterations,
+        "max_evals": spec.max_evals,
+        "fitness": float(fit),
+        "position_error": float(pos),
+        "rotation_error": float(rot),
+        "n_evals": int(n_evals),
+        "time_s": float(t),
+        "success": bool(success),
+        "within_limits": bool(within),
     }
     history = compact_history(hist, int(n_evals)) if spec.keep_history else None
     return RunOutcome(row, history)
@@ -227,8 +273,9 @@ def warm_up() -> None:
         pass
 
 
-def compact_history(history: Sequence[float] | np.ndarray, n_evals: int,
-                    max_points: int = HISTORY_POINTS) -> dict[str, Any]:
+def compact_history(
+    history: Sequence[float] | np.ndarray, n_evals: int, max_points: int = HISTORY_POINTS
+) -> dict[str, Any]:
     """A run's best-fitness history, thinned for storage.
 
     Args:
@@ -244,7 +291,8 @@ def compact_history(history: Sequence[float] | np.ndarray, n_evals: int,
     n = int(h.shape[0])
     idx: list[int] = (
         np.unique(np.round(np.linspace(0, n - 1, min(n, max_points))).astype(int)).tolist()
-        if n else []
+        if n
+        else []
     )
     vals = [float(f"{h[i]:.5g}") if np.isfinite(h[i]) else None for i in idx]
     return {"n_iter": n, "n_evals": int(n_evals), "it": [int(i) for i in idx], "f": vals}
@@ -418,28 +466,39 @@ def execute(
     desc: str = "runs",
     worker: Callable[[RunSpec], RunOutcome] = run_one,
     initializer: Callable[[], None] | None = warm_up,
+    client: Any = None,
+    batch_per_worker: int = DASK_BATCH_PER_WORKER,
 ) -> ExecSummary:
     """Run the specs not yet in the CSV files under ``out``, appending rows as they finish.
 
     Args:
         specs: The runs (any experiments; each goes to its experiment's CSV).
         out: Output folder.
-        jobs: Worker processes (1: run inline in this process).
+        jobs: Worker processes (1: run inline in this process); ignored with ``client``.
         progress: Show a ``tqdm`` progress bar.
         desc: Label of the progress bar.
-        worker: The function running one spec (must be picklable when ``jobs > 1``).
-        initializer: Called once in each worker process (inline: once before the first run)
-            when there are IK runs to do; ``None``: nothing.
+        worker: The function running one spec (must be picklable when ``jobs > 1`` or with
+            ``client``).
+        initializer: Called once in each worker process (inline: once before the first run;
+            Dask: once per worker process, before its first run) when there are IK runs to
+            do; ``None``: nothing.
+        client: A ``distributed.Client``: run on its workers instead of the process pool, in
+            batches of ``batch_per_worker`` runs per worker (one Dask task per run), the rows
+            of a batch written when it completes.  ``None``: the process pool / inline.
+        batch_per_worker: Runs per worker in one Dask batch (more: less idle time at the end
+            of each batch; fewer: less lost on an interruption).
 
     Returns:
         A summary; on KeyboardInterrupt the rows finished so far are saved and
         ``interrupted`` is True (rerun to resume).
 
     Raises:
-        InvalidArgumentError: ``jobs < 1`` or two specs share a key.
+        InvalidArgumentError: ``jobs < 1``, ``batch_per_worker < 1`` or two specs share a key.
     """
     if jobs < 1:
         raise InvalidArgumentError(f"jobs must be >= 1, got {jobs}")
+    if batch_per_worker < 1:
+        raise InvalidArgumentError(f"batch_per_worker must be >= 1, got {batch_per_worker}")
     keys = [s.key for s in specs]
     if len(set(keys)) != len(keys):
         dup = sorted({k for k in keys if keys.count(k) > 1})[:3]
@@ -463,7 +522,10 @@ def execute(
     try:
         if not any(s.fitness_name != "function" for s in todo):
             initializer = None  # benchmark functions use no compiled kernel
-        if jobs == 1 or len(todo) <= 1:
+        if client is not None:
+            if todo:
+                _execute_dask(todo, client, worker, write, initializer, batch_per_worker)
+        elif jobs == 1 or len(todo) <= 1:
             if todo and initializer is not None:
                 initializer()
             for s in todo:
@@ -516,6 +578,42 @@ def _execute_pool(
         raise
     finally:
         pool.shutdown(wait=True, cancel_futures=True)
+
+
+_INITIALIZED: set[Any] = set()
+"""Initializers already called in this (Dask worker) process."""
+
+
+def _initialized_run(
+    worker: Callable[[RunSpec], RunOutcome], initializer: Callable[[], None] | None, spec: RunSpec
+) -> RunOutcome:
+    """``worker(spec)`` after calling ``initializer`` once in this process (Dask tasks)."""
+    if initializer is not None and initializer not in _INITIALIZED:
+        initializer()
+        _INITIALIZED.add(initializer)
+    return worker(spec)
+
+
+def _execute_dask(
+    todo: Sequence[RunSpec],
+    client: Any,
+    worker: Callable[[RunSpec], RunOutcome],
+    write: Callable[[RunOutcome], None],
+    initializer: Callable[[], None] | None,
+    batch_per_worker: int,
+) -> None:
+    """Run ``todo`` on the Dask workers behind ``client`` with
+    :func:`swarm_ik.distributed.map_chunks`, ``batch_per_worker × workers`` runs at a time (one
+    task per run); writes each batch's outcomes (in spec order) as the batch completes, so an
+    interruption loses at most the batch in flight (its tasks are cancelled)."""
+    from swarm_ik import distributed
+
+    func = functools.partial(_initialized_run, worker, initializer)
+    size = batch_per_worker * distributed.n_workers(client)
+    for start in range(0, len(todo), size):
+        batch = list(todo[start : start + size])
+        for outcome in distributed.map_chunks(func, batch, client=client, name="swarm-ik-bench"):
+            write(outcome)
 
 
 class _NoBar:
@@ -581,8 +679,13 @@ def summarize(values: Iterable[float]) -> Stats:
     if v.size == 0:
         raise InvalidArgumentError("cannot summarize an empty sample")
     return Stats(
-        n=int(v.size), best=float(v.min()), mean=float(v.mean()), worst=float(v.max()),
-        std=float(v.std(ddof=0)), var=float(v.var(ddof=0)), median=float(np.median(v)),
+        n=int(v.size),
+        best=float(v.min()),
+        mean=float(v.mean()),
+        worst=float(v.max()),
+        std=float(v.std(ddof=0)),
+        var=float(v.var(ddof=0)),
+        median=float(np.median(v)),
     )
 
 
@@ -655,8 +758,9 @@ def judge(
     return Verdict("reproduced", ratio, f"reproduced (ratio {ratio:.2g})")
 
 
-def group_rows(rows: Iterable[Mapping[str, Any]], *keys: str) -> dict[tuple[Any, ...],
-                                                                      list[Mapping[str, Any]]]:
+def group_rows(
+    rows: Iterable[Mapping[str, Any]], *keys: str
+) -> dict[tuple[Any, ...], list[Mapping[str, Any]]]:
     """Rows grouped by the values of ``keys`` (insertion order kept)."""
     groups: dict[tuple[Any, ...], list[Mapping[str, Any]]] = {}
     for r in rows:

@@ -27,6 +27,10 @@ Experiments (ids for ``--experiments``):
 Every run is one row of ``<experiment>.csv`` under ``--out`` (schema:
 :mod:`swarm_ik.bench.common`); ``report.md`` and the PNG plots are made from those files.
 Interrupt it at any time (Ctrl-C) and run the same command again: finished runs are kept.
+By default the runs go over a local process pool (``--jobs``); ``--scheduler local`` runs them
+on an embedded Dask LocalCluster and ``--scheduler tcp://host:port`` on an existing Dask
+scheduler's workers (through :func:`swarm_ik.distributed.map_chunks`, a batch of runs at a
+time, each batch's rows written as it comes back, so resuming works the same way).
 ``--quick`` runs a reduced version of everything (fewer runs, fewer iterations, fewer poses);
 its report says so.
 """
@@ -69,8 +73,13 @@ POSE_SEED = 2021
 """Seed of the joint vectors whose FK are the arbitrary poses (000 Table 4, budget)."""
 
 Q_EXACT = (
-    -2.3633884105424747, -1.7359312886882694, 0.24014480588594253, 1.7082843808984993,
-    -1.2356793043129546, 3.2865382472506774, 2.903761762991929,
+    -2.3633884105424747,
+    -1.7359312886882694,
+    0.24014480588594253,
+    1.7082843808984993,
+    -1.2356793043129546,
+    3.2865382472506774,
+    2.903761762991929,
 )
 """Joint vector [rad] whose FK best fits paper 000's printed pose: bounded least squares on
 the ``paper-l1`` residuals (position ×10 per metre, the 9 rotation entries) from
@@ -132,8 +141,15 @@ class Config:
 
 FULL = Config("full")
 QUICK = Config(
-    "quick", runs_000=3, iterations_000=150, poses_000=3, runs_000_t4=2, runs_003=10,
-    budget_poses=3, budget_seeds=1, budgets=(2_000, 20_000),
+    "quick",
+    runs_000=3,
+    iterations_000=150,
+    poses_000=3,
+    runs_000_t4=2,
+    runs_003=10,
+    budget_poses=3,
+    budget_seeds=1,
+    budgets=(2_000, 20_000),
 )
 
 
@@ -182,8 +198,9 @@ def printed_floor() -> tuple[float, tuple[float, ...]]:
         return float(problem.fitness(np.clip(q, robot.lower, robot.upper)[None])[0])
 
     q0 = np.asarray(Q_EXACT)
-    res = minimize(f, q0, method="Nelder-Mead",
-                   options={"xatol": 1e-10, "fatol": 1e-12, "maxfev": 6000})
+    res = minimize(
+        f, q0, method="Nelder-Mead", options={"xatol": 1e-10, "fatol": 1e-12, "maxfev": 6000}
+    )
     q = np.clip(res.x, robot.lower, robot.upper)
     best = min((f(q), tuple(q)), (f(q0), tuple(q0)))
     return best
@@ -244,11 +261,21 @@ def specs_000_table2(cfg: Config) -> list[RunSpec]:
     for tid, target, orth in (("printed", printed_target(), 1e-4), ("exact", exact_target(), 1e-6)):
         for s in solvers:
             for seed in range(cfg.runs_000):
-                out.append(RunSpec(
-                    "000-table2", "yumi_left", tid, s, seed, "paper-l1", _flat(target),
-                    orth_tol=orth, tol_pos=TOL, tol_rot=TOL,
-                    **_paper_settings(s, cfg.pop_000, cfg.iterations_000, budget),
-                ))
+                out.append(
+                    RunSpec(
+                        "000-table2",
+                        "yumi_left",
+                        tid,
+                        s,
+                        seed,
+                        "paper-l1",
+                        _flat(target),
+                        orth_tol=orth,
+                        tol_pos=TOL,
+                        tol_rot=TOL,
+                        **_paper_settings(s, cfg.pop_000, cfg.iterations_000, budget),
+                    )
+                )
     return out
 
 
@@ -260,11 +287,20 @@ def specs_000_table4(cfg: Config) -> list[RunSpec]:
     for i, target in enumerate(arbitrary_poses("yumi_left", cfg.poses_000)):
         for s in solvers:
             for seed in range(cfg.runs_000_t4):
-                out.append(RunSpec(
-                    "000-table4", "yumi_left", f"pose{i}", s, seed, "paper-l1", _flat(target),
-                    tol_pos=TOL, tol_rot=TOL,
-                    **_paper_settings(s, cfg.pop_000, cfg.iterations_000, budget),
-                ))
+                out.append(
+                    RunSpec(
+                        "000-table4",
+                        "yumi_left",
+                        f"pose{i}",
+                        s,
+                        seed,
+                        "paper-l1",
+                        _flat(target),
+                        tol_pos=TOL,
+                        tol_rot=TOL,
+                        **_paper_settings(s, cfg.pop_000, cfg.iterations_000, budget),
+                    )
+                )
     return out
 
 
@@ -272,8 +308,7 @@ def specs_003_table3(cfg: Config) -> list[RunSpec]:
     """Runs of 003 Table 3: F1–F4 × {GWO, MGWO} × runs."""
     solvers, _ = available(("gwo", "mgwo"))
     return [
-        RunSpec("003-table3", f, "min", s, seed, "function", None, cfg.pop_003,
-                cfg.iterations_003)
+        RunSpec("003-table3", f, "min", s, seed, "function", None, cfg.pop_003, cfg.iterations_003)
         for f in published.P003_TABLE3
         for s in solvers
         for seed in range(cfg.runs_003)
@@ -289,11 +324,20 @@ def specs_003_table4(cfg: Config) -> list[RunSpec]:
         target = x_star_target(robot)
         for s in solvers:
             for seed in range(cfg.runs_003):
-                out.append(RunSpec(
-                    "003-table4", robot, "x*", s, seed, "euler-zyz", _flat(target),
-                    tol_pos=TOL, tol_rot=TOL,
-                    **_paper_settings(s, cfg.pop_003, cfg.iterations_003, budget),
-                ))
+                out.append(
+                    RunSpec(
+                        "003-table4",
+                        robot,
+                        "x*",
+                        s,
+                        seed,
+                        "euler-zyz",
+                        _flat(target),
+                        tol_pos=TOL,
+                        tol_rot=TOL,
+                        **_paper_settings(s, cfg.pop_003, cfg.iterations_003, budget),
+                    )
+                )
     return out
 
 
@@ -309,12 +353,13 @@ def budget_solvers() -> list[str]:
 def budget_targets(cfg: Config) -> list[tuple[str, str, np.ndarray]]:
     """``(robot, target id, pose)`` of the equal-budget experiment: YuMi at the Table-4
     poses, the long loading manipulator at FK(x*) then arbitrary poses."""
-    out = [("yumi_left", f"pose{i}", t)
-           for i, t in enumerate(arbitrary_poses("yumi_left", cfg.budget_poses))]
+    out = [
+        ("yumi_left", f"pose{i}", t)
+        for i, t in enumerate(arbitrary_poses("yumi_left", cfg.budget_poses))
+    ]
     lm = "loading_manipulator_long"
     out.append((lm, "x*", x_star_target(lm)))
-    out += [(lm, f"pose{i}", t)
-            for i, t in enumerate(arbitrary_poses(lm, cfg.budget_poses - 1))]
+    out += [(lm, f"pose{i}", t) for i, t in enumerate(arbitrary_poses(lm, cfg.budget_poses - 1))]
     return out
 
 
@@ -325,11 +370,22 @@ def specs_budget(cfg: Config) -> list[RunSpec]:
         for b in cfg.budgets:
             for s in budget_solvers():
                 for seed in range(cfg.budget_seeds):
-                    out.append(RunSpec(
-                        "budget", robot, tid, s, seed, "se3", _flat(target),
-                        stop_on_success=True, tol_pos=TOL, tol_rot=TOL, keep_history=False,
-                        **_budget_settings(s, b),
-                    ))
+                    out.append(
+                        RunSpec(
+                            "budget",
+                            robot,
+                            tid,
+                            s,
+                            seed,
+                            "se3",
+                            _flat(target),
+                            stop_on_success=True,
+                            tol_pos=TOL,
+                            tol_rot=TOL,
+                            keep_history=False,
+                            **_budget_settings(s, b),
+                        )
+                    )
     return out
 
 
@@ -368,8 +424,9 @@ def _join(parts: Sequence[str]) -> str:
 def _quick_why(cfg: Config) -> str | None:
     if cfg.iterations_000 >= FULL.iterations_000:
         return None
-    return (f"quick run: {cfg.iterations_000} iterations instead of the paper's "
-            f"{FULL.iterations_000}")
+    return (
+        f"quick run: {cfg.iterations_000} iterations instead of the paper's {FULL.iterations_000}"
+    )
 
 
 def _missing_note(solvers: Sequence[str]) -> list[str]:
@@ -399,9 +456,11 @@ def _section_000_table2(cfg: Config, rows: list[dict[str, Any]], hl: Headline, o
 
     def why_printed(solver: str, st: Stats) -> str | None:
         if st.best >= 0.5 * floor_used:
-            return (f"the printed target is rounded; nothing within the limits fits it better "
-                    f"than {floor_used:.3g} (its rounding floor), see (b) for the full-precision "
-                    "target")
+            return (
+                f"the printed target is rounded; nothing within the limits fits it better "
+                f"than {floor_used:.3g} (its rounding floor), see (b) for the full-precision "
+                "target"
+            )
         return None
 
     sol = PAPER000_SOLVERS
@@ -409,33 +468,55 @@ def _section_000_table2(cfg: Config, rows: list[dict[str, Any]], hl: Headline, o
     parts = [
         _setup_000(cfg),
         "",
-        render_comparison(Comparison(
-            "(a) the pose as printed", _by(target_id="printed"), sol, t, floor=IK_FLOOR,
-            why_worse=why_printed, why_default=_quick_why(cfg), attainable=floor_used,
-            case="printed pose",
-            notes=(
-                f"**Rounding floor.** The printed pose is rounded to five decimals and its "
-                f"rotation is not orthonormal (singular values 1.0000058, 1.0000034, 1.0000003). "
-                f"The lowest `paper-l1` fitness we find against it within the joint limits is "
-                f"**{floor:.3g}** (bounded least squares then Nelder–Mead, at q = "
-                f"{np.round(np.rad2deg(q_floor), 2).tolist()}°); the best of all runs here is "
-                f"{fmt(ours_best)}. No solver can go below this floor, so the paper's 1e-16 "
-                "values cannot come from the printed matrix. A success (errors ≤ 1e-5) is "
-                "still possible: the floor is spread over the nine rotation entries.",
+        render_comparison(
+            Comparison(
+                "(a) the pose as printed",
+                _by(target_id="printed"),
+                sol,
+                t,
+                floor=IK_FLOOR,
+                why_worse=why_printed,
+                why_default=_quick_why(cfg),
+                attainable=floor_used,
+                case="printed pose",
+                notes=(
+                    "**Rounding floor.** The printed pose is rounded to five decimals and its "
+                    "rotation is not orthonormal (singular values 1.0000058, 1.0000034, "
+                    "1.0000003). "
+                    f"The lowest `paper-l1` fitness we find against it within the joint limits is "
+                    f"**{floor:.3g}** (bounded least squares then Nelder–Mead, at q = "
+                    f"{np.round(np.rad2deg(q_floor), 2).tolist()}°); the best of all runs here is "
+                    f"{fmt(ours_best)}. No solver can go below this floor, so the paper's 1e-16 "
+                    "values cannot come from the printed matrix. A success (errors ≤ 1e-5) is "
+                    "still possible: the floor is spread over the nine rotation entries.",
+                ),
             ),
-        ), rows, hl, "000-table2"),
-        render_comparison(Comparison(
-            "(b) full precision: target = FK(q*)", _by(target_id="exact"), sol, t,
-            floor=IK_FLOOR, why_default=_quick_why(cfg), case="FK(q*)",
-            notes=(
-                "q* = " + str(np.round(np.rad2deg(Q_EXACT), 4).tolist()) + "° (within the "
-                "limits) is the bounded least-squares fit of the printed pose; its FK differs "
-                "from the printed matrix only by the rounding. This is the case the paper's "
-                "figures (≈ 1e-16) correspond to.",
-                "FOA's candidates are `S_i = 1/Dist_i > 0` (eqs. 4–9), so it cannot reach "
-                "negative joint angles: a faithful FOA stalls near 5.2, as the paper shows.",
+            rows,
+            hl,
+            "000-table2",
+        ),
+        render_comparison(
+            Comparison(
+                "(b) full precision: target = FK(q*)",
+                _by(target_id="exact"),
+                sol,
+                t,
+                floor=IK_FLOOR,
+                why_default=_quick_why(cfg),
+                case="FK(q*)",
+                notes=(
+                    "q* = " + str(np.round(np.rad2deg(Q_EXACT), 4).tolist()) + "° (within the "
+                    "limits) is the bounded least-squares fit of the printed pose; its FK differs "
+                    "from the printed matrix only by the rounding. This is the case the paper's "
+                    "figures (≈ 1e-16) correspond to.",
+                    "FOA's candidates are `S_i = 1/Dist_i > 0` (eqs. 4–9), so it cannot reach "
+                    "negative joint angles: a faithful FOA stalls near 5.2, as the paper shows.",
+                ),
             ),
-        ), rows, hl, "000-table2"),
+            rows,
+            hl,
+            "000-table2",
+        ),
         *_missing_note(sol),
         _img(out, "convergence_000-table2.png", "convergence, 000 Table 2"),
         _img(out, "box_000-table2.png", "final fitness, 000 Table 2"),
@@ -443,22 +524,34 @@ def _section_000_table2(cfg: Config, rows: list[dict[str, Any]], hl: Headline, o
     return _join(parts)
 
 
-def _plots_000_table2(cfg: Config, rows: list[dict[str, Any]], hist: dict[str, Any],
-                      out: Path) -> list[Path]:
+def _plots_000_table2(
+    cfg: Config, rows: list[dict[str, Any]], hist: dict[str, Any], out: Path
+) -> list[Path]:
     from swarm_ik.bench import plots
 
-    panels = [("(a) printed pose", _by(target_id="printed"), 0.0),
-              ("(b) full precision, FK(q*)", _by(target_id="exact"), 0.0)]
+    panels = [
+        ("(a) printed pose", _by(target_id="printed"), 0.0),
+        ("(b) full precision, FK(q*)", _by(target_id="exact"), 0.0),
+    ]
     sol, _ = available(PAPER000_SOLVERS)
     t = "Paper 000 Table 2 — YuMi left arm, fitness paper-l1"
-    floor = min(printed_floor()[0], min(r["fitness"] for r in rows if r["target_id"] == "printed")
-                if any(r["target_id"] == "printed" for r in rows) else math.inf)
+    floor = min(
+        printed_floor()[0],
+        min(r["fitness"] for r in rows if r["target_id"] == "printed")
+        if any(r["target_id"] == "printed" for r in rows)
+        else math.inf,
+    )
     refs = [(floor, f"rounding floor {floor:.3g}"), None]
-    return [p for p in (
-        plots.convergence(out / "convergence_000-table2.png", rows, hist, panels, sol, title=t,
-                          refs=refs),
-        plots.boxes(out / "box_000-table2.png", rows, panels, sol, title=t),
-    ) if p]
+    return [
+        p
+        for p in (
+            plots.convergence(
+                out / "convergence_000-table2.png", rows, hist, panels, sol, title=t, refs=refs
+            ),
+            plots.boxes(out / "box_000-table2.png", rows, panels, sol, title=t),
+        )
+        if p
+    ]
 
 
 def _section_000_table4(cfg: Config, rows: list[dict[str, Any]], hl: Headline, out: Path) -> str:
@@ -469,11 +562,20 @@ def _section_000_table4(cfg: Config, rows: list[dict[str, Any]], hl: Headline, o
         f"(seed {POSE_SEED}); {cfg.runs_000_t4} runs per pose and solver, statistics pooled "
         "over poses and runs (the paper does not say how many runs per pose).",
         "",
-        render_comparison(Comparison(
-            f"{cfg.poses_000} arbitrary reachable poses (pooled)", lambda r: True, sol,
-            published.P000_TABLE4, floor=IK_FLOOR, why_default=_quick_why(cfg),
-            case="arbitrary poses",
-        ), rows, hl, "000-table4"),
+        render_comparison(
+            Comparison(
+                f"{cfg.poses_000} arbitrary reachable poses (pooled)",
+                lambda r: True,
+                sol,
+                published.P000_TABLE4,
+                floor=IK_FLOOR,
+                why_default=_quick_why(cfg),
+                case="arbitrary poses",
+            ),
+            rows,
+            hl,
+            "000-table4",
+        ),
         "Mean fitness per pose:",
         "",
         per_target_means(rows, available(sol)[0]),
@@ -484,17 +586,22 @@ def _section_000_table4(cfg: Config, rows: list[dict[str, Any]], hl: Headline, o
     return _join(parts)
 
 
-def _plots_000_table4(cfg: Config, rows: list[dict[str, Any]], hist: dict[str, Any],
-                      out: Path) -> list[Path]:
+def _plots_000_table4(
+    cfg: Config, rows: list[dict[str, Any]], hist: dict[str, Any], out: Path
+) -> list[Path]:
     from swarm_ik.bench import plots
 
     panels = [(f"{cfg.poses_000} arbitrary poses, all runs", lambda r: True, 0.0)]
     sol, _ = available(PAPER000_SOLVERS)
     t = "Paper 000 Table 4 — YuMi left arm, arbitrary reachable poses"
-    return [p for p in (
-        plots.convergence(out / "convergence_000-table4.png", rows, hist, panels, sol, title=t),
-        plots.boxes(out / "box_000-table4.png", rows, panels, sol, title=t),
-    ) if p]
+    return [
+        p
+        for p in (
+            plots.convergence(out / "convergence_000-table4.png", rows, hist, panels, sol, title=t),
+            plots.boxes(out / "box_000-table4.png", rows, panels, sol, title=t),
+        )
+        if p
+    ]
 
 
 def _f_min(key: str) -> float:
@@ -506,10 +613,12 @@ def _f_min(key: str) -> float:
 def _why_mgwo(solver: str, st: Stats) -> str | None:
     if solver != "mgwo":
         return None
-    return ("the paper does not give MGWO's sub-pack count, γ, ω, c1, c2; with ours (see "
-            "`swarm_ik/solvers/mgwo.py`, chosen by a sweep) the 30 wolves split into sub-packs "
-            "that each behave like a small GWO, which is slower on these unimodal/separable "
-            "functions; nothing in the paper's text explains its F1–F3 figures")
+    return (
+        "the paper does not give MGWO's sub-pack count, γ, ω, c1, c2; with ours (see "
+        "`swarm_ik/solvers/mgwo.py`, chosen by a sweep) the 30 wolves split into sub-packs "
+        "that each behave like a small GWO, which is slower on these unimodal/separable "
+        "functions; nothing in the paper's text explains its F1–F3 figures"
+    )
 
 
 def _section_003_table3(cfg: Config, rows: list[dict[str, Any]], hl: Headline, out: Path) -> str:
@@ -522,31 +631,62 @@ def _section_003_table3(cfg: Config, rows: list[dict[str, Any]], hl: Headline, o
         "",
     ]
     for key, table in published.P003_TABLE3.items():
-        parts.append(render_comparison(Comparison(
-            f"{key}: {table.caption}", _by(robot=key), ("gwo", "mgwo"), table,
-            stats=("best", "mean", "worst", "std", "median"), f_min=_f_min(key),
-            floor=table.resolution, digits=6 if key == "F4" else 3, ik=False, case=key,
-            why_worse=_why_mgwo if key != "F4" else None,
-        ), rows, hl, "003-table3"))
-    parts += [*_missing_note(("gwo", "mgwo")),
-              _img(out, "convergence_003-table3.png", "convergence, 003 Table 3"),
-              _img(out, "box_003-table3.png", "final values, 003 Table 3")]
+        parts.append(
+            render_comparison(
+                Comparison(
+                    f"{key}: {table.caption}",
+                    _by(robot=key),
+                    ("gwo", "mgwo"),
+                    table,
+                    stats=("best", "mean", "worst", "std", "median"),
+                    f_min=_f_min(key),
+                    floor=table.resolution,
+                    digits=6 if key == "F4" else 3,
+                    ik=False,
+                    case=key,
+                    why_worse=_why_mgwo if key != "F4" else None,
+                ),
+                rows,
+                hl,
+                "003-table3",
+            )
+        )
+    parts += [
+        *_missing_note(("gwo", "mgwo")),
+        _img(out, "convergence_003-table3.png", "convergence, 003 Table 3"),
+        _img(out, "box_003-table3.png", "final values, 003 Table 3"),
+    ]
     return _join(parts)
 
 
-def _plots_003_table3(cfg: Config, rows: list[dict[str, Any]], hist: dict[str, Any],
-                      out: Path) -> list[Path]:
+def _plots_003_table3(
+    cfg: Config, rows: list[dict[str, Any]], hist: dict[str, Any], out: Path
+) -> list[Path]:
     from swarm_ik.bench import plots
 
-    panels = [(f"{k}: {t.caption}", _by(robot=k), _f_min(k))
-              for k, t in published.P003_TABLE3.items()]
+    panels = [
+        (f"{k}: {t.caption}", _by(robot=k), _f_min(k)) for k, t in published.P003_TABLE3.items()
+    ]
     sol, _ = available(("gwo", "mgwo"))
     t = "Paper 003 Table 3 — benchmark functions"
-    return [p for p in (
-        plots.convergence(out / "convergence_003-table3.png", rows, hist, panels, sol, title=t,
-                          ylabel="best value"),
-        plots.boxes(out / "box_003-table3.png", rows, panels, sol, title=t, ylabel="final value"),
-    ) if p]
+    return [
+        p
+        for p in (
+            plots.convergence(
+                out / "convergence_003-table3.png",
+                rows,
+                hist,
+                panels,
+                sol,
+                title=t,
+                ylabel="best value",
+            ),
+            plots.boxes(
+                out / "box_003-table3.png", rows, panels, sol, title=t, ylabel="final value"
+            ),
+        )
+        if p
+    ]
 
 
 def _section_003_table4(cfg: Config, rows: list[dict[str, Any]], hl: Headline, out: Path) -> str:
@@ -556,9 +696,11 @@ def _section_003_table4(cfg: Config, rows: list[dict[str, Any]], hl: Headline, o
     def why_unreachable(solver: str, st: Stats) -> str | None:
         if best is None:
             return None
-        return (f"FK(x*) is unreachable within the stated limits (best over all runs: fitness "
-                f"{best['fitness']:.3g}, position error {best['position_error']:.3g} m); the "
-                "paper's values need x* itself, which violates θ3 ≤ 35.45° and d4..d6 ≤ 0.5 m")
+        return (
+            f"FK(x*) is unreachable within the stated limits (best over all runs: fitness "
+            f"{best['fitness']:.3g}, position error {best['position_error']:.3g} m); the "
+            "paper's values need x* itself, which violates θ3 ≤ 35.45° and d4..d6 ≤ 0.5 m"
+        )
 
     sol = PAPER003_SOLVERS
     budget = cfg.pop_003 * cfg.iterations_003
@@ -572,41 +714,70 @@ def _section_003_table4(cfg: Config, rows: list[dict[str, Any]], hl: Headline, o
         "(θ3 = 45° > 35.45°, d4..d6 > 0.5 m); its FK is the target on both robot variants. "
         "`var` is the variance (ddof 0), as the paper prints it.",
         "",
-        render_comparison(Comparison(
-            "`loading_manipulator_long` (d4..d6 ∈ [0, 1.5] m, the stroke D of the parameter "
-            "table): reachable", _by(robot="loading_manipulator_long"), sol, t, stats=stats,
-            floor=IK_FLOOR, case="long stroke (reachable)",
-        ), rows, hl, "003-table4"),
-        render_comparison(Comparison(
-            "`loading_manipulator` (stated limits, d4..d6 ∈ [0, 0.5] m): unreachable",
-            _by(robot="loading_manipulator"), sol, t, stats=stats, floor=IK_FLOOR,
-            why_worse=why_unreachable, case="stated limits (unreachable)",
-            attainable=None if best is None else float(best["fitness"]),
-            notes=("An unreachable target is reported with its best error and success = "
-                   "false, never as a success.",),
-        ), rows, hl, "003-table4"),
+        render_comparison(
+            Comparison(
+                "`loading_manipulator_long` (d4..d6 ∈ [0, 1.5] m, the stroke D of the parameter "
+                "table): reachable",
+                _by(robot="loading_manipulator_long"),
+                sol,
+                t,
+                stats=stats,
+                floor=IK_FLOOR,
+                case="long stroke (reachable)",
+            ),
+            rows,
+            hl,
+            "003-table4",
+        ),
+        render_comparison(
+            Comparison(
+                "`loading_manipulator` (stated limits, d4..d6 ∈ [0, 0.5] m): unreachable",
+                _by(robot="loading_manipulator"),
+                sol,
+                t,
+                stats=stats,
+                floor=IK_FLOOR,
+                why_worse=why_unreachable,
+                case="stated limits (unreachable)",
+                attainable=None if best is None else float(best["fitness"]),
+                notes=(
+                    "An unreachable target is reported with its best error and success = "
+                    "false, never as a success.",
+                ),
+            ),
+            rows,
+            hl,
+            "003-table4",
+        ),
         *_missing_note(sol),
         "VAGWO is listed as published only: no solver of that name is registered."
-        if "vagwo" not in available(sol)[0] else "",
+        if "vagwo" not in available(sol)[0]
+        else "",
         _img(out, "convergence_003-table4.png", "convergence, 003 Table 4"),
         _img(out, "box_003-table4.png", "final fitness, 003 Table 4"),
     ]
     return _join(parts)
 
 
-def _plots_003_table4(cfg: Config, rows: list[dict[str, Any]], hist: dict[str, Any],
-                      out: Path) -> list[Path]:
+def _plots_003_table4(
+    cfg: Config, rows: list[dict[str, Any]], hist: dict[str, Any], out: Path
+) -> list[Path]:
     from swarm_ik.bench import plots
 
-    panels = [("loading_manipulator_long (reachable)", _by(robot="loading_manipulator_long"), 0.0),
-              ("loading_manipulator, stated limits (unreachable)",
-               _by(robot="loading_manipulator"), 0.0)]
+    panels = [
+        ("loading_manipulator_long (reachable)", _by(robot="loading_manipulator_long"), 0.0),
+        ("loading_manipulator, stated limits (unreachable)", _by(robot="loading_manipulator"), 0.0),
+    ]
     sol, _ = available(PAPER003_SOLVERS)
     t = "Paper 003 Table 4 — loading manipulator, target FK(x*), fitness euler-zyz"
-    return [p for p in (
-        plots.convergence(out / "convergence_003-table4.png", rows, hist, panels, sol, title=t),
-        plots.boxes(out / "box_003-table4.png", rows, panels, sol, title=t),
-    ) if p]
+    return [
+        p
+        for p in (
+            plots.convergence(out / "convergence_003-table4.png", rows, hist, panels, sol, title=t),
+            plots.boxes(out / "box_003-table4.png", rows, panels, sol, title=t),
+        )
+        if p
+    ]
 
 
 def _section_budget(cfg: Config, rows: list[dict[str, Any]], hl: Headline, out: Path) -> str:
@@ -624,36 +795,66 @@ def _section_budget(cfg: Config, rows: list[dict[str, Any]], hl: Headline, out: 
         "",
     ]
     for robot in ("yumi_left", "loading_manipulator_long"):
-        parts.append(render_budget(f"`{robot}`", [r for r in rows if r["robot"] == robot], sol,
-                                   cfg.budgets))
+        parts.append(
+            render_budget(f"`{robot}`", [r for r in rows if r["robot"] == robot], sol, cfg.budgets)
+        )
     parts.append(_img(out, "budget_success.png", "success rate against budget"))
     return _join(parts)
 
 
-def _plots_budget(cfg: Config, rows: list[dict[str, Any]], hist: dict[str, Any],
-                  out: Path) -> list[Path]:
+def _plots_budget(
+    cfg: Config, rows: list[dict[str, Any]], hist: dict[str, Any], out: Path
+) -> list[Path]:
     from swarm_ik.bench import plots
 
-    p = plots.budget_success(out / "budget_success.png", rows,
-                             ["yumi_left", "loading_manipulator_long"], budget_solvers(),
-                             title="Success rate (‖Δp‖ ≤ 1e-5 m, θ ≤ 1e-5 rad) on equal "
-                                   "evaluation budgets")
+    p = plots.budget_success(
+        out / "budget_success.png",
+        rows,
+        ["yumi_left", "loading_manipulator_long"],
+        budget_solvers(),
+        title="Success rate (‖Δp‖ ≤ 1e-5 m, θ ≤ 1e-5 rad) on equal evaluation budgets",
+    )
     return [p] if p else []
 
 
 EXPERIMENTS: dict[str, Experiment] = {
     e.id: e
     for e in (
-        Experiment("000-table2", "Paper 000, Table 2 — YuMi left arm, the given pose",
-                   specs_000_table2, _section_000_table2, _plots_000_table2),
-        Experiment("000-table4", "Paper 000, Table 4 — YuMi left arm, arbitrary reachable poses",
-                   specs_000_table4, _section_000_table4, _plots_000_table4),
-        Experiment("003-table3", "Paper 003, Table 3 — benchmark functions F1–F4",
-                   specs_003_table3, _section_003_table3, _plots_003_table3),
-        Experiment("003-table4", "Paper 003, Table 4 — loading manipulator, target FK(x*)",
-                   specs_003_table4, _section_003_table4, _plots_003_table4),
-        Experiment("budget", "Every solver against DLS on equal evaluation budgets",
-                   specs_budget, _section_budget, _plots_budget),
+        Experiment(
+            "000-table2",
+            "Paper 000, Table 2 — YuMi left arm, the given pose",
+            specs_000_table2,
+            _section_000_table2,
+            _plots_000_table2,
+        ),
+        Experiment(
+            "000-table4",
+            "Paper 000, Table 4 — YuMi left arm, arbitrary reachable poses",
+            specs_000_table4,
+            _section_000_table4,
+            _plots_000_table4,
+        ),
+        Experiment(
+            "003-table3",
+            "Paper 003, Table 3 — benchmark functions F1–F4",
+            specs_003_table3,
+            _section_003_table3,
+            _plots_003_table3,
+        ),
+        Experiment(
+            "003-table4",
+            "Paper 003, Table 4 — loading manipulator, target FK(x*)",
+            specs_003_table4,
+            _section_003_table4,
+            _plots_003_table4,
+        ),
+        Experiment(
+            "budget",
+            "Every solver against DLS on equal evaluation budgets",
+            specs_budget,
+            _section_budget,
+            _plots_budget,
+        ),
     )
 }
 """The experiments, by id, in report order."""
@@ -691,9 +892,12 @@ def environment() -> dict[str, Any]:
     import swarm_ik
 
     return {
-        "python": platform.python_version(), "platform": platform.platform(),
-        "processor": platform.processor() or platform.machine(), "cpus": common.cpu_count(),
-        "numpy": numpy.__version__, "pinocchio": pinocchio.__version__,
+        "python": platform.python_version(),
+        "platform": platform.platform(),
+        "processor": platform.processor() or platform.machine(),
+        "cpus": common.cpu_count(),
+        "numpy": numpy.__version__,
+        "pinocchio": pinocchio.__version__,
         "swarm_ik": swarm_ik.__version__,
     }
 
@@ -710,18 +914,33 @@ def build_report(cfg: Config, out: Path, experiments: Sequence[str] | None = Non
         n_plan = len(exp.specs(cfg))
         info = meta.get("experiments", {}).get(exp.id, {})
         cpu = sum(float(r["time_s"]) for r in rows)
-        status = (f"{len(rows)} of {n_plan} runs recorded" if len(rows) < n_plan
-                  else f"{n_plan} runs")
+        status = (
+            f"{len(rows)} of {n_plan} runs recorded" if len(rows) < n_plan else f"{n_plan} runs"
+        )
         timing = f"sum of run times {cpu:.0f} s"
         if "wall_s" in info:
-            timing += (f", wall-clock {info['wall_s']:.0f} s with --jobs {info.get('jobs', '?')} "
-                       f"(last invocation that ran it)")
+            where = info.get("where", f"--jobs {info.get('jobs', '?')}")
+            new = info.get("new_runs")
+            which = ", ".join(f"`{s}`" for s in info.get("new_solvers", []))
+            timing += (
+                f", wall-clock {info['wall_s']:.0f} s with {where} in the last invocation that "
+                "ran it"
+                + (
+                    f" ({new} new runs" + (f" of {which}" if which else "") + ")"
+                    if new is not None and new < n_plan
+                    else ""
+                )
+            )
         if not rows:
-            body.append(f"## {exp.title}\n\n_`{exp.id}`: not run yet ({n_plan} runs planned; "
-                        f"`--experiments {exp.id}`)._\n")
+            body.append(
+                f"## {exp.title}\n\n_`{exp.id}`: not run yet ({n_plan} runs planned; "
+                f"`--experiments {exp.id}`)._\n"
+            )
             continue
-        body.append(f"## {exp.title}\n\n_`{exp.id}`: {status}; {timing}._\n\n"
-                    + exp.section(cfg, rows, hl, out))
+        body.append(
+            f"## {exp.title}\n\n_`{exp.id}`: {status}; {timing}._\n\n"
+            + exp.section(cfg, rows, hl, out)
+        )
     env = meta.get("environment") or environment()
     quick = cfg.name == "quick"
     head = [
@@ -755,9 +974,16 @@ def build_report(cfg: Config, out: Path, experiments: Sequence[str] | None = Non
         "1e-16 to 1e-15, so both at machine precision count as equal) and the printing "
         "resolution for published values given with few decimals (F4).",
         "",
-        "Environment: " + ", ".join(f"{k} {v}" for k, v in env.items()) + "."
-        + (f" Last invocation that ran experiments: {meta['last_wall_s']:.0f} s wall-clock with "
-           f"--jobs {meta.get('last_jobs', '?')}." if "last_wall_s" in meta else "")
+        "Environment: "
+        + ", ".join(f"{k} {v}" for k, v in env.items())
+        + "."
+        + (
+            f" Last invocation that ran experiments: {meta['last_wall_s']:.0f} s wall-clock with "
+            + meta.get("last_where", f"--jobs {meta.get('last_jobs', '?')}")
+            + "."
+            if "last_wall_s" in meta
+            else ""
+        )
         + " `time_s` of a run is its own wall-clock time and grows when runs share the CPUs.",
         "",
         "## Headline",
@@ -785,22 +1011,55 @@ def make_plots(cfg: Config, out: Path, experiments: Sequence[str] | None = None)
 def add_arguments(parser: argparse.ArgumentParser) -> None:
     """Options of ``swarm-ik bench paper``."""
     parser.description = __doc__.split("\n\n")[0] if __doc__ else None
-    parser.add_argument("--quick", action="store_true",
-                        help="reduced version of everything (< 5 min on 2 cores); its own "
-                             f"default folder {DEFAULT_OUT_QUICK}")
-    parser.add_argument("--jobs", type=int, default=common.cpu_count(),
-                        help="worker processes (default: the CPUs available)")
-    parser.add_argument("--out", type=Path, default=None,
-                        help=f"output folder (default {DEFAULT_OUT}, or {DEFAULT_OUT_QUICK} "
-                             "with --quick)")
-    parser.add_argument("--experiments", nargs="+", default=None, metavar="ID",
-                        help="subset to run: " + ", ".join(EXPERIMENTS))
-    parser.add_argument("--runs", type=int, default=None,
-                        help="override the number of runs per case and solver everywhere")
+    parser.add_argument(
+        "--quick",
+        action="store_true",
+        help="reduced version of everything (< 5 min on 2 cores); its own "
+        f"default folder {DEFAULT_OUT_QUICK}",
+    )
+    parser.add_argument(
+        "--jobs",
+        type=int,
+        default=common.cpu_count(),
+        help="worker processes (default: the CPUs available)",
+    )
+    parser.add_argument(
+        "--scheduler",
+        default="none",
+        metavar="none|local|tcp://HOST:PORT",
+        help="where the runs execute: 'none' (default: no Dask, the local process pool of "
+        "--jobs, as without this option), 'local' (an embedded Dask LocalCluster, one worker "
+        "process per core; --jobs is then ignored) or the address of an existing Dask "
+        "scheduler (its workers need swarm_ik installed). The default is 'none', unlike "
+        "'swarm-ik batch', because on one machine a LocalCluster is no faster than the pool; "
+        "the results are the same either way (only time_s differs)",
+    )
+    parser.add_argument(
+        "--out",
+        type=Path,
+        default=None,
+        help=f"output folder (default {DEFAULT_OUT}, or {DEFAULT_OUT_QUICK} with --quick)",
+    )
+    parser.add_argument(
+        "--experiments",
+        nargs="+",
+        default=None,
+        metavar="ID",
+        help="subset to run: " + ", ".join(EXPERIMENTS),
+    )
+    parser.add_argument(
+        "--runs",
+        type=int,
+        default=None,
+        help="override the number of runs per case and solver everywhere",
+    )
     parser.add_argument("--no-plots", action="store_true", help="skip the PNG plots")
     parser.add_argument("--no-progress", action="store_true", help="no progress bar")
-    parser.add_argument("--report-only", action="store_true",
-                        help="only rebuild report.md and the plots from the CSV files")
+    parser.add_argument(
+        "--report-only",
+        action="store_true",
+        help="only rebuild report.md and the plots from the CSV files",
+    )
 
 
 def config_from_args(args: argparse.Namespace) -> tuple[Config, Path, list[str]]:
@@ -808,10 +1067,13 @@ def config_from_args(args: argparse.Namespace) -> tuple[Config, Path, list[str]]
 
     Raises:
         UnknownNameError: an experiment id is not known (the valid ones listed).
-        InvalidArgumentError: ``--runs`` or ``--jobs`` below 1.
+        InvalidArgumentError: ``--runs`` or ``--jobs`` below 1, or an invalid ``--scheduler``
+            (the valid forms listed).
     """
+    from swarm_ik import distributed
     from swarm_ik.errors import unknown
 
+    distributed.check_scheduler(getattr(args, "scheduler", None))
     cfg = QUICK if args.quick else FULL
     if args.runs is not None:
         cfg = cfg.with_runs(args.runs)
@@ -823,6 +1085,16 @@ def config_from_args(args: argparse.Namespace) -> tuple[Config, Path, list[str]]
             raise unknown("experiment", i, EXPERIMENTS)
     out = args.out if args.out is not None else (DEFAULT_OUT_QUICK if args.quick else DEFAULT_OUT)
     return cfg, Path(out), ids
+
+
+def _where(jobs: int, scheduler: Any, client: Any) -> str:
+    """Where the runs executed, for ``meta.json`` and the report."""
+    if client is None:
+        return f"--jobs {jobs}"
+    from swarm_ik import distributed
+
+    name = scheduler if isinstance(scheduler, str) else "(a Dask client)"
+    return f"--scheduler {name} ({distributed.n_workers(client)} Dask workers)"
 
 
 def run(args: argparse.Namespace) -> int:
@@ -840,22 +1112,44 @@ def run(args: argparse.Namespace) -> int:
     t_all = time.perf_counter()
     interrupted = False
     if not args.report_only:
-        for i in ids:
-            exp = EXPERIMENTS[i]
-            summary = common.execute(exp.specs(cfg), out, jobs=args.jobs,
-                                     progress=not args.no_progress, desc=exp.id)
-            print(f"{exp.id}: {summary.new} new, {summary.skipped} already done, "
-                  f"of {summary.total} runs ({summary.wall_s:.1f} s)", file=sys.stderr)
-            if summary.new:
-                meta["experiments"][exp.id] = {"wall_s": summary.wall_s, "jobs": args.jobs,
-                                               "new_runs": summary.new, "runs": summary.total,
-                                               "complete": summary.new + summary.skipped
-                                               == summary.total}
-            if summary.interrupted:
-                interrupted = True
-                break
+        from swarm_ik import distributed
+
+        scheduler = getattr(args, "scheduler", None)
+        with distributed.connect(scheduler) as client:
+            where = _where(args.jobs, scheduler, client)
+            for i in ids:
+                exp = EXPERIMENTS[i]
+                specs = exp.specs(cfg)
+                todo, _ = common.pending(specs, out)
+                summary = common.execute(
+                    specs,
+                    out,
+                    jobs=args.jobs,
+                    progress=not args.no_progress,
+                    desc=exp.id,
+                    client=client,
+                )
+                print(
+                    f"{exp.id}: {summary.new} new, {summary.skipped} already done, "
+                    f"of {summary.total} runs ({summary.wall_s:.1f} s)",
+                    file=sys.stderr,
+                )
+                if summary.new:
+                    meta["experiments"][exp.id] = {
+                        "wall_s": summary.wall_s,
+                        "jobs": args.jobs,
+                        "where": where,
+                        "new_runs": summary.new,
+                        "new_solvers": sorted({s.solver for s in todo}),
+                        "runs": summary.total,
+                        "complete": summary.new + summary.skipped == summary.total,
+                    }
+                if summary.interrupted:
+                    interrupted = True
+                    break
         meta["last_wall_s"] = time.perf_counter() - t_all
         meta["last_jobs"] = args.jobs
+        meta["last_where"] = where
         _meta_path(out).write_text(json.dumps(meta, indent=2) + "\n")
     written: list[Path] = []
     if not args.no_plots and not interrupted:
@@ -867,11 +1161,15 @@ def run(args: argparse.Namespace) -> int:
             print(f"swarm-ik: {exc}", file=sys.stderr)
     report = out / "report.md"
     report.write_text(build_report(cfg, out))
-    print(f"report: {report}" + (f"; plots: {len(written)} PNG in {out}" if written else ""),
-          file=sys.stderr)
+    print(
+        f"report: {report}" + (f"; plots: {len(written)} PNG in {out}" if written else ""),
+        file=sys.stderr,
+    )
     if interrupted:
-        print("interrupted: finished runs are saved; run the same command again to resume",
-              file=sys.stderr)
+        print(
+            "interrupted: finished runs are saved; run the same command again to resume",
+            file=sys.stderr,
+        )
         return 130
     return 0
 

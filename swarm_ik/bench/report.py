@@ -95,8 +95,10 @@ def _verdict(comp: Comparison, solver: str, st: Stats) -> Verdict | None:
     pub = prow.stats["mean"]
     v = judge(st.mean, pub, f_min=comp.f_min, floor=comp.floor, why_worse=why)
     if comp.attainable is not None and pub < comp.attainable and v.label != "worse":
-        reason = why or (f"the paper's value lies below the lowest fitness attainable here "
-                         f"({comp.attainable:.3g})")
+        reason = why or (
+            f"the paper's value lies below the lowest fitness attainable here "
+            f"({comp.attainable:.3g})"
+        )
         return Verdict("worse", v.ratio, f"worse (ratio {v.ratio:.2g}, but): {reason}", reason)
     return v
 
@@ -111,8 +113,9 @@ def short_verdict(v: Verdict) -> str:
     return f"{v.label}: {reason}"
 
 
-def render_comparison(comp: Comparison, rows: Iterable[Row], headline: Headline | None = None,
-                      experiment: str = "") -> str:
+def render_comparison(
+    comp: Comparison, rows: Iterable[Row], headline: Headline | None = None, experiment: str = ""
+) -> str:
     """Markdown of one comparison table (with its notes)."""
     chosen = [r for r in rows if comp.select(r)]
     by_solver = group_rows(chosen, "solver")
@@ -123,8 +126,12 @@ def render_comparison(comp: Comparison, rows: Iterable[Row], headline: Headline 
     if comp.ik:
         head += ["success", "median ‖Δp‖ [m]"]
     head += ["verdict (on the mean)"]
-    lines = [f"#### {comp.title}", "", "| " + " | ".join(head) + " |",
-             "|" + "|".join("---" for _ in head) + "|"]
+    lines = [
+        f"#### {comp.title}",
+        "",
+        "| " + " | ".join(head) + " |",
+        "|" + "|".join("---" for _ in head) + "|",
+    ]
     shown: set[str] = set()
     for solver in comp.solvers:
         runs = by_solver.get((solver,))
@@ -137,8 +144,7 @@ def render_comparison(comp: Comparison, rows: Iterable[Row], headline: Headline 
         cells = [name, str(st.n)]
         for s in comp.stats:
             cells.append(fmt(st.get(s), comp.digits))
-            cells.append(fmt(prow.stats.get(s), comp.digits) if prow and s in prow.stats
-                         else "—")
+            cells.append(fmt(prow.stats.get(s), comp.digits) if prow and s in prow.stats else "—")
         if comp.ik:
             cells.append(f"{100 * success_rate(r['success'] for r in runs):.0f} %")
             cells.append(fmt(float(np.median([float(r["position_error"]) for r in runs]))))
@@ -146,15 +152,25 @@ def render_comparison(comp: Comparison, rows: Iterable[Row], headline: Headline 
         cells.append(v.text if v else "— (no published number)")
         lines.append("| " + " | ".join(cells) + " |")
         if v and headline is not None and prow is not None:
-            headline.rows.append((experiment, comp.case or comp.title, prow.algorithm,
-                                  fmt(prow.stats["mean"], comp.digits),
-                                  fmt(st.mean, comp.digits), short_verdict(v)))
+            headline.rows.append(
+                (
+                    experiment,
+                    comp.case or comp.title,
+                    prow.algorithm,
+                    fmt(prow.stats["mean"], comp.digits),
+                    fmt(st.mean, comp.digits),
+                    short_verdict(v),
+                )
+            )
     if pub is not None:
         for prow in pub.rows:
             if prow.solver in shown:
                 continue
-            why = ("published only (not implemented here)" if prow.solver is None
-                   else f"published only (solver `{prow.solver}` not registered)")
+            why = (
+                "published only (not implemented here)"
+                if prow.solver is None
+                else f"published only (solver `{prow.solver}` not registered)"
+            )
             cells = [prow.algorithm, "—"]
             for s in comp.stats:
                 cells += ["—", fmt(prow.stats.get(s), comp.digits) if s in prow.stats else "—"]
@@ -170,8 +186,9 @@ def render_comparison(comp: Comparison, rows: Iterable[Row], headline: Headline 
     return "\n".join(lines) + "\n"
 
 
-def render_budget(title: str, rows: Iterable[Row], solvers: Sequence[str],
-                  budgets: Sequence[int]) -> str:
+def render_budget(
+    title: str, rows: Iterable[Row], solvers: Sequence[str], budgets: Sequence[int]
+) -> str:
     """Markdown of the equal-budget table: one block of rows per budget.
 
     Columns: success rate, median evaluations of the successful runs, median time, median
@@ -179,10 +196,22 @@ def render_budget(title: str, rows: Iterable[Row], solvers: Sequence[str],
     """
     rows = list(rows)
     by = group_rows(rows, "max_evals", "solver")
-    head = ["budget", "solver", "runs", "success", "median evals (successes)", "median time [ms]",
-            "median ‖Δp‖ [m]", "median θ [rad]"]
-    lines = [f"#### {title}", "", "| " + " | ".join(head) + " |",
-             "|" + "|".join("---" for _ in head) + "|"]
+    head = [
+        "budget",
+        "solver",
+        "runs",
+        "success",
+        "median evals (successes)",
+        "median time [ms]",
+        "median ‖Δp‖ [m]",
+        "median θ [rad]",
+    ]
+    lines = [
+        f"#### {title}",
+        "",
+        "| " + " | ".join(head) + " |",
+        "|" + "|".join("---" for _ in head) + "|",
+    ]
     for b in budgets:
         for solver in solvers:
             runs = by.get((b, solver))
@@ -190,13 +219,22 @@ def render_budget(title: str, rows: Iterable[Row], solvers: Sequence[str],
                 continue
             ok = [r for r in runs if r["success"]]
             evals = fmt(float(np.median([r["n_evals"] for r in ok]))) if ok else "—"
-            lines.append("| " + " | ".join([
-                f"{b:,}", f"`{solver}`", str(len(runs)),
-                f"{100 * success_rate(r['success'] for r in runs):.0f} %", evals,
-                fmt(1e3 * float(np.median([r["time_s"] for r in runs]))),
-                fmt(float(np.median([r["position_error"] for r in runs]))),
-                fmt(float(np.median([r["rotation_error"] for r in runs]))),
-            ]) + " |")
+            lines.append(
+                "| "
+                + " | ".join(
+                    [
+                        f"{b:,}",
+                        f"`{solver}`",
+                        str(len(runs)),
+                        f"{100 * success_rate(r['success'] for r in runs):.0f} %",
+                        evals,
+                        fmt(1e3 * float(np.median([r["time_s"] for r in runs]))),
+                        fmt(float(np.median([r["position_error"] for r in runs]))),
+                        fmt(float(np.median([r["rotation_error"] for r in runs]))),
+                    ]
+                )
+                + " |"
+            )
     return "\n".join(lines) + "\n"
 
 
@@ -215,10 +253,14 @@ def per_target_means(rows: Iterable[Row], solvers: Sequence[str], digits: int = 
     by = group_rows(rows, "target_id", "solver")
     targets = list(dict.fromkeys(r["target_id"] for r in rows))
     cols = [s for s in solvers if any((t, s) in by for t in targets)]
-    lines = ["| target | " + " | ".join(f"`{s}`" for s in cols) + " |",
-             "|---|" + "|".join("---" for _ in cols) + "|"]
+    lines = [
+        "| target | " + " | ".join(f"`{s}`" for s in cols) + " |",
+        "|---|" + "|".join("---" for _ in cols) + "|",
+    ]
     for t in targets:
-        cells = [fmt(float(np.mean([r["fitness"] for r in by[(t, s)]])), digits)
-                 if (t, s) in by else "—" for s in cols]
+        cells = [
+            fmt(float(np.mean([r["fitness"] for r in by[(t, s)]])), digits) if (t, s) in by else "—"
+            for s in cols
+        ]
         lines.append(f"| {t} | " + " | ".join(cells) + " |")
     return "\n".join(lines) + "\n"
