@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import math
 from typing import Any
 
 import numpy as np
@@ -163,12 +164,16 @@ class IKProblem:
         if np.any(q < self.lower - 1e-12) or np.any(q > self.upper + 1e-12):
             return False
         pose = self.robot.fk(q)
-        d = pose[:3, 3] - self.target[:3, 3]
-        if float(np.sqrt(d @ d)) > tol_pos:
+        t = self.target
+        dx, dy, dz = pose[0, 3] - t[0, 3], pose[1, 3] - t[1, 3], pose[2, 3] - t[2, 3]
+        if math.sqrt(dx * dx + dy * dy + dz * dz) > tol_pos:
             return False
         if self.position_only:
             return True
-        return bool(rotation_angle(self._rot_target.T @ pose[:3, :3]) <= tol_rot)
+        m = (self._rot_target.T @ pose[:3, :3]).tolist()  # scalar maths: one pose only
+        sx, sy, sz = m[2][1] - m[1][2], m[0][2] - m[2][0], m[1][0] - m[0][1]
+        cos_t = 0.5 * (m[0][0] + m[1][1] + m[2][2] - 1.0)
+        return math.atan2(0.5 * math.sqrt(sx * sx + sy * sy + sz * sz), cos_t) <= tol_rot
 
     def __repr__(self) -> str:
         p = self.target[:3, 3]
