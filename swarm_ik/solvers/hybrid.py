@@ -116,6 +116,28 @@ def _log3(m: FloatArray, out: FloatArray) -> float:  # pragma: no cover - compil
 
 
 @numba.njit(cache=True)
+def _step_into_bounds(
+    q: FloatArray,
+    delta: FloatArray,
+    scale: float,
+    wrap: NDArray[np.bool_],
+    lower: FloatArray,
+    upper: FloatArray,
+    out: FloatArray,
+) -> None:  # pragma: no cover - compiled
+    """``out = q + scale·delta``, continuous joints wrapped into [-π, π), then clipped."""
+    for j in range(q.shape[0]):
+        v = q[j] + scale * delta[j]
+        if wrap[j]:
+            v = (v + math.pi) % (2.0 * math.pi) - math.pi
+        if v < lower[j]:
+            v = lower[j]
+        elif v > upper[j]:
+            v = upper[j]
+        out[j] = v
+
+
+@numba.njit(cache=True)
 def _residual(
     q: FloatArray,
     kinds: IntArray,
@@ -412,15 +434,7 @@ def lm_polish(
             shrink = 1.0
             if big > max_step:
                 shrink = max_step / big
-            for j in range(n):
-                v = q[j] + shrink * delta[j]
-                if wrap[j]:
-                    v = (v + math.pi) % (2.0 * math.pi) - math.pi
-                if v < lower[j]:
-                    v = lower[j]
-                elif v > upper[j]:
-                    v = upper[j]
-                q_t[j] = v
+            _step_into_bounds(q, delta, shrink, wrap, lower, upper, q_t)
             cost_t, dp_t, dr_t = _residual(
                 q_t,
                 kinds,
@@ -600,15 +614,7 @@ def nullspace_toward(
             for a in range(6):
                 v += jac[a, j] * y[a]
             delta[j] = v
-        for j in range(n):
-            v = q[j] + delta[j]
-            if wrap[j]:
-                v = (v + math.pi) % (2.0 * math.pi) - math.pi
-            if v < lower[j]:
-                v = lower[j]
-            elif v > upper[j]:
-                v = upper[j]
-            q_t[j] = v
+        _step_into_bounds(q, delta, 1.0, wrap, lower, upper, q_t)
         _c, dp_t, dr_t = _residual(
             q_t,
             kinds,
