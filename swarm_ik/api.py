@@ -2,12 +2,12 @@
 
 from __future__ import annotations
 
+import math
 import time
 import warnings
 from typing import Any
 
 import numpy as np
-import pinocchio as pin
 
 from swarm_ik.errors import InvalidArgumentError, unknown
 from swarm_ik.optimize import check_budget, make_rng
@@ -23,11 +23,48 @@ PREFER = ("best", "nearest")
 
 
 def verify(problem: IKProblem, q: Any) -> tuple[float, float]:
-    """Position [m] and rotation [rad] errors of ``q``, computed with Pinocchio's own FK."""
-    pose = problem.robot.fk_pinocchio(q)
-    dp = float(np.linalg.norm(pose[:3, 3] - problem.target[:3, 3]))
-    dr = float(np.linalg.norm(pin.log3(problem.target[:3, :3].T @ pose[:3, :3])))
-    return dp, dr
+    """Largest position error [m] and angular error [rad] over the primary goals at ``q``,
+    computed with Pinocchio's own FK (0 where no goal has such an error)."""
+    if not isinstance(problem, IKProblem):
+        raise InvalidArgumentError(f"problem must be an IKProblem, got {type(problem).__name__}")
+    errs = problem.verify(q)
+    dp = max((e.position_error for e in errs if not math.isnan(e.position_error)), default=0.0)
+    dr = max((e.rotation_error for e in errs if not math.isnan(e.rotation_error)), default=0.0)
+    return float(dp), float(dr)
+
+
+def unreachable_goal(problem: IKProblem) -> str | None:
+    """A primary goal point beyond its frame's reach (:meth:`RobotModel.reach_radius`), if
+    any: no joint vector can meet it.  Returns its label."""
+    from swarm_ik.goals import Pose, Position
+
+    for gl in problem.goals:
+        if not gl.primary:
+            continue
+        if isinstance(gl, Pose):
+            point = gl.target[:3, 3]
+        elif isinstance(gl, Position):
+            point = gl.point
+        else:
+            continue
+        if float(np.linalg.norm(point)) > problem.robot.reach_radius(gl.frame) * (1 + 1e-9):
+            return gl.describe()
+    return None
+
+
+def end_reason(problem: IKProblem, success: bool, ev: base.Evaluator) -> str:
+    """Why a solve ended (see :attr:`swarm_ik.result.Result.reason`)."""
+    if success:
+        return "converged"
+    if unreachable_goal(problem) is not None:
+        return "unreachable"
+    if ev.max_evals is not None and ev.n_evals >= ev.max_evals:
+        return "budget"
+    if ev.time_limit is not None and ev.elapsed >= ev.time_limit:
+        return "time_limit"
+    if ev.max_evals is None and ev.time_limit is None:
+        return "local_minima"
+    return "stopped"
 
 
 def prepare_q0(problem: IKProblem, q0: Any) -> np.ndarray | None:
@@ -132,9 +169,15 @@ def solve(
         fit = float(problem.fitness(q[None])[0])
     else:
         fit = float(ev.best_f)
-    dp, dr = verify(problem, q)
-    within = bool(np.all(q >= problem.lower - 1e-12) and np.all(q <= problem.upper + 1e-12))
-    success = within and dp <= tol_pos and (problem.position_only or dr <= tol_rot)
+    goal_errors = problem.verify(q, tol_pos, tol_rot, q0=q_start)
+    dp = max(
+        (e.position_error for e in goal_errors if not math.isnan(e.position_error)), default=0.0
+    )
+    dr = max(
+        (e.rotation_error for e in goal_errors if not math.isnan(e.rotation_error)), default=0.0
+    )
+    within = problem.within_bounds(q)
+    success = within and all(e.met for e in goal_errors)
     return Result(
         q=q,
         fitness=fit,
@@ -147,4 +190,6 @@ def solve(
         history=np.asarray(ev.history, dtype=float),
         solver=solver,
         seed=None if isinstance(seed, np.random.Generator) else (0 if seed is None else int(seed)),
+        goal_errors=goal_errors,
+        reason=end_reason(problem, bool(success), ev),
     )

@@ -2,7 +2,7 @@
 
 :func:`solve_batch` solves ``N`` target poses of one robot in one call.  The work is one
 numba-compiled loop over the targets (:func:`_solve_targets`); for each target it runs the
-bounded Levenberg–Marquardt polish of the default solver (:func:`swarm_ik.solvers.hybrid.lm_polish`:
+bounded Levenberg–Marquardt polish of the default solver (:func:`swarm_ik.kernels.lm.lm_polish`:
 pose residual in world axes, exact residual Jacobian, active-set joint limits, adaptive
 damping with accept/reject, stall detection), first from the seed (``q0``, else the middle of
 the joint ranges), then from random restarts until one start converges or ``max_starts``
@@ -43,10 +43,11 @@ import numpy as np
 from numpy.typing import NDArray
 
 from swarm_ik.errors import InvalidArgumentError, InvalidTargetError
-from swarm_ik.kinematics import ChainKinematics
-from swarm_ik.pose import make_pose, matrix_to_quat, rotation_angle
+from swarm_ik.kernels import lie, lm
+from swarm_ik.kernels.fk import TreeArrays
+from swarm_ik.kernels.lm import CONVERGED, NOT_RUN
+from swarm_ik.pose import make_pose, matrix_to_quat
 from swarm_ik.robot import RobotModel
-from swarm_ik.solvers.hybrid import CONVERGED, NOT_RUN, lm_polish
 
 FloatArray = NDArray[np.float64]
 IntArray = NDArray[np.int64]
@@ -86,24 +87,13 @@ def _solve_targets(
     t_pos: FloatArray,
     q_seed: FloatArray,
     index: IntArray,
-    kinds: IntArray,
-    axes: FloatArray,
-    rot_p: FloatArray,
-    pos_p: FloatArray,
-    rot_f: FloatArray,
-    pos_f: FloatArray,
-    lower: FloatArray,
-    upper: FloatArray,
-    wrap: BoolArray,
-    rot_w: float,
+    tree: TreeArrays,
+    goals: lm.GoalTable,
+    bounds: lm.Bounds,
+    cfg: lm.LMSettings,
     tol_pos: float,
     tol_rot: float,
     max_starts: int,
-    max_iters: int,
-    lam0: float,
-    max_step: float,
-    stall_rel: float,
-    stall_iters: int,
     seed: int,
     out_q: FloatArray,
     out_evals: IntArray,
@@ -116,20 +106,19 @@ def _solve_targets(
         t_pos: Target positions [m], shape ``(N, 3)``.
         q_seed: First start of each target, shape ``(N, nq)``, inside the bounds.
         index: Index of each target in the whole batch (keys its random stream), ``(N,)``.
-        kinds … pos_f: The chain (:class:`swarm_ik.kinematics.ChainKinematics`).
-        lower, upper: Bounds, shape ``(nq,)``; ``wrap``: continuous joints, ``(nq,)``.
-        rot_w: Rotation weight [m/rad] (0: position only).
+        tree: The robot's kinematic tree.
+        goals: A one-goal table (``POSE`` or ``POSITION`` on the first frame) whose
+            parameters are overwritten with each target.
+        bounds: Joint bounds; ``cfg``: LM settings (:data:`swarm_ik.kernels.lm.DEFAULT_LM`).
         tol_pos, tol_rot: Tolerances the polish stops at [m], [rad].
         max_starts: Most starts per target (the seed included).
-        max_iters: Most FK + Jacobian evaluations per start.
-        lam0, max_step, stall_rel, stall_iters: LM settings (see ``lm_polish``).
         seed: Seed of the restart streams, ``0 <= seed < 2**63``.
         out_q: Best point per target, shape ``(N, nq)``.
         out_evals: FK + Jacobian evaluations per target, ``(N,)``.
         out_starts: Starts polished per target, ``(N,)``.
     """
     n_targets = t_rot.shape[0]
-    n = lower.shape[0]
+    n = bounds.lower.shape[0]
     block = min(_RESTART_BLOCK, max(max_starts - 1, 1))
     starts = np.empty((block, n))
     pq = np.empty((block, n))
@@ -139,7 +128,12 @@ def _solve_targets(
     pev = np.empty(block, dtype=np.int64)
     seed_key = _splitmix64(np.uint64(seed))
     scale = 2.0**-53
+    par = goals.par[0]
     for i in range(n_targets):
+        for a in range(3):
+            for c in range(3):
+                par[3 * a + c] = t_rot[i, a, c]
+            par[9 + a] = t_pos[i, a]
         key = _splitmix64(seed_key ^ np.uint64(index[i]))
         for j in range(n):
             starts[0, j] = q_seed[i, j]
@@ -150,41 +144,16 @@ def _solve_targets(
         best_cost = np.inf
         converged = False
         while True:
-            used = lm_polish(
-                starts[:k],
-                kinds,
-                axes,
-                rot_p,
-                pos_p,
-                rot_f,
-                pos_f,
-                t_rot[i],
-                t_pos[i],
-                lower,
-                upper,
-                wrap,
-                rot_w,
-                tol_pos,
-                tol_rot,
-                max_iters,
-                k * max_iters,
-                True,
-                lam0,
-                max_step,
-                stall_rel,
-                stall_iters,
-                pq[:k],
-                pdp[:k],
-                pdr[:k],
-                pst[:k],
-                pev[:k],
-            )
+            used = lm.lm_polish(
+                starts[:k], tree, goals, bounds, cfg, tol_pos, tol_rot, k * cfg.max_iters,
+                True, pq[:k], pdp[:k], pdr[:k], pst[:k], pev[:k],
+            )  # fmt: skip
             evals += used
             for s in range(k):
                 if pst[s] == NOT_RUN:
                     break
                 done += 1
-                cost = pdp[s] + rot_w * pdr[s]
+                cost = pdp[s] + pdr[s]
                 if pst[s] == CONVERGED or cost < best_cost:
                     best_cost = cost
                     for j in range(n):
@@ -199,7 +168,9 @@ def _solve_targets(
                 for j in range(n):
                     counter += np.uint64(1)
                     u = float(_splitmix64(key + counter) >> np.uint64(11)) * scale
-                    starts[s, j] = min(lower[j] + u * (upper[j] - lower[j]), upper[j])
+                    starts[s, j] = min(
+                        bounds.lower[j] + u * (bounds.upper[j] - bounds.lower[j]), bounds.upper[j]
+                    )
         out_evals[i] = evals
         out_starts[i] = done
 
@@ -229,13 +200,13 @@ class BatchSettings:
     tol_rot: float = 1e-5
     position_only: bool = False
     max_starts: int = 128
-    max_iters: int = 60
+    max_iters: int = lm.DEFAULT_LM.max_iters
     seed: int = 0
-    lam0: float = 1e-3
-    max_step: float = 0.5
-    stall_rel: float = 1e-3
-    stall_iters: int = 3
-    tol_margin: float = 0.5
+    lam0: float = lm.DEFAULT_LM.lam0
+    max_step: float = lm.DEFAULT_LM.max_step
+    stall_rel: float = lm.DEFAULT_LM.stall_rel
+    stall_iters: int = lm.DEFAULT_LM.stall_iters
+    tol_margin: float = lm.DEFAULT_LM.tol_margin
 
     def __post_init__(self) -> None:
         for label in ("tol_pos", "tol_rot"):
@@ -251,43 +222,63 @@ class BatchSettings:
             raise InvalidArgumentError(f"seed must be an integer in [0, 2**63), got {s!r}")
         if not 0.0 < self.tol_margin <= 1.0:
             raise InvalidArgumentError(f"tol_margin must be in (0, 1], got {self.tol_margin!r}")
-        for label in ("lam0", "max_step", "stall_rel"):
-            v = getattr(self, label)
-            if not (np.isfinite(v) and v > 0):
-                raise InvalidArgumentError(f"{label} must be a positive number, got {v!r}")
+        self.lm_settings()  # validates lam0, max_step, stall_rel
+
+    def lm_settings(self) -> lm.LMSettings:
+        """The LM settings of the kernel, validated."""
+        return lm.LMSettings(
+            self.max_iters, self.lam0, self.max_step, self.stall_rel, self.stall_iters,
+            self.tol_margin,
+        ).checked()  # fmt: skip
 
 
 @dataclass(frozen=True)
 class BatchChain:
-    """What a worker needs of a robot: the chain arrays, the limits, the continuous joints
-    (plain arrays, so shipping it to a Dask worker needs neither the URDF nor Pinocchio).
+    """What a worker needs of a robot: the tree arrays and the bounds (plain arrays, so
+    shipping it to a Dask worker needs neither the URDF nor Pinocchio).
 
     Attributes:
-        chain: The kinematic chain (see :class:`swarm_ik.kinematics.ChainKinematics`).
-        lower: Lower limits, shape ``(nq,)``.
-        upper: Upper limits, shape ``(nq,)``.
-        wrap: Continuous joints, shape ``(nq,)``.
+        tree: The kinematic tree (:class:`swarm_ik.kernels.fk.TreeArrays`); targets are for
+            its first frame.
+        bounds: Limits, continuous and prismatic joints (:class:`swarm_ik.kernels.lm.Bounds`).
     """
 
-    chain: ChainKinematics
-    lower: FloatArray
-    upper: FloatArray
-    wrap: BoolArray
+    tree: TreeArrays
+    bounds: lm.Bounds
 
     @classmethod
     def from_robot(cls, robot: RobotModel) -> BatchChain:
-        """The chain of ``robot``."""
+        """The tree of ``robot``, reduced to its first goal frame."""
+        t = robot.tree
         return cls(
-            robot.chain,
-            np.ascontiguousarray(robot.lower, dtype=float),
-            np.ascontiguousarray(robot.upper, dtype=float),
-            np.ascontiguousarray(robot.continuous_mask),
+            t.with_frames(t.frame_joint[:1], t.frame_rot[:1], t.frame_pos[:1]),
+            lm.Bounds(
+                np.ascontiguousarray(robot.lower, dtype=float),
+                np.ascontiguousarray(robot.upper, dtype=float),
+                np.ascontiguousarray(robot.continuous_mask),
+                np.ascontiguousarray(robot.prismatic_mask),
+            ),
         )
 
     @property
     def nq(self) -> int:
         """Number of joints."""
-        return self.chain.nq
+        return self.tree.nq
+
+    @property
+    def lower(self) -> FloatArray:
+        """Lower limits, ``(nq,)``."""
+        return self.bounds.lower
+
+    @property
+    def upper(self) -> FloatArray:
+        """Upper limits, ``(nq,)``."""
+        return self.bounds.upper
+
+    @property
+    def wrap(self) -> BoolArray:
+        """Continuous joints, ``(nq,)``."""
+        return self.bounds.wrap
 
 
 @dataclass(frozen=True)
@@ -507,14 +498,14 @@ def _seed_starts(bc: BatchChain, q0: Any, n: int) -> FloatArray:
 
 
 def pose_errors(
-    chain: ChainKinematics, q: FloatArray, targets: FloatArray
+    tree: TreeArrays, q: FloatArray, targets: FloatArray
 ) -> tuple[FloatArray, FloatArray]:
     """Position [m] and rotation [rad] errors of ``q`` ``(N, nq)`` against ``targets``
-    ``(N, 4, 4)``, with the batched FK (independent of the solver's kernel)."""
-    poses = chain.fk(q) if q.shape[0] else np.empty((0, 4, 4))
+    ``(N, 4, 4)`` for the tree's first frame, with the batched FK (not the LM kernel)."""
+    poses = tree.fk(q)[:, 0] if q.shape[0] else np.empty((0, 4, 4))
     dp = np.linalg.norm(poses[:, :3, 3] - targets[:, :3, 3], axis=-1)
     rel = np.einsum("nji,njk->nik", targets[:, :3, :3], poses[:, :3, :3])
-    return dp, rotation_angle(rel)
+    return dp, lie.angle(rel)
 
 
 # --------------------------------------------------------------------------- chunks
@@ -543,38 +534,29 @@ def solve_chunk(
     q = np.empty((n, nq))
     evals = np.zeros(n, dtype=np.int64)
     starts = np.zeros(n, dtype=np.int64)
-    c = bc.chain
-    rot_w = 0.0 if settings.position_only else 1.0
     if n:
+        code = lm.POSITION if settings.position_only else lm.POSE
+        goals = lm.goal_table(
+            [code], [0], [1.0], [True], [np.zeros(lm.N_PAR)], [np.zeros(nq)], [np.zeros(nq)], nq
+        )
         _solve_targets(
             np.ascontiguousarray(targets[:, :3, :3]),
             np.ascontiguousarray(targets[:, :3, 3]),
             np.ascontiguousarray(q_seed, dtype=float),
             np.arange(start, start + n, dtype=np.int64),
-            c.kinds,
-            c.axes,
-            c.rot_p,
-            c.pos_p,
-            c.rot_f,
-            c.pos_f,
-            bc.lower,
-            bc.upper,
-            bc.wrap,
-            rot_w,
+            bc.tree,
+            goals,
+            bc.bounds,
+            settings.lm_settings(),
             settings.tol_pos * settings.tol_margin,
             settings.tol_rot * settings.tol_margin,
             int(settings.max_starts),
-            int(settings.max_iters),
-            float(settings.lam0),
-            float(settings.max_step),
-            float(settings.stall_rel),
-            int(settings.stall_iters),
             int(settings.seed),
             q,
             evals,
             starts,
         )
-    dp, dr = pose_errors(c, q, targets)
+    dp, dr = pose_errors(bc.tree, q, targets)
     within = np.all((q >= bc.lower - 1e-12) & (q <= bc.upper + 1e-12), axis=1)
     ok = within & (dp <= settings.tol_pos)
     if not settings.position_only:

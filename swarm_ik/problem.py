@@ -1,62 +1,122 @@
-"""IKProblem: a robot, a target pose, a fitness and the search bounds."""
+"""IKProblem: a robot, its goals, a scalar cost for the swarm solvers, the search bounds, and
+the one success judge.
+
+>>> import swarm_ik
+>>> robot = swarm_ik.load_robot("baxter")             # goal frames: both grippers
+>>> q = robot.mid_q() + 0.2
+>>> left, right = robot.fk_all(q)
+>>> problem = swarm_ik.IKProblem(robot, goals=[swarm_ik.goals.Pose("left_gripper", left),
+...                                            swarm_ik.goals.Pose("right_gripper", right)])
+>>> swarm_ik.solve(problem, seed=0).success
+True
+"""
 
 from __future__ import annotations
 
 import math
+from collections.abc import Sequence
+from dataclasses import dataclass
 from typing import Any
 
 import numpy as np
-import pinocchio as pin
 from numpy.typing import NDArray
 
-from swarm_ik.errors import InvalidArgumentError, unknown
+from swarm_ik.errors import InvalidArgumentError, InvalidTargetError, unknown
 from swarm_ik.fitness import FITNESS, get_fitness
-from swarm_ik.pose import as_pose, is_finite_nonneg, rotation_angle
+from swarm_ik.goals import Goal, Pose, Position
+from swarm_ik.kernels import lm
+from swarm_ik.pose import as_pose, is_finite_nonneg
 from swarm_ik.robot import RobotModel
 
 FloatArray = NDArray[np.float64]
 
+SECONDARY_WEIGHT = 1e-3
+"""Weight of the secondary goals' cost (½‖r₂‖²) in the scalar cost of the swarm solvers."""
 
-def _log3_world(m: FloatArray) -> FloatArray:
-    """Rotation vectors ``(pop, 3)`` of rotations ``(pop, 3, 3)``, accurate up to π."""
-    theta = rotation_angle(m)
-    s = 0.5 * np.stack(
-        [m[:, 2, 1] - m[:, 1, 2], m[:, 0, 2] - m[:, 2, 0], m[:, 1, 0] - m[:, 0, 1]], axis=-1
-    )
-    sin_t = np.sin(theta)
-    scale = np.where(theta < 1e-8, 1.0 + theta**2 / 6.0, theta / np.where(sin_t == 0, 1.0, sin_t))
-    out = s * scale[:, None]
-    near_pi = theta > np.pi - 1e-4
-    for i in np.flatnonzero(near_pi):  # rare: let Pinocchio handle the branch at π
-        out[i] = pin.log3(m[i])
-    return out
+
+@dataclass(frozen=True)
+class GoalError:
+    """How far one primary goal is from being met, computed with Pinocchio.
+
+    Attributes:
+        goal: Label, e.g. ``"Pose(left_gripper)"``.
+        position_error: Position error [m] (NaN when the goal has none).
+        rotation_error: Angular error [rad] (NaN when the goal has none).
+        met: Within the tolerances of the solve.
+    """
+
+    goal: str
+    position_error: float
+    rotation_error: float
+    met: bool
+
+    def to_dict(self) -> dict[str, Any]:
+        """JSON-ready dict (NaN as None)."""
+
+        def num(v: float) -> float | None:
+            return None if math.isnan(v) else float(v)
+
+        return {
+            "goal": self.goal,
+            "position_error": num(self.position_error),
+            "rotation_error": num(self.rotation_error),
+            "met": self.met,
+        }
+
+
+def judge(
+    errors: FloatArray, primary: Sequence[bool] | FloatArray, tol_pos: float, tol_rot: float
+) -> NDArray[np.bool_]:
+    """The one success judge: which goals are met.
+
+    Args:
+        errors: ``(ng, 2)`` errors ``[position m, angle rad]`` (NaN where a goal has none).
+        primary: Which goals are primary, ``(ng,)`` (secondary goals always count as met).
+        tol_pos: Position tolerance [m].
+        tol_rot: Angular tolerance [rad].
+
+    Returns:
+        ``(ng,)`` booleans (compiled twin: :func:`swarm_ik.kernels.lm.within_tolerance`).
+    """
+    e = np.asarray(errors, dtype=float)
+    ok_p = ~(e[:, 0] > tol_pos)  # NaN: no such error
+    ok_r = ~(e[:, 1] > tol_rot)
+    return (ok_p & ok_r) | ~np.asarray(primary, dtype=bool)
 
 
 class IKProblem:
-    """Inverse kinematics of one target pose.
+    """Inverse kinematics of a set of goals.
 
     Args:
-        robot: The robot (see :func:`swarm_ik.load_robot`).
-        target: Target pose: ``(4, 4)`` array [m], ``(position, quaternion xyzw)``, 7 numbers
+        robot: The robot (see :func:`swarm_ik.load_robot`), loaded with every goal frame.
+        target: Shorthand for ``[Pose(robot.ee_frame, target)]`` (``Position`` when
+            ``w_rot == 0``): ``(4, 4)`` array [m], ``(position, quaternion xyzw)``, 7 numbers
             ``x y z qx qy qz qw``, or a ``pinocchio.SE3``.
-        fitness: ``"se3"`` (default), ``"paper-l1"``, ``"euler-zyz"`` or ``"paper-pso"``
-            (see :mod:`swarm_ik.fitness`).
-        w_rot: Weight of the rotation error in ``"se3"`` [m/rad]; 0 makes the problem
-            position-only (success then ignores the rotation).
-        lam: λ of ``"paper-l1"`` (per metre; 10 equals the paper's 1e-2 per millimetre).
+        goals: Goal terms (:mod:`swarm_ik.goals`), after the target's pose if both are given.
+        fitness: Scalar cost of the swarm solvers: ``"se3"`` (default: the sum over primary
+            goals of their errors, ``‖Δp‖ + w_rot·θ`` for a pose, plus
+            ``SECONDARY_WEIGHT·½‖r₂‖²``), or, for a single-pose problem only, the paper forms
+            ``"paper-l1"``, ``"euler-zyz"``, ``"paper-pso"`` (see :mod:`swarm_ik.fitness`).
+            (For compatibility a string passed as the third positional argument is taken as
+            ``fitness``.)
+        w_rot: Weight of angular errors in ``"se3"`` [m/rad]; 0 with ``target`` makes the
+            problem position-only.
+        lam: λ of ``"paper-l1"`` (per metre).
         mu: μ of ``"euler-zyz"``.
-        orth_tol: Tolerance on the orthonormality of the target rotation.
+        orth_tol: Tolerance on the orthonormality of target rotations.
         lower: Optional narrower lower bounds, shape ``(nq,)``; default the joint limits.
         upper: Optional narrower upper bounds, shape ``(nq,)``.
 
     Attributes:
-        robot, target, fitness_name, w_rot, lower, upper, nq.
+        robot, goals, target (the first pose target, or None), fitness_name, w_rot, lower,
+        upper, nq, position_only (a single Position goal from ``target`` with ``w_rot=0``).
     """
 
     def __init__(
         self,
         robot: RobotModel,
-        target: Any,
+        target: Any = None,
+        goals: Sequence[Goal] | str | None = None,
         fitness: str = "se3",
         *,
         w_rot: float = 1.0,
@@ -70,18 +130,54 @@ class IKProblem:
             raise InvalidArgumentError(
                 f"robot must be a RobotModel (see swarm_ik.load_robot), got {type(robot).__name__}"
             )
+        if isinstance(goals, str):  # IKProblem(robot, target, "paper-l1"): the 0.1 signature
+            fitness, goals = goals, None
         self.robot = robot
-        self.target = as_pose(target, orth_tol=orth_tol)
-        if not isinstance(fitness, str):
-            raise unknown("fitness", fitness, FITNESS)
-        self.fitness_name = fitness
-        self._fitness = get_fitness(fitness)
         for label, v in (("w_rot", w_rot), ("lam", lam), ("mu", mu)):
             if not is_finite_nonneg(v):
                 raise InvalidArgumentError(
                     f"{label} must be a finite non-negative number, got {v!r}"
                 )
         self.w_rot = float(w_rot)
+        terms: list[Goal] = []
+        self.target: FloatArray | None = None
+        if target is not None:
+            self.target = as_pose(target, orth_tol=orth_tol)
+            if self.w_rot == 0.0:
+                terms.append(Position(robot.ee_frame, self.target[:3, 3]))
+            else:
+                terms.append(Pose(robot.ee_frame, self.target, orth_tol=orth_tol))
+        if goals is not None:
+            if not isinstance(goals, Sequence):
+                raise InvalidArgumentError(
+                    f"goals must be a list of goal terms (swarm_ik.goals), got {goals!r}"
+                )
+            for gl in goals:
+                if not isinstance(gl, Goal):
+                    raise InvalidArgumentError(
+                        f"goals must be swarm_ik.goals terms, got {type(gl).__name__}"
+                    )
+            terms.extend(goals)
+        if not terms:
+            raise InvalidTargetError("give a target pose or a list of goals; got None")
+        if not any(gl.primary for gl in terms):
+            raise InvalidArgumentError(
+                "at least one goal must be primary (Posture, CenterJoints and "
+                "MinimalDisplacement are secondary unless primary=True)"
+            )
+        self.goals: tuple[Goal, ...] = tuple(terms)
+        if self.target is None:
+            first = next((gl for gl in terms if isinstance(gl, Pose)), None)
+            self.target = None if first is None else first.target
+        if not isinstance(fitness, str) or fitness not in FITNESS:
+            raise unknown("fitness", fitness, FITNESS)
+        self.single_pose = len(terms) == 1 and isinstance(terms[0], (Pose, Position))
+        if fitness != "se3" and not (len(terms) == 1 and isinstance(terms[0], Pose)):
+            raise InvalidArgumentError(
+                f"fitness {fitness!r} is a paper's single-pose form; goal sets use 'se3'"
+            )
+        self.fitness_name = fitness
+        self._fitness = get_fitness(fitness)
         self._weights = {"w_rot": self.w_rot, "lam": float(lam), "mu": float(mu)}
         self.lower = robot.lower.copy() if lower is None else robot.check_q(lower, "lower")
         self.upper = robot.upper.copy() if upper is None else robot.check_q(upper, "upper")
@@ -98,86 +194,153 @@ class IKProblem:
                 f"bounds [{self.lower[j]:g}, {self.upper[j]:g}] exceed its limits "
                 f"[{robot.lower[j]:g}, {robot.upper[j]:g}]"
             )
-        self.position_only = fitness == "se3" and self.w_rot == 0.0
-        self._rot_target = np.ascontiguousarray(self.target[:3, :3])
+        self.position_only = (target is not None and self.w_rot == 0.0 and len(terms) == 1) or all(
+            isinstance(gl, Position) for gl in terms if gl.primary
+        )
+        self.primary = np.array([gl.primary for gl in terms], dtype=bool)
+        # angular errors in the se3 cost: w_rot (m/rad); position errors: 1
+        self._table_cache: dict[Any, lm.GoalTable] = {}
+        self.bounds = lm.Bounds(
+            np.ascontiguousarray(self.lower),
+            np.ascontiguousarray(self.upper),
+            np.ascontiguousarray(robot.continuous_mask),
+            np.ascontiguousarray(robot.prismatic_mask),
+        )
+        self.table(None)  # validate every goal against the robot now
 
+    # ------------------------------------------------------------------ goals
     @property
     def nq(self) -> int:
         """Number of joints."""
         return self.robot.nq
 
+    @property
+    def has_secondary(self) -> bool:
+        """Whether any goal is secondary."""
+        return bool(np.any(~self.primary))
+
+    def table(self, q0: FloatArray | None) -> lm.GoalTable:
+        """The compiled goal table (``q0`` fills :class:`~swarm_ik.goals.MinimalDisplacement`)."""
+        key = None if q0 is None else np.asarray(q0, dtype=float).tobytes()
+        tab = self._table_cache.get(key)
+        if tab is None:
+            rows = [gl.encode(self.robot, q0) for gl in self.goals]
+            tab = lm.goal_table(
+                [r.code for r in rows],
+                [r.frame for r in rows],
+                [r.weight for r in rows],
+                [r.primary for r in rows],
+                [r.par for r in rows],
+                [r.jref for r in rows],
+                [r.jw for r in rows],
+                self.nq,
+            )
+            if len(self._table_cache) > 64:
+                self._table_cache.clear()
+            self._table_cache[key] = tab
+        return tab
+
     @classmethod
     def from_q(cls, robot: RobotModel, q: Any, fitness: str = "se3", **kwargs: Any) -> IKProblem:
-        """The problem whose target is the FK of ``q`` (reachable by construction)."""
-        return cls(robot, robot.fk(robot.check_q(q)), fitness, **kwargs)
+        """The single-pose problem whose target is the FK of ``q`` (reachable by
+        construction)."""
+        return cls(robot, robot.fk(robot.check_q(q)), fitness=fitness, **kwargs)
 
     # --------------------------------------------------------------- hot path
+    def goal_errors(self, q_batch: FloatArray, q0: FloatArray | None = None) -> FloatArray:
+        """Errors of every goal, ``(pop, nq) -> (pop, ng, 2)`` ``[m, rad]`` (compiled FK)."""
+        q2 = np.ascontiguousarray(np.atleast_2d(q_batch), dtype=float)
+        err = np.empty((q2.shape[0], len(self.goals), 2))
+        cost2 = np.empty(q2.shape[0])
+        lm.errors_batch(q2, self.robot.tree, self.table(q0), self.bounds, err, cost2)
+        return err
+
+    def cost(self, q_batch: FloatArray, q0: FloatArray | None = None) -> FloatArray:
+        """The ``"se3"`` scalar cost ``(pop, nq) -> (pop,)``: Σ over primary goals of
+        position error + ``w_rot``·angular error, plus ``SECONDARY_WEIGHT``·½‖r₂‖²."""
+        q2 = np.ascontiguousarray(np.atleast_2d(q_batch), dtype=float)
+        err = np.empty((q2.shape[0], len(self.goals), 2))
+        cost2 = np.empty(q2.shape[0])
+        lm.errors_batch(q2, self.robot.tree, self.table(q0), self.bounds, err, cost2)
+        e = np.where(np.isnan(err), 0.0, err)[:, self.primary]
+        return e[..., 0].sum(-1) + self.w_rot * e[..., 1].sum(-1) + SECONDARY_WEIGHT * 0.5 * cost2
+
     def fitness(self, q_batch: FloatArray) -> FloatArray:
-        """Batched fitness: ``(pop, nq) -> (pop,)`` (the solvers' objective)."""
+        """Batched scalar cost: ``(pop, nq) -> (pop,)`` (the swarm solvers' objective)."""
+        if self.fitness_name == "se3":
+            return self.cost(q_batch)
         poses = self.robot.fk(np.atleast_2d(q_batch))
         return self._fitness(poses, self.target, **self._weights)
 
     __call__ = fitness
 
     def fitness_of_poses(self, poses: FloatArray) -> FloatArray:
-        """Fitness of given end-effector poses ``(pop, 4, 4)``."""
+        """Fitness of given end-effector poses ``(pop, 4, 4)`` (single-pose problems)."""
+        if self.target is None or not self.single_pose:
+            raise InvalidArgumentError("fitness_of_poses needs a single-pose problem")
         return self._fitness(poses, self.target, **self._weights)
 
     def errors(self, q_batch: FloatArray) -> tuple[FloatArray, FloatArray]:
-        """Position error ‖Δp‖ [m] and rotation error θ [rad], each ``(pop,)``."""
-        poses = self.robot.fk(np.atleast_2d(q_batch))
-        return self.pose_errors(poses)
-
-    def pose_errors(self, poses: FloatArray) -> tuple[FloatArray, FloatArray]:
-        """Position and rotation errors of poses ``(pop, 4, 4)`` against the target."""
-        dp = np.linalg.norm(poses[:, :3, 3] - self.target[:3, 3], axis=-1)
-        rot_err = np.einsum("ji,njk->nik", self._rot_target, poses[:, :3, :3])
-        return dp, rotation_angle(rot_err)
+        """Largest primary position error [m] and angular error [rad], each ``(pop,)``."""
+        err = self.goal_errors(q_batch)[:, self.primary]
+        e = np.where(np.isnan(err), 0.0, err)
+        return e[..., 0].max(-1), e[..., 1].max(-1)
 
     def residual_jacobian(self, q_batch: FloatArray) -> tuple[FloatArray, FloatArray, FloatArray]:
-        """Fitness, error twist and Jacobian for Gauss–Newton / DLS steps.
+        """Fitness, stacked primary residual and its step Jacobian, for Gauss–Newton steps.
 
         Args:
             q_batch: Joint vectors, shape ``(pop, nq)``.
 
         Returns:
-            ``fitness (pop,)``; ``err (pop, 6)`` = ``[p_target − p; log(R_target Rᵀ)]`` in world
-            axes (rotation rows zero when position-only); ``jac (pop, 6, nq)``, the
-            LOCAL_WORLD_ALIGNED frame Jacobian (rotation rows zero when position-only), so
-            that ``q + pinv(jac) @ err`` is the Gauss–Newton step.
+            ``fitness (pop,)``; ``err (pop, rows)`` with ``r(q + δ) ≈ r − J δ`` (for a pose:
+            ``[p* − p; log(R* Rᵀ)]`` in world axes); ``jac (pop, rows, nq)``, so that
+            ``q + pinv(jac) @ err`` is the Gauss–Newton step.
         """
-        poses, jac = self.robot.fk_jacobian(np.atleast_2d(q_batch))
-        f = self._fitness(poses, self.target, **self._weights)
-        err = np.empty((poses.shape[0], 6))
-        err[:, :3] = self.target[:3, 3] - poses[:, :3, 3]
-        if self.position_only:
-            err[:, 3:] = 0.0
-            jac[:, 3:, :] = 0.0
-        else:
-            m = np.einsum("ij,nkj->nik", self._rot_target, poses[:, :3, :3])
-            err[:, 3:] = _log3_world(m)
-        return f, err, jac
+        q2 = np.ascontiguousarray(np.atleast_2d(q_batch), dtype=float)
+        tab = self.table(None)
+        pop, m = q2.shape[0], tab.rows_primary
+        res = np.empty((pop, m))
+        jac = np.empty((pop, m, self.nq))
+        err = np.empty((pop, len(self.goals), 2))
+        lm.residuals_batch(q2, self.robot.tree, tab, self.bounds, True, res, jac, err)
+        return self.fitness(q2), res, jac
+
+    def within_bounds(self, q: FloatArray, tol: float = 1e-12) -> bool:
+        """Whether ``q`` lies within the problem's bounds (± ``tol``)."""
+        q = np.asarray(q, dtype=float)
+        return bool(np.all(q >= self.lower - tol) and np.all(q <= self.upper + tol))
 
     def is_success(self, q: FloatArray, tol_pos: float, tol_rot: float) -> bool:
-        """Both errors within tolerance (rotation ignored when position-only), within limits."""
-        q = np.asarray(q, dtype=float)
-        if np.any(q < self.lower - 1e-12) or np.any(q > self.upper + 1e-12):
+        """Every primary goal within tolerance (compiled FK) and ``q`` within the bounds."""
+        if not self.within_bounds(q):
             return False
-        pose = self.robot.fk(q)
-        t = self.target
-        dx, dy, dz = pose[0, 3] - t[0, 3], pose[1, 3] - t[1, 3], pose[2, 3] - t[2, 3]
-        if math.sqrt(dx * dx + dy * dy + dz * dz) > tol_pos:
-            return False
-        if self.position_only:
-            return True
-        m = (self._rot_target.T @ pose[:3, :3]).tolist()  # scalar maths: one pose only
-        sx, sy, sz = m[2][1] - m[1][2], m[0][2] - m[2][0], m[1][0] - m[0][1]
-        cos_t = 0.5 * (m[0][0] + m[1][1] + m[2][2] - 1.0)
-        return math.atan2(0.5 * math.sqrt(sx * sx + sy * sy + sz * sz), cos_t) <= tol_rot
+        return bool(np.all(judge(self.goal_errors(q)[0], self.primary, tol_pos, tol_rot)))
+
+    # ------------------------------------------------------------ the check
+    def verify(
+        self, q: Any, tol_pos: float = 1e-5, tol_rot: float = 1e-5, q0: FloatArray | None = None
+    ) -> tuple[GoalError, ...]:
+        """Errors of every primary goal at ``q`` computed with Pinocchio's own FK (not the
+        compiled kernels), judged against the tolerances."""
+        qv = self.robot.check_q(q, "q")
+        poses = self.robot.fk_pinocchio_all(qv)
+        out = []
+        for gl, prim in zip(self.goals, self.primary, strict=False):
+            if not prim:
+                continue
+            frame = gl.frame_name()
+            pose = poses[self.robot.frames.index(frame)] if frame is not None else np.eye(4)
+            if gl.frame_goal:
+                dp, dr = gl.errors(pose, qv, self.robot)
+            else:
+                dp, dr = gl.errors(pose, qv, self.robot, q0)  # type: ignore[call-arg]
+            met = bool(judge(np.array([[dp, dr]]), [True], tol_pos, tol_rot)[0])
+            out.append(GoalError(gl.describe(), float(dp), float(dr), met))
+        return tuple(out)
 
     def __repr__(self) -> str:
-        p = self.target[:3, 3]
+        labels = [gl.describe() for gl in self.goals]
         return (
-            f"IKProblem(robot={self.robot.name!r}, fitness={self.fitness_name!r}, "
-            f"target_position={np.round(p, 4).tolist()})"
+            f"IKProblem(robot={self.robot.name!r}, fitness={self.fitness_name!r}, goals={labels})"
         )

@@ -161,8 +161,8 @@ def chain_reach_bound(robot: RobotModel) -> tuple[FloatArray, float]:
     Returns:
         ``(centre (3,) [m], radius [m])``.
     """
-    c = robot.chain
-    radius = float(np.linalg.norm(c.pos_p[1:], axis=1).sum() + np.linalg.norm(c.pos_f))
+    c = robot.tree
+    radius = float(np.linalg.norm(c.pos_p[1:], axis=1).sum() + np.linalg.norm(c.frame_pos[0]))
     for j, kind in enumerate(robot.joint_kinds):
         if kind == "prismatic":
             radius += float(max(abs(robot.lower[j]), abs(robot.upper[j])))

@@ -2,7 +2,7 @@
 
 from __future__ import annotations
 
-from dataclasses import asdict, dataclass
+from dataclasses import dataclass, fields
 from typing import Any
 
 import numpy as np
@@ -31,6 +31,14 @@ class Result:
         history: Best fitness after each iteration of the solver, shape ``(iterations,)``.
         solver: Registry name of the solver.
         seed: The seed used (``None`` if a Generator was passed).
+        goal_errors: Per primary goal, its errors [m, rad] computed with Pinocchio and
+            whether it is met (:class:`swarm_ik.problem.GoalError`).
+        reason: Why the solve ended: ``"converged"`` (success), ``"budget"`` (the
+            evaluation budget ran out), ``"time_limit"``, ``"local_minima"`` (every start
+            ended in a local minimum or at its iteration cap within the solver's own
+            iteration count), ``"unreachable"`` (a goal point lies beyond the frame's
+            reach: no joint vector can meet it), or ``"stopped"`` (the solver returned on its
+            own before its budget without success).
     """
 
     q: FloatArray
@@ -44,12 +52,15 @@ class Result:
     history: FloatArray
     solver: str = ""
     seed: int | None = None
+    goal_errors: tuple[Any, ...] = ()
+    reason: str = ""
 
     def to_dict(self) -> dict[str, Any]:
         """JSON-ready dict (arrays as lists)."""
-        d = asdict(self)
+        d = {f.name: getattr(self, f.name) for f in fields(self)}
         d["q"] = [float(v) for v in self.q]
         d["history"] = [float(v) for v in self.history]
+        d["goal_errors"] = [g.to_dict() for g in self.goal_errors]
         return d
 
     def __repr__(self) -> str:
@@ -57,5 +68,6 @@ class Result:
             f"Result(success={self.success}, position_error={self.position_error:.3g} m, "
             f"rotation_error={self.rotation_error:.3g} rad, fitness={self.fitness:.3g}, "
             f"n_evals={self.n_evals}, time_s={self.time_s:.4f}, solver={self.solver!r}, "
+            f"reason={self.reason!r}, "
             f"q={np.round(self.q, 6).tolist()})"
         )

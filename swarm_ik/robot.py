@@ -14,17 +14,18 @@ import sys
 import threading
 import warnings
 import xml.etree.ElementTree as ET
+from collections.abc import Sequence
 from dataclasses import dataclass, field
 from importlib import resources
 from pathlib import Path
-from typing import Any
+from typing import Any, NamedTuple
 
 import numpy as np
 import pinocchio as pin
 from numpy.typing import NDArray
 
 from swarm_ik.errors import InvalidArgumentError, RobotFileNotFoundError, RobotModelError, unknown
-from swarm_ik.kinematics import CONTINUOUS, KIND_NAMES, PRISMATIC, REVOLUTE, ChainKinematics
+from swarm_ik.kernels.fk import CONTINUOUS, KIND_NAMES, PRISMATIC, REVOLUTE, TreeArrays
 
 FloatArray = NDArray[np.float64]
 
@@ -35,7 +36,7 @@ BUNDLED: dict[str, tuple[str, str]] = {
 }
 """Bundled robots: name -> (file in ``robots/``, end-effector frame)."""
 
-EXAMPLE_ROBOTS: dict[str, tuple[str, str]] = {
+EXAMPLE_ROBOTS: dict[str, tuple[str, str | tuple[str, ...]]] = {
     "panda": ("panda_description/urdf/panda.urdf", "panda_hand_tcp"),
     "ur3": ("ur_description/urdf/ur3_robot.urdf", "tool0"),
     "ur5": ("ur_description/urdf/ur5_robot.urdf", "tool0"),
@@ -44,6 +45,11 @@ EXAMPLE_ROBOTS: dict[str, tuple[str, str]] = {
     "xarm7": ("xarm_description/urdf/xarm7.urdf", "link_eef"),
     "z1": ("z1_description/urdf/z1.urdf", "link06"),
     "baxter_left": ("baxter_description/urdf/baxter.urdf", "left_gripper"),
+    "baxter": ("baxter_description/urdf/baxter.urdf", ("left_gripper", "right_gripper")),
+    "talos": (
+        "talos_data/robots/talos_reduced.urdf",
+        ("gripper_left_base_link", "gripper_right_base_link"),
+    ),
 }
 """Arms of the ``example-robot-data`` package: name -> (URDF path under its ``robots/``
 folder, default end-effector frame).  Joints off the root → end-effector chain (grippers)
@@ -215,25 +221,224 @@ def _joint_kind_axis(jmodel: Any) -> tuple[int, FloatArray]:
     return kind, axis / np.linalg.norm(axis)
 
 
+def _mimic_table(path: Path) -> dict[str, tuple[str, float, float]]:
+    """Mimic joints of the URDF: follower -> (driver, multiplier, offset)."""
+    out: dict[str, tuple[str, float, float]] = {}
+    try:
+        root = ET.parse(path).getroot()
+    except ET.ParseError:
+        return out
+    for joint in root.findall("joint"):
+        el = joint.find("mimic")
+        if el is None:
+            continue
+        try:
+            mult = float(el.get("multiplier", "1"))
+            off = float(el.get("offset", "0"))
+        except ValueError:
+            raise RobotModelError(
+                f"{path}: joint {joint.get('name')!r} has a non-numeric <mimic> multiplier or "
+                "offset"
+            ) from None
+        if not (np.isfinite(mult) and np.isfinite(off)) or mult == 0.0:
+            raise RobotModelError(
+                f"{path}: joint {joint.get('name')!r}: <mimic> multiplier must be finite and "
+                f"non-zero, offset finite (got {mult}, {off})"
+            )
+        out[str(joint.get("name"))] = (str(el.get("joint")), mult, off)
+    return out
+
+
+class _Reduction(NamedTuple):
+    reduced: Any
+    locked: list[int]
+    q_ref: FloatArray
+    frame_ids: list[int]
+    names: list[str]
+    kinds: list[int]
+    tree: TreeArrays
+    lower: FloatArray
+    upper: FloatArray
+    followers: dict[str, tuple[str, float, float]]
+
+
+def _reduce(
+    p: Path,
+    full: Any,
+    frames: list[str],
+    mimic: dict[str, tuple[str, float, float]],
+) -> _Reduction:
+    """Reduce ``full`` to the union of the root → frame paths of ``frames`` (a chain or a
+    tree) and read the kinematic arrays off it.
+
+    A mimic follower on a path is kept and driven by its driver (which is then solved even if
+    it is on no path); its range narrows the driver's.  Every other joint is locked at its
+    neutral value.
+    """
+    keep: set[int] = set()
+    where = f"chain to {frames[0]!r}" if len(frames) == 1 else f"paths to {frames}"
+    fids = [_frame_id(full, f) for f in frames]
+    for f, fid in zip(frames, fids, strict=False):
+        parent = full.frames[fid].parentJoint
+        path_ids = [int(j) for j in full.supports[parent] if j != 0]
+        if not path_ids:
+            raise RobotModelError(f"{p}: no movable joint between the root and frame {f!r}")
+        keep.update(path_ids)
+    jid = {full.names[j]: j for j in range(1, full.njoints)}
+    for j in sorted(keep):
+        name = full.names[j]
+        if name in mimic:
+            driver = mimic[name][0]
+            if driver not in jid:
+                raise RobotModelError(
+                    f"{p}: joint {name!r} mimics joint {driver!r}, which is not in the model"
+                )
+            if driver in mimic:
+                raise RobotModelError(
+                    f"{p}: joint {name!r} mimics {driver!r}, itself a mimic joint (chains of "
+                    "mimic joints are not supported)"
+                )
+            if jid[driver] not in keep:
+                raise RobotModelError(
+                    f"{p}: joint {name!r} on the {where} mimics joint {driver!r}, which is not "
+                    f"on the {where}; a mimic joint is supported where its driver is solved too"
+                )
+    locked = [j for j in range(1, full.njoints) if j not in keep]
+    q_ref = pin.neutral(full)
+    try:
+        reduced = pin.buildReducedModel(full, locked, q_ref) if locked else full.copy()
+    except Exception as exc:
+        raise RobotModelError(f"{p}: could not reduce the model ({exc})") from None
+    names: list[str] = []
+    kinds: list[int] = []
+    axes, rot_p, pos_p, parent = [], [], [], []
+    lower: list[float] = []
+    upper: list[float] = []
+    joint_kind: dict[str, int] = {}
+    joint_range: dict[str, tuple[float, float]] = {}
+    for j in range(1, reduced.njoints):
+        jm = reduced.joints[j]
+        jname = reduced.names[j]
+        try:
+            kind, axis = _joint_kind_axis(jm)
+        except RobotModelError as exc:
+            raise RobotModelError(
+                f"{p}: joint {jname!r} on the {where}: {exc}; supported: revolute, "
+                "continuous, prismatic (and fixed)"
+            ) from None
+        kinds.append(kind)
+        axes.append(axis)
+        placement = reduced.jointPlacements[j]
+        rot_p.append(np.array(placement.rotation))
+        pos_p.append(np.array(placement.translation))
+        parent.append(int(reduced.parents[j]) - 1)
+        if kind == CONTINUOUS:
+            lo, hi = -np.pi, np.pi
+        else:
+            lo = float(reduced.lowerPositionLimit[jm.idx_q])
+            hi = float(reduced.upperPositionLimit[jm.idx_q])
+        if not (np.isfinite(lo) and np.isfinite(hi)) or lo > hi:
+            raise RobotModelError(f"{p}: joint {jname!r} has invalid limits [{lo}, {hi}]")
+        joint_kind[jname] = kind
+        joint_range[jname] = (lo, hi)
+    # joint vector: one entry per non-follower joint, in the reduced model's order
+    q_of: dict[str, int] = {}
+    for j in range(1, reduced.njoints):
+        jname = reduced.names[j]
+        if jname not in mimic:
+            q_of[jname] = len(names)
+            names.append(jname)
+            lower.append(joint_range[jname][0])
+            upper.append(joint_range[jname][1])
+    q_index, mult, offs = [], [], []
+    followers: dict[str, tuple[str, float, float]] = {}
+    for j in range(1, reduced.njoints):
+        jname = reduced.names[j]
+        if jname in mimic:
+            driver, a, b = mimic[jname]
+            if joint_kind[jname] == CONTINUOUS or joint_kind[driver] == CONTINUOUS:
+                raise RobotModelError(
+                    f"{p}: mimic joint {jname!r} or its driver {driver!r} is continuous; "
+                    "supported: revolute and prismatic mimic joints"
+                )
+            d = q_of[driver]
+            flo, fhi = joint_range[jname]
+            lo_d, hi_d = sorted(((flo - b) / a, (fhi - b) / a))
+            lower[d] = max(lower[d], lo_d)
+            upper[d] = min(upper[d], hi_d)
+            if lower[d] > upper[d]:
+                raise RobotModelError(
+                    f"{p}: mimic joint {jname!r} cannot stay within its limits for any value "
+                    f"of its driver {driver!r} within the driver's limits"
+                )
+            q_index.append(d)
+            mult.append(a)
+            offs.append(b)
+            followers[jname] = (driver, a, b)
+        else:
+            q_index.append(q_of[jname])
+            mult.append(1.0)
+            offs.append(0.0)
+    rfids = [_frame_id(reduced, f) for f in frames]
+    f_joint = [int(reduced.frames[i].parentJoint) - 1 for i in rfids]
+    f_rot = [np.array(reduced.frames[i].placement.rotation) for i in rfids]
+    f_pos = [np.array(reduced.frames[i].placement.translation) for i in rfids]
+    tree = TreeArrays.canonical(
+        kind=np.array(kinds, dtype=np.int64),
+        parent=np.array(parent, dtype=np.int64),
+        q_index=np.array(q_index, dtype=np.int64),
+        multiplier=np.array(mult, dtype=float),
+        offset=np.array(offs, dtype=float),
+        axes=np.asarray(axes, dtype=float).reshape(-1, 3),
+        rot_p=np.asarray(rot_p, dtype=float).reshape(-1, 3, 3),
+        pos_p=np.asarray(pos_p, dtype=float).reshape(-1, 3),
+        frame_joint=np.array(f_joint, dtype=np.int64),
+        frame_rot=np.asarray(f_rot, dtype=float).reshape(-1, 3, 3),
+        frame_pos=np.asarray(f_pos, dtype=float).reshape(-1, 3),
+        nq=len(names),
+    )
+    return _Reduction(
+        reduced,
+        locked,
+        np.asarray(q_ref, dtype=float),
+        rfids,
+        names,
+        [kinds[reduced.getJointId(n) - 1] for n in names],
+        tree,
+        np.array(lower),
+        np.array(upper),
+        followers,
+    )
+
+
 @dataclass(frozen=True, eq=False)
 class RobotModel:
-    """A serial chain from a URDF, with limits, joint kinds and batched kinematics.
+    """A URDF reduced to the joints between the root and its goal frames, with limits, joint
+    kinds and batched kinematics of every goal frame.
 
-    Build it with :func:`load_robot` or :meth:`from_urdf`.
+    Build it with :func:`load_robot` or :meth:`from_urdf`.  With one goal frame the model is
+    the serial chain root → frame; with several it is the union of the root → frame paths (a
+    tree: Baxter's two arms, a humanoid's hands), every other joint locked.
 
     Attributes:
         name: Robot name (from the URDF).
         urdf_path: The URDF file.
-        ee_frame: End-effector frame name.
-        model: Pinocchio model of the chain (joints off the chain locked).
+        ee_frame: The first goal frame (the end effector of single-frame problems).
+        frames: Every goal frame, in the order given, shape ``(nf,)``.
+        model: Pinocchio model of the solved joints (other joints locked).
         full_model: Pinocchio model of the whole URDF.
-        locked_joints: Names of the URDF joints locked (off the chain).
+        locked_joints: Names of the URDF joints locked.
         q_locked: Full-model configuration used for the locked joints.
-        joint_names: Names of the chain's joints, shape ``(nq,)``.
+        joint_names: Names of the solved joints, shape ``(nq,)``.
         joint_kinds: ``"revolute"``, ``"prismatic"`` or ``"continuous"`` per joint.
         lower: Lower limits (rad or m), shape ``(nq,)``; ``-π`` for continuous joints.
         upper: Upper limits (rad or m), shape ``(nq,)``; ``+π`` for continuous joints.
-        chain: The arrays behind the batched FK and Jacobian.
+        tree: The arrays behind the batched FK and Jacobian of every goal frame.
+        frame_ids: Ids of the goal frames in ``model``, shape ``(nf,)``.
+        mimic: Mimic joints of ``model`` driven by a solved joint: follower name ->
+            ``(driver, multiplier, offset)``; the follower's value is ``multiplier·q + offset``.
+        ee_frame_reason: Why ``ee_frame`` was chosen ("given", "the robot's usual tool
+            frame", or the rule used for a file).
     """
 
     name: str
@@ -247,29 +452,40 @@ class RobotModel:
     joint_kinds: tuple[str, ...]
     lower: FloatArray
     upper: FloatArray
-    chain: ChainKinematics
-    ee_frame_id: int = field(default=0)
+    tree: TreeArrays
+    frames: tuple[str, ...] = ()
+    frame_ids: tuple[int, ...] = ()
+    mimic: dict[str, tuple[str, float, float]] = field(default_factory=dict)
+    ee_frame_reason: str = "given"
     _local: threading.local = field(default_factory=threading.local, repr=False)
+    _cache: dict[str, Any] = field(default_factory=dict, repr=False)
 
     # --------------------------------------------------------------- building
     @classmethod
-    def from_urdf(cls, path: str | os.PathLike[str], ee_frame: str | None = None) -> RobotModel:
-        """Load a URDF and reduce it to the chain from the root to ``ee_frame``.
+    def from_urdf(
+        cls,
+        path: str | os.PathLike[str],
+        ee_frame: str | Sequence[str] | None = None,
+        *,
+        frame_reason: str = "given",
+    ) -> RobotModel:
+        """Load a URDF and reduce it to the joints between the root and the goal frame(s).
 
         Args:
             path: URDF file.
-            ee_frame: End-effector frame (a link or fixed-joint name).  Default: the last link
-                attached to the deepest joint of the model.
+            ee_frame: Goal frame (a link or fixed-joint name) or a list of them.  Default:
+                the last link attached to the deepest joint of the model.
+            frame_reason: How ``ee_frame`` was chosen (stored as ``ee_frame_reason``).
 
         Raises:
             RobotFileNotFoundError: the file does not exist.
-            RobotModelError: not a URDF, loops, bad limits, no movable joint on the chain.
-            UnknownNameError: ``ee_frame`` is not a frame of the model (the valid ones listed).
+            RobotModelError: not a URDF, loops, bad limits, no movable joint on a path.
+            UnknownNameError: a frame is not a frame of the model (the valid ones listed).
         """
         p = Path(path)
         if not p.is_file():
             raise RobotFileNotFoundError(f"URDF file not found: {str(p)!r}")
-        mimic = _check_urdf_xml(p)
+        _check_urdf_xml(p)
         try:
             full = pin.buildModelFromUrdf(str(p))
         except Exception as exc:  # Pinocchio raises plain ValueError/RuntimeError
@@ -283,118 +499,119 @@ class RobotModel:
                 key=lambda i: (depth[i], i),
             )
             ee_frame = full.frames[best].name
-        if ee_frame not in all_frames:
-            raise unknown("frame", ee_frame, body_frames)
-        fid = _frame_id(full, ee_frame)
-        parent = full.frames[fid].parentJoint
-        chain_ids = [int(j) for j in full.supports[parent] if j != 0]
-        if not chain_ids:
-            raise RobotModelError(f"{p}: no movable joint between the root and frame {ee_frame!r}")
-        locked = [j for j in range(1, full.njoints) if j not in chain_ids]
-        q_ref = pin.neutral(full)
-        try:
-            reduced = pin.buildReducedModel(full, locked, q_ref) if locked else full.copy()
-        except Exception as exc:
-            raise RobotModelError(f"{p}: could not reduce the model to the chain ({exc})") from None
-        rfid = _frame_id(reduced, ee_frame)
-        names, kinds, axes, rot_p, pos_p = [], [], [], [], []
-        lower, upper = [], []
-        for j in range(1, reduced.njoints):
-            if reduced.parents[j] != j - 1:
-                raise RobotModelError(f"{p}: the reduced model is not a serial chain")
-            jm = reduced.joints[j]
-            jname = reduced.names[j]
-            if jname in mimic:
-                raise RobotModelError(
-                    f"{p}: joint {jname!r} on the chain to {ee_frame!r} mimics joint "
-                    f"{mimic[jname]!r}; mimic joints on the chain are not supported (they would "
-                    "be solved as independent joints)"
-                )
-            try:
-                kind, axis = _joint_kind_axis(jm)
-            except RobotModelError as exc:
-                raise RobotModelError(
-                    f"{p}: joint {jname!r} on the chain to {ee_frame!r}: {exc}; supported: "
-                    "revolute, continuous, prismatic (and fixed)"
-                ) from None
-            names.append(reduced.names[j])
-            kinds.append(kind)
-            axes.append(axis)
-            placement = reduced.jointPlacements[j]
-            rot_p.append(np.array(placement.rotation))
-            pos_p.append(np.array(placement.translation))
-            if kind == CONTINUOUS:
-                lo, hi = -np.pi, np.pi
-            else:
-                lo = float(reduced.lowerPositionLimit[jm.idx_q])
-                hi = float(reduced.upperPositionLimit[jm.idx_q])
-            if not (np.isfinite(lo) and np.isfinite(hi)) or lo > hi:
-                raise RobotModelError(
-                    f"{p}: joint {reduced.names[j]!r} has invalid limits [{lo}, {hi}]"
-                )
-            lower.append(lo)
-            upper.append(hi)
-        frame = reduced.frames[rfid]
-        if frame.parentJoint != reduced.njoints - 1:
-            raise RobotModelError(f"{p}: frame {ee_frame!r} is not at the end of the chain")
-        chain = ChainKinematics.canonical(
-            kinds=np.array(kinds, dtype=np.int64),
-            axes=np.asarray(axes, dtype=float),
-            rot_p=np.asarray(rot_p, dtype=float),
-            pos_p=np.asarray(pos_p, dtype=float),
-            rot_f=np.asarray(frame.placement.rotation, dtype=float),
-            pos_f=np.asarray(frame.placement.translation, dtype=float),
-        )
+            frame_reason = "the last link of the deepest chain"
+        frames = [ee_frame] if isinstance(ee_frame, str) else list(ee_frame)
+        if not frames:
+            raise InvalidArgumentError("ee_frame: give a frame name or a non-empty list of them")
+        for f in frames:
+            if not isinstance(f, str):
+                raise InvalidArgumentError(f"frame names must be strings, got {f!r}")
+            if f not in all_frames:
+                raise unknown("frame", f, body_frames)
+        dup = sorted({f for f in frames if frames.count(f) > 1})
+        if dup:
+            raise InvalidArgumentError(f"frame(s) {dup} given more than once")
+        red = _reduce(p, full, frames, _mimic_table(p))
         return cls(
             name=full.name or p.stem,
             urdf_path=p.resolve(),
-            ee_frame=ee_frame,
-            model=reduced,
+            ee_frame=frames[0],
+            model=red.reduced,
             full_model=full,
-            locked_joints=tuple(full.names[j] for j in locked),
-            q_locked=np.asarray(q_ref, dtype=float),
-            joint_names=tuple(names),
-            joint_kinds=tuple(KIND_NAMES[k] for k in kinds),
-            lower=np.array(lower),
-            upper=np.array(upper),
-            chain=chain,
-            ee_frame_id=rfid,
+            locked_joints=tuple(full.names[j] for j in red.locked),
+            q_locked=red.q_ref,
+            joint_names=tuple(red.names),
+            joint_kinds=tuple(KIND_NAMES[k] for k in red.kinds),
+            lower=red.lower,
+            upper=red.upper,
+            tree=red.tree,
+            frames=tuple(frames),
+            frame_ids=tuple(red.frame_ids),
+            mimic=red.followers,
+            ee_frame_reason=frame_reason,
         )
 
     # ------------------------------------------------------------- properties
     @property
     def nq(self) -> int:
-        """Number of joints of the chain (one value per joint)."""
-        return self.chain.nq
+        """Number of solved joints (one value per joint; mimic followers excluded)."""
+        return self.tree.nq
 
     @property
     def continuous_mask(self) -> NDArray[np.bool_]:
         """True for continuous joints, shape ``(nq,)``."""
-        return np.array([k == "continuous" for k in self.joint_kinds])
+        return np.array([k == "continuous" for k in self.joint_kinds], dtype=bool)
 
     @property
     def prismatic_mask(self) -> NDArray[np.bool_]:
         """True for prismatic joints, shape ``(nq,)``."""
-        return np.array([k == "prismatic" for k in self.joint_kinds])
+        return np.array([k == "prismatic" for k in self.joint_kinds], dtype=bool)
+
+    @property
+    def ee_frame_id(self) -> int:
+        """Id of :attr:`ee_frame` in :attr:`model`."""
+        return self.frame_ids[0]
+
+    def frame_index(self, frame: str | None) -> int:
+        """Index of goal frame ``frame`` in :attr:`frames` (``None``: the first).
+
+        Raises:
+            UnknownNameError: not a goal frame of this robot (the goal frames listed).
+        """
+        if frame is None:
+            return 0
+        try:
+            return self.frames.index(frame)
+        except ValueError:
+            raise unknown("goal frame", frame, self.frames) from None
+
+    def reach_radius(self, frame: str | None = None) -> float:
+        """An upper bound [m] on the distance from the world origin that ``frame`` can reach:
+        the sum of the joint offsets along its path, the prismatic strokes and the frame
+        offset."""
+        t = self.tree
+        f = self.frame_index(frame)
+        total = float(np.linalg.norm(t.frame_pos[f]))
+        j = int(t.frame_joint[f])
+        while j >= 0:
+            total += float(np.linalg.norm(t.pos_p[j]))
+            if t.kind[j] == PRISMATIC:
+                qi = int(t.q_index[j])
+                m = abs(float(t.multiplier[j]))
+                total += m * max(abs(self.lower[qi]), abs(self.upper[qi])) + abs(t.offset[j])
+            j = int(t.parent[j])
+        return total
 
     # ------------------------------------------------------------- kinematics
-    def fk(self, q: FloatArray) -> FloatArray:
-        """End-effector pose(s) [m]: ``(nq,) -> (4, 4)`` or ``(pop, nq) -> (pop, 4, 4)``."""
-        return self.chain.fk(q)
+    def fk(self, q: FloatArray, frame: str | None = None) -> FloatArray:
+        """Pose(s) [m] of one goal frame (default the first):
+        ``(nq,) -> (4, 4)`` or ``(pop, nq) -> (pop, 4, 4)``."""
+        f = self.frame_index(frame)
+        out = self.tree.fk(q)
+        return out[..., f, :, :]
 
-    def fk_jacobian(self, q: FloatArray) -> tuple[FloatArray, FloatArray]:
-        """Pose(s) and LOCAL_WORLD_ALIGNED frame Jacobian(s) ``(…, 6, nq)``, rows ``[v; ω]``."""
-        return self.chain.fk_jacobian(q)
+    def fk_all(self, q: FloatArray) -> FloatArray:
+        """Poses of every goal frame: ``(nq,) -> (nf, 4, 4)``, ``(pop, nq) -> (pop, nf, 4, 4)``."""
+        return self.tree.fk(q)
+
+    def fk_jacobian(self, q: FloatArray, frame: str | None = None) -> tuple[FloatArray, FloatArray]:
+        """Pose(s) and LOCAL_WORLD_ALIGNED frame Jacobian(s) ``(…, 6, nq)``, rows ``[v; ω]``,
+        of one goal frame (default the first)."""
+        f = self.frame_index(frame)
+        t, j = self.tree.fk_jacobian(q)
+        return t[..., f, :, :], j[..., f, :, :]
 
     def to_pinocchio(self, q: FloatArray) -> FloatArray:
-        """Pinocchio configuration of the chain model for ``q`` (continuous → cos, sin)."""
+        """Pinocchio configuration of :attr:`model` for ``q`` (continuous → cos, sin; mimic
+        followers set from their drivers)."""
         q = np.asarray(q, dtype=float).reshape(self.nq)
-        if self.model.nq == self.nq:  # no continuous joint: the same vector
+        t = self.tree
+        if self.model.nq == self.nq and not self.mimic:  # the same vector
             return q.copy()
         out = np.empty(self.model.nq)
         for j in range(1, self.model.njoints):
             jm = self.model.joints[j]
-            v = q[j - 1]
+            v = t.multiplier[j - 1] * q[t.q_index[j - 1]] + t.offset[j - 1]
             if jm.nq == 2:
                 out[jm.idx_q] = np.cos(v)
                 out[jm.idx_q + 1] = np.sin(v)
@@ -403,20 +620,24 @@ class RobotModel:
         return out
 
     def from_pinocchio(self, q_pin: FloatArray) -> FloatArray:
-        """Inverse of :meth:`to_pinocchio`: one value per joint."""
+        """Inverse of :meth:`to_pinocchio`: one value per solved joint."""
         q_pin = np.asarray(q_pin, dtype=float)
         out = np.empty(self.nq)
         for j in range(1, self.model.njoints):
+            if self.model.names[j] in self.mimic:
+                continue
             jm = self.model.joints[j]
+            qi = int(self.tree.q_index[j - 1])
             if jm.nq == 2:
-                out[j - 1] = np.arctan2(q_pin[jm.idx_q + 1], q_pin[jm.idx_q])
+                out[qi] = np.arctan2(q_pin[jm.idx_q + 1], q_pin[jm.idx_q])
             else:
-                out[j - 1] = q_pin[jm.idx_q]
+                out[qi] = q_pin[jm.idx_q]
         return out
 
     def __getstate__(self) -> dict[str, Any]:
         state = dict(self.__dict__)
         state.pop("_local", None)  # per-thread Pinocchio Data: rebuilt on demand
+        state["_cache"] = {}
         return state
 
     def __setstate__(self, state: dict[str, Any]) -> None:
@@ -424,37 +645,52 @@ class RobotModel:
         object.__setattr__(self, "_local", threading.local())
 
     def _data(self) -> Any:
-        """Pinocchio ``Data`` of the chain model, one per thread (reused between calls)."""
+        """Pinocchio ``Data`` of :attr:`model`, one per thread (reused between calls)."""
         data = getattr(self._local, "data", None)
         if data is None:
             data = self._local.data = self.model.createData()
         return data
 
-    def fk_pinocchio(self, q: FloatArray) -> FloatArray:
-        """Reference FK through ``pinocchio.forwardKinematics`` + ``updateFramePlacements``.
-
-        Slower than :meth:`fk` (one call per pose); used to verify results.
+    def fk_pinocchio(self, q: FloatArray, frame: str | None = None) -> FloatArray:
+        """Reference FK of one goal frame through ``pinocchio.forwardKinematics`` +
+        ``updateFramePlacement``; used to verify results.
 
         Args:
             q: Joint values, shape ``(nq,)``.
+            frame: Goal frame (default the first).
 
         Returns:
             Pose, shape ``(4, 4)``.
         """
+        fid = self.frame_ids[self.frame_index(frame)]
         data = self._data()
         pin.forwardKinematics(self.model, data, self.to_pinocchio(q))
-        pin.updateFramePlacements(self.model, data)
-        return np.array(data.oMf[self.ee_frame_id].homogeneous)
+        return np.array(pin.updateFramePlacement(self.model, data, fid).homogeneous)
 
-    def jacobian_pinocchio(self, q: FloatArray) -> FloatArray:
-        """Reference frame Jacobian ``(6, nq)`` from Pinocchio, LOCAL_WORLD_ALIGNED."""
+    def fk_pinocchio_all(self, q: FloatArray) -> FloatArray:
+        """Reference poses of every goal frame with Pinocchio, shape ``(nf, 4, 4)``."""
+        data = self._data()
+        pin.forwardKinematics(self.model, data, self.to_pinocchio(q))
+        return np.array(
+            [pin.updateFramePlacement(self.model, data, fid).homogeneous for fid in self.frame_ids]
+        ).reshape(len(self.frame_ids), 4, 4)
+
+    def jacobian_pinocchio(self, q: FloatArray, frame: str | None = None) -> FloatArray:
+        """Reference LOCAL_WORLD_ALIGNED frame Jacobian ``(6, nq)`` from Pinocchio (mimic
+        columns summed into their drivers' columns)."""
+        fid = self.frame_ids[self.frame_index(frame)]
         data = self._data()
         pin.computeJointJacobians(self.model, data, self.to_pinocchio(q))
         pin.updateFramePlacements(self.model, data)
-        jac = pin.getFrameJacobian(
-            self.model, data, self.ee_frame_id, pin.ReferenceFrame.LOCAL_WORLD_ALIGNED
-        )
-        return np.array(jac).reshape(6, self.model.nv)  # eigenpy gives (6,) when nv == 1
+        jac = pin.getFrameJacobian(self.model, data, fid, pin.ReferenceFrame.LOCAL_WORLD_ALIGNED)
+        jac = np.array(jac).reshape(6, self.model.nv)  # eigenpy gives (6,) when nv == 1
+        if self.model.nv == self.nq and not self.mimic:
+            return jac
+        out = np.zeros((6, self.nq))
+        for j in range(1, self.model.njoints):
+            iv = self.model.joints[j].idx_v
+            out[:, self.tree.q_index[j - 1]] += self.tree.multiplier[j - 1] * jac[:, iv]
+        return out
 
     # ----------------------------------------------------------------- limits
     def within_limits(self, q: FloatArray, tol: float = 1e-9) -> bool:
@@ -512,7 +748,9 @@ def _frame_id(model: Any, name: str) -> int:
     return ids[0]
 
 
-def resolve_robot_path(name_or_path: str | os.PathLike[str]) -> tuple[Path, str | None]:
+def resolve_robot_path(
+    name_or_path: str | os.PathLike[str],
+) -> tuple[Path, str | tuple[str, ...] | None]:
     """URDF path and default end-effector frame for a bundled name, an example-robot-data
     name, or a path."""
     s = str(name_or_path)
@@ -528,20 +766,30 @@ def resolve_robot_path(name_or_path: str | os.PathLike[str]) -> tuple[Path, str 
     raise unknown("robot", s, [*BUNDLED, *EXAMPLE_ROBOTS])
 
 
-def load_robot(name_or_path: str | os.PathLike[str], ee_frame: str | None = None) -> RobotModel:
+def load_robot(
+    name_or_path: str | os.PathLike[str], ee_frame: str | Sequence[str] | None = None
+) -> RobotModel:
     """Load a robot by bundled name, ``example-robot-data`` name, or URDF path.
 
     Args:
         name_or_path: ``"yumi_left"``, ``"loading_manipulator"``, ``"loading_manipulator_long"``,
-            an example-robot-data arm (``"panda"``, ``"ur5"``, ``"ur10"``, …; see
+            an example-robot-data robot (``"panda"``, ``"ur5"``, ``"baxter"``, …; see
             :func:`robot_names`), or a path to a ``.urdf`` file.
-        ee_frame: End-effector frame; default: the robot's usual tool frame for named robots,
-            the tip of the deepest chain for a file.
+        ee_frame: Goal frame, or a list of goal frames (the model is then the union of the
+            root → frame paths, a tree); default: the robot's usual tool frame(s) for named
+            robots, the tip of the deepest chain for a file.
 
     Returns:
-        The robot, reduced to the serial chain root → ``ee_frame``.
+        The robot, reduced to the joints between the root and its goal frame(s).
+
+    >>> load_robot("baxter", ["left_gripper", "right_gripper"]).nq
+    14
     """
     path, default_frame = resolve_robot_path(name_or_path)
+    if ee_frame is not None:
+        frames, reason = ee_frame, "given"
+    else:
+        frames, reason = default_frame, "the robot's usual tool frame"
     with warnings.catch_warnings():
         warnings.simplefilter("ignore")
-        return RobotModel.from_urdf(path, ee_frame or default_frame)
+        return RobotModel.from_urdf(path, frames, frame_reason=reason)

@@ -242,11 +242,7 @@ def full_configuration(robot: RobotModel, q: Any) -> FloatArray:
 
 def _reach(robot: RobotModel) -> float:
     """A length scale of the robot [m]: the sum of its joint offsets (at least 0.2)."""
-    return max(
-        0.2,
-        float(np.sum(np.linalg.norm(robot.chain.pos_p, axis=-1)))
-        + float(np.linalg.norm(robot.chain.pos_f)),
-    )
+    return max(0.2, robot.reach_radius())
 
 
 def _translation(p: Any) -> FloatArray:

@@ -202,9 +202,9 @@ def test_solving_does_not_modify_its_inputs(yumi: swarm_ik.RobotModel) -> None:
         "problem.upper": prob.upper,
         "robot.lower": yumi.lower,
         "robot.upper": yumi.upper,
-        "chain.axes": yumi.chain.axes,
-        "chain.pos_p": yumi.chain.pos_p,
-        "chain.rot_p": yumi.chain.rot_p,
+        "tree.frame_pos": yumi.tree.frame_pos,
+        "tree.pos_p": yumi.tree.pos_p,
+        "tree.rot_p": yumi.tree.rot_p,
     }
     before = {k: v.copy() for k, v in arrays.items()}
     names_before = swarm_ik.solvers.names()

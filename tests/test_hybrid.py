@@ -14,9 +14,9 @@ import pytest
 from conftest import robot
 
 import swarm_ik
-from swarm_ik.kinematics import fk_jac_one
+from swarm_ik.kernels.lie import log3_nb as _log3
 from swarm_ik.solvers import base
-from swarm_ik.solvers.hybrid import Polisher, _log3, wrapped_distance
+from swarm_ik.solvers.hybrid import Polisher, wrapped_distance
 
 ROOT = Path(__file__).resolve().parents[1]
 ARMS = ["panda", "ur5", "kinova", "xarm7", "baxter_left"]
@@ -24,38 +24,6 @@ BUNDLED = ["yumi_left", "loading_manipulator", "loading_manipulator_long"]
 
 
 # --------------------------------------------------------------------------- Jacobians
-@pytest.mark.parametrize("name", ["panda", "kinova", "loading_manipulator_long", "yumi_left"])
-def test_single_pose_kernel_equals_batched_fk_and_jacobian(name: str) -> None:
-    r = robot(name)
-    q = r.random_q(np.random.default_rng(3), 5)
-    poses, jacs = r.fk_jacobian(q)
-    c = r.chain
-    n = r.nq
-    for i in range(5):
-        rot, pos, jac = np.empty((3, 3)), np.empty(3), np.empty((6, n))
-        fk_jac_one(
-            q[i],
-            c.kinds,
-            c.axes,
-            c.rot_p,
-            c.pos_p,
-            c.rot_f,
-            c.pos_f,
-            rot,
-            pos,
-            jac,
-            np.empty((n, 3)),
-            np.empty((n, 3)),
-            np.empty((3, 3)),
-            np.empty((3, 3)),
-            True,
-        )
-        np.testing.assert_allclose(rot, poses[i, :3, :3], atol=1e-15)
-        np.testing.assert_allclose(pos, poses[i, :3, 3], atol=1e-15)
-        np.testing.assert_allclose(jac, jacs[i], atol=1e-15)
-        np.testing.assert_allclose(jac, r.jacobian_pinocchio(q[i]), atol=1e-12)
-
-
 def test_log3_matches_pinocchio_near_zero_generic_and_near_pi() -> None:
     rng = np.random.default_rng(4)
     out = np.empty(3)
@@ -115,8 +83,7 @@ def test_residual_jacobian_matches_central_differences(name: str, position_only:
             rp, _, _, _ = pol.residual(q + e)
             rm, _, _, _ = pol.residual(q - e)
             np.testing.assert_allclose(-(rp - rm) / (2 * h), jac[:, j], atol=2e-7)
-        if position_only:
-            assert np.all(res[3:] == 0.0) and np.all(jac[3:] == 0.0)
+        assert res.shape == ((3,) if position_only else (6,))
 
 
 # --------------------------------------------------------------------------- solving

@@ -168,13 +168,14 @@ BAD_URDFS: dict[str, tuple[str, str]] = {
         ),
         r"joint 'j0' on the chain to 'c': .*Planar.*not supported",
     ),
-    "mimic joint on the chain": (
+    "mimic joint whose driver is off the chain": (
         _robot(
-            _links("a", "b", "c"),
+            _links("a", "b", "c", "d"),
             _joint("j1", "a", "b"),
-            _joint("j2", "b", "c", extra='<mimic joint="j1"/>'),
+            _joint("j2", "b", "c", extra='<mimic joint="j3"/>'),
+            _joint("j3", "a", "d"),
         ),
-        r"joint 'j2' on the chain to 'c' mimics joint 'j1'; mimic joints on the chain are not",
+        r"joint 'j2' on the chain to 'c' mimics joint 'j3', which is not on the chain",
     ),
 }
 

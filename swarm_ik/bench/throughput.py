@@ -41,10 +41,10 @@ from swarm_ik.batch import (
     BatchChain,
     BatchSettings,
     _seed_starts,
-    _solve_targets,
     check_targets,
     pose_errors,
     solve_batch,
+    solve_chunk,
 )
 from swarm_ik.robot import RobotModel
 
@@ -199,44 +199,14 @@ def profile_batch(robot: RobotModel, n: int, seed: int, tol: float) -> list[dict
     targets = make_targets(robot, n, seed)
     settings = BatchSettings(tol_pos=tol, tol_rot=tol, seed=seed)
     bc = BatchChain.from_robot(robot)
-    c = bc.chain
     t0 = time.perf_counter()
     poses = check_targets(targets)
     seeds = _seed_starts(bc, None, n)
     t1 = time.perf_counter()
-    q = np.empty((n, robot.nq))
-    evals = np.zeros(n, dtype=np.int64)
-    starts = np.zeros(n, dtype=np.int64)
-    _solve_targets(
-        np.ascontiguousarray(poses[:, :3, :3]),
-        np.ascontiguousarray(poses[:, :3, 3]),
-        seeds,
-        np.arange(n, dtype=np.int64),
-        c.kinds,
-        c.axes,
-        c.rot_p,
-        c.pos_p,
-        c.rot_f,
-        c.pos_f,
-        bc.lower,
-        bc.upper,
-        bc.wrap,
-        1.0,
-        tol * settings.tol_margin,
-        tol * settings.tol_margin,
-        settings.max_starts,
-        settings.max_iters,
-        settings.lam0,
-        settings.max_step,
-        settings.stall_rel,
-        settings.stall_iters,
-        seed,
-        q,
-        evals,
-        starts,
-    )
+    chunk = solve_chunk(bc, settings, 0, poses, seeds)
+    q, evals, starts = chunk.q, chunk.n_evals, chunk.n_starts
     t2 = time.perf_counter()
-    dp, dr = pose_errors(c, q, poses)
+    dp, dr = pose_errors(bc.tree, q, poses)
     ok = (dp <= tol) & (dr <= tol)
     t3 = time.perf_counter()
     total = t3 - t0

@@ -29,641 +29,29 @@ in well under a millisecond, most of it Python bookkeeping; see ``docs/performan
 
 from __future__ import annotations
 
-import math
 import time
 from typing import NamedTuple
 
-import numba
 import numpy as np
 from numpy.typing import NDArray
 
 from swarm_ik.errors import InvalidArgumentError, unknown
-from swarm_ik.kinematics import fk_jac_one
+from swarm_ik.kernels import lm
+from swarm_ik.kernels.lm import BUDGET, CONVERGED, ITER_CAP, LOCAL_MIN, NOT_RUN, LMSettings
 from swarm_ik.problem import IKProblem
 from swarm_ik.solvers.base import Evaluator, FloatArray, register
 from swarm_ik.solvers.gwo import gwo_move
 
 IntArray = NDArray[np.int64]
 
+__all__ = ["BUDGET", "CONVERGED", "ITER_CAP", "LOCAL_MIN", "NOT_RUN", "Polisher", "run"]
+
 FULL_BUDGET_TOL = 1e-14
 """Polish tolerance [m, rad] when the run is not to stop at success (``stop_on_success=False``,
 as in the papers' experiments): each start is polished to round-off."""
 
-# Status codes of a polished start (``status`` output of :func:`lm_polish`).
-NOT_RUN = 0
-"""The start was not reached (budget spent, or an earlier start succeeded)."""
-CONVERGED = 1
-"""Both errors within tolerance."""
-LOCAL_MIN = 2
-"""No further progress: a local minimum of the residual (often at a joint limit)."""
-ITER_CAP = 3
-"""The start used its iteration cap without converging or stalling."""
-BUDGET = 4
-"""The evaluation budget of the call ran out during this start (it may be resumed)."""
-
 PREFER = ("best", "nearest")
 """Answer selection modes of the ``swarm`` solver (``prefer`` parameter)."""
-
-
-# --------------------------------------------------------------------------- kernels
-@numba.njit(cache=True)
-def _log3(m: FloatArray, out: FloatArray) -> float:  # pragma: no cover - compiled
-    """Rotation vector of the rotation ``m`` (3, 3) into ``out`` (3,); returns the angle.
-
-    Accurate near 0 (``atan2`` of the skew part) and near π (axis from the symmetric part).
-    """
-    s0 = 0.5 * (m[2, 1] - m[1, 2])
-    s1 = 0.5 * (m[0, 2] - m[2, 0])
-    s2 = 0.5 * (m[1, 0] - m[0, 1])
-    sn = math.sqrt(s0 * s0 + s1 * s1 + s2 * s2)
-    c = 0.5 * (m[0, 0] + m[1, 1] + m[2, 2] - 1.0)
-    theta = math.atan2(sn, c)
-    if theta < 1e-5:
-        scale = 1.0 + theta * theta / 6.0
-        out[0] = s0 * scale
-        out[1] = s1 * scale
-        out[2] = s2 * scale
-    elif theta < math.pi - 1e-3:
-        scale = theta / sn
-        out[0] = s0 * scale
-        out[1] = s1 * scale
-        out[2] = s2 * scale
-    else:
-        # symmetric part: B = c I + (1 - c) a aᵀ
-        i = 0
-        if m[1, 1] > m[i, i]:
-            i = 1
-        if m[2, 2] > m[i, i]:
-            i = 2
-        one_c = 1.0 - c
-        ai = math.sqrt(max((m[i, i] - c) / one_c, 0.0))
-        a0 = 0.5 * (m[0, i] + m[i, 0]) / (one_c * ai)
-        a1 = 0.5 * (m[1, i] + m[i, 1]) / (one_c * ai)
-        a2 = 0.5 * (m[2, i] + m[i, 2]) / (one_c * ai)
-        if i == 0:
-            a0 = ai
-        elif i == 1:
-            a1 = ai
-        else:
-            a2 = ai
-        norm = math.sqrt(a0 * a0 + a1 * a1 + a2 * a2)
-        if a0 * s0 + a1 * s1 + a2 * s2 < 0.0:
-            norm = -norm
-        out[0] = theta * a0 / norm
-        out[1] = theta * a1 / norm
-        out[2] = theta * a2 / norm
-    return theta
-
-
-@numba.njit(cache=True)
-def _step_into_bounds(
-    q: FloatArray,
-    delta: FloatArray,
-    scale: float,
-    wrap: NDArray[np.bool_],
-    lower: FloatArray,
-    upper: FloatArray,
-    out: FloatArray,
-) -> None:  # pragma: no cover - compiled
-    """``out = q + scale·delta``, continuous joints wrapped into [-π, π), then clipped."""
-    for j in range(q.shape[0]):
-        v = q[j] + scale * delta[j]
-        if wrap[j]:
-            v = (v + math.pi) % (2.0 * math.pi) - math.pi
-        if v < lower[j]:
-            v = lower[j]
-        elif v > upper[j]:
-            v = upper[j]
-        out[j] = v
-
-
-@numba.njit(cache=True)
-def _residual(
-    q: FloatArray,
-    kinds: IntArray,
-    axes: FloatArray,
-    rot_p: FloatArray,
-    pos_p: FloatArray,
-    rot_f: FloatArray,
-    pos_f: FloatArray,
-    t_rot: FloatArray,
-    t_pos: FloatArray,
-    rot_w: float,
-    want_jac: bool,
-    res: FloatArray,
-    jac: FloatArray,
-    rot: FloatArray,
-    pos: FloatArray,
-    jraw: FloatArray,
-    w_buf: FloatArray,
-    o_buf: FloatArray,
-    mot: FloatArray,
-    tmp: FloatArray,
-) -> tuple[float, float, float]:  # pragma: no cover - compiled
-    """Residual ``r = [p* − p; w·log(R* Rᵀ)]`` (6,) and its Jacobian w.r.t. a step.
-
-    ``jac`` (6, nq) is ``[J_v; w·J_r⁻¹(φ) J_ω]``: ``r(q + δ) ≈ r(q) − jac @ δ``.
-
-    Returns:
-        ``(cost ‖r‖², position error [m], rotation angle [rad])``.
-    """
-    fk_jac_one(
-        q, kinds, axes, rot_p, pos_p, rot_f, pos_f, rot, pos, jraw, w_buf, o_buf, mot, tmp, want_jac
-    )
-    for a in range(3):
-        res[a] = t_pos[a] - pos[a]
-    # M = R* Rᵀ
-    for a in range(3):
-        for b in range(3):
-            tmp[a, b] = t_rot[a, 0] * rot[b, 0] + t_rot[a, 1] * rot[b, 1] + t_rot[a, 2] * rot[b, 2]
-    phi = np.empty(3)
-    theta = _log3(tmp, phi)
-    dp = math.sqrt(res[0] * res[0] + res[1] * res[1] + res[2] * res[2])
-    for a in range(3):
-        res[3 + a] = rot_w * phi[a]
-    cost = dp * dp + rot_w * rot_w * theta * theta
-    if want_jac:
-        n = q.shape[0]
-        for a in range(3):
-            for j in range(n):
-                jac[a, j] = jraw[a, j]
-        if rot_w == 0.0:
-            for a in range(3, 6):
-                for j in range(n):
-                    jac[a, j] = 0.0
-        else:
-            # J_r⁻¹(φ) = I + ½[φ]× + k [φ]×², k = 1/θ² − (1 + cos θ)/(2 θ sin θ)
-            if theta < 1e-3:
-                k = 1.0 / 12.0 + theta * theta / 720.0
-            else:
-                k = 1.0 / (theta * theta) - (1.0 + math.cos(theta)) / (
-                    2.0 * theta * math.sin(theta)
-                )
-            px, py, pz = phi[0], phi[1], phi[2]
-            # [φ]× and [φ]×²
-            sk = mot
-            sk[0, 0] = 0.0
-            sk[0, 1] = -pz
-            sk[0, 2] = py
-            sk[1, 0] = pz
-            sk[1, 1] = 0.0
-            sk[1, 2] = -px
-            sk[2, 0] = -py
-            sk[2, 1] = px
-            sk[2, 2] = 0.0
-            for a in range(3):
-                for b in range(3):
-                    sq = sk[a, 0] * sk[0, b] + sk[a, 1] * sk[1, b] + sk[a, 2] * sk[2, b]
-                    tmp[a, b] = (1.0 if a == b else 0.0) + 0.5 * sk[a, b] + k * sq
-            for a in range(3):
-                for j in range(n):
-                    jac[3 + a, j] = rot_w * (
-                        tmp[a, 0] * jraw[3, j] + tmp[a, 1] * jraw[4, j] + tmp[a, 2] * jraw[5, j]
-                    )
-    return cost, dp, theta
-
-
-@numba.njit(cache=True)
-def _chol_solve(a: FloatArray, b: FloatArray, n: int, x: FloatArray) -> bool:  # pragma: no cover
-    """Solve ``a x = b`` for SPD ``a`` (n, n) in place (``a`` overwritten by its Cholesky
-    factor); False when ``a`` is not numerically positive definite."""
-    for j in range(n):
-        s = a[j, j]
-        for k in range(j):
-            s -= a[j, k] * a[j, k]
-        if s <= 0.0:
-            return False
-        d = math.sqrt(s)
-        a[j, j] = d
-        for i in range(j + 1, n):
-            s = a[i, j]
-            for k in range(j):
-                s -= a[i, k] * a[j, k]
-            a[i, j] = s / d
-    for i in range(n):
-        s = b[i]
-        for k in range(i):
-            s -= a[i, k] * x[k]
-        x[i] = s / a[i, i]
-    for i in range(n - 1, -1, -1):
-        s = x[i]
-        for k in range(i + 1, n):
-            s -= a[k, i] * x[k]
-        x[i] = s / a[i, i]
-    return True
-
-
-@numba.njit(cache=True)
-def lm_polish(
-    starts: FloatArray,
-    kinds: IntArray,
-    axes: FloatArray,
-    rot_p: FloatArray,
-    pos_p: FloatArray,
-    rot_f: FloatArray,
-    pos_f: FloatArray,
-    t_rot: FloatArray,
-    t_pos: FloatArray,
-    lower: FloatArray,
-    upper: FloatArray,
-    wrap: NDArray[np.bool_],
-    rot_w: float,
-    tol_pos: float,
-    tol_rot: float,
-    max_iters: int,
-    max_evals: int,
-    stop_first: bool,
-    lam0: float,
-    max_step: float,
-    stall_rel: float,
-    stall_iters: int,
-    out_q: FloatArray,
-    out_dp: FloatArray,
-    out_dr: FloatArray,
-    out_status: IntArray,
-    out_evals: IntArray,
-) -> int:  # pragma: no cover - compiled
-    """Bounded Levenberg–Marquardt polish of a batch of starts; returns evaluations used.
-
-    Starts are polished one after the other; with ``stop_first`` the call returns as soon as
-    one converges.  Each FK + Jacobian evaluation counts as one evaluation and the call never
-    uses more than ``max_evals``.
-
-    Args:
-        starts: Starting joint vectors, shape ``(k, nq)``, inside the bounds.
-        kinds, axes, rot_p, pos_p, rot_f, pos_f: The chain (:class:`ChainKinematics`).
-        t_rot: Target rotation, shape ``(3, 3)``.
-        t_pos: Target position [m], shape ``(3,)``.
-        lower, upper: Bounds, shape ``(nq,)``.
-        wrap: Continuous joints (wrapped into ``[-π, π)``), shape ``(nq,)``.
-        rot_w: Weight of the rotation residual [m/rad]; 0 = position only.
-        tol_pos: Position tolerance [m].
-        tol_rot: Rotation tolerance [rad] (ignored when ``rot_w == 0``).
-        max_iters: Most evaluations per start.
-        max_evals: Most evaluations in this call (all starts together).
-        stop_first: Return at the first converged start.
-        lam0: Initial damping, relative to the mean diagonal of ``JᵀJ``.
-        max_step: Largest step per joint per iteration (rad or m).
-        stall_rel: A step is "no progress" when the cost falls by less than this fraction…
-        stall_iters: …this many times in a row: the start is at a local minimum.
-        out_q: Polished points, shape ``(k, nq)``.
-        out_dp: Their position errors [m], ``(k,)``.
-        out_dr: Their rotation errors [rad], ``(k,)``.
-        out_status: ``NOT_RUN``, ``CONVERGED``, ``LOCAL_MIN``, ``ITER_CAP`` or ``BUDGET``.
-        out_evals: Evaluations used per start, ``(k,)``.
-    """
-    k_starts, n = starts.shape
-    res = np.empty(6)
-    jac = np.empty((6, n))
-    res_t = np.empty(6)
-    jac_t = np.empty((6, n))
-    rot = np.empty((3, 3))
-    pos = np.empty(3)
-    jraw = np.empty((6, n))
-    w_buf = np.empty((n, 3))
-    o_buf = np.empty((n, 3))
-    mot = np.empty((3, 3))
-    tmp = np.empty((3, 3))
-    a_mat = np.empty((n, n))
-    g = np.empty(n)
-    delta = np.empty(n)
-    q = np.empty(n)
-    q_t = np.empty(n)
-    free = np.empty(n, dtype=np.bool_)
-    idx = np.empty(n, dtype=np.int64)
-    a_red = np.empty((n, n))
-    b_red = np.empty(n)
-    x_red = np.empty(n)
-    used = 0
-    for s in range(k_starts):
-        out_status[s] = NOT_RUN
-        out_evals[s] = 0
-        out_dp[s] = np.inf
-        out_dr[s] = np.inf
-    for s in range(k_starts):
-        for j in range(n):
-            out_q[s, j] = starts[s, j]
-    for s in range(k_starts):
-        if used >= max_evals:
-            break
-        for j in range(n):
-            q[j] = starts[s, j]
-        cost, dp, dr = _residual(
-            q,
-            kinds,
-            axes,
-            rot_p,
-            pos_p,
-            rot_f,
-            pos_f,
-            t_rot,
-            t_pos,
-            rot_w,
-            True,
-            res,
-            jac,
-            rot,
-            pos,
-            jraw,
-            w_buf,
-            o_buf,
-            mot,
-            tmp,
-        )
-        used += 1
-        ev_s = 1
-        status = ITER_CAP
-        lam = lam0
-        stall = 0
-        while True:
-            if dp <= tol_pos and (rot_w == 0.0 or dr <= tol_rot):
-                status = CONVERGED
-                break
-            if ev_s >= max_iters:
-                status = ITER_CAP
-                break
-            if used >= max_evals:
-                status = BUDGET
-                break
-            # normal equations A = JᵀJ, g = Jᵀr
-            trace = 0.0
-            for i in range(n):
-                s_g = 0.0
-                for a in range(6):
-                    s_g += jac[a, i] * res[a]
-                g[i] = s_g
-                for j in range(i, n):
-                    s_a = 0.0
-                    for a in range(6):
-                        s_a += jac[a, i] * jac[a, j]
-                    a_mat[i, j] = s_a
-                    a_mat[j, i] = s_a
-                trace += a_mat[i, i]
-            scale = trace / n + 1e-300
-            # active set: a joint at a limit whose descent direction points outwards is fixed
-            m = 0
-            for j in range(n):
-                at_lo = (not wrap[j]) and q[j] <= lower[j] and g[j] < 0.0
-                at_hi = (not wrap[j]) and q[j] >= upper[j] and g[j] > 0.0
-                free[j] = not (at_lo or at_hi)
-                if free[j]:
-                    idx[m] = j
-                    m += 1
-            ok = False
-            while not ok:
-                for i in range(m):
-                    for j in range(m):
-                        a_red[i, j] = a_mat[idx[i], idx[j]]
-                    a_red[i, i] += lam * scale
-                    b_red[i] = g[idx[i]]
-                ok = _chol_solve(a_red, b_red, m, x_red)
-                if not ok:
-                    lam *= 10.0
-                    if lam > 1e12:
-                        break
-            if not ok:
-                status = LOCAL_MIN
-                break
-            for j in range(n):
-                delta[j] = 0.0
-            big = 0.0
-            for i in range(m):
-                delta[idx[i]] = x_red[i]
-                if abs(x_red[i]) > big:
-                    big = abs(x_red[i])
-            shrink = 1.0
-            if big > max_step:
-                shrink = max_step / big
-            _step_into_bounds(q, delta, shrink, wrap, lower, upper, q_t)
-            cost_t, dp_t, dr_t = _residual(
-                q_t,
-                kinds,
-                axes,
-                rot_p,
-                pos_p,
-                rot_f,
-                pos_f,
-                t_rot,
-                t_pos,
-                rot_w,
-                True,
-                res_t,
-                jac_t,
-                rot,
-                pos,
-                jraw,
-                w_buf,
-                o_buf,
-                mot,
-                tmp,
-            )
-            used += 1
-            ev_s += 1
-            if cost_t < cost:
-                if cost_t > cost * (1.0 - stall_rel):
-                    stall += 1
-                else:
-                    stall = 0
-                for j in range(n):
-                    q[j] = q_t[j]
-                for a in range(6):
-                    res[a] = res_t[a]
-                    for j in range(n):
-                        jac[a, j] = jac_t[a, j]
-                cost, dp, dr = cost_t, dp_t, dr_t
-                lam = max(lam * 0.1, 1e-12)
-                if stall >= stall_iters and not (dp <= tol_pos and (rot_w == 0.0 or dr <= tol_rot)):
-                    status = LOCAL_MIN
-                    break
-            else:
-                lam *= 10.0
-                stall += 1
-                if lam > 1e8 or stall >= stall_iters:
-                    status = LOCAL_MIN
-                    break
-        for j in range(n):
-            out_q[s, j] = q[j]
-        out_dp[s] = dp
-        out_dr[s] = dr
-        out_status[s] = status
-        out_evals[s] = ev_s
-        if stop_first and status == CONVERGED:
-            break
-    return used
-
-
-@numba.njit(cache=True)
-def nullspace_toward(
-    q_in: FloatArray,
-    q_ref: FloatArray,
-    kinds: IntArray,
-    axes: FloatArray,
-    rot_p: FloatArray,
-    pos_p: FloatArray,
-    rot_f: FloatArray,
-    pos_f: FloatArray,
-    t_rot: FloatArray,
-    t_pos: FloatArray,
-    lower: FloatArray,
-    upper: FloatArray,
-    wrap: NDArray[np.bool_],
-    rot_w: float,
-    tol_pos: float,
-    tol_rot: float,
-    gain: float,
-    max_evals: int,
-    out_q: FloatArray,
-) -> int:  # pragma: no cover - compiled
-    """Slide a solution along its self-motion towards ``q_ref``, staying on the target.
-
-    Iterates ``δ = J⁺ r + (I − J⁺ J)·gain·(q_ref − q)`` (``J⁺ = Jᵀ (J Jᵀ + εI)⁻¹``, the
-    residual Jacobian of :func:`lm_polish`), clipped to the bounds, keeping a step only when
-    the pose stays within tolerance and the (wrapped) distance to ``q_ref`` decreases.  For a
-    non-redundant arm the null space is empty and nothing moves.  Used by ``prefer="nearest"``.
-
-    Args:
-        q_in: A solution, shape ``(nq,)``.
-        q_ref: The joint vector to approach (``q0``), shape ``(nq,)``.
-        kinds … wrap: As :func:`lm_polish`.
-        rot_w, tol_pos, tol_rot: As :func:`lm_polish`.
-        gain: Fraction of the remaining distance attempted per step (0–1].
-        max_evals: Most FK + Jacobian evaluations.
-        out_q: The refined solution, shape ``(nq,)`` (``q_in`` if no step was kept).
-
-    Returns:
-        Evaluations used.
-    """
-    n = q_in.shape[0]
-    res = np.empty(6)
-    jac = np.empty((6, n))
-    res_t = np.empty(6)
-    jac_t = np.empty((6, n))
-    rot = np.empty((3, 3))
-    pos = np.empty(3)
-    jraw = np.empty((6, n))
-    w_buf = np.empty((n, 3))
-    o_buf = np.empty((n, 3))
-    mot = np.empty((3, 3))
-    tmp = np.empty((3, 3))
-    jjt = np.empty((6, 6))
-    y = np.empty(6)
-    b = np.empty(6)
-    d = np.empty(n)
-    delta = np.empty(n)
-    q = q_in.copy()
-    q_t = np.empty(n)
-    for j in range(n):
-        out_q[j] = q[j]
-    if max_evals < 1:
-        return 0
-    _residual(
-        q,
-        kinds,
-        axes,
-        rot_p,
-        pos_p,
-        rot_f,
-        pos_f,
-        t_rot,
-        t_pos,
-        rot_w,
-        True,
-        res,
-        jac,
-        rot,
-        pos,
-        jraw,
-        w_buf,
-        o_buf,
-        mot,
-        tmp,
-    )
-    used = 1
-    dist = 0.0
-    for j in range(n):
-        dj = q_ref[j] - q[j]
-        if wrap[j]:
-            dj = (dj + math.pi) % (2.0 * math.pi) - math.pi
-        d[j] = dj
-        dist += dj * dj
-    step_gain = gain
-    while used < max_evals and dist > 1e-24 and step_gain > 1e-4:
-        # y = (J Jᵀ + εI)⁻¹ (r − J·g·d);  δ = g·d + Jᵀ y
-        for a in range(6):
-            s_b = res[a]
-            for j in range(n):
-                s_b -= jac[a, j] * step_gain * d[j]
-            b[a] = s_b
-            for c in range(6):
-                s_a = 0.0
-                for j in range(n):
-                    s_a += jac[a, j] * jac[c, j]
-                jjt[a, c] = s_a
-            jjt[a, a] += 1e-12
-        if rot_w == 0.0:
-            for a in range(3, 6):
-                b[a] = 0.0
-                for c in range(6):
-                    jjt[a, c] = 0.0
-                    jjt[c, a] = 0.0
-                jjt[a, a] = 1.0
-        if not _chol_solve(jjt, b, 6, y):
-            break
-        for j in range(n):
-            v = step_gain * d[j]
-            for a in range(6):
-                v += jac[a, j] * y[a]
-            delta[j] = v
-        _step_into_bounds(q, delta, 1.0, wrap, lower, upper, q_t)
-        _c, dp_t, dr_t = _residual(
-            q_t,
-            kinds,
-            axes,
-            rot_p,
-            pos_p,
-            rot_f,
-            pos_f,
-            t_rot,
-            t_pos,
-            rot_w,
-            True,
-            res_t,
-            jac_t,
-            rot,
-            pos,
-            jraw,
-            w_buf,
-            o_buf,
-            mot,
-            tmp,
-        )
-        used += 1
-        dist_t = 0.0
-        for j in range(n):
-            dj = q_ref[j] - q_t[j]
-            if wrap[j]:
-                dj = (dj + math.pi) % (2.0 * math.pi) - math.pi
-            dist_t += dj * dj
-        on_target = dp_t <= tol_pos and (rot_w == 0.0 or dr_t <= tol_rot)
-        if on_target and dist_t < dist * (1.0 - 1e-6):
-            for j in range(n):
-                q[j] = q_t[j]
-                out_q[j] = q_t[j]
-                dj = q_ref[j] - q_t[j]
-                if wrap[j]:
-                    dj = (dj + math.pi) % (2.0 * math.pi) - math.pi
-                d[j] = dj
-            for a in range(6):
-                res[a] = res_t[a]
-                for j in range(n):
-                    jac[a, j] = jac_t[a, j]
-            dist = dist_t
-            step_gain = min(gain, step_gain * 2.0)
-        elif on_target:
-            break  # no more progress along the self-motion
-        else:
-            step_gain *= 0.5
-    return used
 
 
 # --------------------------------------------------------------------------- python side
@@ -672,8 +60,8 @@ class PolishOutcome(NamedTuple):
 
     Attributes:
         q: Polished points, shape ``(k, nq)`` (the start where not run).
-        position_error: ‖Δp‖ [m], ``(k,)`` (``inf`` where not run).
-        rotation_error: θ [rad], ``(k,)`` (``inf`` where not run).
+        position_error: Largest primary position error [m], ``(k,)`` (``inf`` where not run).
+        rotation_error: Largest primary angular error [rad], ``(k,)`` (``inf`` where not run).
         status: ``NOT_RUN``, ``CONVERGED``, ``LOCAL_MIN``, ``ITER_CAP`` or ``BUDGET``, ``(k,)``.
         evals: Evaluations per start, ``(k,)``.
         used: Evaluations of the call in total.
@@ -688,85 +76,67 @@ class PolishOutcome(NamedTuple):
 
 
 class Polisher(NamedTuple):
-    """The compiled LM polish bound to one IK problem (the chain, target, bounds, tolerance).
+    """The compiled LM kernel (:func:`swarm_ik.kernels.lm.lm_polish`) bound to one problem.
 
-    Build with :meth:`from_problem`.  Attributes are the kernel's arguments (see
-    :func:`lm_polish`); ``kernel_tol_*`` are the tolerances the kernel stops at
+    Build with :meth:`from_problem`.  ``kernel_tol_*`` are the tolerances the kernel stops at
     (``tol_margin`` × the success tolerances, so that Pinocchio's check passes with margin).
     """
 
-    kinds: IntArray
-    axes: FloatArray
-    rot_p: FloatArray
-    pos_p: FloatArray
-    rot_f: FloatArray
-    pos_f: FloatArray
-    t_rot: FloatArray
-    t_pos: FloatArray
-    lower: FloatArray
-    upper: FloatArray
-    wrap: NDArray[np.bool_]
-    rot_w: float
+    tree: lm.TreeArrays
+    table: lm.GoalTable
+    bounds: lm.Bounds
+    cfg: LMSettings
     kernel_tol_pos: float
     kernel_tol_rot: float
-    max_iters: int = 30
-    lam0: float = 1e-2
-    max_step: float = 1.0
-    stall_rel: float = 1e-2
-    stall_iters: int = 3
 
     @classmethod
     def from_problem(
         cls,
         problem: IKProblem,
-        lower: FloatArray,
-        upper: FloatArray,
+        lower: FloatArray | None = None,
+        upper: FloatArray | None = None,
         tol_pos: float = 1e-5,
         tol_rot: float = 1e-5,
         *,
         wrap: NDArray[np.bool_] | None = None,
-        tol_margin: float = 0.5,
-        max_iters: int = 30,
-        lam0: float = 1e-2,
-        max_step: float = 1.0,
-        stall_rel: float = 1e-2,
-        stall_iters: int = 3,
+        q0: FloatArray | None = None,
+        settings: LMSettings = lm.DEFAULT_LM,
+        **overrides: float,
     ) -> Polisher:
-        """Bind the kernel to ``problem`` (its robot's chain and target) within the bounds.
+        """Bind the kernel to ``problem`` within the bounds.
 
         Args:
             problem: The IK problem.
-            lower: Lower bounds, shape ``(nq,)``.
+            lower: Lower bounds, shape ``(nq,)`` (default the problem's).
             upper: Upper bounds, shape ``(nq,)``.
             tol_pos: Position tolerance of success [m].
-            tol_rot: Rotation tolerance of success [rad].
+            tol_rot: Angular tolerance of success [rad].
             wrap: Continuous-joint mask, shape ``(nq,)`` (default: the robot's).
-            tol_margin: The kernel stops at ``tol_margin`` × the tolerances.
-            max_iters, lam0, max_step, stall_rel, stall_iters: See :func:`lm_polish`.
+            q0: The solve's start (fills ``MinimalDisplacement`` goals).
+            settings: LM settings (default :data:`swarm_ik.kernels.lm.DEFAULT_LM`).
+            **overrides: Fields of :class:`~swarm_ik.kernels.lm.LMSettings` to change.
         """
-        chain = problem.robot.chain
-        target = problem.target
-        return cls(
-            kinds=chain.kinds,
-            axes=chain.axes,
-            rot_p=chain.rot_p,
-            pos_p=chain.pos_p,
-            rot_f=chain.rot_f,
-            pos_f=chain.pos_f,
-            t_rot=np.ascontiguousarray(target[:3, :3]),
-            t_pos=np.ascontiguousarray(target[:3, 3]),
-            lower=np.ascontiguousarray(lower, dtype=float),
-            upper=np.ascontiguousarray(upper, dtype=float),
-            wrap=np.ascontiguousarray(problem.robot.continuous_mask if wrap is None else wrap),
-            rot_w=0.0 if problem.position_only else 1.0,
-            kernel_tol_pos=float(tol_pos) * tol_margin,
-            kernel_tol_rot=float(tol_rot) * tol_margin,
-            max_iters=int(max_iters),
-            lam0=float(lam0),
-            max_step=float(max_step),
-            stall_rel=float(stall_rel),
-            stall_iters=int(stall_iters),
+        cfg = settings._replace(**overrides).checked()  # type: ignore[arg-type]
+        b = problem.bounds
+        bounds = lm.Bounds(
+            b.lower if lower is None else np.ascontiguousarray(lower, dtype=float),
+            b.upper if upper is None else np.ascontiguousarray(upper, dtype=float),
+            b.wrap if wrap is None else np.ascontiguousarray(wrap, dtype=np.bool_),
+            b.linear,
         )
+        return cls(
+            problem.robot.tree,
+            problem.table(q0),
+            bounds,
+            cfg,
+            float(tol_pos) * cfg.tol_margin,
+            float(tol_rot) * cfg.tol_margin,
+        )
+
+    @property
+    def wrap(self) -> NDArray[np.bool_]:
+        """Continuous-joint mask, ``(nq,)``."""
+        return self.bounds.wrap
 
     def polish(self, starts: FloatArray, max_evals: int, stop_first: bool = True) -> PolishOutcome:
         """Polish ``starts`` ``(k, nq)`` (inside the bounds) with at most ``max_evals``
@@ -778,96 +148,62 @@ class Polisher(NamedTuple):
         dr = np.empty(k)
         status = np.empty(k, dtype=np.int64)
         evals = np.empty(k, dtype=np.int64)
-        used = lm_polish(
-            starts,
-            self.kinds,
-            self.axes,
-            self.rot_p,
-            self.pos_p,
-            self.rot_f,
-            self.pos_f,
-            self.t_rot,
-            self.t_pos,
-            self.lower,
-            self.upper,
-            self.wrap,
-            self.rot_w,
-            self.kernel_tol_pos,
-            self.kernel_tol_rot,
-            self.max_iters,
-            int(max_evals),
-            bool(stop_first),
-            self.lam0,
-            self.max_step,
-            self.stall_rel,
-            self.stall_iters,
-            out_q,
-            dp,
-            dr,
-            status,
-            evals,
-        )
+        used = lm.lm_polish(
+            starts, self.tree, self.table, self.bounds, self.cfg, self.kernel_tol_pos,
+            self.kernel_tol_rot, int(max_evals), bool(stop_first), out_q, dp, dr, status, evals,
+        )  # fmt: skip
         return PolishOutcome(out_q, dp, dr, status, evals, int(used))
 
-    def toward(
-        self, q: FloatArray, q_ref: FloatArray, max_evals: int, gain: float = 0.5
-    ) -> tuple[FloatArray, int]:
-        """Move the solution ``q`` along its self-motion towards ``q_ref`` (see
-        :func:`nullspace_toward`); returns ``(q', evaluations used)``."""
-        out = np.empty_like(q)
-        used = nullspace_toward(
-            np.ascontiguousarray(q, dtype=float),
-            np.ascontiguousarray(q_ref, dtype=float),
-            self.kinds,
-            self.axes,
-            self.rot_p,
-            self.pos_p,
-            self.rot_f,
-            self.pos_f,
-            self.t_rot,
-            self.t_pos,
-            self.lower,
-            self.upper,
-            self.wrap,
-            self.rot_w,
-            self.kernel_tol_pos,
-            self.kernel_tol_rot,
-            float(gain),
-            int(max_evals),
-            out,
-        )
+    def secondary(self, q: FloatArray, max_evals: int) -> tuple[FloatArray, int]:
+        """Lower the secondary goals' cost in the primary null space
+        (:func:`swarm_ik.kernels.lm.secondary_descent`); returns ``(q', evaluations)``."""
+        out = np.empty(q.shape[0])
+        used = lm.secondary_descent(
+            np.ascontiguousarray(q, dtype=float), self.tree, self.table, self.bounds,
+            self.kernel_tol_pos, self.kernel_tol_rot, int(max_evals), out,
+        )  # fmt: skip
         return out, int(used)
 
-    def residual(self, q: FloatArray) -> tuple[FloatArray, FloatArray, float, float]:
-        """Residual ``r (6,)``, its step Jacobian ``(6, nq)`` (``r(q + δ) ≈ r − jac @ δ``),
-        position error [m] and rotation angle [rad] at one ``q`` (for tests and tools)."""
-        q = np.ascontiguousarray(q, dtype=float)
-        n = q.shape[0]
-        res = np.empty(6)
-        jac = np.empty((6, n))
-        _c, dp, dr = _residual(
-            q,
-            self.kinds,
-            self.axes,
-            self.rot_p,
-            self.pos_p,
-            self.rot_f,
-            self.pos_f,
-            self.t_rot,
-            self.t_pos,
-            self.rot_w,
-            True,
-            res,
-            jac,
-            np.empty((3, 3)),
-            np.empty(3),
-            np.empty((6, n)),
-            np.empty((n, 3)),
-            np.empty((n, 3)),
-            np.empty((3, 3)),
-            np.empty((3, 3)),
+    def with_posture(self, q_ref: FloatArray) -> Polisher:
+        """The same kernel with a secondary posture goal at ``q_ref`` added (``prefer=
+        "nearest"``: slide along the self-motion towards ``q0``)."""
+        t = self.table
+        nq = q_ref.shape[0]
+        tab = lm.goal_table(
+            [*t.code.tolist(), lm.JOINT],
+            [*t.frame.tolist(), -1],
+            [*t.weight.tolist(), 1.0],
+            [*t.primary.tolist(), False],
+            [*t.par, np.zeros(lm.N_PAR)],
+            [*t.jref, np.asarray(q_ref, dtype=float)],
+            [*t.jw, np.ones(nq)],
+            nq,
         )
-        return res, jac, float(dp), float(dr)
+        return self._replace(table=tab)
+
+    def toward(self, q: FloatArray, q_ref: FloatArray, max_evals: int) -> tuple[FloatArray, int]:
+        """Move the solution ``q`` along its self-motion towards ``q_ref``."""
+        return self.with_posture(q_ref).secondary(q, max_evals)
+
+    def residual(self, q: FloatArray) -> tuple[FloatArray, FloatArray, float, float]:
+        """Stacked primary residual ``r (rows,)``, its step Jacobian ``(rows, nq)``
+        (``r(q + δ) ≈ r − jac @ δ``), largest position error [m] and angular error [rad]."""
+        q2 = np.ascontiguousarray(np.asarray(q, dtype=float)[None])
+        m = self.table.rows_primary
+        res = np.empty((1, m))
+        jac = np.empty((1, m, q2.shape[1]))
+        err = np.empty((1, self.table.code.shape[0], 2))
+        lm.residuals_batch(q2, self.tree, self.table, self.bounds, True, res, jac, err)
+        e = np.where(np.isnan(err[0][self.table.primary]), 0.0, err[0][self.table.primary])
+        return res[0], jac[0], float(e[:, 0].max()), float(e[:, 1].max())
+
+    def secondary_cost(self, q_batch: FloatArray) -> FloatArray:
+        """Squared norm of the secondary stack for each row of ``q_batch`` ``(k, nq)``."""
+        q2 = np.ascontiguousarray(np.atleast_2d(q_batch), dtype=float)
+        err = np.empty((q2.shape[0], self.table.code.shape[0], 2))
+        c2 = np.empty(q2.shape[0])
+        lm.errors_batch(q2, self.tree, self.table, self.bounds, err, c2)
+        return c2
 
 
 def wrapped_distance(a: FloatArray, b: FloatArray, wrap: NDArray[np.bool_]) -> FloatArray:
@@ -900,6 +236,17 @@ def _check_params(
         raise InvalidArgumentError(f"tol_margin must be in (0, 1], got {tol_margin}")
     if prefer not in PREFER:
         raise unknown("prefer mode", prefer, PREFER)
+
+
+def _default_seed(problem: IKProblem, ev: Evaluator) -> FloatArray:
+    """The first start without ``q0``: the reference of the first Posture goal (clipped into
+    the bounds) when there is one, else the middle of the ranges (TRAC-IK's seed)."""
+    from swarm_ik.goals import Posture
+
+    for gl in problem.goals:
+        if isinstance(gl, Posture):
+            return ev.clip(problem.robot.check_q(gl.q_ref, "Posture.q_ref")[None])[0]
+    return 0.5 * (ev.lower + ev.upper)
 
 
 def propose(
@@ -1031,6 +378,7 @@ def run(
         tol_pos,
         tol_rot,
         wrap=ev.wrap_mask,
+        q0=ev.q0,
         tol_margin=tol_margin,
         max_iters=max_iters,
         lam0=lam0,
@@ -1038,9 +386,13 @@ def run(
         stall_rel=stall_rel,
         stall_iters=stall_iters,
     )
-    # the se3 fitness is dp + w_rot·θ, which the kernel computes; any other fitness (or an
-    # overridden one) is evaluated by the problem itself
-    se3 = problem.fitness_name == "se3" and type(problem).fitness is IKProblem.fitness
+    # a single-goal se3 cost is dp + w_rot·θ, which the kernel computes; any other cost (or
+    # an overridden one) is evaluated by the problem itself
+    se3 = (
+        problem.fitness_name == "se3"
+        and len(problem.goals) == 1
+        and type(problem).fitness is IKProblem.fitness
+    )
     w_rot = 0.0 if problem.position_only else problem.w_rot
 
     def fitness_of(q: FloatArray, dp: FloatArray, dr: FloatArray) -> FloatArray:
@@ -1048,8 +400,15 @@ def run(
             return dp + w_rot * dr
         return np.asarray(problem.fitness(q), dtype=float)
 
-    nearest = prefer == "nearest"
-    seed = ev.q0.copy() if ev.q0 is not None else 0.5 * (ev.lower + ev.upper)
+    seed = ev.q0.copy() if ev.q0 is not None else _default_seed(problem, ev)
+    if prefer == "nearest":
+        pol_sec = pol.with_posture(seed)  # nearest to q0: a secondary posture at q0
+    else:
+        pol_sec = pol
+    # "nearest" mode and problems with secondary goals: once a first solution is found,
+    # polish more starts around the seed, keep the converged one with the lowest secondary
+    # cost, then lower it further in the primary null space
+    nearest = prefer == "nearest" or problem.has_secondary
     m = int(pop_size)
     n_swarm = int(round(swarm_fraction * m))
     unlimited = ev.max_evals is None and ev.time_limit is None
@@ -1139,10 +498,10 @@ def run(
     if nearest:
         if sol_x:
             sols = np.asarray(sol_x)
-            k = int(np.argmin(wrapped_distance(sols, seed, pol.wrap)))
+            k = int(np.argmin(pol_sec.secondary_cost(sols)))
             q_best = sols[k]
-            if problem.nq > (3 if problem.position_only else 6) and ev.remaining > 0:
-                q_best, used = pol.toward(q_best, seed, min(ev.remaining, 200))
+            if ev.remaining > 0:
+                q_best, used = pol_sec.secondary(q_best, min(ev.remaining, 200))
                 ev.add_evals(used)
             _r, _j, dp, dr = pol.residual(q_best)
             best_x = q_best

@@ -1,0 +1,710 @@
+"""Goal terms: what an IK problem asks of the robot, each a residual with its Jacobian.
+
+A goal is a small frozen object: a frame (for frame goals), its data (a pose, a point, an
+axis…), a ``weight`` and whether it is ``primary``.  Primary goals must be met to tolerance
+(success = every primary goal within tolerance and the joints within limits); secondary goals
+(the default for :class:`Posture`, :class:`CenterJoints` and :class:`MinimalDisplacement`) are
+optimised lexicographically *after* the primary ones: once the primary residual is within
+tolerance, the solver moves in the null space of the primary Jacobian to reduce the secondary
+cost and accepts a step only when every primary goal stays within tolerance
+(:func:`swarm_ik.kernels.lm.secondary_descent`), so a secondary goal never costs primary
+accuracy.
+
+Each goal class gives
+
+* ``encode(robot, q0)``: its row of the compiled goal table
+  (:class:`swarm_ik.kernels.lm.GoalTable`): a residual code of :mod:`swarm_ik.kernels.lm`, the goal frame's index and 12 parameters,
+  plus a joint reference and per-joint weights for joint-space goals;
+* ``residual(pose, jac, q)``: the numpy twin of the compiled residual ``r`` and its step
+  Jacobian ``J`` (``r(q + δ) ≈ r(q) − J δ``), used by the tests;
+* ``errors(pose, q)``: ``(position error [m], angular error [rad])`` (NaN where the goal has
+  none), the quantities the tolerances judge.
+
+Adding a goal type is one class here plus ``@register_goal``; a goal whose residual is not one
+of the kernel's residual codes also needs its branch in :func:`swarm_ik.kernels.lm.goal_rows`.
+
+>>> import numpy as np, swarm_ik
+>>> from swarm_ik import goals
+>>> robot = swarm_ik.load_robot("panda")
+>>> down = goals.Axis("panda_hand_tcp", axis=[0, 0, 1], direction=[0, 0, -1])
+>>> at = goals.Position("panda_hand_tcp", [0.5, 0, 0.3])
+>>> problem = swarm_ik.IKProblem(robot, goals=[at, down])
+>>> swarm_ik.solve(problem).success
+True
+"""
+
+from __future__ import annotations
+
+import json
+import os
+import reprlib
+from collections.abc import Callable, Mapping, Sequence
+from dataclasses import MISSING, dataclass, fields
+from pathlib import Path
+from typing import TYPE_CHECKING, Any, ClassVar, TypeVar
+
+import numpy as np
+from numpy.typing import NDArray
+
+from swarm_ik.errors import InvalidArgumentError, InvalidTargetError, UnknownNameError, unknown
+from swarm_ik.kernels import lie
+from swarm_ik.kernels.lm import (
+    AXIS,
+    JOINT,
+    LOOK_AT,
+    N_PAR,
+    ORIENTATION,
+    POSE,
+    POSITION,
+)
+from swarm_ik.pose import as_pose
+
+if TYPE_CHECKING:
+    from swarm_ik.robot import RobotModel
+
+FloatArray = NDArray[np.float64]
+
+
+def _vec3(value: Any, what: str, *, unit: bool = False) -> FloatArray:
+    try:
+        arr = np.array(value, dtype=float)
+    except (TypeError, ValueError):
+        raise InvalidArgumentError(f"{what} must be 3 numbers, got {reprlib.repr(value)}") from None
+    if arr.shape != (3,):
+        raise InvalidArgumentError(f"{what} must be 3 numbers, got shape {arr.shape}")
+    if not np.all(np.isfinite(arr)):
+        raise InvalidArgumentError(f"{what} must be finite, got {arr.tolist()}")
+    if unit:
+        scale = np.max(np.abs(arr))
+        if scale == 0.0:
+            raise InvalidArgumentError(f"{what} must not be the zero vector")
+        arr = arr / scale
+        arr = arr / np.linalg.norm(arr)
+    return arr
+
+
+def _weight(value: Any, what: str = "weight") -> float:
+    try:
+        w = float(value)
+    except (TypeError, ValueError):
+        raise InvalidArgumentError(f"{what} must be a positive number, got {value!r}") from None
+    if not (np.isfinite(w) and w > 0.0):
+        raise InvalidArgumentError(f"{what} must be a positive finite number, got {value!r}")
+    return w
+
+
+def _skew(v: FloatArray) -> FloatArray:
+    return np.array([[0.0, -v[2], v[1]], [v[2], 0.0, -v[0]], [-v[1], v[0], 0.0]])
+
+
+@dataclass(frozen=True)
+class Goal:
+    """Base of every goal term.
+
+    Attributes:
+        weight: Weight of the goal's residual rows (dimensionless; a Pose's rotation rows are
+            in radians, its position rows in metres).
+        primary: Must be met to tolerance (True) or optimised after the primary goals in
+            their null space (False).
+    """
+
+    code: ClassVar[int] = -1
+    frame_goal: ClassVar[bool] = True
+
+    def frame_name(self) -> str | None:
+        """The goal frame (None for joint-space goals)."""
+        return getattr(self, "frame", None)
+
+    def encode(self, robot: RobotModel, q0: FloatArray | None) -> GoalRow:
+        """The goal's row of the compiled goal table."""
+        raise NotImplementedError
+
+    def residual(
+        self, pose: FloatArray, jac: FloatArray, q: FloatArray, robot: RobotModel
+    ) -> tuple[FloatArray, FloatArray]:
+        """Numpy twin of the compiled residual: ``(r (rows,), J (rows, nq))`` with
+        ``r(q + δ) ≈ r − J δ``; ``pose (4, 4)`` and ``jac (6, nq)`` of the goal frame."""
+        raise NotImplementedError
+
+    def errors(self, pose: FloatArray, q: FloatArray, robot: RobotModel) -> tuple[float, float]:
+        """``(position error [m], angular error [rad])``, NaN where the goal has none."""
+        raise NotImplementedError
+
+    def describe(self) -> str:
+        """Short label for reports, e.g. ``Pose(left_gripper)``."""
+        f = self.frame_name()
+        return f"{type(self).__name__}({f})" if f else type(self).__name__
+
+
+@dataclass(frozen=True)
+class GoalRow:
+    """One goal encoded for the kernel (see :class:`swarm_ik.kernels.lm.GoalTable`)."""
+
+    code: int
+    frame: int
+    weight: float
+    primary: bool
+    par: FloatArray
+    jref: FloatArray
+    jw: FloatArray
+
+
+GOALS: dict[str, type[Goal]] = {}
+"""Goal types by name (the ``type`` field of the JSON schema)."""
+
+G = TypeVar("G", bound=type[Goal])
+
+
+def register_goal(cls: G) -> G:
+    """Class decorator: make a goal type known by its class name (JSON, CLI).
+
+    Raises:
+        InvalidArgumentError: a goal type of that name is already registered.
+    """
+    name = cls.__name__
+    if name in GOALS:
+        raise InvalidArgumentError(f"goal type {name!r} is already registered")
+    GOALS[name] = cls
+    return cls
+
+
+def _frame_row(
+    goal: Goal, robot: RobotModel, code: int, par: FloatArray, weight: float, primary: bool
+) -> GoalRow:
+    frame = goal.frame_name()
+    if frame not in robot.frames:
+        raise UnknownNameError(
+            f"{goal.describe()}: {frame!r} is not a goal frame of this robot; goal frames: "
+            f"{', '.join(robot.frames)} (load the robot with every goal frame: "
+            "load_robot(name, ee_frame=[...]))"
+        )
+    return GoalRow(
+        code,
+        robot.frames.index(frame),
+        weight,
+        primary,
+        par,
+        np.zeros(robot.nq),
+        np.zeros(robot.nq),
+    )
+
+
+# --------------------------------------------------------------------------- frame goals
+@register_goal
+@dataclass(frozen=True)
+class Pose(Goal):
+    """The frame at a full pose: ``r = w·[p* − p; log(R* Rᵀ)]`` (world axes).
+
+    Args:
+        frame: Goal frame name.
+        target: ``(4, 4)`` pose [m], ``(position, quaternion xyzw)``, 7 numbers, or SE3.
+        weight: Residual weight.
+        primary: Must be met to tolerance (default True).
+        orth_tol: Tolerance on the orthonormality of the target rotation.
+    """
+
+    frame: str
+    target: Any
+    weight: float = 1.0
+    primary: bool = True
+    orth_tol: float = 1e-6
+    code: ClassVar[int] = POSE
+
+    def __post_init__(self) -> None:
+        object.__setattr__(self, "target", as_pose(self.target, orth_tol=self.orth_tol))
+        object.__setattr__(self, "weight", _weight(self.weight))
+
+    def encode(self, robot: RobotModel, q0: FloatArray | None) -> GoalRow:
+        par = np.zeros(N_PAR)
+        par[:9] = self.target[:3, :3].ravel()
+        par[9:12] = self.target[:3, 3]
+        return _frame_row(self, robot, self.code, par, self.weight, self.primary)
+
+    def residual(self, pose, jac, q, robot):  # type: ignore[no-untyped-def]
+        phi = lie.log3(self.target[:3, :3] @ pose[:3, :3].T)
+        r = np.concatenate([self.target[:3, 3] - pose[:3, 3], phi])
+        jr = np.vstack([jac[:3], lie.jr_inv(phi) @ jac[3:]])
+        return self.weight * r, self.weight * jr
+
+    def errors(self, pose, q, robot):  # type: ignore[no-untyped-def]
+        dp = float(np.linalg.norm(pose[:3, 3] - self.target[:3, 3]))
+        return dp, float(lie.angle(self.target[:3, :3].T @ pose[:3, :3]))
+
+
+@register_goal
+@dataclass(frozen=True)
+class Position(Goal):
+    """The frame origin at a world point: ``r = w·(p* − p)`` [m].
+
+    Args:
+        frame: Goal frame name.
+        point: World point [m], 3 numbers.
+        weight, primary: As :class:`Pose`.
+    """
+
+    frame: str
+    point: Any
+    weight: float = 1.0
+    primary: bool = True
+    code: ClassVar[int] = POSITION
+
+    def __post_init__(self) -> None:
+        object.__setattr__(self, "point", _vec3(self.point, "Position.point"))
+        object.__setattr__(self, "weight", _weight(self.weight))
+
+    def encode(self, robot: RobotModel, q0: FloatArray | None) -> GoalRow:
+        par = np.zeros(N_PAR)
+        par[9:12] = self.point
+        return _frame_row(self, robot, self.code, par, self.weight, self.primary)
+
+    def residual(self, pose, jac, q, robot):  # type: ignore[no-untyped-def]
+        return self.weight * (self.point - pose[:3, 3]), self.weight * jac[:3].copy()
+
+    def errors(self, pose, q, robot):  # type: ignore[no-untyped-def]
+        return float(np.linalg.norm(pose[:3, 3] - self.point)), float("nan")
+
+
+@register_goal
+@dataclass(frozen=True)
+class Orientation(Goal):
+    """The frame at a world orientation: ``r = w·log(R* Rᵀ)`` [rad].
+
+    Args:
+        frame: Goal frame name.
+        rotation: ``(3, 3)`` rotation matrix or a quaternion ``(x, y, z, w)``.
+        weight, primary, orth_tol: As :class:`Pose`.
+    """
+
+    frame: str
+    rotation: Any
+    weight: float = 1.0
+    primary: bool = True
+    orth_tol: float = 1e-6
+    code: ClassVar[int] = ORIENTATION
+
+    def __post_init__(self) -> None:
+        r = np.asarray(self.rotation, dtype=float) if _is_array(self.rotation) else None
+        if r is not None and r.shape == (3, 3):
+            pose = np.eye(4)
+            pose[:3, :3] = r
+            rot = as_pose(pose, orth_tol=self.orth_tol)[:3, :3]
+        else:
+            rot = as_pose((np.zeros(3), self.rotation), orth_tol=self.orth_tol)[:3, :3]
+        object.__setattr__(self, "rotation", rot)
+        object.__setattr__(self, "weight", _weight(self.weight))
+
+    def encode(self, robot: RobotModel, q0: FloatArray | None) -> GoalRow:
+        par = np.zeros(N_PAR)
+        par[:9] = self.rotation.ravel()
+        return _frame_row(self, robot, self.code, par, self.weight, self.primary)
+
+    def residual(self, pose, jac, q, robot):  # type: ignore[no-untyped-def]
+        phi = lie.log3(self.rotation @ pose[:3, :3].T)
+        return self.weight * phi, self.weight * (lie.jr_inv(phi) @ jac[3:])
+
+    def errors(self, pose, q, robot):  # type: ignore[no-untyped-def]
+        return float("nan"), float(lie.angle(self.rotation.T @ pose[:3, :3]))
+
+
+def _is_array(v: Any) -> bool:
+    try:
+        np.asarray(v, dtype=float)
+    except (TypeError, ValueError):
+        return False
+    return True
+
+
+@register_goal
+@dataclass(frozen=True)
+class Axis(Goal):
+    """A frame axis along a world direction, the rotation about it free.
+
+    ``u = R·a`` (the frame axis ``a`` in world axes), ``r = w·(d − u)``: zero only when the
+    axis points along ``d`` (not against it).  Error: the angle between ``u`` and ``d``.
+
+    Args:
+        frame: Goal frame name.
+        axis: The axis in the frame's own coordinates (normalised; not zero).
+        direction: The world direction (normalised; not zero).
+        weight, primary: As :class:`Pose`.
+    """
+
+    frame: str
+    axis: Any
+    direction: Any
+    weight: float = 1.0
+    primary: bool = True
+    code: ClassVar[int] = AXIS
+
+    def __post_init__(self) -> None:
+        object.__setattr__(self, "axis", _vec3(self.axis, "Axis.axis", unit=True))
+        object.__setattr__(self, "direction", _vec3(self.direction, "Axis.direction", unit=True))
+        object.__setattr__(self, "weight", _weight(self.weight))
+
+    def encode(self, robot: RobotModel, q0: FloatArray | None) -> GoalRow:
+        par = np.zeros(N_PAR)
+        par[:3] = self.axis
+        par[3:6] = self.direction
+        return _frame_row(self, robot, self.code, par, self.weight, self.primary)
+
+    def residual(self, pose, jac, q, robot):  # type: ignore[no-untyped-def]
+        u = pose[:3, :3] @ self.axis
+        # du = ω × u = −[u]× ω; r = d − u  =>  J = −[u]× J_ω
+        return self.weight * (self.direction - u), self.weight * (-_skew(u) @ jac[3:])
+
+    def errors(self, pose, q, robot):  # type: ignore[no-untyped-def]
+        u = pose[:3, :3] @ self.axis
+        return float("nan"), _angle_between(u, self.direction)
+
+
+def _angle_between(u: FloatArray, v: FloatArray) -> float:
+    return float(np.arctan2(np.linalg.norm(np.cross(u, v)), float(np.dot(u, v))))
+
+
+@register_goal
+@dataclass(frozen=True)
+class LookAt(Goal):
+    """A frame axis pointing at a world point (a camera looking at a target).
+
+    ``u = R·a``, ``d = (t − p)/‖t − p‖``, ``r = w·(d − u)``.  Error: the angle between them.
+
+    Args:
+        frame: Goal frame name.
+        axis: The viewing axis in the frame's coordinates (normalised; not zero).
+        point: The world point to look at [m].
+        weight, primary: As :class:`Pose`.
+    """
+
+    frame: str
+    axis: Any
+    point: Any
+    weight: float = 1.0
+    primary: bool = True
+    code: ClassVar[int] = LOOK_AT
+
+    def __post_init__(self) -> None:
+        object.__setattr__(self, "axis", _vec3(self.axis, "LookAt.axis", unit=True))
+        object.__setattr__(self, "point", _vec3(self.point, "LookAt.point"))
+        object.__setattr__(self, "weight", _weight(self.weight))
+
+    def encode(self, robot: RobotModel, q0: FloatArray | None) -> GoalRow:
+        par = np.zeros(N_PAR)
+        par[:3] = self.axis
+        par[3:6] = self.point
+        return _frame_row(self, robot, self.code, par, self.weight, self.primary)
+
+    def residual(self, pose, jac, q, robot):  # type: ignore[no-untyped-def]
+        u = pose[:3, :3] @ self.axis
+        e = self.point - pose[:3, 3]
+        dist = max(float(np.linalg.norm(e)), 1e-9)
+        d = e / dist
+        # dd = −(I − d dᵀ)/L · dp ; du = −[u]× ω ; r = d − u  =>  J = du − dd
+        jd = -(np.eye(3) - np.outer(d, d)) / dist @ jac[:3]
+        ju = -_skew(u) @ jac[3:]
+        return self.weight * (d - u), self.weight * (ju - jd)
+
+    def errors(self, pose, q, robot):  # type: ignore[no-untyped-def]
+        u = pose[:3, :3] @ self.axis
+        return float("nan"), _angle_between(u, self.point - pose[:3, 3])
+
+
+# --------------------------------------------------------------------------- joint goals
+def _joint_rows(
+    goal: Goal, robot: RobotModel, ref: FloatArray, jw: FloatArray, primary: bool
+) -> GoalRow:
+    return GoalRow(
+        JOINT,
+        -1,
+        goal.weight,
+        primary,
+        np.zeros(N_PAR),
+        ref.astype(float),
+        jw.astype(float),  # type: ignore[attr-defined]
+    )
+
+
+def _joint_residual(
+    goal: Goal, ref: FloatArray, jw: FloatArray, q: FloatArray, robot: RobotModel
+) -> tuple[FloatArray, FloatArray]:
+    d = ref - q
+    m = robot.continuous_mask
+    d[m] = (d[m] + np.pi) % (2 * np.pi) - np.pi
+    w = goal.weight * jw  # type: ignore[attr-defined]
+    return w * d, np.diag(w)
+
+
+def _joint_errors(
+    ref: FloatArray, jw: FloatArray, q: FloatArray, robot: RobotModel
+) -> tuple[float, float]:
+    d = ref - q
+    m = robot.continuous_mask
+    d[m] = (d[m] + np.pi) % (2 * np.pi) - np.pi
+    d = np.abs(d)
+    on = jw > 0
+    pri = on & robot.prismatic_mask
+    rev = on & ~robot.prismatic_mask
+    return (
+        float(d[pri].max()) if pri.any() else float("nan"),
+        float(d[rev].max()) if rev.any() else float("nan"),
+    )
+
+
+def _joint_vector(value: Any, robot: RobotModel, what: str) -> FloatArray:
+    return robot.check_q(value, what)
+
+
+@register_goal
+@dataclass(frozen=True)
+class Posture(Goal):
+    """Joints near a reference posture: ``r = w·(q_ref − q)`` (continuous joints wrapped).
+
+    Secondary by default (optimised in the null space of the primary goals).
+
+    Args:
+        q_ref: Reference joint vector ``(nq,)`` (rad / m).
+        weight: Residual weight.
+        primary: Default False.
+        joint_weights: Optional per-joint weights ``(nq,)`` (default all 1).
+    """
+
+    q_ref: Any
+    weight: float = 1.0
+    primary: bool = False
+    joint_weights: Any = None
+    code: ClassVar[int] = JOINT
+    frame_goal: ClassVar[bool] = False
+
+    def __post_init__(self) -> None:
+        object.__setattr__(self, "weight", _weight(self.weight))
+
+    def _ref_w(self, robot: RobotModel, q0: FloatArray | None) -> tuple[FloatArray, FloatArray]:
+        ref = _joint_vector(self.q_ref, robot, "Posture.q_ref")
+        jw = (
+            np.ones(robot.nq)
+            if self.joint_weights is None
+            else _joint_vector(self.joint_weights, robot, "Posture.joint_weights")
+        )
+        if np.any(jw < 0):
+            raise InvalidArgumentError("Posture.joint_weights must be non-negative")
+        return ref, jw
+
+    def encode(self, robot: RobotModel, q0: FloatArray | None) -> GoalRow:
+        ref, jw = self._ref_w(robot, q0)
+        return _joint_rows(self, robot, ref, jw, self.primary)
+
+    def residual(self, pose, jac, q, robot, q0=None):  # type: ignore[no-untyped-def]
+        ref, jw = self._ref_w(robot, q0)
+        return _joint_residual(self, ref, jw, q, robot)
+
+    def errors(self, pose, q, robot, q0=None):  # type: ignore[no-untyped-def]
+        ref, jw = self._ref_w(robot, q0)
+        return _joint_errors(ref, jw, q, robot)
+
+
+@register_goal
+@dataclass(frozen=True)
+class CenterJoints(Goal):
+    """Joints near the middle of their ranges (BioIK's CenterJoints): a :class:`Posture` at
+    the mid-range, each joint's row scaled by ``2/range`` so every joint counts alike.
+
+    Args:
+        weight: Residual weight.
+        primary: Default False.
+    """
+
+    weight: float = 1.0
+    primary: bool = False
+    code: ClassVar[int] = JOINT
+    frame_goal: ClassVar[bool] = False
+
+    def __post_init__(self) -> None:
+        object.__setattr__(self, "weight", _weight(self.weight))
+
+    def _ref_w(self, robot: RobotModel, q0: FloatArray | None) -> tuple[FloatArray, FloatArray]:
+        width = robot.upper - robot.lower
+        jw = np.where(width > 0, 2.0 / np.where(width > 0, width, 1.0), 0.0)
+        jw[robot.continuous_mask] = 0.0  # no centre on a circle
+        return robot.mid_q(), jw
+
+    encode = Posture.encode
+    residual = Posture.residual
+    errors = Posture.errors
+
+
+@register_goal
+@dataclass(frozen=True)
+class MinimalDisplacement(Goal):
+    """Joints near the start ``q0`` of the solve (BioIK's MinimalDisplacement): a
+    :class:`Posture` at ``q0`` (at the mid-range when the solve has no ``q0``).
+
+    Args:
+        weight: Residual weight.
+        primary: Default False.
+    """
+
+    weight: float = 1.0
+    primary: bool = False
+    code: ClassVar[int] = JOINT
+    frame_goal: ClassVar[bool] = False
+
+    def __post_init__(self) -> None:
+        object.__setattr__(self, "weight", _weight(self.weight))
+
+    def _ref_w(self, robot: RobotModel, q0: FloatArray | None) -> tuple[FloatArray, FloatArray]:
+        ref = robot.mid_q() if q0 is None else np.asarray(q0, dtype=float)
+        return ref, np.ones(robot.nq)
+
+    encode = Posture.encode
+    residual = Posture.residual
+    errors = Posture.errors
+
+
+@register_goal
+@dataclass(frozen=True)
+class JointValue(Goal):
+    """One joint at a value: ``r = w·(v − q_j)``.  Primary by default.
+
+    Args:
+        joint: Joint name (one of ``robot.joint_names``).
+        value: The value (rad or m).
+        weight, primary: As :class:`Pose`.
+    """
+
+    joint: str
+    value: float
+    weight: float = 1.0
+    primary: bool = True
+    code: ClassVar[int] = JOINT
+    frame_goal: ClassVar[bool] = False
+
+    def __post_init__(self) -> None:
+        try:
+            v = float(self.value)
+        except (TypeError, ValueError):
+            raise InvalidArgumentError(
+                f"JointValue.value must be a number, got {self.value!r}"
+            ) from None
+        if not np.isfinite(v):
+            raise InvalidArgumentError(f"JointValue.value must be finite, got {self.value!r}")
+        object.__setattr__(self, "value", v)
+        object.__setattr__(self, "weight", _weight(self.weight))
+
+    def describe(self) -> str:
+        return f"JointValue({self.joint})"
+
+    def _ref_w(self, robot: RobotModel, q0: FloatArray | None) -> tuple[FloatArray, FloatArray]:
+        if self.joint not in robot.joint_names:
+            raise unknown("joint", self.joint, robot.joint_names)
+        j = robot.joint_names.index(self.joint)
+        ref = np.zeros(robot.nq)
+        ref[j] = self.value
+        jw = np.zeros(robot.nq)
+        jw[j] = 1.0
+        return ref, jw
+
+    encode = Posture.encode
+    residual = Posture.residual
+    errors = Posture.errors
+
+
+# --------------------------------------------------------------------------- JSON
+def goal_from_dict(data: Mapping[str, Any]) -> Goal:
+    """One goal from its JSON form ``{"type": "Pose", "frame": ..., ...}``.
+
+    Raises:
+        UnknownNameError: unknown ``type`` (the goal types listed).
+        InvalidArgumentError: missing or unknown fields (the valid ones listed), bad values.
+    """
+    if not isinstance(data, Mapping):
+        raise InvalidArgumentError(
+            f"a goal must be a JSON object with a 'type', got {reprlib.repr(data)}"
+        )
+    kind = data.get("type")
+    if kind not in GOALS:
+        raise unknown("goal type", kind, GOALS)
+    cls = GOALS[str(kind)]
+    valid = [f.name for f in fields(cls) if f.init]
+    given = {k: v for k, v in data.items() if k != "type"}
+    bad = sorted(set(given) - set(valid))
+    if bad:
+        raise InvalidArgumentError(
+            f"goal {kind}: unknown field(s) {bad}; valid fields: {', '.join(valid)}"
+        )
+    required = [
+        f.name
+        for f in fields(cls)
+        if f.init and f.default is MISSING and f.default_factory is MISSING
+    ]
+    missing = [name for name in required if name not in given]
+    if missing:
+        raise InvalidArgumentError(f"goal {kind}: missing field(s) {missing}")
+    if "target" in given and isinstance(given["target"], Mapping):
+        t = given["target"]
+        extra = sorted(set(t) - {"position", "quaternion"})
+        if extra or "position" not in t or "quaternion" not in t:
+            raise InvalidTargetError(
+                f"goal {kind}: target must be a 4x4 matrix, 7 numbers (x y z qx qy qz qw) or "
+                '{"position": [x, y, z], "quaternion": [qx, qy, qz, qw]}'
+            )
+        given["target"] = (t["position"], t["quaternion"])
+    try:
+        return cls(**given)
+    except TypeError as exc:
+        raise InvalidArgumentError(f"goal {kind}: {exc}") from None
+
+
+def goal_to_dict(goal: Goal) -> dict[str, Any]:
+    """JSON form of a goal (inverse of :func:`goal_from_dict`)."""
+    out: dict[str, Any] = {"type": type(goal).__name__}
+    for f in fields(goal):
+        if not f.init:
+            continue
+        v = getattr(goal, f.name)
+        out[f.name] = v.tolist() if isinstance(v, np.ndarray) else v
+    return out
+
+
+def load_goals(source: str | os.PathLike[str] | Sequence[Mapping[str, Any]]) -> list[Goal]:
+    """Goals from a JSON file (a list of goal objects, or ``{"goals": [...]}``) or from the
+    already-parsed list.
+
+    Raises:
+        InvalidArgumentError: unreadable file, not a list of goal objects, bad goals.
+    """
+    if isinstance(source, (str, os.PathLike)):
+        p = Path(source)
+        try:
+            data = json.loads(p.read_text())
+        except FileNotFoundError:
+            raise InvalidArgumentError(f"goals file not found: {str(p)!r}") from None
+        except (OSError, UnicodeDecodeError, json.JSONDecodeError) as exc:
+            raise InvalidArgumentError(f"{p}: not a readable JSON goals file ({exc})") from None
+    else:
+        data = source
+    if isinstance(data, Mapping) and "goals" in data:
+        data = data["goals"]
+    if not isinstance(data, Sequence) or isinstance(data, (str, bytes)) or not data:
+        raise InvalidArgumentError("goals must be a non-empty JSON list of goal objects")
+    return [goal_from_dict(d) for d in data]
+
+
+GoalFactory = Callable[..., Goal]
+
+__all__ = [
+    "GOALS",
+    "Axis",
+    "CenterJoints",
+    "Goal",
+    "GoalRow",
+    "JointValue",
+    "LookAt",
+    "MinimalDisplacement",
+    "Orientation",
+    "Pose",
+    "Position",
+    "Posture",
+    "goal_from_dict",
+    "goal_to_dict",
+    "load_goals",
+    "register_goal",
+]

@@ -1,0 +1,164 @@
+"""Rotation helpers in one place: ``log3``, the rotation angle and ``Jr⁻¹``.
+
+Each has a compiled twin (``*_nb``, numba, one rotation, no allocation) for the kernels and a
+numpy version for Python code; ``tests/test_lie.py`` checks them against each other and
+against Pinocchio's ``log3`` / ``Jlog3``.
+
+Conventions: a rotation vector ``φ = θ·u`` (``θ ∈ [0, π]``), ``exp([φ]×) = R``.  The right
+Jacobian inverse is ``Jr⁻¹(φ) = I + ½[φ]× + k(θ)[φ]×²`` with
+``k = 1/θ² − (1 + cos θ)/(2θ sin θ)`` (Solà et al., "A micro Lie theory", eq. 144, [LIE]).
+"""
+
+from __future__ import annotations
+
+import math
+
+import numba
+import numpy as np
+from numpy.typing import NDArray
+
+FloatArray = NDArray[np.float64]
+
+
+@numba.njit(cache=True)
+def angle_nb(m: FloatArray) -> float:  # pragma: no cover - compiled
+    """Rotation angle θ ∈ [0, π] of the rotation matrix ``m`` (3, 3), accurate near 0 and π
+    (``atan2`` of the skew and trace parts)."""
+    s0 = m[2, 1] - m[1, 2]
+    s1 = m[0, 2] - m[2, 0]
+    s2 = m[1, 0] - m[0, 1]
+    c = m[0, 0] + m[1, 1] + m[2, 2] - 1.0
+    return math.atan2(math.sqrt(s0 * s0 + s1 * s1 + s2 * s2), c)
+
+
+@numba.njit(cache=True)
+def log3_nb(m: FloatArray, out: FloatArray) -> float:  # pragma: no cover - compiled
+    """Rotation vector of ``m`` (3, 3) into ``out`` (3,); returns the angle θ.
+
+    Accurate near 0 (``atan2`` of the skew part) and near π (axis from the symmetric part).
+    """
+    s0 = 0.5 * (m[2, 1] - m[1, 2])
+    s1 = 0.5 * (m[0, 2] - m[2, 0])
+    s2 = 0.5 * (m[1, 0] - m[0, 1])
+    sn = math.sqrt(s0 * s0 + s1 * s1 + s2 * s2)
+    c = 0.5 * (m[0, 0] + m[1, 1] + m[2, 2] - 1.0)
+    theta = math.atan2(sn, c)
+    if theta < 1e-5:
+        scale = 1.0 + theta * theta / 6.0
+        out[0] = s0 * scale
+        out[1] = s1 * scale
+        out[2] = s2 * scale
+    elif theta < math.pi - 1e-3:
+        scale = theta / sn
+        out[0] = s0 * scale
+        out[1] = s1 * scale
+        out[2] = s2 * scale
+    else:
+        # symmetric part: B = c I + (1 - c) a aᵀ
+        i = 0
+        if m[1, 1] > m[i, i]:
+            i = 1
+        if m[2, 2] > m[i, i]:
+            i = 2
+        one_c = 1.0 - c
+        ai = math.sqrt(max((m[i, i] - c) / one_c, 0.0))
+        a0 = 0.5 * (m[0, i] + m[i, 0]) / (one_c * ai)
+        a1 = 0.5 * (m[1, i] + m[i, 1]) / (one_c * ai)
+        a2 = 0.5 * (m[2, i] + m[i, 2]) / (one_c * ai)
+        if i == 0:
+            a0 = ai
+        elif i == 1:
+            a1 = ai
+        else:
+            a2 = ai
+        norm = math.sqrt(a0 * a0 + a1 * a1 + a2 * a2)
+        if a0 * s0 + a1 * s1 + a2 * s2 < 0.0:
+            norm = -norm
+        out[0] = theta * a0 / norm
+        out[1] = theta * a1 / norm
+        out[2] = theta * a2 / norm
+    return theta
+
+
+@numba.njit(cache=True)
+def jr_inv_nb(phi: FloatArray, theta: float, out: FloatArray) -> None:  # pragma: no cover
+    """``Jr⁻¹(φ)`` (3, 3) into ``out`` for the rotation vector ``φ`` of angle ``θ``.
+
+    With ``φ = log(R* Rᵀ)`` in world axes and ``ω`` the world angular velocity,
+    ``dφ/dt = −Jr⁻¹(φ)·ω`` … up to the sign convention used by the kernel (see
+    :mod:`swarm_ik.kernels.lm`); only the matrix is computed here.
+    """
+    if theta < 1e-3:
+        k = 1.0 / 12.0 + theta * theta / 720.0
+    else:
+        k = 1.0 / (theta * theta) - (1.0 + math.cos(theta)) / (2.0 * theta * math.sin(theta))
+    px, py, pz = phi[0], phi[1], phi[2]
+    # [φ]× = [[0, -pz, py], [pz, 0, -px], [-py, px, 0]]; [φ]×² = φφᵀ − θ² I
+    n2 = px * px + py * py + pz * pz
+    out[0, 0] = 1.0 + k * (px * px - n2)
+    out[0, 1] = -0.5 * pz + k * px * py
+    out[0, 2] = 0.5 * py + k * px * pz
+    out[1, 0] = 0.5 * pz + k * py * px
+    out[1, 1] = 1.0 + k * (py * py - n2)
+    out[1, 2] = -0.5 * px + k * py * pz
+    out[2, 0] = -0.5 * py + k * pz * px
+    out[2, 1] = 0.5 * px + k * pz * py
+    out[2, 2] = 1.0 + k * (pz * pz - n2)
+
+
+# --------------------------------------------------------------------------- numpy twins
+def angle(rot: FloatArray) -> FloatArray:
+    """Rotation angles θ ∈ [0, π] of rotations ``(..., 3, 3)`` → ``(...)``, accurate near 0
+    and π."""
+    r = np.asarray(rot, dtype=float)
+    s = np.stack(
+        [r[..., 2, 1] - r[..., 1, 2], r[..., 0, 2] - r[..., 2, 0], r[..., 1, 0] - r[..., 0, 1]],
+        axis=-1,
+    )
+    c = r[..., 0, 0] + r[..., 1, 1] + r[..., 2, 2] - 1.0
+    return np.arctan2(np.linalg.norm(s, axis=-1), c)
+
+
+def log3(rot: FloatArray) -> FloatArray:
+    """Rotation vectors ``(..., 3)`` of rotations ``(..., 3, 3)``, accurate near 0 and π.
+
+    Vectorised twin of :func:`log3_nb`: ``φ = θ/sin θ · vee(R − Rᵀ)/2`` away from π, the axis
+    from the symmetric part ``(R + Rᵀ)/2 = cos θ·I + (1 − cos θ)·aaᵀ`` near π.
+    """
+    r = np.asarray(rot, dtype=float)
+    shape = r.shape[:-2]
+    r = r.reshape(-1, 3, 3)
+    s = 0.5 * np.stack(
+        [r[:, 2, 1] - r[:, 1, 2], r[:, 0, 2] - r[:, 2, 0], r[:, 1, 0] - r[:, 0, 1]], -1
+    )
+    sn = np.linalg.norm(s, axis=-1)
+    c = 0.5 * (np.trace(r, axis1=1, axis2=2) - 1.0)
+    theta = np.arctan2(sn, c)
+    with np.errstate(divide="ignore", invalid="ignore"):
+        scale = np.where(theta < 1e-5, 1.0 + theta**2 / 6.0, theta / np.where(sn > 0, sn, 1.0))
+    out = s * scale[:, None]
+    near = theta >= np.pi - 1e-3
+    if np.any(near):
+        rn, cn, sv, tn = r[near], c[near], s[near], theta[near]
+        sym = 0.5 * (rn + np.swapaxes(rn, 1, 2))
+        diag = np.diagonal(sym, axis1=1, axis2=2)
+        i = np.argmax(diag, axis=1)
+        rows = np.arange(rn.shape[0])
+        col = sym[rows, :, i] / (1.0 - cn)[:, None]  # a · a_i
+        col[rows, i] = np.sqrt(np.maximum((diag[rows, i] - cn) / (1.0 - cn), 0.0)) ** 2
+        a = col / np.linalg.norm(col, axis=-1, keepdims=True)
+        sign = np.where(np.einsum("ij,ij->i", a, sv) < 0.0, -1.0, 1.0)
+        out[near] = a * (sign * tn)[:, None]
+    return out.reshape(shape + (3,))
+
+
+def jr_inv(phi: FloatArray) -> FloatArray:
+    """``Jr⁻¹(φ) = I + ½[φ]× + k[φ]×²`` (3, 3) of one rotation vector ``φ`` (3,)."""
+    p = np.asarray(phi, dtype=float).reshape(3)
+    theta = float(np.linalg.norm(p))
+    if theta < 1e-3:
+        k = 1.0 / 12.0 + theta**2 / 720.0
+    else:
+        k = 1.0 / theta**2 - (1.0 + np.cos(theta)) / (2.0 * theta * np.sin(theta))
+    sk = np.array([[0.0, -p[2], p[1]], [p[2], 0.0, -p[0]], [-p[1], p[0], 0.0]])
+    return np.eye(3) + 0.5 * sk + k * (sk @ sk)
