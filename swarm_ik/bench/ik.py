@@ -170,7 +170,7 @@ def summarise(rows: Sequence[dict[str, Any]]) -> list[dict[str, Any]]:
             continue
         groups.setdefault((r["robot"], r["budget_ms"], r["solver"]), []).append(r)
         groups.setdefault(("all", r["budget_ms"], r["solver"]), []).append(r)
-    rank = {}
+    rank: dict[str, int] = {}
     for r in rows:
         rank.setdefault(r["solver"], len(rank))
     out = []
@@ -239,13 +239,16 @@ def write_summary(out: Path, plan: IKPlan, quick: bool, wall_s: float | None) ->
                 sections.append(f"### {title}, budget {b:g} ms\n\n" + _table(stats, robot, b))
     notes = sorted({(r["robot"], r["solver"], r["note"]) for r in rows if r["note"]})
     skipped = "\n".join(f"- `{s}` on `{r}`: {n}" for r, s, n in notes) or "- none"
-    described = "\n".join(
-        f"- `{n}`: {peers.PEERS[n].what}" for n in plan.peers if n in peers.PEERS
-    )
+    described = "\n".join(f"- `{n}`: {peers.PEERS[n].what}" for n in plan.peers if n in peers.PEERS)
     info = common.machine_info(
         ("pytracik", "roboticstoolbox-python", "pin-pink", "ikpy", "threadpoolctl")
     )
-    command = "swarm-ik bench ik" + (" --quick" if quick else "")
+    command = (
+        f"swarm-ik bench ik --robots {' '.join(plan.robots)} --peers {' '.join(plan.peers)} "
+        f"--n {plan.n} --budgets-ms {' '.join(f'{b:g}' for b in plan.budgets_ms)} "
+        f"--seed {plan.seed} --tol {plan.tol:g} --lenient-tol {plan.lenient_tol:g}"
+        + (" --quick" if quick else "")
+    )
     text = common.render(
         "ik.md",
         command=command,
@@ -284,7 +287,7 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
         nargs="+",
         default=None,
         help=f"robots (default: {' '.join(plans.IK_ROBOTS)}; with --quick "
-        f"{' '.join(plans.IK_QUICK['robots'])})",
+        f"{' '.join(plans.IK_QUICK_ROBOTS)})",
     )
     parser.add_argument(
         "--peers",
@@ -300,7 +303,7 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
         "--n",
         type=int,
         default=None,
-        help=f"targets per robot (default 1000; with --quick {plans.IK_QUICK['n']})",
+        help=f"targets per robot (default 1000; with --quick {plans.IK_QUICK_N})",
     )
     parser.add_argument(
         "--budgets-ms",
@@ -360,8 +363,8 @@ def plan_from_args(args: argparse.Namespace) -> tuple[IKPlan, bool]:
         InvalidArgumentError: unknown peer or robot, or invalid sizes.
     """
     quick = bool(args.quick)
-    robots = tuple(args.robots or (plans.IK_QUICK["robots"] if quick else plans.IK_ROBOTS))
-    n = args.n if args.n is not None else (plans.IK_QUICK["n"] if quick else 1000)
+    robots = tuple(args.robots or (plans.IK_QUICK_ROBOTS if quick else plans.IK_ROBOTS))
+    n = args.n if args.n is not None else (plans.IK_QUICK_N if quick else 1000)
     if args.peers:
         names = tuple(args.peers)
         for p in names:

@@ -57,6 +57,7 @@ from swarm_ik.bench.plans import (
     IK_FLOOR,
     PAPER000_SOLVERS,
     PAPER003_SOLVERS,
+    POSE_SEED,
     Q_EXACT,
     QUICK,
     TOL,
@@ -558,7 +559,11 @@ EXPERIMENTS: dict[str, Experiment] = {
 def plan_rows(exp: Experiment, cfg: Config, out: Path) -> list[dict[str, Any]]:
     """The CSV rows of ``exp`` that belong to configuration ``cfg`` (others ignored)."""
     keys = {s.key for s in exp.specs(cfg)}
-    return [r for r in runner.read_rows(runner.csv_path(out, exp.id), solve_runs.SCHEMA) if r["key"] in keys]
+    return [
+        r
+        for r in runner.read_rows(runner.csv_path(out, exp.id), solve_runs.SCHEMA)
+        if r["key"] in keys
+    ]
 
 
 def _meta_path(out: Path) -> Path:

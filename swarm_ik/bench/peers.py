@@ -84,7 +84,9 @@ class Peer(Protocol):
 
     name: str
 
-    def solve(self, target: np.ndarray, q0: np.ndarray, seed: int) -> Answer: ...  # pragma: no cover
+    def solve(
+        self, target: np.ndarray, q0: np.ndarray, seed: int
+    ) -> Answer: ...  # pragma: no cover
 
 
 @dataclass(frozen=True)
@@ -114,7 +116,7 @@ class PeerInfo:
         return _importable(self.package)
 
 
-@functools.lru_cache(maxsize=None)
+@functools.cache
 def _importable(module: str) -> bool:
     import importlib
 
@@ -312,7 +314,9 @@ class RtbIK:
 
     def __init__(self, robot: Any, tol: float, name: str = "rtb-lm") -> None:
         if name not in _RTB_METHODS:
-            raise InvalidArgumentError(f"unknown rtb method {name!r}; valid: {sorted(_RTB_METHODS)}")
+            raise InvalidArgumentError(
+                f"unknown rtb method {name!r}; valid: {sorted(_RTB_METHODS)}"
+            )
         rtb = _need("roboticstoolbox", name)
         method, cfun = _RTB_METHODS[name]
         namespace = getattr(rtb.ETS, method).__globals__  # the module calling the C function
@@ -403,6 +407,7 @@ class PinkIK:
         self._to_pin = to_pin or (lambda q: np.asarray(q, dtype=float))
         self._from_pin = from_pin or (lambda q: np.asarray(q, dtype=float))
         self._fids = [model.getFrameId(f) for f in self.frames]
+        self.robot: Any = None  # set by for_robot: answers are then wrapped
 
     @classmethod
     def for_robot(cls, robot: Any, budget_s: float, tol: float) -> PinkIK:
@@ -465,9 +470,8 @@ class PinkIK:
         t0 = time.perf_counter()
         q, ok, own, steps = self.solve_frames([target], q0)
         dt = time.perf_counter() - t0
-        robot = getattr(self, "robot", None)
-        if robot is not None:
-            q = robot.wrap(q)
+        if self.robot is not None:
+            q = self.robot.wrap(q)
         return Answer(q, ok, dt, own, float(steps))
 
     def fk(self, q: np.ndarray) -> np.ndarray:

@@ -99,8 +99,6 @@ def _blank(v: Any) -> str:
     return "" if v is None else str(v)
 
 
-
-
 # --------------------------------------------------------------------------- paper: sizes
 POSE_SEED = 2021
 """Seed of the joint vectors whose FK are the arbitrary poses (000 Table 4, budget)."""
@@ -173,13 +171,14 @@ QUICK = Config(
     "quick",
     runs_000=3,
     iterations_000=150,
-    poses_000=3,
+    poses_000=2,
     runs_000_t4=2,
-    runs_003=10,
-    budget_poses=3,
+    runs_003=5,
+    budget_poses=2,
     budget_seeds=1,
-    budgets=(2_000, 20_000),
+    budgets=(1_000, 10_000),
 )
+"""Reduced sizes of ``bench paper --quick`` (about a minute on a quiet 2-core machine)."""
 
 
 def _flat(m: np.ndarray) -> tuple[float, ...]:
@@ -412,8 +411,6 @@ def specs_budget(cfg: Config) -> list[RunSpec]:
     return out
 
 
-
-
 # --------------------------------------------------------------------------- bench ik
 IK_ROBOTS = ("panda", "ur5", "ur10", "yumi_left", "loading_manipulator_long", "kinova", "xarm7")
 """Robots of the full ``bench ik`` (kinova: continuous joints; xarm7: a 7-joint arm)."""
@@ -432,8 +429,10 @@ IK_PEERS = (
 )
 """Adapters of :mod:`swarm_ik.bench.peers` run by default (those not installed are skipped)."""
 
-IK_QUICK = {"robots": ("panda", "ur5"), "n": 10}
-"""What ``--quick`` reduces ``bench ik`` to (unless ``--robots`` / ``--n`` are given)."""
+IK_QUICK_ROBOTS = ("panda", "ur5")
+"""Robots of ``bench ik --quick`` (unless ``--robots`` is given)."""
+IK_QUICK_N = 10
+"""Targets per robot of ``bench ik --quick`` (unless ``--n`` is given)."""
 
 
 @dataclass(frozen=True)

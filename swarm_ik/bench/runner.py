@@ -29,7 +29,7 @@ from collections.abc import Callable, Iterable, Mapping, Sequence
 from concurrent.futures import FIRST_COMPLETED, Future, ProcessPoolExecutor, wait
 from dataclasses import dataclass, field
 from pathlib import Path
-from typing import Any, Protocol
+from typing import Any, Protocol, TypeVar
 
 from swarm_ik.errors import InvalidArgumentError
 
@@ -263,9 +263,12 @@ def done_keys(out: Path, experiment: str, schema: Schema, multi_row: bool) -> se
     return set(text.splitlines())
 
 
+T = TypeVar("T", bound=Task)
+
+
 def pending(
-    tasks: Iterable[Task], out: Path, schema: Schema, multi_row: bool = False
-) -> tuple[list[Task], int]:
+    tasks: Iterable[T], out: Path, schema: Schema, multi_row: bool = False
+) -> tuple[list[T], int]:
     """The tasks not yet done under ``out``, and how many were done."""
     tasks = list(tasks)
     done: dict[str, set[str]] = {}

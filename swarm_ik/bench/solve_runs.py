@@ -186,5 +186,3 @@ def compact_history(
     )
     vals = [float(f"{h[i]:.5g}") if np.isfinite(h[i]) else None for i in idx]
     return {"n_iter": n, "n_evals": int(n_evals), "it": [int(i) for i in idx], "f": vals}
-
-
