@@ -166,7 +166,7 @@ def test_every_bench_option_has_help() -> None:
     for mod in (ik, paper, throughput):
         parser = argparse.ArgumentParser()
         mod.add_arguments(parser)
-        assert parser.description
+        assert parser.description and mod.HELP
         for action in parser._actions:
             if action.dest != "help":
                 assert action.help, f"{mod.__name__}: {action.option_strings} has no help"

@@ -274,6 +274,12 @@ def write_summary(out: Path, plan: IKPlan, quick: bool, wall_s: float | None) ->
 
 
 # --------------------------------------------------------------------------- CLI
+HELP = (
+    "fair peer table for single IK calls (ours, TRAC-IK, rtb, pink, ikpy), checked with Pinocchio"
+)
+"""One line for ``swarm-ik bench --help``."""
+
+
 def add_arguments(parser: argparse.ArgumentParser) -> None:
     """Options of ``swarm-ik bench ik``."""
     parser.description = (

@@ -707,6 +707,10 @@ def make_plots(cfg: Config, out: Path, experiments: Sequence[str] | None = None)
 
 
 # --------------------------------------------------------------------------- CLI
+HELP = "the source papers' tables rerun, beside the published numbers"
+"""One line for ``swarm-ik bench --help``."""
+
+
 def add_arguments(parser: argparse.ArgumentParser) -> None:
     """Options of ``swarm-ik bench paper``."""
     parser.description = __doc__.split("\n\n")[0] if __doc__ else None

@@ -62,6 +62,10 @@ FIELDS = (
 PROFILE_FIELDS = ("robot", "n", "part", "seconds", "share", "note")
 
 
+HELP = "poses per second of solve_batch against loops over solve and TRAC-IK"
+"""One line for ``swarm-ik bench --help``."""
+
+
 def add_arguments(parser: argparse.ArgumentParser) -> None:
     """Options of ``swarm-ik bench throughput``."""
     parser.description = (
