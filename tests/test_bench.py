@@ -14,10 +14,23 @@ import numpy as np
 import pytest
 
 import swarm_ik
-from swarm_ik.bench import common, paper, published
-from swarm_ik.bench.common import RUN_FIELDS, RunSpec, judge, summarize
+from swarm_ik.bench import common, paper, plans, published, runner, solve_runs
+from swarm_ik.bench.common import judge, summarize
+from swarm_ik.bench.plans import RunSpec
 from swarm_ik.bench.report import Comparison, Headline, render_comparison
+from swarm_ik.bench.solve_runs import RUN_FIELDS
 from swarm_ik.errors import InvalidArgumentError, UnknownNameError
+
+
+def execute(specs, out, **kw):
+    """The runner with the optimiser-run worker and schema (as ``bench paper`` calls it)."""
+    worker = kw.pop("worker", solve_runs.run_one)
+    kw.setdefault("initializer", None)
+    return runner.execute(specs, out, worker, solve_runs.SCHEMA, **kw)
+
+
+def read_rows(path):
+    return runner.read_rows(path, solve_runs.SCHEMA)
 
 
 def tiny_specs(n: int = 5, experiment: str = "t-func") -> list[RunSpec]:
@@ -51,14 +64,14 @@ def comparable(rows: list[dict]) -> dict[str, tuple]:
 # --------------------------------------------------------------------------- CSV schema
 def test_csv_schema_one_typed_row_per_run(tmp_path: Path) -> None:
     specs = tiny_specs(4)
-    summary = common.execute(specs, tmp_path, jobs=1, progress=False)
+    summary = execute(specs, tmp_path, jobs=1, progress=False)
     assert (summary.total, summary.new, summary.skipped, summary.interrupted) == (4, 4, 0, False)
-    path = common.csv_path(tmp_path, "t-func")
+    path = runner.csv_path(tmp_path, "t-func")
     with open(path, newline="") as fh:
         raw = list(csv.reader(fh))
     assert tuple(raw[0]) == RUN_FIELDS
     assert len(raw) == 1 + 4
-    rows = common.read_rows(path)
+    rows = read_rows(path)
     assert sorted(r["key"] for r in rows) == sorted(s.key for s in specs)
     f4 = swarm_ik.testfunctions.FUNCTIONS["F4"]
     for r in rows:
@@ -68,8 +81,8 @@ def test_csv_schema_one_typed_row_per_run(tmp_path: Path) -> None:
         assert r["n_evals"] == 6 * 8
         assert math.isnan(r["position_error"]) and math.isnan(r["rotation_error"])
         assert r["fitness"] >= f4.f_min - 1e-5
-        assert r["success"] == (r["fitness"] - f4.f_min <= common.FUNCTION_SUCCESS_GAP)
-    hist = common.read_histories(common.history_path(tmp_path, "t-func"))
+        assert r["success"] == (r["fitness"] - f4.f_min <= solve_runs.FUNCTION_SUCCESS_GAP)
+    hist = runner.read_histories(runner.history_path(tmp_path, "t-func"))
     assert set(hist) == {s.key for s in specs}
     for r in rows:
         h = hist[r["key"]]
@@ -81,8 +94,8 @@ def test_csv_schema_one_typed_row_per_run(tmp_path: Path) -> None:
 
 def test_ik_row_errors_are_pinocchio_checked(tmp_path: Path, get_robot) -> None:
     spec = ik_spec(get_robot)
-    outcome = common.run_one(spec)
-    row = outcome.row
+    outcome = solve_runs.run_one(spec)
+    row = outcome.rows[0]
     assert set(row) == set(RUN_FIELDS)
     robot = get_robot("yumi_left")
     problem = swarm_ik.IKProblem(robot, np.array(spec.target).reshape(4, 4))
@@ -102,16 +115,16 @@ def test_keys_distinguish_settings() -> None:
     assert a.key != RunSpec("e", "F1", "min", "gwo", 1, "function", None, 30, 200).key
     assert a.key != RunSpec("e", "F1", "min", "mgwo", 0, "function", None, 30, 200).key
     with pytest.raises(InvalidArgumentError, match="duplicate"):
-        common.execute([a, a], Path("/nonexistent"), progress=False)
+        execute([a, a], Path("/nonexistent"), progress=False)
 
 
 def test_compact_history_keeps_last_point_and_bounds_size() -> None:
     h = np.geomspace(1.0, 1e-12, 1000)
-    c = common.compact_history(h, 100_000, max_points=50)
+    c = solve_runs.compact_history(h, 100_000, max_points=50)
     assert len(c["it"]) == len(c["f"]) <= 50
     assert c["it"][0] == 0 and c["it"][-1] == 999
     assert c["f"][-1] == pytest.approx(1e-12, rel=1e-4)
-    assert common.compact_history([np.inf, 1.0], 2)["f"] == [None, 1.0]
+    assert solve_runs.compact_history([np.inf, 1.0], 2)["f"] == [None, 1.0]
 
 
 # --------------------------------------------------------------------------- resume
@@ -121,32 +134,32 @@ class _Interrupt:
     def __init__(self, k: int) -> None:
         self.k, self.calls = k, 0
 
-    def __call__(self, spec: RunSpec) -> common.RunOutcome:
+    def __call__(self, spec: RunSpec) -> runner.Outcome:
         self.calls += 1
         if self.calls == self.k:
             raise KeyboardInterrupt
-        return common.run_one(spec)
+        return solve_runs.run_one(spec)
 
 
 def test_resume_after_keyboard_interrupt(tmp_path: Path) -> None:
     specs = tiny_specs(6)
-    first = common.execute(specs, tmp_path / "a", jobs=1, progress=False, worker=_Interrupt(4))
+    first = execute(specs, tmp_path / "a", jobs=1, progress=False, worker=_Interrupt(4))
     assert first.interrupted and first.new == 3
-    assert len(common.read_rows(common.csv_path(tmp_path / "a", "t-func"))) == 3
+    assert len(read_rows(runner.csv_path(tmp_path / "a", "t-func"))) == 3
     calls: list[str] = []
 
-    def counting(spec: RunSpec) -> common.RunOutcome:
+    def counting(spec: RunSpec) -> runner.Outcome:
         calls.append(spec.key)
-        return common.run_one(spec)
+        return solve_runs.run_one(spec)
 
-    second = common.execute(specs, tmp_path / "a", jobs=1, progress=False, worker=counting)
+    second = execute(specs, tmp_path / "a", jobs=1, progress=False, worker=counting)
     assert (second.skipped, second.new, second.interrupted) == (3, 3, False)
     assert calls == [s.key for s in specs[3:]]  # finished runs are not redone
-    resumed = common.read_rows(common.csv_path(tmp_path / "a", "t-func"))
-    common.execute(specs, tmp_path / "b", jobs=1, progress=False)
-    straight = common.read_rows(common.csv_path(tmp_path / "b", "t-func"))
+    resumed = read_rows(runner.csv_path(tmp_path / "a", "t-func"))
+    execute(specs, tmp_path / "b", jobs=1, progress=False)
+    straight = read_rows(runner.csv_path(tmp_path / "b", "t-func"))
     assert comparable(resumed) == comparable(straight)
-    assert len(common.read_histories(common.history_path(tmp_path / "a", "t-func"))) == 6
+    assert len(runner.read_histories(runner.history_path(tmp_path / "a", "t-func"))) == 6
 
 
 def test_resume_after_killed_process(tmp_path: Path) -> None:
@@ -156,7 +169,7 @@ def test_resume_after_killed_process(tmp_path: Path) -> None:
     script.write_text(
         textwrap.dedent(f"""
         import os, pickle, signal
-        from swarm_ik.bench import common
+        from swarm_ik.bench import runner, solve_runs
 
         specs = pickle.loads(open({str(tmp_path / "specs.pkl")!r}, "rb").read())
         calls = [0]
@@ -165,23 +178,23 @@ def test_resume_after_killed_process(tmp_path: Path) -> None:
             calls[0] += 1
             if calls[0] == 3:
                 os.kill(os.getpid(), signal.SIGKILL)
-            return common.run_one(spec)
+            return solve_runs.run_one(spec)
 
-        common.execute(specs, {str(tmp_path / "out")!r}, jobs=1, progress=False, worker=worker,
-                       initializer=None)
+        runner.execute(specs, {str(tmp_path / "out")!r}, worker, solve_runs.SCHEMA, jobs=1,
+                       progress=False)
     """)
     )
     proc = subprocess.run([sys.executable, str(script)], capture_output=True, timeout=120)
     assert proc.returncode == -9, proc.stderr.decode()
-    path = common.csv_path(tmp_path / "out", "t-func")
-    before = common.read_rows(path)
+    path = runner.csv_path(tmp_path / "out", "t-func")
+    before = read_rows(path)
     assert len(before) == 2
     with open(path, "a") as fh:  # and a row torn in the middle of its write
         fh.write("t-func|F4|torn,t-func,F4")
-    assert len(common.read_rows(path)) == 2
-    summary = common.execute(specs, tmp_path / "out", jobs=1, progress=False)
+    assert len(read_rows(path)) == 2
+    summary = execute(specs, tmp_path / "out", jobs=1, progress=False)
     assert (summary.skipped, summary.new) == (2, 3)
-    after = common.read_rows(path)
+    after = read_rows(path)
     assert sorted(r["key"] for r in after) == sorted(s.key for s in specs)
     assert "torn" not in path.read_text()
     assert {k: v for k, v in comparable(after).items() if k in comparable(before)} == comparable(
@@ -191,11 +204,11 @@ def test_resume_after_killed_process(tmp_path: Path) -> None:
 
 def test_results_do_not_depend_on_jobs(tmp_path: Path) -> None:
     specs = tiny_specs(4)
-    common.execute(specs, tmp_path / "one", jobs=1, progress=False)
-    s2 = common.execute(specs, tmp_path / "two", jobs=2, progress=False, initializer=None)
+    execute(specs, tmp_path / "one", jobs=1, progress=False)
+    s2 = execute(specs, tmp_path / "two", jobs=2, progress=False, initializer=None)
     assert s2.new == 4
-    one = common.read_rows(common.csv_path(tmp_path / "one", "t-func"))
-    two = common.read_rows(common.csv_path(tmp_path / "two", "t-func"))
+    one = read_rows(runner.csv_path(tmp_path / "one", "t-func"))
+    two = read_rows(runner.csv_path(tmp_path / "two", "t-func"))
     assert comparable(one) == comparable(two)
 
 
@@ -289,7 +302,7 @@ def test_unattainable_published_value_is_worse_with_reason() -> None:
 # --------------------------------------------------------------------------- experiments
 def test_paper_targets(get_robot) -> None:
     robot = get_robot("yumi_left")
-    printed = paper.printed_target()
+    printed = plans.printed_target()
     problem = swarm_ik.IKProblem(robot, printed, "paper-l1", orth_tol=1e-4)
     assert np.array_equal(problem.target, printed)  # kept as printed, not projected
     q = np.asarray(paper.Q_EXACT)
@@ -299,7 +312,7 @@ def test_paper_targets(get_robot) -> None:
     assert 1e-5 < floor < 1.6e-5  # the rounding floor of the printed pose
     assert robot.within_limits(np.asarray(q_floor))
     assert float(problem.fitness(q[None])[0]) < 1.6e-5
-    exact = swarm_ik.IKProblem(robot, paper.exact_target(), "paper-l1")
+    exact = swarm_ik.IKProblem(robot, plans.exact_target(), "paper-l1")
     assert float(exact.fitness(q[None])[0]) < 1e-14
     x = np.asarray(published.P003_X_STAR)
     for name in ("loading_manipulator", "loading_manipulator_long"):
@@ -344,7 +357,7 @@ def test_cli_runs_an_experiment_and_writes_report(tmp_path: Path) -> None:
         "--no-progress",
     ]
     assert main(argv) == 0
-    rows = common.read_rows(common.csv_path(tmp_path, "003-table3"))
+    rows = read_rows(runner.csv_path(tmp_path, "003-table3"))
     assert len(rows) == 4 * 2  # F1..F4 x {gwo, mgwo}
     report = (tmp_path / "report.md").read_text()
     assert "QUICK run" in report and "Table 3" in report and "| GWO (`gwo`)" in report
@@ -352,7 +365,7 @@ def test_cli_runs_an_experiment_and_writes_report(tmp_path: Path) -> None:
     assert (tmp_path / "convergence_003-table3.png").stat().st_size > 10_000
     assert (tmp_path / "box_003-table3.png").stat().st_size > 10_000
     assert main(argv) == 0  # rerun: resumes, nothing new
-    assert len(common.read_rows(common.csv_path(tmp_path, "003-table3"))) == 8
+    assert len(read_rows(runner.csv_path(tmp_path, "003-table3"))) == 8
 
 
 def test_unknown_experiment_lists_valid_ones(tmp_path: Path) -> None:
@@ -403,12 +416,12 @@ def test_execute_on_dask_equals_the_inline_run_and_resumes(
     specs = tiny_specs(5) + [
         ik_spec(get_robot, s, seed) for s in ("dls", "swarm") for seed in (0, 1)
     ]
-    common.execute(specs, tmp_path / "ref", jobs=1, progress=False)
+    execute(specs, tmp_path / "ref", jobs=1, progress=False)
     # batches of 2 runs (1 per worker); the 8th run fails on its worker: the 3 batches before
     # it are on disk, the batch holding it is lost, nothing after it ran
     bad = RunSpec("t-func", "F4", "min", "no-such-solver", 0, "function", None, 6, 8)
     with pytest.raises(UnknownNameError, match="no-such-solver"):
-        common.execute(
+        execute(
             specs[:7] + [bad] + specs[7:],
             tmp_path / "dask",
             progress=False,
@@ -418,19 +431,19 @@ def test_execute_on_dask_equals_the_inline_run_and_resumes(
     done = {
         r["key"]
         for e in ("t-func", "t-ik")
-        for r in common.read_rows(common.csv_path(tmp_path / "dask", e))
+        for r in read_rows(runner.csv_path(tmp_path / "dask", e))
     }
     assert done == {s.key for s in specs[:6]}
-    summary = common.execute(
+    summary = execute(
         specs, tmp_path / "dask", progress=False, client=dask_client, batch_per_worker=2
     )
     assert (summary.skipped, summary.new, summary.interrupted) == (6, 3, False)
     for e in ("t-func", "t-ik"):
-        ref = common.read_rows(common.csv_path(tmp_path / "ref", e))
-        got = common.read_rows(common.csv_path(tmp_path / "dask", e))
+        ref = read_rows(runner.csv_path(tmp_path / "ref", e))
+        got = read_rows(runner.csv_path(tmp_path / "dask", e))
         assert comparable(got) == comparable(ref)
-        hist_ref = common.read_histories(common.history_path(tmp_path / "ref", e))
-        assert common.read_histories(common.history_path(tmp_path / "dask", e)) == hist_ref
+        hist_ref = runner.read_histories(runner.history_path(tmp_path / "ref", e))
+        assert runner.read_histories(runner.history_path(tmp_path / "dask", e)) == hist_ref
 
 
 def test_bench_paper_scheduler_option(tmp_path: Path, dask_client) -> None:
@@ -446,73 +459,7 @@ def test_bench_paper_scheduler_option(tmp_path: Path, dask_client) -> None:
     args = parser.parse_args([*base, "--out", str(tmp_path / "b")])
     args.scheduler = dask_client  # what --scheduler local / tcp://… connects to
     assert paper.run(args) == 0
-    a = common.read_rows(common.csv_path(tmp_path / "a", "003-table3"))
-    b = common.read_rows(common.csv_path(tmp_path / "b", "003-table3"))
+    a = read_rows(runner.csv_path(tmp_path / "a", "003-table3"))
+    b = read_rows(runner.csv_path(tmp_path / "b", "003-table3"))
     assert len(a) == 4 * 2 * 2 and comparable(a) == comparable(b)
     assert "2 Dask workers" in (tmp_path / "b" / "report.md").read_text()
-
-
-def test_bench_ik_scheduler_runs_chunks_on_workers(tmp_path: Path, dask_client) -> None:
-    import argparse
-
-    from swarm_ik.bench import ik
-
-    parser = argparse.ArgumentParser()
-    ik.add_arguments(parser)
-    argv = [
-        "--robots",
-        "ur5",
-        "--n",
-        "4",
-        "--n-other",
-        "2",
-        "--budgets-ms",
-        "50",
-        "--full-budget-ms",
-        "50",
-        "--solvers",
-        "swarm",
-        "dls",
-        "--n-precise",
-        "2",
-        "--many-robots",
-        "ur5",
-        "--n-many",
-        "1",
-        "--seed",
-        "3",
-    ]
-    assert parser.parse_args(argv).scheduler == "none"  # default: in process, sequential
-    assert ik.run(parser.parse_args([*argv, "--out", str(tmp_path / "a")])) == 0
-    args = parser.parse_args([*argv, "--out", str(tmp_path / "b")])
-    args.scheduler = dask_client
-    assert ik.run(args) == 0
-    chunks = ik.dask_chunks(
-        ik.Plan(("ur5",), ("swarm", "dls"), (50.0,), 1e-5, 1e-10, 3, 4, 2, 50.0, 2, ("ur5",), 1)
-    )
-    assert [(c.kind, c.solver) for c in chunks] == [
-        ("runs", "swarm"),
-        ("runs", "dls"),
-        ("precise", "swarm"),
-        ("precise", "dls"),
-        ("many", ""),
-    ]
-    rows = {}
-    for d in ("a", "b"):
-        with open(tmp_path / d / "runs.csv", newline="") as fh:
-            rows[d] = list(csv.DictReader(fh))
-    key = ("robot", "target_id", "solver", "budget_ms", "tol", "seed")
-    assert [tuple(r[k] for k in key) for r in rows["b"]] == [
-        tuple(r[k] for k in key) for r in rows["a"]
-    ]  # same runs, in the order of the in-process run
-    assert len(rows["a"]) == 2 * 4 + 2 * 2
-    same = ("success", "solver_says", "position_error", "rotation_error", "n_evals")
-    for ra, rb in zip(rows["a"], rows["b"], strict=True):
-        if ra["solver"] == "swarm":  # deterministic (done long before the 50 ms budget)
-            assert tuple(ra[k] for k in same) == tuple(rb[k] for k in same)
-    with open(tmp_path / "b" / "many.csv", newline="") as fh:
-        many = list(csv.DictReader(fh))
-    assert [r["method"] for r in many] == ["swarm_ik.solve_many", "dls restarts"]
-    summary_b = (tmp_path / "b" / "summary.md").read_text()
-    assert "Run on Dask" in summary_b and "share the machine" in summary_b
-    assert "Run on Dask" not in (tmp_path / "a" / "summary.md").read_text()

@@ -44,15 +44,34 @@ import platform
 import sys
 import time
 from collections.abc import Callable, Mapping, Sequence
-from dataclasses import dataclass, replace
-from functools import lru_cache
+from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
 import numpy as np
 
-from swarm_ik.bench import common, published
-from swarm_ik.bench.common import RunSpec, Stats
+from swarm_ik.bench import common, published, runner, solve_runs
+from swarm_ik.bench.common import Stats
+from swarm_ik.bench.plans import (
+    FULL,
+    IK_FLOOR,
+    PAPER000_SOLVERS,
+    PAPER003_SOLVERS,
+    POSE_SEED,
+    Q_EXACT,
+    QUICK,
+    TOL,
+    Config,
+    RunSpec,
+    available,
+    budget_solvers,
+    printed_floor,
+    specs_000_table2,
+    specs_000_table4,
+    specs_003_table3,
+    specs_003_table4,
+    specs_budget,
+)
 from swarm_ik.bench.report import (
     Comparison,
     Headline,
@@ -63,330 +82,6 @@ from swarm_ik.bench.report import (
     render_headline,
 )
 from swarm_ik.errors import InvalidArgumentError
-
-DEFAULT_OUT = Path("docs/results/paper")
-"""Output folder of the full run (committed)."""
-DEFAULT_OUT_QUICK = Path("bench_out/paper-quick")
-"""Output folder of ``--quick`` (not committed)."""
-
-POSE_SEED = 2021
-"""Seed of the joint vectors whose FK are the arbitrary poses (000 Table 4, budget)."""
-
-Q_EXACT = (
-    -2.3633884105424747,
-    -1.7359312886882694,
-    0.24014480588594253,
-    1.7082843808984993,
-    -1.2356793043129546,
-    3.2865382472506774,
-    2.903761762991929,
-)
-"""Joint vector [rad] whose FK best fits paper 000's printed pose: bounded least squares on
-the ``paper-l1`` residuals (position ×10 per metre, the 9 rotation entries) from
-:data:`swarm_ik.bench.published.P000_Q_PRINTED_DEG`; within the YuMi limits.  Its FK is the
-full-precision target of ``000-table2`` (b)."""
-
-PAPER000_SOLVERS = ("foa", "hlfoa", "gwo", "mgwo", "pso", "dls", "swarm")
-PAPER003_SOLVERS = ("gwo", "vagwo", "mgwo", "dls", "swarm")
-BUDGET_ONLY = ("swarm",)
-"""Solvers given only an evaluation budget (their own defaults otherwise)."""
-EVALS_PER_ITERATION_1 = ("dls",)
-"""Solvers whose ``iterations`` count single evaluations."""
-
-TOL = 1e-5
-"""Success tolerance, ‖Δp‖ [m] and θ [rad], both judged with Pinocchio's FK."""
-IK_FLOOR = 1e-12
-"""IK fitness values below this count as exact in the verdicts (round-off of an exact
-solution is ~1e-16 to 1e-15)."""
-
-
-@dataclass(frozen=True)
-class Config:
-    """Sizes of a benchmark invocation.
-
-    Attributes:
-        name: ``"full"`` (the papers' settings) or ``"quick"``.
-        runs_000: Runs per target and solver in 000 Table 2 (paper: 10).
-        iterations_000: Iterations in paper 000's experiments (paper: 1000).
-        pop_000: Population in paper 000's experiments (paper: 100).
-        poses_000: Poses of 000 Table 4 (paper: 10).
-        runs_000_t4: Runs per pose and solver in 000 Table 4.
-        runs_003: Runs per case and solver in paper 003's experiments (paper: 50).
-        pop_003: Wolves (paper: 30).
-        iterations_003: Iterations (paper: 200).
-        budget_poses: Poses per robot in the equal-budget experiment.
-        budget_seeds: Runs per pose and solver there.
-        budgets: The evaluation budgets there.
-    """
-
-    name: str
-    runs_000: int = 10
-    iterations_000: int = 1000
-    pop_000: int = 100
-    poses_000: int = 10
-    runs_000_t4: int = 10
-    runs_003: int = 50
-    pop_003: int = 30
-    iterations_003: int = 200
-    budget_poses: int = 10
-    budget_seeds: int = 3
-    budgets: tuple[int, ...] = (1_000, 10_000, 100_000)
-
-    def with_runs(self, runs: int) -> Config:
-        """The same configuration with ``runs`` runs per case and solver everywhere."""
-        if runs < 1:
-            raise InvalidArgumentError(f"--runs must be >= 1, got {runs}")
-        return replace(self, runs_000=runs, runs_000_t4=runs, runs_003=runs, budget_seeds=runs)
-
-
-FULL = Config("full")
-QUICK = Config(
-    "quick",
-    runs_000=3,
-    iterations_000=150,
-    poses_000=3,
-    runs_000_t4=2,
-    runs_003=10,
-    budget_poses=3,
-    budget_seeds=1,
-    budgets=(2_000, 20_000),
-)
-
-
-# --------------------------------------------------------------------------- targets
-@lru_cache(maxsize=4)
-def _robot(name: str) -> Any:
-    import swarm_ik
-
-    return swarm_ik.load_robot(name)
-
-
-def _flat(m: np.ndarray) -> tuple[float, ...]:
-    return tuple(float(v) for v in np.asarray(m, dtype=float).ravel())
-
-
-def printed_target() -> np.ndarray:
-    """Paper 000's printed target in metres (the matrix as printed, not projected)."""
-    t = published.P000_TARGET_MM.copy()
-    t[:3, 3] /= 1000.0
-    return t
-
-
-def exact_target() -> np.ndarray:
-    """FK of :data:`Q_EXACT` on the YuMi left arm: the full-precision target."""
-    return np.asarray(_robot("yumi_left").fk(np.asarray(Q_EXACT)), dtype=float)
-
-
-@lru_cache(maxsize=1)
-def printed_floor() -> tuple[float, tuple[float, ...]]:
-    """Lowest ``paper-l1`` fitness we find against the printed pose within the limits.
-
-    Bounded least squares from :data:`Q_EXACT`, then Nelder–Mead on the (non-smooth) L1
-    fitness itself, kept within the limits.
-
-    Returns:
-        ``(floor fitness, joint vector [rad])``.
-    """
-    from scipy.optimize import minimize
-
-    import swarm_ik
-
-    robot = _robot("yumi_left")
-    problem = swarm_ik.IKProblem(robot, printed_target(), "paper-l1", orth_tol=1e-4)
-
-    def f(q: np.ndarray) -> float:
-        return float(problem.fitness(np.clip(q, robot.lower, robot.upper)[None])[0])
-
-    q0 = np.asarray(Q_EXACT)
-    res = minimize(
-        f, q0, method="Nelder-Mead", options={"xatol": 1e-10, "fatol": 1e-12, "maxfev": 6000}
-    )
-    q = np.clip(res.x, robot.lower, robot.upper)
-    best = min((f(q), tuple(q)), (f(q0), tuple(q0)))
-    return best
-
-
-def arbitrary_poses(robot_name: str, n: int) -> list[np.ndarray]:
-    """FK of ``n`` joint vectors drawn uniformly within the limits (seed :data:`POSE_SEED`);
-    the first ``k`` poses do not depend on ``n``."""
-    robot = _robot(robot_name)
-    rng = np.random.default_rng(POSE_SEED)
-    qs = robot.random_q(rng, max(n, 1))
-    return [np.asarray(robot.fk(q), dtype=float) for q in np.atleast_2d(qs)[:n]]
-
-
-def x_star_target(robot_name: str) -> np.ndarray:
-    """FK of paper 003's ``x*`` on the given loading-manipulator variant (x* itself lies
-    outside the limits of both; its FK is the target)."""
-    return np.asarray(_robot(robot_name).fk(np.asarray(published.P003_X_STAR)), dtype=float)
-
-
-# --------------------------------------------------------------------------- specs
-def available(solvers: Sequence[str]) -> tuple[list[str], list[str]]:
-    """``(registered, missing)`` among ``solvers``, order kept."""
-    from swarm_ik import solvers as reg
-
-    names = set(reg.names())
-    return [s for s in solvers if s in names], [s for s in solvers if s not in names]
-
-
-def _paper_settings(solver: str, pop: int, iterations: int, budget: int) -> dict[str, Any]:
-    """Settings of one solver at a paper's population/iterations; non-population solvers get
-    the same evaluation budget."""
-    if solver in EVALS_PER_ITERATION_1:
-        return {"iterations": budget, "max_evals": budget}
-    if solver in BUDGET_ONLY:
-        return {"max_evals": budget}
-    return {"pop_size": pop, "iterations": iterations}
-
-
-def _budget_settings(solver: str, budget: int) -> dict[str, Any]:
-    """Settings for an evaluation budget: the solver's own population, enough iterations to
-    spend the budget (``⌈budget / pop⌉``), and ``max_evals = budget``."""
-    from swarm_ik import solvers as reg
-
-    if solver in EVALS_PER_ITERATION_1:
-        return {"iterations": budget, "max_evals": budget}
-    params = reg.get(solver).params
-    if solver in BUDGET_ONLY or "pop_size" not in params or "iterations" not in params:
-        return {"max_evals": budget}
-    return {"iterations": math.ceil(budget / int(params["pop_size"])), "max_evals": budget}
-
-
-def specs_000_table2(cfg: Config) -> list[RunSpec]:
-    """Runs of 000 Table 2: both targets × solvers × runs."""
-    solvers, _ = available(PAPER000_SOLVERS)
-    budget = cfg.pop_000 * (cfg.iterations_000 + 1)
-    out = []
-    for tid, target, orth in (("printed", printed_target(), 1e-4), ("exact", exact_target(), 1e-6)):
-        for s in solvers:
-            for seed in range(cfg.runs_000):
-                out.append(
-                    RunSpec(
-                        "000-table2",
-                        "yumi_left",
-                        tid,
-                        s,
-                        seed,
-                        "paper-l1",
-                        _flat(target),
-                        orth_tol=orth,
-                        tol_pos=TOL,
-                        tol_rot=TOL,
-                        **_paper_settings(s, cfg.pop_000, cfg.iterations_000, budget),
-                    )
-                )
-    return out
-
-
-def specs_000_table4(cfg: Config) -> list[RunSpec]:
-    """Runs of 000 Table 4: poses × solvers × runs."""
-    solvers, _ = available(PAPER000_SOLVERS)
-    budget = cfg.pop_000 * (cfg.iterations_000 + 1)
-    out = []
-    for i, target in enumerate(arbitrary_poses("yumi_left", cfg.poses_000)):
-        for s in solvers:
-            for seed in range(cfg.runs_000_t4):
-                out.append(
-                    RunSpec(
-                        "000-table4",
-                        "yumi_left",
-                        f"pose{i}",
-                        s,
-                        seed,
-                        "paper-l1",
-                        _flat(target),
-                        tol_pos=TOL,
-                        tol_rot=TOL,
-                        **_paper_settings(s, cfg.pop_000, cfg.iterations_000, budget),
-                    )
-                )
-    return out
-
-
-def specs_003_table3(cfg: Config) -> list[RunSpec]:
-    """Runs of 003 Table 3: F1–F4 × {GWO, MGWO} × runs."""
-    solvers, _ = available(("gwo", "mgwo"))
-    return [
-        RunSpec("003-table3", f, "min", s, seed, "function", None, cfg.pop_003, cfg.iterations_003)
-        for f in published.P003_TABLE3
-        for s in solvers
-        for seed in range(cfg.runs_003)
-    ]
-
-
-def specs_003_table4(cfg: Config) -> list[RunSpec]:
-    """Runs of 003 Table 4: both robot variants × solvers × runs."""
-    solvers, _ = available(PAPER003_SOLVERS)
-    budget = cfg.pop_003 * cfg.iterations_003
-    out = []
-    for robot in ("loading_manipulator_long", "loading_manipulator"):
-        target = x_star_target(robot)
-        for s in solvers:
-            for seed in range(cfg.runs_003):
-                out.append(
-                    RunSpec(
-                        "003-table4",
-                        robot,
-                        "x*",
-                        s,
-                        seed,
-                        "euler-zyz",
-                        _flat(target),
-                        tol_pos=TOL,
-                        tol_rot=TOL,
-                        **_paper_settings(s, cfg.pop_003, cfg.iterations_003, budget),
-                    )
-                )
-    return out
-
-
-def budget_solvers() -> list[str]:
-    """Every registered solver, DLS and ``swarm`` first."""
-    from swarm_ik import solvers as reg
-
-    names = reg.names()
-    first = [s for s in ("dls", "swarm") if s in names]
-    return first + [s for s in names if s not in first]
-
-
-def budget_targets(cfg: Config) -> list[tuple[str, str, np.ndarray]]:
-    """``(robot, target id, pose)`` of the equal-budget experiment: YuMi at the Table-4
-    poses, the long loading manipulator at FK(x*) then arbitrary poses."""
-    out = [
-        ("yumi_left", f"pose{i}", t)
-        for i, t in enumerate(arbitrary_poses("yumi_left", cfg.budget_poses))
-    ]
-    lm = "loading_manipulator_long"
-    out.append((lm, "x*", x_star_target(lm)))
-    out += [(lm, f"pose{i}", t) for i, t in enumerate(arbitrary_poses(lm, cfg.budget_poses - 1))]
-    return out
-
-
-def specs_budget(cfg: Config) -> list[RunSpec]:
-    """Runs of the equal-budget experiment: targets × budgets × every solver × seeds."""
-    out = []
-    for robot, tid, target in budget_targets(cfg):
-        for b in cfg.budgets:
-            for s in budget_solvers():
-                for seed in range(cfg.budget_seeds):
-                    out.append(
-                        RunSpec(
-                            "budget",
-                            robot,
-                            tid,
-                            s,
-                            seed,
-                            "se3",
-                            _flat(target),
-                            stop_on_success=True,
-                            tol_pos=TOL,
-                            tol_rot=TOL,
-                            keep_history=False,
-                            **_budget_settings(s, b),
-                        )
-                    )
-    return out
 
 
 # --------------------------------------------------------------------------- experiments
@@ -864,7 +559,11 @@ EXPERIMENTS: dict[str, Experiment] = {
 def plan_rows(exp: Experiment, cfg: Config, out: Path) -> list[dict[str, Any]]:
     """The CSV rows of ``exp`` that belong to configuration ``cfg`` (others ignored)."""
     keys = {s.key for s in exp.specs(cfg)}
-    return [r for r in common.read_rows(common.csv_path(out, exp.id)) if r["key"] in keys]
+    return [
+        r
+        for r in runner.read_rows(runner.csv_path(out, exp.id), solve_runs.SCHEMA)
+        if r["key"] in keys
+    ]
 
 
 def _meta_path(out: Path) -> Path:
@@ -1002,20 +701,25 @@ def make_plots(cfg: Config, out: Path, experiments: Sequence[str] | None = None)
         rows = plan_rows(exp, cfg, out)
         if not rows:
             continue
-        hist = common.read_histories(common.history_path(out, exp.id))
+        hist = runner.read_histories(runner.history_path(out, exp.id))
         written += exp.plots(cfg, rows, hist, out)
     return written
 
 
 # --------------------------------------------------------------------------- CLI
+HELP = "the source papers' tables rerun, beside the published numbers"
+"""One line for ``swarm-ik bench --help``."""
+
+
 def add_arguments(parser: argparse.ArgumentParser) -> None:
     """Options of ``swarm-ik bench paper``."""
     parser.description = __doc__.split("\n\n")[0] if __doc__ else None
     parser.add_argument(
         "--quick",
         action="store_true",
-        help="reduced version of everything (< 5 min on 2 cores); its own "
-        f"default folder {DEFAULT_OUT_QUICK}",
+        help="reduced version of everything (fewer runs, iterations and poses; about a "
+        "minute on 2 cores); default folder ./bench-paper-quick; never writes into a folder "
+        "holding a full run",
     )
     parser.add_argument(
         "--jobs",
@@ -1038,7 +742,7 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
         "--out",
         type=Path,
         default=None,
-        help=f"output folder (default {DEFAULT_OUT}, or {DEFAULT_OUT_QUICK} with --quick)",
+        help="output folder (default ./bench-paper, or ./bench-paper-quick with --quick)",
     )
     parser.add_argument(
         "--experiments",
@@ -1083,8 +787,8 @@ def config_from_args(args: argparse.Namespace) -> tuple[Config, Path, list[str]]
     for i in ids:
         if i not in EXPERIMENTS:
             raise unknown("experiment", i, EXPERIMENTS)
-    out = args.out if args.out is not None else (DEFAULT_OUT_QUICK if args.quick else DEFAULT_OUT)
-    return cfg, Path(out), ids
+    out = common.resolve_out(args.out, "paper", bool(args.quick))
+    return cfg, out, ids
 
 
 def _where(jobs: int, scheduler: Any, client: Any) -> str:
@@ -1104,7 +808,7 @@ def run(args: argparse.Namespace) -> int:
         0 when done, 130 when interrupted (finished runs are saved; rerun to resume).
     """
     cfg, out, ids = config_from_args(args)
-    out.mkdir(parents=True, exist_ok=True)
+    common.write_run_info(out, "paper", cfg.name == "quick")
     meta = load_meta(out)
     meta["config"] = cfg.name
     meta["environment"] = environment()
@@ -1120,14 +824,19 @@ def run(args: argparse.Namespace) -> int:
             for i in ids:
                 exp = EXPERIMENTS[i]
                 specs = exp.specs(cfg)
-                todo, _ = common.pending(specs, out)
-                summary = common.execute(
+                todo, _ = runner.pending(specs, out, solve_runs.SCHEMA)
+                summary = runner.execute(
                     specs,
                     out,
+                    solve_runs.run_one,
+                    solve_runs.SCHEMA,
                     jobs=args.jobs,
-                    progress=not args.no_progress,
-                    desc=exp.id,
                     client=client,
+                    initializer=solve_runs.warm_up
+                    if any(s.fitness_name != "function" for s in todo)
+                    else None,
+                    progress=False if args.no_progress else None,
+                    desc=exp.id,
                 )
                 print(
                     f"{exp.id}: {summary.new} new, {summary.skipped} already done, "

@@ -184,3 +184,44 @@ P003_TABLE4 = PublishedTable(
     ),
 )
 """Paper 003, Table 4: mean / best / worst / variance of the fitness over 50 runs."""
+
+
+# --------------------------------------------------------------------------- solver facts
+@dataclass(frozen=True)
+class SolverFacts:
+    """What the benchmarks need to know about a registered solver.
+
+    These belong in the solver's registration (``register(...)`` in
+    ``swarm_ik/solvers/base.py``); until the registry carries them, they live here, in one
+    place, keyed by registry name.
+
+    Attributes:
+        needs_jacobian: Uses the Jacobian (DLS, the ``swarm`` polish) rather than fitness only.
+        budget_only: Takes only an evaluation budget (no population / iteration schedule).
+        evals_per_iteration: Evaluations one ``iterations`` step costs (``1``: an iteration is
+            one evaluation, so ``iterations = budget``; ``None``: a population schedule).
+        paper: Short key of its source in ``docs/references.md`` (``None``: our own).
+    """
+
+    needs_jacobian: bool = False
+    budget_only: bool = False
+    evals_per_iteration: int | None = None
+    paper: str | None = None
+
+
+SOLVER_FACTS: dict[str, SolverFacts] = {
+    "swarm": SolverFacts(needs_jacobian=True, budget_only=True),
+    "dls": SolverFacts(needs_jacobian=True, evals_per_iteration=1),
+    "foa": SolverFacts(paper="FOA"),
+    "hlfoa": SolverFacts(paper="HLFOA"),
+    "gwo": SolverFacts(paper="GWO"),
+    "mgwo": SolverFacts(paper="MGWO"),
+    "pso": SolverFacts(paper="PSO"),
+    "cs": SolverFacts(paper="CS"),
+}
+"""Facts by registry name (a solver not listed: :class:`SolverFacts` defaults)."""
+
+
+def solver_facts(name: str) -> SolverFacts:
+    """The facts of solver ``name`` (defaults when it is not listed)."""
+    return SOLVER_FACTS.get(name, SolverFacts())

@@ -10,24 +10,24 @@ FK; the loops with Pinocchio's FK through :func:`swarm_ik.verify`).
 Methods (one CSV row per robot, method and N):
 
 * ``batch-1proc``: ``solve_batch`` in this process (no Dask), one core;
-* ``batch-dask``: ``solve_batch`` on ``--scheduler`` (default: an embedded LocalCluster with
-  one worker process per core).  The cluster is started and the workers warmed up (kernels
-  loaded) before timing; its start-up time is reported separately (``setup_s``);
+* ``batch-dask``: ``solve_batch`` on ``--scheduler`` (``local``: an embedded LocalCluster
+  with one worker process per core; default ``none``: not run).  The cluster is started
+  and the workers warmed up (kernels loaded) before timing; its start-up time is reported
+  separately (``setup_s``);
 * ``loop-solve``: ``[solve(IKProblem(robot, T)) for T in targets]`` with the default solver,
   for ``N ≤ --loop-max``;
 * ``loop-tracik``: ``[pytracik.ik(T) for T in targets]`` (TRAC-IK, Speed mode, 5 ms timeout,
   ε = tol) for ``N ≤ --loop-max``, when ``pytracik`` is installed.
 
-Writes ``throughput.csv`` (the experiment), then ``throughput.md`` and ``throughput.png``
-(log-log time vs N) from the CSV, plus ``profile.csv`` (where the time of one batch goes).
+Writes under ``--out`` (default ``./bench-throughput``): ``throughput.csv`` (the experiment),
+then ``throughput.md`` (from the CSV and ``templates/throughput.md``) and ``throughput.png``
+(log-log time vs N), plus ``profile.csv`` (where the time of one batch goes).  Only the public
+:func:`swarm_ik.solve_batch` is timed.
 """
 
 from __future__ import annotations
 
 import argparse
-import csv
-import os
-import platform
 import time
 from collections.abc import Sequence
 from pathlib import Path
@@ -36,21 +36,14 @@ from typing import Any
 import numpy as np
 
 import swarm_ik
-from swarm_ik import distributed
-from swarm_ik.batch import (
-    BatchChain,
-    BatchSettings,
-    _seed_starts,
-    check_targets,
-    pose_errors,
-    solve_batch,
-    solve_chunk,
-)
+from swarm_ik import distributed, solve_batch
+from swarm_ik.batch import BatchChain, check_targets, pose_errors
+from swarm_ik.bench import common, plans
 from swarm_ik.robot import RobotModel
 
-DEFAULT_ROBOTS = ("panda", "yumi_left")
-DEFAULT_SIZES = (100, 1000, 10_000, 100_000)
-QUICK_SIZES = (100, 1000)
+DEFAULT_ROBOTS = plans.THROUGHPUT_ROBOTS
+DEFAULT_SIZES = plans.THROUGHPUT_SIZES
+QUICK_SIZES = plans.THROUGHPUT_QUICK_SIZES
 FIELDS = (
     "robot",
     "nq",
@@ -67,13 +60,24 @@ FIELDS = (
     "tol",
 )
 PROFILE_FIELDS = ("robot", "n", "part", "seconds", "share", "note")
-TARGET_RATE = 10_000.0
-"""The issue's target [poses/s]."""
+
+
+HELP = "poses per second of solve_batch against loops over solve and TRAC-IK"
+"""One line for ``swarm-ik bench --help``."""
 
 
 def add_arguments(parser: argparse.ArgumentParser) -> None:
     """Options of ``swarm-ik bench throughput``."""
-    parser.add_argument("--robots", nargs="+", default=list(DEFAULT_ROBOTS))
+    parser.description = (
+        "Poses per second of swarm_ik.solve_batch (one process, and on Dask with --scheduler) "
+        "against Python loops over swarm_ik.solve and over TRAC-IK, on FK-sampled targets."
+    )
+    parser.add_argument(
+        "--robots",
+        nargs="+",
+        default=list(DEFAULT_ROBOTS),
+        help=f"robots (default: {' '.join(DEFAULT_ROBOTS)})",
+    )
     parser.add_argument(
         "--sizes",
         nargs="+",
@@ -89,7 +93,7 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
         help="largest N for the loops over solve and TRAC-IK (default 1000)",
     )
     parser.add_argument("--tol", type=float, default=1e-5, help="tolerance [m] and [rad]")
-    parser.add_argument("--seed", type=int, default=0)
+    parser.add_argument("--seed", type=int, default=0, help="seed of the targets and solves")
     parser.add_argument(
         "--repeat",
         type=int,
@@ -99,20 +103,27 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     )
     parser.add_argument(
         "--scheduler",
-        default="local",
-        metavar="local|none|tcp://HOST:PORT",
-        help="where batch-dask runs ('none' skips it; default: an embedded "
-        "LocalCluster, one worker process per core)",
+        default="none",
+        metavar="none|local|tcp://HOST:PORT",
+        help="where batch-dask runs: 'none' (default: batch-dask not run), 'local' (an "
+        "embedded LocalCluster, one worker process per core) or a Dask scheduler address",
     )
     parser.add_argument("--no-tracik", action="store_true", help="skip TRAC-IK")
-    parser.add_argument("--quick", action="store_true", help="small sizes (a smoke test)")
-    parser.add_argument("--out", type=Path, default=Path("docs/results/batch"))
+    parser.add_argument(
+        "--quick",
+        action="store_true",
+        help="small sizes (a smoke test); never writes into a full run's folder",
+    )
+    parser.add_argument(
+        "--out",
+        default=None,
+        help="output folder (default ./bench-throughput, or ./bench-throughput-quick with --quick)",
+    )
 
 
 def make_targets(robot: RobotModel, n: int, seed: int) -> np.ndarray:
     """FK of ``n`` joint vectors drawn uniformly within the limits, ``(n, 4, 4)``."""
-    rng = np.random.default_rng([seed, n])
-    return robot.fk(robot.random_q(rng, n))
+    return common.fk_targets(robot, n, [seed, n])
 
 
 def _row(
@@ -168,21 +179,16 @@ def loop_tracik(
 ) -> tuple[float, np.ndarray] | None:
     """Time a Python loop over TRAC-IK (Speed, 5 ms timeout, ε = tol) from mid-range, judged
     afterwards with Pinocchio's FK; ``None`` when pytracik is not installed."""
-    try:
-        from swarm_ik.bench.ik import TracIK, tracik_available
-    except ImportError:  # pragma: no cover - the other benchmark module is missing
-        return None
-    if not tracik_available():
-        return None
-    from swarm_ik.pose import matrix_to_quat
+    from swarm_ik.bench import peers
 
-    trac = TracIK(robot, 5e-3, tol)
-    quats = [matrix_to_quat(t[:3, :3]) for t in targets]
+    if not peers.get("tracik-1e-5").available():
+        return None
+    trac = peers.TracIK(robot, 5e-3, tol)
     seed_q = robot.mid_q()
     answers: list[np.ndarray | None] = []
     t0 = time.perf_counter()
-    for t, qu in zip(targets, quats, strict=True):
-        answers.append(trac.solve(t, qu, seed_q)[0])
+    for t in targets:
+        answers.append(trac.solve(t, seed_q, 0).q)
     elapsed = time.perf_counter() - t0
     ok = np.zeros(len(targets), dtype=bool)
     for i, (t, q) in enumerate(zip(targets, answers, strict=True)):
@@ -193,24 +199,24 @@ def loop_tracik(
 
 
 def profile_batch(robot: RobotModel, n: int, seed: int, tol: float) -> list[dict[str, Any]]:
-    """Where the time of one in-process batch of ``n`` targets goes: target validation, the
-    compiled kernel (split into targets solved from the first start, restarted, failed), and
-    the independent check."""
+    """Where the time of one in-process :func:`swarm_ik.solve_batch` of ``n`` targets goes:
+    target validation (:func:`swarm_ik.batch.check_targets`, timed alone), the independent
+    check (:func:`swarm_ik.batch.pose_errors`, timed alone), and the rest of the call (the
+    compiled kernel), split by the evaluations of targets solved from the first start,
+    restarted, and failed."""
     targets = make_targets(robot, n, seed)
-    settings = BatchSettings(tol_pos=tol, tol_rot=tol, seed=seed)
-    bc = BatchChain.from_robot(robot)
     t0 = time.perf_counter()
-    poses = check_targets(targets)
-    seeds = _seed_starts(bc, None, n)
+    res = solve_batch(robot, targets, seed=seed, tol_pos=tol, tol_rot=tol)
+    total = time.perf_counter() - t0
     t1 = time.perf_counter()
-    chunk = solve_chunk(bc, settings, 0, poses, seeds)
-    q, evals, starts = chunk.q, chunk.n_evals, chunk.n_starts
+    poses = check_targets(targets)
+    validate = time.perf_counter() - t1
+    chain = BatchChain.from_robot(robot).tree
     t2 = time.perf_counter()
-    dp, dr = pose_errors(bc.tree, q, poses)
-    ok = (dp <= tol) & (dr <= tol)
-    t3 = time.perf_counter()
-    total = t3 - t0
-    kernel = t2 - t1
+    pose_errors(chain, res.q, poses)
+    check = time.perf_counter() - t2
+    kernel = max(total - validate - check, 0.0)
+    evals, starts, ok = res.n_evals, res.n_starts, res.success
     per_eval = kernel / max(int(evals.sum()), 1)
     first = ok & (starts == 1)
     restarted = ok & (starts > 1)
@@ -229,7 +235,7 @@ def profile_batch(robot: RobotModel, n: int, seed: int, tol: float) -> list[dict
             }
         )
 
-    add("validate targets + seeds", t1 - t0, "check_targets, mid-range seeds")
+    add("validate targets", validate, "check_targets (timed alone)")
     add(
         "kernel: solved from the first start",
         per_eval * evals[first].sum(),
@@ -248,7 +254,7 @@ def profile_batch(robot: RobotModel, n: int, seed: int, tol: float) -> list[dict
         f"{failed.mean():.2%} of targets, {evals[failed].mean() if failed.any() else 0:.0f} "
         "evaluations each",
     )
-    add("independent check (batched FK)", t3 - t2, "pose_errors")
+    add("independent check (batched FK)", check, "pose_errors (timed alone)")
     add(
         "total",
         total,
@@ -256,16 +262,6 @@ def profile_batch(robot: RobotModel, n: int, seed: int, tol: float) -> list[dict
         f"(FK + Jacobian + {robot.nq}x{robot.nq} Cholesky), {evals.mean():.1f} per target",
     )
     return rows
-
-
-def _cpu_name() -> str:
-    try:
-        for line in Path("/proc/cpuinfo").read_text().splitlines():
-            if line.startswith("model name"):
-                return line.split(":", 1)[1].strip()
-    except OSError:  # pragma: no cover
-        pass
-    return platform.processor() or "unknown CPU"
 
 
 def run_experiment(
@@ -381,22 +377,9 @@ def run_experiment(
                             flush=True,
                         )
             prof += profile_batch(robot, min(max(sizes), 10_000), seed, tol)
-    csv_path = out / "throughput.csv"
-    with csv_path.open("w", newline="") as fh:
-        w = csv.DictWriter(fh, fieldnames=FIELDS)
-        w.writeheader()
-        w.writerows(rows)
-    prof_path = out / "profile.csv"
-    with prof_path.open("w", newline="") as fh:
-        w = csv.DictWriter(fh, fieldnames=PROFILE_FIELDS)
-        w.writeheader()
-        w.writerows(prof)
+    csv_path = common.write_csv(out / "throughput.csv", FIELDS, rows)
+    prof_path = common.write_csv(out / "profile.csv", PROFILE_FIELDS, prof)
     return csv_path, prof_path
-
-
-def _read(path: Path) -> list[dict[str, str]]:
-    with path.open(newline="") as fh:
-        return list(csv.DictReader(fh))
 
 
 METHOD_LABELS = {
@@ -415,7 +398,7 @@ def plot(csv_path: Path, png_path: Path) -> Path:
     matplotlib.use("Agg", force=False)
     import matplotlib.pyplot as plt
 
-    rows = _read(csv_path)
+    rows = common.read_csv(csv_path)
     robots = list(dict.fromkeys(r["robot"] for r in rows))
     fig, axs = plt.subplots(
         2, len(robots), figsize=(6.2 * len(robots), 8.4), squeeze=False, constrained_layout=True
@@ -436,9 +419,6 @@ def plot(csv_path: Path, png_path: Path) -> Path:
                 label += f" ({w[0]} workers)"
             top.loglog(n, t, "o-", label=label)
             bottom.semilogx(n, np.array(n) / np.array(t), "o-", label=label)
-        ns = sorted({int(r["n"]) for r in mine})
-        top.loglog(ns, np.array(ns) / TARGET_RATE, "k--", lw=1, label="10,000 poses/s")
-        bottom.axhline(TARGET_RATE, color="k", ls="--", lw=1, label="10,000 poses/s")
         top.set_title(f"{robot}: FK-sampled targets, tolerance {mine[0]['tol']} m / rad")
         top.set_ylabel("wall-clock time [s]")
         bottom.set_ylabel("throughput [poses/s]")
@@ -453,65 +433,47 @@ def plot(csv_path: Path, png_path: Path) -> Path:
 
 
 def report(csv_path: Path, prof_path: Path, md_path: Path, png_name: str, scheduler: str) -> Path:
-    """Markdown summary of ``throughput.csv`` and ``profile.csv``."""
-    rows = _read(csv_path)
-    prof = _read(prof_path)
-    lines = [
-        "# Batched IK throughput (`swarm-ik bench throughput`)",
-        "",
-        f"Machine: {_cpu_name()}, {distributed.available_cores()} cores, Python "
-        f"{platform.python_version()}; swarm_ik {swarm_ik.__version__}.  Dask scheduler: "
-        f"`{scheduler}`.",
-        "",
-        "Targets: forward kinematics of joint vectors drawn uniformly within the limits "
-        "(all reachable); every method starts from the middle of the joint ranges; success = "
-        "‖Δp‖ ≤ tol and geodesic angle ≤ tol, within the limits (strict, the same test for "
-        "every method).  Times are wall-clock for the whole call (validation and the "
-        "independent check included), the fastest of `--repeat` runs for the batch methods "
-        "(one run for the loops); the Dask cluster's start-up (`setup_s`) is not in `time_s`.  "
-        "TRAC-IK runs in Speed mode with a 5 ms timeout and ε = tol; its own convergence test "
-        "(per twist component, in its own frame) is looser than the strict one, so some "
-        "answers it returns as solved fail here.  The machine may be shared: compare rows of "
-        "one run only.",
-        "",
-        f"![time vs N]({png_name})",
-        "",
-        "| robot | method | N | workers | time [s] | poses/s | success | LM iterations / "
-        "target | starts / target |",
-        "|---|---|---:|---:|---:|---:|---:|---:|---:|",
-    ]
+    """Markdown summary of ``throughput.csv`` and ``profile.csv`` (``templates/throughput.md``)."""
+    rows = common.read_csv(csv_path)
+    prof = common.read_csv(prof_path)
+    table = []
     for r in rows:
-        lines.append(
+        table.append(
             f"| {r['robot']} | {METHOD_LABELS.get(r['method'], r['method'])} | {int(r['n']):,} | "
             f"{r['workers']} | {float(r['time_s']):.3f} | {float(r['poses_per_s']):,.0f} | "
             f"{100 * float(r['success_rate']):.2f} % | {r['mean_evals'] or '–'} | "
             f"{r['mean_starts'] or '–'} |"
         )
-    setups = {r["setup_s"] for r in rows if r["method"] == "batch-dask"}
-    if setups:
-        lines += [
-            "",
-            f"Dask LocalCluster start-up (not in the times above): {', '.join(sorted(setups))} s.",
-        ]
-    lines += [
-        "",
-        "## Where the time goes (one in-process batch)",
-        "",
-        "| robot | N | part | seconds | share | note |",
-        "|---|---:|---|---:|---:|---|",
+    setups = sorted({r["setup_s"] for r in rows if r["method"] == "batch-dask"})
+    profile = [
+        f"| {r['robot']} | {int(r['n']):,} | {r['part']} | {float(r['seconds']):.4f} "
+        f"| {100 * float(r['share']):.1f} % | {r['note']} |"
+        for r in prof
     ]
-    for r in prof:
-        lines.append(
-            f"| {r['robot']} | {int(r['n']):,} | {r['part']} | {float(r['seconds']):.4f} "
-            f"| {100 * float(r['share']):.1f} % | {r['note']} |"
+    info = common.machine_info(("pytracik",))
+    md_path.write_text(
+        common.render(
+            "throughput.md",
+            machine=", ".join(f"{k} {v}" for k, v in info.items()),
+            scheduler=scheduler,
+            png=png_name,
+            table="\n".join(table),
+            dask_setup=(
+                f"Dask start-up (not in the times above): {', '.join(setups)} s.\n"
+                if setups
+                else ""
+            ),
+            profile="\n".join(profile),
         )
-    md_path.write_text("\n".join(lines) + "\n")
+    )
     return md_path
 
 
 def run(args: argparse.Namespace) -> int:
     """Entry point of ``swarm-ik bench throughput``; returns the exit code."""
-    quick = args.quick or os.environ.get("SWARM_IK_QUICK") == "1"
+    quick = bool(args.quick)
+    out = common.resolve_out(args.out, "throughput", quick)
+    common.write_run_info(out, "throughput", quick)
     sizes = args.sizes or (QUICK_SIZES if quick else DEFAULT_SIZES)
     loop_max = min(args.loop_max, 100) if quick else args.loop_max
     csv_path, prof_path = run_experiment(
@@ -522,10 +484,10 @@ def run(args: argparse.Namespace) -> int:
         args.seed,
         args.scheduler,
         not args.no_tracik,
-        args.out,
+        out,
         args.repeat,
     )
-    png = plot(csv_path, args.out / "throughput.png")
-    md = report(csv_path, prof_path, args.out / "throughput.md", png.name, str(args.scheduler))
+    png = plot(csv_path, out / "throughput.png")
+    md = report(csv_path, prof_path, out / "throughput.md", png.name, str(args.scheduler))
     print(f"wrote {csv_path}, {prof_path}, {png}, {md}")
     return 0
