@@ -476,11 +476,14 @@ def _numerical(
         ran = int(np.count_nonzero(out.status))
         n_starts += ran
         good = (out.position_error[:ran] <= tol_pos) & (out.rotation_error[:ran] <= tol_rot)
+        deadline = None if time_limit is None else t0 + time_limit
         for i in range(ran):
             if i >= n_hop:
                 since_new += 1
             if not good[i]:
                 continue
+            if deadline is not None and time.perf_counter() >= deadline:
+                break  # verification counts against the time limit too
             q = out.q[i]
             if out.position_error[i] > ROUNDOFF_TOL or out.rotation_error[i] > ROUNDOFF_TOL:
                 q = refine(problem, q)[0]  # near a singularity the damped polish crawls
