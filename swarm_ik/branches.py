@@ -207,7 +207,11 @@ def refine(
         pin.updateFramePlacement(model, data, fid)
         m = data.oMf[fid]
         dp = float(np.linalg.norm(m.translation - o_m_t.translation))
-        dr = 0.0 if problem.position_only else float(np.linalg.norm(pin.log3(m.rotation.T @ o_m_t.rotation)))
+        dr = (
+            0.0
+            if problem.position_only
+            else float(np.linalg.norm(pin.log3(m.rotation.T @ o_m_t.rotation)))
+        )
         return dp, dr, m, qp
 
     dp, dr, m, qp = errors(best)
@@ -272,7 +276,9 @@ def same_branch(
         tol: Branch tolerance (rad / m); see :data:`BRANCH_TOL`.
         periodic: Mask of the periodic joints, shape ``(nq,)``.
     """
-    mask = periodic_mask(problem.robot, problem.lower, problem.upper) if periodic is None else periodic
+    mask = (
+        periodic_mask(problem.robot, problem.lower, problem.upper) if periodic is None else periodic
+    )
     a = polish_to_roundoff(problem, qa)[0]
     b = polish_to_roundoff(problem, qb)[0]
     return bool(branch_distance(a, b, mask) < tol)

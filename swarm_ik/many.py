@@ -39,11 +39,12 @@ from swarm_ik.branches import (
     TWO_PI,
     BranchSet,
     branch_distance,
-    nearest_winding,
     periodic_mask,
     refine,
     revolute_mask,
     spread_select,
+)
+from swarm_ik.branches import (
     windings as _windings,
 )
 from swarm_ik.errors import InvalidArgumentError, unknown
@@ -89,9 +90,7 @@ class _Hops:
         q_pin = robot.to_pinocchio(np.zeros(robot.nq))
         jac = np.asarray(pin.computeJointJacobians(model, self.data, q_pin)).reshape(6, model.nv)
         axes = jac[3:].T
-        self.local = [
-            np.array(self.data.oMi[j + 1].rotation).T @ axes[j] for j in range(robot.nq)
-        ]
+        self.local = [np.array(self.data.oMi[j + 1].rotation).T @ axes[j] for j in range(robot.nq)]
         self.revolute = revolute_mask(robot)
         n = robot.nq
         self.parallel: list[tuple[int, tuple[float, float, float]]] = []
@@ -154,7 +153,7 @@ class _Hops:
                 a[j + 2] = -a[j + 2]
                 a[j + 3] = np.pi - a[j + 3]
                 out.append(a)
-        for j in np.flatnonzero(rev):
+        for j in map(int, np.flatnonzero(rev)):
             a = q.copy()
             a[j] += np.pi
             out.append(a)
@@ -297,7 +296,9 @@ def solve_many(
     t0 = time.perf_counter()
     if use_analytic:
         qs, dps, drs = analytic.solve_all(problem, ref=ref, tol_pos=tol_pos, tol_rot=tol_rot)
-        found = BranchSet(periodic_mask(problem.robot, problem.lower, problem.upper), BRANCH_TOL, min_distance)
+        found = BranchSet(
+            periodic_mask(problem.robot, problem.lower, problem.upper), BRANCH_TOL, min_distance
+        )
         keep = [i for i in range(qs.shape[0]) if found.add(qs[i])][:n]
         elapsed = time.perf_counter() - t0
         reps = [(qs[i], float(dps[i]), float(drs[i]), 0, elapsed) for i in keep]
@@ -310,9 +311,21 @@ def solve_many(
         solver = SOLVER_NAME
     qs_all = np.array([r[0] for r in reps]).reshape(-1, problem.nq)
     fits = problem.fitness(qs_all) if reps else np.empty(0)
-    order = np.argsort(branch_distance(qs_all, ref, periodic_mask(problem.robot, problem.lower, problem.upper)), kind="stable")
+    order = np.argsort(
+        branch_distance(qs_all, ref, periodic_mask(problem.robot, problem.lower, problem.upper)),
+        kind="stable",
+    )
     results = [
-        _result(reps[i][0], reps[i][1], reps[i][2], reps[i][3], reps[i][4], float(fits[i]), solver, seed_label)
+        _result(
+            reps[i][0],
+            reps[i][1],
+            reps[i][2],
+            reps[i][3],
+            reps[i][4],
+            float(fits[i]),
+            solver,
+            seed_label,
+        )
         for i in order
     ]
     if not windings:
