@@ -32,7 +32,7 @@ from typing import Any
 import numpy as np
 import pinocchio as pin
 
-from swarm_ik.api import prepare_q0
+from swarm_ik.api import prepare_q0, verify
 from swarm_ik.branches import (
     BRANCH_TOL,
     ROUNDOFF_TOL,
@@ -295,13 +295,14 @@ def solve_many(
 
     t0 = time.perf_counter()
     if use_analytic:
-        qs, dps, drs = analytic.solve_all(problem, ref=ref, tol_pos=tol_pos, tol_rot=tol_rot)
+        qs, _dps, _drs = analytic.solve_all(problem, ref=ref, tol_pos=tol_pos, tol_rot=tol_rot)
         found = BranchSet(
             periodic_mask(problem.robot, problem.lower, problem.upper), BRANCH_TOL, min_distance
         )
         keep = [i for i in range(qs.shape[0]) if found.add(qs[i])][:n]
         elapsed = time.perf_counter() - t0
-        reps = [(qs[i], float(dps[i]), float(drs[i]), 0, elapsed) for i in keep]
+        # the errors reported exactly as swarm_ik.verify computes them
+        reps = [(qs[i], *verify(problem, qs[i]), 0, elapsed) for i in keep]
         solver = "analytic"
     else:
         reps = _numerical(
@@ -369,10 +370,10 @@ def _with_windings(problem: IKProblem, rep: Result, ref: FloatArray) -> list[Res
     others = copies[branch_distance(copies, rep.q, periodic) > 1e-9]
     if others.shape[0] == 0:
         return [rep]
-    dp, dr = analytic.pinocchio_errors(problem, others)
+    errs = [verify(problem, q) for q in others]
     fits = problem.fitness(others)
     out = [rep]
-    for q, a, b, f in zip(others, dp, dr, fits, strict=True):
+    for q, (a, b), f in zip(others, errs, fits, strict=True):
         out.append(_result(q, a, b, rep.n_evals, rep.time_s, float(f), rep.solver, rep.seed))
     return out
 
@@ -503,12 +504,12 @@ def _numerical(
             q = fold(q[None])[0][0]
             if fold.dist(q[None])[0] < merge:
                 continue
-            dp, dr = analytic.pinocchio_errors(problem, q[None])
-            if not (dp[0] <= tol_pos and (problem.position_only or dr[0] <= tol_rot)):
+            dp, dr = verify(problem, q)  # Pinocchio's FK, as swarm_ik.verify reports it
+            if not (dp <= tol_pos and (problem.position_only or dr <= tol_rot)):
                 continue  # the kernel's check disagrees with Pinocchio's: never report it
             since_new = 0
             fold.kept = np.vstack([fold.kept, q])
-            kept.append((q, float(dp[0]), float(dr[0]), used, time.perf_counter() - t0))
+            kept.append((q, dp, dr, used, time.perf_counter() - t0))
             if hops is not None:
                 cand, ok = fold(np.asarray(hops(q)).reshape(-1, nq))
                 cand = cand[ok]
