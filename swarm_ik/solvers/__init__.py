@@ -8,6 +8,7 @@ True
 from swarm_ik.solvers.base import Evaluator, SolverSpec, get, names, register
 
 # Importing a module registers its solvers; one line per module.
+from swarm_ik.solvers import analytic  # noqa: E402,F401  isort: skip
 from swarm_ik.solvers import cs  # noqa: E402,F401  isort: skip
 from swarm_ik.solvers import dls  # noqa: E402,F401  isort: skip
 from swarm_ik.solvers import gwo  # noqa: E402,F401  isort: skip
