@@ -276,9 +276,32 @@ class Scene:
             facing: Direction the text faces (towards the camera), shape ``(3,)``; the text's
                 up is the world's z tilted to be square to it.
         """
+        png, aspect = text_png(lines)
+        self.add_image(name, png, aspect, position=position, height=height, facing=facing)
+
+    def add_image(
+        self,
+        name: str,
+        png: bytes,
+        aspect: float,
+        *,
+        position: Any,
+        height: float = 0.1,
+        facing: Any = (1.0, 0.0, 0.0),
+    ) -> None:
+        """A flat upright sign showing a PNG image (a texture), e.g. a colour legend.
+
+        Args:
+            name: Node name inside the scene.
+            png: The image, PNG bytes.
+            aspect: Its width / height ratio.
+            position: Centre of the sign [m], shape ``(3,)``.
+            height: Height of the sign [m]; the width is ``aspect × height``.
+            facing: Direction the image faces (towards the camera), shape ``(3,)``; its up
+                is the world's z tilted to be square to it.
+        """
         import meshcat.geometry as mg
 
-        png, aspect = text_png(lines)
         tex = mg.ImageTexture(image=mg.PngImage(png))
         mat = mg.MeshBasicMaterial(map=tex)
         node = self.node(name)
