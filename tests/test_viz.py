@@ -286,8 +286,8 @@ def test_several_robots_share_their_meshes(panda: swarm_ik.RobotModel, tmp_path:
     refs = [
         c["object"]["object"]["data"]
         for c in cmds
-        if c["type"] == "set_object" and c["object"].get("object", {}).get("type", "")
-        == "_meshfile_object"
+        if c["type"] == "set_object"
+        and c["object"].get("object", {}).get("type", "") == "_meshfile_object"
     ]
     assert len(refs) >= 3 * 8  # every Panda draws its meshes ...
     assert all(r.startswith(viz.export.SHARED_PREFIX) for r in refs)
