@@ -18,18 +18,18 @@ from pathlib import Path
 
 import numpy as np
 
-try:
-    from swarm_ik.dh import ChainStep, DHRow, chain_to_urdf, dh_to_urdf, rot_x, translation
-except ModuleNotFoundError as exc:  # `python robots/generate.py` without swarm_ik installed
-    if exc.name != "swarm_ik":
-        raise
-    sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
-    from swarm_ik.dh import ChainStep, DHRow, chain_to_urdf, dh_to_urdf, rot_x, translation
-
 HERE = Path(__file__).resolve().parent
 
+try:
+    from swarm_ik.robots.dh import ChainStep, DHRow, chain_to_urdf, dh_to_urdf, rot_x, translation
+except ModuleNotFoundError as exc:  # `python robots/generate.py` without swarm_ik installed
+    if exc.name not in ("swarm_ik", "swarm_ik.robots"):
+        raise
+    sys.path[:0] = [str(HERE), str(HERE.parent)]
+    from dh import ChainStep, DHRow, chain_to_urdf, dh_to_urdf, rot_x, translation  # type: ignore[no-redef]
+
 # --------------------------------------------------------------------------------------------
-# YuMi IRB 14000 left arm -- Table 1 of the HLFOA paper (Shi et al., 2021), mm and degrees.
+# YuMi IRB 14000 left arm -- Table 1 of [HLFOA] (docs/references.md), mm and degrees.
 # --------------------------------------------------------------------------------------------
 
 YUMI_LEFT_DH_MM_DEG: tuple[tuple[float, float, float, float, float, float], ...] = (
@@ -82,7 +82,7 @@ def yumi_left_urdf() -> str:
 
 
 # --------------------------------------------------------------------------------------------
-# Mobile loading manipulator -- eqs. 1-8 and Table 1 of the MGWO paper (Hu et al., 2025).
+# Mobile loading manipulator -- eqs. 1-8 and Table 1 of [MGWO] (docs/references.md).
 # --------------------------------------------------------------------------------------------
 
 LM_L1 = 1.74
@@ -121,7 +121,8 @@ def loading_manipulator_steps(stroke: float) -> list[ChainStep]:
         stroke: Upper limit of d4, d5, d6 (m); the lower limit is 0.
 
     Returns:
-        Eight :class:`~swarm_ik.dh.ChainStep`; frame 8 (the spreader) is the last joint's frame.
+        Eight :class:`~swarm_ik.robots.dh.ChainStep`; frame 8 (the spreader) is the last
+        joint's frame.
     """
     pi = math.pi
     z = (0.0, 0.0, 1.0)

@@ -21,7 +21,6 @@ as a coloured point cloud; needs ``meshcat``).
 
 from __future__ import annotations
 
-import base64
 import time
 from dataclasses import dataclass
 from pathlib import Path
@@ -35,6 +34,10 @@ from swarm_ik.errors import InvalidArgumentError
 from swarm_ik.robot import RobotModel
 
 FloatArray = NDArray[np.float64]
+
+MAX_TARGETS = 5_000_000
+"""Default most poses of one map (voxels × K): the targets alone take 128 bytes each
+(640 MB), and at some 25,000 poses/s on one core the solve takes minutes."""
 
 
 @dataclass(frozen=True)
@@ -212,6 +215,41 @@ def grid_axes(
     return axes[0], axes[1], axes[2]
 
 
+def check_grid_size(
+    lower: Any, upper: Any, resolution: float, n_orientations: int, max_targets: int
+) -> int:
+    """Refuse a grid too large to allocate, before allocating anything.
+
+    Args:
+        lower: Lower corner of the box [m], shape ``(3,)``.
+        upper: Upper corner [m], shape ``(3,)``.
+        resolution: Voxel edge [m], ``> 0``.
+        n_orientations: Orientations per voxel (K).
+        max_targets: Most poses allowed (voxels × K).
+
+    Returns:
+        The number of voxels of the box.
+
+    Raises:
+        InvalidArgumentError: the box holds more than ``max_targets`` poses (the message gives
+            the count, its memory, and a resolution that fits).
+    """
+    ext = np.asarray(upper, dtype=float).reshape(3) - np.asarray(lower, dtype=float).reshape(3)
+    with np.errstate(over="ignore", divide="ignore"):
+        per_axis = np.maximum(1.0, np.ceil(ext / float(resolution) - 1e-9))
+        n_voxels = float(np.prod(per_axis))
+    poses = n_voxels * int(n_orientations)
+    if not np.isfinite(poses) or poses > max_targets:
+        fits = float((np.prod(ext) * n_orientations / max_targets) ** (1.0 / 3.0))
+        raise InvalidArgumentError(
+            f"resolution {resolution!r} m gives a grid of {n_voxels:.3g} voxels × "
+            f"{n_orientations} orientations = {poses:.3g} poses (about {poses * 128 / 1e9:.3g} "
+            f"GB of targets), more than max_targets={max_targets}; use a coarser resolution "
+            f"(at least {fits:.3g} m for this box) or smaller bounds"
+        )
+    return int(n_voxels)
+
+
 def reach_map(
     robot: RobotModel,
     *,
@@ -225,7 +263,7 @@ def reach_map(
     max_iters: int = 60,
     scheduler: Any = None,
     progress: bool = False,
-    max_targets: int = 20_000_000,
+    max_targets: int = MAX_TARGETS,
 ) -> ReachMap:
     """Compute the reachability map of ``robot``.
 
@@ -243,7 +281,8 @@ def reach_map(
         scheduler: Where to solve (see :mod:`swarm_ik.distributed`); ``None``: this process.
         progress: Show a progress bar.
         max_targets: Refuse grids needing more poses than this (voxels × K), to catch a
-            resolution typed in the wrong unit.
+            resolution typed in the wrong unit; the whole box is checked before anything is
+            allocated (:func:`check_grid_size`), the voxels within reach after.
 
     Returns:
         The :class:`ReachMap`.
@@ -278,13 +317,14 @@ def reach_map(
                 f"bounds: lower corner {lo.tolist()} must be below upper corner {hi.tolist()} "
                 "on every axis"
             )
+    k = int(n_orientations)
+    check_grid_size(lo, hi, resolution, k, max_targets)
     x, y, z = grid_axes(lo, hi, resolution)
     shape = (x.size, y.size, z.size)
     gx, gy, gz = np.meshgrid(x, y, z, indexing="ij")
     centres = np.stack([gx, gy, gz], axis=-1).reshape(-1, 3)
     base, radius = chain_reach_bound(robot)
     inside = np.linalg.norm(centres - base, axis=1) <= radius + 1e-12
-    k = int(n_orientations)
     n_targets = int(inside.sum()) * k
     if n_targets > max_targets:
         raise InvalidArgumentError(
@@ -395,58 +435,244 @@ def _viridis(values: FloatArray) -> FloatArray:
         return np.stack([v, 0.3 + 0.6 * v, 1.0 - v], axis=1)
 
 
-def export_html(rmap: ReachMap, path: str | Path, point_size: float | None = None) -> Path:
-    """A self-contained HTML page (meshcat's viewer, no server) showing the voxels with a
-    non-zero index as a point cloud coloured by the index (viridis), with a triad at the first
-    joint.
+def legend_png(n_orientations: int, width: int = 480) -> tuple[bytes, float]:
+    """PNG of the colour legend (the viridis bar from 0 to 1 with its caption) and its
+    width / height ratio."""
+    import io
+
+    from PIL import Image, ImageDraw, ImageFont
+
+    try:
+        font: Any = ImageFont.load_default(size=22)
+    except TypeError:  # Pillow < 10.1: fixed-size bitmap font
+        font = ImageFont.load_default()
+    pad, bar_h, height = 16, 36, 140
+    img = Image.new("RGB", (width, height), (255, 255, 250))
+    draw = ImageDraw.Draw(img)
+    draw.text(
+        (pad, 8), f"reachability index (of K = {n_orientations})", fill=(20, 20, 30), font=font
+    )
+    x0, x1, y0 = pad, width - pad, 48
+    colours = (255 * _viridis(np.linspace(0.0, 1.0, x1 - x0))).astype(int)
+    for k, (r, g, b) in enumerate(colours):
+        draw.line([(x0 + k, y0), (x0 + k, y0 + bar_h)], fill=(int(r), int(g), int(b)))
+    for v in (0.0, 0.25, 0.5, 0.75, 1.0):
+        x = x0 + v * (x1 - x0 - 1)
+        draw.line([(x, y0 + bar_h), (x, y0 + bar_h + 8)], fill=(20, 20, 30), width=2)
+        label = f"{v:g}"
+        w = draw.textlength(label, font=font)
+        draw.text((min(max(x - w / 2, 0), width - w), y0 + bar_h + 12), label, fill=(20, 20, 30),
+                  font=font)  # fmt: skip
+    buf = io.BytesIO()
+    img.save(buf, format="PNG")
+    return buf.getvalue(), width / height
+
+
+def export_html(
+    rmap: ReachMap,
+    path: str | Path,
+    point_size: float | None = None,
+    robot: RobotModel | None = None,
+) -> Path:
+    """A self-contained HTML page (meshcat's viewer, no server): the voxels with a non-zero
+    index as a point cloud coloured by the index (viridis), the robot at its mid-range
+    configuration, and the colour legend.
+
+    Built as a :class:`swarm_ik.viz.Scene` and written with its HTML export.
+
+    Args:
+        rmap: The map.
+        path: The ``.html`` file to write.
+        point_size: Size of a point [m] (default 0.6 × the resolution).
+        robot: The robot to draw (default: loaded by the map's robot name and frame; left
+            out when that fails).
 
     Raises:
-        InvalidArgumentError: meshcat is not installed.
+        InvalidArgumentError: meshcat is not installed, or the path cannot be written.
     """
+    from swarm_ik import viz
+
     try:
-        import meshcat
-        import meshcat.geometry as mg
-        import umsgpack
-        from meshcat.commands import SetObject, SetTransform
-        from meshcat.path import Path as MeshcatPath
-    except ImportError:  # pragma: no cover - depends on the environment
+        viz.require_meshcat()
+    except viz.VizUnavailableError:
         raise InvalidArgumentError(
             'the HTML export needs meshcat: pip install "swarm_ik[viz]"'
         ) from None
+    import meshcat.geometry as mg
+
+    out = viz.check_output_path(path, "HTML file", (".html", ".htm"))
+    if robot is None:
+        import swarm_ik
+        from swarm_ik.errors import SwarmIKError
+
+        try:
+            robot = swarm_ik.load_robot(rmap.robot, ee_frame=rmap.ee_frame)
+        except SwarmIKError:
+            robot = None
     reach = rmap.index > 0
     pts = rmap.centres[reach].astype(np.float32)
     colours = _viridis(rmap.index[reach]).astype(np.float32)
     size = float(point_size) if point_size is not None else 0.6 * rmap.resolution
-    root = MeshcatPath(("meshcat", "reachability"))
-    cloud = mg.PointCloud(pts.T.copy(), colours.T.copy(), size=size)
-    triad = mg.triad(scale=0.2)
-    place = np.eye(4)
-    place[:3, 3] = rmap.base
-    commands = [
-        SetObject(cloud, path=root.append("voxels")),
-        SetObject(triad, path=root.append("base")),
-        SetTransform(place, path=root.append("base")),
-    ]
-    blobs = []
-    for cmd in commands:
-        data = base64.b64encode(umsgpack.packb(cmd.lower())).decode("ascii")
-        blobs.append(
-            f'fetch("data:application/octet-binary;base64,{data}")'
-            ".then(r => r.arrayBuffer())"
-            ".then(b => viewer.handle_command_bytearray(new Uint8Array(b)));"
+    with viz.Scene() as scene:
+        scene.node("reachability/voxels").set_object(
+            mg.PointCloud(pts.T.copy(), colours.T.copy(), size=size)
         )
-    # the viewer's code, as meshcat's own server embeds it in its static export
-    js = (Path(meshcat.__file__).parent / "viewer" / "dist" / "main.min.js").read_text()
-    title = f"{rmap.robot} reachability ({int(reach.sum())} voxels, K = {rmap.n_orientations})"
-    html = (
-        "<!DOCTYPE html>\n<html>\n<head><meta charset=utf-8><title>" + title + "</title>\n"
-        "<style>body {margin: 0;} #meshcat-pane {width: 100vw; height: 100vh; "
-        'overflow: hidden;}</style></head>\n<body>\n<div id="meshcat-pane"></div>\n'
-        "<script>" + js + "</script>\n<script>\n"
-        'var viewer = new MeshCat.Viewer(document.getElementById("meshcat-pane"));\n'
-        + "\n".join(blobs)
-        + "\n</script>\n</body>\n</html>\n"
+        view = [pts.astype(float).reshape(-1, 3), rmap.base[None]]
+        if robot is not None:
+            q = robot.mid_q()
+            scene.add_robot(robot, q, name="robot")
+            scene.add_triad("reached", robot.fk(q), length=0.12 * viz.reach_length(robot))
+            view.append(robot.fk(q)[None, :3, 3])
+        scene.add_triad("base", viz.scene.translation(rmap.base), length=0.2)
+        pts_all = np.vstack(view)
+        d = np.array([1.0, 0.75, 0.45]) / np.linalg.norm([1.0, 0.75, 0.45])
+        lo, hi = pts_all.min(axis=0), pts_all.max(axis=0)
+        extent = max(float(np.linalg.norm(hi - lo)), 0.2)
+        png, aspect = legend_png(rmap.n_orientations)
+        height = 0.12 * extent
+        centre = np.array([0.5 * (lo[0] + hi[0]), 0.5 * (lo[1] + hi[1]), hi[2] + 0.6 * height])
+        scene.add_image("legend", png, aspect, position=centre, height=height, facing=d)
+        right = np.cross([0.0, 0.0, 1.0], d)
+        right /= np.linalg.norm(right)
+        corners = [centre + sx * 0.5 * height * aspect * right for sx in (-1, 1)]
+        scene.frame_camera(
+            np.vstack([pts_all, corners, centre + [0, 0, 0.5 * height]]), direction=d
+        )
+        title = f"{rmap.robot} reachability ({int(reach.sum())} voxels, K = {rmap.n_orientations})"
+        return scene.save_html(out, title=title)
+
+
+# ------------------------------------------------------------------------ command line
+def add_arguments(parser: Any) -> None:
+    """The options of ``swarm-ik reach`` (see :func:`run`)."""
+    from swarm_ik.batch_cli import add_scheduler_argument
+
+    parser.add_argument(
+        "--robot", required=True, help="bundled or example-robot-data name, or a .urdf path"
     )
-    p = Path(path)
-    p.write_text(html)
-    return p
+    parser.add_argument(
+        "--frame", default=None, help="end-effector frame (default: the robot's tool frame)"
+    )
+    parser.add_argument(
+        "--resolution", type=float, default=0.1, help="voxel edge [m] (default 0.1)"
+    )
+    parser.add_argument(
+        "--bounds",
+        nargs=6,
+        type=float,
+        default=None,
+        metavar=("XMIN", "YMIN", "ZMIN", "XMAX", "YMAX", "ZMAX"),
+        help="workspace box [m] (default: cube around the first joint, 1.1 × the sampled reach)",
+    )
+    parser.add_argument(
+        "--orientations",
+        type=int,
+        default=8,
+        metavar="K",
+        help="orientations tried per voxel (default 8, seeded random rotations)",
+    )
+    parser.add_argument(
+        "--out",
+        type=Path,
+        default=None,
+        metavar="FILE.npz",
+        help="map file (default reach_<robot>.npz)",
+    )
+    parser.add_argument(
+        "--png",
+        type=Path,
+        default=None,
+        help="slices picture (default: next to --out; needs [plot])",
+    )
+    parser.add_argument("--no-png", action="store_true", help="do not draw the slices picture")
+    parser.add_argument(
+        "--html",
+        type=Path,
+        default=None,
+        help="meshcat page: point cloud, robot, colour legend (default: next to --out, when "
+        "meshcat is installed)",
+    )
+    parser.add_argument("--no-html", action="store_true", help="do not write the HTML page")
+    parser.add_argument("--seed", type=int, default=0, help="seed of the orientations and restarts")
+    parser.add_argument("--tol-pos", type=float, default=1e-5, help="position tolerance [m]")
+    parser.add_argument("--tol-rot", type=float, default=1e-5, help="rotation tolerance [rad]")
+    parser.add_argument(
+        "--max-starts", type=int, default=16, help="most LM starts per pose (default 16)"
+    )
+    parser.add_argument("--max-iters", type=int, default=60, help="most LM iterations per start")
+    parser.add_argument(
+        "--max-targets",
+        type=int,
+        default=MAX_TARGETS,
+        help=f"refuse grids of more poses (voxels × K) than this (default {MAX_TARGETS})",
+    )
+    add_scheduler_argument(parser, default="none")
+    parser.add_argument("--no-progress", action="store_true", help="no progress bar")
+
+
+def _has(module: str) -> bool:
+    import importlib.util
+
+    try:
+        return importlib.util.find_spec(module) is not None
+    except ValueError:  # pragma: no cover - a module without a spec
+        return False
+
+
+def run(args: Any) -> int:
+    """``swarm-ik reach``: everything that can be refused is refused before the work (missing
+    extras, output paths, a grid too large); returns 0 when the files are written."""
+    import sys
+
+    import swarm_ik
+    from swarm_ik.viz.export import check_output_path
+
+    out = args.out if args.out is not None else Path(f"reach_{Path(args.robot).stem}.npz")
+    out = check_output_path(out, "--out", (".npz",))
+    png = None
+    if not args.no_png:
+        if not _has("matplotlib"):
+            raise InvalidArgumentError(
+                'the slices picture needs matplotlib: pip install "swarm_ik[plot]" (or --no-png)'
+            )
+        png = check_output_path(args.png or out.with_suffix(".png"), "--png", (".png",))
+    html = None
+    if not args.no_html:
+        if _has("meshcat"):
+            html = check_output_path(
+                args.html or out.with_suffix(".html"), "--html", (".html", ".htm")
+            )
+        elif args.html is not None:
+            raise InvalidArgumentError('--html needs meshcat: pip install "swarm_ik[viz]"')
+    robot = swarm_ik.load_robot(args.robot, ee_frame=args.frame)
+    rmap = reach_map(
+        robot,
+        resolution=args.resolution,
+        bounds=args.bounds,
+        n_orientations=args.orientations,
+        seed=args.seed,
+        tol_pos=args.tol_pos,
+        tol_rot=args.tol_rot,
+        max_starts=args.max_starts,
+        max_iters=args.max_iters,
+        scheduler=None if args.scheduler in (None, "none") else args.scheduler,
+        progress=not args.no_progress and sys.stderr.isatty(),
+        max_targets=args.max_targets,
+    )
+    written = [str(rmap.save(out))]
+    if png is not None:
+        written.append(str(plot_slices(rmap, png)))
+    if html is not None:
+        written.append(str(export_html(rmap, html, robot=robot)))
+    reachable = rmap.index > 0
+    print(
+        f"robot {robot.name}, frame {robot.ee_frame}: grid {rmap.index.shape} of "
+        f"{rmap.resolution:g} m voxels, K = {rmap.n_orientations} orientations"
+    )
+    mean = float(rmap.index[reachable].mean()) if reachable.any() else 0.0
+    print(
+        f"reachable voxels {int(reachable.sum())} of {int(rmap.solved.sum())} within the "
+        f"chain's reach; mean index {mean:.3f} ({rmap.time_s:.1f} s)"
+    )
+    print("wrote " + ", ".join(written))
+    return 0

@@ -4,7 +4,8 @@ options of ``swarm-ik solve``.
 ``--show`` (and ``show`` without ``--html``) starts meshcat's local server, prints its URL and
 keeps it up until Enter (on a terminal) or Ctrl-C; ``SWARM_IK_NO_WAIT=1`` returns at once (for
 scripts and tests).  ``--html FILE`` writes one self-contained page that any browser opens
-without a server.
+without a server.  ``solve --animate`` or ``--compare`` without ``--html`` or ``--show`` draws
+nothing: it says so on stderr and returns (it never starts a viewer that blocks).
 """
 
 from __future__ import annotations
@@ -169,11 +170,21 @@ def after_solve(args: argparse.Namespace, problem: Any, result: Any) -> None:
 
     ``--animate`` solves again with the same options and seed, recording the best-so-far
     configuration of every iteration (:func:`swarm_ik.viz.solve_traced`); ``--compare SOLVER``
-    solves the target with SOLVER too and draws its answer ghosted.
+    solves the target with SOLVER too and draws its answer ghosted.  Without ``--html`` or
+    ``--show`` there is nowhere to draw: a note on stderr, and nothing else is done.
     """
+    if not (args.html or args.show):
+        print(
+            "swarm-ik: note: --animate/--compare draw a scene; add --html FILE to write it or "
+            "--show to open the live viewer (nothing drawn)",
+            file=sys.stderr,
+        )
+        return
     from swarm_ik import viz
 
     viz.require_meshcat()
+    if args.html:
+        viz.check_output_path(args.html, "--html", (".html", ".htm"))
     kwargs = solve_kwargs(args)
     trace = None
     if args.animate:
@@ -197,7 +208,7 @@ def after_solve(args: argparse.Namespace, problem: Any, result: Any) -> None:
         compare = swarm_ik.solve(problem, args.compare, **kwargs)
         _say(args, "compare " + _result_line(compare))
     scene = viz.show_result(problem, result, trace=trace, compare=compare)
-    present(scene, args, live=bool(args.show or not args.html))
+    present(scene, args, live=bool(args.show))
 
 
 # ------------------------------------------------------------------------- show command
@@ -208,6 +219,8 @@ def run_show(args: argparse.Namespace) -> int:
     from swarm_ik.errors import InvalidArgumentError
 
     viz.require_meshcat()
+    if args.html:
+        viz.check_output_path(args.html, "--html", (".html", ".htm"))
     robot = swarm_ik.load_robot(args.robot, ee_frame=args.frame)
     target = None
     if args.from_q is not None:

@@ -39,3 +39,48 @@ def test_example_runs(script: Path, tmp_path: Path) -> None:
     assert proc.stdout.strip(), f"{script.name} printed nothing"
     assert "Traceback" not in proc.stderr
     assert list(tmp_path.iterdir()) == [], f"{script.name} wrote into the working directory"
+
+
+def _run(name: str, *args: str, cwd: Path, quick: bool = True) -> subprocess.CompletedProcess[str]:
+    env = dict(os.environ, MPLBACKEND="Agg", SWARM_IK_NO_WAIT="1")
+    env.pop("DISPLAY", None)
+    if quick:
+        env["SWARM_IK_QUICK"] = "1"
+    else:
+        env.pop("SWARM_IK_QUICK", None)
+    script = next(p for p in EXAMPLES if p.name.startswith(name))
+    return subprocess.run(
+        [sys.executable, str(script), *args],
+        cwd=cwd,
+        env=env,
+        stdin=subprocess.DEVNULL,
+        capture_output=True,
+        text=True,
+        timeout=TIMEOUT_S,
+    )
+
+
+def test_example_04_writes_its_plot_where_asked_and_nowhere_else(tmp_path: Path) -> None:
+    out = tmp_path / "plots" / "c.png"
+    out.parent.mkdir()
+    work = tmp_path / "work"
+    work.mkdir()
+    proc = _run("04", "--out", str(out), cwd=work)
+    assert proc.returncode == 0, proc.stderr
+    assert out.stat().st_size > 10_000
+    assert list(work.iterdir()) == []
+
+
+def test_example_05_shows_nearest_and_best_differ(tmp_path: Path) -> None:
+    proc = _run("05", cwd=tmp_path)
+    assert proc.returncode == 0, proc.stderr
+    steps: dict[str, list[float]] = {}
+    for line in proc.stdout.splitlines():
+        for label in ("nearest", "best, seeded", "best, no seed"):
+            if f" {label} " in line:
+                steps.setdefault(label, []).append(
+                    float(line.split("max joint step")[1].split()[0])
+                )
+    assert len(steps["nearest"]) == len(steps["best, no seed"]) == 2
+    # solved afresh, the arm jumps between its solutions; seeded with "nearest" it does not
+    assert all(b > 2 * n for n, b in zip(steps["nearest"], steps["best, no seed"], strict=True))

@@ -1,4 +1,4 @@
-"""The bundled robots (robots/*.urdf) and the DH/chain -> URDF generator (swarm_ik.dh).
+"""The bundled robots (robots/*.urdf) and their DH/chain -> URDF generator (robots/dh.py).
 
 Every kinematic check goes through Pinocchio's own URDF parser, independently of
 swarm_ik.robot, against the papers' equations written out literally in numpy here.
@@ -17,8 +17,8 @@ import pinocchio as pin
 import pytest
 from numpy.typing import NDArray
 from scipy.optimize import least_squares
+from swarm_ik.robots.dh import ChainStep, DHRow, chain_to_urdf, dh_fk, dh_to_urdf
 
-from swarm_ik.dh import ChainStep, DHRow, chain_to_urdf, dh_fk, dh_to_urdf
 from swarm_ik.errors import InvalidArgumentError
 
 ROBOTS = Path(__file__).resolve().parents[1] / "robots"
@@ -80,7 +80,8 @@ YUMI_LIMITS_DEG = [
     (-229.0, 229.0),
     (-168.5, 168.5),
 ]
-# Printed target of the Table 2 experiment (mm) and the least-squares q of SEEDS.md (deg).
+# Printed target of the Table 2 experiment (mm) and the q (deg) bounded least
+# squares finds against it (robots/README.md).
 YUMI_PRINTED_TARGET_MM = np.array(
     [
         [-0.53812, -0.17516, 0.82447, 21.84134],
@@ -140,7 +141,7 @@ def test_yumi_table_joints_and_limits_match_paper() -> None:
 
 
 def test_yumi_reproduces_paper_target_with_offset_inside_urdf() -> None:
-    """q (DH variable, offset excluded) of SEEDS.md lands on the paper's printed target."""
+    """The least-squares q (DH variable, offset excluded) lands on the paper's printed target."""
     model = _model(YUMI)
     q = np.radians(YUMI_LSQ_Q_DEG)
     assert np.all(q >= model.lowerPositionLimit) and np.all(q <= model.upperPositionLimit)

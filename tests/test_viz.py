@@ -4,6 +4,7 @@ export drawn by a real headless browser."""
 from __future__ import annotations
 
 import base64
+import collections
 import json
 import os
 import re
@@ -177,10 +178,26 @@ def test_trace_subsample_keeps_ends(yumi: swarm_ik.RobotModel) -> None:
         trace.subsample(1)
 
 
-def test_solve_traced_refuses_stop_on_success_false(yumi: swarm_ik.RobotModel) -> None:
+def test_solve_traced_full_budget_without_stop_on_success(yumi: swarm_ik.RobotModel) -> None:
+    """The recording does not rely on the success check: the whole budget is traced too."""
     problem = swarm_ik.IKProblem.from_q(yumi, Q_YUMI)
-    with pytest.raises(swarm_ik.InvalidArgumentError, match="stop_on_success"):
-        viz.solve_traced(problem, "pso", stop_on_success=False)
+    plain = swarm_ik.solve(problem, "pso", seed=1, max_evals=1200, stop_on_success=False)
+    res, trace = viz.solve_traced(problem, "pso", seed=1, max_evals=1200, stop_on_success=False)
+    assert res.n_evals == plain.n_evals == 1200
+    np.testing.assert_array_equal(res.q, plain.q)
+    np.testing.assert_array_equal(trace.fitness[: len(res.history)], res.history)
+    finite = np.isfinite(trace.fitness)
+    np.testing.assert_allclose(problem.fitness(trace.q)[finite], trace.fitness[finite], rtol=1e-7)
+
+
+def test_trace_recorder_keeps_only_improvements() -> None:
+    rec = viz.TraceRecorder()
+    for q, f in ((0.0, 3.0), (1.0, 4.0), (2.0, 2.0), (3.0, np.nan), (4.0, 2.0), (5.0, 1.0)):
+        rec([q], f)
+    assert rec.fitness == [3.0, 2.0, 1.0]
+    assert [float(q[0]) for q in rec.q] == [0.0, 2.0, 5.0]
+    rec.offer(np.array([[7.0], [8.0]]), np.array([0.5, 0.2]))
+    assert rec.fitness[-1] == 0.2 and float(rec.q[-1][0]) == 8.0
 
 
 # ------------------------------------------------------------------------------ scenes
@@ -237,6 +254,58 @@ def test_show_solutions_side_by_side_and_steps(yumi: swarm_ik.RobotModel) -> Non
         viz.show_solutions(problem, sols, layout="grid")
 
 
+def test_export_needs_no_server_and_replays_in_order(yumi: swarm_ik.RobotModel) -> None:
+    scene = viz.Scene()
+    scene.add_robot(yumi, Q_YUMI)
+    scene.add_triad("t", np.eye(4))
+    scene.add_triad("t", yumi.fk(Q_YUMI))  # replaces the first one
+    html = scene.to_html()
+    assert not scene.is_live  # writing the page started no meshcat server
+    cmds = html_commands(html)
+    tfs = [c for c in cmds if c["type"] == "set_transform" and c["path"] == "/meshcat/swarm_ik/t"]
+    assert len(tfs) == 1
+    np.testing.assert_allclose(np.array(tfs[0]["matrix"]).reshape(4, 4).T, yumi.fk(Q_YUMI))
+    scene.node("t").delete()
+    assert not any(c.get("path", "").startswith("/meshcat/swarm_ik/t") for c in scene.commands)
+    scene.close()
+
+
+def test_several_robots_share_their_meshes(panda: swarm_ik.RobotModel, tmp_path: Path) -> None:
+    """Three Pandas in one page cost little more than one: each mesh file is embedded once."""
+    q = np.array([0.3, -0.5, 0.2, -2.0, 0.1, 1.6, 0.7])
+    with viz.show_pose(panda, q) as one:
+        size_one = one.save_html(tmp_path / "one.html").stat().st_size
+    with viz.show_configurations(panda, [q, q + 0.2, q - 0.2]) as three:
+        path = three.save_html(tmp_path / "three.html")
+    size_three = path.stat().st_size
+    assert size_three < 1.2 * size_one, (size_one, size_three)
+    cmds = html_commands(path.read_text())
+    shared = [c for c in cmds if c["type"] == viz.export.SHARED_COMMAND]
+    assert len(shared) == 1
+    store = shared[0]["data"]
+    refs = [
+        c["object"]["object"]["data"]
+        for c in cmds
+        if c["type"] == "set_object"
+        and c["object"].get("object", {}).get("type", "") == "_meshfile_object"
+    ]
+    assert len(refs) >= 3 * 8  # every Panda draws its meshes ...
+    assert all(r.startswith(viz.export.SHARED_PREFIX) for r in refs)
+    counts = collections.Counter(refs)  # ... from one copy of each (the fingers share one)
+    assert all(c % 3 == 0 for c in counts.values()) and len(counts) <= len(refs) // 3
+    assert set(r[len(viz.export.SHARED_PREFIX) :] for r in refs) <= set(store)
+
+
+def test_save_html_refuses_bad_paths(yumi: swarm_ik.RobotModel, tmp_path: Path) -> None:
+    with viz.show_pose(yumi, Q_YUMI) as scene:
+        with pytest.raises(swarm_ik.InvalidArgumentError, match="does not exist"):
+            scene.save_html(tmp_path / "missing" / "a.html")
+        with pytest.raises(swarm_ik.InvalidArgumentError, match="is a folder"):
+            scene.save_html(tmp_path)
+        with pytest.raises(swarm_ik.InvalidArgumentError, match="valid: .html, .htm"):
+            scene.save_html(tmp_path / "a.png")
+
+
 # ---------------------------------------------------------------------------------- CLI
 def test_cli_solve_html_animate_compare(tmp_path: Path, capsys: Any) -> None:
     out = tmp_path / "scene.html"
@@ -266,6 +335,29 @@ def test_cli_solve_html_animate_compare(tmp_path: Path, capsys: Any) -> None:
     cmds = html_commands(out.read_text())
     assert any(c["type"] == "set_animation" for c in cmds)
     assert any(c.get("path", "").startswith("/meshcat/swarm_ik/ghost/") for c in cmds)
+
+
+def test_cli_animate_without_html_or_show_does_not_block(capsys: Any) -> None:
+    """No viewer is started (it would wait for Ctrl-C): a note on stderr, the solve's code."""
+    rc = cli.main(
+        ["solve", "--robot", "yumi_left", "--from-q", *map(str, Q_YUMI), "--animate"]
+        + ["--compare", "dls", "--json"]
+    )
+    cap = capsys.readouterr()
+    assert rc == 0
+    assert json.loads(cap.out)["success"] is True
+    assert "add --html FILE" in cap.err and "--show" in cap.err
+    assert "meshcat viewer" not in cap.err + cap.out
+
+
+def test_cli_html_path_checked_before_drawing(tmp_path: Path, capsys: Any) -> None:
+    bad = tmp_path / "missing" / "scene.html"
+    args = ["--robot", "yumi_left", "--from-q", *map(str, Q_YUMI), "--html", str(bad)]
+    assert cli.main(["solve", *args, "--animate"]) == 2
+    err = capsys.readouterr().err
+    assert err.count("\n") == 1 and "does not exist" in err
+    assert cli.main(["show", *args]) == 2
+    assert "does not exist" in capsys.readouterr().err
 
 
 def test_cli_show_prints_url_and_keeps_json_clean(capsys: Any) -> None:

@@ -1,0 +1,120 @@
+"""swarm_ik.reach: the grid size is checked before allocating, the HTML page is the viewer's
+scene (point cloud, robot, colour legend), and the command line refuses bad output paths and
+missing extras before computing."""
+
+from __future__ import annotations
+
+import argparse
+import base64
+import re
+import time
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+import pytest
+
+import swarm_ik
+from swarm_ik import reach
+from swarm_ik.errors import InvalidArgumentError
+
+
+@pytest.fixture(scope="module")
+def yumi() -> swarm_ik.RobotModel:
+    return swarm_ik.load_robot("yumi_left")
+
+
+def _parse(*argv: str) -> argparse.Namespace:
+    parser = argparse.ArgumentParser()
+    reach.add_arguments(parser)
+    return parser.parse_args(list(argv))
+
+
+@pytest.mark.parametrize("resolution", [0.002, 1e-4, 1e-300])
+def test_grid_too_fine_is_refused_before_allocating(
+    yumi: swarm_ik.RobotModel, resolution: float
+) -> None:
+    t0 = time.perf_counter()
+    with pytest.raises(InvalidArgumentError, match="coarser resolution") as info:
+        reach.reach_map(yumi, resolution=resolution)
+    assert time.perf_counter() - t0 < 5.0  # refused at once, nothing allocated
+    assert "\n" not in str(info.value) and "GB of targets" in str(info.value)
+
+
+def test_check_grid_size_counts_the_box() -> None:
+    assert reach.check_grid_size([0, 0, 0], [1, 1, 1], 0.25, 2, 1000) == 64
+    with pytest.raises(InvalidArgumentError, match="at least"):
+        reach.check_grid_size([0, 0, 0], [1, 1, 1], 0.25, 2, 100)
+
+
+def test_html_is_the_scene_with_robot_and_legend(yumi: swarm_ik.RobotModel, tmp_path: Path) -> None:
+    pytest.importorskip("meshcat")
+    import umsgpack
+
+    rmap = reach.reach_map(yumi, resolution=0.25, n_orientations=2, max_starts=4)
+    html = reach.export_html(rmap, tmp_path / "m.html").read_text()
+    page = html[html.index("new MeshCat.Viewer") :]
+    cmds = [
+        umsgpack.unpackb(base64.b64decode(b))
+        for b in re.findall(r'base64,([A-Za-z0-9+/=]+)"', page)
+    ]
+    objects = {c["path"]: c for c in cmds if c["type"] == "set_object"}
+    cloud = objects["/meshcat/swarm_ik/reachability/voxels"]["object"]["geometries"][0]
+    n_points = len(cloud["data"]["attributes"]["position"]["array"].data) // (4 * 3)
+    assert n_points == int((rmap.index > 0).sum())
+    assert any(p.startswith("/meshcat/swarm_ik/robot/visuals/") for p in objects)  # the robot
+    assert "/meshcat/swarm_ik/legend/shape" in objects  # the colour legend
+    with pytest.raises(InvalidArgumentError, match="does not exist"):
+        reach.export_html(rmap, tmp_path / "nowhere" / "m.html")
+
+
+def test_cli_defaults_to_no_scheduler() -> None:
+    assert _parse("--robot", "yumi_left").scheduler == "none"
+
+
+@pytest.mark.parametrize(
+    ("option", "bad", "message"),
+    [
+        ("--out", "missing/m.npz", "does not exist"),
+        ("--out", ".", "is a folder"),
+        ("--png", "missing/m.png", "does not exist"),
+        ("--html", "missing/m.html", "does not exist"),
+        ("--out", "m.txt", "valid: .npz"),
+    ],
+)
+def test_cli_checks_output_paths_before_computing(
+    tmp_path: Path, monkeypatch: pytest.MonkeyPatch, option: str, bad: str, message: str
+) -> None:
+    monkeypatch.chdir(tmp_path)
+    called: list[Any] = []
+    monkeypatch.setattr(reach, "reach_map", lambda *a, **k: called.append(1))
+    args = _parse("--robot", "yumi_left", option, bad)
+    with pytest.raises(InvalidArgumentError, match=message):
+        reach.run(args)
+    assert not called  # nothing was computed
+    assert list(tmp_path.iterdir()) == []
+
+
+def test_cli_missing_matplotlib_is_refused_first(
+    tmp_path: Path, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    monkeypatch.setattr(reach, "_has", lambda name: name != "matplotlib")
+    monkeypatch.setattr(reach, "reach_map", lambda *a, **k: pytest.fail("computed"))
+    with pytest.raises(InvalidArgumentError, match=r"swarm_ik\[plot\].*--no-png"):
+        reach.run(_parse("--robot", "yumi_left", "--out", str(tmp_path / "m.npz")))
+
+
+def test_cli_writes_map_picture_and_page(tmp_path: Path, capsys: Any) -> None:
+    out = tmp_path / "yumi.npz"
+    args = _parse(
+        "--robot", "yumi_left", "--resolution", "0.25", "--orientations", "2",
+        "--max-starts", "4", "--out", str(out), "--no-progress",
+    )  # fmt: skip
+    assert reach.run(args) == 0
+    assert "reachable voxels" in capsys.readouterr().out
+    rmap = reach.ReachMap.load(out)
+    assert rmap.n_orientations == 2
+    assert out.with_suffix(".png").stat().st_size > 10_000
+    if reach._has("meshcat"):
+        assert "MeshCat.Viewer" in out.with_suffix(".html").read_text()
+    np.testing.assert_array_equal(rmap.index, rmap.hits.mean(axis=-1))
