@@ -7,8 +7,8 @@
 True
 """
 
-from swarm_ik import solvers
-from swarm_ik.api import solve, verify
+from swarm_ik import goals, solvers
+from swarm_ik.api import IKSolver, solve, verify
 from swarm_ik.batch import solve_batch
 from swarm_ik.errors import (
     InvalidArgumentError,
@@ -29,6 +29,7 @@ __version__ = "0.1.0"
 
 __all__ = [
     "IKProblem",
+    "IKSolver",
     "InvalidArgumentError",
     "InvalidTargetError",
     "OptimizeResult",
@@ -46,6 +47,7 @@ __all__ = [
     "solve",
     "solve_batch",
     "solve_many",
+    "goals",
     "solvers",
     "verify",
 ]

@@ -83,6 +83,76 @@ def prepare_q0(problem: IKProblem, q0: Any) -> np.ndarray | None:
     return fixed
 
 
+def _fast_path(
+    problem: IKProblem,
+    solver: str,
+    kwargs: dict[str, Any],
+    q_start: np.ndarray | None,
+    tol_pos: float,
+    tol_rot: float,
+    max_evals: int | None,
+    time_limit: float | None,
+    stop_on_success: bool,
+    prefer: str,
+    seed: int | None,
+) -> Result | None:
+    """The ``swarm`` solver's first step without its Python loop: polish the seed once in
+    the compiled kernel; when it converges the answer is exactly the one the full run would
+    return (its first start is this seed polish), else ``None`` and the full run follows."""
+    if not (
+        solver == "swarm"
+        and stop_on_success
+        and prefer == "best"
+        and not problem.has_secondary
+        and problem.fitness_name == "se3"
+        and len(problem.goals) == 1
+        and type(problem).fitness is IKProblem.fitness
+    ):
+        return None
+    from swarm_ik.solvers.hybrid import CONVERGED, Polisher
+
+    t0 = time.perf_counter()
+    key = (float(tol_pos), float(tol_rot), tuple(sorted(kwargs.items())))
+    pol = problem._table_cache.get(key)  # type: ignore[call-overload]
+    if pol is None:
+        lm_keys = ("max_iters", "lam0", "max_step", "stall_rel", "stall_iters", "tol_margin")
+        pol = Polisher.from_problem(
+            problem, tol_pos=tol_pos, tol_rot=tol_rot, **{k: kwargs[k] for k in lm_keys}
+        )
+        problem._table_cache[key] = pol  # type: ignore[index]
+    seed_q = q_start if q_start is not None else 0.5 * (problem.lower + problem.upper)
+    cap = pol.cfg.max_iters if max_evals is None else min(pol.cfg.max_iters, int(max_evals))
+    if time_limit is not None and time_limit <= 0:
+        return None
+    out = pol.polish(seed_q[None], cap, True)
+    if out.status[0] != CONVERGED:
+        return None
+    q = out.q[0].copy()
+    fit = float(
+        out.position_error[0]
+        + (0.0 if problem.position_only else problem.w_rot) * out.rotation_error[0]
+    )
+    goal_errors = problem.verify(q, tol_pos, tol_rot)
+    dp = goal_errors[0].position_error
+    dr = goal_errors[0].rotation_error
+    success = problem.within_bounds(q) and goal_errors[0].met
+    return Result(
+        q=q,
+        fitness=fit,
+        position_error=float(dp),
+        rotation_error=0.0 if math.isnan(dr) else float(dr),
+        n_evals=out.used,
+        time_s=time.perf_counter() - t0,
+        success=bool(success),
+        within_limits=problem.within_bounds(q),
+        history=np.array([fit]),
+        solver=solver,
+        seed=seed,
+        goal_errors=goal_errors,
+        reason="converged" if success else "stopped",
+    )
+
+
 def solve(
     problem: IKProblem,
     solver: str = DEFAULT_SOLVER,
@@ -146,6 +216,14 @@ def solve(
             raise InvalidArgumentError(f"{label} must be a positive number, got {tol!r}")
     rng = make_rng(seed)
     q_start = prepare_q0(problem, q0)
+    problem.robot.warm_up()  # compiled kernels loaded before the clock starts
+    seed_val = None if isinstance(seed, np.random.Generator) else (0 if seed is None else int(seed))
+    fast = _fast_path(
+        problem, solver, kwargs, q_start, tol_pos, tol_rot, max_evals, time_limit,
+        stop_on_success, prefer, seed_val,
+    )  # fmt: skip
+    if fast is not None:
+        return fast
 
     def stop(q: np.ndarray) -> bool:
         return problem.is_success(q, tol_pos, tol_rot)
@@ -193,3 +271,89 @@ def solve(
         goal_errors=goal_errors,
         reason=end_reason(problem, bool(success), ev),
     )
+
+
+class IKSolver:
+    """A solver bound to one robot: validate once, solve many targets.
+
+    Like roboticstoolbox's ``IKSolver`` or TRAC-IK's solver object: the settings are checked
+    and the compiled kernels loaded when it is made, so each :meth:`solve` spends its time
+    in the search, not in set-up.  Its results are exactly those of :func:`solve` with the
+    same arguments.
+
+    Args:
+        robot: The robot (its first goal frame is the one a 4×4 target is for).
+        solver: Registry name (default ``"swarm"``).
+        tol_pos: Position tolerance [m].
+        tol_rot: Angular tolerance [rad].
+        time_limit: Most seconds per solve (None: the solver's own iteration count).
+        max_evals: Most evaluations per solve.
+        w_rot: Weight of the rotation error; 0 makes 4×4 targets position-only.
+        **params: The solver's parameters (unknown names refused with the valid list).
+
+    >>> import numpy as np, swarm_ik
+    >>> robot = swarm_ik.load_robot("panda")
+    >>> ik = swarm_ik.IKSolver(robot, time_limit=0.005)
+    >>> ik.solve(robot.fk(robot.random_q(np.random.default_rng(0)))).success
+    True
+    """
+
+    def __init__(
+        self,
+        robot: Any,
+        solver: str = DEFAULT_SOLVER,
+        *,
+        tol_pos: float = 1e-5,
+        tol_rot: float = 1e-5,
+        time_limit: float | None = None,
+        max_evals: int | None = None,
+        w_rot: float = 1.0,
+        **params: Any,
+    ) -> None:
+        from swarm_ik.robot import RobotModel
+
+        if not isinstance(robot, RobotModel):
+            raise InvalidArgumentError(
+                f"robot must be a RobotModel (see swarm_ik.load_robot), got {type(robot).__name__}"
+            )
+        self.robot = robot
+        self.solver = solver
+        self.spec = base.get(solver)
+        self.params = dict(params)
+        self.spec.resolve(self.params)  # refuse unknown / bad parameters now
+        check_budget(max_evals, time_limit)
+        for label, tol in (("tol_pos", tol_pos), ("tol_rot", tol_rot)):
+            if not (is_finite_nonneg(tol) and float(tol) > 0):
+                raise InvalidArgumentError(f"{label} must be a positive number, got {tol!r}")
+        self.tol_pos, self.tol_rot = float(tol_pos), float(tol_rot)
+        self.time_limit, self.max_evals = time_limit, max_evals
+        self._template = IKProblem(robot, robot.fk(robot.mid_q()), w_rot=w_rot)
+        robot.warm_up()
+        self.solve(self._template)  # the first solve's Python paths warmed too
+
+    def solve(
+        self, target: Any, q0: Any = None, seed: int | np.random.Generator | None = 0
+    ) -> Result:
+        """Solve one target.
+
+        Args:
+            target: A pose for the robot's first goal frame (4×4, ``(position, quaternion
+                xyzw)``, 7 numbers, SE3) or an :class:`~swarm_ik.problem.IKProblem`.
+            q0: Optional start ``(nq,)``.
+            seed: Seed or Generator.
+
+        Returns:
+            The :class:`~swarm_ik.result.Result`, checked with Pinocchio.
+        """
+        problem = target if isinstance(target, IKProblem) else self._template.with_target(target)
+        return solve(
+            problem, self.solver, seed=seed, max_evals=self.max_evals,
+            time_limit=self.time_limit, q0=q0, tol_pos=self.tol_pos, tol_rot=self.tol_rot,
+            **self.params,
+        )  # fmt: skip
+
+    def __repr__(self) -> str:
+        return (
+            f"IKSolver(robot={self.robot.name!r}, solver={self.solver!r}, "
+            f"tol_pos={self.tol_pos:g}, tol_rot={self.tol_rot:g}, time_limit={self.time_limit})"
+        )

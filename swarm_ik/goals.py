@@ -214,6 +214,16 @@ class Pose(Goal):
         object.__setattr__(self, "target", as_pose(self.target, orth_tol=self.orth_tol))
         object.__setattr__(self, "weight", _weight(self.weight))
 
+    @classmethod
+    def checked(cls, frame: str, target: FloatArray) -> Pose:
+        """A Pose of a target already validated by :func:`swarm_ik.pose.as_pose` (no second
+        check: the hot path of :class:`swarm_ik.IKSolver`)."""
+        goal = object.__new__(cls)
+        for name, v in (("frame", frame), ("target", target), ("weight", 1.0),
+                        ("primary", True), ("orth_tol", 1e-6)):  # fmt: skip
+            object.__setattr__(goal, name, v)
+        return goal
+
     def encode(self, robot: RobotModel, q0: FloatArray | None) -> GoalRow:
         par = np.zeros(N_PAR)
         par[:9] = self.target[:3, :3].ravel()

@@ -13,6 +13,7 @@ True
 
 from __future__ import annotations
 
+import copy
 import math
 from collections.abc import Sequence
 from dataclasses import dataclass
@@ -146,7 +147,7 @@ class IKProblem:
             if self.w_rot == 0.0:
                 terms.append(Position(robot.ee_frame, self.target[:3, 3]))
             else:
-                terms.append(Pose(robot.ee_frame, self.target, orth_tol=orth_tol))
+                terms.append(Pose.checked(robot.ee_frame, self.target))
         if goals is not None:
             if not isinstance(goals, Sequence):
                 raise InvalidArgumentError(
@@ -239,6 +240,20 @@ class IKProblem:
                 self._table_cache.clear()
             self._table_cache[key] = tab
         return tab
+
+    def with_target(self, target: Any) -> IKProblem:
+        """The same single-pose problem with another target (validated), sharing everything
+        else: the per-call path of :class:`swarm_ik.IKSolver`."""
+        if not self.single_pose or self.target is None:
+            raise InvalidArgumentError("with_target needs a single-pose problem")
+        new = copy.copy(self)
+        new.target = as_pose(target)
+        if isinstance(self.goals[0], Position):
+            new.goals = (Position(self.robot.ee_frame, new.target[:3, 3]),)
+        else:
+            new.goals = (Pose.checked(self.robot.ee_frame, new.target),)
+        new._table_cache = {}
+        return new
 
     @classmethod
     def from_q(cls, robot: RobotModel, q: Any, fitness: str = "se3", **kwargs: Any) -> IKProblem:

@@ -531,6 +531,15 @@ class RobotModel:
             ee_frame_reason=frame_reason,
         )
 
+    def warm_up(self) -> None:
+        """Compile or load the compiled kernels now (not inside a timed solve)."""
+        from swarm_ik.kernels import lm
+
+        lm.warm_up(
+            self.tree,
+            lm.Bounds(self.lower, self.upper, self.continuous_mask, self.prismatic_mask),
+        )
+
     # ------------------------------------------------------------- properties
     @property
     def nq(self) -> int:
@@ -792,4 +801,6 @@ def load_robot(
         frames, reason = default_frame, "the robot's usual tool frame"
     with warnings.catch_warnings():
         warnings.simplefilter("ignore")
-        return RobotModel.from_urdf(path, frames, frame_reason=reason)
+        robot = RobotModel.from_urdf(path, frames, frame_reason=reason)
+    robot.warm_up()
+    return robot

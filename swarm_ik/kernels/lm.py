@@ -889,3 +889,30 @@ def residuals_batch(
     for k in range(q.shape[0]):
         fk_one(q[k], t, w.fk, True)
         goal_rows(q[k], w.fk, g, b, primary, True, out_res[k], out_jac[k], out_err[k], w.m3, w.v3)
+
+
+_WARM: set[tuple[int, int]] = set()
+
+
+def warm_up(t: TreeArrays, b: Bounds) -> None:
+    """Compile (or load from numba's cache) every LM kernel for this tree's types, outside any
+    timed solve: called when a robot is loaded and when an :class:`swarm_ik.IKSolver` is made.
+    Idempotent per process (the kernels' types do not depend on the robot)."""
+    key = (t.nq > 0, t.nf)
+    if key in _WARM:
+        return
+    nq = t.nq
+    rows = [np.zeros(N_PAR), np.zeros(N_PAR)]
+    rows[0][[0, 4, 8]] = 1.0
+    g = goal_table([POSE, JOINT], [0, -1], [1.0, 1.0], [True, False], rows,
+                   [np.zeros(nq), np.zeros(nq)], [np.zeros(nq), np.ones(nq)], nq)  # fmt: skip
+    q = np.ascontiguousarray(0.5 * (b.lower + b.upper))[None]
+    out_q = np.empty((1, nq))
+    f1, f2 = np.empty(1), np.empty(1)
+    st, ev = np.empty(1, dtype=np.int64), np.empty(1, dtype=np.int64)
+    lm_polish(q, t, g, b, DEFAULT_LM, 1e-5, 1e-5, 3, True, out_q, f1, f2, st, ev)
+    secondary_descent(q[0], t, g, b, 1.0, 1.0, 2, np.empty(nq))
+    err = np.empty((1, 2, 2))
+    errors_batch(q, t, g, b, err, f1)
+    residuals_batch(q, t, g, b, True, np.empty((1, 6)), np.empty((1, 6, nq)), err)
+    _WARM.add(key)
