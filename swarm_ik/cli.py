@@ -22,6 +22,8 @@ BENCHMARKS = {
     "paper": "swarm_ik.bench.paper",
     "ik": "swarm_ik.bench.ik",
     "throughput": "swarm_ik.bench.throughput",
+    "goals": "swarm_ik.bench.goals",
+    "many": "swarm_ik.bench.many",
 }
 COMMAND_MODULES = ("swarm_ik.viz_cli", "swarm_ik.batch_cli")
 """Modules adding sub-commands: each has ``add_commands(subparsers) -> {name: handler}``, a

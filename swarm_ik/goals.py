@@ -13,7 +13,8 @@ accuracy.
 Each goal class gives
 
 * ``encode(robot, q0)``: its row of the compiled goal table
-  (:class:`swarm_ik.kernels.lm.GoalTable`): a residual code of :mod:`swarm_ik.kernels.lm`, the goal frame's index and 12 parameters,
+  (:class:`swarm_ik.kernels.lm.GoalTable`): a residual code of :mod:`swarm_ik.kernels.lm`,
+  the goal frame's index and 12 parameters,
   plus a joint reference and per-joint weights for joint-space goals;
 * ``residual(pose, jac, q)``: the numpy twin of the compiled residual ``r`` and its step
   Jacobian ``J`` (``r(q + δ) ≈ r(q) − J δ``), used by the tests;

@@ -203,8 +203,14 @@ def support(problem: IKProblem) -> str:
         return "the problem has no single end-effector pose target"
     if problem.position_only:
         return "the problem is position-only; the analytic path solves full poses"
-    extra = getattr(problem, "goals", None)
-    if extra:  # goal terms beyond the pose (the goals API of the core rewrite)
+    from swarm_ik.goals import Pose
+
+    goals = problem.goals
+    if (
+        len(goals) != 1
+        or not isinstance(goals[0], Pose)
+        or goals[0].frame != problem.robot.ee_frame
+    ):
         return "the problem has goal terms beyond one end-effector pose"
     return ""
 
