@@ -107,7 +107,8 @@ def _fast_path(
         and problem.fitness_name == "se3"
         and len(problem.goals) == 1
         and type(problem).fitness is IKProblem.fitness
-    ):
+        and not ({"fitness", "is_success", "residual_jacobian"} & set(vars(problem)))
+    ):  # (a problem whose methods are wrapped, e.g. to record a trace, takes the full run)
         return None
     from swarm_ik.solvers.hybrid import CONVERGED, Polisher
 

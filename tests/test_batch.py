@@ -2,8 +2,6 @@
 
 from __future__ import annotations
 
-import base64
-import re
 import warnings
 
 import numpy as np
@@ -25,7 +23,6 @@ from swarm_ik.errors import InvalidArgumentError, InvalidTargetError
 from swarm_ik.reach import (
     ReachMap,
     chain_reach_bound,
-    export_html,
     grid_axes,
     random_rotations,
     reach_map,
@@ -284,83 +281,6 @@ def test_reach_map(get_robot, tmp_path):
         reach_map(robot, bounds=[0, 0, 0, 1, -1, 1])
 
 
-def test_reach_html_holds_the_point_cloud(get_robot, tmp_path):
-    pytest.importorskip("meshcat")
-    import umsgpack
-
-    robot = get_robot("yumi_left")
-    rmap = reach_map(robot, resolution=0.25, n_orientations=2, max_starts=4)
-    html = export_html(rmap, tmp_path / "m.html").read_text()
-    assert "MeshCat.Viewer" in html
-    scene = html[html.index("new MeshCat.Viewer") :]  # the commands, after the viewer's code
-    blobs = re.findall(r"base64,([A-Za-z0-9+/=]+)", scene)
-    assert len(blobs) == 3  # point cloud, triad, its placement
-    cmd = umsgpack.unpackb(base64.b64decode(blobs[0]))
-    assert cmd["type"] == "set_object" and cmd["path"] == "/meshcat/reachability/voxels"
-    geometry = cmd["object"]["geometries"][0]
-    n_points = len(geometry["data"]["attributes"]["position"]["array"].data) // (4 * 3)
-    assert n_points == int((rmap.index > 0).sum())
-
-
-# ---------------------------------------------------------------------------- CLI
-def test_cli_batch(tmp_path, capsys):
-    out = tmp_path / "r.csv"
-    code = main(
-        [
-            "batch",
-            "--robot",
-            "yumi_left",
-            "--random",
-            "50",
-            "--out",
-            str(out),
-            "--scheduler",
-            "none",
-            "--seed",
-            "3",
-        ]
-    )
-    text = capsys.readouterr().out
-    assert code == 0 and "solved 50/50" in text
-    table = np.genfromtxt(out, delimiter=",", names=True)
-    assert table.shape == (50,) and table["success"].all()
-    # a targets file in, an npz out; one unreachable target -> exit code 1
-    robot = swarm_ik.load_robot("yumi_left")
-    targets = robot.fk(robot.random_q(np.random.default_rng(0), 5))
-    targets[0, :3, 3] = [3.0, 0.0, 0.0]
-    write_targets(tmp_path / "t.csv", targets)
-    code = main(
-        [
-            "batch",
-            "--robot",
-            "yumi_left",
-            "--targets",
-            str(tmp_path / "t.csv"),
-            "--out",
-            str(tmp_path / "r.npz"),
-            "--scheduler",
-            "none",
-            "--max-starts",
-            "40",
-        ]
-    )
-    assert code == 1 and "solved 4/5" in capsys.readouterr().out
-    assert np.load(tmp_path / "r.npz")["success"].tolist() == [False, True, True, True, True]
-    code = main(
-        [
-            "batch",
-            "--robot",
-            "yumi_left",
-            "--random",
-            "5",
-            "--out",
-            str(tmp_path / "x.json"),
-            "--scheduler",
-            "none",
-        ]
-    )
-    assert code == 2 and "valid: .csv, .npz" in capsys.readouterr().err
-
 
 def test_cli_reach(tmp_path, capsys):
     out = tmp_path / "yumi.npz"
@@ -394,35 +314,3 @@ def test_cli_reach(tmp_path, capsys):
         return
     assert out.with_suffix(".html").is_file()
 
-
-def test_throughput_benchmark_smoke(tmp_path):
-    import argparse
-
-    from swarm_ik.bench import throughput
-
-    parser = argparse.ArgumentParser()
-    throughput.add_arguments(parser)
-    args = parser.parse_args(
-        [
-            "--robots",
-            "yumi_left",
-            "--sizes",
-            "20",
-            "40",
-            "--loop-max",
-            "20",
-            "--scheduler",
-            "none",
-            "--out",
-            str(tmp_path),
-        ]
-    )
-    assert throughput.run(args) == 0
-    rows = throughput._read(tmp_path / "throughput.csv")
-    methods = {(r["method"], int(r["n"])) for r in rows}
-    assert {("batch-1proc", 20), ("batch-1proc", 40), ("loop-solve", 20)} <= methods
-    assert ("loop-solve", 40) not in methods  # above --loop-max
-    assert all(float(r["success_rate"]) > 0.8 for r in rows)
-    md = (tmp_path / "throughput.md").read_text()
-    assert "| yumi_left | solve_batch, 1 process | 40 |" in md and "Where the time goes" in md
-    assert (tmp_path / "throughput.png").stat().st_size > 10_000

@@ -21,7 +21,7 @@ import pytest
 
 import swarm_ik
 
-SOLVERS = swarm_ik.solvers.names()
+SOLVERS = swarm_ik.solvers.search_names()
 BUDGET = 400
 Q_REACH = [0.3, -0.8, 0.5, 0.4, -0.6, 0.9, -0.2]
 

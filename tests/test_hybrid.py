@@ -3,8 +3,6 @@ and the benchmark code path."""
 
 from __future__ import annotations
 
-import argparse
-import csv
 import importlib.util
 from pathlib import Path
 
@@ -174,7 +172,7 @@ def test_evaluator_add_evals_counts_and_refuses_overdraft() -> None:
 
 # --------------------------------------------------------------------------- many solutions
 @pytest.mark.parametrize("name", ["yumi_left", "kinova"])
-def test_solve_many_returns_distinct_verified_sorted_solutions(name: str) -> None:
+def test_solve_many_returns_distinct_verified_solutions(name: str) -> None:
     r = robot(name)
     prob = swarm_ik.IKProblem.from_q(r, r.random_q(np.random.default_rng(21)))
     sols = swarm_ik.solve_many(prob, n=8, min_distance=0.2, seed=0, time_limit=0.5)
@@ -187,8 +185,6 @@ def test_solve_many_returns_distinct_verified_sorted_solutions(name: str) -> Non
         dp, dr = swarm_ik.verify(prob, s.q)
         assert s.success and dp <= 1e-5 and dr <= 1e-5 and r.within_limits(s.q, tol=0.0)
         assert (dp, dr) == (s.position_error, s.rotation_error)
-    fits = [s.fitness for s in sols]
-    assert fits == sorted(fits)
 
 
 def test_wrapped_distance_treats_continuous_joints_as_circles() -> None:
@@ -279,52 +275,6 @@ def test_prefer_arguments_are_checked() -> None:
 
 
 # --------------------------------------------------------------------------- benchmark, example
-def test_benchmark_code_path_on_a_small_n(tmp_path: Path) -> None:
-    from swarm_ik.bench import ik
-
-    parser = argparse.ArgumentParser()
-    ik.add_arguments(parser)
-    args = parser.parse_args(
-        [
-            "--quick",
-            "--robots",
-            "ur5",
-            "--n",
-            "4",
-            "--n-other",
-            "2",
-            "--budgets-ms",
-            "5",
-            "--solvers",
-            "swarm",
-            "dls",
-            "gwo",
-            "--n-precise",
-            "3",
-            "--many-robots",
-            "yumi_left",
-            "--n-many",
-            "1",
-            "--out",
-            str(tmp_path),
-        ]
-    )
-    assert ik.run(args) == 0
-    with open(tmp_path / "runs.csv", newline="") as fh:
-        rows = list(csv.DictReader(fh))
-    assert set(rows[0]) == set(ik.RUN_FIELDS)
-    swarm_rows = [r for r in rows if r["solver"] == "swarm" and r["tol"] == "1e-05"]
-    assert len(swarm_rows) == 4 and {r["solver"] for r in rows} == {"swarm", "dls", "gwo"}
-    assert len([r for r in rows if r["solver"] == "gwo"]) == 2
-    assert len([r for r in rows if r["tol"] == "1e-10" and r["solver"] == "swarm"]) == 3
-    for r in swarm_rows:  # the benchmark's verdict agrees with its recorded errors
-        ok = float(r["position_error"]) <= 1e-5 and float(r["rotation_error"]) <= 1e-5
-        assert (r["success"] == "1") == (ok and r["within_limits"] == "1")
-    summary = (tmp_path / "summary.md").read_text()
-    assert "| ur5 | swarm | 4 |" in summary and "Targets of the issue" in summary
-    assert (tmp_path / "many.csv").exists()
-
-
 def test_cartesian_path_example_runs(capsys: pytest.CaptureFixture[str]) -> None:
     path = ROOT / "examples" / "05_cartesian_path.py"
     spec = importlib.util.spec_from_file_location("ex05", path)
@@ -333,4 +283,4 @@ def test_cartesian_path_example_runs(capsys: pytest.CaptureFixture[str]) -> None
     spec.loader.exec_module(mod)
     mod.main()
     out = capsys.readouterr().out
-    assert out.count("solved 25/25") == 4
+    assert out.count("solved 25/25") == 6  # line and circle, three ways each

@@ -242,7 +242,7 @@ def test_every_solver_result_lies_within_limits(
     else:  # any pose, usually out of reach
         target = swarm_ik.make_pose(rng.uniform(-2, 2, 3), rng.normal(size=4))
     problem = swarm_ik.IKProblem(robot, target, fitness)
-    for name in swarm_ik.solvers.names():
+    for name in swarm_ik.solvers.search_names():
         with warnings.catch_warnings():
             warnings.simplefilter("error")
             res = swarm_ik.solve(problem, name, seed=seed, max_evals=300)
@@ -252,7 +252,7 @@ def test_every_solver_result_lies_within_limits(
         assert 0 < res.n_evals <= 300, (name, res)
 
 
-@pytest.mark.parametrize("name", swarm_ik.solvers.names())
+@pytest.mark.parametrize("name", swarm_ik.solvers.search_names())
 def test_every_solver_on_one_joint(name: str) -> None:
     # found by the property test above: eigenpy returns a (6, 1) Jacobian as a (6,) vector,
     # which crashed dls on one-joint chains

@@ -27,7 +27,7 @@ from swarm_ik.cli import main
 from swarm_ik.fitness import FITNESS
 from swarm_ik.solvers import base
 
-SOLVERS = swarm_ik.solvers.names()
+SOLVERS = swarm_ik.solvers.search_names()
 POP_SOLVERS = [n for n in SOLVERS if "pop_size" in base.get(n).params]
 ITER_SOLVERS = [n for n in SOLVERS if "iterations" in base.get(n).params]
 

@@ -8,7 +8,7 @@ import pytest
 import swarm_ik
 from swarm_ik import solvers
 
-NAMES = solvers.names()
+NAMES = solvers.search_names()
 Q_STAR = np.array([0.7, 1.1])  # positive angles: even basic FOA (S > 0) can reach them
 
 

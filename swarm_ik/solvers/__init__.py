@@ -5,7 +5,7 @@
 True
 """
 
-from swarm_ik.solvers.base import Evaluator, SolverSpec, get, names, register
+from swarm_ik.solvers.base import Evaluator, SolverSpec, get, names, register, search_names
 
 # Importing a module registers its solvers; one line per module.
 from swarm_ik.solvers import analytic  # noqa: E402,F401  isort: skip
@@ -18,4 +18,4 @@ from swarm_ik.solvers import hybrid  # noqa: E402,F401  isort: skip
 from swarm_ik.solvers import mgwo  # noqa: E402,F401  isort: skip
 from swarm_ik.solvers import pso  # noqa: E402,F401  isort: skip
 
-__all__ = ["Evaluator", "SolverSpec", "get", "names", "register"]
+__all__ = ["Evaluator", "SolverSpec", "get", "names", "register", "search_names"]

@@ -334,4 +334,5 @@ register(
     run,
     description="closed-form IK of decomposable 6R arms with eaik (extra 'analytic')",
     needs_jacobian=True,
+    closed_form=True,
 )

@@ -291,6 +291,9 @@ class SolverSpec:
         params: Default value of every parameter, registration overrides applied.
         description: One line for listings.
         needs_jacobian: True when the solver needs an IK problem (not a plain objective).
+        closed_form: True for a closed-form solver of particular chains (``analytic``): not
+            a search over any objective, so the contract of :func:`search_names` does not
+            apply to it.
     """
 
     name: str
@@ -298,6 +301,7 @@ class SolverSpec:
     params: Mapping[str, Any] = field(default_factory=dict)
     description: str = ""
     needs_jacobian: bool = False
+    closed_form: bool = False
 
     def resolve(self, overrides: Mapping[str, Any]) -> dict[str, Any]:
         """Defaults updated with ``overrides``; unknown names are refused, listing valid ones.
@@ -338,6 +342,7 @@ def register(
     *,
     description: str = "",
     needs_jacobian: bool = False,
+    closed_form: bool = False,
     **overrides: Any,
 ) -> SolverSpec:
     """Register ``run`` under ``name``; keyword ``overrides`` change its parameter defaults.
@@ -356,8 +361,10 @@ def register(
         for p in sig.parameters.values()
         if p.kind is inspect.Parameter.KEYWORD_ONLY
     }
-    spec = SolverSpec(name, run, defaults, description, needs_jacobian)
-    spec = SolverSpec(name, run, spec.resolve(overrides), description, needs_jacobian)
+    spec = SolverSpec(name, run, defaults, description, needs_jacobian, closed_form)
+    spec = SolverSpec(
+        name, run, spec.resolve(overrides), description, needs_jacobian, closed_form
+    )
     _REGISTRY[name] = spec
     return spec
 
@@ -365,6 +372,12 @@ def register(
 def names() -> list[str]:
     """Names of all registered solvers, sorted."""
     return sorted(_REGISTRY)
+
+
+def search_names() -> list[str]:
+    """Names of the registered search solvers (every solver but the closed-form ones),
+    sorted: those that minimise any problem's cost within a budget."""
+    return sorted(n for n, s in _REGISTRY.items() if not s.closed_form)
 
 
 def get(name: str) -> SolverSpec:
