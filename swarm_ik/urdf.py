@@ -493,15 +493,17 @@ FINGER_NAMES = ("hand", "index", "middle", "ring", "little", "pinky", "mrl", "pa
 """Whole words that mark a movable joint's *name* as a hand joint (``hand_index_flex_1``)."""
 
 FRAME_NAME_SCORES = (
+    (("camera", "range", "imu", "sensor", "laser", "accelerometer", "ft", "finger"), -1),
     (("tcp",), 6),
     (("tool",), 5),
     (("ee", "eef", "endeffector", "end_effector", "effector"), 4),
     (("flange",), 3),
     (("hand", "gripper", "wrist"), 2),
-    (("camera", "range", "imu", "sensor", "laser", "accelerometer", "ft", "finger"), -1),
 )
 """Frame-name preference of :func:`default_ee_frame`: the score of the first group one of
-whose words is a word of the name (digits stripped: ``tool0`` → ``tool``)."""
+whose words is a word of the name (digits stripped: ``tool0`` → ``tool``; words of five
+letters or more also match inside a word: ``fingertip``, ``endeffector``); sensor and finger
+frames first, so ``left_hand_camera`` scores -1."""
 
 
 def name_words(name: str) -> list[str]:
@@ -518,8 +520,11 @@ def frame_name_score(name: str) -> int:
     words = name_words(name)
     joined = "_".join(words)
     for group, score in FRAME_NAME_SCORES:
-        if any(w in words for w in group) or any("_" in w and w in joined for w in group):
-            return score
+        for g in group:
+            if "_" in g and g in joined:
+                return score
+            if any(w == g or (len(g) >= 5 and g in w) for w in words):
+                return score
     return 0
 
 
@@ -540,7 +545,7 @@ def default_ee_frame(model: Any, info: UrdfInfo | None = None) -> tuple[str, str
     one-DoF joints and no gripper joint (a mimic joint, the driver of a mimic joint, or a
     joint named like a finger: :func:`is_gripper_joint`); pick the one with the most movable
     joints on its chain; among those, the best name (:func:`frame_name_score`: tcp > tool >
-    ee/eef/end_effector > flange > hand/gripper/wrist > others > camera/sensor/finger), then
+    ee/eef/end_effector > flange > hand/gripper/wrist > others > camera/sensor/ft/finger), then
     the one furthest along fixed joints from the last movable joint (the tip), then the first
     in the file.  When no link qualifies (a hand alone, a free-floating body), the rule falls
     back to the link on the deepest joint.
