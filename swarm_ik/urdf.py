@@ -110,10 +110,13 @@ def decode_xml_bytes(raw: bytes, where: str = "file") -> str:
     try:
         text = raw.decode(encoding)
     except LookupError:
-        raise RobotModelError(f"{where}: unknown encoding {encoding!r} in the XML declaration")
+        raise RobotModelError(
+            f"{where}: unknown encoding {encoding!r} in the XML declaration"
+        ) from None
     except UnicodeDecodeError as exc:
-        raise RobotModelError(f"{where}: not valid {encoding} text ({exc.reason} at byte "
-                              f"{exc.start})") from None
+        raise RobotModelError(
+            f"{where}: not valid {encoding} text ({exc.reason} at byte {exc.start})"
+        ) from None
     text = text.lstrip("\ufeff \t\r\n")
     return _DECL.sub("", text, count=1).lstrip()
 
@@ -285,9 +288,7 @@ def check_urdf_xml(root: ET.Element, where: str = "URDF") -> dict[str, MimicJoin
                     f"[{limit.get('lower')!r}, {limit.get('upper')!r}]"
                 ) from None
             if not (np.isfinite(lo) and np.isfinite(hi)):
-                raise RobotModelError(
-                    f"{where}: joint {name!r} has non-finite limits [{lo}, {hi}]"
-                )
+                raise RobotModelError(f"{where}: joint {name!r} has non-finite limits [{lo}, {hi}]")
             if lo > hi:
                 raise RobotModelError(
                     f"{where}: joint {name!r} has lower limit {lo} > upper limit {hi}"

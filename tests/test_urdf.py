@@ -58,9 +58,7 @@ def _write(tmp_path: Path, data: str | bytes, name: str = "r.urdf") -> Path:
     [
         pytest.param(lambda t: ("\n   \t" + t).encode(), id="whitespace before <?xml"),
         pytest.param(lambda t: b"\xef\xbb\xbf" + t.encode(), id="utf-8 BOM"),
-        pytest.param(
-            lambda t: t.replace("UTF-8", "UTF-16").encode("utf-16"), id="utf-16 with BOM"
-        ),
+        pytest.param(lambda t: t.replace("UTF-8", "UTF-16").encode("utf-16"), id="utf-16 with BOM"),
         pytest.param(
             lambda t: t.replace("UTF-8", "UTF-16").encode("utf-16-le"), id="utf-16-le no BOM"
         ),
@@ -87,7 +85,9 @@ def test_decode_refuses_bytes_that_are_not_their_declared_encoding() -> None:
 
 # ------------------------------------------------------------------- item 2: empty <robot>
 def test_empty_robot_is_called_empty(tmp_path: Path) -> None:
-    path = _write(tmp_path, '<?xml version="1.0"?>\n<!-- generated -->\n<robot name="ur3">\n</robot>')
+    path = _write(
+        tmp_path, '<?xml version="1.0"?>\n<!-- generated -->\n<robot name="ur3">\n</robot>'
+    )
     with pytest.raises(RobotModelError, match=r"the URDF is empty: <robot name='ur3'> defines no"):
         swarm_ik.load_robot(path)
 
@@ -186,8 +186,9 @@ def test_mimic_joints_are_parsed_with_driver_multiplier_offset(tmp_path: Path) -
 
 
 def test_mimic_with_a_non_numeric_multiplier_is_refused(tmp_path: Path) -> None:
-    text = _arm().replace(f"{LIMIT}</joint></robot>", f'{LIMIT}<mimic joint="j1" multiplier="x"/>'
-                          "</joint></robot>")
+    text = _arm().replace(
+        f"{LIMIT}</joint></robot>", f'{LIMIT}<mimic joint="j1" multiplier="x"/></joint></robot>'
+    )
     with pytest.raises(RobotModelError, match=r"joint 'j2': <mimic multiplier='x'> must be a"):
         swarm_ik.load_robot(_write(tmp_path, text))
 
@@ -236,7 +237,9 @@ def test_real_robot_by_path_loads_with_a_sensible_frame_and_solves(
     with caplog.at_level(logging.INFO, logger="swarm_ik"):
         robot = swarm_ik.load_robot(path)
     # the choice is said, with its reason
-    said = [r.getMessage() for r in caplog.records if "default end-effector frame" in r.getMessage()]
+    said = [
+        r.getMessage() for r in caplog.records if "default end-effector frame" in r.getMessage()
+    ]
     assert said and repr(robot.ee_frame) in said[0] and "longest movable chain" in said[0]
     if frames is not None:
         assert robot.ee_frame in frames
