@@ -1,7 +1,12 @@
 """Command line: ``swarm-ik robots | solve | bench …``.
 
 Exit codes: 0 success, 1 target not reached (the best found is still printed), 2 bad input
-(one line on stderr, no traceback).
+(one line on stderr, no traceback; with ``--json`` one JSON object ``{"error": …,
+"exit_code": 2, …}`` on stdout instead), 3 an unexpected error inside swarm_ik (one line; set
+``SWARM_IK_DEBUG=1`` to see the traceback), 130 interrupted (Ctrl-C).
+
+Numbers may be negative in any notation (``--from-q -1e-3 0.5 -2``): the parser does not take
+``-1e-3`` for an option.  Usage errors are one line too, naming the sub-command's ``--help``.
 """
 
 from __future__ import annotations
@@ -9,14 +14,45 @@ from __future__ import annotations
 import argparse
 import importlib
 import json
+import os
+import re
 import sys
 import warnings
 from collections.abc import Sequence
-from typing import Any
+from typing import Any, NoReturn
 
 import numpy as np
 
 from swarm_ik.errors import SwarmIKError
+
+EXIT_NOT_REACHED = 1
+EXIT_BAD_INPUT = 2
+EXIT_INTERNAL = 3
+EXIT_INTERRUPTED = 130
+
+_NEGATIVE_NUMBER = re.compile(
+    r"^-(?:\d+\.?\d*|\.\d+)(?:[eE][-+]?\d+)?$|^-(?:inf|infinity|nan)$", re.IGNORECASE
+)
+"""What the parser reads as a negative number rather than an option: ``-1``, ``-.5``,
+``-1e-3``, ``-2.5E+4``, ``-inf``."""
+
+
+class UsageError(Exception):
+    """A command-line usage error (bad option, missing argument); exit code 2."""
+
+
+class Parser(argparse.ArgumentParser):
+    """``argparse.ArgumentParser`` that takes ``-1e-3`` for a number and reports usage errors
+    as :class:`UsageError` (printed as one line by :func:`main`) instead of eight lines of
+    usage.  Sub-parsers inherit the class."""
+
+    def __init__(self, *args: Any, **kwargs: Any) -> None:
+        super().__init__(*args, **kwargs)
+        self._negative_number_matcher = _NEGATIVE_NUMBER
+
+    def error(self, message: str) -> NoReturn:
+        raise UsageError(f"{self.prog}: error: {message} (see `{self.prog} --help`)")
+
 
 BENCHMARKS = {
     "paper": "swarm_ik.bench.paper",
@@ -49,7 +85,7 @@ def _build_parser() -> argparse.ArgumentParser:
     from swarm_ik import solvers
     from swarm_ik.api import DEFAULT_SOLVER
 
-    parser = argparse.ArgumentParser(
+    parser = Parser(
         prog="swarm-ik",
         description="Inverse kinematics for URDF robots with swarm optimisers and Pinocchio.",
     )
@@ -156,7 +192,10 @@ def _cmd_robots() -> int:
 
 def _cmd_solve(args: argparse.Namespace) -> int:
     import swarm_ik
+    from swarm_ik._validate import check_output_path
 
+    if args.html is not None:  # refuse an unwritable page before solving
+        check_output_path(args.html, "--html")
     robot = swarm_ik.load_robot(args.robot, ee_frame=args.frame)
     if args.from_q is not None:
         target = robot.fk(robot.check_q(args.from_q, "--from-q"))
@@ -203,34 +242,65 @@ def _cmd_solve(args: argparse.Namespace) -> int:
     return 0 if res.success else 1
 
 
+def _fail(message: str, code: int, as_json: bool, kind: str) -> int:
+    """Report an error as one line on stderr (or one JSON object on stdout); returns ``code``."""
+    message = " ".join(str(message).split())
+    if as_json:
+        print(json.dumps({"error": message, "kind": kind, "exit_code": code}))
+    else:
+        prefix = "" if message.startswith("swarm-ik") else "swarm-ik: error: "
+        print(prefix + message, file=sys.stderr)
+    return code
+
+
+def _dispatch(parser: argparse.ArgumentParser, args: argparse.Namespace) -> int:
+    if args.command == "robots":
+        return _cmd_robots()
+    if args.command == "solve":
+        return _cmd_solve(args)
+    if args.command == "bench":
+        missing = getattr(args, "_missing", None)
+        if missing:
+            raise UsageError(f"swarm-ik: error: benchmark module {missing} is not available")
+        return int(importlib.import_module(BENCHMARKS[args.bench]).run(args))
+    extra = _HANDLERS.get(args.command)
+    if extra is not None:
+        return int(extra(args))
+    parser.error(f"unknown command {args.command!r}")
+
+
 def main(argv: Sequence[str] | None = None) -> int:
-    """Entry point of the ``swarm-ik`` console script; returns the exit code."""
-    parser = _build_parser()
-    args = parser.parse_args(argv)
+    """Entry point of the ``swarm-ik`` console script; returns the exit code.
+
+    Never raises (except ``SystemExit`` from ``--help``): bad input gives 2 and one line,
+    anything unexpected 3 and one line (``SWARM_IK_DEBUG=1`` re-raises it), Ctrl-C 130.
+    """
+    argv = list(sys.argv[1:] if argv is None else argv)
+    as_json = "--json" in argv
     try:
+        parser = _build_parser()
+        args = parser.parse_args(argv)
+        as_json = bool(getattr(args, "json", False))
         with warnings.catch_warnings():
             warnings.simplefilter("default")
-            if args.command == "robots":
-                return _cmd_robots()
-            if args.command == "solve":
-                return _cmd_solve(args)
-            if args.command == "bench":
-                missing = getattr(args, "_missing", None)
-                if missing:
-                    print(
-                        f"swarm-ik: error: benchmark module {missing} is not available",
-                        file=sys.stderr,
-                    )
-                    return 2
-                return int(importlib.import_module(BENCHMARKS[args.bench]).run(args))
-            extra = _HANDLERS.get(args.command)
-            if extra is not None:
-                return int(extra(args))
+            return _dispatch(parser, args)
+    except UsageError as exc:
+        return _fail(str(exc), EXIT_BAD_INPUT, as_json, "UsageError")
     except SwarmIKError as exc:
-        print(f"swarm-ik: error: {exc}", file=sys.stderr)
-        return 2
-    parser.error(f"unknown command {args.command!r}")
-    return 2
+        return _fail(str(exc), EXIT_BAD_INPUT, as_json, type(exc).__name__)
+    except KeyboardInterrupt:
+        return _fail("swarm-ik: interrupted", EXIT_INTERRUPTED, as_json, "KeyboardInterrupt")
+    except Exception as exc:
+        if os.environ.get("SWARM_IK_DEBUG"):
+            raise
+        what = "out of memory" if isinstance(exc, MemoryError) else f"{type(exc).__name__}: {exc}"
+        return _fail(
+            f"swarm-ik: internal error ({what}); please report it, with the command line "
+            "(set SWARM_IK_DEBUG=1 for the traceback)",
+            EXIT_INTERNAL,
+            as_json,
+            type(exc).__name__,
+        )
 
 
 if __name__ == "__main__":

@@ -40,7 +40,9 @@ def quat_to_matrix(quat_xyzw: Any) -> FloatArray:
     """Rotation matrix of a quaternion.
 
     Args:
-        quat_xyzw: Quaternion ``(x, y, z, w)``, any non-zero norm (it is normalised).
+        quat_xyzw: Quaternion ``(x, y, z, w)``, any finite norm of at least 1e-9 (it is
+            normalised: divided by its largest absolute component first, so that a norm
+            such as 1e200, whose square overflows, normalises exactly).
 
     Returns:
         Rotation matrix, shape ``(3, 3)``.
@@ -53,10 +55,12 @@ def quat_to_matrix(quat_xyzw: Any) -> FloatArray:
         raise InvalidTargetError(
             f"quaternion must be 4 finite numbers (x, y, z, w), got {q.tolist()}"
         )
-    n = np.linalg.norm(q)
-    if n < 1e-9:
+    big = float(np.max(np.abs(q)))
+    scaled = q / big if big > 0 else q
+    n = big * float(np.linalg.norm(scaled))
+    if not n >= 1e-9:
         raise InvalidTargetError(f"quaternion has zero norm: {q.tolist()}")
-    x, y, z, w = q / n
+    x, y, z, w = scaled / np.linalg.norm(scaled)
     return np.array(
         [
             [1 - 2 * (y * y + z * z), 2 * (x * y - z * w), 2 * (x * z + y * w)],

@@ -13,7 +13,6 @@ import reprlib
 import sys
 import threading
 import warnings
-import xml.etree.ElementTree as ET
 from collections.abc import Sequence
 from dataclasses import dataclass, field
 from importlib import resources
@@ -24,6 +23,7 @@ import numpy as np
 import pinocchio as pin
 from numpy.typing import NDArray
 
+from swarm_ik import urdf
 from swarm_ik.errors import InvalidArgumentError, RobotFileNotFoundError, RobotModelError, unknown
 from swarm_ik.kernels.fk import CONTINUOUS, KIND_NAMES, PRISMATIC, REVOLUTE, TreeArrays
 
@@ -89,113 +89,6 @@ def robot_names() -> dict[str, list[str]]:
     return {"bundled": sorted(BUNDLED), "example-robot-data": sorted(EXAMPLE_ROBOTS)}
 
 
-def _xyz(path: Path, joint: str | None, el: ET.Element | None, attr: str) -> FloatArray | None:
-    """The 3 numbers of attribute ``attr`` of ``el`` (``None`` when absent); refuses
-    malformed or non-finite values, naming the joint."""
-    if el is None:
-        return None
-    raw = el.get(attr)
-    if raw is None:
-        return None
-    try:
-        vals = np.array([float(v) for v in raw.split()])
-    except ValueError:
-        vals = np.array([])
-    if vals.shape != (3,) or not np.all(np.isfinite(vals)):
-        raise RobotModelError(
-            f"{path}: joint {joint!r}: <{el.tag} {attr}={raw!r}> must be 3 finite numbers"
-        )
-    return vals
-
-
-def _check_urdf_xml(path: Path) -> dict[str, str]:
-    """Refuse files that are not URDF XML, and what urdfdom would refuse with no useful
-    message: duplicate names, missing or non-finite limits, malformed origins and axes.
-
-    Returns:
-        The mimic joints: name -> the joint it mimics.
-    """
-    try:
-        root = ET.parse(path).getroot()
-    except ET.ParseError as exc:
-        raise RobotModelError(f"{path}: not a valid XML file ({exc})") from None
-    if root.tag != "robot":
-        raise RobotModelError(
-            f"{path}: not a URDF (root element is <{root.tag}>, expected <robot>)"
-        )
-    link_list = [link.get("name") for link in root.findall("link")]
-    links = set(link_list)
-    joint_list = [joint.get("name") for joint in root.findall("joint")]
-    for label, names in (("link", link_list), ("joint", joint_list)):
-        dup = sorted({str(n) for n in names if names.count(n) > 1})
-        if dup:
-            raise RobotModelError(f"{path}: {label} name(s) {dup} defined more than once")
-    children: set[str] = set()
-    mimic: dict[str, str] = {}
-    for joint in root.findall("joint"):
-        name = joint.get("name")
-        jtype = joint.get("type")
-        valid_types = ("revolute", "continuous", "prismatic", "fixed", "floating", "planar")
-        if jtype not in valid_types:
-            raise RobotModelError(
-                f"{path}: joint {name!r} has unknown type {jtype!r}; valid types: "
-                + ", ".join(valid_types)
-            )
-        parent = joint.find("parent")
-        child = joint.find("child")
-        for tag, el in (("parent", parent), ("child", child)):
-            link = None if el is None else el.get("link")
-            if link not in links:
-                raise RobotModelError(
-                    f"{path}: joint {name!r} names {tag} link {link!r}, which is not defined"
-                )
-        assert child is not None
-        c = child.get("link")
-        if c in children:
-            raise RobotModelError(
-                f"{path}: link {c!r} is the child of two joints (a kinematic loop)"
-            )
-        children.add(str(c))
-        origin = joint.find("origin")
-        _xyz(path, name, origin, "xyz")
-        _xyz(path, name, origin, "rpy")
-        axis = _xyz(path, name, joint.find("axis"), "xyz")
-        if axis is not None and jtype not in ("fixed", "floating") and np.linalg.norm(axis) < 1e-9:
-            raise RobotModelError(f"{path}: joint {name!r} has a zero axis {axis.tolist()}")
-        el_mimic = joint.find("mimic")
-        if el_mimic is not None:
-            mimic[str(name)] = str(el_mimic.get("joint"))
-        limit = joint.find("limit")
-        if jtype in ("revolute", "prismatic"):
-            if limit is None:
-                raise RobotModelError(
-                    f"{path}: {jtype} joint {name!r} has no <limit lower=... upper=...>; "
-                    "URDF requires limits on revolute and prismatic joints (use type "
-                    "'continuous' for a revolute joint without limits)"
-                )
-            try:
-                lo = float(limit.get("lower", "0"))
-                hi = float(limit.get("upper", "0"))
-            except ValueError:
-                raise RobotModelError(
-                    f"{path}: joint {name!r} has non-numeric limits "
-                    f"[{limit.get('lower')!r}, {limit.get('upper')!r}]"
-                ) from None
-            if not (np.isfinite(lo) and np.isfinite(hi)):
-                raise RobotModelError(f"{path}: joint {name!r} has non-finite limits [{lo}, {hi}]")
-            if lo > hi:
-                raise RobotModelError(
-                    f"{path}: joint {name!r} has lower limit {lo} > upper limit {hi}"
-                )
-    roots = links - children
-    if len(roots) != 1:
-        raise RobotModelError(
-            f"{path}: a URDF needs exactly one root link, found "
-            f"{sorted(map(str, roots)) or 'none'} (a loop or a disconnected link)"
-        )
-    return mimic
-
-
 def _joint_kind_axis(jmodel: Any) -> tuple[int, FloatArray]:
     """Kind code and unit axis (in the joint frame) of a one-DoF Pinocchio joint."""
     short = jmodel.shortname()
@@ -219,34 +112,6 @@ def _joint_kind_axis(jmodel: Any) -> tuple[int, FloatArray]:
             raise RobotModelError(f"cannot read the axis of joint type {short}")
     axis = ang if kind in (REVOLUTE, CONTINUOUS) else lin
     return kind, axis / np.linalg.norm(axis)
-
-
-def _mimic_table(path: Path) -> dict[str, tuple[str, float, float]]:
-    """Mimic joints of the URDF: follower -> (driver, multiplier, offset)."""
-    out: dict[str, tuple[str, float, float]] = {}
-    try:
-        root = ET.parse(path).getroot()
-    except ET.ParseError:
-        return out
-    for joint in root.findall("joint"):
-        el = joint.find("mimic")
-        if el is None:
-            continue
-        try:
-            mult = float(el.get("multiplier", "1"))
-            off = float(el.get("offset", "0"))
-        except ValueError:
-            raise RobotModelError(
-                f"{path}: joint {joint.get('name')!r} has a non-numeric <mimic> multiplier or "
-                "offset"
-            ) from None
-        if not (np.isfinite(mult) and np.isfinite(off)) or mult == 0.0:
-            raise RobotModelError(
-                f"{path}: joint {joint.get('name')!r}: <mimic> multiplier must be finite and "
-                f"non-zero, offset finite (got {mult}, {off})"
-            )
-        out[str(joint.get("name"))] = (str(el.get("joint")), mult, off)
-    return out
 
 
 class _Reduction(NamedTuple):
@@ -485,21 +350,12 @@ class RobotModel:
         p = Path(path)
         if not p.is_file():
             raise RobotFileNotFoundError(f"URDF file not found: {str(p)!r}")
-        _check_urdf_xml(p)
-        try:
-            full = pin.buildModelFromUrdf(str(p))
-        except Exception as exc:  # Pinocchio raises plain ValueError/RuntimeError
-            raise RobotModelError(f"{p}: Pinocchio could not load it ({exc})") from None
+        full, info = urdf.load_urdf(p)  # decoded, checked, joints renamed, stderr captured
         body_frames = [f.name for f in full.frames if f.type == pin.FrameType.BODY]
         all_frames = [f.name for f in full.frames if f.name != "universe"]
         if ee_frame is None:
-            depth = [len(full.supports[f.parentJoint]) for f in full.frames]
-            best = max(
-                (i for i, f in enumerate(full.frames) if f.type == pin.FrameType.BODY),
-                key=lambda i: (depth[i], i),
-            )
-            ee_frame = full.frames[best].name
-            frame_reason = "the last link of the deepest chain"
+            ee_frame, frame_reason = urdf.default_ee_frame(full, info)
+            urdf.log.info("%s: %s", p, frame_reason)
         frames = [ee_frame] if isinstance(ee_frame, str) else list(ee_frame)
         if not frames:
             raise InvalidArgumentError("ee_frame: give a frame name or a non-empty list of them")
@@ -511,7 +367,8 @@ class RobotModel:
         dup = sorted({f for f in frames if frames.count(f) > 1})
         if dup:
             raise InvalidArgumentError(f"frame(s) {dup} given more than once")
-        red = _reduce(p, full, frames, _mimic_table(p))
+        mimic = {k: (m.driver, m.multiplier, m.offset) for k, m in info.mimic.items()}
+        red = _reduce(p, full, frames, mimic)
         return cls(
             name=full.name or p.stem,
             urdf_path=p.resolve(),

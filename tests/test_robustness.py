@@ -131,7 +131,7 @@ BAD_URDFS: dict[str, tuple[str, str]] = {
         r"no movable joint between the root and frame 'b'",
     ),
     "no joint at all": (_robot(_links("a")), r"no movable joint between the root and frame 'a'"),
-    "no link at all": (_robot(), r"exactly one root link, found none"),
+    "no link at all": (_robot(), r"the URDF is empty: <robot name=.bad.> defines no <link>"),
     "zero axis": (
         _robot(_links("a", "b"), _joint("j1", "a", "b", axis='<axis xyz="0 0 0"/>')),
         r"joint 'j1' has a zero axis",

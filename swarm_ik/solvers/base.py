@@ -18,6 +18,7 @@ entry per iteration.  Whatever it returns is ignored: the answer is ``ev.best_x`
 from __future__ import annotations
 
 import inspect
+import re
 import time
 from collections.abc import Callable, Mapping
 from dataclasses import dataclass, field
@@ -35,6 +36,12 @@ FloatArray = NDArray[np.float64]
 _UNLIMITED = int(np.iinfo(np.int64).max)
 MIN_POP_SIZE = 4
 """Smallest ``pop_size`` any population solver accepts (HLFOA needs 4 distinct members)."""
+MAX_POP_SIZE = 1_000_000
+"""Largest ``pop_size`` any solver accepts."""
+MAX_POPULATION_VALUES = 10_000_000
+"""Largest ``pop_size · dim`` (numbers in one population array: 80 MB of float64; a solver
+keeps a few such arrays).  Checked by :meth:`SolverSpec.resolve` when it is given ``dim`` and
+by :meth:`Evaluator.uniform` / :meth:`Evaluator.initial_population` before allocating."""
 Objective = Callable[[FloatArray], FloatArray]
 """A batched objective: ``(pop, n) -> (pop,)``; lower is better."""
 
@@ -253,7 +260,12 @@ class Evaluator:
 
     # ---------------------------------------------------------------- helpers
     def uniform(self, rng: np.random.Generator, n: int) -> FloatArray:
-        """``n`` points drawn uniformly within the bounds, shape ``(n, dim)``."""
+        """``n`` points drawn uniformly within the bounds, shape ``(n, dim)``.
+
+        Raises:
+            InvalidArgumentError: ``n · dim`` exceeds :data:`MAX_POPULATION_VALUES`.
+        """
+        check_population(n, self.dim)
         return rng.uniform(self.lower, self.upper, size=(n, self.dim))
 
     def initial_population(self, rng: np.random.Generator, n: int) -> FloatArray:
@@ -281,6 +293,169 @@ class Evaluator:
         return np.where(bad, fresh, x)
 
 
+def check_population(pop_size: int, dim: int, solver: str | None = None) -> None:
+    """Refuse a population too large to allocate: ``pop_size · dim`` above
+    :data:`MAX_POPULATION_VALUES`.
+
+    Raises:
+        InvalidArgumentError: naming both numbers and the cap.
+    """
+    if int(pop_size) * max(int(dim), 1) > MAX_POPULATION_VALUES:
+        who = f" for solver {solver!r}" if solver else ""
+        raise InvalidArgumentError(
+            f"pop_size {int(pop_size)} x {int(dim)} joints = {int(pop_size) * int(dim)} values "
+            f"per population array{who} exceeds the cap of {MAX_POPULATION_VALUES} "
+            f"(swarm_ik.solvers.base.MAX_POPULATION_VALUES); use a smaller pop_size"
+        )
+
+
+_INTERVAL = re.compile(
+    r"^\s*([\[(])\s*([-+]?(?:inf|[0-9.]+(?:e[-+]?[0-9]+)?))\s*,\s*"
+    r"([-+]?(?:inf|[0-9.]+(?:e[-+]?[0-9]+)?))\s*([\])])\s*$",
+    re.IGNORECASE,
+)
+_NAMED = {
+    "finite": "(-inf, inf)",
+    "positive": "(0, inf)",
+    "nonnegative": "[0, inf)",
+    "unit": "[0, 1]",
+}
+
+
+@dataclass(frozen=True)
+class Constraint:
+    """What values a solver parameter accepts.
+
+    Build one with :meth:`parse` from a short spec:
+
+    * floats (always finite; ints are accepted and converted): ``"finite"``, ``"positive"``
+      (``> 0``), ``"nonnegative"`` (``>= 0``), ``"unit"`` (``[0, 1]``) or an interval such as
+      ``"(0, 1]"``, ``"(0, 2)"``, ``"[0, 1e3]"``;
+    * integers (booleans refused): ``"int"`` or ``"int>=N"``;
+    * ``"bool"``; ``"str"``; ``"choice:a|b"`` (one of the strings).
+
+    Attributes:
+        kind: ``"float"``, ``"int"``, ``"bool"``, ``"str"``.
+        lo: Lower bound (floats and ints).
+        hi: Upper bound (floats).
+        lo_open: Whether ``lo`` itself is excluded.
+        hi_open: Whether ``hi`` itself is excluded.
+        choices: Accepted strings (empty: any).
+    """
+
+    kind: str
+    lo: float = -np.inf
+    hi: float = np.inf
+    lo_open: bool = True
+    hi_open: bool = True
+    choices: tuple[str, ...] = ()
+
+    @classmethod
+    def parse(cls, spec: str | Constraint) -> Constraint:
+        """The constraint of a spec string (see the class docstring).
+
+        Raises:
+            InvalidArgumentError: an unknown spec.
+        """
+        if isinstance(spec, Constraint):
+            return spec
+        text = _NAMED.get(spec, spec)
+        m = _INTERVAL.match(text)
+        if m:
+            return cls(
+                "float", float(m.group(2)), float(m.group(3)), m.group(1) == "(", m.group(4) == ")"
+            )
+        if text == "int":
+            return cls("int")
+        if text.startswith("int>="):
+            return cls("int", lo=float(int(text[5:])), lo_open=False)
+        if text in ("bool", "str"):
+            return cls(text)
+        if text.startswith("choice:"):
+            return cls("str", choices=tuple(text[7:].split("|")))
+        raise InvalidArgumentError(f"unknown parameter constraint {spec!r}")
+
+    @classmethod
+    def infer(cls, default: Any) -> Constraint | None:
+        """The constraint implied by a default value's type (``None`` for other types)."""
+        if isinstance(default, (bool, np.bool_)):
+            return cls("bool")
+        if isinstance(default, (int, np.integer)):
+            return cls("int")
+        if isinstance(default, (float, np.floating)):
+            return cls("float")
+        if isinstance(default, str):
+            return cls("str")
+        return None
+
+    def describe(self) -> str:
+        """Words for messages, e.g. ``"a finite number in (0, 1]"``."""
+        if self.kind == "bool":
+            return "true or false"
+        if self.kind == "str":
+            if self.choices:
+                return "one of " + ", ".join(map(repr, self.choices))
+            return "a string"
+        if self.kind == "int":
+            return "an integer" + (f" >= {int(self.lo)}" if np.isfinite(self.lo) else "")
+        lo_inf, hi_inf = not np.isfinite(self.lo), not np.isfinite(self.hi)
+        if lo_inf and hi_inf:
+            return "a finite number"
+        if hi_inf:
+            return f"a finite number {'>' if self.lo_open else '>='} {self.lo:g}"
+        if lo_inf:
+            return f"a finite number {'<' if self.hi_open else '<='} {self.hi:g}"
+        return (
+            f"a number in {'(' if self.lo_open else '['}{self.lo:g}, {self.hi:g}"
+            f"{')' if self.hi_open else ']'}"
+        )
+
+    def convert(self, value: Any) -> tuple[bool, Any]:
+        """``(ok, value)``: whether ``value`` is accepted, and its normalised form (floats as
+        ``float``, integers as ``int``)."""
+        if self.kind == "bool":
+            if isinstance(value, (bool, np.bool_)):
+                return True, bool(value)
+            return False, value
+        if self.kind == "str":
+            ok = isinstance(value, str) and (not self.choices or value in self.choices)
+            return ok, value
+        if isinstance(value, (bool, np.bool_)):
+            return False, value
+        if self.kind == "int":
+            if not isinstance(value, (int, np.integer)):
+                return False, value
+            n = int(value)
+            return (not np.isfinite(self.lo) or n >= self.lo), n
+        if not isinstance(value, (int, float, np.integer, np.floating)):
+            return False, value
+        v = float(value)
+        if not np.isfinite(v):
+            return False, value
+        ok_lo = v > self.lo if self.lo_open else v >= self.lo
+        ok_hi = v < self.hi if self.hi_open else v <= self.hi
+        return bool(ok_lo and ok_hi), v
+
+
+SOLVER_CONSTRAINTS: dict[str, dict[str, str]] = {
+    "swarm": {
+        "swarm_fraction": "[0, 1]",
+        "max_iters": "int>=2",
+        "lam0": "(0, 1e12]",
+        "max_step": "positive",
+        "stall_rel": "[0, 1]",
+        "stall_iters": "int>=1",
+        "tol_margin": "(0, 1]",
+        "prefer": "choice:best|nearest",
+        "nearest_starts": "int>=0",
+        "nearest_sigma": "nonnegative",
+    },
+}
+"""Constraints of solvers registered in modules that do not declare them themselves
+(solver name -> parameter -> spec of :meth:`Constraint.parse`); merged with the
+``constraints`` given to :func:`register`."""
+
+
 @dataclass(frozen=True)
 class SolverSpec:
     """A registered solver.
@@ -291,6 +466,9 @@ class SolverSpec:
         params: Default value of every parameter, registration overrides applied.
         description: One line for listings.
         needs_jacobian: True when the solver needs an IK problem (not a plain objective).
+        constraints: What each parameter accepts (:class:`Constraint`): declared at
+            registration, else inferred from the default's type (a float default: any
+            finite number; an int: any integer; a bool; a string).
         closed_form: True for a closed-form solver of particular chains (``analytic``): not
             a search over any objective, so the contract of :func:`search_names` does not
             apply to it.
@@ -301,18 +479,26 @@ class SolverSpec:
     params: Mapping[str, Any] = field(default_factory=dict)
     description: str = ""
     needs_jacobian: bool = False
+    constraints: Mapping[str, Constraint] = field(default_factory=dict)
     closed_form: bool = False
 
-    def resolve(self, overrides: Mapping[str, Any]) -> dict[str, Any]:
+    def resolve(self, overrides: Mapping[str, Any], dim: int | None = None) -> dict[str, Any]:
         """Defaults updated with ``overrides``; unknown names are refused, listing valid ones.
 
-        The sizes shared by the population solvers are checked here, for every solver that
-        has them: ``pop_size`` must be an integer ``>= MIN_POP_SIZE`` and ``iterations`` an
-        integer ``>= 1``.
+        Every parameter is checked against its :attr:`constraints` (NaN, infinities,
+        strings for numbers, booleans for integers, signs and ranges are refused), and the
+        sizes shared by the population solvers for every solver that has them: ``pop_size``
+        must be an integer in ``[MIN_POP_SIZE, MAX_POP_SIZE]`` (and ``pop_size · dim`` at
+        most :data:`MAX_POPULATION_VALUES` when ``dim`` is given), ``iterations`` an integer
+        ``>= 1``.
+
+        Args:
+            overrides: Parameter values given by the user.
+            dim: Number of variables (joints), when known.
 
         Raises:
-            InvalidArgumentError: an unknown parameter name, or a bad ``pop_size`` /
-                ``iterations``.
+            InvalidArgumentError: an unknown parameter name, or a value its constraint
+                refuses (the message names the parameter, the solver and what is accepted).
         """
         bad = [k for k in overrides if k not in self.params]
         if bad:
@@ -330,6 +516,24 @@ class SolverSpec:
                 raise InvalidArgumentError(
                     f"{key} must be >= {least} (an integer) for solver {self.name!r}, got {v!r}"
                 )
+        if "pop_size" in out:
+            if out["pop_size"] > MAX_POP_SIZE:
+                raise InvalidArgumentError(
+                    f"pop_size must be <= {MAX_POP_SIZE} for solver {self.name!r}, got "
+                    f"{out['pop_size']!r}"
+                )
+            if dim is not None:
+                check_population(out["pop_size"], dim, self.name)
+        for key, con in self.constraints.items():
+            if key not in out:
+                continue
+            ok, v = con.convert(out[key])
+            if not ok:
+                raise InvalidArgumentError(
+                    f"parameter {key} of solver {self.name!r} must be {con.describe()}, "
+                    f"got {out[key]!r}"
+                )
+            out[key] = v
         return out
 
 
@@ -342,6 +546,7 @@ def register(
     *,
     description: str = "",
     needs_jacobian: bool = False,
+    constraints: Mapping[str, str | Constraint] | None = None,
     closed_form: bool = False,
     **overrides: Any,
 ) -> SolverSpec:
@@ -349,9 +554,20 @@ def register(
 
     A variant is a registration of the same function with other overrides, never a copy.
 
+    Args:
+        name: Registry name.
+        run: The solver function.
+        description: One line for listings.
+        needs_jacobian: True when the solver needs an IK problem.
+        constraints: Parameter -> spec of :meth:`Constraint.parse` (e.g. ``{"lam0":
+            "positive", "pa": "[0, 1]", "subpops": "int>=1"}``), merged over
+            :data:`SOLVER_CONSTRAINTS` ``[name]``; parameters without one get the
+            constraint inferred from their default (:meth:`Constraint.infer`).
+        **overrides: New defaults.
+
     Raises:
-        InvalidArgumentError: ``name`` is already registered, or an override is not a
-            keyword-only parameter of ``run``.
+        InvalidArgumentError: ``name`` is already registered, an override or constraint is
+            not a keyword-only parameter of ``run``, or a default breaks its constraint.
     """
     if name in _REGISTRY:
         raise InvalidArgumentError(f"solver {name!r} is already registered")
@@ -361,9 +577,20 @@ def register(
         for p in sig.parameters.values()
         if p.kind is inspect.Parameter.KEYWORD_ONLY
     }
-    spec = SolverSpec(name, run, defaults, description, needs_jacobian, closed_form)
+    declared = {**SOLVER_CONSTRAINTS.get(name, {}), **(constraints or {})}
+    stray = sorted(k for k in declared if k not in defaults)
+    if stray:
+        raise InvalidArgumentError(
+            f"constraints for {stray} given, but solver {name!r} has no such parameter"
+        )
+    cons: dict[str, Constraint] = {}
+    for key, default in defaults.items():
+        con = Constraint.parse(declared[key]) if key in declared else Constraint.infer(default)
+        if con is not None:
+            cons[key] = con
+    spec = SolverSpec(name, run, defaults, description, needs_jacobian, cons, closed_form)
     spec = SolverSpec(
-        name, run, spec.resolve(overrides), description, needs_jacobian, closed_form
+        name, run, spec.resolve(overrides), description, needs_jacobian, cons, closed_form
     )
     _REGISTRY[name] = spec
     return spec

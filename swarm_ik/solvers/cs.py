@@ -206,15 +206,28 @@ def run(
         ev.end_iteration()
 
 
+CONSTRAINTS = {
+    "pa": "unit",
+    "beta": "(0, 2)",
+    "alpha": "(0, 1e3]",
+    "eps": "positive",
+    "eta0": "positive",
+    "eta_t": "positive",
+    "tau": "positive",
+}
+"""What each parameter accepts (checked by the registry: ``solvers.base.Constraint``)."""
+
 register(
     "cs",
     run,
+    constraints=CONSTRAINTS,
     newton=False,
     description="Yang-Deb cuckoo search (paper 004: Levy flights beta=1.5, pa=0.25, 50 nests)",
 )
 register(
     "cs-newton",
     run,
+    constraints=CONSTRAINTS,
     newton=True,
     needs_jacobian=True,
     description="paper 004: cuckoo search until fitness < 0.2, then Newton/pseudo-inverse "

@@ -95,9 +95,19 @@ def run(
             stall = 0
 
 
+CONSTRAINTS = {
+    "iters_per_restart": "int>=1",
+    "damping": "positive",
+    "step": "positive",
+    "stall_tol": "nonnegative",
+    "stall_iters": "int>=1",
+}
+"""What each parameter accepts (checked by the registry: ``solvers.base.Constraint``)."""
+
 register(
     "dls",
     run,
+    constraints=CONSTRAINTS,
     description="Pinocchio damped least squares with random restarts (baseline)",
     needs_jacobian=True,
 )

@@ -121,9 +121,13 @@ def run(
         ev.end_iteration()
 
 
+CONSTRAINTS = {"init_range": "(0, 1e6]", "step": "(0, 1e6]"}
+"""What each parameter accepts (checked by the registry: ``solvers.base.Constraint``)."""
+
 register(
     "foa",
     run,
+    constraints=CONSTRAINTS,
     description="basic fruit fly optimisation (Pan; paper 000 eqs. 4-9); cannot reach negative "
     "values, kept as the paper's baseline",
 )

@@ -201,9 +201,20 @@ def run(
             stall = 0
 
 
+CONSTRAINTS = {
+    "subpops": "int>=1",
+    "gamma": "(0, 1)",
+    "omega": "nonnegative",
+    "c1": "nonnegative",
+    "c2": "nonnegative",
+    "v_max": "(0, 1e3]",
+}
+"""What each parameter accepts (checked by the registry: ``solvers.base.Constraint``)."""
+
 register(
     "mgwo",
     run,
+    constraints=CONSTRAINTS,
     description="paper 003's multi-population GWO: sub-packs, wolf king, PSO-guided worst "
     "wolves, re-initialisation of the worst sub-pack on stagnation (30 wolves x 200)",
 )

@@ -211,14 +211,28 @@ def run(
         ev.end_iteration()
 
 
+CONSTRAINTS = {
+    "w": "nonnegative",
+    "c1": "nonnegative",
+    "c2": "nonnegative",
+    "v_max": "(0, 1e3]",
+    "ls_step": "(0, 1e3]",
+    "ls_steps": "int>=0",
+    "fd_step": "(0, 1]",
+    "escape_after": "int>=1",
+}
+"""What each parameter accepts (checked by the registry: ``solvers.base.Constraint``)."""
+
 register(
     "pso",
     run,
+    constraints=CONSTRAINTS,
     description="standard global-best PSO (paper 002 eq. 6; w=0.7, c1=c2=1.5, 40x100)",
 )
 register(
     "pso-improved",
     run,
+    constraints=CONSTRAINTS,
     w=0.9,
     local_search=True,
     escape=True,

@@ -1,0 +1,142 @@
+"""Input checks shared by the API and the command line (issue 16).
+
+Each helper turns a bad value into a :class:`~swarm_ik.errors.SwarmIKError` that names it,
+instead of the ``ValueError``/``TypeError``/``OSError`` numpy, ``float()`` or the file system
+would raise deep inside.  They are meant to be called at the door of the public functions:
+
+* :func:`float_array` — ``solve_batch(robot, "abc")``, ``check_targets``;
+* :func:`positive_float` — ``solve_batch(..., tol_pos="a")``;
+* :func:`joint_vector` — ``verify(problem, [0, 0])``;
+* :func:`check_output_path` — output files of ``batch``/``reach``/``solve --html``, checked
+  *before* computing;
+* :func:`read_targets_file` — ``batch --targets`` with a corrupt ``.npz`` or an object
+  ``.npy``.
+"""
+
+from __future__ import annotations
+
+import os
+import pickle
+import reprlib
+import zipfile
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+from numpy.typing import NDArray
+
+from swarm_ik.errors import InvalidArgumentError, InvalidTargetError, SwarmIKError
+
+FloatArray = NDArray[np.float64]
+
+
+def float_array(value: Any, what: str = "targets", *, target: bool = True) -> FloatArray:
+    """``value`` as a float array, or a SwarmIKError naming ``what``.
+
+    Args:
+        value: Anything array-like.
+        what: Name for the message.
+        target: Raise :class:`InvalidTargetError` (True) or :class:`InvalidArgumentError`.
+
+    Raises:
+        InvalidTargetError | InvalidArgumentError: strings, ``None``, ragged nesting,
+            objects that are not numbers.
+    """
+    cls = InvalidTargetError if target else InvalidArgumentError
+    if value is None or isinstance(value, (str, bytes)):
+        raise cls(f"{what} must be an array of numbers, got {reprlib.repr(value)}")
+    try:
+        arr = np.asarray(value, dtype=float)
+    except (TypeError, ValueError, OverflowError):
+        raise cls(f"{what} must be an array of numbers, got {reprlib.repr(value)}") from None
+    return arr
+
+
+def positive_float(value: Any, what: str) -> float:
+    """``value`` as a positive finite float (booleans, strings, NaN, ≤ 0 refused).
+
+    Raises:
+        InvalidArgumentError: naming ``what`` and the value.
+    """
+    if not isinstance(value, (bool, np.bool_)) and isinstance(
+        value, (int, float, np.integer, np.floating)
+    ):
+        v = float(value)
+        if 0.0 < v < np.inf:
+            return v
+    raise InvalidArgumentError(f"{what} must be a positive number, got {value!r}")
+
+
+def joint_vector(robot: Any, q: Any, what: str = "q") -> FloatArray:
+    """``q`` checked against ``robot`` (``robot.check_q``): ``nq`` finite numbers.
+
+    Raises:
+        InvalidArgumentError: wrong length or non-finite values (the joints listed).
+    """
+    return np.asarray(robot.check_q(q, what), dtype=float)
+
+
+def check_output_path(
+    path: str | os.PathLike[str], what: str, suffixes: tuple[str, ...] | None = None
+) -> Path:
+    """Refuse an output file that cannot be written, before any work is done.
+
+    Args:
+        path: The file to write.
+        what: The option, for the message (e.g. ``"--out"``).
+        suffixes: Accepted suffixes (lower case, with the dot); ``None``: any.
+
+    Returns:
+        The path.
+
+    Raises:
+        InvalidArgumentError: the path is a folder, its folder does not exist or is not a
+            folder, it is not writable, or its suffix is not accepted.
+    """
+    p = Path(path)
+    if p.is_dir():
+        raise InvalidArgumentError(f"{what} {str(p)!r} is a folder; give a file name")
+    if suffixes is not None and p.suffix.lower() not in suffixes:
+        raise InvalidArgumentError(
+            f"{what} {str(p)!r}: unknown suffix {p.suffix!r}; valid: {', '.join(suffixes)}"
+        )
+    parent = p.parent if str(p.parent) else Path(".")
+    if not parent.exists():
+        raise InvalidArgumentError(
+            f"{what} {str(p)!r}: folder {str(parent)!r} does not exist (create it first)"
+        )
+    if not parent.is_dir():
+        raise InvalidArgumentError(f"{what} {str(p)!r}: {str(parent)!r} is not a folder")
+    if not os.access(parent, os.W_OK) or (p.exists() and not os.access(p, os.W_OK)):
+        raise InvalidArgumentError(f"{what} {str(p)!r}: not writable (permission denied)")
+    return p
+
+
+def read_targets_file(path: str | os.PathLike[str]) -> FloatArray:
+    """:func:`swarm_ik.batch.read_targets`, with unreadable files turned into one message.
+
+    Raises:
+        InvalidArgumentError: a corrupt ``.npz``/``.npy`` (not a zip, truncated, an object
+            array that would need pickle), an unreadable file.
+        InvalidTargetError: a row is not a valid pose.
+    """
+    from swarm_ik.batch import read_targets
+
+    try:
+        return read_targets(Path(path))
+    except SwarmIKError:
+        raise
+    except (
+        ValueError,
+        TypeError,
+        OSError,
+        EOFError,
+        zipfile.BadZipFile,
+        pickle.UnpicklingError,
+        UnicodeDecodeError,
+        KeyError,
+    ) as exc:
+        reason = " ".join(str(exc).split()) or type(exc).__name__
+        if "allow_pickle" in reason:
+            reason = "it holds Python objects, not numbers (an object array)"
+        raise InvalidArgumentError(f"{path}: cannot read targets ({reason})") from None
