@@ -98,7 +98,11 @@ def _build_parser() -> argparse.ArgumentParser:
         "--robot", required=True, help="bundled or example-robot-data name, or a .urdf path"
     )
     p.add_argument(
-        "--frame", default=None, help="end-effector frame (default: the robot's tool frame)"
+        "--frame",
+        action="append",
+        default=None,
+        help="goal frame; repeat for several (default: the robot's tool frame); --pose and "
+        "--from-q are for the first",
     )
     tgt = p.add_mutually_exclusive_group(required=True)
     tgt.add_argument(
@@ -106,7 +110,14 @@ def _build_parser() -> argparse.ArgumentParser:
         nargs=7,
         type=float,
         metavar=("X", "Y", "Z", "QX", "QY", "QZ", "QW"),
-        help="target position [m] and quaternion (x, y, z, w)",
+        help="target position [m] and quaternion qx qy qz qw (x y z w order)",
+    )
+    tgt.add_argument(
+        "--goals",
+        default=None,
+        metavar="FILE",
+        help="JSON list of goal terms (schema in docs/goals.md), e.g. "
+        '[{"type": "Position", "frame": "tool0", "point": [0.4, 0, 0.3]}]',
     )
     tgt.add_argument(
         "--from-q",
@@ -117,6 +128,11 @@ def _build_parser() -> argparse.ArgumentParser:
     )
     p.add_argument("--solver", default=DEFAULT_SOLVER, help=f"one of: {', '.join(solvers.names())}")
     p.add_argument("--fitness", default="se3", help="se3, paper-l1, euler-zyz or paper-pso")
+    p.add_argument(
+        "--position-only",
+        action="store_true",
+        help="solve for the position of the target only (chains with fewer than six joints)",
+    )
     p.add_argument("--seed", type=int, default=0)
     p.add_argument("--max-evals", type=int, default=None)
     p.add_argument("--time-limit", type=float, default=None, help="seconds")
@@ -196,12 +212,22 @@ def _cmd_solve(args: argparse.Namespace) -> int:
 
     if args.html is not None:  # refuse an unwritable page before solving
         check_output_path(args.html, "--html")
-    robot = swarm_ik.load_robot(args.robot, ee_frame=args.frame)
-    if args.from_q is not None:
+    frames = None if not args.frame else (args.frame[0] if len(args.frame) == 1 else args.frame)
+    robot = swarm_ik.load_robot(args.robot, ee_frame=frames)
+    goals = None
+    target = None
+    if args.goals is not None:
+        goals = swarm_ik.goals.load_goals(args.goals)
+    elif args.from_q is not None and len(robot.frames) > 1:  # a Pose goal on every frame
+        poses = robot.fk_all(robot.check_q(args.from_q, "--from-q"))
+        goals = [swarm_ik.goals.Pose(f, t) for f, t in zip(robot.frames, poses, strict=True)]
+    elif args.from_q is not None:
         target = robot.fk(robot.check_q(args.from_q, "--from-q"))
     else:
         target = np.asarray(args.pose, dtype=float)
-    problem = swarm_ik.IKProblem(robot, target, args.fitness)
+    problem = swarm_ik.IKProblem(
+        robot, target, goals, args.fitness, w_rot=0.0 if args.position_only else 1.0
+    )
     res = swarm_ik.solve(
         problem,
         args.solver,
@@ -216,7 +242,12 @@ def _cmd_solve(args: argparse.Namespace) -> int:
     if args.json:
         d = res.to_dict()
         d.pop("history")
-        d.update(robot=robot.name, joint_names=list(robot.joint_names), ee_frame=robot.ee_frame)
+        d.update(
+            robot=robot.name,
+            joint_names=list(robot.joint_names),
+            ee_frame=robot.ee_frame,
+            frames=list(robot.frames),
+        )
         print(json.dumps(d))
     else:
         status = "reached" if res.success else "NOT reached (best found below)"
@@ -227,9 +258,17 @@ def _cmd_solve(args: argparse.Namespace) -> int:
         for name, kind, v in zip(robot.joint_names, robot.joint_kinds, res.q, strict=True):
             unit = "m" if kind == "prismatic" else "rad"
             print(f"  {name:24s} {v: .10f} {unit}")
+        if len(res.goal_errors) > 1:
+            for e in res.goal_errors:
+                parts = (
+                    [f"{e.position_error:.3e} m"] if e.position_error == e.position_error else []
+                )
+                if e.rotation_error == e.rotation_error:
+                    parts.append(f"{e.rotation_error:.3e} rad")
+                print(f"  {e.goal}: {', '.join(parts)} ({'met' if e.met else 'NOT met'})")
         print(
             f"position error {res.position_error:.3e} m, "
-            f"rotation error {res.rotation_error:.3e} rad"
+            f"rotation error {res.rotation_error:.3e} rad ({res.reason})"
         )
         print(
             f"evaluations {res.n_evals}, time {res.time_s * 1e3:.2f} ms, "

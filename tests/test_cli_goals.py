@@ -1,0 +1,77 @@
+"""``swarm-ik solve --goals``, repeated ``--frame`` and ``--position-only``."""
+
+from __future__ import annotations
+
+import json
+from pathlib import Path
+
+import pytest
+
+from swarm_ik.cli import main
+
+
+def _goals(tmp_path: Path, goals: object) -> str:
+    path = tmp_path / "goals.json"
+    path.write_text(json.dumps(goals))
+    return str(path)
+
+
+def test_goals_file_is_solved(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
+    f = _goals(tmp_path, [
+        {"type": "Position", "frame": "panda_hand_tcp", "point": [0.5, 0.0, 0.3]},
+        {"type": "Axis", "frame": "panda_hand_tcp", "axis": [0, 0, 1], "direction": [0, 0, -1]},
+    ])  # fmt: skip
+    assert main(["solve", "--robot", "panda", "--goals", f, "--json"]) == 0
+    out = json.loads(capsys.readouterr().out)
+    assert out["success"] and [g["goal"] for g in out["goal_errors"]] == [
+        "Position(panda_hand_tcp)", "Axis(panda_hand_tcp)"]  # fmt: skip
+
+
+def test_repeated_frame_poses_every_frame(capsys: pytest.CaptureFixture[str]) -> None:
+    q = ["0.1"] * 14
+    code = main(["solve", "--robot", "baxter", "--frame", "left_gripper", "--frame",
+                 "right_gripper", "--from-q", *q, "--json"])  # fmt: skip
+    out = json.loads(capsys.readouterr().out)
+    assert code == 0 and out["frames"] == ["left_gripper", "right_gripper"]
+    assert len(out["goal_errors"]) == 2
+
+
+def test_position_only_on_a_short_chain(capsys: pytest.CaptureFixture[str]) -> None:
+    assert main(["solve", "--robot", "panda", "--position-only", "--pose",
+                 "0.4", "0.1", "0.4", "0", "0", "0", "1", "--json"]) == 0  # fmt: skip
+    out = json.loads(capsys.readouterr().out)
+    assert out["rotation_error"] == 0.0 and out["goal_errors"][0]["goal"].startswith("Position")
+
+
+@pytest.mark.parametrize(
+    "goals,message",
+    [
+        ([{"type": "Bogus"}], "unknown goal type 'Bogus'"),
+        (
+            [{"type": "Position", "frame": "nope", "point": [0, 0, 0]}],
+            "goal frames: panda_hand_tcp",
+        ),
+        (
+            [{"type": "Position", "frame": "panda_hand_tcp", "point": [0, 0, 0], "x": 1}],
+            "unknown field",
+        ),
+        (
+            [
+                {
+                    "type": "Axis",
+                    "frame": "panda_hand_tcp",
+                    "axis": [0, 0, 0],
+                    "direction": [1, 0, 0],
+                }
+            ],
+            "zero vector",
+        ),
+        ([{"type": "Position", "frame": "panda_hand_tcp", "point": [0, "nan", 0]}], "finite"),
+    ],
+)
+def test_bad_goals_exit_2_with_one_line(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str], goals: object, message: str
+) -> None:
+    assert main(["solve", "--robot", "panda", "--goals", _goals(tmp_path, goals)]) == 2
+    err = capsys.readouterr().err.strip()
+    assert message in err and len(err.splitlines()) == 1
