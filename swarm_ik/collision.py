@@ -356,6 +356,8 @@ class RobotCollision:
         key = (scene, self_collision)
         hit = cache.get(key)
         if hit is None:
+            if len(cache) >= 32:  # many scenes in one thread: keep memory bounded
+                cache.clear()
             hit = cache[key] = _Checker(self, scene, self_collision)
         return hit
 

@@ -2,7 +2,8 @@
 frame (the robot's root frame), read from and written to JSON.
 
 >>> from swarm_ik.scene import Box, Scene, Sphere
->>> scene = Scene([Box(size=(1.0, 0.6, 0.02), pose=(0.5, 0.0, -0.011)), Sphere(0.05, (0.4, 0, 0.3))])
+>>> table = Box(size=(1.0, 0.6, 0.02), pose=(0.5, 0.0, -0.011))
+>>> scene = Scene([table, Sphere(0.05, (0.4, 0.0, 0.3))])
 >>> [o.kind for o in scene], scene.names
 (['box', 'sphere'], ('box0', 'sphere1'))
 
@@ -31,9 +32,9 @@ import math
 import os
 import reprlib
 from collections.abc import Iterable, Iterator, Sequence
-from dataclasses import dataclass, field
+from dataclasses import dataclass
 from pathlib import Path
-from typing import Any, ClassVar, Union
+from typing import Any, ClassVar
 
 import numpy as np
 from numpy.typing import NDArray
@@ -41,7 +42,8 @@ from numpy.typing import NDArray
 from swarm_ik.errors import InvalidArgumentError, SwarmIKError, unknown
 
 FloatArray = NDArray[np.float64]
-Matrix4 = tuple[tuple[float, float, float, float], ...]
+Matrix4 = tuple[tuple[float, ...], ...]
+"""A 4x4 rigid transform as 4 rows of 4 numbers."""
 
 FORMAT = "swarm_ik.scene"
 VERSION = 1
@@ -108,7 +110,7 @@ def _pose(kind: str, value: Any) -> Matrix4:
             f"{kind}: pose is not a rigid transform (its 3x3 block must be a rotation and its "
             f"last row [0, 0, 0, 1]), got {arr.tolist()}"
         )
-    return tuple(tuple(float(v) for v in row) for row in arr)  # type: ignore[return-value]
+    return tuple(tuple(float(v) for v in row) for row in arr)
 
 
 # ------------------------------------------------------------------------------ shapes
@@ -138,7 +140,7 @@ class Box:
     """A box with full edge lengths ``size`` (3,) [m], centred on ``pose`` (4x4)."""
 
     size: tuple[float, float, float]
-    pose: Matrix4 = field(default=None)  # type: ignore[assignment]
+    pose: Matrix4 = None  # type: ignore[assignment]  # validated in __post_init__
     name: str | None = None
     kind: ClassVar[str] = "box"
 
@@ -154,7 +156,7 @@ class Capsule:
 
     radius: float
     length: float
-    pose: Matrix4 = field(default=None)  # type: ignore[assignment]
+    pose: Matrix4 = None  # type: ignore[assignment]  # validated in __post_init__
     name: str | None = None
     kind: ClassVar[str] = "capsule"
 
@@ -171,7 +173,7 @@ class Cylinder:
 
     radius: float
     length: float
-    pose: Matrix4 = field(default=None)  # type: ignore[assignment]
+    pose: Matrix4 = None  # type: ignore[assignment]  # validated in __post_init__
     name: str | None = None
     kind: ClassVar[str] = "cylinder"
 
@@ -187,7 +189,7 @@ class Mesh:
     ``scale`` (a number or 3 numbers) and placed at ``pose``.  The path is stored absolute."""
 
     path: str
-    pose: Matrix4 = field(default=None)  # type: ignore[assignment]
+    pose: Matrix4 = None  # type: ignore[assignment]  # validated in __post_init__
     scale: tuple[float, float, float] = (1.0, 1.0, 1.0)
     name: str | None = None
     kind: ClassVar[str] = "mesh"
@@ -204,7 +206,7 @@ class Mesh:
         object.__setattr__(self, "pose", _pose("mesh", self.pose))
 
 
-Shape = Union[Sphere, Box, Capsule, Cylinder, Mesh]
+Shape = Sphere | Box | Capsule | Cylinder | Mesh
 SHAPES: dict[str, type] = {c.kind: c for c in (Sphere, Box, Capsule, Cylinder, Mesh)}
 """Shape classes by their JSON ``type``."""
 

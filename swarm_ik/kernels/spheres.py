@@ -28,7 +28,8 @@ spheres as above.
 
 **Residual** (:func:`penetration`): one row ``max(0, margin + r_i + r_j − |c_i − c_j|)`` per
 active sphere pair of an enabled body pair and ``max(0, margin + r_i − sdf_k(c_i))`` per
-active sphere–obstacle pair, with its Jacobian.  Body pairs (and body–obstacle pairs) are
+active sphere–obstacle pair (spheres of the bodies that ``q`` moves; a body fixed to the
+world is left to the exact check), with its Jacobian.  Body pairs (and body–obstacle pairs) are
 culled first with each body's bounding sphere.  The centre ``c = R c_local + p`` of a sphere
 moves with the body Jacobian ``J`` (LOCAL_WORLD_ALIGNED at the body origin, rows ``[v; ω]``)
 as ``J_c = J_v − [R c_local]× J_ω``.
@@ -786,7 +787,7 @@ class SphereModel:
                 dims.append([o.radius, 0.0, 0.0])
             elif isinstance(o, Box):
                 kinds.append(BOX)
-                dims.append(0.5 * np.array(o.size))
+                dims.append([0.5 * v for v in o.size])
             elif isinstance(o, (Capsule, Cylinder)):
                 kinds.append(CAPSULE if isinstance(o, Capsule) else CYLINDER)
                 dims.append([o.radius, 0.5 * o.length, 0.0])
@@ -912,7 +913,7 @@ class SphereModel:
         out_res = np.zeros(max_rows)
         out_jac = np.zeros((max_rows, nq))
         out_pair = np.zeros((max_rows, 2), dtype=np.int64)
-        n = penetration(
+        n = penetration(  # type: ignore[call-arg]
             rot,
             pos,
             jac,
@@ -928,7 +929,7 @@ class SphereModel:
     def cost(self, q: Any, margin: float = 0.0) -> tuple[float, float]:
         """:func:`penetration_cost` at ``q`` (Pinocchio kinematics)."""
         rot, pos, _ = self.body_kinematics(q)
-        return penetration_cost(rot, pos, *self.arrays(), float(margin), self.scratch())
+        return penetration_cost(rot, pos, *self.arrays(), float(margin), self.scratch())  # type: ignore[call-arg]
 
     def world_spheres(self, q: Any) -> tuple[FloatArray, FloatArray]:
         """World sphere centres ``(ns, 3)`` [m] and radii ``(ns,)`` at ``q`` (for drawing)."""
