@@ -1,0 +1,579 @@
+"""Robot collision geometry, self-collision pairs and the exact collision check (coal).
+
+The geometry is the URDF's ``<collision>`` elements, loaded by Pinocchio's
+``buildGeomFromUrdf`` (meshes and primitives become coal objects) on the full model and
+reduced with ``buildReducedModel`` to the solved chain, so every body follows the joint it
+is attached to after the off-chain joints are locked at ``robot.q_locked``.
+
+Self-collision pairs are the pairs of links with collision geometry, minus
+
+* **adjacent** links: a link and its nearest ancestor link that has collision geometry
+  (links joined by a joint, skipping links without geometry, as MoveIt does);
+* **rigid** pairs: links attached to the same joint of the reduced model (or both to the
+  world); their relative pose never changes, so a contact there would be a property of the
+  model, not of ``q``;
+* the pairs an SRDF disables (``<disable_collisions link1=… link2=…/>``).  The SRDF is given
+  or found next to the URDF (``<pkg>/srdf/<name>.srdf``; see :func:`find_srdf`), which covers
+  every arm of ``example-robot-data``;
+* without an SRDF, the pairs that collide in no sample or in at least 95 % of ``N = 2000``
+  configurations drawn uniformly within the limits (the rule of MoveIt's setup assistant,
+  "never in collision" / "always in collision"); the result is cached per URDF content in
+  :func:`cache_dir`.
+
+The exact check (:meth:`RobotCollision.check`) runs coal's ``collide`` (with the margin as
+security margin) and ``distance`` on every enabled pair: self pairs and every robot body
+against every obstacle of a :class:`~swarm_ik.scene.Scene`.
+"""
+
+from __future__ import annotations
+
+import hashlib
+import json
+import os
+import threading
+import warnings
+import xml.etree.ElementTree as ET
+from dataclasses import dataclass, field
+from itertools import combinations
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+import pinocchio as pin
+from numpy.typing import NDArray
+
+from swarm_ik.errors import RobotFileNotFoundError, RobotModelError, SwarmIKError
+from swarm_ik.scene import Scene, as_scene
+
+FloatArray = NDArray[np.float64]
+
+SAMPLES = 2000
+"""Random configurations of the no-SRDF rule (MoveIt's setup assistant uses 10,000 by
+default; 2000 already separates 'never' and 'always' pairs on the arms tested)."""
+
+ALWAYS_FRACTION = 0.95
+"""A pair colliding in at least this fraction of the samples is disabled ('always')."""
+
+_RULE_VERSION = 1
+
+
+def cache_dir() -> Path:
+    """Folder of swarm_ik's caches (sampled collision pairs, fitted spheres).
+
+    ``$SWARM_IK_CACHE_DIR``, else ``$XDG_CACHE_HOME/swarm_ik``, else ``~/.cache/swarm_ik``;
+    created on first use.
+    """
+    env = os.environ.get("SWARM_IK_CACHE_DIR")
+    if env:
+        d = Path(env)
+    else:
+        base = os.environ.get("XDG_CACHE_HOME") or str(Path.home() / ".cache")
+        d = Path(base) / "swarm_ik"
+    d.mkdir(parents=True, exist_ok=True)
+    return d
+
+
+def package_dirs(urdf_path: str | os.PathLike[str]) -> list[str]:
+    """Folders searched for ``package://`` meshes: the URDF's folder and its two parents (a
+    ``<pkg>/urdf/robot.urdf`` layout), the ``example-robot-data`` folders when installed,
+    and ``$ROS_PACKAGE_PATH`` (the resolver of :mod:`swarm_ik.viz`)."""
+    dirs: list[Path] = []
+    here = Path(urdf_path).resolve().parent
+    dirs += [here, here.parent, here.parent.parent]
+    try:
+        from swarm_ik.robot import example_robot_data_dir
+
+        erd = example_robot_data_dir()
+        dirs += [erd, erd.parent, erd.parent.parent]
+    except SwarmIKError:
+        pass
+    dirs += [Path(p) for p in os.environ.get("ROS_PACKAGE_PATH", "").split(os.pathsep) if p]
+    out: list[str] = []
+    for d in dirs:
+        s = str(d)
+        if s not in out and d.is_dir():
+            out.append(s)
+    return out
+
+
+# ------------------------------------------------------------------------------ SRDF
+def _robot_name(path: Path) -> str | None:
+    try:
+        return ET.parse(path).getroot().get("name")
+    except (ET.ParseError, OSError):
+        return None
+
+
+def find_srdf(urdf_path: str | os.PathLike[str]) -> Path | None:
+    """The SRDF shipped next to a URDF, or ``None``.
+
+    Looks in ``<urdf folder>/../srdf`` and the URDF's own folder for, in order:
+    ``<stem>.srdf``; ``<stem without "_robot">.srdf``; ``<robot name>.srdf``; the only
+    ``.srdf`` there whose ``<robot name>`` equals the URDF's.  (``ur5_robot.urdf`` →
+    ``ur5.srdf``; ``baxter.urdf`` → ``baxter_manipulation.srdf``.)
+    """
+    urdf = Path(urdf_path).resolve()
+    name = _robot_name(urdf)
+    folders = [d for d in (urdf.parent.parent / "srdf", urdf.parent) if d.is_dir()]
+    stems = [urdf.stem]
+    if urdf.stem.endswith("_robot"):
+        stems.append(urdf.stem[: -len("_robot")])
+    if name:
+        stems.append(name)
+    for d in folders:
+        for s in stems:
+            if (d / f"{s}.srdf").is_file():
+                return d / f"{s}.srdf"
+    for d in folders:
+        same = [p for p in sorted(d.glob("*.srdf")) if name and _robot_name(p) == name]
+        if len(same) == 1:
+            return same[0]
+    return None
+
+
+def parse_srdf(path: str | os.PathLike[str]) -> list[tuple[str, str, str]]:
+    """The ``<disable_collisions>`` entries of an SRDF: ``(link1, link2, reason)``.
+
+    Raises:
+        RobotFileNotFoundError: the file does not exist.
+        RobotModelError: not XML, or an entry without both links.
+    """
+    p = Path(path)
+    if not p.is_file():
+        raise RobotFileNotFoundError(f"SRDF file not found: {str(p)!r}")
+    try:
+        root = ET.parse(p).getroot()
+    except ET.ParseError as exc:
+        raise RobotModelError(f"{p}: not a valid XML file ({exc})") from None
+    out = []
+    for el in root.iter("disable_collisions"):
+        a, b = el.get("link1"), el.get("link2")
+        if not a or not b:
+            raise RobotModelError(
+                f"{p}: <disable_collisions> needs link1 and link2, got {el.attrib}"
+            )
+        out.append((a, b, el.get("reason", "")))
+    return out
+
+
+def _link_parents(urdf_path: Path) -> dict[str, str]:
+    """child link -> parent link, from the URDF's joints."""
+    root = ET.parse(urdf_path).getroot()
+    out = {}
+    for j in root.findall("joint"):
+        parent, child = j.find("parent"), j.find("child")
+        if parent is not None and child is not None:
+            out[str(child.get("link"))] = str(parent.get("link"))
+    return out
+
+
+def _key(a: str, b: str) -> tuple[str, str]:
+    return (a, b) if a <= b else (b, a)
+
+
+# ------------------------------------------------------------------------- the report
+@dataclass(frozen=True)
+class CollisionReport:
+    """Outcome of the exact check at one configuration.
+
+    Attributes:
+        collision_free: No pair closer than the margin (and none intersecting).
+        clearance: Smallest distance over the checked pairs [m]; ``<= 0`` for a contact
+            (intersecting meshes report 0, intersecting primitives minus the penetration
+            depth); ``inf`` when no pair is checked.
+        pairs_in_contact: Pairs ``(body, body)`` closer than the margin, by link name for the
+            robot and obstacle name for the scene, sorted.
+        closest_pair: The pair realising ``clearance`` (``None`` when no pair is checked).
+    """
+
+    collision_free: bool
+    clearance: float
+    pairs_in_contact: list[tuple[str, str]]
+    closest_pair: tuple[str, str] | None = None
+
+
+# ---------------------------------------------------------------------------- geometry
+@dataclass(eq=False)
+class RobotCollision:
+    """Collision geometry of a robot's chain model and its enabled self-collision pairs.
+
+    Build it with :meth:`from_robot`.
+
+    Attributes:
+        robot: The :class:`~swarm_ik.robot.RobotModel`.
+        geom_model: Pinocchio ``GeometryModel`` of the reduced (chain) model; body ``k`` is
+            ``geom_model.geometryObjects[k]``.
+        body_names: Geometry object names, shape ``(nb,)``.
+        body_links: Link of each body, shape ``(nb,)``.
+        body_joint: Reduced-model joint each body is attached to (0: the world), ``(nb,)``.
+        self_pairs: Enabled self-collision pairs of body indices ``(i, j)``, ``i < j``.
+        srdf_path: The SRDF used, or ``None``.
+        pair_rule: How the pairs were chosen (``"srdf"`` or ``"sampled"``).
+        disabled: Disabled link pairs by reason: ``"adjacent"``, ``"rigid"``, ``"srdf"``,
+            ``"never"``, ``"always"``.
+    """
+
+    robot: Any
+    geom_model: Any
+    body_names: tuple[str, ...]
+    body_links: tuple[str, ...]
+    body_joint: tuple[int, ...]
+    self_pairs: list[tuple[int, int]]
+    srdf_path: Path | None
+    pair_rule: str
+    disabled: dict[str, list[tuple[str, str]]]
+    _local: threading.local = field(default_factory=threading.local, repr=False)
+
+    @classmethod
+    def from_robot(
+        cls,
+        robot: Any,
+        srdf: str | os.PathLike[str] | bool | None = None,
+        *,
+        samples: int = SAMPLES,
+        seed: int = 0,
+        use_cache: bool = True,
+    ) -> RobotCollision:
+        """Load the collision geometry of ``robot`` and choose its self-collision pairs.
+
+        Args:
+            robot: A :class:`~swarm_ik.robot.RobotModel`.
+            srdf: An SRDF path; ``None`` finds one next to the URDF (:func:`find_srdf`);
+                ``False`` uses none (the sampling rule decides).
+            samples: Random configurations of the no-SRDF rule.
+            seed: Seed of those samples (part of the cache key).
+            use_cache: Read and write the sampled pairs in :func:`cache_dir`.
+
+        Raises:
+            RobotModelError: a mesh cannot be found, or the model has no collision geometry.
+            RobotFileNotFoundError: ``srdf`` does not exist.
+        """
+        urdf = Path(robot.urdf_path)
+        dirs = package_dirs(urdf)
+        with warnings.catch_warnings():
+            warnings.simplefilter("ignore")
+            try:
+                full_geom = pin.buildGeomFromUrdf(
+                    robot.full_model, str(urdf), pin.GeometryType.COLLISION, package_dirs=dirs
+                )
+            except ValueError as exc:
+                raise RobotModelError(
+                    f"{urdf}: cannot load the collision geometry ({exc}); searched {dirs} (add "
+                    "the package folder to ROS_PACKAGE_PATH)"
+                ) from None
+        if full_geom.ngeoms == 0:
+            raise RobotModelError(f"{urdf}: the URDF has no <collision> elements")
+        locked = [robot.full_model.getJointId(n) for n in robot.locked_joints]
+        if locked:
+            model, geom = pin.buildReducedModel(robot.full_model, full_geom, locked, robot.q_locked)
+            if list(model.names) != list(robot.model.names):
+                raise RobotModelError(f"{urdf}: reduced geometry model does not match the chain")
+        else:
+            geom = full_geom
+        objs = list(geom.geometryObjects)
+        names = tuple(g.name for g in objs)
+        links = tuple(robot.model.frames[g.parentFrame].name for g in objs)
+        joints = tuple(int(g.parentJoint) for g in objs)
+
+        link_joint: dict[str, int] = dict(zip(links, joints, strict=True))
+        link_set = sorted(link_joint)
+        disabled: dict[str, set[tuple[str, str]]] = {
+            k: set() for k in ("adjacent", "rigid", "srdf", "never", "always")
+        }
+        parents = _link_parents(urdf)
+        for link in link_set:
+            up = parents.get(link)
+            while up is not None and up not in link_joint:
+                up = parents.get(up)
+            if up is not None:
+                disabled["adjacent"].add(_key(link, up))
+        for a, b in combinations(link_set, 2):
+            if link_joint[a] == link_joint[b] and _key(a, b) not in disabled["adjacent"]:
+                disabled["rigid"].add(_key(a, b))
+        srdf_path: Path | None
+        if srdf is None or srdf is True:
+            srdf_path = find_srdf(urdf)
+        elif srdf is False:
+            srdf_path = None
+        else:
+            srdf_path = Path(os.fspath(srdf))
+        if srdf_path is not None:
+            for a, b, _ in parse_srdf(srdf_path):
+                if a in link_joint and b in link_joint and a != b:
+                    disabled["srdf"].add(_key(a, b))
+        off = set().union(*disabled.values())
+        candidates = [p for p in combinations(link_set, 2) if _key(*p) not in off]
+        rule = "srdf" if srdf_path is not None else "sampled"
+        if srdf_path is None and candidates:
+            never, always = _sampled_rule(
+                robot, geom, links, candidates, samples, seed, urdf, use_cache
+            )
+            disabled["never"] = set(never)
+            disabled["always"] = set(always)
+            off = set().union(*disabled.values())
+        pairs = [
+            (i, j)
+            for i, j in combinations(range(len(objs)), 2)
+            if links[i] != links[j] and _key(links[i], links[j]) not in off
+        ]
+        return cls(
+            robot=robot,
+            geom_model=geom,
+            body_names=names,
+            body_links=links,
+            body_joint=joints,
+            self_pairs=pairs,
+            srdf_path=srdf_path,
+            pair_rule=rule,
+            disabled={k: sorted(v) for k, v in disabled.items()},
+        )
+
+    @property
+    def nb(self) -> int:
+        """Number of collision bodies."""
+        return len(self.body_names)
+
+    @property
+    def self_link_pairs(self) -> list[tuple[str, str]]:
+        """Enabled self-collision pairs by link name, sorted."""
+        return sorted({_key(self.body_links[i], self.body_links[j]) for i, j in self.self_pairs})
+
+    def __getstate__(self) -> dict[str, Any]:
+        state = dict(self.__dict__)
+        state.pop("_local", None)
+        return state
+
+    def __setstate__(self, state: dict[str, Any]) -> None:
+        self.__dict__.update(state)
+        self._local = threading.local()
+
+    # -------------------------------------------------------------------- checking
+    def _checker(self, scene: Scene, self_collision: bool) -> _Checker:
+        """The pair set of a scene, with per-thread Pinocchio data (built once)."""
+        cache = getattr(self._local, "checkers", None)
+        if cache is None:
+            cache = self._local.checkers = {}
+        key = (scene, self_collision)
+        hit = cache.get(key)
+        if hit is None:
+            if len(cache) >= 32:  # many scenes in one thread: keep memory bounded
+                cache.clear()
+            hit = cache[key] = _Checker(self, scene, self_collision)
+        return hit
+
+    def check(
+        self,
+        q: Any,
+        scene: Scene | None = None,
+        margin: float = 0.0,
+        self_collision: bool = True,
+    ) -> CollisionReport:
+        """Exact check of configuration ``q`` with coal on the URDF collision geometry.
+
+        Contact is decided by coal's ``collide`` on every pair, with ``margin`` as security
+        margin.  The clearance is the exact smallest distance: coal's ``distance`` on the
+        pairs in contact, else on the pairs in order of a lower bound (the distance between
+        the convex hulls of the meshes, GJK), until the bound exceeds the best distance.
+
+        Args:
+            q: Chain joint vector (rad / m), shape ``(nq,)``.
+            scene: Obstacles (default: none).
+            margin: Bodies closer than this [m] count as in contact (``>= 0``).
+            self_collision: Check the enabled self-collision pairs too.
+
+        Returns:
+            The :class:`CollisionReport`.
+
+        Raises:
+            InvalidArgumentError: a bad ``q`` or ``margin``.
+        """
+        from swarm_ik.errors import InvalidArgumentError
+
+        margin = float(margin)
+        if not (np.isfinite(margin) and margin >= 0.0):
+            raise InvalidArgumentError(f"margin must be a finite number >= 0 [m], got {margin}")
+        q = self.robot.check_q(q)
+        return self._checker(as_scene(scene), bool(self_collision)).run(
+            self.robot.to_pinocchio(q), margin
+        )
+
+    def collides(
+        self, q: Any, scene: Scene | None = None, margin: float = 0.0, self_collision: bool = True
+    ) -> bool:
+        """Fast exact test: whether any pair is closer than ``margin`` [m] at ``q`` (coal's
+        ``collide`` only, no distance; same answer as ``not check(...).collision_free``)."""
+        q = self.robot.check_q(q)
+        ck = self._checker(as_scene(scene), bool(self_collision))
+        return ck.collide(self.robot.to_pinocchio(q), float(margin))
+
+    def body_placements(self, q: Any) -> tuple[FloatArray, FloatArray]:
+        """World poses of the collision bodies at ``q`` (Pinocchio):
+        rotations ``(nb, 3, 3)`` and positions ``(nb, 3)`` [m]."""
+        q = self.robot.check_q(q)
+        data = self.robot.model.createData()
+        gd = pin.GeometryData(self.geom_model)
+        pin.forwardKinematics(self.robot.model, data, self.robot.to_pinocchio(q))
+        pin.updateGeometryPlacements(self.robot.model, data, self.geom_model, gd)
+        rot = np.array([np.array(m.rotation) for m in gd.oMg])
+        pos = np.array([np.array(m.translation) for m in gd.oMg])
+        return rot, pos
+
+
+class _Checker:
+    """Geometry models (exact, and convex hulls for distance bounds), data and pair labels of
+    one (scene, self_collision) set of pairs."""
+
+    def __init__(self, rc: RobotCollision, scene: Scene, self_collision: bool) -> None:
+        import coal
+
+        self.model = rc.robot.model
+        self.data = rc.robot.model.createData()
+        gm = pin.GeometryModel()
+        for g in rc.geom_model.geometryObjects:
+            gm.addGeometryObject(pin.GeometryObject(g))
+        labels: list[tuple[str, str]] = []
+        if self_collision:
+            for i, j in rc.self_pairs:
+                gm.addCollisionPair(pin.CollisionPair(i, j))
+                labels.append(_key(rc.body_links[i], rc.body_links[j]))
+        for name, obj in scene.coal_objects():
+            tf = obj.getTransform()
+            placement = pin.SE3(np.array(tf.getRotation()), np.array(tf.getTranslation()))
+            oid = gm.addGeometryObject(
+                pin.GeometryObject(f"scene:{name}", 0, 0, placement, obj.collisionGeometry())
+            )
+            for k in range(rc.nb):
+                gm.addCollisionPair(pin.CollisionPair(k, oid))
+                labels.append((rc.body_links[k], name))
+        hm = pin.GeometryModel()
+        is_mesh = []
+        for g in gm.geometryObjects:
+            h = pin.GeometryObject(g)
+            mesh = isinstance(g.geometry, coal.BVHModelBase)
+            if mesh:
+                g.geometry.buildConvexHull(False, "Qt")  # qhull: the true hull
+                h.geometry = g.geometry.convex
+            is_mesh.append(mesh)
+            hm.addGeometryObject(h)
+        for cp in gm.collisionPairs:
+            hm.addCollisionPair(cp)
+        self.gm, self.hm = gm, hm
+        self.gd, self.hd = pin.GeometryData(gm), pin.GeometryData(hm)
+        self.labels = labels
+        self.exact_by_hull = np.array(
+            [not (is_mesh[cp.first] or is_mesh[cp.second]) for cp in gm.collisionPairs], dtype=bool
+        )
+        self.margin = 0.0
+
+    def _set_margin(self, margin: float) -> None:
+        if margin != self.margin:
+            for req in self.gd.collisionRequests:
+                req.security_margin = margin
+            self.margin = margin
+
+    def collide(self, q_pin: FloatArray, margin: float) -> bool:
+        """Whether any pair is in contact (stops at the first)."""
+        if not self.labels:
+            return False
+        self._set_margin(margin)
+        return bool(pin.computeCollisions(self.model, self.data, self.gm, self.gd, q_pin, True))
+
+    def run(self, q_pin: FloatArray, margin: float) -> CollisionReport:
+        """Check Pinocchio configuration ``q_pin`` of the chain model."""
+        gm, gd, hm, hd = self.gm, self.gd, self.hm, self.hd
+        self._set_margin(margin)
+        npairs = len(self.labels)
+        if npairs == 0:
+            return CollisionReport(True, float("inf"), [], None)
+        pin.forwardKinematics(self.model, self.data, q_pin)
+        pin.updateGeometryPlacements(self.model, self.data, gm, gd)
+        pin.computeCollisions(gm, gd, False)
+        hits = [k for k in range(npairs) if gd.collisionResults[k].isCollision()]
+        best, best_k = float("inf"), -1
+        if hits:
+            for k in hits:
+                pin.computeDistance(gm, gd, k)
+                d = float(gd.distanceResults[k].min_distance)
+                if d < best:
+                    best, best_k = d, k
+            if margin == 0.0:
+                best = min(best, 0.0)
+            contact = sorted({self.labels[k] for k in hits})
+            return CollisionReport(False, best, contact, self.labels[best_k])
+        pin.updateGeometryPlacements(self.model, self.data, hm, hd)
+        pin.computeDistances(hm, hd)
+        bound = np.array([hd.distanceResults[k].min_distance for k in range(npairs)])
+        for k in np.argsort(bound):
+            if bound[k] >= best:
+                break
+            if self.exact_by_hull[k]:
+                d = float(bound[k])
+            else:
+                pin.computeDistance(gm, gd, int(k))
+                d = float(gd.distanceResults[int(k)].min_distance)
+            if d < best:
+                best, best_k = d, int(k)
+        return CollisionReport(True, best, [], self.labels[best_k])
+
+
+# ---------------------------------------------------------------------- sampling rule
+def _sampled_rule(
+    robot: Any,
+    geom: Any,
+    links: tuple[str, ...],
+    candidates: list[tuple[str, str]],
+    samples: int,
+    seed: int,
+    urdf: Path,
+    use_cache: bool,
+) -> tuple[list[tuple[str, str]], list[tuple[str, str]]]:
+    """MoveIt's rule on the candidate link pairs: (never, always) in ``samples`` random
+    configurations, cached per URDF content, locked joints, samples and seed."""
+    h = hashlib.sha256()
+    h.update(urdf.read_bytes())
+    h.update(
+        json.dumps(
+            [
+                list(robot.locked_joints),
+                np.asarray(robot.q_locked).round(12).tolist(),
+                samples,
+                seed,
+                ALWAYS_FRACTION,
+                _RULE_VERSION,
+                sorted(candidates),
+            ]
+        ).encode()
+    )
+    path = cache_dir() / f"pairs-{h.hexdigest()[:20]}.json"
+    if use_cache and path.is_file():
+        try:
+            data = json.loads(path.read_text())
+            return [tuple(p) for p in data["never"]], [tuple(p) for p in data["always"]]  # type: ignore[misc]
+        except (json.JSONDecodeError, KeyError, TypeError):
+            pass
+    gm = pin.GeometryModel()
+    for g in geom.geometryObjects:
+        gm.addGeometryObject(pin.GeometryObject(g))
+    want = {_key(*p) for p in candidates}
+    pair_link: list[tuple[str, str]] = []
+    for i, j in combinations(range(gm.ngeoms), 2):
+        key = _key(links[i], links[j])
+        if links[i] != links[j] and key in want:
+            gm.addCollisionPair(pin.CollisionPair(i, j))
+            pair_link.append(key)
+    gd = pin.GeometryData(gm)
+    data = robot.model.createData()
+    rng = np.random.default_rng(seed)
+    counts = dict.fromkeys(want, 0)
+    for q in robot.random_q(rng, samples):
+        pin.computeCollisions(robot.model, data, gm, gd, robot.to_pinocchio(q), False)
+        hit = {pair_link[k] for k in range(len(pair_link)) if gd.collisionResults[k].isCollision()}
+        for key in hit:
+            counts[key] += 1
+    never = sorted(k for k, c in counts.items() if c == 0)
+    always = sorted(k for k, c in counts.items() if c >= ALWAYS_FRACTION * samples)
+    if use_cache:
+        tmp = path.with_suffix(f".tmp{os.getpid()}")
+        tmp.write_text(json.dumps({"never": never, "always": always, "samples": samples}))
+        tmp.replace(path)
+    return never, always

@@ -1,0 +1,185 @@
+"""Robot collision geometry, self-collision pairs (SRDF, adjacency, sampling) and the exact
+check against coal called directly."""
+
+from __future__ import annotations
+
+from itertools import combinations
+
+import coal
+import numpy as np
+import pinocchio as pin
+import pytest
+
+from swarm_ik.collision import RobotCollision, find_srdf, parse_srdf
+from swarm_ik.errors import InvalidArgumentError, RobotFileNotFoundError
+from swarm_ik.scene import Box, Capsule, Cylinder, Scene, Sphere
+
+_RC: dict[str, RobotCollision] = {}
+
+
+def collision(get_robot, name: str) -> RobotCollision:
+    if name not in _RC:
+        _RC[name] = RobotCollision.from_robot(get_robot(name))
+    return _RC[name]
+
+
+def scene_near_robot() -> Scene:
+    return Scene(
+        [
+            Box((1.2, 1.2, 0.04), (0.3, 0.0, -0.05), name="table"),
+            Sphere(0.12, (0.45, 0.15, 0.45)),
+            Capsule(0.05, 0.5, (0.0, 0.45, 0.4)),
+            Cylinder(0.06, 0.6, (-0.35, -0.25, 0.3)),
+        ]
+    )
+
+
+def _key(a: str, b: str) -> tuple[str, str]:
+    return (a, b) if a <= b else (b, a)
+
+
+def test_srdf_found_for_example_robot_data(get_robot) -> None:
+    for name, srdf in [("panda", "panda.srdf"), ("ur5", "ur5.srdf"), ("baxter_left", None)]:
+        found = find_srdf(get_robot(name).urdf_path)
+        if srdf is None:
+            assert found is not None and found.name == "baxter_manipulation.srdf"
+        else:
+            assert found is not None and found.name == srdf
+
+
+def test_panda_pairs_are_all_minus_adjacent_rigid_and_srdf(get_robot) -> None:
+    rc = collision(get_robot, "panda")
+    assert rc.pair_rule == "srdf" and rc.srdf_path is not None
+    links = sorted(set(rc.body_links))
+    srdf = {_key(a, b) for a, b, _ in parse_srdf(rc.srdf_path)}
+    adjacent = {_key(f"panda_link{i}", f"panda_link{i + 1}") for i in range(7)}
+    adjacent |= {("panda_hand", "panda_link7"), ("panda_hand", "panda_leftfinger")}
+    adjacent |= {("panda_hand", "panda_rightfinger")}
+    assert set(rc.disabled["adjacent"]) == adjacent
+    # fingers are locked: they ride on joint 7 with link 7 and the hand
+    assert ("panda_leftfinger", "panda_rightfinger") in rc.disabled["rigid"]
+    expected = {
+        _key(a, b)
+        for a, b in combinations(links, 2)
+        if _key(a, b) not in srdf | adjacent | set(rc.disabled["rigid"])
+    }
+    assert set(rc.self_link_pairs) == expected
+    assert ("panda_link1", "panda_link7") in expected  # a pair the SRDF keeps
+    assert not srdf & set(rc.self_link_pairs)
+    for i, j in rc.self_pairs:  # geometry pairs follow the link pairs
+        assert _key(rc.body_links[i], rc.body_links[j]) in expected
+
+
+def test_bad_srdf_path(get_robot, tmp_path) -> None:
+    with pytest.raises(RobotFileNotFoundError, match="nope.srdf"):
+        RobotCollision.from_robot(get_robot("ur5"), srdf=tmp_path / "nope.srdf")
+
+
+def _world_tf(rc: RobotCollision, data, k: int):
+    g = rc.geom_model.geometryObjects[k]
+    m = data.oMi[g.parentJoint] * g.placement
+    return coal.Transform3s(np.array(m.rotation), np.array(m.translation))
+
+
+def _reference(rc: RobotCollision, q, scene: Scene, margin: float):
+    """Contact pairs and smallest distance from coal.collide / coal.distance, pair by pair."""
+    robot = rc.robot
+    data = robot.model.createData()
+    pin.forwardKinematics(robot.model, data, robot.to_pinocchio(q))
+    tfs = [_world_tf(rc, data, k) for k in range(rc.nb)]
+    geoms = [g.geometry for g in rc.geom_model.geometryObjects]
+    pairs = [
+        (geoms[i], tfs[i], geoms[j], tfs[j], _key(rc.body_links[i], rc.body_links[j]))
+        for i, j in rc.self_pairs
+    ]
+    for name, obj in scene.coal_objects():
+        for k in range(rc.nb):
+            pairs.append(
+                (
+                    geoms[k],
+                    tfs[k],
+                    obj.collisionGeometry(),
+                    obj.getTransform(),
+                    (rc.body_links[k], name),
+                )
+            )
+    contact, best = set(), np.inf
+    for g1, t1, g2, t2, label in pairs:
+        req = coal.CollisionRequest()
+        req.security_margin = margin
+        res = coal.CollisionResult()
+        hit = coal.collide(g1, t1, g2, t2, req, res) > 0
+        d = coal.distance(g1, t1, g2, t2, coal.DistanceRequest(), coal.DistanceResult())
+        if hit or d < margin:
+            contact.add(label)
+        best = min(best, d)
+    return contact, best
+
+
+@pytest.mark.parametrize("name", ["panda", "ur5"])
+def test_exact_check_equals_coal(get_robot, name) -> None:
+    rc = collision(get_robot, name)
+    scene = scene_near_robot()
+    rng = np.random.default_rng(3)
+    free = hit = 0
+    for q in rc.robot.random_q(rng, 25):
+        for margin in (0.0, 0.03):
+            rep = rc.check(q, scene, margin=margin)
+            contact, best = _reference(rc, q, scene, margin)
+            assert set(rep.pairs_in_contact) == contact
+            assert rep.collision_free == (not contact)
+            assert rc.collides(q, scene, margin) == (not rep.collision_free)
+            if rep.collision_free:
+                assert rep.clearance == pytest.approx(best, abs=1e-9)
+                assert rep.clearance >= margin
+                free += 1
+            else:
+                assert rep.clearance <= max(margin, 0.0)
+                hit += 1
+    assert free > 5 and hit > 5  # both outcomes were exercised
+
+
+def test_self_collision_off_and_empty_scene(get_robot) -> None:
+    rc = collision(get_robot, "panda")
+    rng = np.random.default_rng(5)
+    for q in rc.robot.random_q(rng, 10):
+        rep = rc.check(q, Scene(), self_collision=False)
+        assert rep.collision_free and rep.clearance == np.inf
+    with pytest.raises(InvalidArgumentError, match="margin"):
+        rc.check(rc.robot.mid_q(), margin=-0.1)
+
+
+def test_sampled_rule_without_srdf(get_robot, tmp_path, monkeypatch) -> None:
+    """No SRDF: pairs colliding in none (or >= 95 %) of the seeded samples are disabled; the
+    classification is recomputed here with coal pair by pair."""
+    monkeypatch.setenv("SWARM_IK_CACHE_DIR", str(tmp_path))
+    robot = get_robot("ur5")
+    n = 150
+    rc = RobotCollision.from_robot(robot, srdf=False, samples=n, seed=7)
+    assert rc.pair_rule == "sampled" and rc.srdf_path is None
+    assert len(list(tmp_path.glob("pairs-*.json"))) == 1
+    links = sorted(set(rc.body_links))
+    off = set().union(*(set(rc.disabled[k]) for k in ("adjacent", "rigid")))
+    candidates = [_key(a, b) for a, b in combinations(links, 2) if _key(a, b) not in off]
+    counts = dict.fromkeys(candidates, 0)
+    data = robot.model.createData()
+    geoms = [g.geometry for g in rc.geom_model.geometryObjects]
+    for q in robot.random_q(np.random.default_rng(7), n):
+        pin.forwardKinematics(robot.model, data, robot.to_pinocchio(q))
+        tfs = [_world_tf(rc, data, k) for k in range(rc.nb)]
+        hit = set()
+        for i, j in combinations(range(rc.nb), 2):
+            key = _key(rc.body_links[i], rc.body_links[j])
+            if key in counts and coal.collide(
+                geoms[i], tfs[i], geoms[j], tfs[j], coal.CollisionRequest(), coal.CollisionResult()
+            ):
+                hit.add(key)
+        for key in hit:
+            counts[key] += 1
+    never = {k for k, c in counts.items() if c == 0}
+    always = {k for k, c in counts.items() if c >= 0.95 * n}
+    assert set(rc.disabled["never"]) == never and set(rc.disabled["always"]) == always
+    assert set(rc.self_link_pairs) == set(candidates) - never - always
+    assert never and set(rc.self_link_pairs)  # the rule did something, and left pairs
+    again = RobotCollision.from_robot(robot, srdf=False, samples=n, seed=7)  # from the cache
+    assert again.self_pairs == rc.self_pairs
