@@ -199,6 +199,9 @@ class IKProblem:
             isinstance(gl, Position) for gl in terms if gl.primary
         )
         self.primary = np.array([gl.primary for gl in terms], dtype=bool)
+        self.tree = robot.tree
+        """The kinematic tree the kernels evaluate: the robot's goal frames (first, in order)
+        and any frames the goals add (collision bodies)."""
         # angular errors in the se3 cost: w_rot (m/rad); position errors: 1
         self._table_cache: dict[Any, lm.GoalTable] = {}
         self.bounds = lm.Bounds(
@@ -267,7 +270,7 @@ class IKProblem:
         q2 = np.ascontiguousarray(np.atleast_2d(q_batch), dtype=float)
         err = np.empty((q2.shape[0], len(self.goals), 2))
         cost2 = np.empty(q2.shape[0])
-        lm.errors_batch(q2, self.robot.tree, self.table(q0), self.bounds, err, cost2)
+        lm.errors_batch(q2, self.tree, self.table(q0), self.bounds, err, cost2)
         return err
 
     def cost(self, q_batch: FloatArray, q0: FloatArray | None = None) -> FloatArray:
@@ -276,7 +279,7 @@ class IKProblem:
         q2 = np.ascontiguousarray(np.atleast_2d(q_batch), dtype=float)
         err = np.empty((q2.shape[0], len(self.goals), 2))
         cost2 = np.empty(q2.shape[0])
-        lm.errors_batch(q2, self.robot.tree, self.table(q0), self.bounds, err, cost2)
+        lm.errors_batch(q2, self.tree, self.table(q0), self.bounds, err, cost2)
         e = np.where(np.isnan(err), 0.0, err)[:, self.primary]
         return e[..., 0].sum(-1) + self.w_rot * e[..., 1].sum(-1) + SECONDARY_WEIGHT * 0.5 * cost2
 
@@ -318,7 +321,7 @@ class IKProblem:
         res = np.empty((pop, m))
         jac = np.empty((pop, m, self.nq))
         err = np.empty((pop, len(self.goals), 2))
-        lm.residuals_batch(q2, self.robot.tree, tab, self.bounds, True, res, jac, err)
+        lm.residuals_batch(q2, self.tree, tab, self.bounds, True, res, jac, err)
         return self.fitness(q2), res, jac
 
     def within_bounds(self, q: FloatArray, tol: float = 1e-12) -> bool:

@@ -125,7 +125,7 @@ class Polisher(NamedTuple):
             b.linear,
         )
         return cls(
-            problem.robot.tree,
+            problem.tree,
             problem.table(q0),
             bounds,
             cfg,
