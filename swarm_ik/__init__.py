@@ -24,6 +24,7 @@ from swarm_ik.pose import make_pose, project_to_se3
 from swarm_ik.problem import IKProblem
 from swarm_ik.result import Result
 from swarm_ik.robot import RobotModel, load_robot, robot_names
+from swarm_ik.scene import Scene
 
 __version__ = "0.1.0"
 
@@ -37,6 +38,7 @@ __all__ = [
     "RobotFileNotFoundError",
     "RobotModel",
     "RobotModelError",
+    "Scene",
     "SwarmIKError",
     "UnknownNameError",
     "load_robot",

@@ -36,8 +36,9 @@ def verify(problem: IKProblem, q: Any) -> tuple[float, float]:
 def unreachable_goal(problem: IKProblem) -> str | None:
     """A primary goal point beyond its frame's reach (:meth:`RobotModel.reach_radius`), if
     any: no joint vector can meet it.  Returns its label."""
-    from swarm_ik.goals import Pose, Position
+    from swarm_ik.goals import AvoidCollisions, Pose, Position
 
+    avoid = [gl for gl in problem.goals if isinstance(gl, AvoidCollisions) and gl.primary]
     for gl in problem.goals:
         if not gl.primary:
             continue
@@ -49,6 +50,10 @@ def unreachable_goal(problem: IKProblem) -> str | None:
             continue
         if float(np.linalg.norm(point)) > problem.robot.reach_radius(gl.frame) * (1 + 1e-9):
             return gl.describe()
+        for av in avoid:  # a goal point inside an obstacle: the robot would be in contact
+            inside = av.obstacle_containing(point)
+            if inside is not None:
+                return f"{gl.describe()} inside obstacle {inside!r}"
     return None
 
 
