@@ -193,10 +193,10 @@ def test_mimic_with_a_non_numeric_multiplier_is_refused(tmp_path: Path) -> None:
         swarm_ik.load_robot(_write(tmp_path, text))
 
 
-def test_mimic_on_the_chain_is_still_refused_clearly(tmp_path: Path) -> None:
+def test_mimic_on_the_chain_is_driven_by_its_driver(tmp_path: Path) -> None:
     text = _arm().replace(f"{LIMIT}</joint></robot>", f'{LIMIT}<mimic joint="j1"/></joint></robot>')
-    with pytest.raises(RobotModelError, match=r"joint 'j2' on the chain to 'c' mimics joint 'j1'"):
-        swarm_ik.load_robot(_write(tmp_path, text), ee_frame="c")
+    robot = swarm_ik.load_robot(_write(tmp_path, text), ee_frame="c")
+    assert robot.joint_names == ("j1",) and robot.mimic == {"j2": ("j1", 1.0, 0.0)}
 
 
 # ------------------------------------------------------------------- item 4: default frame
