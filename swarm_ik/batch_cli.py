@@ -286,7 +286,7 @@ def run_batch(args: argparse.Namespace) -> int:
     from swarm_ik._validate import check_output_path, read_targets_file
     from swarm_ik.errors import InvalidArgumentError
 
-    check_output_path(args.out, "--out", (".npz", ".csv"))  # before any work
+    check_output_path(args.out, "--out", (".csv", ".npz"))  # before any work
     if args.random is not None and args.random < 1:
         raise InvalidArgumentError(f"--random must be a positive count, got {args.random}")
     robot = _load(args)
@@ -340,7 +340,7 @@ def run_batch(args: argparse.Namespace) -> int:
 def run_reach(args: argparse.Namespace) -> int:
     """Handler of ``swarm-ik reach``; returns the exit code."""
     from swarm_ik import reach
-    from swarm_ik._validate import check_output_path
+    from swarm_ik._validate import check_grid_size, check_output_path, positive_float
 
     out = args.out if args.out is not None else Path(f"reach_{args.robot.replace('/', '_')}.npz")
     if out.suffix.lower() != ".npz":
@@ -350,10 +350,20 @@ def run_reach(args: argparse.Namespace) -> int:
     if not args.no_html:
         check_output_path(args.html or out.with_suffix(".html"), "--html")
     robot = _load(args)
+    # the grid's size is checked before anything is allocated (reach_map refuses too many
+    # poses only once the voxel centres exist); default_bounds with the same seed is what
+    # reach_map would compute itself, so the map is the same
+    if args.bounds is not None:
+        lo, hi = np.asarray(args.bounds[:3], float), np.asarray(args.bounds[3:], float)
+    else:
+        positive_float(args.resolution, "--resolution")
+        lo, hi = reach.default_bounds(robot, seed=args.seed)
+    check_grid_size(lo, hi, args.resolution)
+    bounds = np.concatenate([lo, hi])
     rmap = reach.reach_map(
         robot,
         resolution=args.resolution,
-        bounds=args.bounds,
+        bounds=bounds,
         n_orientations=args.orientations,
         seed=args.seed,
         tol_pos=args.tol_pos,

@@ -7,6 +7,7 @@ Every bad input listed in ``docs/robustness.md`` has a test here.  Bad URDFs are
 from __future__ import annotations
 
 import json
+import re
 import time
 import warnings
 from pathlib import Path
@@ -963,7 +964,7 @@ def _never(*args: object, **kwargs: object) -> None:
     [
         ("batch", "--out", lambda d: d, "is a folder"),
         ("batch", "--out", lambda d: d / "no" / "r.npz", "does not exist"),
-        ("batch", "--out", lambda d: d / "r.txt", "valid: .npz, .csv"),
+        ("batch", "--out", lambda d: d / "r.txt", "valid: .csv, .npz"),
         ("reach", "--out", lambda d: d / "no" / "m.npz", "does not exist"),
         ("reach", "--png", lambda d: d, "is a folder"),
         ("solve", "--html", lambda d: d / "no" / "s.html", "does not exist"),
@@ -1114,3 +1115,49 @@ def test_api_refuses_bad_input_with_a_swarmik_error(
             swarm_ik.solve_batch(yumi, yumi.fk(yumi.mid_q())[None], tol_pos="a")
         else:
             swarm_ik.verify(problem, [0, 0])
+
+
+# ---------------------------------------------------------- item 10: reach grid size
+@pytest.mark.parametrize(
+    ("resolution", "message"),
+    [
+        ("0.002", r"more than the cap of 10000000; use --resolution"),
+        ("1e-4", r"more than the cap of 10000000"),
+        ("0", r"--resolution must be a positive number, got 0.0"),
+        ("nan", r"--resolution must be a positive number"),
+    ],
+)
+def test_cli_reach_refuses_a_grid_too_large_before_allocating(
+    resolution: str, message: str, tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    t0 = time.perf_counter()
+    rc = main(
+        [
+            "reach",
+            "--robot",
+            "yumi_left",
+            "--resolution",
+            resolution,
+            "--out",
+            str(tmp_path / "m.npz"),
+            "--scheduler",
+            "none",
+        ]
+    )
+    err = capsys.readouterr().err.strip().splitlines()
+    assert rc == 2 and len(err) == 1 and re.search(message, err[0]), err
+    assert time.perf_counter() - t0 < 10.0  # refused, not killed for memory
+    assert not (tmp_path / "m.npz").exists()
+
+
+def test_grid_size_check_counts_without_allocating() -> None:
+    from swarm_ik._validate import check_grid_size, grid_cells
+    from swarm_ik.reach import grid_axes
+
+    lo, hi = np.array([-0.3, -0.2, 0.0]), np.array([0.4, 0.25, 0.9])
+    for res in (0.1, 0.07, 0.3):
+        x, y, z = grid_axes(lo, hi, res)
+        assert grid_cells(lo, hi, res) == x.size * y.size * z.size
+        assert check_grid_size(lo, hi, res) == x.size * y.size * z.size
+    with pytest.raises(InvalidArgumentError, match=r"use --resolution 0.0"):
+        check_grid_size(lo, hi, 1e-4)
