@@ -138,7 +138,7 @@ def read_targets_file(path: str | os.PathLike[str]) -> FloatArray:
     ) as exc:
         reason = " ".join(str(exc).split()) or type(exc).__name__
         if "allow_pickle" in reason:
-            reason = "it holds Python objects, not numbers (an object array)"
+            reason = "an object array of Python objects, not numbers"
         raise InvalidArgumentError(f"{path}: cannot read targets ({reason})") from None
 
 
