@@ -121,8 +121,8 @@ class LMSettings(NamedTuple):
 
         return LMSettings(
             max_iters=whole("max_iters", self.max_iters, 2),
-            lam0=num("lam0", self.lam0, 0.0, 1e6),
-            max_step=num("max_step", self.max_step, 0.0, 1e6),
+            lam0=num("lam0", self.lam0, 0.0, 1e12),
+            max_step=num("max_step", self.max_step, 0.0, math.inf),
             stall_rel=num("stall_rel", self.stall_rel, 0.0, 1.0, lo_open=False),
             stall_iters=whole("stall_iters", self.stall_iters, 1),
             tol_margin=num("tol_margin", self.tol_margin, 0.0, 1.0),
