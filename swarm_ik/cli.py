@@ -349,6 +349,9 @@ def main(argv: Sequence[str] | None = None) -> int:
         as_json = bool(getattr(args, "json", False))
         with warnings.catch_warnings():
             warnings.simplefilter("default")
+            # Dask's start-up chatter (dashboard port taken, sockets) is not the user's concern
+            warnings.filterwarnings("ignore", module=r"distributed(\.|$)")
+            warnings.filterwarnings("ignore", category=ResourceWarning)
             return _dispatch(parser, args)
     except UsageError as exc:
         return _fail(str(exc), EXIT_BAD_INPUT, as_json, "UsageError")
