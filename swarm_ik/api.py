@@ -27,7 +27,9 @@ def verify(problem: IKProblem, q: Any) -> tuple[float, float]:
     computed with Pinocchio's own FK (0 where no goal has such an error)."""
     if not isinstance(problem, IKProblem):
         raise InvalidArgumentError(f"problem must be an IKProblem, got {type(problem).__name__}")
-    errs = problem.verify(q)
+    from swarm_ik._validate import joint_vector
+
+    errs = problem.verify(joint_vector(problem.robot, q))
     dp = max((e.position_error for e in errs if not math.isnan(e.position_error)), default=0.0)
     dr = max((e.rotation_error for e in errs if not math.isnan(e.rotation_error)), default=0.0)
     return float(dp), float(dr)
@@ -215,7 +217,7 @@ def solve(
                 + ", ".join(able)
             )
         params = {**params, "prefer": prefer}
-    kwargs = spec.resolve(params)
+    kwargs = spec.resolve(params, dim=problem.nq)
     check_budget(max_evals, time_limit)
     for label, tol in (("tol_pos", tol_pos), ("tol_rot", tol_rot)):
         if not (is_finite_nonneg(tol) and float(tol) > 0):
