@@ -49,8 +49,8 @@ def test_foa_never_evaluates_negative_values_and_cannot_reach_a_negative_optimum
     rec = Recorder(shifted_sphere(centre))
     res = minimize(rec, lo, hi, "foa", seed=3, pop_size=30, iterations=100)
     rows = rec.rows
-    assert rows.shape[0] == 30 * 100 + 1  # m*t_max + 1 (paper 000, 2.2.5)
-    assert np.all(rows >= 0.0)  # S = 1/Dist > 0: the weakness paper 000 describes
+    assert rows.shape[0] == 30 * 100 + 1  # m*t_max + 1 ([HLFOA], 2.2.5)
+    assert np.all(rows >= 0.0)  # S = 1/Dist > 0: the weakness [HLFOA] describes
     # The best any non-negative point can do is the origin: sum(centre^2).
     assert res.fun >= float(np.sum(centre**2)) - 1e-12
     # ...while HLFOA's linear candidates reach the optimum.
@@ -83,7 +83,7 @@ def test_distinct_indices_are_distinct_and_uniform():
 
 
 def reference_hlfoa(objective, lo, hi, m, t_max, seed):
-    """Paper 000's HLFOA written plainly, one fly at a time, with the same random stream."""
+    """[HLFOA]'s HLFOA written plainly, one fly at a time, with the same random stream."""
     rng = np.random.default_rng(seed)
     n = lo.size
     x = rng.uniform(lo, hi, size=(m, n))
@@ -126,7 +126,7 @@ def test_hlfoa_realtime_evaluates_one_fly_at_a_time_and_differs_from_batch():
     rec_rt, rec_b = Recorder(shifted_sphere(SHIFT[:4])), Recorder(shifted_sphere(SHIFT[:4]))
     rt = minimize(rec_rt, lo, hi, "hlfoa", seed=5, pop_size=20, iterations=30)
     bt = minimize(rec_b, lo, hi, "hlfoa-batch", seed=5, pop_size=20, iterations=30)
-    assert rt.n_evals == bt.n_evals == 20 * 30 + 20  # m*t_max + m (paper 000, 2.2.5)
+    assert rt.n_evals == bt.n_evals == 20 * 30 + 20  # m*t_max + m ([HLFOA], 2.2.5)
     assert [len(b) for b in rec_rt.batches] == [20] + [1] * (20 * 30)
     assert [len(b) for b in rec_b.batches] == [20] * 31
     # Same random stream, same initial population, different update rule.

@@ -12,7 +12,6 @@ Specs only: nothing here runs a solver or writes a file (the runner is
 
 from __future__ import annotations
 
-import math
 from collections.abc import Sequence
 from dataclasses import dataclass, replace
 from functools import lru_cache
@@ -112,13 +111,13 @@ Q_EXACT = (
     3.2865382472506774,
     2.903761762991929,
 )
-"""Joint vector [rad] whose FK best fits paper 000's printed pose: bounded least squares on
+"""Joint vector [rad] whose FK best fits [HLFOA]'s printed pose: bounded least squares on
 the ``paper-l1`` residuals (position ×10 per metre, the 9 rotation entries) from
 :data:`swarm_ik.bench.published.P000_Q_PRINTED_DEG`; within the YuMi limits.  Its FK is the
 full-precision target of ``000-table2`` (b)."""
 
 PAPER000_SOLVERS = ("foa", "hlfoa", "gwo", "mgwo", "pso", "dls", "swarm")
-PAPER003_SOLVERS = ("gwo", "vagwo", "mgwo", "dls", "swarm")
+PAPER003_SOLVERS = ("gwo", "mgwo", "dls", "swarm")
 
 TOL = 1e-5
 """Success tolerance, ‖Δp‖ [m] and θ [rad], both judged with Pinocchio's FK."""
@@ -134,11 +133,11 @@ class Config:
     Attributes:
         name: ``"full"`` (the papers' settings) or ``"quick"``.
         runs_000: Runs per target and solver in 000 Table 2 (paper: 10).
-        iterations_000: Iterations in paper 000's experiments (paper: 1000).
-        pop_000: Population in paper 000's experiments (paper: 100).
+        iterations_000: Iterations in [HLFOA]'s experiments (paper: 1000).
+        pop_000: Population in [HLFOA]'s experiments (paper: 100).
         poses_000: Poses of 000 Table 4 (paper: 10).
         runs_000_t4: Runs per pose and solver in 000 Table 4.
-        runs_003: Runs per case and solver in paper 003's experiments (paper: 50).
+        runs_003: Runs per case and solver in [MGWO]'s experiments (paper: 50).
         pop_003: Wolves (paper: 30).
         iterations_003: Iterations (paper: 200).
         budget_poses: Poses per robot in the equal-budget experiment.
@@ -178,7 +177,7 @@ QUICK = Config(
     budget_seeds=1,
     budgets=(1_000, 10_000),
 )
-"""Reduced sizes of ``bench paper --quick`` (about a minute on a quiet 2-core machine)."""
+"""Reduced sizes of ``bench paper --quick`` (a few minutes on a quiet 2-core machine)."""
 
 
 def _flat(m: np.ndarray) -> tuple[float, ...]:
@@ -186,7 +185,7 @@ def _flat(m: np.ndarray) -> tuple[float, ...]:
 
 
 def printed_target() -> np.ndarray:
-    """Paper 000's printed target in metres (the matrix as printed, not projected)."""
+    """[HLFOA]'s printed target in metres (the matrix as printed, not projected)."""
     t = published.P000_TARGET_MM.copy()
     t[:3, 3] /= 1000.0
     return t
@@ -236,7 +235,7 @@ def arbitrary_poses(robot_name: str, n: int) -> list[np.ndarray]:
 
 
 def x_star_target(robot_name: str) -> np.ndarray:
-    """FK of paper 003's ``x*`` on the given loading-manipulator variant (x* itself lies
+    """FK of [MGWO]'s ``x*`` on the given loading-manipulator variant (x* itself lies
     outside the limits of both; its FK is the target)."""
     return np.asarray(_robot(robot_name).fk(np.asarray(published.P003_X_STAR)), dtype=float)
 
@@ -251,28 +250,23 @@ def available(solvers: Sequence[str]) -> tuple[list[str], list[str]]:
 
 
 def _paper_settings(solver: str, pop: int, iterations: int, budget: int) -> dict[str, Any]:
-    """Settings of one solver at a paper's population/iterations; non-population solvers get
-    the same evaluation budget."""
-    facts = published.solver_facts(solver)
-    if facts.evals_per_iteration == 1:
-        return {"iterations": budget, "max_evals": budget}
-    if facts.budget_only:
-        return {"max_evals": budget}
+    """Settings of one solver at a paper's population/iterations; a solver without a
+    population schedule (registry: ``budget_only`` or ``evals_per_iteration``) gets the same
+    evaluation budget instead."""
+    from swarm_ik import solvers as reg
+
+    spec = reg.get(solver)
+    if spec.budget_only or spec.evals_per_iteration is not None:
+        return spec.schedule(budget)
     return {"pop_size": pop, "iterations": iterations}
 
 
 def _budget_settings(solver: str, budget: int) -> dict[str, Any]:
-    """Settings for an evaluation budget: the solver's own population, enough iterations to
-    spend the budget (``⌈budget / pop⌉``), and ``max_evals = budget``."""
+    """Settings for an evaluation budget (:meth:`swarm_ik.solvers.base.SolverSpec.schedule`:
+    the solver's own population, enough iterations to spend the budget, ``max_evals``)."""
     from swarm_ik import solvers as reg
 
-    facts = published.solver_facts(solver)
-    if facts.evals_per_iteration == 1:
-        return {"iterations": budget, "max_evals": budget}
-    params = reg.get(solver).params
-    if facts.budget_only or "pop_size" not in params or "iterations" not in params:
-        return {"max_evals": budget}
-    return {"iterations": math.ceil(budget / int(params["pop_size"])), "max_evals": budget}
+    return reg.get(solver).schedule(budget)
 
 
 def specs_000_table2(cfg: Config) -> list[RunSpec]:

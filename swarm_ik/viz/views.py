@@ -5,7 +5,7 @@ the convergence animated), several configurations side by side or stepped throug
 from __future__ import annotations
 
 from collections.abc import Sequence
-from typing import Any
+from typing import Any, cast
 
 import numpy as np
 import pinocchio as pin
@@ -351,8 +351,9 @@ def several_solutions(
     if isinstance(n, bool) or not isinstance(n, (int, np.integer)) or n < 1:
         raise InvalidArgumentError(f"n must be a positive integer, got {n!r}")
     if solver is None:
-        found = list(
-            swarm_ik.solve_many(problem, n, min_distance=min_distance, seed=seed, **solve_kwargs)
+        found = cast(
+            "list[Result]",
+            swarm_ik.solve_many(problem, n, min_distance=min_distance, seed=seed, **solve_kwargs),
         )
         return found or [swarm_ik.solve(problem, seed=seed, **solve_kwargs)]
     robot = problem.robot
