@@ -92,19 +92,24 @@ def test_gwo_reproduces_paper_003_on_f1_and_f4():
     assert abs(f4 - FUNCTIONS["F4"].f_min) < 1e-2
 
 
+def niapy_problem(tf):
+    """A benchmark function of :mod:`swarm_ik.testfunctions` as a niapy ``Problem``."""
+    from niapy.problems import Problem
+
+    class Wrapped(Problem):
+        def __init__(self):
+            super().__init__(dimension=tf.dim, lower=tf.lower, upper=tf.upper)
+
+        def _evaluate(self, x):
+            return float(tf(np.asarray(x)[None])[0])
+
+    return Wrapped()
+
+
 def test_gwo_matches_niapy_grey_wolf_optimizer():
     niapy = pytest.importorskip("niapy", reason="cross-check needs niapy (pip install niapy)")
     from niapy.algorithms.basic import GreyWolfOptimizer
-    from niapy.problems import Problem
     from niapy.task import Task
-
-    class Wrapped(Problem):
-        def __init__(self, tf):
-            super().__init__(dimension=tf.dim, lower=tf.lower, upper=tf.upper)
-            self.tf = tf
-
-        def _evaluate(self, x):
-            return float(self.tf(np.asarray(x)[None])[0])
 
     assert niapy is not None
     for key in ("F1", "F3"):
@@ -112,7 +117,7 @@ def test_gwo_matches_niapy_grey_wolf_optimizer():
         theirs = np.mean(
             [
                 GreyWolfOptimizer(population_size=30, seed=s).run(
-                    Task(problem=Wrapped(tf), max_evals=30 * 200)
+                    Task(problem=niapy_problem(tf), max_evals=30 * 200)
                 )[1]
                 for s in range(3)
             ]
@@ -226,22 +231,13 @@ def test_cs_finds_the_hartmann3_minimum():
 def test_cs_matches_niapy_cuckoo_search():
     pytest.importorskip("niapy", reason="cross-check needs niapy (pip install niapy)")
     from niapy.algorithms.basic import CuckooSearch
-    from niapy.problems import Problem
     from niapy.task import Task
-
-    class Wrapped(Problem):
-        def __init__(self, tf):
-            super().__init__(dimension=tf.dim, lower=tf.lower, upper=tf.upper)
-            self.tf = tf
-
-        def _evaluate(self, x):
-            return float(self.tf(np.asarray(x)[None])[0])
 
     tf = FUNCTIONS["F1"]
     theirs = np.mean(
         [
             CuckooSearch(population_size=50, pa=0.25, seed=s).run(
-                Task(problem=Wrapped(tf), max_evals=5000)
+                Task(problem=niapy_problem(tf), max_evals=5000)
             )[1]
             for s in range(3)
         ]

@@ -21,8 +21,8 @@ Experiments (ids for ``--experiments``):
     ``success = false``).  GWO, MGWO, DLS and ``swarm`` on the same budget for context
     (VAGWO, not implemented here, is listed with its published numbers).
 ``budget``
-    Every registered solver against Pinocchio DLS on equal evaluation budgets, fitness ``se3``,
-    stopping at the tolerance (‖Δp‖ ≤ 1e-5 m and θ ≤ 1e-5 rad, judged with Pinocchio's FK).
+    Every registered search solver against Pinocchio DLS on equal evaluation budgets, fitness
+    ``se3``, stopping at the tolerance (‖Δp‖ ≤ 1e-5 m and θ ≤ 1e-5 rad, judged with Pinocchio's FK).
 
 Every run is one row of ``<experiment>.csv`` under ``--out`` (schema:
 :mod:`swarm_ik.bench.common`); ``report.md`` (its prose from ``templates/paper.md``) and the
@@ -42,6 +42,7 @@ import argparse
 import json
 import math
 import platform
+import re
 import sys
 import time
 from collections.abc import Callable, Mapping, Sequence
@@ -126,6 +127,11 @@ def _quick_why(cfg: Config) -> str | None:
     )
 
 
+def _g(v: float) -> str:
+    """A number for the prose: ``%g`` without the exponent's leading zero (``1e-5``)."""
+    return re.sub(r"e([+-])0(\d)", r"e\1\2", f"{v:g}")
+
+
 def _text(block: str, *, inline: bool = False, **values: Any) -> str:
     """A block of ``templates/paper.md`` (:func:`swarm_ik.bench.report.render_block`)."""
     return render_block("paper.md", block, inline=inline, **values)
@@ -151,7 +157,7 @@ def _setup_000(cfg: Config) -> str:
         paper_pop=FULL.pop_000,
         paper_iterations=FULL.iterations_000,
         budget=f"{cfg.pop_000 * (cfg.iterations_000 + 1):,}",
-        tol=f"{TOL:g}",
+        tol=_g(TOL),
     )
 
 
@@ -190,7 +196,7 @@ def _section_000_table2(cfg: Config, rows: list[dict[str, Any]], hl: Headline, o
                         q_floor=np.round(np.rad2deg(q_floor), 2).tolist(),
                         ours_best=fmt(ours_best),
                         paper_hlfoa=_published_mean(t, "hlfoa"),
-                        tol=f"{TOL:g}",
+                        tol=_g(TOL),
                     ),
                 ),
             ),
@@ -227,34 +233,56 @@ def _section_000_table2(cfg: Config, rows: list[dict[str, Any]], hl: Headline, o
     return _join(parts)
 
 
+Panel = tuple[str, Callable[[Mapping[str, Any]], bool], float]
+
+
+def _plot_pair(
+    exp_id: str,
+    out: Path,
+    rows: list[dict[str, Any]],
+    hist: dict[str, Any],
+    panels: Sequence[Panel],
+    solvers: Sequence[str],
+    title: str,
+    *,
+    refs: Sequence[tuple[float, str] | None] | None = None,
+    value: str = "fitness",
+) -> list[Path]:
+    """An experiment's two plots: convergence (``convergence_<id>.png``) and the final values
+    (``box_<id>.png``) of the registered ``solvers``, per panel."""
+    from swarm_ik.bench import plots
+
+    sol, _ = available(solvers)
+    written = (
+        plots.convergence(
+            out / f"convergence_{exp_id}.png",
+            rows,
+            hist,
+            panels,
+            sol,
+            title=title,
+            ylabel=f"best {value}",
+            refs=refs,
+        ),
+        plots.boxes(
+            out / f"box_{exp_id}.png", rows, panels, sol, title=title, ylabel=f"final {value}"
+        ),
+    )
+    return [p for p in written if p]
+
+
 def _plots_000_table2(
     cfg: Config, rows: list[dict[str, Any]], hist: dict[str, Any], out: Path
 ) -> list[Path]:
-    from swarm_ik.bench import plots
-
-    panels = [
+    panels: list[Panel] = [
         ("(a) printed pose", _by(target_id="printed"), 0.0),
         ("(b) full precision, FK(q*)", _by(target_id="exact"), 0.0),
     ]
-    sol, _ = available(PAPER000_SOLVERS)
-    t = "[HLFOA] Table 2 — YuMi left arm, fitness paper-l1"
-    floor = min(
-        printed_floor()[0],
-        min(r["fitness"] for r in rows if r["target_id"] == "printed")
-        if any(r["target_id"] == "printed" for r in rows)
-        else math.inf,
-    )
+    printed = [r["fitness"] for r in rows if r["target_id"] == "printed"]
+    floor = min(printed_floor()[0], min(printed, default=math.inf))
+    title = "[HLFOA] Table 2 — YuMi left arm, fitness paper-l1"
     refs = [(floor, f"rounding floor {floor:.3g}"), None]
-    return [
-        p
-        for p in (
-            plots.convergence(
-                out / "convergence_000-table2.png", rows, hist, panels, sol, title=t, refs=refs
-            ),
-            plots.boxes(out / "box_000-table2.png", rows, panels, sol, title=t),
-        )
-        if p
-    ]
+    return _plot_pair("000-table2", out, rows, hist, panels, PAPER000_SOLVERS, title, refs=refs)
 
 
 def _section_000_table4(cfg: Config, rows: list[dict[str, Any]], hl: Headline, out: Path) -> str:
@@ -291,19 +319,9 @@ def _section_000_table4(cfg: Config, rows: list[dict[str, Any]], hl: Headline, o
 def _plots_000_table4(
     cfg: Config, rows: list[dict[str, Any]], hist: dict[str, Any], out: Path
 ) -> list[Path]:
-    from swarm_ik.bench import plots
-
-    panels = [(f"{cfg.poses_000} arbitrary poses, all runs", lambda r: True, 0.0)]
-    sol, _ = available(PAPER000_SOLVERS)
-    t = "[HLFOA] Table 4 — YuMi left arm, arbitrary reachable poses"
-    return [
-        p
-        for p in (
-            plots.convergence(out / "convergence_000-table4.png", rows, hist, panels, sol, title=t),
-            plots.boxes(out / "box_000-table4.png", rows, panels, sol, title=t),
-        )
-        if p
-    ]
+    panels: list[Panel] = [(f"{cfg.poses_000} arbitrary poses, all runs", lambda r: True, 0.0)]
+    title = "[HLFOA] Table 4 — YuMi left arm, arbitrary reachable poses"
+    return _plot_pair("000-table4", out, rows, hist, panels, PAPER000_SOLVERS, title)
 
 
 def _f_min(key: str) -> float:
@@ -334,7 +352,7 @@ def _section_003_table3(cfg: Config, rows: list[dict[str, Any]], hl: Headline, o
             "setup-003-table3",
             cfg,
             hartmann_min=published.HARTMANN3_MIN,
-            f4_resolution=f"{published.P003_TABLE3['F4'].resolution:g}",
+            f4_resolution=_g(published.P003_TABLE3["F4"].resolution),
         ),
         "",
     ]
@@ -370,31 +388,11 @@ def _section_003_table3(cfg: Config, rows: list[dict[str, Any]], hl: Headline, o
 def _plots_003_table3(
     cfg: Config, rows: list[dict[str, Any]], hist: dict[str, Any], out: Path
 ) -> list[Path]:
-    from swarm_ik.bench import plots
-
-    panels = [
+    panels: list[Panel] = [
         (f"{k}: {t.caption}", _by(robot=k), _f_min(k)) for k, t in published.P003_TABLE3.items()
     ]
-    sol, _ = available(("gwo", "mgwo"))
-    t = "[MGWO] Table 3 — benchmark functions"
-    return [
-        p
-        for p in (
-            plots.convergence(
-                out / "convergence_003-table3.png",
-                rows,
-                hist,
-                panels,
-                sol,
-                title=t,
-                ylabel="best value",
-            ),
-            plots.boxes(
-                out / "box_003-table3.png", rows, panels, sol, title=t, ylabel="final value"
-            ),
-        )
-        if p
-    ]
+    title = "[MGWO] Table 3 — benchmark functions"
+    return _plot_pair("003-table3", out, rows, hist, panels, ("gwo", "mgwo"), title, value="value")
 
 
 def _stated_limits() -> dict[str, str]:
@@ -403,8 +401,8 @@ def _stated_limits() -> dict[str, str]:
     upper = common.cached_robot("loading_manipulator").upper
     return {
         "theta3_max": f"{np.rad2deg(upper[2]):.2f}",
-        "d_max": f"{upper[3]:g}",
-        "theta3_star": f"{np.rad2deg(published.P003_X_STAR[2]):g}",
+        "d_max": _g(upper[3]),
+        "theta3_star": _g(np.rad2deg(published.P003_X_STAR[2])),
     }
 
 
@@ -474,22 +472,12 @@ def _section_003_table4(cfg: Config, rows: list[dict[str, Any]], hl: Headline, o
 def _plots_003_table4(
     cfg: Config, rows: list[dict[str, Any]], hist: dict[str, Any], out: Path
 ) -> list[Path]:
-    from swarm_ik.bench import plots
-
-    panels = [
+    panels: list[Panel] = [
         ("loading_manipulator_long (reachable)", _by(robot="loading_manipulator_long"), 0.0),
         ("loading_manipulator, stated limits (unreachable)", _by(robot="loading_manipulator"), 0.0),
     ]
-    sol, _ = available(PAPER003_SOLVERS)
-    t = "[MGWO] Table 4 — loading manipulator, target FK(x*), fitness euler-zyz"
-    return [
-        p
-        for p in (
-            plots.convergence(out / "convergence_003-table4.png", rows, hist, panels, sol, title=t),
-            plots.boxes(out / "box_003-table4.png", rows, panels, sol, title=t),
-        )
-        if p
-    ]
+    title = "[MGWO] Table 4 — loading manipulator, target FK(x*), fitness euler-zyz"
+    return _plot_pair("003-table4", out, rows, hist, panels, PAPER003_SOLVERS, title)
 
 
 def _section_budget(cfg: Config, rows: list[dict[str, Any]], hl: Headline, out: Path) -> str:
@@ -498,7 +486,7 @@ def _section_budget(cfg: Config, rows: list[dict[str, Any]], hl: Headline, out: 
         _text(
             "setup-budget",
             budgets=", ".join(f"{b:,}" for b in cfg.budgets),
-            tol=f"{TOL:g}",
+            tol=_g(TOL),
             poses=cfg.budget_poses,
             runs=cfg.budget_seeds,
         ),
@@ -522,7 +510,7 @@ def _plots_budget(
         rows,
         ["yumi_left", "loading_manipulator_long"],
         budget_solvers(),
-        title=f"Success rate (‖Δp‖ ≤ {TOL:g} m, θ ≤ {TOL:g} rad) on equal evaluation budgets",
+        title=f"Success rate (‖Δp‖ ≤ {_g(TOL)} m, θ ≤ {_g(TOL)} rad) on equal evaluation budgets",
     )
     return [p] if p else []
 
@@ -670,9 +658,9 @@ def build_report(cfg: Config, out: Path, experiments: Sequence[str] | None = Non
             quick_title=" (QUICK run)" if quick else "",
             command="swarm-ik bench paper" + (" --quick" if quick else ""),
             quick_note=_text("quick") + "\n" if quick else "",
-            tol=f"{TOL:g}",
-            factor=f"{common.VERDICT_FACTOR:g}",
-            ik_floor=f"{IK_FLOOR:g}",
+            tol=_g(TOL),
+            factor=_g(common.VERDICT_FACTOR),
+            ik_floor=_g(IK_FLOOR),
             environment=", ".join(f"{k} {v}" for k, v in env.items()),
             last_invocation=last,
             headline=render_headline(hl),

@@ -12,7 +12,7 @@ Specs only: nothing here runs a solver or writes a file (the runner is
 
 from __future__ import annotations
 
-from collections.abc import Sequence
+from collections.abc import Callable, Sequence
 from dataclasses import dataclass, replace
 from functools import lru_cache
 from typing import Any
@@ -269,55 +269,72 @@ def _budget_settings(solver: str, budget: int) -> dict[str, Any]:
     return reg.get(solver).schedule(budget)
 
 
+Case = tuple[str, str, np.ndarray, float]
+"""An IK case of an experiment: ``(robot, target id, 4x4 target, orth_tol)``."""
+
+
+def _ik_runs(
+    experiment: str,
+    cases: Sequence[Case],
+    solvers: Sequence[str],
+    runs: int,
+    settings: Callable[[str], dict[str, Any]],
+    fitness_name: str,
+    **fixed: Any,
+) -> list[RunSpec]:
+    """The runs of an IK experiment: cases × solvers × seeds ``0 … runs-1``, in that order.
+
+    Args:
+        experiment: Experiment id.
+        cases: The cases (:data:`Case`).
+        solvers: Registry names.
+        runs: Seeds per case and solver.
+        settings: Solver -> its :class:`RunSpec` settings (``pop_size``, ``max_evals``, …).
+        fitness_name: IK fitness.
+        **fixed: Further :class:`RunSpec` fields shared by every run.
+    """
+    return [
+        RunSpec(
+            experiment,
+            robot,
+            tid,
+            s,
+            seed,
+            fitness_name,
+            _flat(target),
+            orth_tol=orth,
+            tol_pos=TOL,
+            tol_rot=TOL,
+            **fixed,
+            **settings(s),
+        )
+        for robot, tid, target, orth in cases
+        for s in solvers
+        for seed in range(runs)
+    ]
+
+
+def _settings_000(cfg: Config) -> Callable[[str], dict[str, Any]]:
+    budget = cfg.pop_000 * (cfg.iterations_000 + 1)
+    return lambda s: _paper_settings(s, cfg.pop_000, cfg.iterations_000, budget)
+
+
 def specs_000_table2(cfg: Config) -> list[RunSpec]:
     """Runs of 000 Table 2: both targets × solvers × runs."""
+    cases = [
+        ("yumi_left", "printed", printed_target(), 1e-4),
+        ("yumi_left", "exact", exact_target(), 1e-6),
+    ]
     solvers, _ = available(PAPER000_SOLVERS)
-    budget = cfg.pop_000 * (cfg.iterations_000 + 1)
-    out = []
-    for tid, target, orth in (("printed", printed_target(), 1e-4), ("exact", exact_target(), 1e-6)):
-        for s in solvers:
-            for seed in range(cfg.runs_000):
-                out.append(
-                    RunSpec(
-                        "000-table2",
-                        "yumi_left",
-                        tid,
-                        s,
-                        seed,
-                        "paper-l1",
-                        _flat(target),
-                        orth_tol=orth,
-                        tol_pos=TOL,
-                        tol_rot=TOL,
-                        **_paper_settings(s, cfg.pop_000, cfg.iterations_000, budget),
-                    )
-                )
-    return out
+    return _ik_runs("000-table2", cases, solvers, cfg.runs_000, _settings_000(cfg), "paper-l1")
 
 
 def specs_000_table4(cfg: Config) -> list[RunSpec]:
     """Runs of 000 Table 4: poses × solvers × runs."""
+    poses = arbitrary_poses("yumi_left", cfg.poses_000)
+    cases = [("yumi_left", f"pose{i}", t, 1e-6) for i, t in enumerate(poses)]
     solvers, _ = available(PAPER000_SOLVERS)
-    budget = cfg.pop_000 * (cfg.iterations_000 + 1)
-    out = []
-    for i, target in enumerate(arbitrary_poses("yumi_left", cfg.poses_000)):
-        for s in solvers:
-            for seed in range(cfg.runs_000_t4):
-                out.append(
-                    RunSpec(
-                        "000-table4",
-                        "yumi_left",
-                        f"pose{i}",
-                        s,
-                        seed,
-                        "paper-l1",
-                        _flat(target),
-                        tol_pos=TOL,
-                        tol_rot=TOL,
-                        **_paper_settings(s, cfg.pop_000, cfg.iterations_000, budget),
-                    )
-                )
-    return out
+    return _ik_runs("000-table4", cases, solvers, cfg.runs_000_t4, _settings_000(cfg), "paper-l1")
 
 
 def specs_003_table3(cfg: Config) -> list[RunSpec]:
@@ -333,35 +350,28 @@ def specs_003_table3(cfg: Config) -> list[RunSpec]:
 
 def specs_003_table4(cfg: Config) -> list[RunSpec]:
     """Runs of 003 Table 4: both robot variants × solvers × runs."""
-    solvers, _ = available(PAPER003_SOLVERS)
     budget = cfg.pop_003 * cfg.iterations_003
-    out = []
-    for robot in ("loading_manipulator_long", "loading_manipulator"):
-        target = x_star_target(robot)
-        for s in solvers:
-            for seed in range(cfg.runs_003):
-                out.append(
-                    RunSpec(
-                        "003-table4",
-                        robot,
-                        "x*",
-                        s,
-                        seed,
-                        "euler-zyz",
-                        _flat(target),
-                        tol_pos=TOL,
-                        tol_rot=TOL,
-                        **_paper_settings(s, cfg.pop_003, cfg.iterations_003, budget),
-                    )
-                )
-    return out
+    cases = [
+        (robot, "x*", x_star_target(robot), 1e-6)
+        for robot in ("loading_manipulator_long", "loading_manipulator")
+    ]
+    solvers, _ = available(PAPER003_SOLVERS)
+    return _ik_runs(
+        "003-table4",
+        cases,
+        solvers,
+        cfg.runs_003,
+        lambda s: _paper_settings(s, cfg.pop_003, cfg.iterations_003, budget),
+        "euler-zyz",
+    )
 
 
 def budget_solvers() -> list[str]:
-    """Every registered solver, DLS and ``swarm`` first."""
+    """Every registered search solver (closed-form ones, which solve only particular chains,
+    left out), DLS and ``swarm`` first."""
     from swarm_ik import solvers as reg
 
-    names = reg.names()
+    names = reg.search_names()
     first = [s for s in ("dls", "swarm") if s in names]
     return first + [s for s in names if s not in first]
 
@@ -381,28 +391,21 @@ def budget_targets(cfg: Config) -> list[tuple[str, str, np.ndarray]]:
 
 def specs_budget(cfg: Config) -> list[RunSpec]:
     """Runs of the equal-budget experiment: targets × budgets × every solver × seeds."""
-    out = []
-    for robot, tid, target in budget_targets(cfg):
-        for b in cfg.budgets:
-            for s in budget_solvers():
-                for seed in range(cfg.budget_seeds):
-                    out.append(
-                        RunSpec(
-                            "budget",
-                            robot,
-                            tid,
-                            s,
-                            seed,
-                            "se3",
-                            _flat(target),
-                            stop_on_success=True,
-                            tol_pos=TOL,
-                            tol_rot=TOL,
-                            keep_history=False,
-                            **_budget_settings(s, b),
-                        )
-                    )
-    return out
+    return [
+        spec
+        for robot, tid, target in budget_targets(cfg)
+        for b in cfg.budgets
+        for spec in _ik_runs(
+            "budget",
+            [(robot, tid, target, 1e-6)],
+            budget_solvers(),
+            cfg.budget_seeds,
+            lambda s, b=b: _budget_settings(s, b),
+            "se3",
+            stop_on_success=True,
+            keep_history=False,
+        )
+    ]
 
 
 # --------------------------------------------------------------------------- bench ik
