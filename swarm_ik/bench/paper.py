@@ -142,6 +142,16 @@ def _published_mean(table: published.PublishedTable, solver: str, stat: str = "m
     return fmt(row.stats.get(stat) if row is not None else None)
 
 
+def _closing(solvers: Sequence[str], out: Path, exp_id: str, value: str = "fitness") -> list[str]:
+    """The end of an experiment's section: solvers not registered, then its two plots."""
+    label = exp_id.replace("-table", " Table ")
+    return [
+        *_missing_note(solvers),
+        _img(out, f"convergence_{exp_id}.png", f"convergence, {label}"),
+        _img(out, f"box_{exp_id}.png", f"final {value}, {label}"),
+    ]
+
+
 def _missing_note(solvers: Sequence[str]) -> list[str]:
     _, missing = available(solvers)
     if not missing:
@@ -226,9 +236,7 @@ def _section_000_table2(cfg: Config, rows: list[dict[str, Any]], hl: Headline, o
             hl,
             "000-table2",
         ),
-        *_missing_note(sol),
-        _img(out, "convergence_000-table2.png", "convergence, 000 Table 2"),
-        _img(out, "box_000-table2.png", "final fitness, 000 Table 2"),
+        *_closing(sol, out, "000-table2"),
     ]
     return _join(parts)
 
@@ -309,9 +317,7 @@ def _section_000_table4(cfg: Config, rows: list[dict[str, Any]], hl: Headline, o
         "Mean fitness per pose:",
         "",
         per_target_means(rows, available(sol)[0]),
-        *_missing_note(sol),
-        _img(out, "convergence_000-table4.png", "convergence, 000 Table 4"),
-        _img(out, "box_000-table4.png", "final fitness, 000 Table 4"),
+        *_closing(sol, out, "000-table4"),
     ]
     return _join(parts)
 
@@ -378,9 +384,7 @@ def _section_003_table3(cfg: Config, rows: list[dict[str, Any]], hl: Headline, o
             )
         )
     parts += [
-        *_missing_note(("gwo", "mgwo")),
-        _img(out, "convergence_003-table3.png", "convergence, 003 Table 3"),
-        _img(out, "box_003-table3.png", "final values, 003 Table 3"),
+        *_closing(("gwo", "mgwo"), out, "003-table3", value="values"),
     ]
     return _join(parts)
 
@@ -462,9 +466,7 @@ def _section_003_table4(cfg: Config, rows: list[dict[str, Any]], hl: Headline, o
             hl,
             "003-table4",
         ),
-        *_missing_note(sol),
-        _img(out, "convergence_003-table4.png", "convergence, 003 Table 4"),
-        _img(out, "box_003-table4.png", "final fitness, 003 Table 4"),
+        *_closing(sol, out, "003-table4"),
     ]
     return _join(parts)
 
