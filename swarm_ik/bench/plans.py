@@ -14,7 +14,7 @@ from __future__ import annotations
 
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass, replace
-from functools import lru_cache
+from functools import lru_cache, partial
 from typing import Any
 
 import numpy as np
@@ -400,7 +400,7 @@ def specs_budget(cfg: Config) -> list[RunSpec]:
             [(robot, tid, target, 1e-6)],
             budget_solvers(),
             cfg.budget_seeds,
-            lambda s, b=b: _budget_settings(s, b),
+            partial(_budget_settings, budget=b),
             "se3",
             stop_on_success=True,
             keep_history=False,
