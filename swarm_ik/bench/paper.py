@@ -84,7 +84,8 @@ from swarm_ik.bench.report import (
     render_comparison,
     render_headline,
 )
-from swarm_ik.errors import InvalidArgumentError
+from swarm_ik.errors import InvalidArgumentError, unknown
+from swarm_ik.testfunctions import FUNCTIONS
 
 
 # --------------------------------------------------------------------------- experiments
@@ -331,8 +332,6 @@ def _plots_000_table4(
 
 
 def _f_min(key: str) -> float:
-    from swarm_ik.testfunctions import FUNCTIONS
-
     return published.HARTMANN3_MIN if key == "F4" else float(FUNCTIONS[key].f_min)
 
 
@@ -755,7 +754,6 @@ def config_from_args(args: argparse.Namespace) -> tuple[Config, Path, list[str]]
             (the valid forms listed).
     """
     from swarm_ik import distributed
-    from swarm_ik.errors import unknown
 
     distributed.check_scheduler(getattr(args, "scheduler", None))
     cfg = QUICK if args.quick else FULL

@@ -19,6 +19,7 @@ from typing import Any
 
 import numpy as np
 
+from swarm_ik import solvers as reg
 from swarm_ik.bench import published
 from swarm_ik.bench.common import cached_robot as _robot
 from swarm_ik.errors import InvalidArgumentError
@@ -243,8 +244,6 @@ def x_star_target(robot_name: str) -> np.ndarray:
 # --------------------------------------------------------------------------- specs
 def available(solvers: Sequence[str]) -> tuple[list[str], list[str]]:
     """``(registered, missing)`` among ``solvers``, order kept."""
-    from swarm_ik import solvers as reg
-
     names = set(reg.names())
     return [s for s in solvers if s in names], [s for s in solvers if s not in names]
 
@@ -253,8 +252,6 @@ def _paper_settings(solver: str, pop: int, iterations: int, budget: int) -> dict
     """Settings of one solver at a paper's population/iterations; a solver without a
     population schedule (registry: ``budget_only`` or ``evals_per_iteration``) gets the same
     evaluation budget instead."""
-    from swarm_ik import solvers as reg
-
     spec = reg.get(solver)
     if spec.budget_only or spec.evals_per_iteration is not None:
         return spec.schedule(budget)
@@ -264,8 +261,6 @@ def _paper_settings(solver: str, pop: int, iterations: int, budget: int) -> dict
 def _budget_settings(solver: str, budget: int) -> dict[str, Any]:
     """Settings for an evaluation budget (:meth:`swarm_ik.solvers.base.SolverSpec.schedule`:
     the solver's own population, enough iterations to spend the budget, ``max_evals``)."""
-    from swarm_ik import solvers as reg
-
     return reg.get(solver).schedule(budget)
 
 
@@ -369,8 +364,6 @@ def specs_003_table4(cfg: Config) -> list[RunSpec]:
 def budget_solvers() -> list[str]:
     """Every registered search solver (closed-form ones, which solve only particular chains,
     left out), DLS and ``swarm`` first."""
-    from swarm_ik import solvers as reg
-
     names = reg.search_names()
     first = [s for s in ("dls", "swarm") if s in names]
     return first + [s for s in names if s not in first]

@@ -13,6 +13,7 @@ import pinocchio as pin
 from numpy.typing import NDArray
 
 from swarm_ik import collision
+from swarm_ik.errors import RobotModelError
 from swarm_ik.robot import RobotModel
 
 FloatArray = NDArray[np.float64]
@@ -34,8 +35,6 @@ def visual_model(robot: RobotModel) -> Any:
     Raises:
         RobotModelError: a mesh cannot be found (the message names it).
     """
-    from swarm_ik.errors import RobotModelError
-
     try:
         return pin.buildGeomFromUrdf(
             robot.full_model,

@@ -11,7 +11,7 @@ import numpy as np
 import pinocchio as pin
 from numpy.typing import NDArray
 
-from swarm_ik.errors import InvalidArgumentError
+from swarm_ik.errors import InvalidArgumentError, unknown
 from swarm_ik.problem import IKProblem
 from swarm_ik.result import Result
 from swarm_ik.robot import RobotModel
@@ -241,8 +241,6 @@ def show_configurations(
         UnknownNameError: unknown layout (the valid ones listed).
         InvalidArgumentError: no configuration given, or one of the wrong length.
     """
-    from swarm_ik.errors import unknown
-
     if layout not in LAYOUTS:
         raise unknown("layout", layout, LAYOUTS)
     if len(qs) == 0:
