@@ -174,9 +174,9 @@ def test_evaluating_never_overdraws_the_budget(planar: swarm_ik.RobotModel) -> N
 
 def test_charging_refuses_an_overdraft_and_counts_work_done_after_the_time_limit() -> None:
     ev = _sphere_ev(4)
-    with pytest.raises(swarm_ik.InvalidArgumentError, match="budget has 4 left"):
+    with pytest.raises(swarm_ik.InvalidArgumentError, match="remaining budget is 4"):
         ev.record(np.zeros((5, 2)), np.zeros(5))
-    with pytest.raises(swarm_ik.InvalidArgumentError, match="budget has 4 left"):
+    with pytest.raises(swarm_ik.InvalidArgumentError, match="remaining budget is 4"):
         ev.add_evals(5)
     assert ev.n_evals == 0
     late = _sphere_ev(10, time_limit=1e-9)

@@ -191,7 +191,7 @@ class Evaluator:
             q_batch: Joint vectors, shape ``(pop, n)``.
 
         Returns:
-            ``(fitness (pop,), err (pop, 6), jac (pop, 6, n))`` as
+            ``(fitness (pop,), err (pop, rows), jac (pop, rows, n))`` as
             :meth:`swarm_ik.problem.IKProblem.residual_jacobian`; rows not evaluated (past
             the budget, or once :attr:`done`) have fitness ``+inf`` and NaN error and Jacobian.
 
@@ -205,14 +205,15 @@ class Evaluator:
             )
         q_batch = np.atleast_2d(np.asarray(q_batch, dtype=float))
         pop = q_batch.shape[0]
-        f = np.full(pop, np.inf)
-        err = np.full((pop, 6), np.nan)
-        jac = np.full((pop, 6, self.dim), np.nan)
         k = self._granted(pop)
+        fk, ek, jk = self.problem.residual_jacobian(q_batch[:k])  # k = 0: the shapes only
+        f = np.full(pop, np.inf)
+        err = np.full((pop, *np.shape(ek)[1:]), np.nan)
+        jac = np.full((pop, *np.shape(jk)[1:]), np.nan)
         if k <= 0:
             return f, err, jac
-        fk, err[:k], jac[:k] = self.problem.residual_jacobian(q_batch[:k])
-        f[:k] = self._charge(k, q_batch[:k], fk)
+        err[:k], jac[:k] = ek, jk
+        f[:k] = self._charge(k, q_batch[:k], np.asarray(fk, dtype=float))
         return f, err, jac
 
     def record(self, x_batch: FloatArray, f: FloatArray) -> FloatArray:
@@ -267,8 +268,8 @@ class Evaluator:
         """
         if n < 0 or n > self.remaining:
             raise InvalidArgumentError(
-                f"{who or 'evaluate'}: {n} evaluations charged but the budget has "
-                f"{self.remaining} left; n must be in [0, {self.remaining}]"
+                f"{who or 'evaluate'}: {n} evaluations charged but the remaining budget is "
+                f"{self.remaining}; n must be in [0, {self.remaining}]"
             )
         self.n_evals += n
         if x_batch is None or f is None:
