@@ -30,8 +30,10 @@ near a straight elbow two branches of a UR5 are only 0.065 rad apart.
 from __future__ import annotations
 
 import itertools
+import math
 from typing import TYPE_CHECKING, Any
 
+import numba
 import numpy as np
 import pinocchio as pin
 from numpy.typing import NDArray
@@ -174,6 +176,83 @@ def windings(q: Any, lower: Any, upper: Any, periodic: BoolArray) -> FloatArray:
     ranges = [range(int(a), int(b) + 1) for a, b in zip(m_min, m_max, strict=True)]
     shifts = np.array(list(itertools.product(*ranges)), dtype=float).reshape(-1, q.shape[0])
     return np.clip(q + TWO_PI * shifts, lower, upper)
+
+
+# --------------------------------------------------------------------- verification
+@numba.njit(cache=True)
+def pose_errors_of(
+    m: FloatArray, target: FloatArray, dp: FloatArray, dr: FloatArray
+) -> None:  # pragma: no cover - compiled
+    """Position error [m] into ``dp`` ``(k,)`` and geodesic angle [rad] into ``dr`` (atan2 of
+    the skew and trace parts of ``Rᵀ_target·R``, as :func:`swarm_ik.kernels.lie.angle`) of
+    each pose ``m[i]`` ``(k, 4, 4)`` against ``target`` ``(4, 4)``."""
+    for i in range(m.shape[0]):
+        s2 = 0.0
+        for a in range(3):
+            s2 += (m[i, a, 3] - target[a, 3]) ** 2
+        dp[i] = math.sqrt(s2)
+        rel = np.empty((3, 3))
+        for a in range(3):
+            for b in range(3):
+                v = 0.0
+                for c in range(3):
+                    v += target[c, a] * m[i, c, b]
+                rel[a, b] = v
+        sx = rel[2, 1] - rel[1, 2]
+        sy = rel[0, 2] - rel[2, 0]
+        sz = rel[1, 0] - rel[0, 1]
+        trace = rel[0, 0] + rel[1, 1] + rel[2, 2]
+        dr[i] = math.atan2(math.sqrt(sx * sx + sy * sy + sz * sz), trace - 1.0)
+
+
+def pose_errors(problem: IKProblem, qs: Any) -> tuple[FloatArray, FloatArray]:
+    """Largest primary position [m] and angular [rad] errors of each row of ``qs`` with
+    Pinocchio's own FK, as :func:`swarm_ik.verify` reports them.
+
+    A single-pose problem (one primary :class:`~swarm_ik.goals.Pose` or
+    :class:`~swarm_ik.goals.Position` goal) takes the direct route:
+    ``pinocchio.forwardKinematics`` + ``updateFramePlacement`` of the goal frame per row
+    (≈ 1.3 µs each on a UR5) and the errors of all rows in a few vectorised NumPy operations;
+    any other problem calls :func:`swarm_ik.verify` row by row.
+
+    Args:
+        problem: The IK problem.
+        qs: Joint vectors, shape ``(k, nq)``.
+
+    Returns:
+        ``(dp (k,), dr (k,))``; ``dr`` is 0 for a position-only goal.
+    """
+    from swarm_ik.goals import Pose, Position
+
+    qs = np.asarray(qs, dtype=float).reshape(-1, problem.nq)
+    goal = problem.goals[0] if len(problem.goals) == 1 else None
+    if not isinstance(goal, (Pose, Position)) or not goal.primary:
+        from swarm_ik.api import verify
+
+        errs = np.array([verify(problem, q) for q in qs]).reshape(-1, 2)
+        return errs[:, 0].copy(), errs[:, 1].copy()
+    robot = problem.robot
+    model = robot.model
+    fid = robot.frame_ids[robot.frame_index(goal.frame)]
+    data = robot._data()  # the robot's per-thread Pinocchio Data (as fk_pinocchio uses)
+    fk, upd = pin.forwardKinematics, pin.updateFramePlacement
+    k = qs.shape[0]
+    m = np.empty((k, 4, 4))
+    if model.nq == robot.nq:
+        for i in range(k):
+            fk(model, data, qs[i])
+            m[i] = upd(model, data, fid).homogeneous
+    else:
+        for i in range(k):
+            fk(model, data, robot.to_pinocchio(qs[i]))
+            m[i] = upd(model, data, fid).homogeneous
+    if isinstance(goal, Position):
+        d = m[:, :3, 3] - goal.point
+        return np.sqrt(np.einsum("ki,ki->k", d, d)), np.zeros(k)
+    dp = np.empty(k)
+    dr = np.empty(k)
+    pose_errors_of(m, goal.target, dp, dr)
+    return dp, dr
 
 
 # ----------------------------------------------------------------------- polishing

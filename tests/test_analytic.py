@@ -78,6 +78,7 @@ def test_unreachable_pose_gives_empty_set():
 
 def test_missing_eaik_message(monkeypatch):
     import builtins
+    import sys
 
     robot = swarm_ik.load_robot("ur3")  # not cached by another test
     analytic._CACHE.pop(robot, None)
@@ -89,6 +90,8 @@ def test_missing_eaik_message(monkeypatch):
         return real_import(name, *args, **kwargs)
 
     monkeypatch.setattr(builtins, "__import__", fake)
+    for mod in [m for m in sys.modules if m == "eaik" or m.startswith("eaik.")]:
+        monkeypatch.delitem(sys.modules, mod)
     assert not analytic.eaik_available()
     problem = swarm_ik.IKProblem.from_q(robot, np.zeros(6))
     with pytest.raises(analytic.AnalyticUnavailableError, match=r"swarm_ik\[analytic\]"):
