@@ -38,6 +38,8 @@ import numpy as np
 import pinocchio as pin
 from numpy.typing import NDArray
 
+from swarm_ik.errors import InvalidArgumentError
+
 if TYPE_CHECKING:
     from swarm_ik.problem import IKProblem
     from swarm_ik.robot import RobotModel
@@ -276,7 +278,10 @@ def refine(
     """
     robot = problem.robot
     model, data, fid = robot.model, robot.model.createData(), robot.ee_frame_id
-    o_m_t = pin.SE3(problem.target[:3, :3].copy(), problem.target[:3, 3].copy())
+    target = problem.target
+    if target is None:
+        raise InvalidArgumentError("refine needs a single-pose problem (one target)")
+    o_m_t = pin.SE3(target[:3, :3].copy(), target[:3, 3].copy())
     lo, hi = problem.lower, problem.upper
     best = np.array(q, dtype=float)
 

@@ -156,9 +156,7 @@ class _Hops:
         self._bound: int | None = None
         if n == 6 and self.revolute.all():
             origins = np.array([self.data.oMi[j + 1].translation for j in range(n)])
-            spherical = any(
-                _through_one_point(origins[k : k + 3], axes[k : k + 3]) for k in (0, 3)
-            )
+            spherical = any(_through_one_point(origins[k : k + 3], axes[k : k + 3]) for k in (0, 3))
             self._bound = 8 if (self.parallel or spherical) else 16
 
     def elbow(self, q: FloatArray) -> list[FloatArray]:
@@ -193,7 +191,7 @@ class _Hops:
         n = q.shape[0]
         rev = self.revolute
         first = self.elbow(q)
-        second = []
+        second: list[FloatArray] = []
         for j in range(n - 2):
             if rev[j : j + 3].all():
                 a = q.copy()
@@ -384,15 +382,19 @@ def solve_many(
             tol_pos, tol_rot, batch, max_starts, max_iters, patience, t0,
         )  # fmt: skip
         qs_all = np.array([r[0] for r in reps]).reshape(-1, problem.nq)
-        fits = problem.fitness(qs_all) if reps else np.empty(0)
+        fit_all = problem.fitness(qs_all) if reps else np.empty(0)
         order = np.argsort(
-            branch_distance(qs_all, ref, periodic_mask(problem.robot, problem.lower, problem.upper)),
+            branch_distance(
+                qs_all, ref, periodic_mask(problem.robot, problem.lower, problem.upper)
+            ),
             kind="stable",
         )
-        results = [
-            _result(*reps[i], float(fits[i]), SOLVER_NAME, seed_label)  # type: ignore[misc]
-            for i in order
-        ]
+        results = []
+        for i in order:
+            q_i, dp_i, dr_i, ev_i, t_i = reps[i]
+            results.append(
+                _result(q_i, dp_i, dr_i, ev_i, t_i, float(fit_all[i]), SOLVER_NAME, seed_label)
+            )
     if not windings:
         return results
     return [_with_windings(problem, r, ref) for r in results]
@@ -419,7 +421,7 @@ def _result(
     solver: str,
     seed: int | None,
 ) -> Result:
-    kw = {
+    kw: dict[str, Any] = {
         "q": np.array(q, dtype=float),
         "fitness": fit,
         "position_error": float(dp),

@@ -87,6 +87,31 @@ def machine_speed() -> float:
     return best * 1e6
 
 
+def _analytic_costs(problem: Any, ref: np.ndarray, n: int) -> dict[str, float]:
+    """µs per call of the analytic path's parts and wholes on one target."""
+    import swarm_ik
+    from swarm_ik.branches import pose_errors
+    from swarm_ik.kernels import lm
+    from swarm_ik.solvers import analytic
+
+    chain = analytic.analytic_chain(problem.robot)
+    err = np.empty((ref.shape[0], 1, 2))
+    c2 = np.empty(ref.shape[0])
+    tab = problem.table(None)
+    return {
+        "eaik_us": _per_call_us(lambda: chain.solver.calculate_IK(problem.target), 100),
+        "pinocchio_check_us": _per_call_us(lambda: pose_errors(problem, ref), 100),
+        "kernel_check_us": _per_call_us(
+            lambda: lm.errors_batch(ref, problem.tree, tab, problem.bounds, err, c2), 100
+        ),
+        "solve_all_us": _per_call_us(lambda: analytic.solve_all(problem), 100),
+        "solve_many_analytic_us": _per_call_us(
+            lambda: swarm_ik.solve_many(problem, n=n, method="analytic"), 100
+        ),
+        "solver_analytic_us": _per_call_us(lambda: swarm_ik.solve(problem, "analytic"), 50),
+    }
+
+
 def run_arm(name: str, n_targets: int, n: int, seed: int, reps: int = 3) -> list[dict[str, Any]]:
     """One row per target and path (``numerical``, ``analytic``).
 
@@ -94,8 +119,7 @@ def run_arm(name: str, n_targets: int, n: int, seed: int, reps: int = 3) -> list
     the load of a shared machine; ``wall_first_ms`` is the first of them.
     """
     import swarm_ik
-    from swarm_ik.branches import pose_errors, revolute_mask
-    from swarm_ik.kernels import lm
+    from swarm_ik.branches import revolute_mask
     from swarm_ik.solvers import analytic
 
     robot = swarm_ik.load_robot(name)
@@ -110,22 +134,7 @@ def run_arm(name: str, n_targets: int, n: int, seed: int, reps: int = 3) -> list
         problem = swarm_ik.IKProblem.from_q(robot, q)
         ref = analytic.solve_all(problem)[0]
         gen_in_ref = bool(_match(q[None], ref, wrap_all).any())
-        chain = analytic.analytic_chain(robot)
-        us = {
-            "eaik_us": _per_call_us(lambda: chain.solver.calculate_IK(problem.target), 100),
-            "solve_all_us": _per_call_us(lambda: analytic.solve_all(problem), 100),
-            "solve_many_analytic_us": _per_call_us(
-                lambda: swarm_ik.solve_many(problem, n=n, method="analytic"), 100
-            ),
-            "solver_analytic_us": _per_call_us(lambda: swarm_ik.solve(problem, "analytic"), 50),
-            "pinocchio_check_us": _per_call_us(lambda: pose_errors(problem, ref), 100),
-        }
-        err = np.empty((ref.shape[0], 1, 2))
-        c2 = np.empty(ref.shape[0])
-        tab = problem.table(None)
-        us["kernel_check_us"] = _per_call_us(
-            lambda: lm.errors_batch(ref, problem.tree, tab, problem.bounds, err, c2), 100
-        )
+        us = _analytic_costs(problem, ref, n)
         for path in ("numerical", "analytic"):
             wall_first = float("nan")
             wall = float("inf")
@@ -297,7 +306,8 @@ def summarize(
     for arm in arms:
         rr = [r for r in rows if r["arm"] == arm and r["path"] == "analytic"]
         lines.append(
-            f"| {arm} | " + " | ".join(f"{np.median([r[k] for r in rr]):.1f}" for k, _ in keys)
+            f"| {arm} | "
+            + " | ".join(f"{np.median([r[k] for r in rr]):.1f}" for k, _ in keys)
             + " |"
         )
     if spread:
@@ -340,8 +350,9 @@ def run(args: argparse.Namespace) -> int:
     spread = run_spread(args.n, args.n_targets, args.seed)
     _write_csv(args.out / "many.csv", rows)
     _write_csv(args.out / "spread.csv", spread)
-    load = "load average {:.1f} / {:.1f} / {:.1f} on {} cores at the end".format(
-        *os.getloadavg(), os.cpu_count()
+    la = os.getloadavg()
+    load = (
+        f"load average {la[0]:.1f} / {la[1]:.1f} / {la[2]:.1f} on {os.cpu_count()} cores at the end"
     )
     md = summarize(rows, spread, args.n, min(speed, machine_speed()), load)
     (args.out / "many.md").write_text(md)

@@ -345,6 +345,7 @@ def solve_supported(
     chain = _CACHE[robot]
     lo, hi = problem.lower, problem.upper
     target = problem.target
+    assert target is not None  # support() accepted the problem: one pose target
     sol = chain.solver.calculate_IK(target)
     qs = sol.Q
     k = qs.shape[0]
@@ -384,7 +385,7 @@ def fitness_of_errors(
     computes the same sum from its own FK, equal to round-off), else :meth:`IKProblem.fitness`.
     """
     goals = problem.goals
-    if problem.fitness_name == "se3" and len(goals) == 1 and goals[0].primary:
+    if problem.fitness_name == "se3" and len(goals) == 1 and bool(problem.primary[0]):
         return (dp + problem.w_rot * dr).tolist()
     return problem.fitness(qs).tolist() if qs.shape[0] else []
 
