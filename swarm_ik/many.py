@@ -34,6 +34,7 @@ from typing import Any
 import numba
 import numpy as np
 import pinocchio as pin
+from numpy.typing import NDArray
 
 from swarm_ik.api import prepare_q0
 from swarm_ik.branches import (
@@ -69,6 +70,10 @@ _HOP_SKIP = 0.05
 """A hop start within this wrapped distance (rad) of a known branch is not polished."""
 _MAX_WALKS = 4
 """Most near-singular valleys walked per call (:func:`_valley_roots`)."""
+_WALK_ERR = 1e-3
+"""A start that stalled with pose errors below this (m, rad)…"""
+_WALK_SIGMA = 1e-3
+"""…and a smallest Jacobian singular value below this lies on a near-singular valley."""
 _WALK_NEAR = 0.1
 """A stalled start within this distance (rad) of a valley already walked starts no walk."""
 _WALK_STEP = 0.08
@@ -158,6 +163,7 @@ class _Hops:
             origins = np.array([self.data.oMi[j + 1].translation for j in range(n)])
             spherical = any(_through_one_point(origins[k : k + 3], axes[k : k + 3]) for k in (0, 3))
             self._bound = 8 if (self.parallel or spherical) else 16
+        self._flips()
 
     def elbow(self, q: FloatArray) -> list[FloatArray]:
         """Exact elbow mirrors of ``q`` (one per parallel triple)."""
@@ -180,38 +186,46 @@ class _Hops:
             out.append(hop)
         return out
 
-    def __call__(self, q: FloatArray) -> tuple[FloatArray, FloatArray]:
-        """Hop starts from the branch ``q``: ``(first, second)``, each ``(k, nq)``.
+    def _flips(self) -> None:
+        """The flips as ``q·S + O`` rows: sign ``S`` and offset ``O`` matrices per tier."""
+        n = self.robot.nq
+        rev = self.revolute
+        rows: list[list[tuple[FloatArray, FloatArray]]] = [[], []]
+        for j in range(n - 2):  # wrist flips (q_j + π, −q_{j+1}, q_{j+2} + π)
+            if rev[j : j + 3].all():
+                sg, off = np.ones(n), np.zeros(n)
+                sg[j + 1] = -1.0
+                off[j] = off[j + 2] = np.pi
+                rows[0 if j == n - 3 else 1].append((sg, off))
+        for j in range(n - 3):  # shoulder flips (q_j + π, π − q_{j+1}, −q_{j+2}, π − q_{j+3})
+            if rev[j : j + 4].all():
+                sg, off = np.ones(n), np.zeros(n)
+                sg[j + 1 : j + 4] = -1.0
+                off[j] = off[j + 1] = off[j + 3] = np.pi
+                rows[0 if j == 0 else 1].append((sg, off))
+        for j in map(int, np.flatnonzero(rev)):  # each joint turned by π
+            sg, off = np.ones(n), np.zeros(n)
+            off[j] = np.pi
+            rows[1].append((sg, off))
+        self.sign = [np.array([r[0] for r in t]).reshape(-1, n) for t in rows]
+        self.offset = [np.array([r[1] for r in t]).reshape(-1, n) for t in rows]
+
+    def __call__(self, qs: FloatArray) -> tuple[FloatArray, FloatArray]:
+        """Hop starts from the branches ``qs`` ``(b, nq)``: ``(first, second)``, each
+        ``(k, nq)``.
 
         ``first``: the elbow mirrors, the wrist flip of the last three joints and the shoulder
         flip of the first four (on a UR5 they land on a new branch 78–100 % of the time);
         ``second``: the other flips and the π turns (9–86 %), tried only when the first ones
         are spent.
         """
-        n = q.shape[0]
-        rev = self.revolute
-        first = self.elbow(q)
-        second: list[FloatArray] = []
-        for j in range(n - 2):
-            if rev[j : j + 3].all():
-                a = q.copy()
-                a[j] += np.pi
-                a[j + 1] = -a[j + 1]
-                a[j + 2] += np.pi
-                (first if j == n - 3 else second).append(a)
-        for j in range(n - 3):
-            if rev[j : j + 4].all():
-                a = q.copy()
-                a[j] += np.pi
-                a[j + 1] = np.pi - a[j + 1]
-                a[j + 2] = -a[j + 2]
-                a[j + 3] = np.pi - a[j + 3]
-                (first if j == 0 else second).append(a)
-        for j in map(int, np.flatnonzero(rev)):
-            a = q.copy()
-            a[j] += np.pi
-            second.append(a)
-        return np.array(first).reshape(-1, n), np.array(second).reshape(-1, n)
+        n = qs.shape[1]
+        elbows = [h for q in qs for h in self.elbow(q)]
+        first = (qs[:, None, :] * self.sign[0] + self.offset[0]).reshape(-1, n)
+        second = (qs[:, None, :] * self.sign[1] + self.offset[1]).reshape(-1, n)
+        if elbows:
+            first = np.vstack([np.array(elbows), first])
+        return first, second
 
     def bound(self) -> int | None:
         """Most branches of a full pose (modulo 2π), from the chain's structure: 8 for a 6R
@@ -466,63 +480,126 @@ def _redundant(problem: IKProblem) -> bool:
     return problem.nq > task
 
 
+@numba.njit(cache=True)
+def _fold_rows(
+    qs: FloatArray,
+    lo: FloatArray,
+    hi: FloatArray,
+    rev: NDArray[np.bool_],
+    ref: FloatArray,
+    out: FloatArray,
+    ok: NDArray[np.bool_],
+) -> None:  # pragma: no cover - compiled
+    """Per row of ``qs``: the in-limit 2π copy nearest to ``ref``, joint by joint (revolute
+    joints), clipped into the bounds; ``ok`` False when some joint has no in-limit copy."""
+    inv = 1.0 / TWO_PI
+    for s in range(qs.shape[0]):
+        good = True
+        for j in range(qs.shape[1]):
+            q = qs[s, j]
+            if rev[j]:
+                m_min = math.ceil((lo[j] - 1e-9 - q) * inv)
+                m_max = math.floor((hi[j] + 1e-9 - q) * inv)
+                if m_min > m_max:
+                    good = False
+                m = min(max(round((ref[j] - q) * inv), m_min), m_max)
+                q = q + TWO_PI * m
+            elif q < lo[j] - 1e-9 or q > hi[j] + 1e-9:
+                good = False
+            out[s, j] = min(max(q, lo[j]), hi[j])
+        ok[s] = good
+
+
+@numba.njit(cache=True)
+def _min_dist2(
+    qs: FloatArray, kept: FloatArray, periodic: NDArray[np.bool_], out: FloatArray
+) -> None:  # pragma: no cover - compiled
+    """Squared wrapped distance of each row of ``qs`` to its nearest row of ``kept``."""
+    for s in range(qs.shape[0]):
+        best = np.inf
+        for r in range(kept.shape[0]):
+            d2 = 0.0
+            for j in range(qs.shape[1]):
+                e = qs[s, j] - kept[r, j]
+                if periodic[j]:
+                    e = (e + math.pi) % TWO_PI - math.pi
+                d2 += e * e
+                if d2 >= best:
+                    break
+            if d2 < best:
+                best = d2
+        out[s] = best
+
+
+@numba.njit(cache=True)
+def _new_rows(
+    qs: FloatArray,
+    kept: FloatArray,
+    periodic: NDArray[np.bool_],
+    tol2: float,
+    out: NDArray[np.int64],
+) -> int:  # pragma: no cover - compiled
+    """Rows of ``qs`` farther than ``√tol2`` (wrapped) from every row of ``kept`` and from
+    every earlier row picked (greedy, in order) into ``out``; returns how many."""
+    c = 0
+    n = qs.shape[1]
+    for s in range(qs.shape[0]):
+        fresh = True
+        for r in range(kept.shape[0] + c):
+            d2 = 0.0
+            for j in range(n):
+                other = kept[r, j] if r < kept.shape[0] else qs[out[r - kept.shape[0]], j]
+                e = qs[s, j] - other
+                if periodic[j]:
+                    e = (e + math.pi) % TWO_PI - math.pi
+                d2 += e * e
+            if d2 < tol2:
+                fresh = False
+                break
+        if fresh:
+            out[c] = s
+            c += 1
+    return c
+
+
 class _Folder:
-    """Vectorised :func:`~swarm_ik.branches.nearest_winding` for one problem and reference,
-    and the wrapped distance to the branches kept so far."""
+    """Nearest in-limit 2π copies (:func:`~swarm_ik.branches.nearest_winding`) for one problem
+    and reference, and wrapped distances to the branches kept so far (compiled)."""
 
     def __init__(self, lower: FloatArray, upper: FloatArray, revolute: Any, periodic: Any,
                  ref: FloatArray) -> None:  # fmt: skip
-        self.lo, self.hi = lower, upper
-        self.lo_s, self.hi_s = lower - 1e-9, upper + 1e-9
-        self.rev = revolute.astype(float)
-        self.any_rev = bool(revolute.any())
-        self.periodic = periodic
-        self.any_periodic = bool(periodic.any())
-        self.ref = ref
+        self.lo = np.ascontiguousarray(lower, dtype=float)
+        self.hi = np.ascontiguousarray(upper, dtype=float)
+        self.rev = np.ascontiguousarray(revolute, dtype=np.bool_)
+        self.periodic = np.ascontiguousarray(periodic, dtype=np.bool_)
+        self.ref = np.ascontiguousarray(ref, dtype=float)
         self.kept = np.empty((0, lower.shape[0]))
 
     def __call__(self, qs: FloatArray) -> tuple[FloatArray, Any]:
         """The in-limit copies nearest to the reference ``(k, nq)`` and whether each has one."""
-        if not self.any_rev:
-            return qs, np.all((qs >= self.lo_s) & (qs <= self.hi_s), axis=-1)
-        inv = 1.0 / TWO_PI
-        m_min = np.ceil((self.lo_s - qs) * inv)
-        m_max = np.floor((self.hi_s - qs) * inv)
-        m = np.minimum(np.maximum(np.rint((self.ref - qs) * inv), m_min), m_max) * self.rev
-        out = np.minimum(np.maximum(qs + TWO_PI * m, self.lo), self.hi)
-        ok = np.all((m_min <= m_max) | (self.rev == 0.0), axis=-1)
+        qs = np.ascontiguousarray(qs, dtype=float)
+        out = np.empty_like(qs)
+        ok = np.empty(qs.shape[0], dtype=np.bool_)
+        _fold_rows(qs, self.lo, self.hi, self.rev, self.ref, out, ok)
         return out, ok
-
-    def delta(self, a: FloatArray, b: FloatArray) -> FloatArray:
-        """Squared wrapped distances between the rows of ``a`` ``(m, nq)`` and ``b``
-        ``(k, nq)``: ``(m, k)``."""
-        d = a[:, None, :] - b[None, :, :]
-        if self.any_periodic:
-            p = self.periodic
-            d[..., p] = (d[..., p] + np.pi) % TWO_PI - np.pi
-        return np.einsum("mki,mki->mk", d, d)
 
     def dist(self, qs: FloatArray) -> FloatArray:
         """Wrapped distance of each row of ``qs`` ``(m, nq)`` to its nearest kept branch."""
-        if self.kept.shape[0] == 0 or qs.shape[0] == 0:
-            return np.full(qs.shape[0], np.inf)
-        return np.sqrt(np.min(self.delta(qs, self.kept), axis=1))
+        out = np.full(qs.shape[0], np.inf)
+        if self.kept.shape[0] and qs.shape[0]:
+            _min_dist2(np.ascontiguousarray(qs, dtype=float), self.kept, self.periodic, out)
+            np.sqrt(out, out=out)
+        return out
 
     def new(self, qs: FloatArray, tol: float) -> list[int]:
         """Rows of ``qs`` that are new branches: farther than ``tol`` from every kept one
         and from every earlier new row (greedy, in order)."""
         if qs.shape[0] == 0:
             return []
-        far = np.flatnonzero(self.dist(qs) >= tol)
-        if far.shape[0] <= 1:
-            return far.tolist()
-        d2 = self.delta(qs[far], qs[far])
-        t2 = tol * tol
-        picked: list[int] = []
-        for a in range(far.shape[0]):
-            if all(d2[a, b] >= t2 for b in picked):
-                picked.append(a)
-        return [int(far[a]) for a in picked]
+        idx = np.empty(qs.shape[0], dtype=np.int64)
+        c = _new_rows(np.ascontiguousarray(qs, dtype=float), self.kept, self.periodic,
+                      tol * tol, idx)  # fmt: skip
+        return idx[:c].tolist()
 
 
 def _valley_roots(
@@ -709,29 +786,31 @@ def _numerical(
             dp, dr = pose_errors(problem, qs)  # Pinocchio's FK, as swarm_ik.verify reports it
             good = (dp <= tol_pos) & ((dr <= tol_rot) | problem.position_only)
             now = time.perf_counter() - t0
-            for i in np.flatnonzero(good):  # the kernel's check disagreeing: never reported
-                if len(kept) >= target_count:
-                    break
-                q = qs[i]
-                fold.kept = np.vstack([fold.kept, q])
-                kept.append((q, float(dp[i]), float(dr[i]), used, now))
+            took = np.flatnonzero(good)[: target_count - len(kept)]
+            for i in took:  # (the kernel's check disagreeing with Pinocchio's: never reported)
+                kept.append((qs[i], float(dp[i]), float(dr[i]), used, now))
                 last_new = max(last_new, int(conv[fresh[i]]))
-                if hops is not None:
-                    for t, h in enumerate(hops(q)):
+            if took.shape[0]:
+                fold.kept = np.vstack([fold.kept, qs[took]])
+                if hops is not None and len(kept) < target_count:
+                    for t, h in enumerate(hops(qs[took])):
                         h, h_ok = fold(h)
                         tiers[t + 1] = np.vstack([tiers[t + 1], h[h_ok]])
         if hops is not None and walks < _MAX_WALKS and len(kept) < target_count:
-            # starts that meet the tolerances but stalled above round-off: a near-singular
-            # valley; walk it for the exact roots on it (once per valley)
+            # starts that stalled above round-off on a near-singular valley floor (small
+            # error, tiny σ_min): walk the valley for the exact roots on it (once per valley)
             stalled = np.flatnonzero(
                 (out.status[:ran] != CONVERGED)
-                & (out.position_error[:ran] <= tol_pos)
-                & ((out.rotation_error[:ran] <= tol_rot) | problem.position_only)
+                & (out.position_error[:ran] <= _WALK_ERR)
+                & ((out.rotation_error[:ran] <= _WALK_ERR) | problem.position_only)
             )
-            for i in stalled:
+            for i in stalled[:4]:
                 qv = out.q[i]
                 if walked.shape[0] and np.min(branch_distance(walked, qv, periodic)) < _WALK_NEAR:
                     continue
+                used += 1
+                if np.linalg.svd(pol.residual(qv)[1], compute_uv=False)[-1] >= _WALK_SIGMA:
+                    continue  # an ordinary local minimum
                 roots, curve, evals = _valley_roots(pol, qv, lower, upper, deadline)
                 used += evals
                 walks += 1
