@@ -68,7 +68,7 @@ POOL_FACTOR = 4
 """A redundant arm's search collects ``POOL_FACTOR · n`` distinct solutions, then spreads."""
 _HOP_SKIP = 0.05
 """A hop start within this wrapped distance (rad) of a known branch is not polished."""
-_MAX_WALKS = 4
+_MAX_WALKS = 8
 """Most near-singular valleys walked per call (:func:`_valley_roots`)."""
 _WALK_ERR = 1e-3
 """A start that stalled with pose errors below this (m, rad)…"""
