@@ -56,10 +56,13 @@ def _best_of(fn: Any, reps: int) -> tuple[Any, float]:
     return out, best
 
 
-def _per_call_us(fn: Any, reps: int) -> float:
-    """Mean wall time of ``fn()`` over ``reps`` calls, best of 3 such means [µs]."""
+def _per_call_us(fn: Any, reps: int, blocks: int = 15) -> float:
+    """Wall time of ``fn()`` [µs]: the mean over a block of ``reps`` calls, the smallest of
+    ``blocks`` such blocks (as ``timeit`` reports the minimum: the machine is shared, and the
+    minimum is the time the calls take when they have a core)."""
+    fn()
     best = float("inf")
-    for _ in range(3):
+    for _ in range(blocks):
         t0 = time.perf_counter()
         for _ in range(reps):
             fn()
@@ -99,20 +102,21 @@ def _analytic_costs(problem: Any, ref: np.ndarray, n: int) -> dict[str, float]:
     c2 = np.empty(ref.shape[0])
     tab = problem.table(None)
     return {
-        "eaik_us": _per_call_us(lambda: chain.solver.calculate_IK(problem.target), 100),
-        "pinocchio_check_us": _per_call_us(lambda: pose_errors(problem, ref), 100),
+        "eaik_us": _per_call_us(lambda: chain.solver.calculate_IK(problem.target), 20),
+        "pinocchio_check_us": _per_call_us(lambda: pose_errors(problem, ref), 20),
         "kernel_check_us": _per_call_us(
-            lambda: lm.errors_batch(ref, problem.tree, tab, problem.bounds, err, c2), 100
+            lambda: lm.errors_batch(ref, problem.tree, tab, problem.bounds, err, c2), 20
         ),
-        "solve_all_us": _per_call_us(lambda: analytic.solve_all(problem), 100),
+        "solve_all_us": _per_call_us(lambda: analytic.solve_all(problem), 20),
         "solve_many_analytic_us": _per_call_us(
-            lambda: swarm_ik.solve_many(problem, n=n, method="analytic"), 100
+            lambda: swarm_ik.solve_many(problem, n=n, method="analytic"), 20
         ),
-        "solver_analytic_us": _per_call_us(lambda: swarm_ik.solve(problem, "analytic"), 50),
+        "solver_analytic_us": _per_call_us(lambda: swarm_ik.solve(problem, "analytic"), 10),
+        "solve_result_us": _per_call_us(lambda: analytic.solve_result(problem), 10),
     }
 
 
-def run_arm(name: str, n_targets: int, n: int, seed: int, reps: int = 3) -> list[dict[str, Any]]:
+def run_arm(name: str, n_targets: int, n: int, seed: int, reps: int = 5) -> list[dict[str, Any]]:
     """One row per target and path (``numerical``, ``analytic``).
 
     ``wall_ms`` is the best of ``reps`` identical calls (same seed, same work), which filters
@@ -196,7 +200,7 @@ def run_spread(n: int, n_targets: int, seed: int) -> list[dict[str, Any]]:
             lambda problem=problem, t=t: swarm_ik.solve_many(
                 problem, n=n, method="numerical", seed=t
             ),
-            3,
+            5,
         )
         sols = cast(list[Any], sols)
         pool = cast(
@@ -240,7 +244,7 @@ def summarize(
         f"# bench many: every IK branch (n={n})",
         "",
         "Recall against eaik's in-limit branch sets (modulo 2π, 1e-6 rad). Wall times are the "
-        "best of 3 identical calls (same seed) of `solve_many`, to filter the load of the "
+        "best of 5 identical calls (same seed) of `solve_many`, to filter the load of the "
         f"shared machine; its speed during the run: {speed:.2f} µs per LM evaluation of a "
         f"fixed UR5 workload (≈ 1.4 µs idle); {load}.",
         "",
@@ -295,10 +299,12 @@ def summarize(
         ("solve_all_us", "`analytic.solve_all`"),
         ("solve_many_analytic_us", "`solve_many(method='analytic')`"),
         ("solver_analytic_us", "`swarm_ik.solve(problem, 'analytic')`"),
+        ("solve_result_us", "`analytic.solve_result` (same Result)"),
     ]
     lines += [
         "",
-        "## Analytic path, µs per pose (median over the targets; mean of 100 calls, best of 3)",
+        "## Analytic path, µs per pose (median over the targets of the best of 15 blocks of "
+        "20 calls, 10 for the last two)",
         "",
         "| arm | " + " | ".join(label for _, label in keys) + " |",
         "|---|" + "---|" * len(keys),
