@@ -33,7 +33,6 @@ import itertools
 import math
 from typing import TYPE_CHECKING, Any
 
-import numba
 import numpy as np
 import pinocchio as pin
 from numpy.typing import NDArray
@@ -181,32 +180,6 @@ def windings(q: Any, lower: Any, upper: Any, periodic: BoolArray) -> FloatArray:
 
 
 # --------------------------------------------------------------------- verification
-@numba.njit(cache=True)
-def pose_errors_of(
-    m: FloatArray, target: FloatArray, dp: FloatArray, dr: FloatArray
-) -> None:  # pragma: no cover - compiled
-    """Position error [m] into ``dp`` ``(k,)`` and geodesic angle [rad] into ``dr`` (atan2 of
-    the skew and trace parts of ``Rᵀ_target·R``, as :func:`swarm_ik.kernels.lie.angle`) of
-    each pose ``m[i]`` ``(k, 4, 4)`` against ``target`` ``(4, 4)``."""
-    for i in range(m.shape[0]):
-        s2 = 0.0
-        for a in range(3):
-            s2 += (m[i, a, 3] - target[a, 3]) ** 2
-        dp[i] = math.sqrt(s2)
-        rel = np.empty((3, 3))
-        for a in range(3):
-            for b in range(3):
-                v = 0.0
-                for c in range(3):
-                    v += target[c, a] * m[i, c, b]
-                rel[a, b] = v
-        sx = rel[2, 1] - rel[1, 2]
-        sy = rel[0, 2] - rel[2, 0]
-        sz = rel[1, 0] - rel[0, 1]
-        trace = rel[0, 0] + rel[1, 1] + rel[2, 2]
-        dr[i] = math.atan2(math.sqrt(sx * sx + sy * sy + sz * sz), trace - 1.0)
-
-
 def pose_errors(problem: IKProblem, qs: Any) -> tuple[FloatArray, FloatArray]:
     """Largest primary position [m] and angular [rad] errors of each row of ``qs`` with
     Pinocchio's own FK, as :func:`swarm_ik.verify` reports them.
@@ -248,13 +221,32 @@ def pose_errors(problem: IKProblem, qs: Any) -> tuple[FloatArray, FloatArray]:
         for i in range(k):
             fk(model, data, robot.to_pinocchio(qs[i]))
             m[i] = upd(model, data, fid).homogeneous
+    return pose_errors_of(m, goal)
+
+
+def pose_errors_of(m: FloatArray, goal: Any) -> tuple[FloatArray, FloatArray]:
+    """Errors of the poses ``m`` ``(k, 4, 4)`` against one Pose / Position goal, bit for bit
+    as the goal's own ``errors`` computes them for one pose (``np.linalg.norm`` of the offset,
+    :func:`swarm_ik.kernels.lie.angle` of ``Rᵀ_target·R`` on the stack: the same NumPy
+    operations per row), so that a :class:`Result`'s errors equal :func:`swarm_ik.verify`'s.
+    """
+    from swarm_ik.goals import Position
+
+    k = m.shape[0]
     if isinstance(goal, Position):
         d = m[:, :3, 3] - goal.point
-        return np.sqrt(np.einsum("ki,ki->k", d, d)), np.zeros(k)
-    dp = np.empty(k)
-    dr = np.empty(k)
-    pose_errors_of(m, goal.target, dp, dr)
-    return dp, dr
+        return np.array([math.sqrt(d[i].dot(d[i])) for i in range(k)]), np.zeros(k)
+    target = goal.target
+    d = m[:, :3, 3] - target[:3, 3]
+    dp = np.array([math.sqrt(d[i].dot(d[i])) for i in range(k)])
+    r = target[:3, :3].T @ m[:, :3, :3]
+    # lie.angle's arithmetic, operation for operation (its np.linalg.norm over the last axis
+    # is sqrt of the in-order sum of squares), without its np.stack: ≈ 4 µs instead of 15
+    sx = r[:, 2, 1] - r[:, 1, 2]
+    sy = r[:, 0, 2] - r[:, 2, 0]
+    sz = r[:, 1, 0] - r[:, 0, 1]
+    c = r[:, 0, 0] + r[:, 1, 1] + r[:, 2, 2] - 1.0
+    return dp, np.arctan2(np.sqrt(sx * sx + sy * sy + sz * sz), c)
 
 
 # ----------------------------------------------------------------------- polishing

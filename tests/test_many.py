@@ -187,9 +187,7 @@ def test_results_are_plain_results():
         assert type(r) is Result and r.__dict__.keys() == twin.__dict__.keys()
         assert r.to_dict() == twin.to_dict()
         assert r.fitness == pytest.approx(float(problem.fitness(r.q[None])[0]), abs=1e-12)
-        dp, dr = swarm_ik.verify(problem, r.q)
-        assert r.position_error == pytest.approx(dp, abs=1e-15)
-        assert r.rotation_error == pytest.approx(dr, abs=1e-15)
+        assert (r.position_error, r.rotation_error) == swarm_ik.verify(problem, r.q)
 
 
 def test_analytic_path_is_fast():

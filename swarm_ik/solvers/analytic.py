@@ -368,9 +368,7 @@ def solve_supported(
         for i in range(c):
             fk(model, data, robot.to_pinocchio(out[i]))
             m[i] = upd(model, data, fid).homogeneous
-    dp = np.empty(c)
-    dr = np.empty(c)
-    pose_errors_of(m, target, dp, dr)
+    dp, dr = pose_errors_of(m, problem.goals[0])  # bit for bit as swarm_ik.verify
     good = (dp <= tol_pos) & (dr <= tol_rot)
     if c < k or not good.all():
         return out[:c][good], dp[good], dr[good]
