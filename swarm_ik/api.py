@@ -101,7 +101,8 @@ def _compiled(problem: IKProblem, kwargs: dict[str, Any], tol_pos: float, tol_ro
     """The compiled search state of ``problem`` for these parameters, built once and kept in
     the problem's cache."""
     key = ("search", float(tol_pos), float(tol_rot), tuple(sorted(kwargs.items())))
-    st = problem._table_cache.get(key)  # type: ignore[call-overload]
+    cache: dict[Any, Any] = problem._table_cache  # (shared with the goal tables)
+    st = cache.get(key)
     if st is None:
         from swarm_ik.kernels import search
         from swarm_ik.solvers.hybrid import Polisher, _check_params
@@ -121,7 +122,7 @@ def _compiled(problem: IKProblem, kwargs: dict[str, Any], tol_pos: float, tol_ro
             int(round(kwargs["swarm_fraction"] * kwargs["pop_size"])),
             int(kwargs["iterations"]),
         )
-        problem._table_cache[key] = st  # type: ignore[index]
+        cache[key] = st
     return st
 
 
@@ -473,7 +474,9 @@ class IKSolver:
         else:
             problem = tpl.with_target(pose)
             reason = end_reason(
-                problem, False, _Spent(self.max_evals, out.used, self.time_limit, elapsed)  # type: ignore[arg-type]
+                problem,
+                False,
+                _Spent(self.max_evals, out.used, self.time_limit, elapsed),  # type: ignore[arg-type]
             )
         from swarm_ik.problem import GoalError
 

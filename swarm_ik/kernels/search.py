@@ -84,7 +84,7 @@ _CLOCK_MONOTONIC = 1  # Linux
 @numba.njit(cache=True)
 def _now_libc() -> float:  # pragma: no cover - compiled
     ts = np.zeros(2, dtype=np.int64)  # struct timespec {time_t tv_sec; long tv_nsec}
-    _clock_gettime(_CLOCK_MONOTONIC, ts.ctypes.data)
+    _clock_gettime(_CLOCK_MONOTONIC, ts.ctypes.data)  # type: ignore[call-overload]
     return float(ts[0]) + 1e-9 * float(ts[1])
 
 
@@ -482,8 +482,10 @@ def pose_errors_one(
     r = np.empty((3, 3))
     for a in range(3):
         for c in range(3):
-            r[a, c] = target[0, a] * reached[0, c] + target[1, a] * reached[1, c] + (
-                target[2, a] * reached[2, c]
+            r[a, c] = (
+                target[0, a] * reached[0, c]
+                + target[1, a] * reached[1, c]
+                + (target[2, a] * reached[2, c])
             )
     s0 = r[2, 1] - r[1, 2]
     s1 = r[0, 2] - r[2, 0]

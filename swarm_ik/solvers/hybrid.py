@@ -520,7 +520,7 @@ def run(
         and ev.f_target is None
         and (not ev.stops_on_success or ev.tolerance is not None)
     ):  # the whole loop in one compiled call (kernels/search.py)
-        out = compiled_search(
+        res = compiled_search(
             search.flat_args(pol.tree, pol.table, pol.bounds, pol.cfg), pol,
             np.ascontiguousarray(seed, dtype=float), search.stream_key(rng),
             stop=ev.stops_on_success, tol_pos=tol_pos, tol_rot=tol_rot, w_rot=w_rot,
@@ -529,10 +529,10 @@ def run(
             evals_before=ev.n_evals, time_limit=ev.time_limit, t0=ev.t0,
         )  # fmt: skip
         prior = ev.best_f
-        ev.add_evals(out.used)
-        if np.isfinite(out.fitness):
-            ev.add_evals(0, out.q, out.fitness)
-        ev.history.extend(np.minimum(out.history, prior).tolist())
+        ev.add_evals(res.used)
+        if np.isfinite(res.fitness):
+            ev.add_evals(0, res.q, res.fitness)
+        ev.history.extend(np.minimum(res.history, prior).tolist())
         return
     if prefer == "nearest":
         pol_sec = pol.with_posture(seed)  # nearest to q0: a secondary posture at q0
