@@ -5,6 +5,7 @@ from __future__ import annotations
 import math
 import time
 import warnings
+import weakref
 from typing import Any, NamedTuple
 
 import numpy as np
@@ -87,23 +88,42 @@ _LM_KEYS = ("max_iters", "lam0", "max_step", "stall_rel", "stall_iters", "tol_ma
 
 
 class _Compiled(NamedTuple):
-    """A problem's compiled search state (cached on the problem; see :func:`_compiled`)."""
+    """A robot's compiled search state for one set of bounds, tolerances and parameters
+    (cached per robot; see :func:`_compiled`)."""
 
-    pol: Any  # swarm_ik.solvers.hybrid.Polisher
-    static: list[Any]  # flat kernel arguments (swarm_ik.kernels.search.flat_args)
-    w_rot: float
+    pol: Any  # swarm_ik.solvers.hybrid.Polisher (its table: the first problem's)
+    head: list[Any]  # flat kernel arguments before the goal table (the tree)
+    tail: list[Any]  # flat kernel arguments after it (bounds, settings)
     pop_size: int
     n_swarm: int
     iterations: int
 
+    def static(self, table: Any) -> list[Any]:
+        """The flat kernel arguments with this goal table."""
+        return [*self.head, *table, *self.tail]
 
-def _compiled(problem: IKProblem, kwargs: dict[str, Any], tol_pos: float, tol_rot: float) -> Any:
-    """The compiled search state of ``problem`` for these parameters, built once and kept in
-    the problem's cache."""
-    key = ("search", float(tol_pos), float(tol_rot), tuple(sorted(kwargs.items())))
-    cache: dict[Any, Any] = problem._table_cache  # (shared with the goal tables)
-    st = cache.get(key)
-    if st is None:
+
+_STATE: weakref.WeakKeyDictionary[Any, dict[Any, _Compiled]] = weakref.WeakKeyDictionary()
+"""Per robot (dropped with it): compiled search states by (tree, bounds, tolerances,
+parameters)."""
+
+
+def _compiled(
+    problem: IKProblem, kwargs: dict[str, Any], tol_pos: float, tol_rot: float
+) -> _Compiled:
+    """The compiled search state for ``problem``'s robot, tree and bounds with these
+    parameters, built once per robot and cached (a new ``IKProblem`` of the same robot
+    reuses it; only its goal table is its own)."""
+    per_robot = _STATE.get(problem.robot)
+    if per_robot is None:
+        per_robot = _STATE.setdefault(problem.robot, {})
+    b = problem.bounds
+    key = (
+        id(problem.tree), b.lower.tobytes(), b.upper.tobytes(), b.wrap.tobytes(),
+        float(tol_pos), float(tol_rot), tuple(sorted(kwargs.items())),
+    )  # fmt: skip
+    st = per_robot.get(key)
+    if st is None or st.head[0] is not problem.tree[0]:
         from swarm_ik.kernels import search
         from swarm_ik.solvers.hybrid import Polisher, _check_params
 
@@ -114,15 +134,19 @@ def _compiled(problem: IKProblem, kwargs: dict[str, Any], tol_pos: float, tol_ro
         pol = Polisher.from_problem(
             problem, tol_pos=tol_pos, tol_rot=tol_rot, **{k: kwargs[k] for k in _LM_KEYS}
         )
+        flat = search.flat_args(pol.tree, pol.table, pol.bounds, pol.cfg)
+        n_tree, n_table = search.N_TREE, search.N_TABLE
         st = _Compiled(
             pol,
-            search.flat_args(pol.tree, pol.table, pol.bounds, pol.cfg),
-            0.0 if problem.position_only else float(problem.w_rot),
+            flat[:n_tree],
+            flat[n_tree + n_table :],
             int(kwargs["pop_size"]),
             int(round(kwargs["swarm_fraction"] * kwargs["pop_size"])),
             int(kwargs["iterations"]),
         )
-        cache[key] = st
+        if len(per_robot) > 64:
+            per_robot.clear()
+        per_robot[key] = st
     return st
 
 
@@ -157,8 +181,9 @@ def _fast_path(
     seed_q = q_start if q_start is not None else 0.5 * (problem.lower + problem.upper)
     t0 = time.perf_counter()
     out = hybrid.compiled_search(
-        st.static, st.pol, np.ascontiguousarray(seed_q, dtype=float), hybrid.search_key(seed),
-        stop=True, tol_pos=tol_pos, tol_rot=tol_rot, w_rot=st.w_rot, pop_size=st.pop_size,
+        st.static(problem.table(None)), st.pol, np.ascontiguousarray(seed_q, dtype=float),
+        hybrid.search_key(seed), stop=True, tol_pos=tol_pos, tol_rot=tol_rot,
+        w_rot=0.0 if problem.position_only else float(problem.w_rot), pop_size=st.pop_size,
         n_swarm=st.n_swarm, iterations=st.iterations, max_evals=max_evals,
         remaining=max_evals if max_evals is not None else 2**62, evals_before=0,
         time_limit=time_limit, t0=t0,
@@ -388,6 +413,9 @@ class IKSolver:
             if hybrid.compiled_ok(self._template, "best"):
                 self._state = _compiled(self._template, self._kwargs, self.tol_pos, self.tol_rot)
         tpl = self._template
+        self._w_rot = 0.0 if tpl.position_only else float(tpl.w_rot)
+        if self._state is not None:
+            self._static = self._state.static(tpl.table(None))
         self._mid = np.ascontiguousarray(0.5 * (tpl.lower + tpl.upper))
         self._par0 = np.ascontiguousarray(tpl.table(None).par)
         self._label = tpl.goals[0].describe()
@@ -447,12 +475,12 @@ class IKSolver:
         if not self._position_only:
             par[0, :9] = pose[:3, :3].ravel()
         par[0, 9:12] = pose[:3, 3]
-        args = st.static.copy()
+        args = self._static.copy()
         args[PAR_INDEX] = par
         t0 = time.perf_counter()
         out = compiled_search(
             args, st.pol, self._mid if q_start is None else q_start, search_key(seed),
-            stop=True, tol_pos=self.tol_pos, tol_rot=self.tol_rot, w_rot=st.w_rot,
+            stop=True, tol_pos=self.tol_pos, tol_rot=self.tol_rot, w_rot=self._w_rot,
             pop_size=st.pop_size, n_swarm=st.n_swarm, iterations=st.iterations,
             max_evals=self.max_evals,
             remaining=self.max_evals if self.max_evals is not None else 2**62,
@@ -468,7 +496,7 @@ class IKSolver:
         success = within and met
         fit = out.fitness
         if not math.isfinite(fit):
-            fit = dp + (0.0 if math.isnan(dr) else st.w_rot * dr)
+            fit = dp + (0.0 if math.isnan(dr) else self._w_rot * dr)
         if success:
             reason = "converged"
         else:
