@@ -176,6 +176,17 @@ def _solve_targets(
 
 
 # --------------------------------------------------------------------------- data
+BATCH_LAM0 = 0.3
+"""Initial LM damping of the batch solver.  Measured (10,000 FK-sampled targets, mid-range
+seed, up to 128 starts): with ``lam0 = 0.3`` and ``stall_rel = 0.05`` instead of
+:data:`swarm_ik.kernels.lm.DEFAULT_LM`'s 1e-2 / 1e-2 a target costs 23.3 instead of 29.4
+evaluations on Panda (UR5 26.9 / 31.6, xarm7 18.8 / 20.8) at the same success (1, 0, 0
+failures in 10,000 either way): the stronger initial damping makes the seed converge more
+often (2.2 instead of 2.9 starts per target on Panda)."""
+BATCH_STALL_REL = 0.05
+"""Stall threshold of the batch solver (see :data:`BATCH_LAM0`)."""
+
+
 @dataclass(frozen=True)
 class BatchSettings:
     """Settings of the batched solver (picklable: it travels to Dask workers).
@@ -202,9 +213,9 @@ class BatchSettings:
     max_starts: int = 128
     max_iters: int = lm.DEFAULT_LM.max_iters
     seed: int = 0
-    lam0: float = lm.DEFAULT_LM.lam0
+    lam0: float = BATCH_LAM0
     max_step: float = lm.DEFAULT_LM.max_step
-    stall_rel: float = lm.DEFAULT_LM.stall_rel
+    stall_rel: float = BATCH_STALL_REL
     stall_iters: int = lm.DEFAULT_LM.stall_iters
     tol_margin: float = lm.DEFAULT_LM.tol_margin
 
