@@ -185,6 +185,9 @@ failures in 10,000 either way): the stronger initial damping makes the seed conv
 often (2.2 instead of 2.9 starts per target on Panda)."""
 BATCH_STALL_REL = 0.05
 """Stall threshold of the batch solver (see :data:`BATCH_LAM0`)."""
+BATCH_MAX_ITERS = 60
+"""Evaluations per start of the batch solver (the default of :func:`solve_batch`, so that
+``BatchSettings()`` is what ``solve_batch`` uses)."""
 
 
 @dataclass(frozen=True)
@@ -211,7 +214,7 @@ class BatchSettings:
     tol_rot: float = 1e-5
     position_only: bool = False
     max_starts: int = 128
-    max_iters: int = lm.DEFAULT_LM.max_iters
+    max_iters: int = BATCH_MAX_ITERS
     seed: int = 0
     lam0: float = BATCH_LAM0
     max_step: float = lm.DEFAULT_LM.max_step
@@ -597,7 +600,7 @@ def solve_batch(
     tol_rot: float = 1e-5,
     position_only: bool = False,
     max_starts: int = 128,
-    max_iters: int = 60,
+    max_iters: int = BATCH_MAX_ITERS,
     scheduler: Any = None,
     chunk_size: int | None = None,
     progress: bool = False,
