@@ -24,7 +24,8 @@ enough to compare with TRAC-IK:
 
 The first start is ``q0`` when given, else the middle of the joint ranges (TRAC-IK's
 benchmark seed).  One polish iteration costs about a microsecond, so a typical pose is solved
-in well under a millisecond, most of it Python bookkeeping; see ``docs/performance.md``.
+in well under a millisecond; the whole search loop is compiled too
+(:mod:`swarm_ik.kernels.search`), so Python runs only around it; see ``docs/performance.md``.
 """
 
 from __future__ import annotations
@@ -429,6 +430,18 @@ def run(
     share of the budget) and uniform random starts for the rest.  Paper 004 (SEEDS.md) is the
     model: the population finds the basin, the Jacobian method finishes; here the Jacobian
     method does most of the work and the population supplies starts.
+
+    **Which code runs.**  With ``prefer="best"``, one primary goal under the ``"se3"``
+    fitness, no secondary goal and no problem method replaced on the instance
+    (:func:`compiled_ok`), and an evaluator whose stop test is the success test at
+    ``ev.tolerance`` (or none: ``stop_on_success=False``), the whole loop below runs in one
+    compiled call, :func:`swarm_ik.kernels.search.swarm_search` (its random stream keyed by one
+    draw from ``rng``); its evaluations are counted with ``ev.add_evals``, its answer offered
+    to ``ev`` and its history (one entry per generation) appended.  ``prefer="nearest"``,
+    secondary goals, several primary goals, other fitness forms and custom stop predicates
+    run the Python loop (with numpy's ``rng`` directly).  :func:`swarm_ik.solve` with an
+    integer seed and :class:`swarm_ik.IKSolver` call the compiled search without an
+    ``Evaluator`` (``swarm_ik.api._fast_path``), with the same key, so the same answer.
 
     Every FK + Jacobian evaluation of the compiled polish counts as one evaluation
     (``ev.add_evals``); a time limit is honoured by giving each compiled call only as many
