@@ -150,6 +150,38 @@ def _compiled(
     return st
 
 
+def _check_pose_goal(
+    problem: IKProblem, q: np.ndarray, tol_pos: float, tol_rot: float
+) -> tuple[tuple[Any, ...], bool] | None:
+    """The Pinocchio check of a one-goal ``Pose`` / ``Position`` problem without
+    :meth:`IKProblem.verify`'s general machinery: the goal frame's pose from Pinocchio
+    (:meth:`RobotModel.fk_pinocchio`), its errors by the formulas of ``Pose.errors`` /
+    ``Position.errors`` (compiled: equal to them to round-off), and whether ``q`` lies within
+    the bounds.  ``None`` for any other problem (then ``verify`` runs)."""
+    from swarm_ik.goals import Pose, Position
+    from swarm_ik.kernels.search import pose_errors_one
+    from swarm_ik.problem import GoalError
+
+    if len(problem.goals) != 1:
+        return None
+    gl = problem.goals[0]
+    if type(gl) is Pose:
+        target = np.ascontiguousarray(gl.target, dtype=float)
+        position_only = False
+    elif type(gl) is Position:
+        target = np.eye(4)
+        target[:3, 3] = gl.point
+        position_only = True
+    else:
+        return None
+    reached = problem.robot.fk_pinocchio(q, gl.frame)
+    dp, dr, within = pose_errors_one(reached, target, q, problem.lower, problem.upper)
+    if position_only:
+        dr = math.nan
+    met = not (dp > tol_pos) and not (dr > tol_rot)
+    return (GoalError(gl.describe(), dp, dr, met),), within
+
+
 def _fast_path(
     problem: IKProblem,
     solver: str,
@@ -191,14 +223,18 @@ def _fast_path(
     elapsed = time.perf_counter() - t0
     q = out.q
     fit = out.fitness if math.isfinite(out.fitness) else float(problem.fitness(q[None])[0])
-    goal_errors = problem.verify(q, tol_pos, tol_rot, q0=q_start)
+    checked = _check_pose_goal(problem, q, tol_pos, tol_rot)
+    if checked is not None:
+        goal_errors, within = checked
+    else:
+        goal_errors = problem.verify(q, tol_pos, tol_rot, q0=q_start)
+        within = problem.within_bounds(q)
     dp = max(
         (e.position_error for e in goal_errors if not math.isnan(e.position_error)), default=0.0
     )
     dr = max(
         (e.rotation_error for e in goal_errors if not math.isnan(e.rotation_error)), default=0.0
     )
-    within = problem.within_bounds(q)
     success = within and all(e.met for e in goal_errors)
     ev = _Spent(max_evals, out.used, time_limit, elapsed)
     return Result(

@@ -144,3 +144,24 @@ def test_iksolver_refuses_bad_targets_like_solve() -> None:
     nan[1, 3] = np.nan
     with pytest.raises(swarm_ik.InvalidTargetError, match="NaN"):
         ik.solve(nan)
+
+
+@pytest.mark.parametrize("w_rot", [1.0, 0.0])
+def test_fast_check_of_the_answer_equals_problem_verify(w_rot: float) -> None:
+    from swarm_ik.api import _check_pose_goal
+
+    robot = swarm_ik.load_robot("ur5")
+    rng = np.random.default_rng(4)
+    for q in robot.random_q(rng, 10):
+        p = swarm_ik.IKProblem(robot, robot.fk(robot.random_q(rng)), w_rot=w_rot)
+        checked = _check_pose_goal(p, q, 1e-5, 1e-5)
+        assert checked is not None
+        (fast,), within = checked
+        (ref,) = p.verify(q, 1e-5, 1e-5)
+        assert within == p.within_bounds(q)
+        assert fast.goal == ref.goal and fast.met == ref.met
+        assert fast.position_error == pytest.approx(ref.position_error, rel=1e-12)
+        if w_rot == 0.0:
+            assert np.isnan(fast.rotation_error) and np.isnan(ref.rotation_error)
+        else:
+            assert fast.rotation_error == pytest.approx(ref.rotation_error, rel=1e-9)

@@ -425,10 +425,11 @@ def flat_args(t: TreeArrays, g: GoalTable, b: Bounds, cfg: LMSettings) -> list[A
 
 def warm_up(t: TreeArrays, g: GoalTable, b: Bounds) -> None:
     """Compile (or load from numba's cache) :func:`swarm_search_flat` for these types, outside
-    any timed solve (called by :func:`swarm_ik.kernels.lm.warm_up`).  Only the search: each
-    cached kernel costs ≈ 30–100 ms to load, so :func:`pose_ok` and :func:`pose_errors_one`
-    are loaded by the first (untimed) solve of an :class:`swarm_ik.IKSolver`, and the test
-    helpers (:func:`gwo_move_into` on its own, :func:`uniforms`) on first use."""
+    any timed solve (called by :func:`swarm_ik.kernels.lm.warm_up`), and
+    :func:`pose_errors_one` (the check of the answer).  Each cached kernel costs ≈ 10–70 ms
+    to load, so :func:`pose_ok` is loaded by the first (untimed) solve of an
+    :class:`swarm_ik.IKSolver`, and the test helpers (:func:`gwo_move_into` on its own,
+    :func:`uniforms`) on first use."""
     nq = t.nq
     seed = np.ascontiguousarray(0.5 * (b.lower + b.upper))
     static = flat_args(t, g, b, lm.DEFAULT_LM)
@@ -437,6 +438,8 @@ def warm_up(t: TreeArrays, g: GoalTable, b: Bounds) -> None:
         *static, seed, 1e-5, 1e-5, 1e-5, 1e-5, 1.0, 2, 1, 1, False, 3, 3, 0, 1.0, now(),
         np.uint64(1), out,
     )  # fmt: skip
+    eye = np.eye(4)
+    pose_errors_one(eye, eye, seed, b.lower, b.upper)  # the check of solve's answer
 
 
 # --------------------------------------------------------------------------- per-call checks
