@@ -321,13 +321,16 @@ def compiled_ok(problem: IKProblem, prefer: str) -> bool:
     problem replaced on the instance (e.g. wrapped to record a trace)."""
     return (
         prefer == "best"
-        and not problem.has_secondary
-        and problem.fitness_name == "se3"
         and len(problem.goals) == 1
+        and bool(problem.primary[0])  # (one goal: no secondary one)
+        and problem.fitness_name == "se3"
         and type(problem).fitness is IKProblem.fitness
         and type(problem).is_success is IKProblem.is_success
-        and not ({"fitness", "is_success", "residual_jacobian", "cost"} & set(vars(problem)))
+        and vars(problem).keys().isdisjoint(_REPLACEABLE)
     )
+
+
+_REPLACEABLE = ("fitness", "is_success", "residual_jacobian", "cost")
 
 
 def _check_params(
