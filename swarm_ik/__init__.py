@@ -7,9 +7,8 @@
 True
 """
 
-from swarm_ik import goals, solvers
-from swarm_ik.api import IKSolver, solve, verify
-from swarm_ik.batch import solve_batch
+from typing import TYPE_CHECKING, Any
+
 from swarm_ik.errors import (
     InvalidArgumentError,
     InvalidTargetError,
@@ -18,13 +17,58 @@ from swarm_ik.errors import (
     SwarmIKError,
     UnknownNameError,
 )
-from swarm_ik.many import solve_many
-from swarm_ik.optimize import OptimizeResult, minimize
-from swarm_ik.pose import make_pose, project_to_se3
-from swarm_ik.problem import IKProblem
-from swarm_ik.result import Result
-from swarm_ik.robot import RobotModel, load_robot, robot_names
-from swarm_ik.scene import Scene
+
+# Everything else is imported on first use (PEP 562): ``import swarm_ik`` loads neither
+# numba, Pinocchio nor numpy's linear algebra until a name that needs them is touched
+# (docs/performance.md, "Start-up").
+_LAZY = {
+    "IKSolver": "swarm_ik.api",
+    "solve": "swarm_ik.api",
+    "verify": "swarm_ik.api",
+    "solve_batch": "swarm_ik.batch",
+    "solve_many": "swarm_ik.many",
+    "OptimizeResult": "swarm_ik.optimize",
+    "minimize": "swarm_ik.optimize",
+    "make_pose": "swarm_ik.pose",
+    "project_to_se3": "swarm_ik.pose",
+    "IKProblem": "swarm_ik.problem",
+    "Result": "swarm_ik.result",
+    "RobotModel": "swarm_ik.robot",
+    "load_robot": "swarm_ik.robot",
+    "robot_names": "swarm_ik.robot",
+    "Scene": "swarm_ik.scene",
+}
+_SUBMODULES = ("goals", "solvers")
+
+
+def __getattr__(name: str) -> Any:
+    import importlib
+
+    if name in _LAZY:
+        value = getattr(importlib.import_module(_LAZY[name]), name)
+    elif name in _SUBMODULES:
+        value = importlib.import_module(f"swarm_ik.{name}")
+    else:
+        raise AttributeError(f"module 'swarm_ik' has no attribute {name!r}")
+    globals()[name] = value
+    return value
+
+
+def __dir__() -> list[str]:
+    return sorted(set(globals()) | set(_LAZY) | set(_SUBMODULES))
+
+
+if TYPE_CHECKING:  # for type checkers and IDEs: the names as if imported eagerly
+    from swarm_ik import goals, solvers
+    from swarm_ik.api import IKSolver, solve, verify
+    from swarm_ik.batch import solve_batch
+    from swarm_ik.many import solve_many
+    from swarm_ik.optimize import OptimizeResult, minimize
+    from swarm_ik.pose import make_pose, project_to_se3
+    from swarm_ik.problem import IKProblem
+    from swarm_ik.result import Result
+    from swarm_ik.robot import RobotModel, load_robot, robot_names
+    from swarm_ik.scene import Scene
 
 __version__ = "0.1.0"
 

@@ -5,13 +5,14 @@ from __future__ import annotations
 import math
 import time
 import warnings
-from typing import Any
+import weakref
+from typing import Any, NamedTuple
 
 import numpy as np
 
 from swarm_ik.errors import InvalidArgumentError, unknown
 from swarm_ik.optimize import check_budget, make_rng
-from swarm_ik.pose import is_finite_nonneg
+from swarm_ik.pose import as_pose, is_finite_nonneg
 from swarm_ik.problem import IKProblem
 from swarm_ik.result import Result
 from swarm_ik.solvers import base
@@ -90,6 +91,104 @@ def prepare_q0(problem: IKProblem, q0: Any) -> np.ndarray | None:
     return fixed
 
 
+_LM_KEYS = ("max_iters", "lam0", "max_step", "stall_rel", "stall_iters", "tol_margin")
+
+
+class _Compiled(NamedTuple):
+    """A robot's compiled search state for one set of bounds, tolerances and parameters
+    (cached per robot; see :func:`_compiled`)."""
+
+    pol: Any  # swarm_ik.solvers.hybrid.Polisher (its table: the first problem's)
+    head: list[Any]  # flat kernel arguments before the goal table (the tree)
+    tail: list[Any]  # flat kernel arguments after it (bounds, settings)
+    pop_size: int
+    n_swarm: int
+    iterations: int
+
+    def static(self, table: Any) -> list[Any]:
+        """The flat kernel arguments with this goal table."""
+        return [*self.head, *table, *self.tail]
+
+
+_STATE: weakref.WeakKeyDictionary[Any, dict[Any, _Compiled]] = weakref.WeakKeyDictionary()
+"""Per robot (dropped with it): compiled search states by (tree, bounds, tolerances,
+parameters)."""
+
+
+def _compiled(
+    problem: IKProblem, kwargs: dict[str, Any], tol_pos: float, tol_rot: float
+) -> _Compiled:
+    """The compiled search state for ``problem``'s robot, tree and bounds with these
+    parameters, built once per robot and cached (a new ``IKProblem`` of the same robot
+    reuses it; only its goal table is its own)."""
+    per_robot = _STATE.get(problem.robot)
+    if per_robot is None:
+        per_robot = _STATE.setdefault(problem.robot, {})
+    b = problem.bounds
+    key = (
+        id(problem.tree), b.lower.tobytes(), b.upper.tobytes(), b.wrap.tobytes(),
+        float(tol_pos), float(tol_rot), tuple(sorted(kwargs.items())),
+    )  # fmt: skip
+    st = per_robot.get(key)
+    if st is None or st.head[0] is not problem.tree[0]:
+        from swarm_ik.kernels import search
+        from swarm_ik.solvers.hybrid import Polisher, _check_params
+
+        _check_params(
+            kwargs["pop_size"], kwargs["iterations"], kwargs["swarm_fraction"],
+            kwargs["max_iters"], "best", kwargs["nearest_starts"], kwargs["tol_margin"],
+        )  # fmt: skip
+        pol = Polisher.from_problem(
+            problem, tol_pos=tol_pos, tol_rot=tol_rot, **{k: kwargs[k] for k in _LM_KEYS}
+        )
+        flat = search.flat_args(pol.tree, pol.table, pol.bounds, pol.cfg)
+        n_tree, n_table = search.N_TREE, search.N_TABLE
+        st = _Compiled(
+            pol,
+            flat[:n_tree],
+            flat[n_tree + n_table :],
+            int(kwargs["pop_size"]),
+            int(round(kwargs["swarm_fraction"] * kwargs["pop_size"])),
+            int(kwargs["iterations"]),
+        )
+        if len(per_robot) > 64:
+            per_robot.clear()
+        per_robot[key] = st
+    return st
+
+
+def _check_pose_goal(
+    problem: IKProblem, q: np.ndarray, tol_pos: float, tol_rot: float
+) -> tuple[tuple[Any, ...], bool] | None:
+    """The Pinocchio check of a one-goal ``Pose`` / ``Position`` problem without
+    :meth:`IKProblem.verify`'s general machinery: the goal frame's pose from Pinocchio
+    (:meth:`RobotModel.fk_pinocchio`), its errors by the formulas of ``Pose.errors`` /
+    ``Position.errors`` (compiled: equal to them to round-off), and whether ``q`` lies within
+    the bounds.  ``None`` for any other problem (then ``verify`` runs)."""
+    from swarm_ik.goals import Pose, Position
+    from swarm_ik.kernels.search import pose_errors_one
+    from swarm_ik.problem import GoalError
+
+    if len(problem.goals) != 1:
+        return None
+    gl = problem.goals[0]
+    if type(gl) is Pose:
+        target = np.ascontiguousarray(gl.target, dtype=float)
+        position_only = False
+    elif type(gl) is Position:
+        target = np.eye(4)
+        target[:3, 3] = gl.point
+        position_only = True
+    else:
+        return None
+    reached = problem.robot.fk_pinocchio(q, gl.frame)
+    dp, dr, within = pose_errors_one(reached, target, q, problem.lower, problem.upper)
+    if position_only:
+        dr = math.nan
+    met = not (dp > tol_pos) and not (dr > tol_rot)
+    return (GoalError(gl.describe(), dp, dr, met),), within
+
+
 def _fast_path(
     problem: IKProblem,
     solver: str,
@@ -103,62 +202,72 @@ def _fast_path(
     prefer: str,
     seed: int | None,
 ) -> Result | None:
-    """The ``swarm`` solver's first step without its Python loop: polish the seed once in
-    the compiled kernel; when it converges the answer is exactly the one the full run would
-    return (its first start is this seed polish), else ``None`` and the full run follows."""
-    if not (
-        solver == "swarm"
-        and stop_on_success
-        and prefer == "best"
-        and not problem.has_secondary
-        and problem.fitness_name == "se3"
-        and len(problem.goals) == 1
-        and type(problem).fitness is IKProblem.fitness
-        and not ({"fitness", "is_success", "residual_jacobian"} & set(vars(problem)))
-    ):  # (a problem whose methods are wrapped, e.g. to record a trace, takes the full run)
-        return None
-    from swarm_ik.solvers.hybrid import CONVERGED, Polisher
+    """The ``swarm`` solver without an ``Evaluator``: the whole search in one compiled call
+    (:func:`swarm_ik.kernels.search.swarm_search`), then the Pinocchio check.
 
-    t0 = time.perf_counter()
-    key = (float(tol_pos), float(tol_rot), tuple(sorted(kwargs.items())))
-    pol = problem._table_cache.get(key)  # type: ignore[call-overload]
-    if pol is None:
-        lm_keys = ("max_iters", "lam0", "max_step", "stall_rel", "stall_iters", "tol_margin")
-        pol = Polisher.from_problem(
-            problem, tol_pos=tol_pos, tol_rot=tol_rot, **{k: kwargs[k] for k in lm_keys}
-        )
-        problem._table_cache[key] = pol  # type: ignore[index]
+    Taken for an integer seed, ``prefer="best"``, ``stop_on_success`` and a problem that
+    :func:`swarm_ik.solvers.hybrid.compiled_ok` accepts (one primary goal, ``"se3"``, no
+    secondary goal); its answer is bit-identical to the one :func:`swarm_ik.solvers.hybrid.run`
+    returns through the ``Evaluator`` (same compiled search, same random key: the first draw
+    of ``default_rng(seed)``).  Otherwise ``None`` and :func:`solve` runs the solver."""
+    if solver != "swarm" or not stop_on_success or prefer != "best" or seed is None:
+        return None
+    from swarm_ik.solvers import hybrid
+
+    if not hybrid.compiled_ok(problem, prefer):
+        return None
+    st = _compiled(problem, kwargs, tol_pos, tol_rot)
     seed_q = q_start if q_start is not None else 0.5 * (problem.lower + problem.upper)
-    cap = pol.cfg.max_iters if max_evals is None else min(pol.cfg.max_iters, int(max_evals))
-    if time_limit is not None and time_limit <= 0:
-        return None
-    out = pol.polish(seed_q[None], cap, True)
-    if out.status[0] != CONVERGED:
-        return None
-    q = out.q[0].copy()
-    fit = float(
-        out.position_error[0]
-        + (0.0 if problem.position_only else problem.w_rot) * out.rotation_error[0]
+    t0 = time.perf_counter()
+    out = hybrid.compiled_search(
+        st.static(problem.table(None)), st.pol, np.ascontiguousarray(seed_q, dtype=float),
+        hybrid.search_key(seed), stop=True, tol_pos=tol_pos, tol_rot=tol_rot,
+        w_rot=0.0 if problem.position_only else float(problem.w_rot), pop_size=st.pop_size,
+        n_swarm=st.n_swarm, iterations=st.iterations, max_evals=max_evals,
+        remaining=max_evals if max_evals is not None else 2**62, evals_before=0,
+        time_limit=time_limit, t0=t0,
+    )  # fmt: skip
+    elapsed = time.perf_counter() - t0
+    q = out.q
+    fit = out.fitness if math.isfinite(out.fitness) else float(problem.fitness(q[None])[0])
+    checked = _check_pose_goal(problem, q, tol_pos, tol_rot)
+    if checked is not None:
+        goal_errors, within = checked
+    else:
+        goal_errors = problem.verify(q, tol_pos, tol_rot, q0=q_start)
+        within = problem.within_bounds(q)
+    dp = max(
+        (e.position_error for e in goal_errors if not math.isnan(e.position_error)), default=0.0
     )
-    goal_errors = problem.verify(q, tol_pos, tol_rot)
-    dp = goal_errors[0].position_error
-    dr = goal_errors[0].rotation_error
-    success = problem.within_bounds(q) and goal_errors[0].met
+    dr = max(
+        (e.rotation_error for e in goal_errors if not math.isnan(e.rotation_error)), default=0.0
+    )
+    success = within and all(e.met for e in goal_errors)
+    ev = _Spent(max_evals, out.used, time_limit, elapsed)
     return Result(
         q=q,
         fitness=fit,
-        position_error=float(dp),
-        rotation_error=0.0 if math.isnan(dr) else float(dr),
+        position_error=dp,
+        rotation_error=dr,
         n_evals=out.used,
-        time_s=time.perf_counter() - t0,
+        time_s=elapsed,
         success=bool(success),
-        within_limits=problem.within_bounds(q),
-        history=np.array([fit]),
+        within_limits=within,
+        history=out.history,
         solver=solver,
         seed=seed,
         goal_errors=goal_errors,
-        reason="converged" if success else "stopped",
+        reason=end_reason(problem, bool(success), ev),  # type: ignore[arg-type]
     )
+
+
+class _Spent(NamedTuple):
+    """What :func:`end_reason` reads of an evaluator, for the compiled path."""
+
+    max_evals: int | None
+    n_evals: int
+    time_limit: float | None
+    elapsed: float
 
 
 def solve(
@@ -284,10 +393,13 @@ def solve(
 class IKSolver:
     """A solver bound to one robot: validate once, solve many targets.
 
-    Like roboticstoolbox's ``IKSolver`` or TRAC-IK's solver object: the settings are checked
-    and the compiled kernels loaded when it is made, so each :meth:`solve` spends its time
-    in the search, not in set-up.  Its results are exactly those of :func:`solve` with the
-    same arguments.
+    Like roboticstoolbox's ``IKSolver`` or TRAC-IK's solver object: the settings are checked,
+    the compiled kernels loaded and the compiled search state (tree, goal table, bounds,
+    settings as flat kernel arguments) built when it is made, so each :meth:`solve` of a
+    4×4 target spends its Python time on checking the arguments, one compiled call
+    (:func:`swarm_ik.kernels.search.swarm_search`), the Pinocchio check and the
+    :class:`~swarm_ik.result.Result`.  Its results are exactly those of :func:`solve` with the
+    same arguments.  Safe to share between threads (no per-call state is kept).
 
     Args:
         robot: The robot (its first goal frame is the one a 4×4 target is for).
@@ -328,7 +440,7 @@ class IKSolver:
         self.solver = solver
         self.spec = base.get(solver)
         self.params = dict(params)
-        self.spec.resolve(self.params)  # refuse unknown / bad parameters now
+        self._kwargs = self.spec.resolve(self.params)  # refuse unknown / bad parameters now
         check_budget(max_evals, time_limit)
         for label, tol in (("tol_pos", tol_pos), ("tol_rot", tol_rot)):
             if not (is_finite_nonneg(tol) and float(tol) > 0):
@@ -337,7 +449,22 @@ class IKSolver:
         self.time_limit, self.max_evals = time_limit, max_evals
         self._template = IKProblem(robot, robot.fk(robot.mid_q()), w_rot=w_rot)
         robot.warm_up()
-        self.solve(self._template)  # the first solve's Python paths warmed too
+        self._state = None
+        if solver == "swarm":
+            from swarm_ik.solvers import hybrid
+
+            if hybrid.compiled_ok(self._template, "best"):
+                self._state = _compiled(self._template, self._kwargs, self.tol_pos, self.tol_rot)
+        tpl = self._template
+        self._w_rot = 0.0 if tpl.position_only else float(tpl.w_rot)
+        if self._state is not None:
+            self._static = self._state.static(tpl.table(None))
+        self._mid = np.ascontiguousarray(0.5 * (tpl.lower + tpl.upper))
+        self._par0 = np.ascontiguousarray(tpl.table(None).par)
+        self._label = tpl.goals[0].describe()
+        self._frame = robot.ee_frame
+        self._position_only = tpl.position_only
+        self.solve(self._template.target)  # the first solve's Python paths warmed too
 
     def solve(
         self, target: Any, q0: Any = None, seed: int | np.random.Generator | None = 0
@@ -353,12 +480,92 @@ class IKSolver:
         Returns:
             The :class:`~swarm_ik.result.Result`, checked with Pinocchio.
         """
-        problem = target if isinstance(target, IKProblem) else self._template.with_target(target)
-        return solve(
-            problem, self.solver, seed=seed, max_evals=self.max_evals,
-            time_limit=self.time_limit, q0=q0, tol_pos=self.tol_pos, tol_rot=self.tol_rot,
-            **self.params,
+        st = self._state
+        if (
+            st is None
+            or isinstance(target, IKProblem)
+            or not (type(seed) is int and 0 <= seed < 2**63)
+        ):
+            problem = (
+                target if isinstance(target, IKProblem) else self._template.with_target(target)
+            )
+            return solve(
+                problem, self.solver, seed=seed, max_evals=self.max_evals,
+                time_limit=self.time_limit, q0=q0, tol_pos=self.tol_pos, tol_rot=self.tol_rot,
+                **self.params,
+            )  # fmt: skip
+        from swarm_ik.kernels.search import pose_ok
+
+        if (
+            type(target) is np.ndarray
+            and target.shape == (4, 4)
+            and target.dtype == np.float64
+            and pose_ok(target, 1e-6)
+        ):
+            pose = target.copy()  # checked in compiled code (as_pose's checks, with margin)
+        else:
+            pose = as_pose(target)
+        return self._solve_pose(st, pose, q0, seed)
+
+    def _solve_pose(self, st: Any, pose: np.ndarray, q0: Any, seed: int) -> Result:
+        """The per-call path of a validated 4×4 target (the compiled search + the check)."""
+        from swarm_ik.kernels.search import PAR_INDEX, pose_errors_one
+        from swarm_ik.solvers.hybrid import compiled_search, search_key
+
+        tpl = self._template
+        q_start = None if q0 is None else prepare_q0(tpl, q0)
+        par = self._par0.copy()
+        if not self._position_only:
+            par[0, :9] = pose[:3, :3].ravel()
+        par[0, 9:12] = pose[:3, 3]
+        args = self._static.copy()
+        args[PAR_INDEX] = par
+        t0 = time.perf_counter()
+        out = compiled_search(
+            args, st.pol, self._mid if q_start is None else q_start, search_key(seed),
+            stop=True, tol_pos=self.tol_pos, tol_rot=self.tol_rot, w_rot=self._w_rot,
+            pop_size=st.pop_size, n_swarm=st.n_swarm, iterations=st.iterations,
+            max_evals=self.max_evals,
+            remaining=self.max_evals if self.max_evals is not None else 2**62,
+            evals_before=0, time_limit=self.time_limit, t0=t0,
         )  # fmt: skip
+        elapsed = time.perf_counter() - t0
+        q = out.q
+        reached = self.robot.fk_pinocchio(q, self._frame)  # the independent check
+        dp, dr, within = pose_errors_one(reached, pose, q, tpl.lower, tpl.upper)
+        if self._position_only:
+            dr = math.nan
+        met = not (dp > self.tol_pos) and not (dr > self.tol_rot)
+        success = within and met
+        fit = out.fitness
+        if not math.isfinite(fit):
+            fit = dp + (0.0 if math.isnan(dr) else self._w_rot * dr)
+        if success:
+            reason = "converged"
+        else:
+            problem = tpl.with_target(pose)
+            reason = end_reason(
+                problem,
+                False,
+                _Spent(self.max_evals, out.used, self.time_limit, elapsed),  # type: ignore[arg-type]
+            )
+        from swarm_ik.problem import GoalError
+
+        return Result(
+            q=q,
+            fitness=fit,
+            position_error=dp,
+            rotation_error=0.0 if math.isnan(dr) else dr,
+            n_evals=out.used,
+            time_s=elapsed,
+            success=bool(success),
+            within_limits=within,
+            history=out.history,
+            solver=self.solver,
+            seed=seed,
+            goal_errors=(GoalError(self._label, dp, dr, bool(met)),),
+            reason=reason,
+        )
 
     def __repr__(self) -> str:
         return (

@@ -149,8 +149,10 @@ def test_does_not_loop_over_solve(get_robot, monkeypatch):
     def forbidden(*args, **kwargs):
         raise AssertionError("solve_batch must not call swarm_ik.solve")
 
-    monkeypatch.setattr(swarm_ik.api, "solve", forbidden)
+    # the package's attribute first: swarm_ik imports it lazily from swarm_ik.api, so patching
+    # swarm_ik.api first would make monkeypatch remember (and restore) the forbidden one
     monkeypatch.setattr(swarm_ik, "solve", forbidden)
+    monkeypatch.setattr(swarm_ik.api, "solve", forbidden)
     robot = get_robot("yumi_left")
     assert solve_batch(robot, fk_targets(robot, 20, 0)[1]).success.all()
 

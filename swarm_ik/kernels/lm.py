@@ -997,4 +997,8 @@ def warm_up(t: TreeArrays, b: Bounds) -> None:
     err = np.empty((1, 2, 2))
     errors_batch(q, t, g, b, err, f1)
     residuals_batch(q, t, g, b, True, np.empty((1, 6)), np.empty((1, 6, nq)), err)
+    from swarm_ik.kernels import search  # the compiled swarm search (kernels/search.py)
+
+    search.warm_up(t, goal_table([POSE], [0], [1.0], [True], rows[:1], [np.zeros(nq)],
+                                 [np.zeros(nq)], nq), b)  # fmt: skip
     _WARM.add(key)

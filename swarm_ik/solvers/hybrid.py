@@ -24,19 +24,20 @@ enough to compare with TRAC-IK:
 
 The first start is ``q0`` when given, else the middle of the joint ranges (TRAC-IK's
 benchmark seed).  One polish iteration costs about a microsecond, so a typical pose is solved
-in well under a millisecond, most of it Python bookkeeping; see ``docs/performance.md``.
+in well under a millisecond; the whole search loop is compiled too
+(:mod:`swarm_ik.kernels.search`), so Python runs only around it; see ``docs/performance.md``.
 """
 
 from __future__ import annotations
 
 import time
-from typing import NamedTuple
+from typing import Any, NamedTuple
 
 import numpy as np
 from numpy.typing import NDArray
 
 from swarm_ik.errors import InvalidArgumentError, unknown
-from swarm_ik.kernels import lm
+from swarm_ik.kernels import lm, search
 from swarm_ik.kernels.lm import BUDGET, CONVERGED, ITER_CAP, LOCAL_MIN, NOT_RUN, LMSettings
 from swarm_ik.problem import IKProblem
 from swarm_ik.solvers.base import Evaluator, FloatArray, register
@@ -44,7 +45,17 @@ from swarm_ik.solvers.gwo import gwo_move
 
 IntArray = NDArray[np.int64]
 
-__all__ = ["BUDGET", "CONVERGED", "ITER_CAP", "LOCAL_MIN", "NOT_RUN", "Polisher", "run"]
+__all__ = [
+    "BUDGET",
+    "CONVERGED",
+    "ITER_CAP",
+    "LOCAL_MIN",
+    "NOT_RUN",
+    "Polisher",
+    "SearchOutcome",
+    "compiled_search",
+    "run",
+]
 
 FULL_BUDGET_TOL = 1e-14
 """Polish tolerance [m, rad] when the run is not to stop at success (``stop_on_success=False``,
@@ -217,6 +228,113 @@ def wrapped_distance(a: FloatArray, b: FloatArray, wrap: NDArray[np.bool_]) -> F
     return np.linalg.norm(d, axis=-1)
 
 
+class SearchOutcome(NamedTuple):
+    """What :func:`compiled_search` returns.
+
+    Attributes:
+        q: The answer (lowest fitness seen), ``(nq,)``.
+        fitness: Its fitness ``dp + w_rot·dr`` (``inf`` when nothing was polished).
+        position_error: Its position error [m] (kernel FK).
+        rotation_error: Its angular error [rad] (kernel FK).
+        used: Evaluations spent.
+        stopped: The stop test (errors within the success tolerances) ended the run.
+        history: Best fitness after each generation.
+    """
+
+    q: FloatArray
+    fitness: float
+    position_error: float
+    rotation_error: float
+    used: int
+    stopped: bool
+    history: FloatArray
+
+
+def search_key(seed: int | np.random.Generator) -> np.uint64:
+    """The random-stream key of a compiled search (:func:`swarm_ik.kernels.search.stream_key`)
+    from a seed or a Generator: the first draw of ``numpy.random.default_rng(seed)``, memoised
+    for integer seeds (making a Generator costs ≈ 10–20 µs)."""
+    if isinstance(seed, np.random.Generator):
+        return search.stream_key(seed)
+    key = _KEYS.get(seed)
+    if key is None:
+        key = search.stream_key(np.random.default_rng(int(seed)))
+        if len(_KEYS) > 4096:
+            _KEYS.clear()
+        _KEYS[int(seed)] = key
+    return key
+
+
+_KEYS: dict[int, np.uint64] = {}
+
+
+def compiled_search(
+    static: list[Any],
+    pol: Polisher,
+    seed_q: FloatArray,
+    key: np.uint64,
+    *,
+    stop: bool,
+    tol_pos: float,
+    tol_rot: float,
+    w_rot: float,
+    pop_size: int,
+    n_swarm: int,
+    iterations: int,
+    max_evals: int | None,
+    remaining: int,
+    evals_before: int,
+    time_limit: float | None,
+    t0: float,
+) -> SearchOutcome:
+    """Run the whole search of :func:`run` in one compiled call
+    (:func:`swarm_ik.kernels.search.swarm_search`).
+
+    Args:
+        static: ``search.flat_args(pol.tree, pol.table, pol.bounds, pol.cfg)`` (built once).
+        pol: The polisher (kernel tolerances).
+        seed_q: First start, ``(nq,)``, inside the bounds.
+        key: Random stream key (:func:`search_key`).
+        stop: Stop at the first point within ``tol_pos``/``tol_rot``.
+        tol_pos, tol_rot: Success tolerances [m], [rad].
+        w_rot: Angle weight of the fitness [m/rad].
+        pop_size, n_swarm, iterations: As :func:`run`.
+        max_evals: The evaluation budget of the solve (``None``: none).
+        remaining: Evaluations this call may spend.
+        evals_before: Evaluations counted before (for the ``a`` schedule).
+        time_limit: Seconds since ``t0`` (``None``: none).
+        t0: Start of the solve, ``time.perf_counter()`` [s].
+    """
+    out_q = np.empty(seed_q.shape[0])
+    used, f, dp, dr, stopped, hist = search.swarm_search_flat(
+        *static, seed_q, pol.kernel_tol_pos, pol.kernel_tol_rot,
+        float(tol_pos) if stop else -1.0, float(tol_rot) if stop else -1.0, float(w_rot),
+        int(pop_size), int(n_swarm), int(iterations), max_evals is None and time_limit is None,
+        int(min(remaining, 2**62)), -1 if max_evals is None else int(max_evals),
+        int(evals_before), search.NO_LIMIT if time_limit is None else float(time_limit),
+        float(t0), key, out_q,
+    )  # fmt: skip
+    return SearchOutcome(out_q, float(f), float(dp), float(dr), int(used), bool(stopped), hist)
+
+
+def compiled_ok(problem: IKProblem, prefer: str) -> bool:
+    """Whether :func:`run` can hand its whole loop to the compiled search: ``prefer="best"``,
+    one primary goal with the ``"se3"`` fitness, no secondary goal, and no method of the
+    problem replaced on the instance (e.g. wrapped to record a trace)."""
+    return (
+        prefer == "best"
+        and len(problem.goals) == 1
+        and bool(problem.primary[0])  # (one goal: no secondary one)
+        and problem.fitness_name == "se3"
+        and type(problem).fitness is IKProblem.fitness
+        and type(problem).is_success is IKProblem.is_success
+        and vars(problem).keys().isdisjoint(_REPLACEABLE)
+    )
+
+
+_REPLACEABLE = ("fitness", "is_success", "residual_jacobian", "cost")
+
+
 def _check_params(
     pop_size: int,
     iterations: int,
@@ -318,6 +436,18 @@ def run(
     model: the population finds the basin, the Jacobian method finishes; here the Jacobian
     method does most of the work and the population supplies starts.
 
+    **Which code runs.**  With ``prefer="best"``, one primary goal under the ``"se3"``
+    fitness, no secondary goal and no problem method replaced on the instance
+    (:func:`compiled_ok`), and an evaluator whose stop test is the success test at
+    ``ev.tolerance`` (or none: ``stop_on_success=False``), the whole loop below runs in one
+    compiled call, :func:`swarm_ik.kernels.search.swarm_search` (its random stream keyed by one
+    draw from ``rng``); its evaluations are counted with ``ev.add_evals``, its answer offered
+    to ``ev`` and its history (one entry per generation) appended.  ``prefer="nearest"``,
+    secondary goals, several primary goals, other fitness forms and custom stop predicates
+    run the Python loop (with numpy's ``rng`` directly).  :func:`swarm_ik.solve` with an
+    integer seed and :class:`swarm_ik.IKSolver` call the compiled search without an
+    ``Evaluator`` (``swarm_ik.api._fast_path``), with the same key, so the same answer.
+
     Every FK + Jacobian evaluation of the compiled polish counts as one evaluation
     (``ev.add_evals``); a time limit is honoured by giving each compiled call only as many
     evaluations as the remaining time allows at the measured cost per evaluation.  The polish
@@ -403,6 +533,25 @@ def run(
         return np.asarray(problem.fitness(q), dtype=float)
 
     seed = ev.q0.copy() if ev.q0 is not None else _default_seed(problem, ev)
+    if (
+        compiled_ok(problem, prefer)
+        and ev.f_target is None
+        and (not ev.stops_on_success or ev.tolerance is not None)
+    ):  # the whole loop in one compiled call (kernels/search.py)
+        res = compiled_search(
+            search.flat_args(pol.tree, pol.table, pol.bounds, pol.cfg), pol,
+            np.ascontiguousarray(seed, dtype=float), search.stream_key(rng),
+            stop=ev.stops_on_success, tol_pos=tol_pos, tol_rot=tol_rot, w_rot=w_rot,
+            pop_size=pop_size, n_swarm=int(round(swarm_fraction * pop_size)),
+            iterations=iterations, max_evals=ev.max_evals, remaining=ev.remaining,
+            evals_before=ev.n_evals, time_limit=ev.time_limit, t0=ev.t0,
+        )  # fmt: skip
+        prior = ev.best_f
+        ev.add_evals(res.used)
+        if np.isfinite(res.fitness):
+            ev.add_evals(0, res.q, res.fitness)
+        ev.history.extend(np.minimum(res.history, prior).tolist())
+        return
     if prefer == "nearest":
         pol_sec = pol.with_posture(seed)  # nearest to q0: a secondary posture at q0
     else:

@@ -1,0 +1,502 @@
+"""The whole ``swarm`` search in one compiled call: starts, grey-wolf proposals, LM polish,
+stop test, clipping and the time check.
+
+:func:`swarm_search` is the compiled twin of the Python loop of
+:func:`swarm_ik.solvers.hybrid.run` (``prefer="best"``, stopping at success, one primary goal
+and no secondary goal): generation 0 polishes the seed and then ``pop_size − 1`` uniform
+starts, one after the other, until one converges; the polished points that did not converge
+form an archive of local minima (best first, ``pop_size`` kept); each later generation
+polishes ``n_swarm`` grey-wolf moves of the archive ([GWO] eqs. 3.3–3.7, :func:`gwo_move_into`,
+the twin of :func:`swarm_ik.solvers.gwo.gwo_move`) and uniform starts for the rest.  The polish
+is :func:`swarm_ik.kernels.lm.lm_polish`.
+
+Randomness is a counter-based stream: uniform number ``c`` of a run is
+``splitmix64(key + c) >> 11 · 2⁻⁵³`` (SplitMix64: Steele, Lea & Flood, OOPSLA 2014), with
+``key`` one ``uint64`` drawn from the caller's ``numpy`` Generator (:func:`stream_key`), so the
+same seed gives the same result.
+
+The clock: numba has none.  :func:`now` calls ``clock_gettime(CLOCK_MONOTONIC)`` of the C
+library (the clock behind ``time.perf_counter`` on Linux) as a numba ``ExternalFunction``,
+which caches (``cache=True``) and costs ≈ 0.03–0.1 µs; the ``objmode`` fallback (used off
+Linux) costs ≈ 2 µs.  The search reads it once per polish call (about once per generation).
+
+Argument passing: numba types a ``NamedTuple`` argument in Python on every call (≈ 4–8 µs for
+the tree, goal table, bounds and settings on the project machine), a flat run of arrays and
+scalars in C (≈ 1–2 µs).  :func:`flat_args` flattens the structures once and
+:func:`swarm_search_flat` rebuilds them inside the compiled code; the structures stay opaque
+(their field counts are read off the classes).
+"""
+
+from __future__ import annotations
+
+import math
+import sys
+import time
+from typing import Any
+
+import numba
+import numpy as np
+from numba import types
+from numpy.typing import NDArray
+
+from swarm_ik.kernels import lm
+from swarm_ik.kernels.fk import TreeArrays
+from swarm_ik.kernels.lm import BUDGET, CONVERGED, Bounds, GoalTable, LMSettings
+
+FloatArray = NDArray[np.float64]
+
+__all__ = [
+    "flat_args",
+    "gwo_move_into",
+    "now",
+    "pose_errors_one",
+    "pose_ok",
+    "splitmix64",
+    "stream_key",
+    "swarm_search",
+    "swarm_search_flat",
+    "uniforms",
+    "warm_up",
+]
+
+N_TREE = len(TreeArrays._fields)
+N_TABLE = len(GoalTable._fields)
+N_BOUNDS = len(Bounds._fields)
+N_CFG = len(LMSettings._fields)
+_E_TREE = N_TREE
+_E_TABLE = _E_TREE + N_TABLE
+_E_BOUNDS = _E_TABLE + N_BOUNDS
+_E_CFG = _E_BOUNDS + N_CFG
+N_STATIC = _E_CFG
+"""Number of flat arguments that carry the tree, goal table, bounds and settings."""
+PAR_INDEX = N_TREE + GoalTable._fields.index("par")
+"""Position of the goal table's ``par`` array among the flat arguments."""
+
+NO_LIMIT = -1.0
+"""``time_limit`` value meaning "no time limit"."""
+
+
+# --------------------------------------------------------------------------- clock
+_clock_gettime = types.ExternalFunction("clock_gettime", types.int32(types.int32, types.voidptr))
+_CLOCK_MONOTONIC = 1  # Linux
+
+
+@numba.njit(cache=True)
+def _now_libc() -> float:  # pragma: no cover - compiled
+    ts = np.zeros(2, dtype=np.int64)  # struct timespec {time_t tv_sec; long tv_nsec}
+    _clock_gettime(_CLOCK_MONOTONIC, ts.ctypes.data)  # type: ignore[call-overload]
+    return float(ts[0]) + 1e-9 * float(ts[1])
+
+
+@numba.njit(cache=True)
+def _now_objmode() -> float:  # pragma: no cover - compiled
+    with numba.objmode(t="float64"):
+        t = time.perf_counter()
+    return t
+
+
+now = _now_libc if sys.platform.startswith("linux") else _now_objmode
+"""Seconds of the clock of ``time.perf_counter`` (compiled; usable inside ``njit`` code)."""
+
+
+# --------------------------------------------------------------------------- randomness
+@numba.njit(cache=True)
+def splitmix64(x: np.uint64) -> np.uint64:  # pragma: no cover - compiled
+    """One SplitMix64 output for state ``x`` (the state advances by the golden gamma)."""
+    z = x + np.uint64(0x9E3779B97F4A7C15)
+    z = (z ^ (z >> np.uint64(30))) * np.uint64(0xBF58476D1CE4E5B9)
+    z = (z ^ (z >> np.uint64(27))) * np.uint64(0x94D049BB133111EB)
+    return z ^ (z >> np.uint64(31))
+
+
+@numba.njit(cache=True)
+def _uniform(key: np.uint64, c: np.uint64) -> float:  # pragma: no cover - compiled
+    return float(splitmix64(key + c) >> np.uint64(11)) * (2.0**-53)
+
+
+@numba.njit(cache=True)
+def uniforms(key: np.uint64, first: int, n: int) -> FloatArray:  # pragma: no cover
+    """Uniforms ``first + 1 … first + n`` of the stream ``key`` in ``[0, 1)`` (tests, tools)."""
+    out = np.empty(n)
+    for c in range(n):
+        out[c] = _uniform(key, np.uint64(first + c + 1))
+    return out
+
+
+def stream_key(rng: np.random.Generator) -> np.uint64:
+    """The ``uint64`` key of a search's random stream, one draw from ``rng``."""
+    return np.uint64(rng.integers(0, 2**64, dtype=np.uint64))
+
+
+# --------------------------------------------------------------------------- grey wolf
+@numba.njit(cache=True)
+def gwo_move_into(
+    x: FloatArray,
+    rows: int,
+    leaders: FloatArray,
+    a: float,
+    r1: FloatArray,
+    r2: FloatArray,
+    out: FloatArray,
+) -> None:  # pragma: no cover - compiled
+    """One grey-wolf move of ``x[:rows]`` (``(p, n)``) towards the leaders ``(3, n)``
+    ([GWO] eqs. 3.3–3.7): ``A = 2a·r1 − a``, ``C = 2·r2``, ``X_l' = X_l − A·|C·X_l − X|``,
+    ``X ← mean over α, β, δ``; ``r1``, ``r2`` of shape ``(3, p, n)`` as drawn by
+    :func:`swarm_ik.solvers.gwo.gwo_move` (the numpy twin; equal on the same numbers).
+    Writes ``out[:rows]``, not clipped."""
+    n = x.shape[1]
+    for i in range(rows):
+        for j in range(n):
+            s = 0.0
+            for L in range(3):
+                big_a = 2.0 * a * r1[L, i, j] - a
+                big_c = 2.0 * r2[L, i, j]
+                s += leaders[L, j] - big_a * abs(big_c * leaders[L, j] - x[i, j])
+            out[i, j] = s / 3.0
+
+
+@numba.njit(cache=True)
+def _clip_row(q: FloatArray, b: Bounds) -> None:  # pragma: no cover - compiled
+    """Continuous joints wrapped into ``[-π, π)``, then clipped to the bounds (in place; the
+    twin of :meth:`swarm_ik.solvers.base.Evaluator.clip`)."""
+    for j in range(q.shape[0]):
+        v = q[j]
+        if b.wrap[j]:
+            v = (v + np.pi) % (2 * np.pi) - np.pi
+        if v < b.lower[j]:
+            v = b.lower[j]
+        elif v > b.upper[j]:
+            v = b.upper[j]
+        q[j] = v
+
+
+# --------------------------------------------------------------------------- the search
+@numba.njit(cache=True)
+def swarm_search(
+    t: TreeArrays,
+    g: GoalTable,
+    b: Bounds,
+    cfg: LMSettings,
+    seed_q: FloatArray,
+    kernel_tol_pos: float,
+    kernel_tol_rot: float,
+    tol_pos: float,
+    tol_rot: float,
+    w_rot: float,
+    pop_size: int,
+    n_swarm: int,
+    iterations: int,
+    unlimited: bool,
+    max_evals: int,
+    budget_total: int,
+    evals_before: int,
+    time_limit: float,
+    t0: float,
+    key: np.uint64,
+    out_q: FloatArray,
+) -> tuple[int, float, float, float, bool, FloatArray]:  # pragma: no cover - compiled
+    """The memetic search of the ``swarm`` solver (see the module docstring).
+
+    Args:
+        t, g, b, cfg: Tree, goal table (one primary goal, no secondary), bounds, LM settings.
+        seed_q: The first start, ``(nq,)``, inside the bounds.
+        kernel_tol_pos, kernel_tol_rot: Tolerances the polish stops at [m], [rad].
+        tol_pos, tol_rot: Tolerances of the stop test (``IKProblem.is_success``) [m], [rad].
+        w_rot: Weight of the angle in the fitness ``dp + w_rot·dr`` [m/rad].
+        pop_size: Starts per generation; ``n_swarm``: grey-wolf starts among them.
+        iterations: Generations when ``unlimited``; length of the ``a`` schedule.
+        unlimited: No evaluation budget and no time limit was given.
+        max_evals: Evaluations this call may use (the evaluator's remaining budget).
+        budget_total: The evaluator's ``max_evals`` (``-1``: none), for the ``a`` schedule.
+        evals_before: Evaluations the evaluator had counted before this call.
+        time_limit: Seconds since ``t0`` after which no polish starts (``NO_LIMIT``: none).
+        t0: Start of the solve on the clock of :func:`now` [s].
+        key: Random stream key (:func:`stream_key`).
+        out_q: The answer (lowest fitness seen), ``(nq,)``.
+
+    Returns:
+        ``(evaluations, fitness, dp, dr, stopped, history)``: evaluations used, the answer's
+        fitness, its position [m] and angular [rad] errors, whether the stop test ended the run
+        and the best fitness after each generation.
+    """
+    n = seed_q.shape[0]
+    m = pop_size
+    rows = max(m, 1)
+    queue = np.empty((rows, n))
+    pq = np.empty((rows, n))
+    pdp = np.empty(rows)
+    pdr = np.empty(rows)
+    pst = np.empty(rows, dtype=np.int64)
+    pev = np.empty(rows, dtype=np.int64)
+    arch_x = np.empty((2 * rows, n))
+    arch_f = np.empty(2 * rows)
+    tmp_x = np.empty(n)
+    lead = np.empty((3, n))
+    r1 = np.empty((3, rows, n))
+    r2 = np.empty((3, rows, n))
+    moved = np.empty((rows, n))
+    hist = np.empty(64)
+    n_hist = 0
+    n_arch = 0
+    for j in range(n):
+        queue[0, j] = seed_q[j]
+    n_queue = 1
+    best_q = seed_q.copy()  # lowest fitness seen (not yet offered to the stop test)
+    best_f = np.inf
+    best_dp = np.inf
+    best_dr = np.inf
+    ev_q = seed_q.copy()  # the evaluator's best (what the stop test has seen)
+    ev_f = np.inf
+    ev_dp = np.inf
+    ev_dr = np.inf
+    stopped = False
+    used = 0
+    gen0_rest = m > 1
+    open_gen = False
+    sec_per_eval = 5e-6
+    gen = 0
+    counter = np.uint64(0)
+    has_time = time_limit >= 0.0
+    lo = b.lower
+    hi = b.upper
+    while True:
+        if stopped or used >= max_evals:
+            break
+        t_call = now()
+        if has_time and t_call - t0 >= time_limit:
+            break
+        if unlimited and gen >= iterations:
+            break
+        cap = max_evals - used
+        if has_time:
+            left = time_limit - (t_call - t0)
+            cap = min(cap, max(8, int(0.8 * left / sec_per_eval)))
+        u = lm.lm_polish(
+            queue[:n_queue], t, g, b, cfg, kernel_tol_pos, kernel_tol_rot, cap, True,
+            pq[:n_queue], pdp[:n_queue], pdr[:n_queue], pst[:n_queue], pev[:n_queue],
+        )  # fmt: skip
+        if u > 0 and has_time:
+            sec_per_eval = 0.5 * sec_per_eval + 0.5 * (now() - t_call) / u
+        open_gen = True
+        r = 0
+        while r < n_queue and pst[r] != 0:
+            r += 1
+        fi = np.inf
+        i_min = 0
+        for s in range(r):
+            f = pdp[s] + w_rot * pdr[s]
+            if f < fi:
+                fi = f
+                i_min = s
+        used += u
+        if fi < best_f:
+            best_f = fi
+            best_dp = pdp[i_min]
+            best_dr = pdr[i_min]
+            for j in range(n):
+                best_q[j] = pq[i_min, j]
+        if r > 0 and pst[r - 1] == CONVERGED:  # offered to the stop test at once
+            f_c = pdp[r - 1] + w_rot * pdr[r - 1]
+            if f_c < ev_f:
+                ev_f = f_c
+                ev_dp = pdp[r - 1]
+                ev_dr = pdr[r - 1]
+                for j in range(n):
+                    ev_q[j] = pq[r - 1, j]
+                stopped = ev_dp <= tol_pos and ev_dr <= tol_rot
+            if stopped or used >= max_evals or (has_time and now() - t0 >= time_limit):
+                break
+        n_done = r - 1 if (r > 0 and pst[r - 1] == BUDGET) else r
+        # archive of polished local minima, best first (stable), pop_size kept
+        for s in range(n_done):
+            if pst[s] == CONVERGED:
+                continue
+            f_new = pdp[s] + pdr[s]
+            k = n_arch
+            while k > 0 and arch_f[k - 1] > f_new:
+                k -= 1
+            for z in range(n_arch, k, -1):
+                arch_f[z] = arch_f[z - 1]
+                for j in range(n):
+                    arch_x[z, j] = arch_x[z - 1, j]
+            arch_f[k] = f_new
+            for j in range(n):
+                arch_x[k, j] = pq[s, j]
+            n_arch += 1
+        if n_arch > m:
+            n_arch = m
+        # unfinished rows (cut by the budget, or not reached) stay queued, partially polished
+        for s in range(n_done, n_queue):
+            for j in range(n):
+                queue[s - n_done, j] = pq[s, j]
+        n_queue -= n_done
+        if n_queue == 0 and gen0_rest:
+            gen0_rest = False
+            for s in range(m - 1):
+                for j in range(n):
+                    counter += np.uint64(1)
+                    queue[s, j] = min(lo[j] + (hi[j] - lo[j]) * _uniform(key, counter), hi[j])
+            n_queue = m - 1
+        elif n_queue == 0:
+            if best_f < np.inf and best_f < ev_f:
+                ev_f = best_f
+                ev_dp = best_dp
+                ev_dr = best_dr
+                for j in range(n):
+                    ev_q[j] = best_q[j]
+                stopped = ev_dp <= tol_pos and ev_dr <= tol_rot
+            if n_hist == hist.shape[0]:
+                bigger = np.empty(2 * n_hist)
+                bigger[:n_hist] = hist
+                hist = bigger
+            hist[n_hist] = ev_f
+            n_hist += 1
+            open_gen = False
+            gen += 1
+            frac = gen / max(iterations, 1)
+            if budget_total > 0:
+                frac = max(frac, (evals_before + used) / budget_total)
+            a = 2.0 * max(0.0, 1.0 - frac)
+            n_sw = min(n_swarm, m) if n_arch > 0 else 0
+            if n_sw > 0:
+                for L in range(3):
+                    for j in range(n):
+                        lead[L, j] = arch_x[L % n_arch, j]
+                for s in range(n_sw):
+                    for j in range(n):
+                        queue[s, j] = arch_x[s % n_arch, j]
+                for rr in (r1, r2):
+                    for L in range(3):
+                        for s in range(n_sw):
+                            for j in range(n):
+                                counter += np.uint64(1)
+                                rr[L, s, j] = _uniform(key, counter)
+                gwo_move_into(queue, n_sw, lead, a, r1, r2, moved)
+                for s in range(n_sw):
+                    for j in range(n):
+                        tmp_x[j] = moved[s, j]
+                    _clip_row(tmp_x, b)
+                    for j in range(n):
+                        queue[s, j] = tmp_x[j]
+            for s in range(n_sw, m):
+                for j in range(n):
+                    counter += np.uint64(1)
+                    queue[s, j] = min(lo[j] + (hi[j] - lo[j]) * _uniform(key, counter), hi[j])
+            n_queue = m
+    if best_f < np.inf and best_f < ev_f and not stopped:
+        ev_f = best_f
+        ev_dp = best_dp
+        ev_dr = best_dr
+        for j in range(n):
+            ev_q[j] = best_q[j]
+        stopped = ev_dp <= tol_pos and ev_dr <= tol_rot
+    if open_gen or n_hist == 0:
+        if n_hist == hist.shape[0]:
+            bigger = np.empty(2 * n_hist)
+            bigger[:n_hist] = hist
+            hist = bigger
+        hist[n_hist] = ev_f
+        n_hist += 1
+    for j in range(n):
+        out_q[j] = ev_q[j]
+    return used, ev_f, ev_dp, ev_dr, stopped, hist[:n_hist].copy()
+
+
+@numba.njit(cache=True)
+def swarm_search_flat(*a: Any) -> tuple[int, float, float, float, bool, FloatArray]:  # type: ignore[no-untyped-def]  # pragma: no cover
+    """:func:`swarm_search` with the tree, goal table, bounds and settings given field by
+    field (:func:`flat_args`): the cheap way to call it from Python."""
+    t = TreeArrays(*a[0:_E_TREE])
+    g = GoalTable(*a[_E_TREE:_E_TABLE])
+    b = Bounds(*a[_E_TABLE:_E_BOUNDS])
+    cfg = LMSettings(*a[_E_BOUNDS:_E_CFG])
+    return swarm_search(t, g, b, cfg, *a[_E_CFG:])
+
+
+def flat_args(t: TreeArrays, g: GoalTable, b: Bounds, cfg: LMSettings) -> list[Any]:
+    """The structures as the flat argument list of :func:`swarm_search_flat` (its first
+    :data:`N_STATIC` entries; the goal table's ``par`` at :data:`PAR_INDEX`)."""
+    cfg_t = LMSettings(
+        int(cfg.max_iters), float(cfg.lam0), float(cfg.max_step), float(cfg.stall_rel),
+        int(cfg.stall_iters), float(cfg.tol_margin),
+    )  # fmt: skip
+    return [*t, *g, *b, *cfg_t]
+
+
+def warm_up(t: TreeArrays, g: GoalTable, b: Bounds) -> None:
+    """Compile (or load from numba's cache) :func:`swarm_search_flat` for these types, outside
+    any timed solve (called by :func:`swarm_ik.kernels.lm.warm_up`), and
+    :func:`pose_errors_one` (the check of the answer).  Each cached kernel costs ≈ 10–70 ms
+    to load, so :func:`pose_ok` is loaded by the first (untimed) solve of an
+    :class:`swarm_ik.IKSolver`, and the test helpers (:func:`gwo_move_into` on its own,
+    :func:`uniforms`) on first use."""
+    nq = t.nq
+    seed = np.ascontiguousarray(0.5 * (b.lower + b.upper))
+    static = flat_args(t, g, b, lm.DEFAULT_LM)
+    out = np.empty(nq)
+    swarm_search_flat(
+        *static, seed, 1e-5, 1e-5, 1e-5, 1e-5, 1.0, 2, 1, 1, False, 3, 3, 0, 1.0, now(),
+        np.uint64(1), out,
+    )  # fmt: skip
+    eye = np.eye(4)
+    pose_errors_one(eye, eye, seed, b.lower, b.upper)  # the check of solve's answer
+
+
+# --------------------------------------------------------------------------- per-call checks
+@numba.njit(cache=True)
+def pose_ok(m: FloatArray, orth_tol: float) -> bool:  # pragma: no cover - compiled
+    """Whether the ``(4, 4)`` matrix ``m`` passes :func:`swarm_ik.pose.as_pose`'s checks
+    with a margin (finite, bottom row ``[0, 0, 0, 1]``, rotation block within ``orth_tol/2``
+    of orthonormal with ``det`` within ``orth_tol/2`` of 1).  False means "let ``as_pose``
+    judge" (it raises the error, naming the fault, or accepts a borderline matrix)."""
+    for i in range(4):
+        for j in range(4):
+            if not math.isfinite(m[i, j]):
+                return False
+    if abs(m[3, 0]) > 1e-9 or abs(m[3, 1]) > 1e-9 or abs(m[3, 2]) > 1e-9:
+        return False
+    if abs(m[3, 3] - 1.0) > 1e-9:
+        return False
+    half = 0.5 * orth_tol
+    for a in range(3):
+        for c in range(3):
+            s = m[0, a] * m[0, c] + m[1, a] * m[1, c] + m[2, a] * m[2, c]
+            if abs(s - (1.0 if a == c else 0.0)) > half:
+                return False
+    det = (
+        m[0, 0] * (m[1, 1] * m[2, 2] - m[1, 2] * m[2, 1])
+        - m[0, 1] * (m[1, 0] * m[2, 2] - m[1, 2] * m[2, 0])
+        + m[0, 2] * (m[1, 0] * m[2, 1] - m[1, 1] * m[2, 0])
+    )
+    return abs(det - 1.0) <= half
+
+
+@numba.njit(cache=True)
+def pose_errors_one(
+    reached: FloatArray, target: FloatArray, q: FloatArray, lower: FloatArray, upper: FloatArray
+) -> tuple[float, float, bool]:  # pragma: no cover - compiled
+    """``‖p − p*‖`` [m], the angle of ``R*ᵀR`` [rad] (the formula of
+    :func:`swarm_ik.kernels.lie.angle`) of a reached pose ``(4, 4)`` (Pinocchio's) against the
+    target ``(4, 4)``, and whether ``q`` lies within ``[lower, upper]`` (± 1e-12)."""
+    dx = reached[0, 3] - target[0, 3]
+    dy = reached[1, 3] - target[1, 3]
+    dz = reached[2, 3] - target[2, 3]
+    dp = math.sqrt(dx * dx + dy * dy + dz * dz)
+    r = np.empty((3, 3))
+    for a in range(3):
+        for c in range(3):
+            r[a, c] = (
+                target[0, a] * reached[0, c]
+                + target[1, a] * reached[1, c]
+                + (target[2, a] * reached[2, c])
+            )
+    s0 = r[2, 1] - r[1, 2]
+    s1 = r[0, 2] - r[2, 0]
+    s2 = r[1, 0] - r[0, 1]
+    c0 = r[0, 0] + r[1, 1] + r[2, 2] - 1.0
+    dr = math.atan2(math.sqrt(s0 * s0 + s1 * s1 + s2 * s2), c0)
+    within = True
+    for j in range(q.shape[0]):
+        if q[j] < lower[j] - 1e-12 or q[j] > upper[j] + 1e-12:
+            within = False
+    return dp, dr, within

@@ -1,0 +1,167 @@
+"""The compiled swarm search (swarm_ik/kernels/search.py) and the IKSolver fast path."""
+
+from __future__ import annotations
+
+import time
+
+import numpy as np
+import pytest
+
+import swarm_ik
+from swarm_ik.kernels import search
+from swarm_ik.solvers import base
+from swarm_ik.solvers.gwo import gwo_move
+
+
+class _Replay:
+    """A stand-in Generator that hands out pre-drawn arrays, in order."""
+
+    def __init__(self, *arrays: np.ndarray) -> None:
+        self.arrays = list(arrays)
+
+    def random(self, shape: tuple[int, ...]) -> np.ndarray:
+        a = self.arrays.pop(0)
+        assert a.shape == tuple(shape)
+        return a
+
+
+def test_compiled_gwo_move_equals_numpy_twin_on_the_same_numbers() -> None:
+    rng = np.random.default_rng(5)
+    p, n = 5, 7
+    x = rng.uniform(-2, 2, (p, n))
+    leaders = rng.uniform(-2, 2, (3, n))
+    r1, r2 = rng.random((3, p, n)), rng.random((3, p, n))
+    for a in (0.0, 0.7, 2.0):
+        ref = gwo_move(x, leaders, a, _Replay(r1, r2))  # type: ignore[arg-type]
+        out = np.empty((p, n))
+        search.gwo_move_into(x, p, leaders, a, r1, r2, out)
+        np.testing.assert_allclose(out, ref, rtol=0, atol=1e-14)
+
+
+def test_stream_uniforms_are_uniform_and_keyed() -> None:
+    u = search.uniforms(np.uint64(12345), 0, 20000)
+    assert 0.0 <= u.min() and u.max() < 1.0
+    assert abs(u.mean() - 0.5) < 0.01 and abs(u.var() - 1 / 12) < 0.005
+    v = search.uniforms(np.uint64(12346), 0, 20000)
+    assert not np.array_equal(u, v)
+    np.testing.assert_array_equal(search.uniforms(np.uint64(12345), 10, 5), u[10:15])
+
+
+def test_compiled_clock_is_perf_counter() -> None:
+    a = time.perf_counter()
+    b = search.now()
+    c = time.perf_counter()
+    assert a - 1e-3 <= b <= c + 1e-3
+
+
+@pytest.mark.parametrize("name", ["panda", "ur5"])
+def test_compiled_search_solves_and_is_deterministic(name: str) -> None:
+    robot = swarm_ik.load_robot(name)
+    rng = np.random.default_rng(11)
+    qs = robot.random_q(rng, 40)
+    ok = 0
+    for q in qs:
+        p = swarm_ik.IKProblem(robot, robot.fk(q))
+        r1 = swarm_ik.solve(p, seed=4, max_evals=3000)
+        r2 = swarm_ik.solve(p, seed=4, max_evals=3000)
+        np.testing.assert_array_equal(r1.q, r2.q)
+        assert r1.n_evals == r2.n_evals <= 3000
+        assert len(r1.history) >= 1 and np.all(np.diff(r1.history) <= 0)
+        ok += r1.success
+    assert ok == len(qs)
+
+
+def test_evaluator_path_and_fast_path_agree_and_count_exactly() -> None:
+    """solve() takes the Evaluator-free fast path for an int seed; a Generator seed goes
+    through hybrid.run with an Evaluator: same key, so the same answer."""
+    robot = swarm_ik.load_robot("panda")
+    rng = np.random.default_rng(3)
+    for q in robot.random_q(rng, 15):
+        p = swarm_ik.IKProblem(robot, robot.fk(q))
+        fast = swarm_ik.solve(p, seed=9, max_evals=2000)
+        slow = swarm_ik.solve(p, seed=np.random.default_rng(9), max_evals=2000)
+        np.testing.assert_array_equal(fast.q, slow.q)
+        assert fast.n_evals == slow.n_evals
+        np.testing.assert_array_equal(fast.history, slow.history)
+
+
+def test_budget_never_exceeded_and_history_one_entry_per_generation() -> None:
+    robot = swarm_ik.load_robot("panda")
+    p = swarm_ik.IKProblem.from_q(robot, robot.random_q(np.random.default_rng(0)))
+    for budget in (1, 7, 31, 200, 777):
+        r = swarm_ik.solve(p, seed=1, max_evals=budget, stop_on_success=False)
+        assert r.n_evals == budget  # the whole budget runs, never more
+        # every generation (12 starts, ≤ 30 evaluations each) costs at most 360 evaluations
+        assert len(r.history) >= budget // 360
+    ev = base.Evaluator(p.fitness, p.lower, p.upper, max_evals=500, problem=p)
+    from swarm_ik.solvers.hybrid import run
+
+    run(ev, np.random.default_rng(2))
+    assert ev.n_evals == 500 and len(ev.history) >= 1
+
+
+def test_time_limit_is_honoured_inside_the_compiled_loop() -> None:
+    robot = swarm_ik.load_robot("panda")
+    # unreachable: the search runs until the clock stops it
+    target = np.eye(4)
+    target[:3, 3] = [3.0, 0.0, 0.5]
+    p = swarm_ik.IKProblem(robot, target)
+    r = swarm_ik.solve(p, time_limit=0.01)
+    assert not r.success and r.reason in ("unreachable", "time_limit")
+    assert r.time_s < 0.01 + 0.05  # one polish call of overshoot at most (loaded machine)
+
+
+def test_iksolver_equals_solve() -> None:
+    robot = swarm_ik.load_robot("panda")
+    ik = swarm_ik.IKSolver(robot, max_evals=3000)
+    rng = np.random.default_rng(8)
+    for q in robot.random_q(rng, 25):
+        T = robot.fk(q)
+        a = ik.solve(T, seed=2)
+        b = swarm_ik.solve(swarm_ik.IKProblem(robot, T), seed=2, max_evals=3000)
+        np.testing.assert_array_equal(a.q, b.q)
+        assert (a.n_evals, a.success, a.reason, a.fitness) == (
+            b.n_evals,
+            b.success,
+            b.reason,
+            b.fitness,
+        )
+        np.testing.assert_array_equal(a.history, b.history)
+        (ga,), (gb,) = a.goal_errors, b.goal_errors
+        assert ga.goal == gb.goal and ga.met == gb.met
+        assert ga.position_error == pytest.approx(gb.position_error, rel=1e-9, abs=1e-15)
+        assert ga.rotation_error == pytest.approx(gb.rotation_error, rel=1e-6, abs=1e-15)
+
+
+def test_iksolver_refuses_bad_targets_like_solve() -> None:
+    robot = swarm_ik.load_robot("panda")
+    ik = swarm_ik.IKSolver(robot, time_limit=0.005)
+    bad = robot.fk(robot.mid_q())
+    bad[0, 0] += 1e-3  # not a rotation
+    with pytest.raises(swarm_ik.InvalidTargetError, match="orthonormal"):
+        ik.solve(bad)
+    nan = robot.fk(robot.mid_q())
+    nan[1, 3] = np.nan
+    with pytest.raises(swarm_ik.InvalidTargetError, match="NaN"):
+        ik.solve(nan)
+
+
+@pytest.mark.parametrize("w_rot", [1.0, 0.0])
+def test_fast_check_of_the_answer_equals_problem_verify(w_rot: float) -> None:
+    from swarm_ik.api import _check_pose_goal
+
+    robot = swarm_ik.load_robot("ur5")
+    rng = np.random.default_rng(4)
+    for q in robot.random_q(rng, 10):
+        p = swarm_ik.IKProblem(robot, robot.fk(robot.random_q(rng)), w_rot=w_rot)
+        checked = _check_pose_goal(p, q, 1e-5, 1e-5)
+        assert checked is not None
+        (fast,), within = checked
+        (ref,) = p.verify(q, 1e-5, 1e-5)
+        assert within == p.within_bounds(q)
+        assert fast.goal == ref.goal and fast.met == ref.met
+        assert fast.position_error == pytest.approx(ref.position_error, rel=1e-12)
+        if w_rot == 0.0:
+            assert np.isnan(fast.rotation_error) and np.isnan(ref.rotation_error)
+        else:
+            assert fast.rotation_error == pytest.approx(ref.rotation_error, rel=1e-9)
