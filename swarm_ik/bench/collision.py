@@ -572,6 +572,90 @@ def overhead(
     ]
 
 
+DIAGNOSIS_FIELDS = ("robot", "scene", "tolerance", "budget_ms", "metric", "n", "value")
+DIAGNOSIS_VARIANTS = ((0.02, 1.0), (0.02, 5.0), (0.01, 1.0))
+"""``(sphere tolerance [m], budget multiplier)`` settings of ``ours+goal`` tried by
+:func:`diagnose` (the first is the default goal at the default budget)."""
+
+
+def _sphere_penetration(robot: Any, goal: Any, target: np.ndarray, qs: np.ndarray) -> np.ndarray:
+    """Deepest penetration [m] of the goal's sphere model at each row of ``qs`` (0: none)."""
+    import swarm_ik
+    from swarm_ik.solvers.hybrid import Polisher
+
+    pol = Polisher.from_problem(swarm_ik.IKProblem(robot, target, goals=[goal]))
+    out = []
+    for q in np.atleast_2d(qs):
+        rows = pol.residual(q)[0][6:]  # after the pose rows: the penetration rows (<= 0)
+        out.append(float(-rows.min()) if rows.size else 0.0)
+    return np.maximum(np.array(out), 0.0)
+
+
+def diagnose(
+    robot: Any, bench_scene: BenchScene, n: int, budget_s: float, seed: int,
+    variants: Sequence[tuple[float, float]] = DIAGNOSIS_VARIANTS,
+) -> list[dict[str, Any]]:  # fmt: skip
+    """Why ``ours+goal`` misses, on the scene's first ``n`` targets, per sphere tolerance:
+
+    * ``q_true_sphere_contact``: fraction of targets whose generating ``q`` (collision-free by
+      the exact check) the sphere model finds in contact (the spheres too conservative);
+    * ``sphere_free_branch`` (6R arms with a closed form): fraction of targets with at least
+      one branch the sphere model finds free: the ceiling of a search that trusts the spheres;
+      ``exact_free_branch`` the same by the exact check;
+    * ``success``: ``ours+goal`` success at that tolerance and budget (``budget_ms``).
+    """
+    import swarm_ik
+    from swarm_ik import goals as G
+    from swarm_ik.solvers import analytic
+
+    rng = np.random.default_rng([int(seed), SCENES.index(bench_scene.name), 7])
+    q_true, targets = collision_free_targets(robot, bench_scene, n, rng)
+    rc = robot.collision_model()
+    try:
+        has_branches = not analytic.support(swarm_ik.IKProblem(robot, targets[0]))
+    except swarm_ik.SwarmIKError:
+        has_branches = False
+    branches = (
+        [analytic.solve_all(swarm_ik.IKProblem(robot, t))[0] for t in targets]
+        if has_branches else []
+    )  # fmt: skip
+    rows: list[dict[str, Any]] = []
+
+    def add(tol: float, budget_ms: float, metric: str, value: float) -> None:
+        rows.append(dict(robot=robot.name, scene=bench_scene.name, tolerance=tol,
+                         budget_ms=budget_ms, metric=metric, n=n, value=value))  # fmt: skip
+
+    if branches:
+        free = [any(not rc.collides(q, bench_scene.scene) for q in qs) for qs in branches]
+        add(math.nan, math.nan, "exact_free_branch", float(np.mean(free)))
+    for tol in sorted({v[0] for v in variants}, reverse=True):
+        goal = G.AvoidCollisions(bench_scene.scene, tolerance=tol)
+        pen = [
+            _sphere_penetration(robot, goal, t, q)[0] for t, q in zip(targets, q_true, strict=True)
+        ]
+        add(tol, math.nan, "q_true_sphere_contact", float(np.mean(np.array(pen) > 1e-9)))
+        if branches:
+            ok = [
+                len(qs) > 0 and bool(np.any(_sphere_penetration(robot, goal, t, qs) <= 1e-9))
+                for t, qs in zip(targets, branches, strict=True)
+            ]
+            add(tol, math.nan, "sphere_free_branch", float(np.mean(ok)))
+        for v_tol, mult in variants:
+            if v_tol != tol:
+                continue
+            b = budget_s * mult
+            solver = OursGoal(robot, bench_scene.scene, b)
+            solver.goal = goal
+            _warm_up(robot, [solver], targets[0])
+            srng = np.random.default_rng([int(seed), 17])
+            succ = [
+                judge(robot, bench_scene.scene, t, solver.solve(t, srng).q)["success"]
+                for t in targets
+            ]
+            add(tol, 1e3 * b, "success", float(np.mean(succ)))
+    return rows
+
+
 def unreachable(
     robot: Any, bench_scene: BenchScene, budget_s: float, seed: int, per_obstacle: int = 2
 ) -> list[dict[str, Any]]:
@@ -637,6 +721,19 @@ def summarise(rows: Sequence[dict[str, str]]) -> list[dict[str, Any]]:
     return out
 
 
+def _union_success(rows: Sequence[dict[str, str]], a: str, b: str) -> dict[tuple[str, str], float]:
+    """Per (robot, scene): fraction of targets solved by solver ``a`` or solver ``b``."""
+    solved: dict[tuple[str, str, str], bool] = {}
+    for r in rows:
+        if r["solver"] in (a, b):
+            key = (r["robot"], r["scene"], r["target_id"])
+            solved[key] = solved.get(key, False) or r["success"] == "1"
+    out: dict[tuple[str, str], list[bool]] = {}
+    for (robot, scene, _t), ok in solved.items():
+        out.setdefault((robot, scene), []).append(ok)
+    return {k: float(np.mean(v)) for k, v in out.items()}
+
+
 def _index(names: Sequence[str], name: str) -> int:
     return names.index(name) if name in names else len(names)
 
@@ -651,6 +748,7 @@ def _count(items: Any) -> dict[str, int]:
 def report(
     rows: Sequence[dict[str, str]], batch: Sequence[dict[str, str]],
     unreach: Sequence[dict[str, str]], over: Sequence[dict[str, str]], info: dict[str, Any],
+    diag: Sequence[dict[str, str]] = (),
 ) -> str:  # fmt: skip
     """The Markdown summary, from the CSV rows (strings) and the run information."""
     budget = float(info.get("budget_ms", 20.0))
@@ -688,8 +786,13 @@ def report(
     missing = info.get("missing") or {}
     if missing:
         lines += ["", "Not run: " + "; ".join(f"`{k}`: {v}" for k, v in sorted(missing.items()))]
-    lines += ["", "## Targets (ours+goal)", "", "| robot | scene | success % (target) | "
-              "median ms (≤ 2) | verdict |", "|---|---|---|---|---|"]  # fmt: skip
+    union = _union_success(rows, "ours+goal", "ours-reject")
+    lines += ["", "## Targets (ours+goal)", "",
+              "`either`: targets solved by ours+goal or by ours-reject (each with its own "
+              "budget): what exact-checking the pose-converged answers the sphere model rejects "
+              "would add to the goal solver.", "",
+              "| robot | scene | success % (target) | median ms (≤ 2) | either % | verdict |",
+              "|---|---|---|---|---|---|"]  # fmt: skip
     for s in stats:
         if s["solver"] != "ours+goal":
             continue
@@ -702,7 +805,8 @@ def report(
             miss.append(f"median {s['median_ms'] / TARGET_MEDIAN_MS:.2f}x the target")
         lines.append(
             f"| {s['robot']} | {s['scene']} | {100 * s['success']:.1f} ({100 * want:.0f}) | "
-            f"{_f(s['median_ms'])} | {'met' if ok else 'missed: ' + ', '.join(miss)} |"
+            f"{_f(s['median_ms'])} | {_f(100 * union.get((s['robot'], s['scene']), math.nan), 1)} "
+            f"| {'met' if ok else 'missed: ' + ', '.join(miss)} |"
         )
     if batch:
         lines += ["", "## Batch (a loop of solves on one core)", "",
@@ -735,6 +839,19 @@ def report(
         for r in bad:
             lines.append(f"- {r['robot']} {r['scene']} {r['obstacle']} #{r['index']}: "
                          f"success {r['success']}, reason {r['reason']!r}")  # fmt: skip
+    if diag:
+        lines += ["", "## Diagnosis of ours+goal", "",
+                  "`q_true_sphere_contact`: the generating q (exact check: free) is in contact "
+                  "for the sphere model; `sphere_free_branch` / `exact_free_branch`: targets "
+                  "with a closed-form branch free by the spheres / by the exact check; "
+                  "`success`: ours+goal at that sphere tolerance and budget.", "",
+                  "| robot | scene | metric | sphere tolerance m | budget ms | N | value % |",
+                  "|---|---|---|---|---|---|---|"]  # fmt: skip
+        for d in diag:
+            tol = "" if d["tolerance"] == "nan" else d["tolerance"]
+            bud = "" if d["budget_ms"] == "nan" else f"{float(d['budget_ms']):g}"
+            lines.append(f"| {d['robot']} | {d['scene']} | {d['metric']} | {tol} | {bud} | "
+                         f"{d['n']} | {100 * float(d['value']):.1f} |")  # fmt: skip
     notes = info.get("notes")
     if notes:
         lines += ["", "## Notes", "", *notes]
@@ -752,6 +869,11 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("--solvers", default=",".join(SOLVERS), help="comma-separated solvers")
     parser.add_argument("--batch-n", type=int, default=None,
                         help="targets of the batch loop (default --n)")  # fmt: skip
+    parser.add_argument(
+        "--diagnose", type=int, default=0, metavar="N",
+        help="also diagnose ours+goal on the first N targets of each scene (sphere "
+        "tolerances, budgets, closed-form branches; slow the first time: fits spheres)",
+    )  # fmt: skip
     parser.add_argument("--quick", action="store_true", help="N = 10 (a smoke run)")
     parser.add_argument("--out", default=None, help="output folder (default ./bench-collision)")
 
@@ -772,6 +894,7 @@ def write_report(out: Path) -> str:
     text = report(
         common.read_csv(out / "collision.csv"), common.read_csv(out / "batch.csv"),
         common.read_csv(out / "unreachable.csv"), common.read_csv(out / "overhead.csv"), info,
+        common.read_csv(out / "diagnosis.csv"),
     )  # fmt: skip
     (out / "summary.md").write_text(text)
     return text
@@ -802,6 +925,7 @@ def run(args: argparse.Namespace) -> int:
     batch: list[dict[str, Any]] = []
     unreach: list[dict[str, Any]] = []
     over: list[dict[str, Any]] = []
+    diag: list[dict[str, Any]] = []
     missing: dict[str, str] = {}
     for rname in robots:
         robot = swarm_ik.load_robot(rname)
@@ -816,12 +940,16 @@ def run(args: argparse.Namespace) -> int:
             batch += batch_rate(robot, bs, nb, budget, args.seed, looped)
             over += overhead(robot, bs, min(nb, 100), budget, args.seed)
             unreach += unreachable(robot, bs, budget, args.seed)
+            if args.diagnose:
+                diag += diagnose(robot, bs, int(args.diagnose), budget, args.seed)
             print(f"{rname}/{sname}: {len(r)} rows, {time.perf_counter() - t_start:.0f} s",
                   flush=True)  # fmt: skip
     common.write_csv(out / "collision.csv", FIELDS, rows)
     common.write_csv(out / "batch.csv", BATCH_FIELDS, batch)
     common.write_csv(out / "unreachable.csv", UNREACHABLE_FIELDS, unreach)
     common.write_csv(out / "overhead.csv", OVERHEAD_FIELDS, over)
+    if diag:
+        common.write_csv(out / "diagnosis.csv", DIAGNOSIS_FIELDS, diag)
     common.write_run_info(
         out, COMMAND, args.quick, n=n, budget_ms=budget_ms, seed=args.seed, robots=robots,
         scenes=scenes, solvers=solvers, missing=missing, load=load,
