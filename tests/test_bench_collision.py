@@ -127,19 +127,23 @@ def test_targets_inside_obstacles_are_reported_unreachable() -> None:
 
 
 def test_report_judges_the_targets_from_the_csv_rows() -> None:
-    def row(scene: str, solver: str, ok: int, ms: float) -> dict[str, str]:
+    def row(scene: str, solver: str, i: int, ok: bool, ms: float) -> dict[str, str]:
         base = dict.fromkeys(C.FIELDS, "0")
-        base.update(robot="panda", scene=scene, solver=solver, success=str(ok),
-                    time_ms=str(ms), own_ms=str(ms / 2), attempts="1", reason="")  # fmt: skip
+        base.update(robot="panda", scene=scene, solver=solver, target_id=str(i),
+                    success=str(int(ok)), time_ms=str(ms), own_ms=str(ms / 2), attempts="1",
+                    reason="")  # fmt: skip
         return base
 
-    rows = [row("table", "ours+goal", 1, 1.0) for _ in range(99)] + [
-        row("table", "ours+goal", 0, 20.0)
-    ]
-    rows += [row("cubby", "ours+goal", int(i < 90), 3.0) for i in range(100)]
+    rows = [row("table", "ours+goal", i, i < 99, 1.0 if i < 99 else 20.0) for i in range(100)]
+    rows += [row("cubby", "ours+goal", i, i < 90, 3.0) for i in range(100)]
+    rows += [row("cubby", "ours-reject", i, 85 <= i < 95, 1.0) for i in range(100)]
     text = C.report(rows, [], [], [], {"n": 100, "budget_ms": 20, "seed": 0})
-    assert "| panda | table | 99.0 (99) | 1.00 | met |" in text
-    assert "success 7.0 points short" in text and "median 1.50x the target" in text
+    assert "| panda | table | 99.0 (99) | 1.00 | 99.0 | met |" in text
+    # cubby: 90 % alone, 95 % with the rejection loop's targets added
+    assert (
+        "| panda | cubby | 90.0 (97) | 3.00 | 95.0 | missed: success 7.0 points short, "
+        "median 1.50x the target |" in text
+    )
 
 
 def test_cli_writes_csvs_and_a_summary_from_them(tmp_path) -> None:
@@ -170,3 +174,16 @@ def test_bad_options_are_refused(argv: list[str], message: str, tmp_path) -> Non
     C.add_arguments(parser)
     with pytest.raises(swarm_ik.SwarmIKError, match=message):
         C.run(parser.parse_args([*argv, "--out", str(tmp_path / "x")]))
+
+
+def test_diagnosis_finds_the_generating_branch_collision_free() -> None:
+    """Every target comes from a collision-free q, so some closed-form branch of the UR5 is
+    collision-free by the exact check; the spheres (conservative) can only find fewer."""
+    r = robot("ur5")
+    rows = C.diagnose(r, C.make_scene("cubby", 0), 4, 0.01, 0, variants=((0.02, 1.0),))
+    got = {row["metric"]: row["value"] for row in rows}
+    assert set(got) == {"exact_free_branch", "q_true_sphere_contact", "sphere_free_branch",
+                        "success"}  # fmt: skip
+    assert got["exact_free_branch"] == 1.0
+    assert 0.0 <= got["sphere_free_branch"] <= got["exact_free_branch"]
+    assert all(0.0 <= v <= 1.0 for v in got.values())
