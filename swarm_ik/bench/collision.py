@@ -19,9 +19,11 @@ Solvers, each given the same budget per target (``--budget-ms``, default 20 ms):
 * ``ours+goal``: ``swarm_ik.solve(IKProblem(robot, T, goals=[AvoidCollisions(scene)]),
   time_limit=budget)``: one call; its ``success`` is its own claim (exact check inside);
 * ``ours-reject``: ``swarm_ik.solve(IKProblem(robot, T))`` without the goal, from random
-  seeds, until an answer passes the exact check or the budget is spent (rejection);
+  seeds, until an answer passes the exact check or the budget is spent (rejection); each
+  attempt's time limit is what is left of the budget;
 * ``rtb-lm-reject``, ``tracik-reject``, ``dls-reject``: the same rejection loop around rtb's
-  ``ik_LM``, TRAC-IK (Speed, eps 1e-5, timeout = budget) and our ``dls``
+  ``ik_LM`` (no time limit of its own), TRAC-IK (Speed, eps 1e-5, timeout a quarter of the
+  budget per attempt, :data:`TRACIK_ATTEMPT_FRACTION`) and our ``dls``
   (:mod:`swarm_ik.bench.peers`; rtb and TRAC-IK need ``pip install 'swarm_ik[bench]'``).
 
 * ``analytic-branches`` (6R arms eaik decomposes, e.g. UR5; needs ``eaik``): every closed-form
