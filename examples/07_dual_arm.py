@@ -39,9 +39,8 @@ def main() -> None:
             robot, goals=[Pose("left_gripper", left), Pose("right_gripper", right)]
         )
         result = swarm_ik.solve(problem, seed=k, time_limit=0.02)
-        print(
-            f"target {k}: success={result.success} ({result.reason}) in {1e3 * result.time_s:.2f} ms"
-        )
+        ms = 1e3 * result.time_s
+        print(f"target {k}: success={result.success} ({result.reason}) in {ms:.2f} ms")
         for e in result.goal_errors:
             print(f"  {e.goal}: {e.position_error:.1e} m, {e.rotation_error:.1e} rad")
     draw(robot, result.q, [left, right], args.html)

@@ -210,17 +210,15 @@ class IKProblem:
         self.tree = robot.tree
         """The kinematic tree the kernels evaluate: the robot's goal frames (first, in order)
         and any frames the goals add (collision bodies)."""
-        extra = [e for e in (gl.extra_frames(robot) for gl in terms) if e is not None]
-        if len(extra) > 1:
+        from swarm_ik.goals import AvoidCollisions
+
+        avoid = [gl for gl in terms if isinstance(gl, AvoidCollisions)]
+        if len(avoid) > 1:
             raise InvalidArgumentError("at most one AvoidCollisions goal per problem")
-        if extra:
-            fj, fr, fp = robot.canonical_frames(*extra[0])
-            t = robot.tree
-            self.tree = t.with_frames(
-                np.concatenate([t.frame_joint, fj]),
-                np.concatenate([t.frame_rot, fr]),
-                np.concatenate([t.frame_pos, fp]),
-            )
+        self._encoded: dict[int, Any] = {}
+        if avoid:
+            self.tree, row = avoid[0].encode_cached(robot)
+            self._encoded[id(avoid[0])] = row
         # angular errors in the se3 cost: w_rot (m/rad); position errors: 1
         self._table_cache: dict[Any, lm.GoalTable] = {}
         self.bounds = lm.Bounds(
@@ -247,7 +245,7 @@ class IKProblem:
         key = None if q0 is None else np.asarray(q0, dtype=float).tobytes()
         tab = self._table_cache.get(key)
         if tab is None:
-            rows = [gl.encode(self.robot, q0) for gl in self.goals]
+            rows = [self._encoded.get(id(gl)) or gl.encode(self.robot, q0) for gl in self.goals]
             tab = lm.goal_table(
                 [r.code for r in rows],
                 [r.frame for r in rows],
@@ -350,11 +348,51 @@ class IKProblem:
         q = np.asarray(q, dtype=float)
         return bool(np.all(q >= self.lower - tol) and np.all(q <= self.upper + tol))
 
+    @property
+    def collision_goal(self) -> Any:
+        """The primary ``AvoidCollisions`` goal, if any."""
+        from swarm_ik.goals import AvoidCollisions
+
+        return next((g for g in self.goals if isinstance(g, AvoidCollisions) and g.primary), None)
+
     def is_success(self, q: FloatArray, tol_pos: float, tol_rot: float) -> bool:
-        """Every primary goal within tolerance (compiled FK) and ``q`` within the bounds."""
+        """Every primary goal within tolerance (compiled FK) and ``q`` within the bounds; a
+        collision goal is judged by the exact check (coal), not by its spheres."""
         if not self.within_bounds(q):
             return False
-        return bool(np.all(judge(self.goal_errors(q)[0], self.primary, tol_pos, tol_rot)))
+        col = self.collision_goal
+        if col is None:
+            return bool(np.all(judge(self.goal_errors(q)[0], self.primary, tol_pos, tol_rot)))
+        return self.candidate_cost(q, tol_pos, tol_rot) is not None
+
+    def without_collisions(self) -> IKProblem | None:
+        """The same problem without its collision goal (None when no other goal is primary):
+        the pose-only polish of the search, whose answers the exact check then judges."""
+        col = self.collision_goal
+        rest = [g for g in self.goals if g is not col]
+        if not any(g.primary for g in rest):
+            return None
+        return IKProblem(
+            self.robot, goals=rest, w_rot=self.w_rot, lower=self.lower, upper=self.upper
+        )
+
+    def candidate_cost(self, q: FloatArray, tol_pos: float, tol_rot: float) -> float | None:
+        """For a problem with a collision goal: when every other primary goal is within
+        tolerance at ``q`` and the exact check finds no contact, the cost with the collision
+        term measured exactly (0), else None.  The spheres of the search are conservative
+        (they stick out of the bodies by up to their fitting tolerance), so a point the
+        spheres call in contact may be free; the search offers such points here."""
+        col = self.collision_goal
+        err = self.goal_errors(q)[0]
+        others = self.primary & np.array([g is not col for g in self.goals])
+        if not np.all(judge(err[others], [True] * int(others.sum()), tol_pos, tol_rot)):
+            return None
+        if col is not None and self.robot.collision_model().collides(
+            q, col.scene, col.margin, bool(col.self_collision)
+        ):
+            return None
+        e = np.where(np.isnan(err), 0.0, err)[others]
+        return float(e[:, 0].sum() + self.w_rot * e[:, 1].sum())
 
     # ------------------------------------------------------------ the check
     def verify(

@@ -108,8 +108,11 @@ def test_target_inside_an_obstacle_is_unreachable() -> None:
 
 @pytest.mark.parametrize(
     "kwargs,message",
-    [({"margin": -0.1}, "margin must be >= 0"), ({"max_rows": 0}, "max_rows must be a positive"),
-     ({"scene": [{"type": "blob"}]}, "expected one of Sphere, Box")],
+    [
+        ({"margin": -0.1}, "margin must be >= 0"),
+        ({"max_rows": 0}, "max_rows must be a positive"),
+        ({"scene": [{"type": "blob"}]}, "expected one of Sphere, Box"),
+    ],
 )
 def test_bad_collision_goal_input_is_refused(kwargs: dict, message: str) -> None:
     with pytest.raises(swarm_ik.SwarmIKError, match=message):

@@ -283,7 +283,6 @@ def test_reach_map(get_robot, tmp_path):
         reach_map(robot, bounds=[0, 0, 0, 1, -1, 1])
 
 
-
 def test_cli_reach(tmp_path, capsys):
     out = tmp_path / "yumi.npz"
     with warnings.catch_warnings():
@@ -315,4 +314,3 @@ def test_cli_reach(tmp_path, capsys):
     except ImportError:  # pragma: no cover
         return
     assert out.with_suffix(".html").is_file()
-

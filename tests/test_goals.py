@@ -127,9 +127,7 @@ def test_two_arm_pose_goals_on_baxter() -> None:
 def test_joint_value_and_a_pose_together() -> None:
     r = robot("panda")
     q_t = r.random_q(np.random.default_rng(6))
-    prob = swarm_ik.IKProblem(
-        r, r.fk(q_t), goals=[G.JointValue(r.joint_names[2], float(q_t[2]))]
-    )
+    prob = swarm_ik.IKProblem(r, r.fk(q_t), goals=[G.JointValue(r.joint_names[2], float(q_t[2]))])
     res = swarm_ik.solve(prob, seed=0, time_limit=0.5)
     assert res.success and abs(res.q[2] - q_t[2]) <= 1e-5
 
@@ -243,8 +241,11 @@ def test_goals_json_round_trip(tmp_path) -> None:
     back = G.load_goals(path)
     assert [type(g) for g in back] == [type(g) for g in goals]
     np.testing.assert_allclose(back[0].target, pose)
-    quat = {"type": "Pose", "frame": r.ee_frame,
-            "target": {"position": [0.4, 0, 0.4], "quaternion": [1, 0, 0, 0]}}
+    quat = {
+        "type": "Pose",
+        "frame": r.ee_frame,
+        "target": {"position": [0.4, 0, 0.4], "quaternion": [1, 0, 0, 0]},
+    }
     assert G.load_goals([quat])[0].target[2, 2] == pytest.approx(-1.0)
     with pytest.raises(swarm_ik.InvalidArgumentError, match="non-empty JSON list"):
         G.load_goals([])

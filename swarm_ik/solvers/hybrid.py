@@ -577,12 +577,42 @@ def run(
     near_done = False
     open_gen = False
     sec_per_eval = 5e-6
+    exact_check = problem.collision_goal is not None and ev.stops_on_success
+    pol_free = None
+    if exact_check:
+        free = problem.without_collisions()
+        if free is not None:
+            pol_free = Polisher.from_problem(
+                free, ev.lower, ev.upper, tol_pos, tol_rot, wrap=ev.wrap_mask, q0=ev.q0,
+                tol_margin=tol_margin, max_iters=max_iters, lam0=lam0, max_step=max_step,
+                stall_rel=stall_rel, stall_iters=stall_iters,
+            )  # fmt: skip
     t = 0
     while not ev.done and (not unlimited or t < iterations):
         cap = ev.remaining
         if ev.time_limit is not None:
             left = ev.time_limit - ev.elapsed
             cap = min(cap, max(8, int(0.8 * left / sec_per_eval)))
+        if pol_free is not None and queue.shape[0]:
+            # collision goal: polish the starts for the other goals alone and let coal judge
+            # the converged ones; those in contact continue below with the sphere rows, from
+            # where they reached the goals
+            pre = pol_free.polish(queue, cap, stop_first=False)
+            ev.add_evals(pre.used)
+            conv = pre.status == CONVERGED
+            for k in np.flatnonzero(conv):
+                fk = problem.candidate_cost(pre.q[k], pol.kernel_tol_pos, pol.kernel_tol_rot)
+                if fk is not None:
+                    best_x, best_f = pre.q[k].copy(), fk
+                    ev.add_evals(0, best_x, best_f)
+                    break
+            if ev.done:
+                break
+            queue = np.where(conv[:, None], pre.q, queue)
+            cap = ev.remaining
+            if ev.time_limit is not None:
+                left = ev.time_limit - ev.elapsed
+                cap = min(cap, max(8, int(0.8 * left / sec_per_eval)))
         t1 = time.perf_counter()
         out = pol.polish(queue, cap, stop_first=not (nearest and sol_x))
         if out.used > 0:
@@ -602,6 +632,15 @@ def run(
         ev.add_evals(out.used)
         if fi < best_f:
             best_x, best_f = qs[i].copy(), fi
+        if exact_check and r:  # starts the spheres reject may still be free: ask coal
+            for k in np.flatnonzero(st[:r] != CONVERGED):
+                fk = problem.candidate_cost(qs[k], pol.kernel_tol_pos, pol.kernel_tol_rot)
+                if fk is not None:
+                    best_x, best_f = qs[k].copy(), fk
+                    ev.add_evals(0, best_x, best_f)
+                    break
+            if ev.done:
+                break
         if nearest:
             sol_x.extend(qs[st[:r] == CONVERGED])
         elif r and st[r - 1] == CONVERGED:  # stop_first: a converged start ends the call
