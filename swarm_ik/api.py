@@ -41,9 +41,9 @@ def unreachable_goal(problem: IKProblem) -> str | None:
     any: no joint vector can meet it.  Returns its label."""
     from swarm_ik.goals import AvoidCollisions, Pose, Position
 
-    avoid = [gl for gl in problem.goals if isinstance(gl, AvoidCollisions) and gl.primary]
+    avoid = [gl for gl in problem.goals if isinstance(gl, AvoidCollisions) and gl.is_primary]
     for gl in problem.goals:
-        if not gl.primary:
+        if not gl.is_primary:
             continue
         if isinstance(gl, Pose):
             point = gl.target[:3, 3]

@@ -216,8 +216,9 @@ def _cmd_robots() -> int:
     for name, (fname, frame) in sorted(BUNDLED.items()):
         print(f"  {name:28s} {fname}  (end effector: {frame})")
     print("example-robot-data:")
-    for name, (rel, frame) in sorted(EXAMPLE_ROBOTS.items()):
-        print(f"  {name:28s} {rel}  (end effector: {frame})")
+    for name, (rel, frames) in sorted(EXAMPLE_ROBOTS.items()):
+        shown = frames if isinstance(frames, str) else ", ".join(frames)
+        print(f"  {name:28s} {rel}  (goal frames: {shown})")
     return 0
 
 

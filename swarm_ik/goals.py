@@ -113,6 +113,16 @@ class Goal:
     code: ClassVar[int] = -1
     frame_goal: ClassVar[bool] = True
 
+    @property
+    def is_primary(self) -> bool:
+        """The goal's ``primary`` field (every goal type declares one)."""
+        return bool(getattr(self, "primary", True))
+
+    @property
+    def residual_weight(self) -> float:
+        """The goal's ``weight`` field (every goal type declares one)."""
+        return float(getattr(self, "weight", 1.0))
+
     def frame_name(self) -> str | None:
         """The goal frame (None for joint-space goals)."""
         return getattr(self, "frame", None)
@@ -449,7 +459,7 @@ def _joint_rows(
     return GoalRow(
         JOINT,
         -1,
-        goal.weight,
+        goal.residual_weight,
         primary,
         np.zeros(N_PAR),
         ref.astype(float),
@@ -463,7 +473,7 @@ def _joint_residual(
     d = ref - q
     m = robot.continuous_mask
     d[m] = (d[m] + np.pi) % (2 * np.pi) - np.pi
-    w = goal.weight * jw  # type: ignore[attr-defined]
+    w = goal.residual_weight * jw
     return w * d, np.diag(w)
 
 
@@ -744,7 +754,7 @@ class AvoidCollisions(Goal):
                self.margin, self.max_rows, self.weight, self.primary)  # fmt: skip
         hit = robot._cache.get(key)
         if hit is None:
-            fj, fr, fp = robot.canonical_frames(*self.extra_frames(robot))
+            fj, fr, fp = robot.canonical_frames(*self.extra_frames(robot))  # type: ignore[misc]
             t = robot.tree
             tree = t.with_frames(
                 np.concatenate([t.frame_joint, fj]),
@@ -758,7 +768,7 @@ class AvoidCollisions(Goal):
         from swarm_ik.kernels.lm import CollisionArrays
 
         sm = self.spheres(robot)
-        col = CollisionArrays(
+        col = CollisionArrays(  # type: ignore[call-arg, misc]
             len(robot.frames), int(sm.body_joint.shape[0]), *sm.arrays(), float(self.margin),
             sm.scratch(), np.zeros((self.max_rows, 2), dtype=np.int64),
         )  # fmt: skip

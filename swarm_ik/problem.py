@@ -74,7 +74,7 @@ class GoalError:
 
 
 def judge(
-    errors: FloatArray, primary: Sequence[bool] | FloatArray, tol_pos: float, tol_rot: float
+    errors: FloatArray, primary: Sequence[bool] | NDArray[Any], tol_pos: float, tol_rot: float
 ) -> NDArray[np.bool_]:
     """The one success judge: which goals are met.
 
@@ -166,10 +166,10 @@ class IKProblem:
                     raise InvalidArgumentError(
                         f"goals must be swarm_ik.goals terms, got {type(gl).__name__}"
                     )
-            terms.extend(goals)
+            terms.extend(gl for gl in goals if isinstance(gl, Goal))
         if not terms:
             raise InvalidTargetError("give a target pose or a list of goals; got None")
-        if not any(gl.primary for gl in terms):
+        if not any(gl.is_primary for gl in terms):
             raise InvalidArgumentError(
                 "at least one goal must be primary (Posture, CenterJoints and "
                 "MinimalDisplacement are secondary unless primary=True)"
@@ -204,9 +204,9 @@ class IKProblem:
                 f"[{robot.lower[j]:g}, {robot.upper[j]:g}]"
             )
         self.position_only = (target is not None and self.w_rot == 0.0 and len(terms) == 1) or all(
-            isinstance(gl, Position) for gl in terms if gl.primary
+            isinstance(gl, Position) for gl in terms if gl.is_primary
         )
-        self.primary = np.array([gl.primary for gl in terms], dtype=bool)
+        self.primary: NDArray[np.bool_] = np.array([gl.is_primary for gl in terms], dtype=np.bool_)
         self.tree = robot.tree
         """The kinematic tree the kernels evaluate: the robot's goal frames (first, in order)
         and any frames the goals add (collision bodies)."""
@@ -353,7 +353,9 @@ class IKProblem:
         """The primary ``AvoidCollisions`` goal, if any."""
         from swarm_ik.goals import AvoidCollisions
 
-        return next((g for g in self.goals if isinstance(g, AvoidCollisions) and g.primary), None)
+        return next(
+            (g for g in self.goals if isinstance(g, AvoidCollisions) and g.is_primary), None
+        )
 
     def is_success(self, q: FloatArray, tol_pos: float, tol_rot: float) -> bool:
         """Every primary goal within tolerance (compiled FK) and ``q`` within the bounds; a
@@ -370,7 +372,7 @@ class IKProblem:
         the pose-only polish of the search, whose answers the exact check then judges."""
         col = self.collision_goal
         rest = [g for g in self.goals if g is not col]
-        if not any(g.primary for g in rest):
+        if not any(g.is_primary for g in rest):
             return None
         return IKProblem(
             self.robot, goals=rest, w_rot=self.w_rot, lower=self.lower, upper=self.upper

@@ -326,7 +326,7 @@ class RobotModel:
     ee_frame_reason: str = "given"
     srdf: Any = None
     _local: threading.local = field(default_factory=threading.local, repr=False)
-    _cache: dict[str, Any] = field(default_factory=dict, repr=False)
+    _cache: dict[Any, Any] = field(default_factory=dict, repr=False)
 
     # --------------------------------------------------------------- building
     @classmethod
@@ -664,8 +664,8 @@ def resolve_robot_path(
         fname, frame = BUNDLED[s]
         return bundled_robot_dir() / fname, frame
     if s in EXAMPLE_ROBOTS:
-        rel, frame = EXAMPLE_ROBOTS[s]
-        return example_robot_data_dir() / rel, frame
+        rel, frames = EXAMPLE_ROBOTS[s]
+        return example_robot_data_dir() / rel, frames
     p = Path(s)
     if p.suffix.lower() in (".urdf", ".xml") or p.exists() or os.sep in s:
         return p, None
@@ -697,6 +697,7 @@ def load_robot(
     14
     """
     path, default_frame = resolve_robot_path(name_or_path)
+    frames: str | Sequence[str] | None
     if ee_frame is not None:
         frames, reason = ee_frame, "given"
     else:
@@ -705,7 +706,7 @@ def load_robot(
         warnings.simplefilter("ignore")
         robot = RobotModel.from_urdf(path, frames, frame_reason=reason)
     if srdf is not None:
-        if srdf is not False and not Path(srdf).is_file():
+        if srdf is not False and (srdf is True or not Path(srdf).is_file()):
             raise RobotFileNotFoundError(f"SRDF file not found: {str(srdf)!r}")
         object.__setattr__(robot, "srdf", srdf)
     robot.warm_up()

@@ -600,10 +600,10 @@ def run(
             pre = pol_free.polish(queue, cap, stop_first=False)
             ev.add_evals(pre.used)
             conv = pre.status == CONVERGED
-            for k in np.flatnonzero(conv):
-                fk = problem.candidate_cost(pre.q[k], pol.kernel_tol_pos, pol.kernel_tol_rot)
+            for row in np.flatnonzero(conv).tolist():
+                fk = problem.candidate_cost(pre.q[row], pol.kernel_tol_pos, pol.kernel_tol_rot)
                 if fk is not None:
-                    best_x, best_f = pre.q[k].copy(), fk
+                    best_x, best_f = pre.q[row].copy(), fk
                     ev.add_evals(0, best_x, best_f)
                     break
             if ev.done:
@@ -633,10 +633,10 @@ def run(
         if fi < best_f:
             best_x, best_f = qs[i].copy(), fi
         if exact_check and r:  # starts the spheres reject may still be free: ask coal
-            for k in np.flatnonzero(st[:r] != CONVERGED):
-                fk = problem.candidate_cost(qs[k], pol.kernel_tol_pos, pol.kernel_tol_rot)
+            for row in np.flatnonzero(st[:r] != CONVERGED).tolist():
+                fk = problem.candidate_cost(qs[row], pol.kernel_tol_pos, pol.kernel_tol_rot)
                 if fk is not None:
-                    best_x, best_f = qs[k].copy(), fk
+                    best_x, best_f = qs[row].copy(), fk
                     ev.add_evals(0, best_x, best_f)
                     break
             if ev.done:
