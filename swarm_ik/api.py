@@ -6,6 +6,7 @@ import math
 import time
 import warnings
 import weakref
+from collections.abc import Callable
 from typing import Any, NamedTuple
 
 import numpy as np
@@ -282,6 +283,7 @@ def solve(
     tol_rot: float = 1e-5,
     stop_on_success: bool = True,
     prefer: str = "best",
+    on_improvement: Callable[[np.ndarray, float], Any] | None = None,
     **params: Any,
 ) -> Result:
     """Solve an IK problem with a registered solver.
@@ -305,6 +307,8 @@ def solve(
             wrapped), so that successive targets along a Cartesian path give a smooth joint
             path.  ``"nearest"`` needs ``q0`` and a solver with a ``prefer`` parameter
             (``swarm``).
+        on_improvement: Optional callback ``(q (nq,), fitness)`` called each time the best
+            point found improves (e.g. to record a trace, :func:`swarm_ik.viz.solve_traced`).
         **params: The solver's own parameters; unknown names are refused with the valid list.
 
     Returns:
@@ -340,6 +344,8 @@ def solve(
         stop_on_success, prefer, seed_val,
     )  # fmt: skip
     if fast is not None:
+        if on_improvement is not None:
+            on_improvement(fast.q.copy(), fast.fitness)
         return fast
 
     def stop(q: np.ndarray) -> bool:
@@ -355,6 +361,7 @@ def solve(
         q0=q_start,
         stop=stop if stop_on_success else None,
         tolerance=(float(tol_pos), float(tol_rot)),
+        on_improvement=on_improvement,
     )
     t0 = time.perf_counter()
     spec.run(ev, rng, **kwargs)

@@ -208,6 +208,13 @@ def after_solve(args: argparse.Namespace, problem: Any, result: Any) -> None:
         compare = swarm_ik.solve(problem, args.compare, **kwargs)
         _say(args, "compare " + _result_line(compare))
     scene = viz.show_result(problem, result, trace=trace, compare=compare)
+    col = getattr(problem, "collision_goal", None)
+    if col is not None:  # the obstacles, and what is in contact in red
+        report = next((e.details for e in result.goal_errors if e.goal == "AvoidCollisions"), None)
+        named = set() if report is None else {n for p in report.pairs_in_contact for n in p}
+        viz.add_obstacles(scene, col.scene, [n for n in col.scene.names if n in named])
+        if named - set(col.scene.names):
+            viz.add_contact_bodies(scene, problem.robot, result.q, sorted(named))
     present(scene, args, live=bool(args.show))
 
 

@@ -424,3 +424,31 @@ def test_static_html_draws_the_robot_in_a_browser(
     assert 150 < ys.mean() < 450 and 200 < xs.mean() < 600  # drawn in the middle
     if os.environ.get("SWARM_IK_KEEP_SCREENSHOTS"):
         shutil.copy(tmp_path / "with.png", os.environ["SWARM_IK_KEEP_SCREENSHOTS"])
+
+
+def test_collision_view_draws_obstacles_and_contacts(tmp_path: Path) -> None:
+    """Obstacles are drawn, the one in contact and the robot bodies touching it in red."""
+    pytest.importorskip("meshcat")
+    from swarm_ik.scene import Box, Scene, Sphere
+    from swarm_ik.viz.obstacles import CONTACT_RGBA
+
+    r = swarm_ik.load_robot("panda")
+    q = np.array([0.0, -0.3, 0.0, -2.2, 0.0, 2.0, 0.785])
+    obstacles = Scene([Box([0.6, 0.6, 0.04], [0.55, 0.0, -0.02]), Sphere(0.08, r.fk(q)[:3, 3])])
+    report = r.collision_model().check(q, obstacles)
+    assert report.pairs_in_contact and not report.collision_free
+    scene = viz.show_collision(r, q, obstacles, report)
+    from swarm_ik.viz.geometry import rgb_int
+
+    red = rgb_int(CONTACT_RGBA)
+    colour = {}
+    for c in scene.commands:
+        mats = c.get("object", {}).get("materials") if c["type"] == "set_object" else None
+        if mats:
+            colour[c["path"]] = mats[0].get("color")
+    base = "/meshcat/swarm_ik/"
+    assert colour[base + "obstacles/sphere1/part0"] == red  # in contact with the hand
+    assert colour[base + "obstacles/box0/part0"] != red  # the table is clear
+    assert any(p.startswith(base + "contacts/") and "hand" in p for p in colour)
+    path = scene.save_html(tmp_path / "contacts.html")
+    assert path.stat().st_size > 0

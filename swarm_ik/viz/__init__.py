@@ -25,6 +25,7 @@ from __future__ import annotations
 
 from swarm_ik.viz.export import CommandLog, check_output_path, static_html
 from swarm_ik.viz.geometry import full_configuration, package_dirs, reach_length, visual_model
+from swarm_ik.viz.obstacles import add_contact_bodies, add_obstacles, show_collision
 from swarm_ik.viz.scene import (
     AXIS_COLORS,
     GHOST_COLOR,
@@ -48,6 +49,9 @@ from swarm_ik.viz.views import (
 )
 
 __all__ = [
+    "add_contact_bodies",
+    "add_obstacles",
+    "show_collision",
     "AXIS_COLORS",
     "GHOST_COLOR",
     "INSTALL_HINT",

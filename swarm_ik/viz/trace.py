@@ -4,16 +4,11 @@ A :class:`TraceRecorder` is an ``on_improvement(q, f)`` callback of
 :class:`swarm_ik.solvers.base.Evaluator`: it keeps every point that improved on the best so
 far, whichever way the solver evaluated it (``ev(x)``, ``ev.residual_jacobian``,
 ``ev.record`` or, for the compiled ``swarm`` solver, ``ev.add_evals(n, x, f)``).
-:func:`solve_traced` hands it to :func:`swarm_ik.solve` as ``on_improvement=``.  With a
-``swarm_ik.solve`` that does not take the callback yet, it observes a shallow copy of the
-problem instead (:func:`_observed`, transitional: the original problem and the solver are
-untouched, and the answer is the same as without recording).
+:func:`solve_traced` hands it to :func:`swarm_ik.solve` as ``on_improvement=``.
 """
 
 from __future__ import annotations
 
-import copy
-import inspect
 from dataclasses import dataclass
 from typing import Any
 
@@ -82,42 +77,6 @@ class TraceRecorder:
             self(np.atleast_2d(q_batch)[i], f[i])
 
 
-def _observed(problem: IKProblem, rec: TraceRecorder) -> IKProblem:
-    """A shallow copy of ``problem`` reporting what the solve evaluates to ``rec``.
-
-    Transitional, for a :func:`swarm_ik.solve` without ``on_improvement``; delete it (and the
-    branch of :func:`solve_traced` using it) once ``solve`` passes the callback on to its
-    :class:`~swarm_ik.solvers.base.Evaluator`."""
-    obs = copy.copy(problem)
-    fitness, residual_jacobian, is_success = (
-        problem.fitness,
-        problem.residual_jacobian,
-        problem.is_success,
-    )
-
-    def fitness_observed(q_batch: FloatArray) -> FloatArray:
-        f = fitness(q_batch)
-        rec.offer(q_batch, f)
-        return f
-
-    def residual_jacobian_observed(q_batch: FloatArray) -> tuple[FloatArray, ...]:
-        out = residual_jacobian(q_batch)
-        rec.offer(q_batch, out[0])
-        return out
-
-    def is_success_observed(q: FloatArray, tol_pos: float, tol_rot: float) -> bool:
-        # called on each new best point, including those found inside compiled kernels
-        rec(q, float(fitness(np.atleast_2d(q))[0]))
-        return is_success(q, tol_pos, tol_rot)
-
-    obs.__dict__.update(
-        fitness=fitness_observed,
-        residual_jacobian=residual_jacobian_observed,
-        is_success=is_success_observed,
-    )
-    return obs
-
-
 def solve_traced(
     problem: IKProblem, solver: str | None = None, **solve_kwargs: Any
 ) -> tuple[Result, Trace]:
@@ -138,10 +97,7 @@ def solve_traced(
 
     rec = TraceRecorder()
     name = solver or DEFAULT_SOLVER
-    if "on_improvement" in inspect.signature(solve).parameters:
-        result = solve(problem, name, on_improvement=rec, **solve_kwargs)
-    else:
-        result = solve(_observed(problem, rec), name, **solve_kwargs)
+    result = solve(problem, name, on_improvement=rec, **solve_kwargs)
     trail = np.array(rec.q, dtype=float).reshape(-1, problem.nq)
     history = np.asarray(result.history, dtype=float)
     if trail.shape[0] == 0 or history.size == 0:
