@@ -92,7 +92,7 @@ def make_pose(position: Any, quat_xyzw: Any) -> FloatArray:
 def project_to_se3(matrix: Any) -> FloatArray:
     """Nearest proper rigid transform to a 4x4 matrix (rotation block by SVD, det +1).
 
-    Use it for printed, rounded matrices such as the target of paper 000.
+    Use it for printed, rounded matrices such as the target of [HLFOA].
 
     Args:
         matrix: Almost-rigid transform, shape ``(4, 4)``.

@@ -332,7 +332,7 @@ def test_rotation_within_tolerance_is_accepted_and_beyond_is_refused(
     slightly = pose.copy()
     slightly[:3, :3] *= 1 + 1e-8  # a rounded matrix: within the default tolerance 1e-6
     IKProblem(yumi, slightly)
-    rounded = np.round(pose, 3)  # printed with 3 decimals, as paper 000's target
+    rounded = np.round(pose, 3)  # printed with 3 decimals, as the [HLFOA] paper's target
     with pytest.raises(InvalidTargetError, match="not orthonormal"):
         IKProblem(yumi, rounded)
     IKProblem(yumi, rounded, orth_tol=1e-2)  # the user may raise the tolerance...

@@ -1,4 +1,4 @@
-"""Benchmark functions F1..F4 (paper 003, Table 2): values, minima, domains, errors."""
+"""Benchmark functions F1..F4 ([MGWO], Table 2): values, minima, domains, errors."""
 
 from __future__ import annotations
 
@@ -13,7 +13,7 @@ from swarm_ik.testfunctions import FUNCTIONS, get_function, hartmann3
 
 def test_table_of_functions():
     assert sorted(FUNCTIONS) == ["F1", "F2", "F3", "F4"]
-    expected = {  # (dim, lower, upper, f_min), Mirjalili 2014 / paper 003 with the F4 fix
+    expected = {  # (dim, lower, upper, f_min), [GWO] / [MGWO] with the F4 fix
         "F1": (30, -100.0, 100.0, 0.0),
         "F2": (30, -10.0, 10.0, 0.0),
         "F3": (30, -5.12, 5.12, 0.0),
