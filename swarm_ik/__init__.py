@@ -36,6 +36,7 @@ _LAZY = {
     "RobotModel": "swarm_ik.robot",
     "load_robot": "swarm_ik.robot",
     "robot_names": "swarm_ik.robot",
+    "Scene": "swarm_ik.scene",
 }
 _SUBMODULES = ("goals", "solvers")
 
@@ -67,6 +68,7 @@ if TYPE_CHECKING:  # for type checkers and IDEs: the names as if imported eagerl
     from swarm_ik.problem import IKProblem
     from swarm_ik.result import Result
     from swarm_ik.robot import RobotModel, load_robot, robot_names
+    from swarm_ik.scene import Scene
 
 __version__ = "0.1.0"
 
@@ -80,6 +82,7 @@ __all__ = [
     "RobotFileNotFoundError",
     "RobotModel",
     "RobotModelError",
+    "Scene",
     "SwarmIKError",
     "UnknownNameError",
     "load_robot",

@@ -138,5 +138,53 @@ def read_targets_file(path: str | os.PathLike[str]) -> FloatArray:
     ) as exc:
         reason = " ".join(str(exc).split()) or type(exc).__name__
         if "allow_pickle" in reason:
-            reason = "it holds Python objects, not numbers (an object array)"
+            reason = "an object array of Python objects, not numbers"
         raise InvalidArgumentError(f"{path}: cannot read targets ({reason})") from None
+
+
+MAX_GRID_CELLS = 10_000_000
+"""Most voxels a reachability grid may have (its centres alone take 0.24 GB at this size,
+the intermediate arrays about 0.6 GB); checked before any array is allocated."""
+
+
+def grid_cells(lower: Any, upper: Any, resolution: float) -> int:
+    """Voxels of the grid :func:`swarm_ik.reach.grid_axes` would build, counted without
+    allocating it (``ceil(extent / resolution)`` per axis, at least one)."""
+    lo = np.asarray(lower, dtype=float).reshape(3)
+    hi = np.asarray(upper, dtype=float).reshape(3)
+    n = 1
+    for a in range(3):
+        n *= max(1, int(np.ceil((hi[a] - lo[a]) / resolution - 1e-9)))
+    return n
+
+
+def check_grid_size(
+    lower: Any, upper: Any, resolution: Any, max_cells: int = MAX_GRID_CELLS
+) -> int:
+    """Refuse a voxel grid too large to allocate, before allocating it.
+
+    Args:
+        lower: Box corner ``(3,)`` [m].
+        upper: Opposite corner ``(3,)`` [m].
+        resolution: Voxel edge [m], positive.
+        max_cells: Most voxels accepted (default :data:`MAX_GRID_CELLS`).
+
+    Returns:
+        The number of voxels.
+
+    Raises:
+        InvalidArgumentError: a non-positive or non-finite resolution, or more voxels than
+            ``max_cells`` (the message says which resolution would fit).
+    """
+    res = positive_float(resolution, "resolution")
+    n = grid_cells(lower, upper, res)
+    if n > max_cells:
+        extent = np.asarray(upper, dtype=float).reshape(3) - np.asarray(lower, dtype=float).reshape(
+            3
+        )
+        fit = float(np.cbrt(np.prod(np.maximum(extent, res)) / max_cells))
+        raise InvalidArgumentError(
+            f"a grid of {res:g} m voxels over this box has {n} voxels, more than the cap of "
+            f"{max_cells}; use --resolution {fit:.3g} or coarser, or smaller --bounds"
+        )
+    return n

@@ -28,7 +28,9 @@ def verify(problem: IKProblem, q: Any) -> tuple[float, float]:
     computed with Pinocchio's own FK (0 where no goal has such an error)."""
     if not isinstance(problem, IKProblem):
         raise InvalidArgumentError(f"problem must be an IKProblem, got {type(problem).__name__}")
-    errs = problem.verify(q)
+    from swarm_ik._validate import joint_vector
+
+    errs = problem.verify(joint_vector(problem.robot, q))
     dp = max((e.position_error for e in errs if not math.isnan(e.position_error)), default=0.0)
     dr = max((e.rotation_error for e in errs if not math.isnan(e.rotation_error)), default=0.0)
     return float(dp), float(dr)
@@ -37,8 +39,9 @@ def verify(problem: IKProblem, q: Any) -> tuple[float, float]:
 def unreachable_goal(problem: IKProblem) -> str | None:
     """A primary goal point beyond its frame's reach (:meth:`RobotModel.reach_radius`), if
     any: no joint vector can meet it.  Returns its label."""
-    from swarm_ik.goals import Pose, Position
+    from swarm_ik.goals import AvoidCollisions, Pose, Position
 
+    avoid = [gl for gl in problem.goals if isinstance(gl, AvoidCollisions) and gl.primary]
     for gl in problem.goals:
         if not gl.primary:
             continue
@@ -50,6 +53,10 @@ def unreachable_goal(problem: IKProblem) -> str | None:
             continue
         if float(np.linalg.norm(point)) > problem.robot.reach_radius(gl.frame) * (1 + 1e-9):
             return gl.describe()
+        for av in avoid:  # a goal point inside an obstacle: the robot would be in contact
+            inside = av.obstacle_containing(point)
+            if inside is not None:
+                return f"{gl.describe()} inside obstacle {inside!r}"
     return None
 
 
@@ -328,7 +335,7 @@ def solve(
                 + ", ".join(able)
             )
         params = {**params, "prefer": prefer}
-    kwargs = spec.resolve(params)
+    kwargs = spec.resolve(params, dim=problem.nq)
     check_budget(max_evals, time_limit)
     for label, tol in (("tol_pos", tol_pos), ("tol_rot", tol_rot)):
         if not (is_finite_nonneg(tol) and float(tol) > 0):

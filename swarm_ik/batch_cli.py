@@ -9,17 +9,32 @@ PNG of slices, and (with meshcat installed) an HTML point cloud.
 Both take ``--scheduler``: ``local`` (default: an embedded Dask LocalCluster, one worker
 process per core), ``none`` (this process, no Dask), or a scheduler address
 ``tcp://host:port``.  Exit codes: 0 all targets solved (``batch``) / map written (``reach``),
-1 some targets not solved (``batch``), 2 bad input.
+1 some targets not solved (``batch``), 2 bad input (output paths are checked before any work),
+130 interrupted.
+
+Ctrl-C during ``batch`` stops after the chunks already finished: their rows (the first ``k``
+targets, in order) are written to ``--out`` and the command exits with 130, printing one line.
+The chunks are submitted in waves (one chunk at a time in-process, two per worker on Dask)
+and solved by :func:`swarm_ik.batch.solve_chunk` with their index in the whole batch, so the
+answers are bit-identical to :func:`swarm_ik.batch.solve_batch`'s.
 """
 
 from __future__ import annotations
 
 import argparse
+import contextlib
+import functools
+import logging
+import signal
 import sys
+import time
+from collections.abc import Iterator
 from pathlib import Path
 from typing import Any
 
 import numpy as np
+
+EXIT_INTERRUPTED = 130
 
 SCHEDULER_HELP = (
     "where to solve: 'local' (default: embedded Dask LocalCluster, one worker process per "
@@ -148,26 +163,141 @@ def _load(args: argparse.Namespace) -> Any:
     return swarm_ik.load_robot(args.robot, ee_frame=args.frame)
 
 
-def run_batch(args: argparse.Namespace) -> int:
-    """Handler of ``swarm-ik batch``; returns the exit code."""
-    from swarm_ik.batch import read_targets, solve_batch
+@contextlib.contextmanager
+def _workers_ignore_sigint() -> Iterator[None]:
+    """Ignore SIGINT while worker processes are started, so that they inherit the ignore
+    (Python keeps an inherited ignore) and Ctrl-C reaches this process only: no tracebacks
+    from every worker.  The handler is restored at once."""
+    try:
+        old = signal.signal(signal.SIGINT, signal.SIG_IGN)
+    except ValueError:  # not the main thread
+        yield
+        return
+    try:
+        yield
+    finally:
+        signal.signal(signal.SIGINT, old)
+
+
+def solve_keeping_chunks(
+    robot: Any,
+    targets: Any,
+    *,
+    seed: int = 0,
+    q0: Any = None,
+    tol_pos: float = 1e-5,
+    tol_rot: float = 1e-5,
+    position_only: bool = False,
+    max_starts: int = 128,
+    max_iters: int = 60,
+    scheduler: Any = None,
+    chunk_size: int | None = None,
+    progress: bool = False,
+) -> tuple[Any, bool]:
+    """:func:`swarm_ik.batch.solve_batch` that survives Ctrl-C with the chunks it finished.
+
+    Same arguments and answers as ``solve_batch``.
+
+    Returns:
+        ``(result, interrupted)``: on Ctrl-C the result holds the first ``k`` targets (the
+        chunks finished before it, in order) and ``interrupted`` is True.
+    """
+    from swarm_ik import distributed
+    from swarm_ik._validate import float_array, positive_float
+    from swarm_ik.batch import (
+        BatchChain,
+        BatchResult,
+        BatchSettings,
+        _run_chunk,
+        _seed_starts,
+        check_targets,
+        default_chunk_size,
+    )
     from swarm_ik.errors import InvalidArgumentError
 
+    t0 = time.perf_counter()
+    settings = BatchSettings(
+        tol_pos=positive_float(tol_pos, "tol_pos"),
+        tol_rot=positive_float(tol_rot, "tol_rot"),
+        position_only=bool(position_only),
+        max_starts=max_starts,
+        max_iters=max_iters,
+        seed=seed,
+    )
+    poses = check_targets(float_array(targets))
+    n = poses.shape[0]
+    bc = BatchChain.from_robot(robot)
+    seeds = _seed_starts(bc, q0, n)
+    if chunk_size is not None and (
+        isinstance(chunk_size, bool)
+        or not isinstance(chunk_size, (int, np.integer))
+        or chunk_size < 1
+    ):
+        raise InvalidArgumentError(f"chunk_size must be a positive integer, got {chunk_size!r}")
+    parts: list[Any] = []
+    interrupted = False
+    setup_s = 0.0
+    with contextlib.ExitStack() as stack:
+        t_setup = time.perf_counter()
+        with _workers_ignore_sigint():
+            client = stack.enter_context(distributed.connect(scheduler))
+        setup_s = time.perf_counter() - t_setup
+        workers = distributed.n_workers(client)
+        size = int(chunk_size) if chunk_size is not None else default_chunk_size(n, workers)
+        items = [(s, poses[s : s + size], seeds[s : s + size]) for s in range(0, n, size)]
+        wave = 1 if client is None else 2 * workers
+        func = functools.partial(_run_chunk, bc, settings)
+        bar = distributed._progress_bar(progress, n, f"IK {robot.name}", "pose")
+        try:
+            for w in range(0, len(items), wave):
+                batch = items[w : w + wave]
+                parts.extend(
+                    distributed.map_chunks(func, batch, client=client, name="swarm-ik-batch")
+                )
+                bar.update(sum(len(it[1]) for it in batch))
+        except KeyboardInterrupt:
+            interrupted = True
+            logging.getLogger("distributed").setLevel(logging.CRITICAL)
+        finally:
+            bar.close()
+    nq = robot.nq
+
+    def cat(attr: str, empty: Any) -> Any:
+        return np.concatenate([getattr(p, attr) for p in parts]) if parts else empty
+
+    res = BatchResult(
+        q=cat("q", np.empty((0, nq))),
+        position_error=cat("position_error", np.empty(0)),
+        rotation_error=cat("rotation_error", np.empty(0)),
+        success=cat("success", np.empty(0, dtype=bool)),
+        n_evals=cat("n_evals", np.empty(0, dtype=np.int64)),
+        n_starts=cat("n_starts", np.empty(0, dtype=np.int64)),
+        time_s=time.perf_counter() - t0,
+        setup_s=setup_s,
+        compute_s=float(sum(p.time_s for p in parts)),
+        settings=settings,
+        joint_names=tuple(robot.joint_names),
+    )
+    return res, interrupted
+
+
+def run_batch(args: argparse.Namespace) -> int:
+    """Handler of ``swarm-ik batch``; returns the exit code."""
+    from swarm_ik._validate import check_output_path, read_targets_file
+    from swarm_ik.errors import InvalidArgumentError
+
+    check_output_path(args.out, "--out", (".csv", ".npz"))  # before any work
+    if args.random is not None and args.random < 1:
+        raise InvalidArgumentError(f"--random must be a positive count, got {args.random}")
     robot = _load(args)
-    if args.out.suffix.lower() not in (".npz", ".csv"):
-        raise InvalidArgumentError(
-            f"--out {str(args.out)!r}: unknown suffix {args.out.suffix!r}; valid: .csv, .npz"
-        )
     if args.targets is not None:
-        targets = read_targets(args.targets)
+        targets = read_targets_file(args.targets)
         source = str(args.targets)
     else:
-        if args.random < 1:
-            raise InvalidArgumentError(f"--random must be a positive count, got {args.random}")
         rng = np.random.default_rng(args.seed)
         targets = robot.fk(robot.random_q(rng, args.random))
         source = f"{args.random} FK-sampled targets (seed {args.seed})"
-    res = solve_batch(
+    res, interrupted = solve_keeping_chunks(
         robot,
         targets,
         seed=args.seed,
@@ -181,6 +311,14 @@ def run_batch(args: argparse.Namespace) -> int:
         chunk_size=args.chunk_size,
         progress=not args.no_progress and sys.stderr.isatty(),
     )
+    if interrupted:
+        if res.n:
+            res.save(args.out, targets=targets[: res.n])
+            kept = f"wrote the {res.n} finished targets (of {len(targets)}) to {args.out}"
+        else:
+            kept = "no chunk had finished; nothing written"
+        print(f"swarm-ik: interrupted; {kept}", file=sys.stderr)
+        return EXIT_INTERRUPTED
     res.save(args.out, targets=targets)
     n_ok = int(res.success.sum())
     print(f"robot {robot.name} ({robot.nq} joints), frame {robot.ee_frame}; targets: {source}")
@@ -202,15 +340,30 @@ def run_batch(args: argparse.Namespace) -> int:
 def run_reach(args: argparse.Namespace) -> int:
     """Handler of ``swarm-ik reach``; returns the exit code."""
     from swarm_ik import reach
+    from swarm_ik._validate import check_grid_size, check_output_path, positive_float
 
-    robot = _load(args)
     out = args.out if args.out is not None else Path(f"reach_{args.robot.replace('/', '_')}.npz")
     if out.suffix.lower() != ".npz":
         out = out.with_suffix(".npz")
+    check_output_path(out, "--out")  # before any work
+    check_output_path(args.png or out.with_suffix(".png"), "--png")
+    if not args.no_html:
+        check_output_path(args.html or out.with_suffix(".html"), "--html")
+    robot = _load(args)
+    # the grid's size is checked before anything is allocated (reach_map refuses too many
+    # poses only once the voxel centres exist); default_bounds with the same seed is what
+    # reach_map would compute itself, so the map is the same
+    if args.bounds is not None:
+        lo, hi = np.asarray(args.bounds[:3], float), np.asarray(args.bounds[3:], float)
+    else:
+        positive_float(args.resolution, "--resolution")
+        lo, hi = reach.default_bounds(robot, seed=args.seed)
+    check_grid_size(lo, hi, args.resolution)
+    bounds = np.concatenate([lo, hi])
     rmap = reach.reach_map(
         robot,
         resolution=args.resolution,
-        bounds=args.bounds,
+        bounds=bounds,
         n_orientations=args.orientations,
         seed=args.seed,
         tol_pos=args.tol_pos,

@@ -60,6 +60,7 @@ BENCHMARKS = {
     "throughput": "swarm_ik.bench.throughput",
     "goals": "swarm_ik.bench.goals",
     "many": "swarm_ik.bench.many",
+    "collision": "swarm_ik.bench.collision",
 }
 COMMAND_MODULES = ("swarm_ik.viz_cli", "swarm_ik.batch_cli")
 """Modules adding sub-commands: each has ``add_commands(subparsers) -> {name: handler}``, a
@@ -140,6 +141,20 @@ def _build_parser() -> argparse.ArgumentParser:
     p.add_argument("--tol-rot", type=float, default=1e-5, help="rotation tolerance [rad]")
     p.add_argument("--q0", nargs="+", type=float, default=None, help="starting joint values")
     p.add_argument(
+        "--scene",
+        default=None,
+        metavar="FILE",
+        help="scene JSON of obstacles: the answer must be collision-free (self and scene)",
+    )
+    p.add_argument(
+        "--no-self-collision",
+        action="store_true",
+        help="with --scene: check the robot against the scene only",
+    )
+    p.add_argument(
+        "--srdf", default=None, help="SRDF of disabled self-collision pairs (default: found)"
+    )
+    p.add_argument(
         "--param",
         action="append",
         type=_parse_param,
@@ -213,7 +228,7 @@ def _cmd_solve(args: argparse.Namespace) -> int:
     if args.html is not None:  # refuse an unwritable page before solving
         check_output_path(args.html, "--html")
     frames = None if not args.frame else (args.frame[0] if len(args.frame) == 1 else args.frame)
-    robot = swarm_ik.load_robot(args.robot, ee_frame=frames)
+    robot = swarm_ik.load_robot(args.robot, ee_frame=frames, srdf=args.srdf)
     goals = None
     target = None
     if args.goals is not None:
@@ -225,6 +240,11 @@ def _cmd_solve(args: argparse.Namespace) -> int:
         target = robot.fk(robot.check_q(args.from_q, "--from-q"))
     else:
         target = np.asarray(args.pose, dtype=float)
+    if args.scene is not None:
+        avoid = swarm_ik.goals.AvoidCollisions(
+            swarm_ik.Scene.from_json(args.scene), self_collision=not args.no_self_collision
+        )
+        goals = [*(goals or []), avoid]
     problem = swarm_ik.IKProblem(
         robot, target, goals, args.fitness, w_rot=0.0 if args.position_only else 1.0
     )
@@ -265,6 +285,13 @@ def _cmd_solve(args: argparse.Namespace) -> int:
                 )
                 if e.rotation_error == e.rotation_error:
                     parts.append(f"{e.rotation_error:.3e} rad")
+                rep = e.details
+                if rep is not None and hasattr(rep, "clearance"):
+                    parts = [f"clearance {rep.clearance:.4f} m"]
+                    if rep.pairs_in_contact:
+                        parts.append(
+                            "in contact: " + ", ".join("-".join(p) for p in rep.pairs_in_contact)
+                        )
                 print(f"  {e.goal}: {', '.join(parts)} ({'met' if e.met else 'NOT met'})")
         print(
             f"position error {res.position_error:.3e} m, "
@@ -322,6 +349,9 @@ def main(argv: Sequence[str] | None = None) -> int:
         as_json = bool(getattr(args, "json", False))
         with warnings.catch_warnings():
             warnings.simplefilter("default")
+            # Dask's start-up chatter (dashboard port taken, sockets) is not the user's concern
+            warnings.filterwarnings("ignore", module=r"distributed(\.|$)")
+            warnings.filterwarnings("ignore", category=ResourceWarning)
             return _dispatch(parser, args)
     except UsageError as exc:
         return _fail(str(exc), EXIT_BAD_INPUT, as_json, "UsageError")

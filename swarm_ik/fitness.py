@@ -3,12 +3,12 @@
 Positions in metres, angles in radians.  Lower is better, zero at the target.
 
 * ``"se3"``: ``‖Δp‖ + w_rot·θ`` with ``θ = ‖log(R_targetᵀ R)‖`` the geodesic rotation error.
-* ``"paper-l1"``: eq. 3 of paper 000 (HLFOA), ``λ·(|Δx|+|Δy|+|Δz|) + Σ|ΔR_ij|`` over the 9
+* ``"paper-l1"``: eq. 3 of [HLFOA], ``λ·(|Δx|+|Δy|+|Δz|) + Σ|ΔR_ij|`` over the 9
   rotation entries.  The paper uses millimetres with ``λ = 1e-2``; in metres ``λ = 10`` gives
   the same values.
-* ``"euler-zyz"``: eq. 15 of paper 003 (MGWO), ``μ·(|Δx|+|Δy|+|Δz|) + |Δα|+|Δβ|+|Δγ|`` with
+* ``"euler-zyz"``: eq. 15 of [MGWO], ``μ·(|Δx|+|Δy|+|Δz|) + |Δα|+|Δβ|+|Δγ|`` with
   ZYZ Euler angles, differences wrapped to ``(−π, π]``, ``μ = 1``.
-* ``"paper-pso"``: eqs. 3–5 of paper 002, ``|Δp|² + (N·N* + O·O* + A·A* − 3)²`` (the printed
+* ``"paper-pso"``: eqs. 3–5 of [PSO-IK], ``|Δp|² + (N·N* + O·O* + A·A* − 3)²`` (the printed
   orientation term is garbled; this reading is zero when the frames agree).
 """
 
@@ -64,7 +64,7 @@ def se3_fitness(
 def paper_l1_fitness(
     poses: FloatArray, target: FloatArray, *, lam: float = 10.0, **_: Any
 ) -> FloatArray:
-    """Eq. 3 of paper 000: ``λ·L1(Δp [m]) + Σ|R − R_target|`` (λ = 10 per metre)."""
+    """Eq. 3 of [HLFOA]: ``λ·L1(Δp [m]) + Σ|R − R_target|`` (λ = 10 per metre)."""
     dp = np.abs(poses[:, :3, 3] - target[:3, 3]).sum(axis=-1)
     dr = np.abs(poses[:, :3, :3] - target[:3, :3]).sum(axis=(-1, -2))
     return lam * dp + dr
@@ -73,14 +73,14 @@ def paper_l1_fitness(
 def euler_zyz_fitness(
     poses: FloatArray, target: FloatArray, *, mu: float = 1.0, **_: Any
 ) -> FloatArray:
-    """Eq. 15 of paper 003: ``μ·L1(Δp [m]) + L1(wrapped ΔZYZ [rad])``."""
+    """Eq. 15 of [MGWO]: ``μ·L1(Δp [m]) + L1(wrapped ΔZYZ [rad])``."""
     dp = np.abs(poses[:, :3, 3] - target[:3, 3]).sum(axis=-1)
     de = wrap_angle(zyz_euler(poses[:, :3, :3]) - zyz_euler(target[:3, :3]))
     return mu * dp + np.abs(de).sum(axis=-1)
 
 
 def paper_pso_fitness(poses: FloatArray, target: FloatArray, **_: Any) -> FloatArray:
-    """Eqs. 3–5 of paper 002: ``|Δp|² + (tr(R_targetᵀR) − 3)²``."""
+    """Eqs. 3–5 of [PSO-IK]: ``|Δp|² + (tr(R_targetᵀR) − 3)²``."""
     dp2 = np.sum((poses[:, :3, 3] - target[:3, 3]) ** 2, axis=-1)
     tr = np.einsum("ij,nij->n", target[:3, :3], poses[:, :3, :3])
     return dp2 + (tr - 3.0) ** 2

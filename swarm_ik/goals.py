@@ -51,6 +51,7 @@ from swarm_ik.errors import InvalidArgumentError, InvalidTargetError, UnknownNam
 from swarm_ik.kernels import lie
 from swarm_ik.kernels.lm import (
     AXIS,
+    COLLISION,
     JOINT,
     LOOK_AT,
     N_PAR,
@@ -136,6 +137,26 @@ class Goal:
         f = self.frame_name()
         return f"{type(self).__name__}({f})" if f else type(self).__name__
 
+    def extra_frames(self, robot: RobotModel) -> tuple[Any, Any, Any] | None:
+        """Frames the goal needs beyond the robot's goal frames (appended to the problem's
+        tree): ``(joint ids of robot.model, rotations, translations)``, or None."""
+        return None
+
+    def check(
+        self, poses: FloatArray, q: FloatArray, robot: RobotModel, tol_pos: float,
+        tol_rot: float, q0: FloatArray | None = None,
+    ) -> tuple[float, float, bool, Any]:  # fmt: skip
+        """The independent check: ``(position error, angular error, met, details)`` with
+        Pinocchio's poses ``(nf, 4, 4)`` of the goal frames."""
+        frame = self.frame_name()
+        pose = poses[robot.frames.index(frame)] if frame is not None else np.eye(4)
+        if self.frame_goal:
+            dp, dr = self.errors(pose, q, robot)
+        else:
+            dp, dr = self.errors(pose, q, robot, q0)  # type: ignore[call-arg]
+        met = not (dp > tol_pos) and not (dr > tol_rot)
+        return float(dp), float(dr), bool(met), None
+
 
 @dataclass(frozen=True)
 class GoalRow:
@@ -148,6 +169,8 @@ class GoalRow:
     par: FloatArray
     jref: FloatArray
     jw: FloatArray
+    rows: int | None = None
+    col: Any = None
 
 
 GOALS: dict[str, type[Goal]] = {}
@@ -618,6 +641,129 @@ class JointValue(Goal):
     errors = Posture.errors
 
 
+# --------------------------------------------------------------------------- collisions
+@register_goal
+@dataclass(frozen=True)
+class AvoidCollisions(Goal):
+    """No contact between the robot's collision bodies (self-collision) nor with a scene.
+
+    A primary constraint.  In the search, every collision body is covered by spheres
+    (conservative: spheres apart ⇒ bodies apart, :mod:`swarm_ik.kernels.spheres`) and each
+    active sphere pair contributes a row ``r = −w·max(0, margin + r_i + r_j − ‖c_i − c_j‖)``
+    (obstacles: their exact signed distance) with its Jacobian, up to ``max_rows`` rows (the
+    deepest first).  The answer is judged by the exact check with coal on the URDF's collision
+    geometry (:meth:`swarm_ik.collision.RobotCollision.check`): success only without contact
+    closer than ``margin``; ``Result.collision`` gives the clearance and the pairs in contact.
+    At most one per problem.
+
+    Args:
+        scene: Obstacles: a :class:`swarm_ik.scene.Scene`, a list of shapes, a scene JSON
+            file, or None (self-collision only).
+        self_collision: Check the robot against itself (pairs: all link pairs minus adjacent
+            links minus the SRDF's disabled pairs, see :mod:`swarm_ik.collision`).
+        margin: Wanted clearance [m], ``>= 0``.
+        weight: Residual weight.
+        primary: Default True.
+        max_rows: Most penetration rows per evaluation.
+        tolerance: Sphere fitting tolerance [m] (how far a sphere may stick out of its body).
+    """
+
+    scene: Any = None
+    self_collision: bool = True
+    margin: float = 0.0
+    weight: float = 1.0
+    primary: bool = True
+    max_rows: int = 24
+    tolerance: float = 0.02
+    code: ClassVar[int] = COLLISION
+    frame_goal: ClassVar[bool] = False
+
+    def __post_init__(self) -> None:
+        from swarm_ik.scene import as_scene
+
+        object.__setattr__(self, "scene", as_scene(self.scene))
+        object.__setattr__(self, "weight", _weight(self.weight))
+        m = float(self.margin) if _is_array(self.margin) else float("nan")
+        if not (np.isfinite(m) and m >= 0.0):
+            raise InvalidArgumentError(
+                f"AvoidCollisions.margin must be >= 0 [m], got {self.margin!r}"
+            )
+        object.__setattr__(self, "margin", m)
+        if (
+            isinstance(self.max_rows, bool)
+            or not isinstance(self.max_rows, int)
+            or self.max_rows < 1
+        ):
+            raise InvalidArgumentError(
+                f"AvoidCollisions.max_rows must be a positive integer, got {self.max_rows!r}"
+            )
+        object.__setattr__(self, "tolerance", _weight(self.tolerance, "AvoidCollisions.tolerance"))
+
+    def describe(self) -> str:
+        return "AvoidCollisions"
+
+    def obstacle_containing(self, point: Any) -> str | None:
+        """Name of a scene obstacle whose inside holds the world ``point`` [m], if any (coal's
+        signed distance of a point-sized probe)."""
+        if len(self.scene) == 0:
+            return None
+        import coal
+
+        from swarm_ik.scene import coal_object
+
+        p = np.asarray(point, dtype=float)
+        probe = coal.CollisionObject(coal.Sphere(1e-9), coal.Transform3s(np.eye(3), p))
+        for name, shape in zip(self.scene.names, self.scene, strict=True):
+            req, res = coal.DistanceRequest(), coal.DistanceResult()
+            if coal.distance(coal_object(shape), probe, req, res) < 0.0:
+                return str(name)
+        return None
+
+    def spheres(self, robot: RobotModel) -> Any:
+        """The sphere model of the robot and the scene (cached on the robot)."""
+        from swarm_ik.kernels.spheres import SphereModel
+
+        key = ("spheres", json.dumps(self.scene.to_dict(), sort_keys=True),
+               bool(self.self_collision), self.tolerance)  # fmt: skip
+        sm = robot._cache.get(key)
+        if sm is None:
+            sm = SphereModel.from_collision(
+                robot.collision_model(), self.scene, tolerance=self.tolerance,
+                self_collision=bool(self.self_collision),
+            )  # fmt: skip
+            robot._cache[key] = sm
+        return sm
+
+    def extra_frames(self, robot: RobotModel) -> tuple[Any, Any, Any] | None:
+        sm = self.spheres(robot)
+        return sm.body_joint, sm.body_frame_rot, sm.body_frame_pos
+
+    def encode(self, robot: RobotModel, q0: FloatArray | None) -> GoalRow:
+        from swarm_ik.kernels.lm import CollisionArrays
+
+        sm = self.spheres(robot)
+        col = CollisionArrays(
+            len(robot.frames), int(sm.body_joint.shape[0]), *sm.arrays(), float(self.margin),
+            sm.scratch(), np.zeros((self.max_rows, 2), dtype=np.int64),
+        )  # fmt: skip
+        return GoalRow(
+            COLLISION, -1, self.weight, self.primary, np.zeros(N_PAR), np.zeros(robot.nq),
+            np.zeros(robot.nq), rows=self.max_rows, col=col,
+        )  # fmt: skip
+
+    def errors(self, pose, q, robot, q0=None):  # type: ignore[no-untyped-def]
+        rep = robot.collision_model().check(q, self.scene, self.margin, bool(self.self_collision))
+        return (0.0 if rep.collision_free else max(0.0, self.margin - rep.clearance)), float("nan")
+
+    def check(self, poses, q, robot, tol_pos, tol_rot, q0=None):  # type: ignore[no-untyped-def]
+        rep = robot.collision_model().check(q, self.scene, self.margin, bool(self.self_collision))
+        depth = 0.0 if rep.collision_free else max(0.0, self.margin - rep.clearance)
+        return depth, float("nan"), bool(rep.collision_free), rep
+
+    def residual(self, pose, jac, q, robot):  # type: ignore[no-untyped-def]
+        raise InvalidArgumentError("AvoidCollisions has no numpy twin: see SphereModel.evaluate")
+
+
 # --------------------------------------------------------------------------- JSON
 def goal_from_dict(data: Mapping[str, Any]) -> Goal:
     """One goal from its JSON form ``{"type": "Pose", "frame": ..., ...}``.
@@ -703,6 +849,7 @@ GoalFactory = Callable[..., Goal]
 
 __all__ = [
     "GOALS",
+    "AvoidCollisions",
     "Axis",
     "CenterJoints",
     "Goal",

@@ -43,13 +43,17 @@ class GoalError:
         goal: Label, e.g. ``"Pose(left_gripper)"``.
         position_error: Position error [m] (NaN when the goal has none).
         rotation_error: Angular error [rad] (NaN when the goal has none).
-        met: Within the tolerances of the solve.
+        met: Within the tolerances of the solve (collisions: the exact check finds no
+            contact).
+        details: Goal-specific report (``AvoidCollisions``: the
+            :class:`swarm_ik.collision.CollisionReport` with clearance and pairs in contact).
     """
 
     goal: str
     position_error: float
     rotation_error: float
     met: bool
+    details: Any = None
 
     def to_dict(self) -> dict[str, Any]:
         """JSON-ready dict (NaN as None)."""
@@ -57,12 +61,16 @@ class GoalError:
         def num(v: float) -> float | None:
             return None if math.isnan(v) else float(v)
 
-        return {
+        out: dict[str, Any] = {
             "goal": self.goal,
             "position_error": num(self.position_error),
             "rotation_error": num(self.rotation_error),
             "met": self.met,
         }
+        if self.details is not None and hasattr(self.details, "clearance"):
+            out["clearance"] = float(self.details.clearance)
+            out["pairs_in_contact"] = [list(p) for p in self.details.pairs_in_contact]
+        return out
 
 
 def judge(
@@ -202,6 +210,17 @@ class IKProblem:
         self.tree = robot.tree
         """The kinematic tree the kernels evaluate: the robot's goal frames (first, in order)
         and any frames the goals add (collision bodies)."""
+        extra = [e for e in (gl.extra_frames(robot) for gl in terms) if e is not None]
+        if len(extra) > 1:
+            raise InvalidArgumentError("at most one AvoidCollisions goal per problem")
+        if extra:
+            fj, fr, fp = robot.canonical_frames(*extra[0])
+            t = robot.tree
+            self.tree = t.with_frames(
+                np.concatenate([t.frame_joint, fj]),
+                np.concatenate([t.frame_rot, fr]),
+                np.concatenate([t.frame_pos, fp]),
+            )
         # angular errors in the se3 cost: w_rot (m/rad); position errors: 1
         self._table_cache: dict[Any, lm.GoalTable] = {}
         self.bounds = lm.Bounds(
@@ -238,6 +257,8 @@ class IKProblem:
                 [r.jref for r in rows],
                 [r.jw for r in rows],
                 self.nq,
+                rows=[lm.rows_of(r.code, self.nq) if r.rows is None else r.rows for r in rows],
+                col=next((r.col for r in rows if r.col is not None), None),
             )
             if len(self._table_cache) > 64:
                 self._table_cache.clear()
@@ -339,22 +360,16 @@ class IKProblem:
     def verify(
         self, q: Any, tol_pos: float = 1e-5, tol_rot: float = 1e-5, q0: FloatArray | None = None
     ) -> tuple[GoalError, ...]:
-        """Errors of every primary goal at ``q`` computed with Pinocchio's own FK (not the
-        compiled kernels), judged against the tolerances."""
+        """Errors of every primary goal at ``q`` computed with Pinocchio's own FK (and coal
+        for collisions), not the compiled kernels, judged against the tolerances."""
         qv = self.robot.check_q(q, "q")
         poses = self.robot.fk_pinocchio_all(qv)
         out = []
-        for gl, prim in zip(self.goals, self.primary, strict=False):
+        for gl, prim in zip(self.goals, self.primary, strict=True):
             if not prim:
                 continue
-            frame = gl.frame_name()
-            pose = poses[self.robot.frames.index(frame)] if frame is not None else np.eye(4)
-            if gl.frame_goal:
-                dp, dr = gl.errors(pose, qv, self.robot)
-            else:
-                dp, dr = gl.errors(pose, qv, self.robot, q0)  # type: ignore[call-arg]
-            met = bool(judge(np.array([[dp, dr]]), [True], tol_pos, tol_rot)[0])
-            out.append(GoalError(gl.describe(), float(dp), float(dr), met))
+            dp, dr, met, details = gl.check(poses, qv, self.robot, tol_pos, tol_rot, q0)
+            out.append(GoalError(gl.describe(), float(dp), float(dr), met, details))
         return tuple(out)
 
     def __repr__(self) -> str:

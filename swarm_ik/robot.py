@@ -304,6 +304,8 @@ class RobotModel:
             ``(driver, multiplier, offset)``; the follower's value is ``multiplier·q + offset``.
         ee_frame_reason: Why ``ee_frame`` was chosen ("given", "the robot's usual tool
             frame", or the rule used for a file).
+        srdf: SRDF of the self-collision pairs to disable (``None``: found next to the URDF,
+            as example-robot-data ships them; ``False``: none, pairs chosen by sampling).
     """
 
     name: str
@@ -322,6 +324,7 @@ class RobotModel:
     frame_ids: tuple[int, ...] = ()
     mimic: dict[str, tuple[str, float, float]] = field(default_factory=dict)
     ee_frame_reason: str = "given"
+    srdf: Any = None
     _local: threading.local = field(default_factory=threading.local, repr=False)
     _cache: dict[str, Any] = field(default_factory=dict, repr=False)
 
@@ -430,6 +433,43 @@ class RobotModel:
             return self.frames.index(frame)
         except ValueError:
             raise unknown("goal frame", frame, self.frames) from None
+
+    def canonical_frames(
+        self, joint_ids: Any, rots: Any, poss: Any
+    ) -> tuple[NDArray[np.int64], FloatArray, FloatArray]:
+        """Frames given in the joint frames of :attr:`model` as the kernels' tree frames.
+
+        Args:
+            joint_ids: Joint of :attr:`model` each frame is attached to (0: the world), ``(k,)``.
+            rots: Frame rotations in those joint frames, ``(k, 3, 3)``.
+            poss: Frame translations [m], ``(k, 3)``.
+
+        Returns:
+            ``(frame_joint (k,), frame_rot (k, 3, 3), frame_pos (k, 3))`` for
+            :meth:`swarm_ik.kernels.fk.TreeArrays.with_frames` (joint index ``id − 1``, the
+            placement turned into the canonical joint frame whose axis is z).
+        """
+        from swarm_ik.kernels.fk import rotation_z_to
+
+        ids = np.asarray(joint_ids, dtype=np.int64).reshape(-1)
+        out_r = np.empty((ids.size, 3, 3))
+        out_p = np.empty((ids.size, 3))
+        for k, j in enumerate(ids):
+            jm = self.model.joints[int(j)]
+            b = np.eye(3) if j == 0 else rotation_z_to(_joint_kind_axis(jm)[1])
+            out_r[k] = b.T @ np.asarray(rots[k], dtype=float)
+            out_p[k] = b.T @ np.asarray(poss[k], dtype=float)
+        return ids - 1, out_r, out_p
+
+    def collision_model(self) -> Any:
+        """The robot's collision geometry and self-collision pairs
+        (:class:`swarm_ik.collision.RobotCollision`; built once, with :attr:`srdf`)."""
+        rc = self._cache.get("collision")
+        if rc is None:
+            from swarm_ik.collision import RobotCollision
+
+            rc = self._cache["collision"] = RobotCollision.from_robot(self, srdf=self.srdf)
+        return rc
 
     def reach_radius(self, frame: str | None = None) -> float:
         """An upper bound [m] on the distance from the world origin that ``frame`` can reach:
@@ -633,7 +673,10 @@ def resolve_robot_path(
 
 
 def load_robot(
-    name_or_path: str | os.PathLike[str], ee_frame: str | Sequence[str] | None = None
+    name_or_path: str | os.PathLike[str],
+    ee_frame: str | Sequence[str] | None = None,
+    *,
+    srdf: str | os.PathLike[str] | bool | None = None,
 ) -> RobotModel:
     """Load a robot by bundled name, ``example-robot-data`` name, or URDF path.
 
@@ -644,6 +687,8 @@ def load_robot(
         ee_frame: Goal frame, or a list of goal frames (the model is then the union of the
             root → frame paths, a tree); default: the robot's usual tool frame(s) for named
             robots, the tip of the deepest chain for a file.
+        srdf: SRDF whose ``disable_collisions`` pairs the collision goal skips (default: the
+            one next to the URDF, if any; ``False``: none).
 
     Returns:
         The robot, reduced to the joints between the root and its goal frame(s).
@@ -659,5 +704,9 @@ def load_robot(
     with warnings.catch_warnings():
         warnings.simplefilter("ignore")
         robot = RobotModel.from_urdf(path, frames, frame_reason=reason)
+    if srdf is not None:
+        if srdf is not False and not Path(srdf).is_file():
+            raise RobotFileNotFoundError(f"SRDF file not found: {str(srdf)!r}")
+        object.__setattr__(robot, "srdf", srdf)
     robot.warm_up()
     return robot

@@ -1,7 +1,7 @@
 """Batched benchmark functions of the GWO/MGWO papers, with their domains and known minima.
 
-The four functions of paper 003 (MGWO, Hu et al., 2025), Table 2, with the dimensions of
-Mirjalili's GWO paper (2014), which paper 003 follows:
+The four functions of [MGWO], Table 2, with the dimensions of the GWO paper [GWO], which
+[MGWO] follows:
 
 ========  ===================  =====  =================  ==========================
 key       function             dim    domain (each x_j)   minimum
@@ -13,7 +13,7 @@ key       function             dim    domain (each x_j)   minimum
                                                          0.555649, 0.852547)
 ========  ===================  =====  =================  ==========================
 
-Paper 003 prints the Hartmann-3 domain as ``[1, 3]``; the function is defined on ``[0, 1]³``
+[MGWO] prints the Hartmann-3 domain as ``[1, 3]``; the function is defined on ``[0, 1]³``
 (its minimum lies there), which is what is used here.  Every function is batched:
 ``(pop, n) -> (pop,)``.
 
@@ -125,7 +125,7 @@ FUNCTIONS: dict[str, TestFunction] = {
         "Hartmann-3", hartmann3, 0.0, 1.0, 3, -3.86278, (0.114614, 0.555649, 0.852547)
     ),
 }
-"""The benchmark functions of paper 003, Table 2, keyed ``"F1"``..``"F4"``."""
+"""The benchmark functions of [MGWO], Table 2, keyed ``"F1"``..``"F4"``."""
 
 
 def get_function(key: str) -> TestFunction:

@@ -404,7 +404,9 @@ def build_model(xml: str, where: str = "URDF") -> tuple[Any, tuple[str, ...]]:
             error = str(exc).strip() or type(exc).__name__
     messages = tuple(lines)
     if error is not None or model is None:
-        detail = "; ".join([*messages[:2], error or ""]).strip("; ")
+        # urdfdom's first complaint is the cause; drop its "at line N in file.cpp" lines
+        said = [re.sub(r"^Error:\s*", "", m) for m in messages if not m.startswith("at line")]
+        detail = "; ".join([*said[:1], error or ""]).strip("; ")
         raise RobotModelError(f"{where}: Pinocchio could not load it ({_one_line(detail)})")
     for line in messages:
         log.debug("%s: urdfdom: %s", where, line)

@@ -78,6 +78,7 @@ def test_unreachable_pose_gives_empty_set():
 
 def test_missing_eaik_message(monkeypatch):
     import builtins
+    import sys
 
     robot = swarm_ik.load_robot("ur3")  # not cached by another test
     analytic._CACHE.pop(robot, None)
@@ -89,9 +90,27 @@ def test_missing_eaik_message(monkeypatch):
         return real_import(name, *args, **kwargs)
 
     monkeypatch.setattr(builtins, "__import__", fake)
+    for mod in [m for m in sys.modules if m == "eaik" or m.startswith("eaik.")]:
+        monkeypatch.delitem(sys.modules, mod)
     assert not analytic.eaik_available()
     problem = swarm_ik.IKProblem.from_q(robot, np.zeros(6))
     with pytest.raises(analytic.AnalyticUnavailableError, match=r"swarm_ik\[analytic\]"):
         swarm_ik.solve_many(problem, method="analytic")
     res = swarm_ik.solve_many(problem, method="auto", n=2)  # auto falls back to numerical
     assert res and res[0].solver == "swarm"
+
+
+def test_solve_result_equals_solve():
+    robot = swarm_ik.load_robot("ur10")
+    problem = swarm_ik.IKProblem.from_q(robot, [0.1, -1.2, 1.0, 0.4, -0.9, 2.0])
+    q0 = np.array([0.0, -1.0, 1.0, 0.0, -1.0, 1.5])
+    for start in (None, q0):
+        a = swarm_ik.solve(problem, "analytic", q0=start)
+        b = analytic.solve_result(problem, q0=start)
+        assert np.allclose(a.q, b.q, atol=1e-12) and b.success and a.success
+        assert a.goal_errors == b.goal_errors and a.reason == b.reason == "converged"
+        assert a.n_evals == b.n_evals and a.fitness == pytest.approx(b.fitness, abs=1e-12)
+    far = np.eye(4)
+    far[:3, 3] = [5.0, 0.0, 0.0]
+    r = analytic.solve_result(swarm_ik.IKProblem(robot, far))
+    assert not r.success and r.reason == "unreachable"

@@ -463,3 +463,85 @@ def test_bench_paper_scheduler_option(tmp_path: Path, dask_client) -> None:
     b = read_rows(runner.csv_path(tmp_path / "b", "003-table3"))
     assert len(a) == 4 * 2 * 2 and comparable(a) == comparable(b)
     assert "2 Dask workers" in (tmp_path / "b" / "report.md").read_text()
+
+
+# --------------------------------------------------------------------------- report prose
+def _fake_rows(specs: list[RunSpec], rng: np.random.Generator) -> list[dict]:
+    """One CSV-like row per spec with a random fitness (the report only reads these)."""
+    return [
+        {
+            "key": s.key,
+            "experiment": s.experiment,
+            "robot": s.robot,
+            "target_id": s.target_id,
+            "solver": s.solver,
+            "seed": s.seed,
+            "fitness_name": s.fitness_name,
+            "pop_size": s.pop_size,
+            "iterations": s.iterations,
+            "max_evals": s.max_evals,
+            "fitness": float(rng.uniform(1e-3, 1.0)),
+            "position_error": float(rng.uniform(1e-4, 1e-2)),
+            "rotation_error": 0.0,
+            "success": bool(rng.random() < 0.5),
+            "within_limits": True,
+            "time_s": 0.01,
+            "n_evals": 10,
+        }
+        for s in specs
+    ]
+
+
+def test_every_report_section_renders_from_the_template(tmp_path: Path) -> None:
+    """Each experiment's prose comes from ``templates/paper.md`` with its numbers filled in
+    from the configuration and the rows: no placeholder left, the set-up sizes present."""
+    from swarm_ik.bench import report
+
+    cfg = plans.QUICK.with_runs(1)
+    rng = np.random.default_rng(0)
+    used: set[str] = set()
+    real = report.render_block
+
+    def spy(template: str, block: str, **kw):
+        used.add(block)
+        return real(template, block, **kw)
+
+    paper.render_block = spy  # type: ignore[assignment]
+    try:
+        for exp in paper.EXPERIMENTS.values():
+            text = exp.section(cfg, _fake_rows(exp.specs(cfg), rng), Headline(), tmp_path)
+            assert "$" not in text, exp.id
+            assert text.strip()
+    finally:
+        paper.render_block = real  # type: ignore[assignment]
+    assert used == set(report.template_blocks("paper.md")) - {"report", "quick"}
+    setup = report.render_block(
+        "paper.md",
+        "setup-003-table3",
+        pop=cfg.pop_003,
+        iterations=cfg.iterations_003,
+        runs=cfg.runs_003,
+        paper_pop=30,
+        paper_iterations=200,
+        paper_runs=50,
+        hartmann_min=-3.86,
+        f4_resolution="5e-05",
+    )
+    assert f"{cfg.pop_003} wolves, {cfg.iterations_003} iterations" in setup
+    with pytest.raises(InvalidArgumentError, match="no value for 'pop'"):
+        report.render_block("paper.md", "setup-003-table3")
+    with pytest.raises(InvalidArgumentError, match="its blocks: report"):
+        report.render_block("paper.md", "nope")
+
+
+def test_report_template_holds_no_measured_numbers() -> None:
+    """Numbers with three or more significant digits (a measurement, a published value, a
+    robot limit) come from the CSV, the configuration or the data modules, never the text."""
+    import re
+
+    text = (common.TEMPLATES / "paper.md").read_text()
+    text = re.sub(r"`00[03]-[^`]*`|<!-- block [\w-]+ -->", "", text)  # ids, block names
+    assert not re.findall(r"\d\.\d{2,}|\d{3,}", text)
+    report = paper.build_report(plans.QUICK, Path("/nonexistent-bench-folder"))
+    assert "QUICK run" in report and "not run yet" in report and "$" not in report
+    assert f"a/b > {common.VERDICT_FACTOR:g}" in report

@@ -78,3 +78,39 @@ def test_spread_select_and_covering_radius():
     spread = br.covering_radius(pool[picks], pool, mask)
     first10 = br.covering_radius(pool[:10], pool, mask)
     assert spread < first10  # farthest-point covers better than an arbitrary subset
+
+
+def test_pose_errors_match_verify(ur5):
+    rng = np.random.default_rng(3)
+    problem = swarm_ik.IKProblem.from_q(ur5, ur5.random_q(rng))
+    qs = ur5.random_q(rng, 6)
+    dp, dr = br.pose_errors(problem, qs)
+    for q, a, b in zip(qs, dp, dr, strict=True):
+        assert (a, b) == swarm_ik.verify(problem, q)  # bit for bit
+    pos = swarm_ik.IKProblem.from_q(ur5, qs[0], w_rot=0.0)  # position-only: no rotation error
+    dp, dr = br.pose_errors(pos, qs)
+    assert dp[0] < 1e-12 and np.all(dr == 0.0)
+    assert (dp[1], dr[1]) == swarm_ik.verify(pos, qs[1])
+
+
+def test_compiled_fold_matches_nearest_winding(ur5):
+    from swarm_ik.many import _Folder
+
+    rng = np.random.default_rng(5)
+    qs = rng.uniform(-12, 12, size=(200, 6))
+    ref = rng.uniform(-3, 3, size=6)
+    rev = br.revolute_mask(ur5)
+    lo, hi = ur5.lower / 2, ur5.upper / 2  # narrower: some rows have no in-limit copy
+    fold = _Folder(lo, hi, rev, br.periodic_mask(ur5, lo, hi), ref)
+    got, ok = fold(qs)
+    want, ok2 = br.nearest_winding(qs, lo, hi, rev, ref)
+    assert ok.tolist() == ok2.tolist() and 0 < ok.sum() < 200
+    assert np.allclose(got[ok], want[ok], atol=1e-12)
+    fold.kept = want[ok][:5]
+    d = fold.dist(qs)
+    ref_d = br.branch_distance(qs[:, None], fold.kept[None], fold.periodic).min(axis=1)
+    assert np.allclose(d, ref_d, atol=1e-12)
+    # greedy new rows: copies 2π apart and exact repeats are not new
+    k0, k1 = fold.kept[0], fold.kept[1]
+    cand = np.vstack([k0 + 2 * np.pi * np.eye(6)[0], k0 + 0.5, k0 + 0.5, k1 + 1e-9, k0 - 0.5])
+    assert fold.new(cand, 1e-6) == [1, 4]

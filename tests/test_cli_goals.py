@@ -75,3 +75,25 @@ def test_bad_goals_exit_2_with_one_line(
     assert main(["solve", "--robot", "panda", "--goals", _goals(tmp_path, goals)]) == 2
     err = capsys.readouterr().err.strip()
     assert message in err and len(err.splitlines()) == 1
+
+
+def test_scene_makes_the_answer_collision_free(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    from swarm_ik.scene import Box, Scene
+
+    scene = tmp_path / "table.json"
+    Scene([Box([0.6, 0.6, 0.04], [0.55, 0.0, -0.02])]).to_json(scene)
+    q = ["0.1", "-0.5", "0.3", "-2", "0.2", "1.5", "0.4"]
+    assert main(["solve", "--robot", "panda", "--from-q", *q, "--scene", str(scene), "--json"]) == 0
+    out = json.loads(capsys.readouterr().out)
+    assert out["goal_errors"][-1]["goal"] == "AvoidCollisions" and out["goal_errors"][-1]["met"]
+    assert out["goal_errors"][-1]["clearance"] > 0
+
+
+def test_bad_scene_exits_2(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
+    bad = tmp_path / "bad.json"
+    bad.write_text('{"obstacles": [{"type": "sphere", "radius": -1}]}')
+    q = ["0.1", "-0.5", "0.3", "-2", "0.2", "1.5", "0.4"]
+    assert main(["solve", "--robot", "panda", "--from-q", *q, "--scene", str(bad)]) == 2
+    assert "radius must be a positive" in capsys.readouterr().err

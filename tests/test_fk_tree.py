@@ -125,3 +125,23 @@ def test_mimic_follower_on_the_chain_is_driven_by_its_driver(tmp_path) -> None:
     target = robot.fk(robot.random_q(rng))
     res = swarm_ik.solve(swarm_ik.IKProblem(robot, target, w_rot=0.0), seed=0)
     assert res.success
+
+
+def test_mimic_whose_driver_is_off_the_chain_is_refused(tmp_path) -> None:
+    joint = (
+        '<joint name="{n}" type="revolute"><parent link="{p}"/><child link="{c}"/>'
+        '<origin xyz="0 0 0.3"/><axis xyz="0 0 1"/>'
+        '<limit lower="-2" upper="2" effort="1" velocity="1"/>{extra}</joint>'
+    )
+    urdf = (
+        '<robot name="m">'
+        + "".join(f'<link name="{n}"/>' for n in "abcd")
+        + joint.format(n="j1", p="a", c="b", extra="")
+        + joint.format(n="j2", p="b", c="c", extra='<mimic joint="j3"/>')
+        + joint.format(n="j3", p="a", c="d", extra="")
+        + "</robot>"
+    )
+    path = tmp_path / "m.urdf"
+    path.write_text(urdf)
+    with pytest.raises(swarm_ik.RobotModelError, match="mimics joint 'j3', which is not on the"):
+        swarm_ik.load_robot(path, "c")

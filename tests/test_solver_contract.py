@@ -90,3 +90,108 @@ def test_survives_nan_fitness(name: str, planar: swarm_ik.RobotModel) -> None:
     res = swarm_ik.solve(prob, name, seed=0, max_evals=2000)
     assert res.within_limits and np.all(np.isfinite(res.q))
     assert np.isfinite(res.position_error)
+
+
+# ------------------------------------------------------------- registry metadata
+def test_registered_papers_are_keys_of_the_references() -> None:
+    import re
+    from pathlib import Path
+
+    refs = (Path(__file__).parents[1] / "docs" / "references.md").read_text()
+    keys = set(re.findall(r"^\*\*\[([\w-]+)\]\*\*", refs, flags=re.MULTILINE))
+    assert {"HLFOA", "MGWO", "GWO", "DLS"} <= keys
+    papers = {n: solvers.get(n).paper for n in solvers.names()}
+    assert papers["hlfoa"] == "HLFOA" and papers["mgwo"] == "MGWO" and papers["dls"] == "DLS"
+    for name, key in papers.items():
+        assert key is None or key in keys, (name, key)
+
+
+def test_schedule_spends_a_budget_by_the_registered_facts() -> None:
+    dls = solvers.get("dls")
+    assert dls.evals_per_iteration == 1 and dls.needs_jacobian
+    assert dls.schedule(1234) == {"iterations": 1234, "max_evals": 1234}
+    gwo = solvers.get("gwo")  # 30 wolves: ceil(1000 / 30) = 34 iterations
+    assert gwo.evals_per_iteration is None and not gwo.budget_only
+    assert gwo.schedule(1000) == {"iterations": 34, "max_evals": 1000}
+    with pytest.raises(swarm_ik.InvalidArgumentError, match="evals_per_iteration"):
+        solvers.register("dls-bad-facts", dls.run, evals_per_iteration=0)
+    assert "dls-bad-facts" not in solvers.names()
+
+
+# ------------------------------------------------------------- one budget rule, on_improvement
+class _Improvements:
+    def __init__(self) -> None:
+        self.x: list[np.ndarray] = []
+        self.f: list[float] = []
+
+    def __call__(self, x: np.ndarray, f: float) -> None:
+        self.x.append(x)
+        self.f.append(f)
+
+
+@pytest.mark.parametrize("name", NAMES)
+def test_on_improvement_sees_every_new_best(name: str, planar: swarm_ik.RobotModel) -> None:
+    prob = _problem(planar)
+    spec = solvers.get(name)
+    rec = _Improvements()
+    ev = solvers.Evaluator(
+        prob.fitness, prob.lower, prob.upper, max_evals=1500, problem=prob, on_improvement=rec
+    )
+    spec.run(ev, np.random.default_rng(0), **spec.params)
+    assert rec.f, name
+    assert np.all(np.diff(rec.f) < 0), "each call is a strict improvement"
+    assert rec.f[-1] == ev.best_f and np.array_equal(rec.x[-1], ev.best_x)
+    # each reported fitness is the problem's own at the reported point (the compiled swarm
+    # kernel computes it with its own arithmetic: equal to rounding)
+    f_true = prob.fitness(np.array(rec.x))
+    np.testing.assert_allclose(rec.f, f_true, rtol=1e-6, atol=1e-12)
+    rec.x[-1][0] += 1.0  # the callback gets a copy
+    assert not np.array_equal(rec.x[-1], ev.best_x)
+
+
+def _sphere_ev(max_evals: int, **kw):
+    return solvers.Evaluator(
+        lambda x: np.sum(x * x, axis=1),
+        -np.ones(2),
+        np.ones(2),
+        max_evals=max_evals,
+        **kw,
+    )
+
+
+def test_evaluating_never_overdraws_the_budget(planar: swarm_ik.RobotModel) -> None:
+    ev = _sphere_ev(5)
+    f = ev(np.full((8, 2), 0.5))
+    assert ev.n_evals == 5 and np.all(np.isfinite(f[:5])) and np.all(np.isinf(f[5:]))
+    assert np.all(np.isinf(ev(np.zeros((3, 2))))) and ev.n_evals == 5  # spent: none evaluated
+    prob = _problem(planar)
+    ev = solvers.Evaluator(prob.fitness, prob.lower, prob.upper, max_evals=2, problem=prob)
+    f, err, jac = ev.residual_jacobian(np.tile(Q_STAR, (3, 1)))  # the same rule, no raise
+    assert ev.n_evals == 2
+    assert np.all(np.isfinite(f[:2])) and np.all(np.isfinite(jac[:2])) and np.isinf(f[2])
+    assert np.all(np.isnan(err[2])) and np.all(np.isnan(jac[2]))
+
+
+def test_charging_refuses_an_overdraft_and_counts_work_done_after_the_time_limit() -> None:
+    ev = _sphere_ev(4)
+    with pytest.raises(swarm_ik.InvalidArgumentError, match="remaining budget is 4"):
+        ev.record(np.zeros((5, 2)), np.zeros(5))
+    with pytest.raises(swarm_ik.InvalidArgumentError, match="remaining budget is 4"):
+        ev.add_evals(5)
+    assert ev.n_evals == 0
+    late = _sphere_ev(10, time_limit=1e-9)
+    assert late.done and np.all(np.isinf(late(np.zeros((2, 2))))) and late.n_evals == 0
+    out = late.record(np.array([[0.1, 0.2]]), np.array([np.nan]))  # work started in time
+    assert late.n_evals == 1 and np.isinf(out[0])
+    late.add_evals(2, np.array([0.3, 0.0]), 0.09)
+    assert late.n_evals == 3 and late.best_f == 0.09
+
+
+def test_no_point_is_taken_after_the_stop_criterion() -> None:
+    rec = _Improvements()
+    ev = _sphere_ev(100, f_target=0.5, on_improvement=rec)
+    ev(np.array([[0.6, 0.6], [0.5, 0.0]]))  # 0.72 then 0.25: the batch's best meets the target
+    assert ev.stopped and ev.best_f == 0.25 and rec.f == [0.25]
+    ev.add_evals(1, np.zeros(2), 0.0)  # charged, but the answer stays the first success
+    ev.record(np.zeros((1, 2)), np.zeros(1))
+    assert ev.n_evals == 4 and ev.best_f == 0.25 and rec.f == [0.25]

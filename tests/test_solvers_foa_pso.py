@@ -49,8 +49,8 @@ def test_foa_never_evaluates_negative_values_and_cannot_reach_a_negative_optimum
     rec = Recorder(shifted_sphere(centre))
     res = minimize(rec, lo, hi, "foa", seed=3, pop_size=30, iterations=100)
     rows = rec.rows
-    assert rows.shape[0] == 30 * 100 + 1  # m*t_max + 1 (paper 000, 2.2.5)
-    assert np.all(rows >= 0.0)  # S = 1/Dist > 0: the weakness paper 000 describes
+    assert rows.shape[0] == 30 * 100 + 1  # m*t_max + 1 ([HLFOA], 2.2.5)
+    assert np.all(rows >= 0.0)  # S = 1/Dist > 0: the weakness [HLFOA] describes
     # The best any non-negative point can do is the origin: sum(centre^2).
     assert res.fun >= float(np.sum(centre**2)) - 1e-12
     # ...while HLFOA's linear candidates reach the optimum.
@@ -83,7 +83,7 @@ def test_distinct_indices_are_distinct_and_uniform():
 
 
 def reference_hlfoa(objective, lo, hi, m, t_max, seed):
-    """Paper 000's HLFOA written plainly, one fly at a time, with the same random stream."""
+    """[HLFOA]'s HLFOA written plainly, one fly at a time, with the same random stream."""
     rng = np.random.default_rng(seed)
     n = lo.size
     x = rng.uniform(lo, hi, size=(m, n))
@@ -126,7 +126,7 @@ def test_hlfoa_realtime_evaluates_one_fly_at_a_time_and_differs_from_batch():
     rec_rt, rec_b = Recorder(shifted_sphere(SHIFT[:4])), Recorder(shifted_sphere(SHIFT[:4]))
     rt = minimize(rec_rt, lo, hi, "hlfoa", seed=5, pop_size=20, iterations=30)
     bt = minimize(rec_b, lo, hi, "hlfoa-batch", seed=5, pop_size=20, iterations=30)
-    assert rt.n_evals == bt.n_evals == 20 * 30 + 20  # m*t_max + m (paper 000, 2.2.5)
+    assert rt.n_evals == bt.n_evals == 20 * 30 + 20  # m*t_max + m ([HLFOA], 2.2.5)
     assert [len(b) for b in rec_rt.batches] == [20] + [1] * (20 * 30)
     assert [len(b) for b in rec_b.batches] == [20] * 31
     # Same random stream, same initial population, different update rule.
@@ -187,25 +187,18 @@ def test_pso_local_search_costs_2n_plus_steps_per_iteration():
     assert res.n_evals == 10 + 20 * (10 + 2 * 3 + 4)
 
 
+def frozen_pso(rec, lo, hi, **params):
+    """PSO whose particles never move (w = c1 = c2 = 0; escapes after 5 stagnant iterations
+    when ``escape=True``): any change of position between iterations is an escape."""
+    return minimize(rec, lo, hi, "pso", w=0.0, c1=0.0, c2=0.0, escape_after=5, **params)
+
+
 def test_pso_escape_rerandomises_the_worse_half_after_g_stagnant_iterations():
     # A flat objective never improves gbest; with w = c1 = c2 = 0 particles never move, so any
     # change of position between iterations is an escape.
     lo, hi = box(2)
     rec = Recorder(lambda x: np.ones(x.shape[0]))
-    minimize(
-        rec,
-        lo,
-        hi,
-        "pso",
-        seed=0,
-        pop_size=8,
-        iterations=22,
-        w=0.0,
-        c1=0.0,
-        c2=0.0,
-        escape=True,
-        escape_after=5,
-    )
+    frozen_pso(rec, lo, hi, seed=0, pop_size=8, iterations=22, escape=True)
     changed = [
         int(np.sum(np.any(b != a, axis=1)))
         for a, b in zip(rec.batches[:-1], rec.batches[1:], strict=True)
@@ -213,7 +206,7 @@ def test_pso_escape_rerandomises_the_worse_half_after_g_stagnant_iterations():
     expected = [4 if t in (6, 11, 16, 21) else 0 for t in range(1, 23)]
     assert changed == expected
     rec_off = Recorder(lambda x: np.ones(x.shape[0]))
-    minimize(rec_off, lo, hi, "pso", seed=0, pop_size=8, iterations=22, w=0.0, c1=0.0, c2=0.0)
+    frozen_pso(rec_off, lo, hi, seed=0, pop_size=8, iterations=22)
     assert all(np.array_equal(a, rec_off.batches[0]) for a in rec_off.batches)
 
 
@@ -222,20 +215,7 @@ def test_pso_escape_replaces_the_worse_half_by_personal_best():
     # with the largest initial positions.
     lo, hi = box(1)
     rec = Recorder(lambda x: x[:, 0] + 10.0)
-    minimize(
-        rec,
-        lo,
-        hi,
-        "pso",
-        seed=1,
-        pop_size=6,
-        iterations=6,
-        w=0.0,
-        c1=0.0,
-        c2=0.0,
-        escape=True,
-        escape_after=5,
-    )
+    frozen_pso(rec, lo, hi, seed=1, pop_size=6, iterations=6, escape=True)
     x0 = rec.batches[0][:, 0]
     moved = np.flatnonzero(rec.batches[6][:, 0] != rec.batches[5][:, 0])
     np.testing.assert_array_equal(moved, np.sort(np.argsort(x0)[3:]))

@@ -13,7 +13,7 @@ from swarm_ik.solvers.base import Evaluator
 from swarm_ik.testfunctions import FUNCTIONS
 
 PAPER_X_STAR = np.array([np.pi / 4, np.pi / 6, np.pi / 4, 0.8, 1.0, 1.0, np.pi / 6, -np.pi / 4])
-"""Paper 003's IK experiment: the target is the FK of this joint vector."""
+"""[MGWO]'s IK experiment: the target is the FK of this joint vector."""
 
 
 def mean_fun(key: str, solver: str, seeds, **params) -> float:
@@ -60,7 +60,7 @@ def test_reference_leader_rule_does_not_demote_alpha():
     x = np.arange(4.0)[:, None] * np.ones((4, 2))  # wolf i sits at (i, i)
     f = np.array([5.0, 3.0, 4.0, 1.0])
     lx, lf = gwo.init_leaders(np.array([9.0, 9.0]))
-    # Mirjalili's GWO.m: 5 -> alpha; 3 -> alpha; 4 -> beta; 1 -> alpha, and 3 is forgotten.
+    # GWO.m of [GWO]: 5 -> alpha; 3 -> alpha; 4 -> beta; 1 -> alpha, and 3 is forgotten.
     rx, rf = gwo.update_leaders(lx, lf, x, f)
     np.testing.assert_array_equal(rf, [1.0, 4.0, np.inf])
     np.testing.assert_array_equal(rx, [[3, 3], [2, 2], [9, 9]])  # empty delta keeps its seat
@@ -83,28 +83,33 @@ def test_gwo_costs_pop_times_iterations_and_shortens_its_schedule_to_the_budget(
     assert gwo.schedule_length(Evaluator(tf, lower, upper), 30, 200) == 200
 
 
-# ------------------------------------------------------------- GWO against paper 003
+# ------------------------------------------------------------- GWO against [MGWO]
 def test_gwo_reproduces_paper_003_on_f1_and_f4():
-    # Paper 003, Table 3 (30 wolves, 200 iterations): F1 9.38e-9, F4 -3.8609.
+    # [MGWO], Table 3 (30 wolves, 200 iterations): F1 9.38e-9, F4 -3.8609.
     f1 = mean_fun("F1", "gwo", range(5))
     assert 1e-10 < f1 < 1e-6
     f4 = mean_fun("F4", "gwo", range(5))
     assert abs(f4 - FUNCTIONS["F4"].f_min) < 1e-2
 
 
+def niapy_problem(tf):
+    """A benchmark function of :mod:`swarm_ik.testfunctions` as a niapy ``Problem``."""
+    from niapy.problems import Problem
+
+    class Wrapped(Problem):
+        def __init__(self):
+            super().__init__(dimension=tf.dim, lower=tf.lower, upper=tf.upper)
+
+        def _evaluate(self, x):
+            return float(tf(np.asarray(x)[None])[0])
+
+    return Wrapped()
+
+
 def test_gwo_matches_niapy_grey_wolf_optimizer():
     niapy = pytest.importorskip("niapy", reason="cross-check needs niapy (pip install niapy)")
     from niapy.algorithms.basic import GreyWolfOptimizer
-    from niapy.problems import Problem
     from niapy.task import Task
-
-    class Wrapped(Problem):
-        def __init__(self, tf):
-            super().__init__(dimension=tf.dim, lower=tf.lower, upper=tf.upper)
-            self.tf = tf
-
-        def _evaluate(self, x):
-            return float(self.tf(np.asarray(x)[None])[0])
 
     assert niapy is not None
     for key in ("F1", "F3"):
@@ -112,7 +117,7 @@ def test_gwo_matches_niapy_grey_wolf_optimizer():
         theirs = np.mean(
             [
                 GreyWolfOptimizer(population_size=30, seed=s).run(
-                    Task(problem=Wrapped(tf), max_evals=30 * 200)
+                    Task(problem=niapy_problem(tf), max_evals=30 * 200)
                 )[1]
                 for s in range(3)
             ]
@@ -126,7 +131,7 @@ def test_gwo_matches_niapy_grey_wolf_optimizer():
 
 # ------------------------------------------------------------------------------ MGWO
 def test_mgwo_on_benchmarks():
-    # F4: MGWO's sub-packs find the global minimum more reliably than GWO (paper 003 Table 3:
+    # F4: MGWO's sub-packs find the global minimum more reliably than GWO ([MGWO] Table 3:
     # -3.8628 vs -3.8609); F1: right order of magnitude for 3 sub-packs of 10 wolves.
     f4_m = mean_fun("F4", "mgwo", range(20))
     f4_g = mean_fun("F4", "gwo", range(20))
@@ -149,7 +154,7 @@ def test_mgwo_beats_gwo_on_paper_003_ik_problem(get_robot):
 
     g, m = fits("gwo"), fits("mgwo")
     # Measured on seeds 0-19: mean 0.056 vs 0.081, worst 0.149 vs 0.427 (on seeds 20-39:
-    # 0.065 vs 0.210, worst 0.135 vs 0.874).  Paper 003, Table 4: 0.0122 vs 0.4292.
+    # 0.065 vs 0.210, worst 0.135 vs 0.874).  [MGWO], Table 4: 0.0122 vs 0.4292.
     assert m.mean() < 0.8 * g.mean()
     assert m.max() < 0.5 * g.max()
 
@@ -196,7 +201,9 @@ def test_mgwo_and_gwo_validate_parameters():
 
 # -------------------------------------------------------------------------------- CS
 def test_mantegna_sigma_and_levy_steps():
-    assert cs.mantegna_sigma(1.5) == pytest.approx(0.6965745, rel=1e-6)  # Yang's value
+    assert cs.mantegna_sigma(1.5) == pytest.approx(
+        0.6965745, rel=1e-6
+    )  # the value of [CS]'s reference code
     a = cs.levy_steps(np.random.default_rng(3), (200_000,), 1.5)
     b = cs.levy_steps(np.random.default_rng(3), (200_000,), 1.5)
     np.testing.assert_array_equal(a, b)
@@ -224,22 +231,13 @@ def test_cs_finds_the_hartmann3_minimum():
 def test_cs_matches_niapy_cuckoo_search():
     pytest.importorskip("niapy", reason="cross-check needs niapy (pip install niapy)")
     from niapy.algorithms.basic import CuckooSearch
-    from niapy.problems import Problem
     from niapy.task import Task
-
-    class Wrapped(Problem):
-        def __init__(self, tf):
-            super().__init__(dimension=tf.dim, lower=tf.lower, upper=tf.upper)
-            self.tf = tf
-
-        def _evaluate(self, x):
-            return float(self.tf(np.asarray(x)[None])[0])
 
     tf = FUNCTIONS["F1"]
     theirs = np.mean(
         [
             CuckooSearch(population_size=50, pa=0.25, seed=s).run(
-                Task(problem=Wrapped(tf), max_evals=5000)
+                Task(problem=niapy_problem(tf), max_evals=5000)
             )[1]
             for s in range(3)
         ]

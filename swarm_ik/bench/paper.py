@@ -3,29 +3,30 @@
 Experiments (ids for ``--experiments``):
 
 ``000-table2``
-    Paper 000 (HLFOA), Table 2: YuMi left arm, the given pose, (a) **as printed** (rounded,
-    not exactly orthonormal: every solver stops at its rounding floor ≈1.5e-5, computed and
-    reported) and (b) **at full precision**, the FK of the joint vector that best reproduces
-    it.  FOA and HLFOA with the paper's population 100 and 1000 iterations, GWO, MGWO, PSO
-    (same population and iterations), DLS and the default ``swarm`` solver (same evaluation
+    [HLFOA], Table 2: YuMi left arm, the given pose, (a) **as printed** (rounded, not exactly
+    orthonormal: every solver stops at its rounding floor, computed and reported) and (b) **at
+    full precision**, the FK of the joint vector that best reproduces it.  FOA and HLFOA
+    with the paper's population 100 and 1000 iterations, GWO, MGWO, PSO (same population and
+    iterations), DLS and the default ``swarm`` solver (same evaluation
     budget, ``m·t_max + m``) for context; fitness ``paper-l1``; 10 runs.
 ``000-table4``
-    Paper 000, Table 4: 10 arbitrary reachable poses (FK of joint vectors drawn uniformly
+    [HLFOA], Table 4: 10 arbitrary reachable poses (FK of joint vectors drawn uniformly
     within the limits, seed :data:`POSE_SEED`), the same solvers and statistics, pooled.
 ``003-table3``
-    Paper 003 (MGWO), Table 3: F1–F4, 30 wolves, 200 iterations, 50 runs, GWO against MGWO.
+    [MGWO], Table 3: F1–F4, 30 wolves, 200 iterations, 50 runs, GWO against MGWO.
 ``003-table4``
-    Paper 003, Table 4: the loading manipulator, target FK(x*), 30 wolves, 200 iterations,
+    [MGWO], Table 4: the loading manipulator, target FK(x*), 30 wolves, 200 iterations,
     50 runs, fitness ``euler-zyz``; on ``loading_manipulator_long`` (reachable) and on
     ``loading_manipulator`` (the stated limits: unreachable, reported with the best error and
-    ``success = false``).  GWO, MGWO (and VAGWO when a solver of that name is registered),
-    DLS and ``swarm`` on the same budget for context.
+    ``success = false``).  GWO, MGWO, DLS and ``swarm`` on the same budget for context
+    (VAGWO, not implemented here, is listed with its published numbers).
 ``budget``
-    Every registered solver against Pinocchio DLS on equal evaluation budgets, fitness ``se3``,
-    stopping at the tolerance (‖Δp‖ ≤ 1e-5 m and θ ≤ 1e-5 rad, judged with Pinocchio's FK).
+    Every registered search solver against Pinocchio DLS on equal evaluation budgets, fitness
+    ``se3``, stopping at the tolerance (‖Δp‖ ≤ 1e-5 m and θ ≤ 1e-5 rad, judged with Pinocchio's FK).
 
 Every run is one row of ``<experiment>.csv`` under ``--out`` (schema:
-:mod:`swarm_ik.bench.common`); ``report.md`` and the PNG plots are made from those files.
+:mod:`swarm_ik.bench.common`); ``report.md`` (its prose from ``templates/paper.md``) and the
+PNG plots are made from those files.
 Interrupt it at any time (Ctrl-C) and run the same command again: finished runs are kept.
 By default the runs go over a local process pool (``--jobs``); ``--scheduler local`` runs them
 on an embedded Dask LocalCluster and ``--scheduler tcp://host:port`` on an existing Dask
@@ -41,6 +42,7 @@ import argparse
 import json
 import math
 import platform
+import re
 import sys
 import time
 from collections.abc import Callable, Mapping, Sequence
@@ -77,11 +79,13 @@ from swarm_ik.bench.report import (
     Headline,
     fmt,
     per_target_means,
+    render_block,
     render_budget,
     render_comparison,
     render_headline,
 )
-from swarm_ik.errors import InvalidArgumentError
+from swarm_ik.errors import InvalidArgumentError, unknown
+from swarm_ik.testfunctions import FUNCTIONS
 
 
 # --------------------------------------------------------------------------- experiments
@@ -124,23 +128,47 @@ def _quick_why(cfg: Config) -> str | None:
     )
 
 
+def _g(v: float) -> str:
+    """A number for the prose: ``%g`` without the exponent's leading zero (``1e-5``)."""
+    return re.sub(r"e([+-])0(\d)", r"e\1\2", f"{v:g}")
+
+
+def _text(block: str, *, inline: bool = False, **values: Any) -> str:
+    """A block of ``templates/paper.md`` (:func:`swarm_ik.bench.report.render_block`)."""
+    return render_block("paper.md", block, inline=inline, **values)
+
+
+def _published_mean(table: published.PublishedTable, solver: str, stat: str = "mean") -> str:
+    row = table.row_for(solver)
+    return fmt(row.stats.get(stat) if row is not None else None)
+
+
+def _closing(solvers: Sequence[str], out: Path, exp_id: str, value: str = "fitness") -> list[str]:
+    """The end of an experiment's section: solvers not registered, then its two plots."""
+    label = exp_id.replace("-table", " Table ")
+    return [
+        *_missing_note(solvers),
+        _img(out, f"convergence_{exp_id}.png", f"convergence, {label}"),
+        _img(out, f"box_{exp_id}.png", f"final {value}, {label}"),
+    ]
+
+
 def _missing_note(solvers: Sequence[str]) -> list[str]:
     _, missing = available(solvers)
-    missing = [m for m in missing if m != "vagwo"]
     if not missing:
         return []
     return [f"Not registered, so not run: {', '.join(f'`{m}`' for m in missing)}."]
 
 
 def _setup_000(cfg: Config) -> str:
-    budget = cfg.pop_000 * (cfg.iterations_000 + 1)
-    return (
-        f"Set-up: fitness `paper-l1` (eq. 3; metres with λ = 10 ≡ the paper's millimetres with "
-        f"λ = 1e-2). FOA, HLFOA, GWO, MGWO and PSO with population {cfg.pop_000} and "
-        f"{cfg.iterations_000} iterations (paper: 100 × 1000); DLS (one evaluation per "
-        f"iteration) and `swarm` get the same budget, m·t_max + m = {budget:,} evaluations. "
-        "Every run spends its whole budget (`stop_on_success=False`), as in the paper. Success "
-        f"= ‖Δp‖ ≤ {TOL:g} m and θ ≤ {TOL:g} rad by Pinocchio's FK, within limits."
+    return _text(
+        "setup-000",
+        pop=cfg.pop_000,
+        iterations=cfg.iterations_000,
+        paper_pop=FULL.pop_000,
+        paper_iterations=FULL.iterations_000,
+        budget=f"{cfg.pop_000 * (cfg.iterations_000 + 1):,}",
+        tol=_g(TOL),
     )
 
 
@@ -151,15 +179,12 @@ def _section_000_table2(cfg: Config, rows: list[dict[str, Any]], hl: Headline, o
 
     def why_printed(solver: str, st: Stats) -> str | None:
         if st.best >= 0.5 * floor_used:
-            return (
-                f"the printed target is rounded; nothing within the limits fits it better "
-                f"than {floor_used:.3g} (its rounding floor), see (b) for the full-precision "
-                "target"
-            )
+            return _text("why-printed", inline=True, floor=f"{floor_used:.3g}")
         return None
 
     sol = PAPER000_SOLVERS
     t = published.P000_TABLE2
+    singular = np.linalg.svd(published.P000_TARGET_MM[:3, :3], compute_uv=False)
     parts = [
         _setup_000(cfg),
         "",
@@ -175,15 +200,15 @@ def _section_000_table2(cfg: Config, rows: list[dict[str, Any]], hl: Headline, o
                 attainable=floor_used,
                 case="printed pose",
                 notes=(
-                    "**Rounding floor.** The printed pose is rounded to five decimals and its "
-                    "rotation is not orthonormal (singular values 1.0000058, 1.0000034, "
-                    "1.0000003). "
-                    f"The lowest `paper-l1` fitness we find against it within the joint limits is "
-                    f"**{floor:.3g}** (bounded least squares then Nelder–Mead, at q = "
-                    f"{np.round(np.rad2deg(q_floor), 2).tolist()}°); the best of all runs here is "
-                    f"{fmt(ours_best)}. No solver can go below this floor, so the paper's 1e-16 "
-                    "values cannot come from the printed matrix. A success (errors ≤ 1e-5) is "
-                    "still possible: the floor is spread over the nine rotation entries.",
+                    _text(
+                        "note-printed",
+                        singular_values=", ".join(f"{v:.7f}" for v in singular),
+                        floor=f"{floor:.3g}",
+                        q_floor=np.round(np.rad2deg(q_floor), 2).tolist(),
+                        ours_best=fmt(ours_best),
+                        paper_hlfoa=_published_mean(t, "hlfoa"),
+                        tol=_g(TOL),
+                    ),
                 ),
             ),
             rows,
@@ -200,62 +225,81 @@ def _section_000_table2(cfg: Config, rows: list[dict[str, Any]], hl: Headline, o
                 why_default=_quick_why(cfg),
                 case="FK(q*)",
                 notes=(
-                    "q* = " + str(np.round(np.rad2deg(Q_EXACT), 4).tolist()) + "° (within the "
-                    "limits) is the bounded least-squares fit of the printed pose; its FK differs "
-                    "from the printed matrix only by the rounding. This is the case the paper's "
-                    "figures (≈ 1e-16) correspond to.",
-                    "FOA's candidates are `S_i = 1/Dist_i > 0` (eqs. 4–9), so it cannot reach "
-                    "negative joint angles: a faithful FOA stalls near 5.2, as the paper shows.",
+                    _text(
+                        "note-exact",
+                        q_exact=np.round(np.rad2deg(Q_EXACT), 4).tolist(),
+                        paper_hlfoa=_published_mean(t, "hlfoa"),
+                    ),
+                    _text("note-foa", paper_foa_best=_published_mean(t, "foa", "best")),
                 ),
             ),
             rows,
             hl,
             "000-table2",
         ),
-        *_missing_note(sol),
-        _img(out, "convergence_000-table2.png", "convergence, 000 Table 2"),
-        _img(out, "box_000-table2.png", "final fitness, 000 Table 2"),
+        *_closing(sol, out, "000-table2"),
     ]
     return _join(parts)
+
+
+Panel = tuple[str, Callable[[Mapping[str, Any]], bool], float]
+
+
+def _plot_pair(
+    exp_id: str,
+    out: Path,
+    rows: list[dict[str, Any]],
+    hist: dict[str, Any],
+    panels: Sequence[Panel],
+    solvers: Sequence[str],
+    title: str,
+    *,
+    refs: Sequence[tuple[float, str] | None] | None = None,
+    value: str = "fitness",
+) -> list[Path]:
+    """An experiment's two plots: convergence (``convergence_<id>.png``) and the final values
+    (``box_<id>.png``) of the registered ``solvers``, per panel."""
+    from swarm_ik.bench import plots
+
+    sol, _ = available(solvers)
+    written = (
+        plots.convergence(
+            out / f"convergence_{exp_id}.png",
+            rows,
+            hist,
+            panels,
+            sol,
+            title=title,
+            ylabel=f"best {value}",
+            refs=refs,
+        ),
+        plots.boxes(
+            out / f"box_{exp_id}.png", rows, panels, sol, title=title, ylabel=f"final {value}"
+        ),
+    )
+    return [p for p in written if p]
 
 
 def _plots_000_table2(
     cfg: Config, rows: list[dict[str, Any]], hist: dict[str, Any], out: Path
 ) -> list[Path]:
-    from swarm_ik.bench import plots
-
-    panels = [
+    panels: list[Panel] = [
         ("(a) printed pose", _by(target_id="printed"), 0.0),
         ("(b) full precision, FK(q*)", _by(target_id="exact"), 0.0),
     ]
-    sol, _ = available(PAPER000_SOLVERS)
-    t = "Paper 000 Table 2 — YuMi left arm, fitness paper-l1"
-    floor = min(
-        printed_floor()[0],
-        min(r["fitness"] for r in rows if r["target_id"] == "printed")
-        if any(r["target_id"] == "printed" for r in rows)
-        else math.inf,
-    )
+    printed = [r["fitness"] for r in rows if r["target_id"] == "printed"]
+    floor = min(printed_floor()[0], min(printed, default=math.inf))
+    title = "[HLFOA] Table 2 — YuMi left arm, fitness paper-l1"
     refs = [(floor, f"rounding floor {floor:.3g}"), None]
-    return [
-        p
-        for p in (
-            plots.convergence(
-                out / "convergence_000-table2.png", rows, hist, panels, sol, title=t, refs=refs
-            ),
-            plots.boxes(out / "box_000-table2.png", rows, panels, sol, title=t),
-        )
-        if p
-    ]
+    return _plot_pair("000-table2", out, rows, hist, panels, PAPER000_SOLVERS, title, refs=refs)
 
 
 def _section_000_table4(cfg: Config, rows: list[dict[str, Any]], hl: Headline, out: Path) -> str:
     sol = PAPER000_SOLVERS
     parts = [
         _setup_000(cfg)
-        + f" Poses: FK of {cfg.poses_000} joint vectors drawn uniformly within the limits "
-        f"(seed {POSE_SEED}); {cfg.runs_000_t4} runs per pose and solver, statistics pooled "
-        "over poses and runs (the paper does not say how many runs per pose).",
+        + "\n"
+        + _text("poses-000", poses=cfg.poses_000, pose_seed=POSE_SEED, runs=cfg.runs_000_t4),
         "",
         render_comparison(
             Comparison(
@@ -274,9 +318,7 @@ def _section_000_table4(cfg: Config, rows: list[dict[str, Any]], hl: Headline, o
         "Mean fitness per pose:",
         "",
         per_target_means(rows, available(sol)[0]),
-        *_missing_note(sol),
-        _img(out, "convergence_000-table4.png", "convergence, 000 Table 4"),
-        _img(out, "box_000-table4.png", "final fitness, 000 Table 4"),
+        *_closing(sol, out, "000-table4"),
     ]
     return _join(parts)
 
@@ -284,45 +326,39 @@ def _section_000_table4(cfg: Config, rows: list[dict[str, Any]], hl: Headline, o
 def _plots_000_table4(
     cfg: Config, rows: list[dict[str, Any]], hist: dict[str, Any], out: Path
 ) -> list[Path]:
-    from swarm_ik.bench import plots
-
-    panels = [(f"{cfg.poses_000} arbitrary poses, all runs", lambda r: True, 0.0)]
-    sol, _ = available(PAPER000_SOLVERS)
-    t = "Paper 000 Table 4 — YuMi left arm, arbitrary reachable poses"
-    return [
-        p
-        for p in (
-            plots.convergence(out / "convergence_000-table4.png", rows, hist, panels, sol, title=t),
-            plots.boxes(out / "box_000-table4.png", rows, panels, sol, title=t),
-        )
-        if p
-    ]
+    panels: list[Panel] = [(f"{cfg.poses_000} arbitrary poses, all runs", lambda r: True, 0.0)]
+    title = "[HLFOA] Table 4 — YuMi left arm, arbitrary reachable poses"
+    return _plot_pair("000-table4", out, rows, hist, panels, PAPER000_SOLVERS, title)
 
 
 def _f_min(key: str) -> float:
-    from swarm_ik.testfunctions import FUNCTIONS
-
     return published.HARTMANN3_MIN if key == "F4" else float(FUNCTIONS[key].f_min)
 
 
-def _why_mgwo(solver: str, st: Stats) -> str | None:
-    if solver != "mgwo":
-        return None
-    return (
-        "the paper does not give MGWO's sub-pack count, γ, ω, c1, c2; with ours (see "
-        "`swarm_ik/solvers/mgwo.py`, chosen by a sweep) the 30 wolves split into sub-packs "
-        "that each behave like a small GWO, which is slower on these unimodal/separable "
-        "functions; nothing in the paper's text explains its F1–F3 figures"
+def _setup_003(block: str, cfg: Config, **values: Any) -> str:
+    return _text(
+        block,
+        pop=cfg.pop_003,
+        iterations=cfg.iterations_003,
+        runs=cfg.runs_003,
+        paper_pop=FULL.pop_003,
+        paper_iterations=FULL.iterations_003,
+        paper_runs=FULL.runs_003,
+        **values,
     )
 
 
 def _section_003_table3(cfg: Config, rows: list[dict[str, Any]], hl: Headline, out: Path) -> str:
+    def why_mgwo(solver: str, st: Stats) -> str | None:
+        return _text("why-mgwo", inline=True, pop=cfg.pop_003) if solver == "mgwo" else None
+
     parts = [
-        f"Set-up: {cfg.pop_003} wolves, {cfg.iterations_003} iterations (paper: 30 × 200), "
-        f"{cfg.runs_003} runs (paper: 50); F1–F3 in 30 dimensions, F4 (Hartmann-3) on "
-        f"[0, 1]³ (the paper prints [1, 3], a typo: the minimum {published.HARTMANN3_MIN} lies "
-        "in [0, 1]³). Verdicts compare the distance to the known minimum; F4's published means "
-        "are printed to 4 decimals, so differences below 5e-5 are not distinguished.",
+        _setup_003(
+            "setup-003-table3",
+            cfg,
+            hartmann_min=published.HARTMANN3_MIN,
+            f4_resolution=_g(published.P003_TABLE3["F4"].resolution),
+        ),
         "",
     ]
     for key, table in published.P003_TABLE3.items():
@@ -339,7 +375,7 @@ def _section_003_table3(cfg: Config, rows: list[dict[str, Any]], hl: Headline, o
                     digits=6 if key == "F4" else 3,
                     ik=False,
                     case=key,
-                    why_worse=_why_mgwo if key != "F4" else None,
+                    why_worse=why_mgwo if key != "F4" else None,
                 ),
                 rows,
                 hl,
@@ -347,9 +383,7 @@ def _section_003_table3(cfg: Config, rows: list[dict[str, Any]], hl: Headline, o
             )
         )
     parts += [
-        *_missing_note(("gwo", "mgwo")),
-        _img(out, "convergence_003-table3.png", "convergence, 003 Table 3"),
-        _img(out, "box_003-table3.png", "final values, 003 Table 3"),
+        *_closing(("gwo", "mgwo"), out, "003-table3", value="values"),
     ]
     return _join(parts)
 
@@ -357,44 +391,39 @@ def _section_003_table3(cfg: Config, rows: list[dict[str, Any]], hl: Headline, o
 def _plots_003_table3(
     cfg: Config, rows: list[dict[str, Any]], hist: dict[str, Any], out: Path
 ) -> list[Path]:
-    from swarm_ik.bench import plots
-
-    panels = [
+    panels: list[Panel] = [
         (f"{k}: {t.caption}", _by(robot=k), _f_min(k)) for k, t in published.P003_TABLE3.items()
     ]
-    sol, _ = available(("gwo", "mgwo"))
-    t = "Paper 003 Table 3 — benchmark functions"
-    return [
-        p
-        for p in (
-            plots.convergence(
-                out / "convergence_003-table3.png",
-                rows,
-                hist,
-                panels,
-                sol,
-                title=t,
-                ylabel="best value",
-            ),
-            plots.boxes(
-                out / "box_003-table3.png", rows, panels, sol, title=t, ylabel="final value"
-            ),
-        )
-        if p
-    ]
+    title = "[MGWO] Table 3 — benchmark functions"
+    return _plot_pair("003-table3", out, rows, hist, panels, ("gwo", "mgwo"), title, value="value")
+
+
+def _stated_limits() -> dict[str, str]:
+    """θ3's upper limit [deg] and d4..d6's [m] of the stated loading manipulator, and θ3 of
+    x* [deg] (the paper's target violates the first two)."""
+    upper = common.cached_robot("loading_manipulator").upper
+    return {
+        "theta3_max": f"{np.rad2deg(upper[2]):.2f}",
+        "d_max": _g(upper[3]),
+        "theta3_star": _g(np.rad2deg(published.P003_X_STAR[2])),
+    }
 
 
 def _section_003_table4(cfg: Config, rows: list[dict[str, Any]], hl: Headline, out: Path) -> str:
+    limits = _stated_limits()
     stated = [r for r in rows if r["robot"] == "loading_manipulator"]
     best = min(stated, key=lambda r: r["fitness"], default=None)
 
     def why_unreachable(solver: str, st: Stats) -> str | None:
         if best is None:
             return None
-        return (
-            f"FK(x*) is unreachable within the stated limits (best over all runs: fitness "
-            f"{best['fitness']:.3g}, position error {best['position_error']:.3g} m); the "
-            "paper's values need x* itself, which violates θ3 ≤ 35.45° and d4..d6 ≤ 0.5 m"
+        return _text(
+            "why-unreachable",
+            inline=True,
+            fitness=f"{best['fitness']:.3g}",
+            position_error=f"{best['position_error']:.3g}",
+            theta3_max=limits["theta3_max"],
+            d_max=limits["d_max"],
         )
 
     sol = PAPER003_SOLVERS
@@ -402,12 +431,7 @@ def _section_003_table4(cfg: Config, rows: list[dict[str, Any]], hl: Headline, o
     t = published.P003_TABLE4
     stats = ("mean", "best", "worst", "var")
     parts = [
-        f"Set-up: fitness `euler-zyz` (eq. 15, μ = 1, angle differences wrapped); GWO and MGWO "
-        f"with {cfg.pop_003} wolves and {cfg.iterations_003} iterations (paper: 30 × 200), "
-        f"{cfg.runs_003} runs (paper: 50); DLS and `swarm` get the same {budget:,} evaluations. "
-        "The paper's target x* = [π/4, π/6, π/4, 0.8, 1, 1, π/6, −π/4] violates its own limits "
-        "(θ3 = 45° > 35.45°, d4..d6 > 0.5 m); its FK is the target on both robot variants. "
-        "`var` is the variance (ddof 0), as the paper prints it.",
+        _setup_003("setup-003-table4", cfg, budget=f"{budget:,}", **limits),
         "",
         render_comparison(
             Comparison(
@@ -435,21 +459,13 @@ def _section_003_table4(cfg: Config, rows: list[dict[str, Any]], hl: Headline, o
                 why_worse=why_unreachable,
                 case="stated limits (unreachable)",
                 attainable=None if best is None else float(best["fitness"]),
-                notes=(
-                    "An unreachable target is reported with its best error and success = "
-                    "false, never as a success.",
-                ),
+                notes=(_text("note-unreachable"),),
             ),
             rows,
             hl,
             "003-table4",
         ),
-        *_missing_note(sol),
-        "VAGWO is listed as published only: no solver of that name is registered."
-        if "vagwo" not in available(sol)[0]
-        else "",
-        _img(out, "convergence_003-table4.png", "convergence, 003 Table 4"),
-        _img(out, "box_003-table4.png", "final fitness, 003 Table 4"),
+        *_closing(sol, out, "003-table4"),
     ]
     return _join(parts)
 
@@ -457,36 +473,24 @@ def _section_003_table4(cfg: Config, rows: list[dict[str, Any]], hl: Headline, o
 def _plots_003_table4(
     cfg: Config, rows: list[dict[str, Any]], hist: dict[str, Any], out: Path
 ) -> list[Path]:
-    from swarm_ik.bench import plots
-
-    panels = [
+    panels: list[Panel] = [
         ("loading_manipulator_long (reachable)", _by(robot="loading_manipulator_long"), 0.0),
         ("loading_manipulator, stated limits (unreachable)", _by(robot="loading_manipulator"), 0.0),
     ]
-    sol, _ = available(PAPER003_SOLVERS)
-    t = "Paper 003 Table 4 — loading manipulator, target FK(x*), fitness euler-zyz"
-    return [
-        p
-        for p in (
-            plots.convergence(out / "convergence_003-table4.png", rows, hist, panels, sol, title=t),
-            plots.boxes(out / "box_003-table4.png", rows, panels, sol, title=t),
-        )
-        if p
-    ]
+    title = "[MGWO] Table 4 — loading manipulator, target FK(x*), fitness euler-zyz"
+    return _plot_pair("003-table4", out, rows, hist, panels, PAPER003_SOLVERS, title)
 
 
 def _section_budget(cfg: Config, rows: list[dict[str, Any]], hl: Headline, out: Path) -> str:
     sol = budget_solvers()
     parts = [
-        f"Set-up: fitness `se3`; every solver gets the same evaluation budget "
-        f"({', '.join(f'{b:,}' for b in cfg.budgets)}) as `max_evals` (a DLS iteration = one FK "
-        "+ Jacobian = one evaluation; population solvers keep their default population with "
-        "⌈budget / population⌉ iterations, so their schedules end with the budget) and stops "
-        f"as soon as ‖Δp‖ ≤ {TOL:g} m and θ ≤ {TOL:g} rad (judged with Pinocchio's FK, within "
-        f"limits). Targets: YuMi at the first {cfg.budget_poses} poses of 000 Table 4; the "
-        "long loading manipulator at FK(x*) and arbitrary poses; "
-        f"{cfg.budget_seeds} run(s) per target. No published numbers: this is our own "
-        "comparison.",
+        _text(
+            "setup-budget",
+            budgets=", ".join(f"{b:,}" for b in cfg.budgets),
+            tol=_g(TOL),
+            poses=cfg.budget_poses,
+            runs=cfg.budget_seeds,
+        ),
         "",
     ]
     for robot in ("yumi_left", "loading_manipulator_long"):
@@ -507,7 +511,7 @@ def _plots_budget(
         rows,
         ["yumi_left", "loading_manipulator_long"],
         budget_solvers(),
-        title="Success rate (‖Δp‖ ≤ 1e-5 m, θ ≤ 1e-5 rad) on equal evaluation budgets",
+        title=f"Success rate (‖Δp‖ ≤ {_g(TOL)} m, θ ≤ {_g(TOL)} rad) on equal evaluation budgets",
     )
     return [p] if p else []
 
@@ -517,28 +521,28 @@ EXPERIMENTS: dict[str, Experiment] = {
     for e in (
         Experiment(
             "000-table2",
-            "Paper 000, Table 2 — YuMi left arm, the given pose",
+            "[HLFOA], Table 2 — YuMi left arm, the given pose",
             specs_000_table2,
             _section_000_table2,
             _plots_000_table2,
         ),
         Experiment(
             "000-table4",
-            "Paper 000, Table 4 — YuMi left arm, arbitrary reachable poses",
+            "[HLFOA], Table 4 — YuMi left arm, arbitrary reachable poses",
             specs_000_table4,
             _section_000_table4,
             _plots_000_table4,
         ),
         Experiment(
             "003-table3",
-            "Paper 003, Table 3 — benchmark functions F1–F4",
+            "[MGWO], Table 3 — benchmark functions F1–F4",
             specs_003_table3,
             _section_003_table3,
             _plots_003_table3,
         ),
         Experiment(
             "003-table4",
-            "Paper 003, Table 4 — loading manipulator, target FK(x*)",
+            "[MGWO], Table 4 — loading manipulator, target FK(x*)",
             specs_003_table4,
             _section_003_table4,
             _plots_003_table4,
@@ -642,54 +646,29 @@ def build_report(cfg: Config, out: Path, experiments: Sequence[str] | None = Non
         )
     env = meta.get("environment") or environment()
     quick = cfg.name == "quick"
-    head = [
-        "# Paper benchmark: our numbers beside the published ones"
-        + (" (QUICK run)" if quick else ""),
-        "",
-        "Generated by `swarm-ik bench paper" + (" --quick" if quick else "") + "` from the CSV "
-        "files in this folder (one row per run; `*.history.jsonl` hold the convergence "
-        "histories). Rerunning the command resumes; plots and this report are rebuilt from the "
-        "files.",
-        "",
-    ]
-    if quick:
-        head += [
-            "> **Quick run**: fewer runs, iterations and poses than the papers (see each "
-            "set-up line). The verdicts are indicative only; the full run's report is in "
-            "`docs/results/paper/report.md`.",
-            "",
-        ]
-    head += [
-        "**How to read the tables.** Each statistic is shown as *ours* then *paper*, side by "
-        "side. `std` and `var` are population statistics (ddof = 0; the papers do not say "
-        "which they use). Success = ‖Δp‖ ≤ 1e-5 m and geodesic θ ≤ 1e-5 rad, computed by the "
-        "benchmark with Pinocchio's FK, answer within the joint limits.",
-        "",
-        "**Verdict rule** (one line per row, on the mean, the statistic every published row "
-        "has): with a = max(ours − f_min, floor) and b = max(paper − f_min, floor), "
-        f"a/b < 1/{common.VERDICT_FACTOR:g} → *better*, a/b > {common.VERDICT_FACTOR:g} → "
-        "*worse* (with the reason when we know it), otherwise *reproduced* (same order of "
-        f"magnitude). floor = {IK_FLOOR:g} for IK fitness (an exact solution's round-off is "
-        "1e-16 to 1e-15, so both at machine precision count as equal) and the printing "
-        "resolution for published values given with few decimals (F4).",
-        "",
-        "Environment: "
-        + ", ".join(f"{k} {v}" for k, v in env.items())
-        + "."
-        + (
-            f" Last invocation that ran experiments: {meta['last_wall_s']:.0f} s wall-clock with "
-            + meta.get("last_where", f"--jobs {meta.get('last_jobs', '?')}")
-            + "."
-            if "last_wall_s" in meta
-            else ""
+    last = ""
+    if "last_wall_s" in meta:
+        where = meta.get("last_where", f"--jobs {meta.get('last_jobs', '?')}")
+        last = (
+            f" Last invocation that ran experiments: {meta['last_wall_s']:.0f} s wall-clock "
+            f"with {where}."
         )
-        + " `time_s` of a run is its own wall-clock time and grows when runs share the CPUs.",
-        "",
-        "## Headline",
-        "",
-        render_headline(hl),
-    ]
-    return "\n".join(head) + "\n" + "\n".join(body)
+    return (
+        _text(
+            "report",
+            quick_title=" (QUICK run)" if quick else "",
+            command="swarm-ik bench paper" + (" --quick" if quick else ""),
+            quick_note=_text("quick") + "\n" if quick else "",
+            tol=_g(TOL),
+            factor=_g(common.VERDICT_FACTOR),
+            ik_floor=_g(IK_FLOOR),
+            environment=", ".join(f"{k} {v}" for k, v in env.items()),
+            last_invocation=last,
+            headline=render_headline(hl),
+            sections="\n".join(body),
+        )
+        + "\n"
+    )
 
 
 def make_plots(cfg: Config, out: Path, experiments: Sequence[str] | None = None) -> list[Path]:
@@ -717,8 +696,8 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument(
         "--quick",
         action="store_true",
-        help="reduced version of everything (fewer runs, iterations and poses; about a "
-        "minute on 2 cores); default folder ./bench-paper-quick; never writes into a folder "
+        help="reduced version of everything (fewer runs, iterations and poses; a few "
+        "minutes on 2 cores); default folder ./bench-paper-quick; never writes into a folder "
         "holding a full run",
     )
     parser.add_argument(
@@ -775,7 +754,6 @@ def config_from_args(args: argparse.Namespace) -> tuple[Config, Path, list[str]]
             (the valid forms listed).
     """
     from swarm_ik import distributed
-    from swarm_ik.errors import unknown
 
     distributed.check_scheduler(getattr(args, "scheduler", None))
     cfg = QUICK if args.quick else FULL

@@ -12,14 +12,14 @@ Specs only: nothing here runs a solver or writes a file (the runner is
 
 from __future__ import annotations
 
-import math
-from collections.abc import Sequence
+from collections.abc import Callable, Sequence
 from dataclasses import dataclass, replace
-from functools import lru_cache
+from functools import lru_cache, partial
 from typing import Any
 
 import numpy as np
 
+from swarm_ik import solvers as reg
 from swarm_ik.bench import published
 from swarm_ik.bench.common import cached_robot as _robot
 from swarm_ik.errors import InvalidArgumentError
@@ -112,13 +112,13 @@ Q_EXACT = (
     3.2865382472506774,
     2.903761762991929,
 )
-"""Joint vector [rad] whose FK best fits paper 000's printed pose: bounded least squares on
+"""Joint vector [rad] whose FK best fits [HLFOA]'s printed pose: bounded least squares on
 the ``paper-l1`` residuals (position ×10 per metre, the 9 rotation entries) from
 :data:`swarm_ik.bench.published.P000_Q_PRINTED_DEG`; within the YuMi limits.  Its FK is the
 full-precision target of ``000-table2`` (b)."""
 
 PAPER000_SOLVERS = ("foa", "hlfoa", "gwo", "mgwo", "pso", "dls", "swarm")
-PAPER003_SOLVERS = ("gwo", "vagwo", "mgwo", "dls", "swarm")
+PAPER003_SOLVERS = ("gwo", "mgwo", "dls", "swarm")
 
 TOL = 1e-5
 """Success tolerance, ‖Δp‖ [m] and θ [rad], both judged with Pinocchio's FK."""
@@ -134,11 +134,11 @@ class Config:
     Attributes:
         name: ``"full"`` (the papers' settings) or ``"quick"``.
         runs_000: Runs per target and solver in 000 Table 2 (paper: 10).
-        iterations_000: Iterations in paper 000's experiments (paper: 1000).
-        pop_000: Population in paper 000's experiments (paper: 100).
+        iterations_000: Iterations in [HLFOA]'s experiments (paper: 1000).
+        pop_000: Population in [HLFOA]'s experiments (paper: 100).
         poses_000: Poses of 000 Table 4 (paper: 10).
         runs_000_t4: Runs per pose and solver in 000 Table 4.
-        runs_003: Runs per case and solver in paper 003's experiments (paper: 50).
+        runs_003: Runs per case and solver in [MGWO]'s experiments (paper: 50).
         pop_003: Wolves (paper: 30).
         iterations_003: Iterations (paper: 200).
         budget_poses: Poses per robot in the equal-budget experiment.
@@ -178,7 +178,7 @@ QUICK = Config(
     budget_seeds=1,
     budgets=(1_000, 10_000),
 )
-"""Reduced sizes of ``bench paper --quick`` (about a minute on a quiet 2-core machine)."""
+"""Reduced sizes of ``bench paper --quick`` (a few minutes on a quiet 2-core machine)."""
 
 
 def _flat(m: np.ndarray) -> tuple[float, ...]:
@@ -186,7 +186,7 @@ def _flat(m: np.ndarray) -> tuple[float, ...]:
 
 
 def printed_target() -> np.ndarray:
-    """Paper 000's printed target in metres (the matrix as printed, not projected)."""
+    """[HLFOA]'s printed target in metres (the matrix as printed, not projected)."""
     t = published.P000_TARGET_MM.copy()
     t[:3, 3] /= 1000.0
     return t
@@ -236,7 +236,7 @@ def arbitrary_poses(robot_name: str, n: int) -> list[np.ndarray]:
 
 
 def x_star_target(robot_name: str) -> np.ndarray:
-    """FK of paper 003's ``x*`` on the given loading-manipulator variant (x* itself lies
+    """FK of [MGWO]'s ``x*`` on the given loading-manipulator variant (x* itself lies
     outside the limits of both; its FK is the target)."""
     return np.asarray(_robot(robot_name).fk(np.asarray(published.P003_X_STAR)), dtype=float)
 
@@ -244,86 +244,92 @@ def x_star_target(robot_name: str) -> np.ndarray:
 # --------------------------------------------------------------------------- specs
 def available(solvers: Sequence[str]) -> tuple[list[str], list[str]]:
     """``(registered, missing)`` among ``solvers``, order kept."""
-    from swarm_ik import solvers as reg
-
     names = set(reg.names())
     return [s for s in solvers if s in names], [s for s in solvers if s not in names]
 
 
 def _paper_settings(solver: str, pop: int, iterations: int, budget: int) -> dict[str, Any]:
-    """Settings of one solver at a paper's population/iterations; non-population solvers get
-    the same evaluation budget."""
-    facts = published.solver_facts(solver)
-    if facts.evals_per_iteration == 1:
-        return {"iterations": budget, "max_evals": budget}
-    if facts.budget_only:
-        return {"max_evals": budget}
+    """Settings of one solver at a paper's population/iterations; a solver without a
+    population schedule (registry: ``budget_only`` or ``evals_per_iteration``) gets the same
+    evaluation budget instead."""
+    spec = reg.get(solver)
+    if spec.budget_only or spec.evals_per_iteration is not None:
+        return spec.schedule(budget)
     return {"pop_size": pop, "iterations": iterations}
 
 
 def _budget_settings(solver: str, budget: int) -> dict[str, Any]:
-    """Settings for an evaluation budget: the solver's own population, enough iterations to
-    spend the budget (``⌈budget / pop⌉``), and ``max_evals = budget``."""
-    from swarm_ik import solvers as reg
+    """Settings for an evaluation budget (:meth:`swarm_ik.solvers.base.SolverSpec.schedule`:
+    the solver's own population, enough iterations to spend the budget, ``max_evals``)."""
+    return reg.get(solver).schedule(budget)
 
-    facts = published.solver_facts(solver)
-    if facts.evals_per_iteration == 1:
-        return {"iterations": budget, "max_evals": budget}
-    params = reg.get(solver).params
-    if facts.budget_only or "pop_size" not in params or "iterations" not in params:
-        return {"max_evals": budget}
-    return {"iterations": math.ceil(budget / int(params["pop_size"])), "max_evals": budget}
+
+Case = tuple[str, str, np.ndarray, float]
+"""An IK case of an experiment: ``(robot, target id, 4x4 target, orth_tol)``."""
+
+
+def _ik_runs(
+    experiment: str,
+    cases: Sequence[Case],
+    solvers: Sequence[str],
+    runs: int,
+    settings: Callable[[str], dict[str, Any]],
+    fitness_name: str,
+    **fixed: Any,
+) -> list[RunSpec]:
+    """The runs of an IK experiment: cases × solvers × seeds ``0 … runs-1``, in that order.
+
+    Args:
+        experiment: Experiment id.
+        cases: The cases (:data:`Case`).
+        solvers: Registry names.
+        runs: Seeds per case and solver.
+        settings: Solver -> its :class:`RunSpec` settings (``pop_size``, ``max_evals``, …).
+        fitness_name: IK fitness.
+        **fixed: Further :class:`RunSpec` fields shared by every run.
+    """
+    return [
+        RunSpec(
+            experiment,
+            robot,
+            tid,
+            s,
+            seed,
+            fitness_name,
+            _flat(target),
+            orth_tol=orth,
+            tol_pos=TOL,
+            tol_rot=TOL,
+            **fixed,
+            **settings(s),
+        )
+        for robot, tid, target, orth in cases
+        for s in solvers
+        for seed in range(runs)
+    ]
+
+
+def _settings_000(cfg: Config) -> Callable[[str], dict[str, Any]]:
+    budget = cfg.pop_000 * (cfg.iterations_000 + 1)
+    return lambda s: _paper_settings(s, cfg.pop_000, cfg.iterations_000, budget)
 
 
 def specs_000_table2(cfg: Config) -> list[RunSpec]:
     """Runs of 000 Table 2: both targets × solvers × runs."""
+    cases = [
+        ("yumi_left", "printed", printed_target(), 1e-4),
+        ("yumi_left", "exact", exact_target(), 1e-6),
+    ]
     solvers, _ = available(PAPER000_SOLVERS)
-    budget = cfg.pop_000 * (cfg.iterations_000 + 1)
-    out = []
-    for tid, target, orth in (("printed", printed_target(), 1e-4), ("exact", exact_target(), 1e-6)):
-        for s in solvers:
-            for seed in range(cfg.runs_000):
-                out.append(
-                    RunSpec(
-                        "000-table2",
-                        "yumi_left",
-                        tid,
-                        s,
-                        seed,
-                        "paper-l1",
-                        _flat(target),
-                        orth_tol=orth,
-                        tol_pos=TOL,
-                        tol_rot=TOL,
-                        **_paper_settings(s, cfg.pop_000, cfg.iterations_000, budget),
-                    )
-                )
-    return out
+    return _ik_runs("000-table2", cases, solvers, cfg.runs_000, _settings_000(cfg), "paper-l1")
 
 
 def specs_000_table4(cfg: Config) -> list[RunSpec]:
     """Runs of 000 Table 4: poses × solvers × runs."""
+    poses = arbitrary_poses("yumi_left", cfg.poses_000)
+    cases = [("yumi_left", f"pose{i}", t, 1e-6) for i, t in enumerate(poses)]
     solvers, _ = available(PAPER000_SOLVERS)
-    budget = cfg.pop_000 * (cfg.iterations_000 + 1)
-    out = []
-    for i, target in enumerate(arbitrary_poses("yumi_left", cfg.poses_000)):
-        for s in solvers:
-            for seed in range(cfg.runs_000_t4):
-                out.append(
-                    RunSpec(
-                        "000-table4",
-                        "yumi_left",
-                        f"pose{i}",
-                        s,
-                        seed,
-                        "paper-l1",
-                        _flat(target),
-                        tol_pos=TOL,
-                        tol_rot=TOL,
-                        **_paper_settings(s, cfg.pop_000, cfg.iterations_000, budget),
-                    )
-                )
-    return out
+    return _ik_runs("000-table4", cases, solvers, cfg.runs_000_t4, _settings_000(cfg), "paper-l1")
 
 
 def specs_003_table3(cfg: Config) -> list[RunSpec]:
@@ -339,35 +345,26 @@ def specs_003_table3(cfg: Config) -> list[RunSpec]:
 
 def specs_003_table4(cfg: Config) -> list[RunSpec]:
     """Runs of 003 Table 4: both robot variants × solvers × runs."""
-    solvers, _ = available(PAPER003_SOLVERS)
     budget = cfg.pop_003 * cfg.iterations_003
-    out = []
-    for robot in ("loading_manipulator_long", "loading_manipulator"):
-        target = x_star_target(robot)
-        for s in solvers:
-            for seed in range(cfg.runs_003):
-                out.append(
-                    RunSpec(
-                        "003-table4",
-                        robot,
-                        "x*",
-                        s,
-                        seed,
-                        "euler-zyz",
-                        _flat(target),
-                        tol_pos=TOL,
-                        tol_rot=TOL,
-                        **_paper_settings(s, cfg.pop_003, cfg.iterations_003, budget),
-                    )
-                )
-    return out
+    cases = [
+        (robot, "x*", x_star_target(robot), 1e-6)
+        for robot in ("loading_manipulator_long", "loading_manipulator")
+    ]
+    solvers, _ = available(PAPER003_SOLVERS)
+    return _ik_runs(
+        "003-table4",
+        cases,
+        solvers,
+        cfg.runs_003,
+        lambda s: _paper_settings(s, cfg.pop_003, cfg.iterations_003, budget),
+        "euler-zyz",
+    )
 
 
 def budget_solvers() -> list[str]:
-    """Every registered solver, DLS and ``swarm`` first."""
-    from swarm_ik import solvers as reg
-
-    names = reg.names()
+    """Every registered search solver (closed-form ones, which solve only particular chains,
+    left out), DLS and ``swarm`` first."""
+    names = reg.search_names()
     first = [s for s in ("dls", "swarm") if s in names]
     return first + [s for s in names if s not in first]
 
@@ -387,28 +384,21 @@ def budget_targets(cfg: Config) -> list[tuple[str, str, np.ndarray]]:
 
 def specs_budget(cfg: Config) -> list[RunSpec]:
     """Runs of the equal-budget experiment: targets × budgets × every solver × seeds."""
-    out = []
-    for robot, tid, target in budget_targets(cfg):
-        for b in cfg.budgets:
-            for s in budget_solvers():
-                for seed in range(cfg.budget_seeds):
-                    out.append(
-                        RunSpec(
-                            "budget",
-                            robot,
-                            tid,
-                            s,
-                            seed,
-                            "se3",
-                            _flat(target),
-                            stop_on_success=True,
-                            tol_pos=TOL,
-                            tol_rot=TOL,
-                            keep_history=False,
-                            **_budget_settings(s, b),
-                        )
-                    )
-    return out
+    return [
+        spec
+        for robot, tid, target in budget_targets(cfg)
+        for b in cfg.budgets
+        for spec in _ik_runs(
+            "budget",
+            [(robot, tid, target, 1e-6)],
+            budget_solvers(),
+            cfg.budget_seeds,
+            partial(_budget_settings, budget=b),
+            "se3",
+            stop_on_success=True,
+            keep_history=False,
+        )
+    ]
 
 
 # --------------------------------------------------------------------------- bench ik

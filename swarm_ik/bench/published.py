@@ -1,16 +1,18 @@
-"""The source papers' published numbers, as data (transcribed from ``SEEDS.md``).
+"""The source papers' published numbers, as data, keyed by our solver names.
+
+Transcribed from the papers (full citations in ``docs/references.md``).
 
 Nothing here is computed: these are the values printed in the papers, set beside our own
 numbers by :mod:`swarm_ik.bench.report`.  Each :class:`PublishedRow` names the algorithm as the
 paper prints it and, when we implement it, the registry name of our solver.
 
-* Paper 000 — Shi et al., 2021, HLFOA on the ABB YuMi IRB 14000 left arm: Table 2 (the given
-  pose, 10 runs, population 100, 1000 iterations) and Table 4 (10 arbitrary reachable poses).
+* [HLFOA], on the ABB YuMi IRB 14000 left arm: Table 2 (the given pose, 10 runs, population
+  100, 1000 iterations) and Table 4 (10 arbitrary reachable poses).
   Fitness: eq. 3, ``λ·(|Δpx|+|Δpy|+|Δpz|) + Σ|ΔR_ij|``, millimetres with ``λ = 1e-2`` (the
   same values as metres with ``λ = 10``, our ``"paper-l1"``).
-* Paper 003 — Hu et al., 2025, MGWO on a mobile loading manipulator: Table 3 (benchmark
-  functions F1–F4, 30 wolves, 200 iterations, 50 runs, means only) and Table 4 (IK of the
-  target FK(x*), 50 runs; its last column is the **variance**).  Fitness: eq. 15, ZYZ Euler
+* [MGWO], on a mobile loading manipulator: Table 3 (benchmark functions F1–F4, 30 wolves,
+  200 iterations, 50 runs, means only) and Table 4 (IK of the target FK(x*), 50 runs; its
+  last column is the **variance**).  Fitness: eq. 15, ZYZ Euler
   angles, ``μ = 1`` (our ``"euler-zyz"``).
 """
 
@@ -22,7 +24,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 STATS = ("best", "mean", "worst", "std", "var")
-"""Statistic names a published row may carry (``var`` = variance, as paper 003 prints)."""
+"""Statistic names a published row may carry (``var`` = variance, as [MGWO] prints)."""
 
 
 @dataclass(frozen=True)
@@ -45,7 +47,7 @@ class PublishedTable:
     """A published table (or the part of it for one case).
 
     Attributes:
-        paper: ``"000"`` or ``"003"`` (the numbering of ``SEEDS.md``).
+        paper: Short key of the paper in ``docs/references.md`` (``"HLFOA"``, ``"MGWO"``).
         table: Table label as in the paper, e.g. ``"Table 2"``.
         caption: What was measured, in one line.
         rows: The rows, in the paper's order.
@@ -67,7 +69,7 @@ class PublishedTable:
         return None
 
 
-# --------------------------------------------------------------------------- paper 000
+# --------------------------------------------------------------------------- [HLFOA]
 P000_TARGET_MM = np.array(
     [
         [-0.53812, -0.17516, 0.82447, 21.84134],
@@ -76,14 +78,16 @@ P000_TARGET_MM = np.array(
         [0.0, 0.0, 0.0, 1.0],
     ]
 )
-"""Paper 000's given target pose (Table 2 experiment) as printed: rotation rounded to five
+"""[HLFOA]'s given target pose (Table 2 experiment) as printed: rotation rounded to five
 decimals (not exactly orthonormal), translation in **millimetres**."""
 
 P000_Q_PRINTED_DEG = (-135.4, -99.5, 13.8, 97.9, -70.8, 188.3, 166.4)
-"""Joint vector [deg] near which the printed pose is reached best (``SEEDS.md``)."""
+"""Joint vector [deg] near which the printed pose is reached best within the limits (found
+with bounded least squares from random starts; refined in
+:data:`swarm_ik.bench.plans.Q_EXACT`)."""
 
 P000_TABLE2 = PublishedTable(
-    "000",
+    "HLFOA",
     "Table 2",
     "YuMi left arm, the given pose; population 100, 1000 iterations, 10 runs",
     (
@@ -105,10 +109,10 @@ P000_TABLE2 = PublishedTable(
         ),
     ),
 )
-"""Paper 000, Table 2: best / mean / worst / std of the fitness over 10 runs."""
+"""[HLFOA], Table 2: best / mean / worst / std of the fitness over 10 runs."""
 
 P000_TABLE4 = PublishedTable(
-    "000",
+    "HLFOA",
     "Table 4",
     "YuMi left arm, 10 arbitrary reachable poses",
     (
@@ -118,110 +122,43 @@ P000_TABLE4 = PublishedTable(
         PublishedRow("HLFOA", "hlfoa", {"best": 1.73e-16, "mean": 3.88e-16, "worst": 6.80e-16}),
     ),
 )
-"""Paper 000, Table 4: fitness over the 10 poses (HLFOA: best / mean / worst; others: mean)."""
+"""[HLFOA], Table 4: fitness over the 10 poses (HLFOA: best / mean / worst; others: mean)."""
 
-# --------------------------------------------------------------------------- paper 003
+# --------------------------------------------------------------------------- [MGWO]
 P003_X_STAR = (np.pi / 4, np.pi / 6, np.pi / 4, 0.8, 1.0, 1.0, np.pi / 6, -np.pi / 4)
-"""Paper 003's target joint vector ``x*`` (rad, rad, rad, m, m, m, rad, rad); it violates the
+"""[MGWO]'s target joint vector ``x*`` (rad, rad, rad, m, m, m, rad, rad); it violates the
 paper's own limits (θ3 = 45° > 35.45°, d4..d6 > 0.5 m)."""
 
 HARTMANN3_MIN = -3.86278214782076
 """Global minimum of Hartmann-3 (F4) to full precision (Dixon & Szegő's test set)."""
 
+
+def _table3(caption: str, gwo: float, mgwo: float, resolution: float = 0.0) -> PublishedTable:
+    """One function's part of [MGWO] Table 3 (means only)."""
+    rows = (PublishedRow("GWO", "gwo", {"mean": gwo}), PublishedRow("MGWO", "mgwo", {"mean": mgwo}))
+    return PublishedTable("MGWO", "Table 3", caption, rows, resolution)
+
+
 P003_TABLE3: dict[str, PublishedTable] = {
-    "F1": PublishedTable(
-        "003",
-        "Table 3",
-        "F1 sphere (30-D)",
-        (
-            PublishedRow("GWO", "gwo", {"mean": 9.38e-9}),
-            PublishedRow("MGWO", "mgwo", {"mean": 5.89e-14}),
-        ),
-    ),
-    "F2": PublishedTable(
-        "003",
-        "Table 3",
-        "F2 Schwefel 2.22 (30-D)",
-        (
-            PublishedRow("GWO", "gwo", {"mean": 6.76e-6}),
-            PublishedRow("MGWO", "mgwo", {"mean": 5.16e-9}),
-        ),
-    ),
-    "F3": PublishedTable(
-        "003",
-        "Table 3",
-        "F3 Rastrigin (30-D)",
-        (
-            PublishedRow("GWO", "gwo", {"mean": 14.75}),
-            PublishedRow("MGWO", "mgwo", {"mean": 1.30}),
-        ),
-    ),
-    "F4": PublishedTable(
-        "003",
-        "Table 3",
-        "F4 Hartmann-3 (3-D)",
-        (
-            PublishedRow("GWO", "gwo", {"mean": -3.8609}),
-            PublishedRow("MGWO", "mgwo", {"mean": -3.8628}),
-        ),
-        resolution=5e-5,
-    ),
+    "F1": _table3("F1 sphere (30-D)", 9.38e-9, 5.89e-14),
+    "F2": _table3("F2 Schwefel 2.22 (30-D)", 6.76e-6, 5.16e-9),
+    "F3": _table3("F3 Rastrigin (30-D)", 14.75, 1.30),
+    "F4": _table3("F4 Hartmann-3 (3-D)", -3.8609, -3.8628, resolution=5e-5),
 }
-"""Paper 003, Table 3: mean best value over 50 runs (30 wolves, 200 iterations), per function.
+"""[MGWO], Table 3: mean best value over 50 runs (30 wolves, 200 iterations), per function.
 F4 is printed to four decimals, hence its resolution."""
 
 P003_TABLE4 = PublishedTable(
-    "003",
+    "MGWO",
     "Table 4",
     "loading manipulator, target FK(x*); 30 wolves, 200 iterations, 50 runs",
     (
         PublishedRow("GWO", "gwo", {"mean": 0.4292, "best": 0.0115, "worst": 1.0613}),
-        PublishedRow("VAGWO", "vagwo", {"mean": 1.0043, "best": 8.04e-5, "worst": 6.2053}),
+        PublishedRow("VAGWO", None, {"mean": 1.0043, "best": 8.04e-5, "worst": 6.2053}),
         PublishedRow("PGWO", None, {"mean": 0.3986, "best": 0.0015, "worst": 2.5655}),
         PublishedRow(
             "MGWO", "mgwo", {"mean": 0.0122, "best": 0.0064, "worst": 0.0226, "var": 8.04e-5}
         ),
     ),
 )
-"""Paper 003, Table 4: mean / best / worst / variance of the fitness over 50 runs."""
-
-
-# --------------------------------------------------------------------------- solver facts
-@dataclass(frozen=True)
-class SolverFacts:
-    """What the benchmarks need to know about a registered solver.
-
-    These belong in the solver's registration (``register(...)`` in
-    ``swarm_ik/solvers/base.py``); until the registry carries them, they live here, in one
-    place, keyed by registry name.
-
-    Attributes:
-        needs_jacobian: Uses the Jacobian (DLS, the ``swarm`` polish) rather than fitness only.
-        budget_only: Takes only an evaluation budget (no population / iteration schedule).
-        evals_per_iteration: Evaluations one ``iterations`` step costs (``1``: an iteration is
-            one evaluation, so ``iterations = budget``; ``None``: a population schedule).
-        paper: Short key of its source in ``docs/references.md`` (``None``: our own).
-    """
-
-    needs_jacobian: bool = False
-    budget_only: bool = False
-    evals_per_iteration: int | None = None
-    paper: str | None = None
-
-
-SOLVER_FACTS: dict[str, SolverFacts] = {
-    "swarm": SolverFacts(needs_jacobian=True, budget_only=True),
-    "dls": SolverFacts(needs_jacobian=True, evals_per_iteration=1),
-    "foa": SolverFacts(paper="FOA"),
-    "hlfoa": SolverFacts(paper="HLFOA"),
-    "gwo": SolverFacts(paper="GWO"),
-    "mgwo": SolverFacts(paper="MGWO"),
-    "pso": SolverFacts(paper="PSO"),
-    "cs": SolverFacts(paper="CS"),
-}
-"""Facts by registry name (a solver not listed: :class:`SolverFacts` defaults)."""
-
-
-def solver_facts(name: str) -> SolverFacts:
-    """The facts of solver ``name`` (defaults when it is not listed)."""
-    return SOLVER_FACTS.get(name, SolverFacts())
+"""[MGWO], Table 4: mean / best / worst / variance of the fitness over 50 runs."""

@@ -7,7 +7,8 @@ Reads rows (from the CSV files, see :mod:`swarm_ik.bench.common`) and renders
   (:func:`swarm_ik.bench.common.judge`, applied to the **mean**, the statistic every published
   row has);
 * budget tables (every solver against DLS on equal evaluation budgets);
-* a headline table collecting every verdict.
+* a headline table collecting every verdict;
+* the prose around them, from the blocks of a template (:func:`render_block`).
 
 Nothing here runs an experiment.
 """
@@ -15,16 +16,64 @@ Nothing here runs an experiment.
 from __future__ import annotations
 
 import math
+import re
+import string
 from collections.abc import Callable, Iterable, Mapping, Sequence
 from dataclasses import dataclass, field
 from typing import Any
 
 import numpy as np
 
-from swarm_ik.bench.common import Stats, Verdict, group_rows, judge, success_rate, summarize
+from swarm_ik.bench.common import (
+    TEMPLATES,
+    Stats,
+    Verdict,
+    group_rows,
+    judge,
+    success_rate,
+    summarize,
+)
 from swarm_ik.bench.published import PublishedTable
+from swarm_ik.errors import InvalidArgumentError
 
 Row = Mapping[str, Any]
+
+_BLOCK = re.compile(r"^<!-- block ([\w-]+) -->\n", re.MULTILINE)
+
+
+def template_blocks(template: str) -> dict[str, str]:
+    """The blocks of a template file of :data:`swarm_ik.bench.common.TEMPLATES`: each
+    starts at a line ``<!-- block NAME -->`` and runs to the next (text before the first
+    block is a comment for the reader)."""
+    parts = _BLOCK.split((TEMPLATES / template).read_text())
+    return {parts[i]: parts[i + 1].rstrip("\n") for i in range(1, len(parts) - 1, 2)}
+
+
+def render_block(template: str, block: str, *, inline: bool = False, **values: Any) -> str:
+    """One block of ``template`` (:func:`template_blocks`) with its ``$name`` placeholders
+    filled (``string.Template``; every placeholder must be given).
+
+    Args:
+        template: File name under :data:`swarm_ik.bench.common.TEMPLATES`.
+        block: Block name.
+        inline: Join the block's lines into one (for a table cell or a reason).
+        **values: Placeholder values (``str()`` of each).
+
+    Raises:
+        InvalidArgumentError: no such block, or a placeholder has no value.
+    """
+    blocks = template_blocks(template)
+    if block not in blocks:
+        raise InvalidArgumentError(
+            f"template {template} has no block {block!r}; its blocks: {', '.join(blocks)}"
+        )
+    try:
+        text = string.Template(blocks[block]).substitute({k: str(v) for k, v in values.items()})
+    except KeyError as exc:
+        raise InvalidArgumentError(
+            f"template {template}, block {block}: no value for {exc}"
+        ) from None
+    return " ".join(text.split()) if inline else text
 
 
 def fmt(v: float | None, digits: int = 3) -> str:

@@ -39,6 +39,7 @@ from numpy.typing import NDArray
 
 from swarm_ik.kernels.fk import FKScratch, TreeArrays, fk_one
 from swarm_ik.kernels.lie import jr_inv_nb, log3_nb
+from swarm_ik.kernels.spheres import penetration
 
 FloatArray = NDArray[np.float64]
 IntArray = NDArray[np.int64]
@@ -51,9 +52,10 @@ ORIENTATION = 2
 AXIS = 3
 LOOK_AT = 4
 JOINT = 5
+COLLISION = 6
 N_PAR = 12
 """Parameters per goal row: a rotation (9, row-major) and a point (3), or two 3-vectors."""
-CODE_NAMES = ("pose", "position", "orientation", "axis", "look-at", "joint")
+CODE_NAMES = ("pose", "position", "orientation", "axis", "look-at", "joint", "collision")
 
 # status of a polished start
 NOT_RUN = 0
@@ -119,8 +121,8 @@ class LMSettings(NamedTuple):
 
         return LMSettings(
             max_iters=whole("max_iters", self.max_iters, 2),
-            lam0=num("lam0", self.lam0, 0.0, 1e6),
-            max_step=num("max_step", self.max_step, 0.0, 1e6),
+            lam0=num("lam0", self.lam0, 0.0, 1e12),
+            max_step=num("max_step", self.max_step, 0.0, math.inf),
             stall_rel=num("stall_rel", self.stall_rel, 0.0, 1.0, lo_open=False),
             stall_iters=whole("stall_iters", self.stall_iters, 1),
             tol_margin=num("tol_margin", self.tol_margin, 0.0, 1.0),
@@ -147,6 +149,52 @@ class Bounds(NamedTuple):
     linear: BoolArray
 
 
+class CollisionArrays(NamedTuple):
+    """The sphere model of an ``AvoidCollisions`` goal for the kernel (empty without one).
+
+    The collision bodies are frames ``body0 … body0 + nb − 1`` of the problem's tree; the
+    other fields are the arrays of :func:`swarm_ik.kernels.spheres.penetration`.
+
+    Attributes:
+        body0: Index of the first body frame in the tree's frames.
+        nb: Number of bodies.
+        sph_body, sph_local, sph_radius, body_start, bound_local, bound_radius, self_pairs,
+        obs_bodies, obs_kind, obs_rot, obs_pos, obs_dims: See
+            :class:`swarm_ik.kernels.spheres.SphereModel`.
+        margin: Wanted clearance [m].
+        scratch: Work array ``(ns, 6)``.
+        pair: Work array ``(max_rows, 2)``.
+    """
+
+    body0: int
+    nb: int
+    sph_body: IntArray
+    sph_local: FloatArray
+    sph_radius: FloatArray
+    body_start: IntArray
+    bound_local: FloatArray
+    bound_radius: FloatArray
+    self_pairs: IntArray
+    obs_bodies: IntArray
+    obs_kind: IntArray
+    obs_rot: FloatArray
+    obs_pos: FloatArray
+    obs_dims: FloatArray
+    margin: float
+    scratch: FloatArray
+    pair: IntArray
+
+
+def no_collision() -> CollisionArrays:
+    """The empty :class:`CollisionArrays` of a problem without a collision goal."""
+    i1 = np.zeros(0, dtype=np.int64)
+    return CollisionArrays(
+        0, 0, i1, np.zeros((0, 3)), np.zeros(0), np.zeros(1, dtype=np.int64), np.zeros((0, 3)),
+        np.zeros(0), np.zeros((0, 2), dtype=np.int64), i1, i1, np.zeros((0, 3, 3)),
+        np.zeros((0, 3)), np.zeros((0, 3)), 0.0, np.zeros((0, 6)), np.zeros((0, 2), dtype=np.int64),
+    )  # fmt: skip
+
+
 class GoalTable(NamedTuple):
     """The goals of a problem as arrays (one row per goal), built by :func:`goal_table`.
 
@@ -159,8 +207,10 @@ class GoalTable(NamedTuple):
         jref: Joint references, ``(ng, nq)`` (joint goals).
         jw: Per-joint weights, ``(ng, nq)`` (joint goals; 0 = joint not included).
         row0: First row of each goal in its stack (primary or secondary), ``(ng,)``.
+        nrows: Rows of each goal, ``(ng,)``.
         rows_primary: Rows of the primary stack.
         rows_secondary: Rows of the secondary stack.
+        col: The sphere model of the (at most one) ``COLLISION`` goal.
     """
 
     code: IntArray
@@ -171,8 +221,10 @@ class GoalTable(NamedTuple):
     jref: FloatArray
     jw: FloatArray
     row0: IntArray
+    nrows: IntArray
     rows_primary: int
     rows_secondary: int
+    col: CollisionArrays
 
 
 def rows_of(code: int, nq: int) -> int:
@@ -189,12 +241,15 @@ def goal_table(
     jref: list[FloatArray],
     jw: list[FloatArray],
     nq: int,
+    rows: list[int] | None = None,
+    col: CollisionArrays | None = None,
 ) -> GoalTable:
-    """Stack goal rows into a :class:`GoalTable` (rows numbered per stack)."""
+    """Stack goal rows into a :class:`GoalTable` (rows numbered per stack; ``rows`` gives
+    each goal's row count where :func:`rows_of` does not, e.g. a collision goal's cap)."""
     row0 = []
     n_p = n_s = 0
-    for c, p in zip(code, primary, strict=False):
-        r = rows_of(c, nq)
+    counts = [rows_of(c, nq) for c in code] if rows is None else list(rows)
+    for p, r in zip(primary, counts, strict=True):
         if p:
             row0.append(n_p)
             n_p += r
@@ -211,8 +266,10 @@ def goal_table(
         jref=np.array(jref, dtype=float).reshape(ng, nq),
         jw=np.array(jw, dtype=float).reshape(ng, nq),
         row0=np.array(row0, dtype=np.int64).reshape(ng),
+        nrows=np.array(counts, dtype=np.int64).reshape(ng),
         rows_primary=int(n_p),
         rows_secondary=int(n_s),
+        col=no_collision() if col is None else col,
     )
 
 
@@ -359,6 +416,31 @@ def goal_rows(
                     jac[r0 + j, j] = wj
             err[i, 0] = e_lin
             err[i, 1] = e_ang
+        elif c == COLLISION:
+            cl = g.col
+            nr = g.nrows[i]
+            b0 = cl.body0
+            b1 = b0 + cl.nb
+            used = penetration(
+                s.f_rot[b0:b1], s.f_pos[b0:b1], s.f_jac[b0:b1], cl.sph_body, cl.sph_local,
+                cl.sph_radius, cl.body_start, cl.bound_local, cl.bound_radius, cl.self_pairs,
+                cl.obs_bodies, cl.obs_kind, cl.obs_rot, cl.obs_pos, cl.obs_dims, cl.margin,
+                cl.scratch, res[r0 : r0 + nr], jac[r0 : r0 + nr], cl.pair[:nr],
+            )  # fmt: skip
+            worst = 0.0
+            for a in range(nr):
+                if a < used:
+                    if res[r0 + a] > worst:
+                        worst = res[r0 + a]
+                    res[r0 + a] = -w * res[r0 + a]  # r = −penetration: r(q+δ) ≈ r − Jδ
+                    for j in range(nq):
+                        jac[r0 + a, j] = w * jac[r0 + a, j]
+                else:
+                    res[r0 + a] = 0.0
+                    for j in range(nq):
+                        jac[r0 + a, j] = 0.0
+            err[i, 0] = worst
+            err[i, 1] = nan
     n_rows = g.rows_primary if primary else g.rows_secondary
     for a in range(n_rows):
         cost += res[a] * res[a]

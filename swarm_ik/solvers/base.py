@@ -5,7 +5,8 @@ A solver is a plain function ``run(ev, rng, *, <its parameters>) -> None``:
 * ``ev`` is an :class:`Evaluator`: the only way a solver may evaluate the objective.  It knows
   the bounds, counts evaluations, enforces ``max_evals`` (exactly: it never evaluates more rows
   than the budget allows) and ``time_limit``, turns NaN/inf into ``+inf``, remembers the best
-  point ever evaluated and records the history of the best fitness.
+  point ever evaluated (telling ``on_improvement`` each time it improves) and records the
+  history of the best fitness.
 * ``rng`` is a :class:`numpy.random.Generator`; a solver takes all its randomness from it.
 * The keyword-only parameters with their defaults are the solver's parameters; the registry
   refuses any other name.
@@ -21,7 +22,7 @@ import inspect
 import re
 import time
 from collections.abc import Callable, Mapping
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 from typing import TYPE_CHECKING, Any
 
 import numpy as np
@@ -49,6 +50,22 @@ Objective = Callable[[FloatArray], FloatArray]
 class Evaluator:
     """Budgeted, counting, NaN-safe access to a batched objective.
 
+    **One rule for the budget.**  There are two ways evaluations happen, and each has one rule:
+
+    * *The evaluator evaluates* (:meth:`__call__`, :meth:`residual_jacobian`): once
+      :attr:`done` nothing is evaluated; otherwise the first ``min(pop, remaining)`` rows are
+      evaluated and charged, and the rows past the budget are not evaluated (fitness ``+inf``;
+      error and Jacobian NaN).  The budget is never overdrawn.
+    * *The solver evaluated itself* and charges it (:meth:`record`, :meth:`add_evals`): the
+      solver checks :attr:`done` before starting and computes at most :attr:`remaining`
+      evaluations; charging more raises :class:`InvalidArgumentError` (a solver bug, never
+      clipped silently).  Work started in time is charged and its points offered even when
+      the time limit passed meanwhile.
+
+    Either way every evaluated point is offered for the best (NaN/inf fitness as ``+inf``),
+    and no point is taken any more once the stop criterion was met: the answer is the first
+    point that met it.  Each time the best improves, ``on_improvement(x, f)`` is called.
+
     Args:
         objective: Batched objective ``(pop, n) -> (pop,)``.
         lower: Lower bounds, shape ``(n,)``.
@@ -63,6 +80,9 @@ class Evaluator:
         f_target: Optional fitness value; reaching it (``<=``) ends the run.
         tolerance: Optional ``(tol_pos [m], tol_rot [rad])`` of the success test behind
             ``stop``, for solvers that stop their own compiled loops at it (``None``: unknown).
+        on_improvement: Optional callback ``(x (n,), f)`` called each time the best point
+            improves (``x`` is a copy), e.g. to record a convergence trace
+            (:class:`swarm_ik.viz.TraceRecorder`).
     """
 
     def __init__(
@@ -78,8 +98,10 @@ class Evaluator:
         stop: Callable[[FloatArray], bool] | None = None,
         f_target: float | None = None,
         tolerance: tuple[float, float] | None = None,
+        on_improvement: Callable[[FloatArray, float], Any] | None = None,
     ) -> None:
         self.objective = objective
+        self.on_improvement = on_improvement
         self.tolerance = tolerance
         self.lower = np.asarray(lower, dtype=float)
         self.upper = np.asarray(upper, dtype=float)
@@ -131,8 +153,13 @@ class Evaluator:
         return self.stopped or self.remaining <= 0 or self.time_up
 
     # ------------------------------------------------------------- evaluation
+    def _granted(self, pop: int) -> int:
+        """Rows of a request of ``pop`` the evaluator evaluates: none once :attr:`done`,
+        else at most :attr:`remaining`."""
+        return 0 if self.done else min(pop, self.remaining)
+
     def __call__(self, x_batch: FloatArray) -> FloatArray:
-        """Evaluate a population.
+        """Evaluate a population (the first rule of the class docstring).
 
         Args:
             x_batch: Points, shape ``(pop, n)``.
@@ -143,9 +170,8 @@ class Evaluator:
             become ``+inf``.
         """
         x_batch = np.asarray(x_batch, dtype=float)
-        pop = x_batch.shape[0]
-        out = np.full(pop, np.inf)
-        k = 0 if self.time_up or self.stopped else min(pop, self.remaining)
+        out = np.full(x_batch.shape[0], np.inf)
+        k = self._granted(x_batch.shape[0])
         if k <= 0:
             return out
         f = np.asarray(self.objective(x_batch[:k]), dtype=float)
@@ -154,22 +180,23 @@ class Evaluator:
                 f"the objective returned shape {f.shape} for {k} points; a batched objective "
                 "maps (pop, n) -> (pop,)"
             )
-        f = f.reshape(k)
-        self.n_evals += k
-        f = np.where(np.isfinite(f), f, np.inf)
-        out[:k] = f
-        self._update_best(x_batch[:k], f)
+        out[:k] = self._charge(k, x_batch[:k], f.reshape(k))
         return out
 
     def residual_jacobian(self, q_batch: FloatArray) -> tuple[FloatArray, FloatArray, FloatArray]:
-        """Fitness, pose error twist and Jacobian of an IK problem, counted as evaluations.
+        """Fitness, pose error twist and Jacobian of an IK problem, counted as evaluations
+        (the first rule of the class docstring).
 
         Args:
-            q_batch: Joint vectors, shape ``(pop, n)``; ``pop`` must fit in the budget.
+            q_batch: Joint vectors, shape ``(pop, n)``.
 
         Returns:
-            ``(fitness (pop,), err (pop, 6), jac (pop, 6, n))`` as
-            :meth:`swarm_ik.problem.IKProblem.residual_jacobian`.
+            ``(fitness (pop,), err (pop, rows), jac (pop, rows, n))`` as
+            :meth:`swarm_ik.problem.IKProblem.residual_jacobian`; rows not evaluated (past
+            the budget, or once :attr:`done`) have fitness ``+inf`` and NaN error and Jacobian.
+
+        Raises:
+            InvalidArgumentError: the evaluator has no IK problem.
         """
         if self.problem is None:
             raise InvalidArgumentError(
@@ -177,48 +204,41 @@ class Evaluator:
                 "objective"
             )
         q_batch = np.atleast_2d(np.asarray(q_batch, dtype=float))
-        k = min(q_batch.shape[0], self.remaining)
-        if k < q_batch.shape[0]:
-            raise InvalidArgumentError(
-                f"residual_jacobian asked for {q_batch.shape[0]} evaluations but only {k} remain"
-            )
-        f, err, jac = self.problem.residual_jacobian(q_batch)
-        self.n_evals += k
-        f = np.where(np.isfinite(f), f, np.inf)
-        self._update_best(q_batch, f)
+        pop = q_batch.shape[0]
+        k = self._granted(pop)
+        fk, ek, jk = self.problem.residual_jacobian(q_batch[:k])  # k = 0: the shapes only
+        f = np.full(pop, np.inf)
+        err = np.full((pop, *np.shape(ek)[1:]), np.nan)
+        jac = np.full((pop, *np.shape(jk)[1:]), np.nan)
+        if k <= 0:
+            return f, err, jac
+        err[:k], jac[:k] = ek, jk
+        f[:k] = self._charge(k, q_batch[:k], np.asarray(fk, dtype=float))
         return f, err, jac
 
     def record(self, x_batch: FloatArray, f: FloatArray) -> FloatArray:
-        """Count evaluations that a solver computed itself (e.g. with Pinocchio calls).
+        """Charge evaluations that a solver computed itself (e.g. with Pinocchio calls) and
+        offer their points (the second rule of the class docstring).
 
-        Only rows within the remaining budget are counted and considered for the best; the
-        caller must compute ``f`` with the problem's own fitness.
+        The caller must compute ``f`` with the problem's own fitness.
 
         Args:
-            x_batch: Points, shape ``(pop, n)``.
+            x_batch: Points, shape ``(pop, n)``, ``pop <= remaining``.
             f: Their fitness, shape ``(pop,)``.
 
         Returns:
-            The fitness with NaN/inf and rows past the budget mapped to ``+inf``.
+            The fitness with NaN/inf mapped to ``+inf``.
+
+        Raises:
+            InvalidArgumentError: ``pop`` exceeds the remaining budget.
         """
         x_batch = np.atleast_2d(np.asarray(x_batch, dtype=float))
         f = np.asarray(f, dtype=float).reshape(x_batch.shape[0])
-        out = np.full(f.shape, np.inf)
-        k = 0 if self.time_up or self.stopped else min(f.shape[0], self.remaining)
-        if k <= 0:
-            return out
-        self.n_evals += k
-        out[:k] = np.where(np.isfinite(f[:k]), f[:k], np.inf)
-        self._update_best(x_batch[:k], out[:k])
-        return out
+        return self._charge(x_batch.shape[0], x_batch, f, who="record")
 
     def add_evals(self, n: int, x: FloatArray | None = None, f: float | None = None) -> None:
-        """Count ``n`` evaluations a solver made itself (e.g. in a compiled kernel), and
-        offer the best point among them.
-
-        The caller must check :attr:`done` before starting the work and must not compute more
-        than :attr:`remaining` evaluations; work started before the time limit is counted and
-        its point considered even if the limit passed meanwhile.
+        """Charge ``n`` evaluations a solver made itself (e.g. in a compiled kernel), and
+        offer the best point among them (the second rule of the class docstring).
 
         Args:
             n: Evaluations spent, ``0 <= n <= remaining``.
@@ -229,26 +249,43 @@ class Evaluator:
             InvalidArgumentError: ``n`` is negative or exceeds the remaining budget, or ``x``
                 comes without ``f``.
         """
-        n = int(n)
+        if x is not None and f is None:
+            raise InvalidArgumentError("add_evals: a point x needs its fitness f")
+        if x is None:
+            self._charge(int(n), None, None, who="add_evals")
+        else:
+            xb = np.asarray(x, dtype=float).reshape(1, self.dim)
+            self._charge(int(n), xb, np.array([f], dtype=float), who="add_evals")
+
+    def _charge(
+        self, n: int, x_batch: FloatArray | None, f: FloatArray | None, who: str = ""
+    ) -> FloatArray:
+        """The one place evaluations are charged: add ``n`` to the count (refusing an
+        overdraft), map NaN/inf fitness to ``+inf`` and offer the points for the best.
+
+        Returns:
+            The cleaned fitness (empty without points).
+        """
         if n < 0 or n > self.remaining:
             raise InvalidArgumentError(
-                f"add_evals: n must be in [0, {self.remaining}] (the remaining budget), got {n}"
+                f"{who or 'evaluate'}: {n} evaluations charged but the remaining budget is "
+                f"{self.remaining}; n must be in [0, {self.remaining}]"
             )
         self.n_evals += n
-        if x is None:
-            return
-        if f is None:
-            raise InvalidArgumentError("add_evals: a point x needs its fitness f")
-        if self.stopped:
-            return
-        fx = float(f) if np.isfinite(f) else np.inf
-        self._update_best(np.asarray(x, dtype=float).reshape(1, self.dim), np.array([fx]))
+        if x_batch is None or f is None:
+            return np.empty(0)
+        f = np.where(np.isfinite(f), f, np.inf)
+        if f.size and not self.stopped:
+            self._update_best(x_batch, f)
+        return f
 
     def _update_best(self, x_batch: FloatArray, f: FloatArray) -> None:
         i = int(np.argmin(f))
         if f[i] < self.best_f:
             self.best_f = float(f[i])
             self.best_x = x_batch[i].copy()
+            if self.on_improvement is not None:
+                self.on_improvement(self.best_x.copy(), self.best_f)
             if self.f_target is not None and self.best_f <= self.f_target:
                 self.stopped = True
             elif self._stop is not None and self._stop(self.best_x):
@@ -285,7 +322,7 @@ class Evaluator:
         return np.clip(x, self.lower, self.upper)
 
     def resample_out_of_bounds(self, rng: np.random.Generator, x: FloatArray) -> FloatArray:
-        """Replace each out-of-bound component by a uniform draw in its range (eq. 12, 000)."""
+        """Replace each out-of-bound component by a uniform draw in its range ([HLFOA], eq. 12)."""
         bad = (x < self.lower) | (x > self.upper)
         if not bad.any():
             return x
@@ -472,6 +509,15 @@ class SolverSpec:
         closed_form: True for a closed-form solver of particular chains (``analytic``): not
             a search over any objective, so the contract of :func:`search_names` does not
             apply to it.
+        paper: Short key of the solver's source in ``docs/references.md`` (e.g. ``"HLFOA"``;
+            ``None``: our own).  The benchmarks set that paper's published numbers beside it.
+        budget_only: True when the solver takes only an evaluation budget (``max_evals`` /
+            ``time_limit``) and no population / iteration schedule worth setting; the
+            benchmarks then give it the budget alone.
+        evals_per_iteration: Evaluations one of its ``iterations`` costs when that is a fixed
+            number independent of the parameters (``1`` for DLS: ``iterations = budget``);
+            ``None``: a population schedule (``pop_size`` evaluations per iteration, or
+            whatever its docstring says).
     """
 
     name: str
@@ -481,6 +527,26 @@ class SolverSpec:
     needs_jacobian: bool = False
     constraints: Mapping[str, Constraint] = field(default_factory=dict)
     closed_form: bool = False
+    paper: str | None = None
+    budget_only: bool = False
+    evals_per_iteration: int | None = None
+
+    def schedule(self, budget: int) -> dict[str, Any]:
+        """Settings that let this solver spend an evaluation budget: ``max_evals = budget``
+        plus, for a solver with a fixed cost per iteration, ``iterations`` to match, or for a
+        population solver, enough iterations of its own ``pop_size`` (``⌈budget / pop⌉``).
+
+        Args:
+            budget: Evaluations, ``>= 1``.
+
+        Returns:
+            Keyword arguments for :func:`swarm_ik.solve` (``max_evals``, maybe ``iterations``).
+        """
+        if self.evals_per_iteration is not None:
+            return {"iterations": -(-budget // self.evals_per_iteration), "max_evals": budget}
+        if self.budget_only or "pop_size" not in self.params or "iterations" not in self.params:
+            return {"max_evals": budget}
+        return {"iterations": -(-budget // int(self.params["pop_size"])), "max_evals": budget}
 
     def resolve(self, overrides: Mapping[str, Any], dim: int | None = None) -> dict[str, Any]:
         """Defaults updated with ``overrides``; unknown names are refused, listing valid ones.
@@ -548,6 +614,9 @@ def register(
     needs_jacobian: bool = False,
     constraints: Mapping[str, str | Constraint] | None = None,
     closed_form: bool = False,
+    paper: str | None = None,
+    budget_only: bool = False,
+    evals_per_iteration: int | None = None,
     **overrides: Any,
 ) -> SolverSpec:
     """Register ``run`` under ``name``; keyword ``overrides`` change its parameter defaults.
@@ -563,6 +632,10 @@ def register(
             "positive", "pa": "[0, 1]", "subpops": "int>=1"}``), merged over
             :data:`SOLVER_CONSTRAINTS` ``[name]``; parameters without one get the
             constraint inferred from their default (:meth:`Constraint.infer`).
+        closed_form: True for a closed-form solver (see :class:`SolverSpec`).
+        paper: Short key of the source in ``docs/references.md`` (see :class:`SolverSpec`).
+        budget_only: The solver takes only a budget (see :class:`SolverSpec`).
+        evals_per_iteration: Fixed evaluations per iteration (see :class:`SolverSpec`).
         **overrides: New defaults.
 
     Raises:
@@ -588,10 +661,26 @@ def register(
         con = Constraint.parse(declared[key]) if key in declared else Constraint.infer(default)
         if con is not None:
             cons[key] = con
-    spec = SolverSpec(name, run, defaults, description, needs_jacobian, cons, closed_form)
+    if evals_per_iteration is not None and (
+        isinstance(evals_per_iteration, bool) or int(evals_per_iteration) < 1
+    ):
+        raise InvalidArgumentError(
+            f"evals_per_iteration of solver {name!r} must be an integer >= 1 or None, "
+            f"got {evals_per_iteration!r}"
+        )
     spec = SolverSpec(
-        name, run, spec.resolve(overrides), description, needs_jacobian, cons, closed_form
+        name,
+        run,
+        defaults,
+        description,
+        needs_jacobian,
+        cons,
+        closed_form,
+        paper,
+        budget_only,
+        evals_per_iteration,
     )
+    spec = replace(spec, params=spec.resolve(overrides))
     _REGISTRY[name] = spec
     return spec
 

@@ -1,11 +1,11 @@
-"""Cuckoo search (Yang & Deb, 2009) and paper 004's cuckoo search + Newton polish (Zhao).
+"""Cuckoo search [CS] and the cuckoo search + Newton polish of [CS-IK].
 
 Two registrations of the same :func:`run`:
 
-* ``cs``: Yang–Deb cuckoo search as in paper 004 (eqs. 8–13): Lévy flights drawn by
+* ``cs``: cuckoo search [CS] as in [CS-IK] (eqs. 8–13): Lévy flights drawn by
   Mantegna's algorithm (β = 1.5), discovery of alien eggs with probability ``pa = 0.25``,
   greedy replacement; 50 nests, 3000 iterations.
-* ``cs-newton``: paper 004's combination: the same search until the best fitness drops below
+* ``cs-newton``: [CS-IK]'s combination: the same search until the best fitness drops below
   ``ε = 0.2``, then Newton / pseudo-inverse iterations ``θ ← θ + η_n·J⁺·e`` on the best nest
   with an exponentially decaying learning rate (eqs. 6, 15, 16).  Needs an IK problem (the
   Jacobian).
@@ -25,7 +25,7 @@ _PINV_RCOND = 1e-10
 
 
 def mantegna_sigma(beta: float) -> float:
-    """Scale ``σ_u`` of Mantegna's algorithm for a Lévy index ``β`` (paper 004, eq. 12)::
+    """Scale ``σ_u`` of Mantegna's algorithm [Mantegna] for a Lévy index ``β`` ([CS-IK], eq. 12)::
 
         σ_u = [Γ(1+β)·sin(πβ/2) / (Γ((1+β)/2)·β·2^((β−1)/2))]^(1/β)
 
@@ -40,7 +40,7 @@ def mantegna_sigma(beta: float) -> float:
 
 
 def levy_steps(rng: np.random.Generator, shape: tuple[int, ...], beta: float = 1.5) -> FloatArray:
-    """Lévy-stable steps by Mantegna's algorithm (paper 004, eqs. 10–13).
+    """Lévy-stable steps by Mantegna's algorithm [Mantegna] ([CS-IK], eqs. 10–13).
 
     ``L = u / |v|^(1/β)`` with ``u ~ N(0, σ_u²)`` and ``v ~ N(0, 1)`` (``σ_v = 1``, eq. 13).
     The distribution is symmetric with a power-law tail ``P(|L| > s) ~ s^(−β)``.
@@ -48,7 +48,7 @@ def levy_steps(rng: np.random.Generator, shape: tuple[int, ...], beta: float = 1
     Args:
         rng: Source of ``u`` and ``v``.
         shape: Output shape.
-        beta: Lévy index ``β`` in ``(0, 2)`` (paper 004: 1.5).
+        beta: Lévy index ``β`` in ``(0, 2)`` ([CS-IK]: 1.5).
 
     Returns:
         Steps of the given shape (finite: ``|v|`` is floored at the smallest normal double).
@@ -79,9 +79,9 @@ def run(
     eta_t: float = 0.001,
     tau: float = 100.0,
 ) -> None:
-    """Cuckoo search (paper 004, eqs. 8–13), optionally followed by a Newton polish (eqs. 15–16).
+    """Cuckoo search ([CS-IK], eqs. 8–13), optionally followed by a Newton polish (eqs. 15–16).
 
-    Cuckoo search as in Yang & Deb's reference code (which paper 004 follows).  Nests start
+    Cuckoo search as in the reference code of [CS] (which [CS-IK] follows).  Nests start
     uniform within the bounds (row 0 = ``q0`` when given) and are evaluated once; then each
     iteration makes two batched evaluations of the whole population:
 
@@ -96,10 +96,10 @@ def run(
        probability that an egg is discovered.  Greedy replacement again.
 
     New points are clipped to the bounds (the reference code's ``simplebounds``).
-    Evaluations: ``pop_size·(2·iterations + 1)``; paper 004's 3000 iterations of 50 nests
+    Evaluations: ``pop_size·(2·iterations + 1)``; [CS-IK]'s 3000 iterations of 50 nests
     make 300 050 evaluations, so in practice ``max_evals`` or the stop criterion ends the run.
 
-    With ``newton=True`` (paper 004's combination, fig. 1): as soon as the best fitness is
+    With ``newton=True`` ([CS-IK]'s combination, fig. 1): as soon as the best fitness is
     below ``eps`` (checked before each iteration, so also right after the initial
     population), the search stops and the remaining iterations are Newton / pseudo-inverse
     steps on the best nest (eqs. 6, 15)::
@@ -108,7 +108,7 @@ def run(
 
     ``e = [p_target − p; log(R_target Rᵀ)]`` and ``J`` the world-aligned frame Jacobian, from
     ``ev.residual_jacobian`` (one evaluation per step); ``J⁺`` cuts singular values below
-    ``1e-10·σ_max``.  Eq. 16 of paper 004 is not legible in our copy; the text says the rate
+    ``1e-10·σ_max``.  Eq. 16 of [CS-IK] is not legible in our copy; the text says the rate
     decays exponentially from ``η0 = 1`` with a parameter ``η_t = 0.001``; the schedule above
     is our reading (it tends to ``η_t``).  ``τ = 100`` steps: the first ~10 steps are nearly
     full Gauss–Newton steps, which converge quadratically near a solution, so the decay only
@@ -123,42 +123,34 @@ def run(
     search when it stalls (e.g. at a joint limit or in a local minimum of a redundant arm).
 
     ``eps`` is compared with the problem's fitness (``"se3"``: metres + radians by default).
-    Paper 004's fitness is instead the squared norm of the Newton step (its eq. 7), so its
+    [CS-IK]'s fitness is instead the squared norm of the Newton step (its eq. 7), so its
     ``ε = 0.2`` is not the same threshold; 0.2 is kept as the default because in our trials
     Gauss–Newton from ``se3 < 0.2`` converged in most cases.
 
     Args:
         ev: Budgeted objective (see :class:`swarm_ik.solvers.base.Evaluator`).
         rng: Source of all randomness.
-        pop_size: Number of nests (paper 004: 50).
-        iterations: Iterations, search and Newton steps together (paper 004: 3000).
-        pa: Discovery probability ``pa`` (paper 004: 0.25).
-        beta: Lévy index ``β`` (paper 004: 1.5).
+        pop_size: Number of nests ([CS-IK]: 50).
+        iterations: Iterations, search and Newton steps together ([CS-IK]: 3000).
+        pa: Discovery probability ``pa`` ([CS-IK]: 0.25).
+        beta: Lévy index ``β`` ([CS-IK]: 1.5).
         alpha: Step scale ``α`` of the Lévy flights (reference code: 0.01).
         newton: Switch to the Newton polish once the best fitness is below ``eps``.
-        eps: Threshold ``ε`` of the switch (paper 004: 0.2).
-        eta0: Initial learning rate ``η0`` (paper 004: 1).
-        eta_t: Final learning rate ``η_t`` (paper 004: 0.001).
+        eps: Threshold ``ε`` of the switch ([CS-IK]: 0.2).
+        eta0: Initial learning rate ``η0`` ([CS-IK]: 1).
+        eta_t: Final learning rate ``η_t`` ([CS-IK]: 0.001).
         tau: Decay constant ``τ`` of the learning rate, in Newton steps (not in the paper).
 
+    Parameter values are checked by the registry (:data:`CONSTRAINTS`, ``pop_size`` and
+        ``iterations`` by :meth:`swarm_ik.solvers.base.SolverSpec.resolve`).
+
     Raises:
-        InvalidArgumentError: ``pop_size < 2``, ``iterations < 0``, ``pa`` outside ``[0, 1]``,
-            ``alpha <= 0``, ``beta`` outside ``(0, 2)``, or (with ``newton``) ``eps <= 0``,
-            ``tau <= 0`` or not ``0 < eta_t <= eta0``.
+        InvalidArgumentError: with ``newton``, ``eta_t > eta0`` (the rate must decay).
     """
     m = int(pop_size)
-    if m < 2 or iterations < 0:
+    if newton and eta_t > eta0:
         raise InvalidArgumentError(
-            f"need pop_size >= 2 and iterations >= 0; got pop_size={pop_size}, "
-            f"iterations={iterations}"
-        )
-    if not (0.0 <= pa <= 1.0 and alpha > 0):
-        raise InvalidArgumentError(f"need 0 <= pa <= 1 and alpha > 0; got pa={pa}, alpha={alpha}")
-    mantegna_sigma(beta)  # validates beta
-    if newton and not (eps > 0 and 0 < eta_t <= eta0 and tau > 0):
-        raise InvalidArgumentError(
-            f"need eps > 0, 0 < eta_t <= eta0 and tau > 0; got eps={eps}, eta0={eta0}, "
-            f"eta_t={eta_t}, tau={tau}"
+            f"cs-newton needs eta_t <= eta0 (a decaying rate); got eta0={eta0}, eta_t={eta_t}"
         )
     n = ev.dim
     nest = ev.initial_population(rng, m)
@@ -178,7 +170,7 @@ def run(
         better = f_new <= fit
         nest[better] = new[better]
         fit[better] = f_new[better]
-        # Discovery (eq. 9): biased random walk; mask as in Yang's reference code (rand > pa).
+        # Discovery (eq. 9): biased random walk; mask as in the reference code of [CS] (rand > pa).
         found = rng.random((m, n)) > pa
         j = rng.permutation(m)
         k = rng.permutation(m)
@@ -220,16 +212,18 @@ CONSTRAINTS = {
 register(
     "cs",
     run,
+    paper="CS",
     constraints=CONSTRAINTS,
     newton=False,
-    description="Yang-Deb cuckoo search (paper 004: Levy flights beta=1.5, pa=0.25, 50 nests)",
+    description="cuckoo search [CS] as in [CS-IK]: Levy flights beta=1.5, pa=0.25, 50 nests",
 )
 register(
     "cs-newton",
     run,
+    paper="CS-IK",
     constraints=CONSTRAINTS,
     newton=True,
     needs_jacobian=True,
-    description="paper 004: cuckoo search until fitness < 0.2, then Newton/pseudo-inverse "
+    description="[CS-IK]: cuckoo search until fitness < 0.2, then Newton/pseudo-inverse "
     "steps with an exponentially decaying learning rate",
 )

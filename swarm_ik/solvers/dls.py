@@ -13,6 +13,7 @@ from __future__ import annotations
 import numpy as np
 import pinocchio as pin
 
+from swarm_ik.errors import InvalidArgumentError
 from swarm_ik.solvers.base import Evaluator, register
 
 
@@ -45,15 +46,16 @@ def run(
         stall_iters: …over this many consecutive iterations.
     """
     problem = ev.problem
-    if problem is None:
-        from swarm_ik.errors import InvalidArgumentError
-
-        raise InvalidArgumentError("dls needs an IK problem (it uses the frame Jacobian)")
+    if problem is None or problem.target is None:
+        raise InvalidArgumentError(
+            "dls needs an IK problem with one pose target (it uses the frame Jacobian)"
+        )
+    target = problem.target
     robot = problem.robot
     model = robot.model
     data = model.createData()
     fid = robot.ee_frame_id
-    o_m_target = pin.SE3(problem.target[:3, :3].copy(), problem.target[:3, 3].copy())
+    o_m_target = pin.SE3(target[:3, :3].copy(), target[:3, 3].copy())
     rows = slice(0, 3) if problem.position_only else slice(0, 6)
     q = ev.q0.copy() if ev.q0 is not None else 0.5 * (ev.lower + ev.upper)
     it_restart = 0
@@ -107,6 +109,8 @@ CONSTRAINTS = {
 register(
     "dls",
     run,
+    paper="DLS",
+    evals_per_iteration=1,
     constraints=CONSTRAINTS,
     description="Pinocchio damped least squares with random restarts (baseline)",
     needs_jacobian=True,

@@ -1,8 +1,8 @@
-"""Basic fruit fly optimisation algorithm (Pan 2012), as described in paper 000, eqs. 4-9.
+"""Basic fruit fly optimisation algorithm [FOA], as described in [HLFOA], eqs. 4-9.
 
-This is the *baseline* the HLFOA paper (000, Shi et al. 2021) improves on, implemented
+This is the *baseline* [HLFOA] improves on, implemented
 faithfully, weaknesses included: the candidate solution ``S = 1/Dist`` is always positive, so
-basic FOA cannot reach joint values below zero (paper 000, section 2.2.1).  On the YuMi target
+basic FOA cannot reach joint values below zero ([HLFOA], section 2.2.1).  On the YuMi target
 the paper shows it stuck near fitness 5.2 (Table 2: mean 5.27143).  Do not "fix" it here; the
 fixed algorithm is :mod:`swarm_ik.solvers.hlfoa`.
 """
@@ -11,7 +11,6 @@ from __future__ import annotations
 
 import numpy as np
 
-from swarm_ik.errors import InvalidArgumentError
 from swarm_ik.solvers.base import Evaluator, FloatArray, register
 
 
@@ -51,21 +50,21 @@ def run(
     init_range: float = 10.0,
     step: float = 1.0,
 ) -> None:
-    """Basic FOA (Pan 2012) in the per-dimension form, paper 000 eqs. 4-9.
+    """Basic FOA [FOA] in the per-dimension form, [HLFOA] eqs. 4-9.
 
     D-dimensional form: every dimension ``j`` has its own pair of axes ``(X_j, Y_j)``; all the
     formulas act elementwise.  The swarm location ``(X_b, Y_b)`` (shape ``(n,)`` each) starts at
-    ``U[0, init_range]`` per component (Pan's ``10*rand()``) and is evaluated once.  Each
+    ``U[0, init_range]`` per component ([FOA]'s ``10*rand()``) and is evaluated once.  Each
     iteration:
 
     * eq. 4: fly ``i`` at ``X_i = X_b + step*U[-1, 1]``, ``Y_i = Y_b + step*U[-1, 1]``
-      (independent draws per component; Pan's ``RandomValue = 2*rand() - 1``);
+      (independent draws per component; [FOA]'s ``RandomValue = 2*rand() - 1``);
     * eq. 5: ``Dist_i = sqrt(X_i² + Y_i²)`` (elementwise);
     * eq. 6: ``S_i = 1/Dist_i`` measured in axis units of ``1/s_j`` with
       ``s_j = max(|l_j|, |u_j|)``, i.e. the joint vector is ``S_ij = s_j / Dist_ij``, clipped to
-      the bounds.  This scaling (our choice; Pan's example had no bounds) makes ``Dist = 1`` land
-      on the largest bound magnitude, so Pan's unit step and ``[0, 10]`` start carry over to any
-      joint range.  It does not change the algorithm: it is Pan's FOA with the axes measured in
+      the bounds.  This scaling (our choice; [FOA]'s example had no bounds) makes ``Dist = 1`` land
+      on the largest bound magnitude, so [FOA]'s unit step and ``[0, 10]`` start carry over to any
+      joint range.  It does not change the algorithm: it is [FOA] with the axes measured in
       units of ``1/s_j``, equivalently an initial location in ``U[0, 10/s_j]`` and a step of
       ``U[-1, 1]/s_j`` in raw axis units;
     * eqs. 7-8: ``Smell_i = f(S_i)`` for the whole swarm in one batch; best fly;
@@ -74,33 +73,24 @@ def run(
 
     ``S_ij > 0`` always: the algorithm never evaluates a negative joint value (unless a bound
     forces it) and so cannot reach optima with negative coordinates.  This is the weakness
-    paper 000 reports, reproduced on purpose.
+    [HLFOA] reports, reproduced on purpose.
 
-    Evaluations: ``pop_size * iterations + 1`` (paper 000, section 2.2.5).  A starting point
+    Evaluations: ``pop_size * iterations + 1`` ([HLFOA], section 2.2.5).  A starting point
     ``q0`` is ignored: a fly location cannot represent an arbitrary joint vector.
 
     Args:
         ev: Budgeted objective (see :class:`swarm_ik.solvers.base.Evaluator`).
         rng: Source of all randomness.
-        pop_size: Flies per iteration ``m`` (paper 000: 100).
-        iterations: Iterations ``t_max`` (paper 000: 1000).
+        pop_size: Flies per iteration ``m`` ([HLFOA]: 100).
+        iterations: Iterations ``t_max`` ([HLFOA]: 1000).
         init_range: Initial swarm location drawn from ``U[0, init_range]`` per axis component,
-            in axis units (Pan: 10; not given in paper 000).
+            in axis units ([FOA]: 10; not given in [HLFOA]).
         step: Half-width of the random flight, ``RandomValue = step*U[-1, 1]``, axis units
-            (Pan: 1; not given in paper 000).
+            ([FOA]: 1; not given in [HLFOA]).
 
-    Raises:
-        InvalidArgumentError: ``pop_size < 1``, ``iterations < 0``, or a non-positive
-            ``init_range``/``step``.
+    Parameter values are checked by the registry (:data:`CONSTRAINTS`, ``pop_size`` and
+        ``iterations`` by :meth:`swarm_ik.solvers.base.SolverSpec.resolve`).
     """
-    if pop_size < 1:
-        raise InvalidArgumentError(f"pop_size must be >= 1, got {pop_size}")
-    if iterations < 0:
-        raise InvalidArgumentError(f"iterations must be >= 0, got {iterations}")
-    if not (init_range > 0 and step > 0):
-        raise InvalidArgumentError(
-            f"init_range and step must be positive, got init_range={init_range}, step={step}"
-        )
     n = ev.dim
     scale = _axis_unit(ev)
     x_b = init_range * rng.random(n)
@@ -127,7 +117,8 @@ CONSTRAINTS = {"init_range": "(0, 1e6]", "step": "(0, 1e6]"}
 register(
     "foa",
     run,
+    paper="FOA",
     constraints=CONSTRAINTS,
-    description="basic fruit fly optimisation (Pan; paper 000 eqs. 4-9); cannot reach negative "
+    description="basic fruit fly optimisation ([FOA]; [HLFOA] eqs. 4-9); cannot reach negative "
     "values, kept as the paper's baseline",
 )

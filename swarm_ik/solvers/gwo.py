@@ -1,10 +1,10 @@
-"""Grey wolf optimiser (Mirjalili, Mirjalili & Lewis, 2014), the baseline of paper 003.
+"""Grey wolf optimiser [GWO], the baseline of [MGWO].
 
-One registration, ``gwo``: the standard GWO as summarised in SEEDS.md ("GWO reference") with
-paper 003's set-up (30 wolves, 200 iterations), following Mirjalili's reference MATLAB code
+One registration, ``gwo``: the standard GWO [GWO] with
+[MGWO]'s set-up (30 wolves, 200 iterations), following the reference MATLAB code of [GWO]
 (GWO.m) in the one place where the paper's text is loose: how α, β, δ are kept (see
 :func:`update_leaders`).  That choice matters: with the reference rule this implementation
-reproduces paper 003's GWO column of Table 3 (the paper evidently ran the reference code);
+reproduces [MGWO]'s GWO column of Table 3 (the paper evidently ran the reference code);
 with the "true three best" rule GWO converges faster on unimodal functions and worse on
 Rastrigin.  The vectorised pack update :func:`gwo_move` and the leader bookkeeping are shared
 with :mod:`swarm_ik.solvers.mgwo`.
@@ -69,11 +69,11 @@ def update_leaders(
 ) -> tuple[FloatArray, FloatArray]:
     """Update α, β, δ with a newly evaluated batch.
 
-    ``demote=False`` is the rule of Mirjalili's reference code (GWO.m, also niapy's): the
+    ``demote=False`` is the rule of the reference code of [GWO] (GWO.m, also niapy's): the
     wolves are visited in order and a wolf replaces α when it is better than α, otherwise β
     when it lies strictly between α and β, otherwise δ when it lies strictly between β and
     δ; a new α does **not** push the old α down to β.  β and δ therefore lag behind α and
-    keep the pack more spread out.  This is what reproduces paper 003's GWO figures (see the
+    keep the pack more spread out.  This is what reproduces [MGWO]'s GWO figures (see the
     module's docstring).  ``demote=True`` keeps the true three best points seen so far (the
     old leaders merged with the batch; ties keep the older leader).
 
@@ -112,7 +112,7 @@ def update_leaders(
 
 
 def gwo_move(x: FloatArray, leaders: FloatArray, a: float, rng: np.random.Generator) -> FloatArray:
-    """One GWO position update of a whole pack (Mirjalili 2014, eqs. 3.3–3.7).
+    """One GWO position update of a whole pack ([GWO], eqs. 3.3–3.7).
 
     For each wolf ``X`` and each leader ``X_l`` (α, β, δ), with fresh ``r1, r2 ~ U[0, 1]`` per
     leader, wolf and coordinate::
@@ -152,14 +152,14 @@ def run(
     iterations: int = 200,
     demote_leaders: bool = False,
 ) -> None:
-    """Grey wolf optimiser (Mirjalili et al., 2014; the GWO of paper 003, section 3.1).
+    """Grey wolf optimiser ([GWO]; the GWO of [MGWO], section 3.1).
 
     Wolves start uniform within the bounds (row 0 = ``q0`` when given).  Each iteration
     ``t = 0, 1, …, T−1`` evaluates the whole pack in one batch, updates the leaders α, β, δ
-    (:func:`update_leaders`: by default the rule of Mirjalili's reference code, where the
+    (:func:`update_leaders`: by default the rule of the reference code of [GWO], where the
     leaders only ever improve and a new α does not demote the old one), records the history,
     and then moves every wolf by :func:`gwo_move` with ``a = 2 − 2t/T`` (eqs. 3.3–3.7 of
-    Mirjalili 2014), clipping the result to the bounds (continuous joints wrapped; see
+    [GWO]), clipping the result to the bounds (continuous joints wrapped; see
     ``Evaluator.clip``).  There is no greedy selection: a wolf always takes its new position.
     The move after the last evaluation is skipped (it would never be evaluated), so a run
     costs exactly ``pop_size·iterations`` evaluations, as in the reference code, where ``a``
@@ -170,27 +170,22 @@ def run(
     ``max_evals`` allows fewer iterations (:func:`schedule_length`).
 
     Measured (30 wolves, 200 iterations, 20 seeds, mean): F1 8.6e-9, F2 6.0e-6, F3 13.6,
-    F4 −3.861, against paper 003's Table 3 GWO 9.38e-9, 6.76e-6, 14.75, −3.8609.  With
+    F4 −3.861, against [MGWO]'s Table 3 GWO 9.38e-9, 6.76e-6, 14.75, −3.8609.  With
     ``demote_leaders=True`` (true three best): F1 4.0e-10, F2 1.0e-6, but F3 33.4 (the pack
     collapses sooner).
 
     Args:
         ev: Budgeted objective (see :class:`swarm_ik.solvers.base.Evaluator`).
         rng: Source of all randomness.
-        pop_size: Number of wolves (paper 003: 30).
-        iterations: Iterations ``T`` (paper 003: 200; Mirjalili 2014: 500).
+        pop_size: Number of wolves ([MGWO]: 30).
+        iterations: Iterations ``T`` ([MGWO]: 200; [GWO]: 500).
         demote_leaders: Keep the true three best points as α, β, δ instead of the reference
             code's rule (not in the papers; the reference rule is what reproduces them).
 
-    Raises:
-        InvalidArgumentError: ``pop_size < 1`` or ``iterations < 0``.
+    Parameter values are checked by the registry (``pop_size`` and
+        ``iterations`` by :meth:`swarm_ik.solvers.base.SolverSpec.resolve`).
     """
     m = int(pop_size)
-    if m < 1 or iterations < 0:
-        raise InvalidArgumentError(
-            f"need pop_size >= 1 and iterations >= 0; got pop_size={pop_size}, "
-            f"iterations={iterations}"
-        )
     t_max = schedule_length(ev, m, iterations)
     x = ev.initial_population(rng, m)
     leader_x, leader_f = init_leaders(x[0])
@@ -209,5 +204,6 @@ def run(
 register(
     "gwo",
     run,
-    description="grey wolf optimiser (Mirjalili 2014; paper 003's baseline, 30 wolves x 200)",
+    paper="GWO",
+    description="grey wolf optimiser ([GWO]; the baseline of [MGWO], 30 wolves x 200)",
 )

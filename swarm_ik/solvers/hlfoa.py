@@ -1,4 +1,4 @@
-"""Hybrid learning fruit fly optimisation (HLFOA), paper 000 (Shi et al., 2021), section 2.2.
+"""Hybrid learning fruit fly optimisation of [HLFOA], section 2.2.
 
 Two registrations of the same :func:`run`:
 
@@ -17,7 +17,6 @@ from __future__ import annotations
 import numpy as np
 from numpy.typing import NDArray
 
-from swarm_ik.errors import InvalidArgumentError
 from swarm_ik.solvers.base import Evaluator, register
 
 IntArray = NDArray[np.int64]
@@ -56,7 +55,7 @@ def run(
     iterations: int = 1000,
     realtime: bool = True,
 ) -> None:
-    """HLFOA, paper 000 section 2.2 (eqs. 10-14), minimising ``ev``.
+    """HLFOA, [HLFOA] section 2.2 (eqs. 10-14), minimising ``ev``.
 
     * Linear candidates (2.2.1): the fly position ``X_i`` *is* the candidate (``S_i = X_i``).
     * Initialisation (2.2.6 step 1): ``m`` flies uniform within the bounds (row 0 = ``q0`` when
@@ -84,23 +83,17 @@ def run(
     Args:
         ev: Budgeted objective (see :class:`swarm_ik.solvers.base.Evaluator`).
         rng: Source of all randomness.
-        pop_size: Population size ``m`` (paper 000: 100); at least 4 (three distinct partners
+        pop_size: Population size ``m`` ([HLFOA]: 100); at least 4 (three distinct partners
             besides the fly itself).
-        iterations: ``t_max`` (paper 000: 1000); also sets the schedule ``ω``.
+        iterations: ``t_max`` ([HLFOA]: 1000); also sets the schedule ``ω``.
         realtime: True: real-time update of eqs. 13-14, one evaluation per call (the paper).
             False: synchronous update, one batch per iteration (the ``hlfoa-batch`` variant,
             not in the paper).
 
-    Raises:
-        InvalidArgumentError: ``pop_size < 4`` or ``iterations < 0``.
+    ``pop_size >= 4`` (:data:`swarm_ik.solvers.base.MIN_POP_SIZE`) and ``iterations >= 1``
+    are checked by the registry (:meth:`swarm_ik.solvers.base.SolverSpec.resolve`).
     """
     m = int(pop_size)
-    if m < 4:
-        raise InvalidArgumentError(
-            f"pop_size must be >= 4 for HLFOA (r1, r2, r3 and i distinct), got {pop_size}"
-        )
-    if iterations < 0:
-        raise InvalidArgumentError(f"iterations must be >= 0, got {iterations}")
     n = ev.dim
     lo, hi = ev.lower, ev.upper
     width = hi - lo
@@ -171,12 +164,14 @@ def run(
 register(
     "hlfoa",
     run,
-    description="hybrid learning fruit fly optimisation (paper 000) with the paper's real-time "
+    paper="HLFOA",
+    description="hybrid learning fruit fly optimisation [HLFOA] with the paper's real-time "
     "update; one evaluation per call",
 )
 register(
     "hlfoa-batch",
     run,
+    paper="HLFOA",
     realtime=False,
-    description="HLFOA variant (not in paper 000): synchronous update, whole population per batch",
+    description="HLFOA variant (not in [HLFOA]): synchronous update, whole population per batch",
 )

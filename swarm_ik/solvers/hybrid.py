@@ -189,6 +189,8 @@ class Polisher(NamedTuple):
             [*t.jref, np.asarray(q_ref, dtype=float)],
             [*t.jw, np.ones(nq)],
             nq,
+            rows=[*t.nrows.tolist(), nq],
+            col=t.col,
         )
         return self._replace(table=tab)
 

@@ -1,4 +1,4 @@
-"""Multi-population grey wolf optimiser (MGWO) of paper 003 (Hu et al., 2025, section 3.1).
+"""Multi-population grey wolf optimiser of [MGWO], section 3.1.
 
 One registration, ``mgwo``: the pack is split into sub-packs that run the GWO update of
 :mod:`swarm_ik.solvers.gwo` with their own leaders; the best of their alphas is the wolf
@@ -7,7 +7,7 @@ stagnating king triggers the re-initialisation of the worst sub-pack (details in
 :func:`run`).  The paper gives no values for m, γ, ω, c1, c2; they were chosen from this
 sweep (30 wolves, 200 iterations; F1–F4 of :mod:`swarm_ik.testfunctions`, mean of 20 runs,
 seeds 0–19; IK: ``loading_manipulator_long`` with the ``"euler-zyz"`` fitness, target the
-FK of paper 003's ``x* = [π/4, π/6, π/4, 0.8, 1, 1, π/6, −π/4]`` (reachable in that variant),
+FK of [MGWO]'s ``x* = [π/4, π/6, π/4, 0.8, 1, 1, π/6, −π/4]`` (reachable in that variant),
 full budget, 50 runs, seeds 0–49):
 
 ======  ===  ====  ===  =======  =======  =====  ========  =======  =========  ========
@@ -28,7 +28,7 @@ mgwo    10   0.1   0.7  6.3      0.87     56.3   -3.86267  0.083    0.078      0
 ======  ===  ====  ===  =======  =======  =====  ========  =======  =========  ========
 
 (c1 = c2 = 1.5 throughout; on F1 and F2 γ never acts, the king improves every iteration.)
-Paper 003, Table 3 (50 runs): GWO 9.38e-9, 6.76e-6, 14.75, −3.8609; MGWO 5.89e-14, 5.16e-9,
+[MGWO], Table 3 (50 runs): GWO 9.38e-9, 6.76e-6, 14.75, −3.8609; MGWO 5.89e-14, 5.16e-9,
 1.30, −3.8628; Table 4 (IK, its own robot limits): GWO 0.4292, MGWO 0.0122.
 
 What this reproduces and what it does not: MGWO's gains on the multimodal IK problem (the mean
@@ -62,7 +62,7 @@ def run(
     v_max: float = 0.2,
     demote_leaders: bool = False,
 ) -> None:
-    """Multi-population GWO (paper 003, section 3.1, steps 1–9 of section 3.2).
+    """Multi-population GWO ([MGWO], section 3.1, steps 1–9 of section 3.2).
 
     The pack of ``pop_size`` wolves (row 0 = ``q0`` when given) is split into ``subpops``
     contiguous sub-packs (step 3; sizes differ by at most one).  Each iteration
@@ -91,7 +91,7 @@ def run(
     evaluations (the move after the last evaluation is skipped) and ``T`` is shortened to what
     ``max_evals`` allows.
 
-    Choices where paper 003 is silent or ambiguous (all exposed as parameters):
+    Choices where [MGWO] is silent or ambiguous (all exposed as parameters):
 
     * Steps 6 and 7 are read as alternatives: the worst wolves move by eqs. 21–22 *instead of*
       the GWO update (applying the GWO update after the PSO move would nearly erase it, since
@@ -109,9 +109,9 @@ def run(
     Args:
         ev: Budgeted objective (see :class:`swarm_ik.solvers.base.Evaluator`).
         rng: Source of all randomness.
-        pop_size: Total number of wolves ``n`` (paper 003: 30).
-        iterations: Iterations ``G_t`` (paper 003: 200).
-        subpops: Number of sub-packs ``m``, ``1 <= m <= pop_size`` (paper 003: ``1 < m < n``,
+        pop_size: Total number of wolves ``n`` ([MGWO]: 30).
+        iterations: Iterations ``G_t`` ([MGWO]: 200).
+        subpops: Number of sub-packs ``m``, ``1 <= m <= pop_size`` ([MGWO]: ``1 < m < n``,
             value not given; ``m = 1`` is plain GWO with a PSO-guided worst wolf and no
             re-initialisation).
         gamma: ``γ ∈ (0, 1)`` of the re-initialisation threshold ``r = γ·G_t`` (eq. 23; value
@@ -124,23 +124,17 @@ def run(
         demote_leaders: Use the true three best as α, β, δ (see
             :func:`swarm_ik.solvers.gwo.update_leaders`; default: the reference rule, as GWO).
 
+    Parameter values are checked by the registry (:data:`CONSTRAINTS`, ``pop_size`` and
+        ``iterations`` by :meth:`swarm_ik.solvers.base.SolverSpec.resolve`).
+
     Raises:
-        InvalidArgumentError: ``subpops`` outside ``[1, pop_size]``, ``iterations < 0``,
-            ``gamma`` outside ``(0, 1)``, a negative coefficient or ``v_max <= 0``.
+        InvalidArgumentError: ``subpops > pop_size``.
     """
     m = int(pop_size)
     k = int(subpops)
-    if k < 1 or m < k or iterations < 0:
+    if m < k:
         raise InvalidArgumentError(
-            f"need 1 <= subpops <= pop_size and iterations >= 0; got pop_size={pop_size}, "
-            f"subpops={subpops}, iterations={iterations}"
-        )
-    if not (0.0 < gamma < 1.0):
-        raise InvalidArgumentError(f"gamma must lie in (0, 1) (paper 003, eq. 23), got {gamma!r}")
-    if min(omega, c1, c2) < 0 or not v_max > 0:
-        raise InvalidArgumentError(
-            f"need omega, c1, c2 >= 0 and v_max > 0; got omega={omega}, c1={c1}, c2={c2}, "
-            f"v_max={v_max}"
+            f"mgwo needs subpops <= pop_size; got pop_size={pop_size}, subpops={subpops}"
         )
     n = ev.dim
     t_max = schedule_length(ev, m, iterations)
@@ -214,7 +208,8 @@ CONSTRAINTS = {
 register(
     "mgwo",
     run,
+    paper="MGWO",
     constraints=CONSTRAINTS,
-    description="paper 003's multi-population GWO: sub-packs, wolf king, PSO-guided worst "
+    description="multi-population GWO of [MGWO]: sub-packs, wolf king, PSO-guided worst "
     "wolves, re-initialisation of the worst sub-pack on stagnation (30 wolves x 200)",
 )

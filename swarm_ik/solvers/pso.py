@@ -1,11 +1,11 @@
-"""Particle swarm optimisation and paper 002's improved PSO (Kang et al., 2019).
+"""Particle swarm optimisation [PSO] and the improved PSO of [PSO-IK].
 
 Two registrations of the same :func:`run`:
 
-* ``pso``: the standard global-best PSO of paper 002, section 3.1 (eq. 6), with the paper's
+* ``pso``: the standard global-best PSO of [PSO-IK], section 3.1 (eq. 6), with the paper's
   settings for its baseline: inertia ``w = 0.7``, ``c1 = c2 = 1.5``, 40 particles,
   100 iterations.
-* ``pso-improved``: paper 002's improved PSO (section 3.2): the same swarm with ``w = 0.9`` plus
+* ``pso-improved``: [PSO-IK]'s improved PSO (section 3.2): the same swarm with ``w = 0.9`` plus
   (1) a local search on the global best along the negative gradient and (2) an escape strategy
   that re-randomises half the swarm when the global best stagnates.
 """
@@ -14,7 +14,6 @@ from __future__ import annotations
 
 import numpy as np
 
-from swarm_ik.errors import InvalidArgumentError
 from swarm_ik.solvers.base import Evaluator, FloatArray, register
 
 _MIN_STEP = 1e-12
@@ -66,7 +65,7 @@ def run(
     escape: bool = False,
     escape_after: int = 5,
 ) -> None:
-    """Global-best PSO (paper 002, eq. 6) with paper 002's optional improvements.
+    """Global-best PSO ([PSO-IK], eq. 6) with [PSO-IK]'s optional improvements.
 
     Standard PSO (section 3.1): positions uniform within the bounds (row 0 = ``q0`` when
     given), velocities uniform in ``[-v_max, v_max]·(u - l)``; each iteration, per particle and
@@ -75,17 +74,17 @@ def run(
         v = w·v + c1·r1·(pbest - x) + c2·r2·(gbest - x);   x = x + v        (eq. 6)
 
     then the whole swarm is evaluated in one batch and ``pbest``/``gbest`` replaced when
-    strictly better.  Paper 002 clips out-of-bound positions to the bound; it says nothing of
+    strictly better.  [PSO-IK] clips out-of-bound positions to the bound; it says nothing of
     velocities: here each velocity component is clamped to ``±v_max·(u_j - l_j)`` (the usual
     clamp; paper silent) and set to zero where the position was clipped (absorbing wall; our
     choice, so a particle does not keep pushing against the bound).
 
     Improvement (1), local search (section 3.2.1, eq. 13), once per iteration on the global
     best, after the swarm's update: the gradient is estimated by central finite differences
-    through ``ev`` (``2n`` evaluations per iteration, counted: paper 002 differentiates its DH
+    through ``ev`` (``2n`` evaluations per iteration, counted: [PSO-IK] differentiates its DH
     model analytically, eq. 11, which a black-box objective does not allow).  The direction is
     normalised in range-scaled coordinates ``z_j = (x_j - l_j)/(u_j - l_j)`` and the step is a
-    fraction ``α`` of the range, so it is independent of the objective's units (paper 002
+    fraction ``α`` of the range, so it is independent of the objective's units ([PSO-IK]
     steps ``λ·∇f`` with the raw gradient).  Up to ``ls_steps`` steps ``x ← clip(x + α·d)``
     are tried, one evaluation each; only improving steps are kept (the paper's "replace pbest
     when better"); after an improving step ``α`` doubles (capped at ``ls_step``), after a
@@ -108,40 +107,26 @@ def run(
     Args:
         ev: Budgeted objective (see :class:`swarm_ik.solvers.base.Evaluator`).
         rng: Source of all randomness.
-        pop_size: Swarm size ``M`` (paper 002: 40).
-        iterations: Iterations (paper 002: 100).
-        w: Inertia weight (paper 002: 0.7 for the standard PSO, 0.9 for the improved one).
-        c1: Cognitive coefficient (paper 002: 1.5).
-        c2: Social coefficient (paper 002: 1.5).
-        v_max: Velocity clamp as a fraction of each joint's range (not in paper 002; 0.2 is
+        pop_size: Swarm size ``M`` ([PSO-IK]: 40).
+        iterations: Iterations ([PSO-IK]: 100).
+        w: Inertia weight ([PSO-IK]: 0.7 for the standard PSO, 0.9 for the improved one).
+        c1: Cognitive coefficient ([PSO-IK]: 1.5).
+        c2: Social coefficient ([PSO-IK]: 1.5).
+        v_max: Velocity clamp as a fraction of each joint's range (not in [PSO-IK]; 0.2 is
             the common choice).
         local_search: Enable improvement (1).
-        ls_step: Largest local-search step ``λ`` as a fraction of the range (paper 002:
+        ls_step: Largest local-search step ``λ`` as a fraction of the range ([PSO-IK]:
             ``λ = 0.2``, applied there to the raw gradient).
-        ls_steps: Most local-search steps per iteration ``MS`` (paper 002: 4).
-        fd_step: Finite-difference probe offset as a fraction of the range (not in paper 002;
+        ls_steps: Most local-search steps per iteration ``MS`` ([PSO-IK]: 4).
+        fd_step: Finite-difference probe offset as a fraction of the range (not in [PSO-IK];
             1e-6 is near the optimum for central differences in double precision).
         escape: Enable improvement (2).
-        escape_after: Stagnation iterations ``G`` before an escape (paper 002: 5).
+        escape_after: Stagnation iterations ``G`` before an escape ([PSO-IK]: 5).
 
-    Raises:
-        InvalidArgumentError: a size below 1 (``pop_size < 2`` with ``escape``), a negative
-            coefficient, or a non-positive step.
+    Parameter values are checked by the registry (:data:`CONSTRAINTS`, ``pop_size`` and
+        ``iterations`` by :meth:`swarm_ik.solvers.base.SolverSpec.resolve`).
     """
     m = int(pop_size)
-    if m < 1 or iterations < 0 or ls_steps < 0 or escape_after < 1:
-        raise InvalidArgumentError(
-            f"need pop_size >= 1, iterations >= 0, ls_steps >= 0, escape_after >= 1; got "
-            f"pop_size={pop_size}, iterations={iterations}, ls_steps={ls_steps}, "
-            f"escape_after={escape_after}"
-        )
-    if escape and m < 2:
-        raise InvalidArgumentError(f"escape needs pop_size >= 2, got {pop_size}")
-    if min(w, c1, c2) < 0 or not (v_max > 0 and ls_step > 0 and fd_step > 0):
-        raise InvalidArgumentError(
-            f"need w, c1, c2 >= 0 and v_max, ls_step, fd_step > 0; got w={w}, c1={c1}, c2={c2}, "
-            f"v_max={v_max}, ls_step={ls_step}, fd_step={fd_step}"
-        )
     n = ev.dim
     lo, hi = ev.lower, ev.upper
     width = hi - lo
@@ -226,16 +211,18 @@ CONSTRAINTS = {
 register(
     "pso",
     run,
+    paper="PSO",
     constraints=CONSTRAINTS,
-    description="standard global-best PSO (paper 002 eq. 6; w=0.7, c1=c2=1.5, 40x100)",
+    description="standard global-best PSO ([PSO-IK] eq. 6; w=0.7, c1=c2=1.5, 40x100)",
 )
 register(
     "pso-improved",
     run,
+    paper="PSO-IK",
     constraints=CONSTRAINTS,
     w=0.9,
     local_search=True,
     escape=True,
-    description="paper 002's improved PSO: w=0.9, gradient local search on gbest (finite "
+    description="[PSO-IK]'s improved PSO: w=0.9, gradient local search on gbest (finite "
     "differences), escape of half the swarm after 5 stagnant iterations",
 )

@@ -5,7 +5,6 @@ configuration for a chain configuration, and Pinocchio's meshcat loader adapted 
 from __future__ import annotations
 
 import functools
-import os
 from pathlib import Path
 from typing import Any
 
@@ -13,7 +12,8 @@ import numpy as np
 import pinocchio as pin
 from numpy.typing import NDArray
 
-from swarm_ik.errors import SwarmIKError
+from swarm_ik import collision
+from swarm_ik.errors import RobotModelError
 from swarm_ik.robot import RobotModel
 
 FloatArray = NDArray[np.float64]
@@ -23,25 +23,10 @@ def package_dirs(robot: RobotModel) -> list[str]:
     """Folders searched for ``package://`` meshes of ``robot``'s URDF.
 
     The URDF's folder and its two parents (a ``<pkg>/urdf/robot.urdf`` layout), the
-    ``example-robot-data`` folders when that package is installed, and ``$ROS_PACKAGE_PATH``.
+    ``example-robot-data`` folders when that package is installed, and ``$ROS_PACKAGE_PATH``
+    (the same search as the collision geometry, :func:`swarm_ik.collision.package_dirs`).
     """
-    dirs: list[Path] = []
-    here = Path(robot.urdf_path).resolve().parent
-    dirs += [here, here.parent, here.parent.parent]
-    try:
-        from swarm_ik.robot import example_robot_data_dir
-
-        erd = example_robot_data_dir()
-        dirs += [erd, erd.parent, erd.parent.parent]
-    except SwarmIKError:
-        pass
-    dirs += [Path(p) for p in os.environ.get("ROS_PACKAGE_PATH", "").split(os.pathsep) if p]
-    out: list[str] = []
-    for d in dirs:
-        s = str(d)
-        if s not in out and d.is_dir():
-            out.append(s)
-    return out
+    return collision.package_dirs(robot.urdf_path)
 
 
 def visual_model(robot: RobotModel) -> Any:
@@ -50,8 +35,6 @@ def visual_model(robot: RobotModel) -> Any:
     Raises:
         RobotModelError: a mesh cannot be found (the message names it).
     """
-    from swarm_ik.errors import RobotModelError
-
     try:
         return pin.buildGeomFromUrdf(
             robot.full_model,

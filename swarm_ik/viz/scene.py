@@ -257,27 +257,17 @@ class Scene:
             node["origin"]["shape"].set_object(mg.Sphere(length / 5.0), mat)
         node.set_transform(np.asarray(pose, dtype=float))
 
-    def add_label(
-        self,
-        name: str,
-        lines: Sequence[str],
-        *,
-        position: Any,
-        height: float = 0.1,
-        facing: Any = (1.0, 0.0, 0.0),
-    ) -> None:
-        """A flat sign with text (a texture), standing upright.
+    def add_label(self, name: str, lines: Sequence[str], **placement: Any) -> None:
+        """A flat sign with text (a texture), standing upright: :meth:`add_image` of the text
+        rendered by :func:`text_png` (the width follows the text).
 
         Args:
             name: Node name inside the scene.
             lines: Text lines.
-            position: Centre of the sign [m], shape ``(3,)``.
-            height: Height of the sign [m]; the width follows the text.
-            facing: Direction the text faces (towards the camera), shape ``(3,)``; the text's
-                up is the world's z tilted to be square to it.
+            **placement: ``position`` (required), ``height``, ``facing`` as :meth:`add_image`.
         """
         png, aspect = text_png(lines)
-        self.add_image(name, png, aspect, position=position, height=height, facing=facing)
+        self.add_image(name, png, aspect, **placement)
 
     def add_image(
         self,

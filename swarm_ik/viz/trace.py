@@ -1,10 +1,13 @@
 """Convergence traces: the best-so-far configuration after each iteration of a solve.
 
-A :class:`TraceRecorder` is an ``on_improvement(q, f)`` callback: it keeps every point that
-improved on the best so far.  :func:`solve_traced` hands it to :func:`swarm_ik.solve`
-(``on_improvement=`` when the solve takes one); until then it observes a shallow copy of the
-problem whose ``fitness``, ``residual_jacobian`` and ``is_success`` are wrapped (the original
-problem and the solver are untouched, and the answer is the same as without recording).
+A :class:`TraceRecorder` is an ``on_improvement(q, f)`` callback of
+:class:`swarm_ik.solvers.base.Evaluator`: it keeps every point that improved on the best so
+far, whichever way the solver evaluated it (``ev(x)``, ``ev.residual_jacobian``,
+``ev.record`` or, for the compiled ``swarm`` solver, ``ev.add_evals(n, x, f)``).
+:func:`solve_traced` hands it to :func:`swarm_ik.solve` as ``on_improvement=``.  With a
+``swarm_ik.solve`` that does not take the callback yet, it observes a shallow copy of the
+problem instead (:func:`_observed`, transitional: the original problem and the solver are
+untouched, and the answer is the same as without recording).
 """
 
 from __future__ import annotations
@@ -80,7 +83,11 @@ class TraceRecorder:
 
 
 def _observed(problem: IKProblem, rec: TraceRecorder) -> IKProblem:
-    """A shallow copy of ``problem`` reporting what the solve evaluates to ``rec``."""
+    """A shallow copy of ``problem`` reporting what the solve evaluates to ``rec``.
+
+    Transitional, for a :func:`swarm_ik.solve` without ``on_improvement``; delete it (and the
+    branch of :func:`solve_traced` using it) once ``solve`` passes the callback on to its
+    :class:`~swarm_ik.solvers.base.Evaluator`."""
     obs = copy.copy(problem)
     fitness, residual_jacobian, is_success = (
         problem.fitness,

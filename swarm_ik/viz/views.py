@@ -5,13 +5,13 @@ the convergence animated), several configurations side by side or stepped throug
 from __future__ import annotations
 
 from collections.abc import Sequence
-from typing import Any
+from typing import Any, cast
 
 import numpy as np
 import pinocchio as pin
 from numpy.typing import NDArray
 
-from swarm_ik.errors import InvalidArgumentError
+from swarm_ik.errors import InvalidArgumentError, unknown
 from swarm_ik.problem import IKProblem
 from swarm_ik.result import Result
 from swarm_ik.robot import RobotModel
@@ -241,8 +241,6 @@ def show_configurations(
         UnknownNameError: unknown layout (the valid ones listed).
         InvalidArgumentError: no configuration given, or one of the wrong length.
     """
-    from swarm_ik.errors import unknown
-
     if layout not in LAYOUTS:
         raise unknown("layout", layout, LAYOUTS)
     if len(qs) == 0:
@@ -351,8 +349,9 @@ def several_solutions(
     if isinstance(n, bool) or not isinstance(n, (int, np.integer)) or n < 1:
         raise InvalidArgumentError(f"n must be a positive integer, got {n!r}")
     if solver is None:
-        found = list(
-            swarm_ik.solve_many(problem, n, min_distance=min_distance, seed=seed, **solve_kwargs)
+        found = cast(
+            "list[Result]",
+            swarm_ik.solve_many(problem, n, min_distance=min_distance, seed=seed, **solve_kwargs),
         )
         return found or [swarm_ik.solve(problem, seed=seed, **solve_kwargs)]
     robot = problem.robot

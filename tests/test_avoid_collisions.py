@@ -1,0 +1,116 @@
+"""The AvoidCollisions goal: its compiled residual's Jacobian, no colliding success, targets
+inside obstacles reported unreachable, collision-free answers on reachable targets."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+from conftest import robot
+
+import swarm_ik
+from swarm_ik import goals as G
+from swarm_ik.scene import Box, Scene, Sphere
+from swarm_ik.solvers.hybrid import Polisher
+
+
+def test_collision_residual_jacobian_matches_central_differences() -> None:
+    r = robot("panda")
+    scene = Scene([Sphere(0.08, [0.45, 0.0, 0.45]), Box([0.3, 0.3, 0.05], [0.4, 0.0, 0.1])])
+    prob = swarm_ik.IKProblem(r, goals=[G.Position(r.ee_frame, [0.4, 0.0, 0.5]),
+                                        G.AvoidCollisions(scene)])  # fmt: skip
+    pol = Polisher.from_problem(prob)
+    rng = np.random.default_rng(0)
+    checked = 0
+    h = 1e-7
+    for q in r.random_q(rng, 60):
+        res, jac, _dp, pen = pol.residual(q)
+        rows = res[3:]
+        if not np.any(rows < -1e-4):
+            continue  # no penetration: nothing to differentiate
+        checked += 1
+        for j in range(r.nq):
+            e = np.zeros(r.nq)
+            e[j] = h
+            rp, rm = pol.residual(q + e)[0], pol.residual(q - e)[0]
+            same = (np.sign(rp[3:]) == np.sign(rows)) & (np.sign(rm[3:]) == np.sign(rows))
+            fd = -(rp - rm) / (2 * h)
+            ok = np.concatenate([[True] * 3, same])
+            np.testing.assert_allclose(fd[ok], jac[ok, j], atol=2e-5)
+        if checked >= 4:
+            break
+    assert checked >= 2
+
+
+def test_collision_free_answers_on_reachable_targets() -> None:
+    r = robot("panda")
+    scene = Scene([Box([0.6, 0.6, 0.04], [0.55, 0.0, -0.02])])  # a table top at z = 0
+    av = G.AvoidCollisions(scene)
+    rc = r.collision_model()
+    rng = np.random.default_rng(1)
+    n = ok = 0
+    for q in r.random_q(rng, 60):
+        if not rc.check(q, scene).collision_free:
+            continue
+        n += 1
+        res = swarm_ik.solve(swarm_ik.IKProblem(r, r.fk(q), goals=[av]), seed=n, time_limit=0.1)
+        if res.success:
+            ok += 1
+            assert rc.check(res.q, scene).collision_free  # never a colliding success
+        if n == 10:
+            break
+    assert n == 10 and ok >= 9
+
+
+def test_no_colliding_success_where_plain_ik_collides() -> None:
+    """Put an obstacle on the elbow of the plain answer: the plain answer then collides, the
+    answer with the goal is collision-free whenever it claims success."""
+    r = robot("panda")
+    rng = np.random.default_rng(2)
+    for k in range(6):
+        q_true = r.random_q(rng)
+        target = r.fk(q_true)
+        plain = swarm_ik.solve(swarm_ik.IKProblem(r, target), seed=k)
+        assert plain.success
+        data = r._data()
+        import pinocchio as pin
+
+        pin.forwardKinematics(r.model, data, r.to_pinocchio(plain.q))
+        elbow = np.array(data.oMi[4].translation)
+        if np.linalg.norm(elbow - target[:3, 3]) < 0.25:
+            continue  # the obstacle would swallow the target
+        scene = Scene([Sphere(0.06, elbow)])
+        assert not r.collision_model().check(plain.q, scene).collision_free
+        res = swarm_ik.solve(
+            swarm_ik.IKProblem(r, target, goals=[G.AvoidCollisions(scene)]), seed=k,
+            time_limit=0.2,
+        )  # fmt: skip
+        report = res.goal_errors[-1].details
+        assert report.collision_free == res.goal_errors[-1].met
+        if res.success:
+            assert r.collision_model().check(res.q, scene).collision_free
+        else:
+            assert res.reason in ("time_limit", "budget", "local_minima")
+    # and the JSON form of the result carries the clearance
+    d = res.to_dict()
+    assert "clearance" in d["goal_errors"][-1]
+
+
+def test_target_inside_an_obstacle_is_unreachable() -> None:
+    r = robot("panda")
+    scene = Scene([Box([0.2, 0.2, 0.2], [0.5, 0.0, 0.3])])
+    target = np.eye(4)
+    target[:3, 3] = [0.5, 0.0, 0.3]
+    res = swarm_ik.solve(
+        swarm_ik.IKProblem(r, target, goals=[G.AvoidCollisions(scene)]), time_limit=0.01
+    )
+    assert not res.success and res.reason == "unreachable"
+
+
+@pytest.mark.parametrize(
+    "kwargs,message",
+    [({"margin": -0.1}, "margin must be >= 0"), ({"max_rows": 0}, "max_rows must be a positive"),
+     ({"scene": [{"type": "blob"}]}, "expected one of Sphere, Box")],
+)
+def test_bad_collision_goal_input_is_refused(kwargs: dict, message: str) -> None:
+    with pytest.raises(swarm_ik.SwarmIKError, match=message):
+        G.AvoidCollisions(**kwargs)
