@@ -262,6 +262,15 @@ def _fast_path(
     )
 
 
+class _Out(NamedTuple):
+    """The parts of a compiled search's outcome that :class:`IKSolver` reads."""
+
+    q: np.ndarray
+    fitness: float
+    used: int
+    history: np.ndarray
+
+
 class _Spent(NamedTuple):
     """What :func:`end_reason` reads of an evaluator, for the compiled path."""
 
@@ -464,8 +473,29 @@ class IKSolver:
                 self._state = _compiled(self._template, self._kwargs, self.tol_pos, self.tol_rot)
         tpl = self._template
         self._w_rot = 0.0 if tpl.position_only else float(tpl.w_rot)
-        if self._state is not None:
-            self._static = self._state.static(tpl.table(None))
+        if self._state is not None:  # the kernel's arguments, all but the target and seed
+            from swarm_ik.kernels import search
+
+            st = self._state
+            static = st.static(tpl.table(None))
+            self._head = tuple(static[: search.PAR_INDEX])
+            self._mid_args = tuple(static[search.PAR_INDEX + 1 :])
+            lim = self.time_limit
+            self._consts = (
+                st.pol.kernel_tol_pos,
+                st.pol.kernel_tol_rot,
+                self.tol_pos,
+                self.tol_rot,
+                self._w_rot,
+                st.pop_size,
+                st.n_swarm,
+                st.iterations,
+                self.max_evals is None and lim is None,
+                int(self.max_evals) if self.max_evals is not None else 2**62,
+                -1 if self.max_evals is None else int(self.max_evals),
+                0,
+                search.NO_LIMIT if lim is None else float(lim),
+            )  # in the order of search.swarm_search's arguments
         self._mid = np.ascontiguousarray(0.5 * (tpl.lower + tpl.upper))
         self._par0 = np.ascontiguousarray(tpl.table(None).par)
         self._label = tpl.goals[0].describe()
@@ -516,8 +546,8 @@ class IKSolver:
 
     def _solve_pose(self, st: Any, pose: np.ndarray, q0: Any, seed: int) -> Result:
         """The per-call path of a validated 4×4 target (the compiled search + the check)."""
-        from swarm_ik.kernels.search import PAR_INDEX, pose_errors_one
-        from swarm_ik.solvers.hybrid import compiled_search, search_key
+        from swarm_ik.kernels.search import pose_errors_one, swarm_search_flat
+        from swarm_ik.solvers.hybrid import search_key
 
         tpl = self._template
         q_start = None if q0 is None else prepare_q0(tpl, q0)
@@ -525,18 +555,14 @@ class IKSolver:
         if not self._position_only:
             par[0, :9] = pose[:3, :3].ravel()
         par[0, 9:12] = pose[:3, 3]
-        args = self._static.copy()
-        args[PAR_INDEX] = par
+        out_q = np.empty(tpl.nq)
         t0 = time.perf_counter()
-        out = compiled_search(
-            args, st.pol, self._mid if q_start is None else q_start, search_key(seed),
-            stop=True, tol_pos=self.tol_pos, tol_rot=self.tol_rot, w_rot=self._w_rot,
-            pop_size=st.pop_size, n_swarm=st.n_swarm, iterations=st.iterations,
-            max_evals=self.max_evals,
-            remaining=self.max_evals if self.max_evals is not None else 2**62,
-            evals_before=0, time_limit=self.time_limit, t0=t0,
+        used, fit, _dp, _dr, _stopped, history = swarm_search_flat(
+            *self._head, par, *self._mid_args, self._mid if q_start is None else q_start,
+            *self._consts, t0, search_key(seed), out_q,
         )  # fmt: skip
         elapsed = time.perf_counter() - t0
+        out = _Out(out_q, float(fit), int(used), history)
         q = out.q
         reached = self.robot.fk_pinocchio(q, self._frame)  # the independent check
         dp, dr, within = pose_errors_one(reached, pose, q, tpl.lower, tpl.upper)

@@ -154,7 +154,19 @@ def n_workers(client: Any) -> int:
     return max(1, len(client.scheduler_info().get("workers", {})))
 
 
+class _NoBar:
+    """Stand-in for a disabled progress bar (tqdm is not imported unless one is shown)."""
+
+    def update(self, n: int = 1) -> None:
+        pass
+
+    def close(self) -> None:
+        pass
+
+
 def _progress_bar(enabled: bool, total: int, desc: str | None, unit: str) -> Any:
+    if not enabled:
+        return _NoBar()
     from tqdm.auto import tqdm
 
     return tqdm(total=total, desc=desc, disable=not enabled, unit=unit, dynamic_ncols=True)
