@@ -344,7 +344,8 @@ def solve(
     for label, tol in (("tol_pos", tol_pos), ("tol_rot", tol_rot)):
         if not (is_finite_nonneg(tol) and float(tol) > 0):
             raise InvalidArgumentError(f"{label} must be a positive number, got {tol!r}")
-    rng = make_rng(seed)
+    plain_seed = isinstance(seed, (int, np.integer)) and not isinstance(seed, bool) and seed >= 0
+    rng = None if plain_seed else make_rng(seed)  # (the fast path needs only the integer)
     q_start = prepare_q0(problem, q0)
     problem.robot.warm_up()  # compiled kernels loaded before the clock starts
     seed_val = None if isinstance(seed, np.random.Generator) else (0 if seed is None else int(seed))
@@ -356,6 +357,8 @@ def solve(
         if on_improvement is not None:
             on_improvement(fast.q.copy(), fast.fitness)
         return fast
+    if rng is None:
+        rng = make_rng(seed)
 
     def stop(q: np.ndarray) -> bool:
         return problem.is_success(q, tol_pos, tol_rot)

@@ -111,6 +111,9 @@ def project_to_se3(matrix: Any) -> FloatArray:
     return out
 
 
+_EYE3 = np.eye(3)
+
+
 def as_pose(target: Any, *, orth_tol: float = 1e-6) -> FloatArray:
     """Validate and convert a target to a 4x4 pose.
 
@@ -145,11 +148,17 @@ def as_pose(target: Any, *, orth_tol: float = 1e-6) -> FloatArray:
     if not np.all(np.isfinite(m)):
         where = [tuple(ij) for ij in np.argwhere(~np.isfinite(m)).tolist()]
         raise InvalidTargetError(f"target contains NaN or infinite values at (row, column) {where}")
-    if not np.allclose(m[3], [0.0, 0.0, 0.0, 1.0], atol=1e-9):
+    b = m[3].tolist()  # scalar maths: one small matrix (this runs on every solve)
+    if abs(b[0]) > 1e-9 or abs(b[1]) > 1e-9 or abs(b[2]) > 1e-9 or abs(b[3] - 1.0) > 1e-9:
         raise InvalidTargetError(f"target's bottom row must be [0, 0, 0, 1], got {m[3].tolist()}")
     rot = m[:3, :3]
-    orth = float(np.max(np.abs(rot.T @ rot - np.eye(3))))
-    det = float(np.linalg.det(rot))
+    orth = float(np.abs(rot.T @ rot - _EYE3).max())
+    r = rot.tolist()
+    det = (
+        r[0][0] * (r[1][1] * r[2][2] - r[1][2] * r[2][1])
+        - r[0][1] * (r[1][0] * r[2][2] - r[1][2] * r[2][0])
+        + r[0][2] * (r[1][0] * r[2][1] - r[1][1] * r[2][0])
+    )
     if orth > orth_tol or abs(det - 1.0) > orth_tol:
         raise InvalidTargetError(
             f"target rotation is not orthonormal: max|RᵀR − I| = {orth:.3g}, det = {det:.9g} "

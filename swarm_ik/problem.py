@@ -188,15 +188,20 @@ class IKProblem:
         self.fitness_name = fitness
         self._fitness = get_fitness(fitness)
         self._weights = {"w_rot": self.w_rot, "lam": float(lam), "mu": float(mu)}
+        narrowed = lower is not None or upper is not None
         self.lower = robot.lower.copy() if lower is None else robot.check_q(lower, "lower")
         self.upper = robot.upper.copy() if upper is None else robot.check_q(upper, "upper")
-        if np.any(self.lower > self.upper):
+        if narrowed and np.any(self.lower > self.upper):
             raise InvalidArgumentError(
                 "lower bounds exceed upper bounds at joints "
                 f"{np.flatnonzero(self.lower > self.upper).tolist()}"
             )
-        outside = np.flatnonzero((self.lower < robot.lower) | (self.upper > robot.upper))
-        if outside.size:  # wider bounds would let a "success" break the joint limits
+        outside = (
+            np.flatnonzero((self.lower < robot.lower) | (self.upper > robot.upper))
+            if narrowed
+            else ()
+        )
+        if len(outside):  # wider bounds would let a "success" break the joint limits
             j = int(outside[0])
             raise InvalidArgumentError(
                 f"bounds may only narrow the joint limits; joint {robot.joint_names[j]!r}: "
@@ -221,13 +226,24 @@ class IKProblem:
             self._encoded[id(avoid[0])] = row
         # angular errors in the se3 cost: w_rot (m/rad); position errors: 1
         self._table_cache: dict[Any, lm.GoalTable] = {}
-        self.bounds = lm.Bounds(
-            np.ascontiguousarray(self.lower),
-            np.ascontiguousarray(self.upper),
-            np.ascontiguousarray(robot.continuous_mask),
-            np.ascontiguousarray(robot.prismatic_mask),
-        )
-        self.table(None)  # validate every goal against the robot now
+        if narrowed:
+            self.bounds = lm.Bounds(
+                np.ascontiguousarray(self.lower),
+                np.ascontiguousarray(self.upper),
+                np.ascontiguousarray(robot.continuous_mask),
+                np.ascontiguousarray(robot.prismatic_mask),
+            )
+        else:  # the robot's own limits: one Bounds per robot
+            self.bounds = robot._cache.get("bounds")
+            if self.bounds is None:
+                self.bounds = robot._cache["bounds"] = lm.Bounds(
+                    np.ascontiguousarray(robot.lower),
+                    np.ascontiguousarray(robot.upper),
+                    np.ascontiguousarray(robot.continuous_mask),
+                    np.ascontiguousarray(robot.prismatic_mask),
+                )
+        if not (target is not None and goals is None):  # (the target's Pose is valid as made)
+            self.table(None)  # validate every goal against the robot now
 
     # ------------------------------------------------------------------ goals
     @property

@@ -185,14 +185,21 @@ class CollisionArrays(NamedTuple):
     pair: IntArray
 
 
+_NO_COLLISION: list[CollisionArrays] = []
+
+
 def no_collision() -> CollisionArrays:
-    """The empty :class:`CollisionArrays` of a problem without a collision goal."""
+    """The empty :class:`CollisionArrays` of a problem without a collision goal (one shared,
+    read-only instance)."""
+    if _NO_COLLISION:
+        return _NO_COLLISION[0]
     i1 = np.zeros(0, dtype=np.int64)
-    return CollisionArrays(
+    _NO_COLLISION.append(CollisionArrays(
         0, 0, i1, np.zeros((0, 3)), np.zeros(0), np.zeros(1, dtype=np.int64), np.zeros((0, 3)),
         np.zeros(0), np.zeros((0, 2), dtype=np.int64), i1, i1, np.zeros((0, 3, 3)),
         np.zeros((0, 3)), np.zeros((0, 3)), 0.0, np.zeros((0, 6)), np.zeros((0, 2), dtype=np.int64),
-    )  # fmt: skip
+    ))  # fmt: skip
+    return _NO_COLLISION[0]
 
 
 class GoalTable(NamedTuple):

@@ -493,6 +493,10 @@ SOLVER_CONSTRAINTS: dict[str, dict[str, str]] = {
 ``constraints`` given to :func:`register`."""
 
 
+_RESOLVED: dict[tuple[str, int, int | None], dict[str, Any]] = {}
+"""Checked default parameters per (solver, defaults object, dim)."""
+
+
 @dataclass(frozen=True)
 class SolverSpec:
     """A registered solver.
@@ -551,6 +555,9 @@ class SolverSpec:
     def resolve(self, overrides: Mapping[str, Any], dim: int | None = None) -> dict[str, Any]:
         """Defaults updated with ``overrides``; unknown names are refused, listing valid ones.
 
+        (Without overrides the checked defaults are cached per ``(solver, dim)``: this runs
+        on every solve.)
+
         Every parameter is checked against its :attr:`constraints` (NaN, infinities,
         strings for numbers, booleans for integers, signs and ranges are refused), and the
         sizes shared by the population solvers for every solver that has them: ``pop_size``
@@ -566,6 +573,16 @@ class SolverSpec:
             InvalidArgumentError: an unknown parameter name, or a value its constraint
                 refuses (the message names the parameter, the solver and what is accepted).
         """
+        if not overrides:
+            hit = _RESOLVED.get((self.name, id(self.params), dim))
+            if hit is not None:
+                return dict(hit)
+            out = self._resolve({}, dim)
+            _RESOLVED[(self.name, id(self.params), dim)] = dict(out)
+            return out
+        return self._resolve(overrides, dim)
+
+    def _resolve(self, overrides: Mapping[str, Any], dim: int | None) -> dict[str, Any]:
         bad = [k for k in overrides if k not in self.params]
         if bad:
             valid = ", ".join(sorted(self.params)) or "(none)"
