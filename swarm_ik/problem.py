@@ -196,10 +196,10 @@ class IKProblem:
                 "lower bounds exceed upper bounds at joints "
                 f"{np.flatnonzero(self.lower > self.upper).tolist()}"
             )
-        outside = (
+        outside: NDArray[np.intp] = (
             np.flatnonzero((self.lower < robot.lower) | (self.upper > robot.upper))
             if narrowed
-            else ()
+            else np.zeros(0, dtype=np.intp)
         )
         if len(outside):  # wider bounds would let a "success" break the joint limits
             j = int(outside[0])
@@ -234,14 +234,15 @@ class IKProblem:
                 np.ascontiguousarray(robot.prismatic_mask),
             )
         else:  # the robot's own limits: one Bounds per robot
-            self.bounds = robot._cache.get("bounds")
-            if self.bounds is None:
-                self.bounds = robot._cache["bounds"] = lm.Bounds(
+            cached = robot._cache.get("bounds")
+            if cached is None:
+                cached = robot._cache["bounds"] = lm.Bounds(
                     np.ascontiguousarray(robot.lower),
                     np.ascontiguousarray(robot.upper),
                     np.ascontiguousarray(robot.continuous_mask),
                     np.ascontiguousarray(robot.prismatic_mask),
                 )
+            self.bounds = cached
         if not (target is not None and goals is None):  # (the target's Pose is valid as made)
             self.table(None)  # validate every goal against the robot now
 
