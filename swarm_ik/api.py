@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import dataclasses
 import math
 import time
 import warnings
@@ -280,6 +281,47 @@ class _Spent(NamedTuple):
     elapsed: float
 
 
+def _collision_first_try(
+    problem: IKProblem,
+    solver: str,
+    kwargs: dict[str, Any],
+    q_start: np.ndarray | None,
+    tol_pos: float,
+    tol_rot: float,
+    max_evals: int | None,
+    time_limit: float | None,
+    stop_on_success: bool,
+    prefer: str,
+    seed: int | None,
+) -> Result | None:
+    """A pose goal with a collision goal: first the compiled search for the pose alone; when
+    its answer is collision-free by the exact check, that is the answer (most targets of an
+    uncluttered scene), else ``None`` and the full search with the sphere rows follows."""
+    if problem.has_secondary or not stop_on_success or prefer != "best":
+        return None
+    free = problem.without_collisions()
+    if free is None or len(free.goals) != 1:
+        return None
+    t0 = time.perf_counter()
+    first = _fast_path(
+        free, solver, kwargs, q_start, tol_pos, tol_rot, max_evals, time_limit,
+        stop_on_success, prefer, seed,
+    )  # fmt: skip
+    if first is None or not first.success:
+        return None
+    col = problem.collision_goal
+    if problem.robot.collision_model().collides(
+        first.q, col.scene, col.margin, bool(col.self_collision)
+    ):
+        return None
+    goal_errors = problem.verify(first.q, tol_pos, tol_rot, q0=q_start)
+    if not all(e.met for e in goal_errors):
+        return None
+    return dataclasses.replace(
+        first, goal_errors=goal_errors, time_s=time.perf_counter() - t0, reason="converged"
+    )
+
+
 def solve(
     problem: IKProblem,
     solver: str = DEFAULT_SOLVER,
@@ -353,6 +395,11 @@ def solve(
         problem, solver, kwargs, q_start, tol_pos, tol_rot, max_evals, time_limit,
         stop_on_success, prefer, seed_val,
     )  # fmt: skip
+    if fast is None and problem.collision_goal is not None:
+        fast = _collision_first_try(
+            problem, solver, kwargs, q_start, tol_pos, tol_rot, max_evals, time_limit,
+            stop_on_success, prefer, seed_val,
+        )  # fmt: skip
     if fast is not None:
         if on_improvement is not None:
             on_improvement(fast.q.copy(), fast.fitness)
