@@ -789,9 +789,10 @@ def _numerical(
             pend = tiers[t]
             if pend.shape[0]:
                 pend = pend[fold.dist(pend) >= (merge if t == 0 else _HOP_SKIP)]
-                tiers[t] = pend[room:]
+                take = min(room, 2 * batch)
+                tiers[t] = pend[take:]
                 if pend.shape[0]:
-                    starts = pend[:room]
+                    starts = pend[:take]
                     n_hop = starts.shape[0]
                     break
         if starts is None:
