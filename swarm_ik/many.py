@@ -639,6 +639,7 @@ def _valley_roots(
     lower: FloatArray,
     upper: FloatArray,
     deadline: float | None,
+    budget: int = 1 << 62,
 ) -> tuple[FloatArray, FloatArray, int]:
     """Exact roots on the near-singular valley through the stalled point ``qv``.
 
@@ -652,7 +653,8 @@ def _valley_roots(
     directions back onto the floor.  The valley residual ``g = u_minᵀ r`` (its left singular
     vector, sign kept continuous) changes sign across a root, which regula falsi then pins
     down to round-off.  The walk stops at :data:`_WALK_STEPS` steps each way, where the valley
-    ends (residual above 1e-3, or σ_min above 1e-2) or at the deadline.
+    ends (residual above 1e-3, or σ_min above 1e-2), at the deadline or when ``budget``
+    evaluations are spent (never more).
 
     Returns:
         ``(roots (k, nq), the valley points visited (m, nq), evaluations used)``.
@@ -662,7 +664,9 @@ def _valley_roots(
 
     def floor(x: FloatArray) -> tuple[FloatArray, FloatArray, FloatArray, float, FloatArray]:
         nonlocal evals
-        for _ in range(4):
+        for it in range(4):
+            if it and evals >= budget:
+                break
             r, jac, _dp, _dr = pol.residual(x)
             evals += 1
             u_m, s, vt = np.linalg.svd(jac)
@@ -679,7 +683,7 @@ def _valley_roots(
         x, r, u, tan = x0, r0, u0, sgn * v0
         g = float(u @ r)
         for _ in range(_WALK_STEPS):
-            if deadline is not None and time.perf_counter() >= deadline:
+            if evals >= budget or (deadline is not None and time.perf_counter() >= deadline):
                 break
             xn, rn, un, sn, vn = floor(x + _WALK_STEP * tan)
             if un @ u < 0:
@@ -694,6 +698,8 @@ def _valley_roots(
                 a, ga, b, gb = x, g, xn, gn
                 m = xn
                 for _ in range(40):
+                    if evals >= budget:
+                        break
                     w = ga / (ga - gb)
                     m, rm, um, _sm, _vm = floor(a + w * (b - a))
                     if um @ un < 0:
@@ -783,9 +789,10 @@ def _numerical(
             pend = tiers[t]
             if pend.shape[0]:
                 pend = pend[fold.dist(pend) >= (merge if t == 0 else _HOP_SKIP)]
-                tiers[t] = pend[room:]
+                take = min(room, 2 * batch)
+                tiers[t] = pend[take:]
                 if pend.shape[0]:
-                    starts = pend[:room]
+                    starts = pend[:take]
                     n_hop = starts.shape[0]
                     break
         if starts is None:
@@ -836,13 +843,16 @@ def _numerical(
                 & ((out.rotation_error[:ran] <= _WALK_ERR) | problem.position_only)
             )
             for i in stalled[:4]:
+                room_evals = 1 << 62 if max_evals is None else max_evals - used
+                if room_evals < 8:
+                    break
                 qv = out.q[i]
                 if walked.shape[0] and np.min(branch_distance(walked, qv, periodic)) < _WALK_NEAR:
                     continue
                 used += 1
                 if np.linalg.svd(pol.residual(qv)[1], compute_uv=False)[-1] >= _WALK_SIGMA:
                     continue  # an ordinary local minimum
-                roots, curve, evals = _valley_roots(pol, qv, lower, upper, deadline)
+                roots, curve, evals = _valley_roots(pol, qv, lower, upper, deadline, room_evals - 1)
                 used += evals
                 walks += 1
                 walked = np.vstack([walked, curve])

@@ -202,3 +202,24 @@ def test_analytic_path_is_fast():
             swarm_ik.solve_many(problem, method="analytic")
         best = min(best, (time.perf_counter() - t0) / 50)
     assert best < 1e-3  # ≈ 50 µs on an idle core; generous for a loaded machine
+
+
+def test_valley_walk_respects_max_evals(monkeypatch):
+    import swarm_ik.many as many
+
+    calls = []
+    real = many._valley_roots
+
+    def spy(pol, qv, lo, hi, deadline, budget):
+        out = real(pol, qv, lo, hi, deadline, budget)
+        calls.append((budget, out[2]))
+        return out
+
+    monkeypatch.setattr(many, "_valley_roots", spy)
+    robot = swarm_ik.load_robot("ur5")
+    problem = swarm_ik.IKProblem.from_q(robot, NEAR_SINGULAR[0])
+    for budget in (300, 900):  # walks happen on this target; they obey the budget
+        sols = swarm_ik.solve_many(problem, method="numerical", max_evals=budget, seed=0)
+        assert all(s.n_evals <= budget for s in sols)
+    assert calls and all(used <= room for room, used in calls)
+    assert any(used == room for room, used in calls)  # a walk was cut by the budget
