@@ -395,6 +395,10 @@ def solve(
         problem, solver, kwargs, q_start, tol_pos, tol_rot, max_evals, time_limit,
         stop_on_success, prefer, seed_val,
     )  # fmt: skip
+    if fast is None and solver == "analytic" and on_improvement is None:
+        from swarm_ik.solvers import analytic  # closed form: no search loop to run
+
+        fast = analytic.solve_result(problem, q_start, tol_pos, tol_rot, seed_val)
     if fast is None and problem.collision_goal is not None:
         fast = _collision_first_try(
             problem, solver, kwargs, q_start, tol_pos, tol_rot, max_evals, time_limit,

@@ -646,10 +646,13 @@ def solve_batch(
         raise InvalidArgumentError(
             f"robot must be a RobotModel (see swarm_ik.load_robot), got {type(robot).__name__}"
         )
+    from swarm_ik._validate import float_array, positive_float
+
     t0 = time.perf_counter()
+    targets = float_array(targets, "targets")
     settings = BatchSettings(
-        tol_pos=float(tol_pos),
-        tol_rot=float(tol_rot),
+        tol_pos=positive_float(tol_pos, "tol_pos"),
+        tol_rot=positive_float(tol_rot, "tol_rot"),
         position_only=bool(position_only),
         max_starts=max_starts,
         max_iters=max_iters,

@@ -1092,11 +1092,6 @@ def test_validate_helpers_name_the_bad_input(yumi: swarm_ik.RobotModel) -> None:
         _validate.joint_vector(yumi, [0, 0])
 
 
-@pytest.mark.xfail(
-    strict=True,
-    reason="lead: call swarm_ik._validate.float_array / positive_float at the top of "
-    "solve_batch and joint_vector in api.verify (issue 16), then drop this marker",
-)
 @pytest.mark.parametrize("case", ["targets", "tol_pos"])
 def test_api_refuses_bad_input_with_a_swarmik_error(
     case: str, yumi: swarm_ik.RobotModel, problem: IKProblem

@@ -474,20 +474,7 @@ class Constraint:
         return bool(ok_lo and ok_hi), v
 
 
-SOLVER_CONSTRAINTS: dict[str, dict[str, str]] = {
-    "swarm": {
-        "swarm_fraction": "[0, 1]",
-        "max_iters": "int>=2",
-        "lam0": "(0, 1e12]",
-        "max_step": "positive",
-        "stall_rel": "[0, 1]",
-        "stall_iters": "int>=1",
-        "tol_margin": "(0, 1]",
-        "prefer": "choice:best|nearest",
-        "nearest_starts": "int>=0",
-        "nearest_sigma": "nonnegative",
-    },
-}
+SOLVER_CONSTRAINTS: dict[str, dict[str, str]] = {}
 """Constraints of solvers registered in modules that do not declare them themselves
 (solver name -> parameter -> spec of :meth:`Constraint.parse`); merged with the
 ``constraints`` given to :func:`register`."""

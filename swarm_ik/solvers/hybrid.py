@@ -1,6 +1,6 @@
 """``swarm``: the default solver, a memetic swarm + Levenberg–Marquardt hybrid.
 
-Paper 004 (Zhao, cuckoo search + Newton; SEEDS.md) draws the lesson: a global population
+[CS-IK] (cuckoo search + Newton) draws the lesson: a global population
 finds the basin, a Jacobian method finishes.  This module turns that into a solver that is
 exact (it stops at the tolerance, down to 1e-10), stays inside the joint limits, and is fast
 enough to compare with TRAC-IK:
@@ -17,8 +17,8 @@ enough to compare with TRAC-IK:
 * **The swarm** keeps the best polished points that did not converge (an archive of
   ``pop_size`` local minima) as its population and proposes half of each next generation's
   starts from them with the grey wolf move of :mod:`swarm_ik.solvers.gwo`
-  (:func:`swarm_ik.solvers.gwo.gwo_move`, Mirjalili 2014 eqs. 3.3–3.7, the update paper
-  003's MGWO builds on); the other half are uniform random starts.  Measured honestly (see
+  (:func:`swarm_ik.solvers.gwo.gwo_move`, [GWO] eqs. 3.3–3.7, the update
+  [MGWO] builds on); the other half are uniform random starts.  Measured honestly (see
   :func:`run`): the uniform starts carry most of the global search, the swarm moves do not
   hurt, a swarm-only generation does.
 
@@ -431,8 +431,8 @@ def run(
     converges.  The polished points that did not converge (local minima, often against a joint
     limit) form an archive, best first; each later generation polishes
     ``round(swarm_fraction · pop_size)`` starts proposed from it by the grey wolf move
-    (:func:`propose`; Mirjalili 2014 eqs. 3.3–3.7, ``a`` falling from 2 to 0 with the spent
-    share of the budget) and uniform random starts for the rest.  Paper 004 (SEEDS.md) is the
+    (:func:`propose`; [GWO] eqs. 3.3–3.7, ``a`` falling from 2 to 0 with the spent
+    share of the budget) and uniform random starts for the rest.  [CS-IK] is the
     model: the population finds the basin, the Jacobian method finishes; here the Jacobian
     method does most of the work and the population supplies starts.
 
@@ -711,4 +711,17 @@ register(
     description="default: memetic swarm (grey wolf proposals) + compiled bounded "
     "Levenberg-Marquardt polish; exact, within limits, fast",
     needs_jacobian=True,
+    budget_only=True,
+    constraints={
+        "swarm_fraction": "[0, 1]",
+        "max_iters": "int>=2",
+        "lam0": "(0, 1e12]",
+        "max_step": "positive",
+        "stall_rel": "[0, 1]",
+        "stall_iters": "int>=1",
+        "tol_margin": "(0, 1]",
+        "prefer": "choice:best|nearest",
+        "nearest_starts": "int>=0",
+        "nearest_sigma": "nonnegative",
+    },
 )
