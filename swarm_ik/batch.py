@@ -46,6 +46,7 @@ from swarm_ik.errors import InvalidArgumentError, InvalidTargetError
 from swarm_ik.kernels import lie, lm
 from swarm_ik.kernels.fk import TreeArrays
 from swarm_ik.kernels.lm import CONVERGED, NOT_RUN
+from swarm_ik.kernels.search import SAMPLING_WIDTH
 from swarm_ik.pose import make_pose, matrix_to_quat
 from swarm_ik.robot import RobotModel
 
@@ -127,6 +128,8 @@ def _solve_targets(
     pst = np.empty(block, dtype=np.int64)
     pev = np.empty(block, dtype=np.int64)
     seed_key = _splitmix64(np.uint64(seed))
+    s_lo = np.empty(n)
+    s_hi = np.empty(n)
     scale = 2.0**-53
     par = goals.par[0]
     for i in range(n_targets):
@@ -137,6 +140,13 @@ def _solve_targets(
         key = _splitmix64(seed_key ^ np.uint64(index[i]))
         for j in range(n):
             starts[0, j] = q_seed[i, j]
+            # uniform restarts; a range wider than SAMPLING_WIDTH: a window around the seed
+            s_lo[j] = bounds.lower[j]
+            s_hi[j] = bounds.upper[j]
+            if s_hi[j] - s_lo[j] > SAMPLING_WIDTH:
+                a = min(max(q_seed[i, j] - 0.5 * SAMPLING_WIDTH, s_lo[j]), s_hi[j] - SAMPLING_WIDTH)
+                s_lo[j] = a
+                s_hi[j] = a + SAMPLING_WIDTH
         k = 1  # starts in this call
         done = 0  # starts polished so far
         counter = np.uint64(0)
@@ -168,9 +178,7 @@ def _solve_targets(
                 for j in range(n):
                     counter += np.uint64(1)
                     u = float(_splitmix64(key + counter) >> np.uint64(11)) * scale
-                    starts[s, j] = min(
-                        bounds.lower[j] + u * (bounds.upper[j] - bounds.lower[j]), bounds.upper[j]
-                    )
+                    starts[s, j] = min(s_lo[j] + u * (s_hi[j] - s_lo[j]), s_hi[j])
         out_evals[i] = evals
         out_starts[i] = done
 

@@ -1152,3 +1152,38 @@ def test_grid_size_check_counts_without_allocating() -> None:
         assert check_grid_size(lo, hi, res) == x.size * y.size * z.size
     with pytest.raises(InvalidArgumentError, match=r"use --resolution 0.0"):
         check_grid_size(lo, hi, 1e-4)
+
+
+def test_mobile_base_with_virtual_joints_of_a_million_metres_is_solved(tmp_path: Path) -> None:
+    """Issue 16 item 6: restarts sample a ±999999 m range in a window around the seed
+    (swarm_ik.urdf.sampling_bounds), in solve and in solve_batch."""
+    lim = '<limit lower="{lo}" upper="{hi}" effort="1" velocity="1"/>'
+
+    def j(n: str, p: str, c: str, t: str, ax: str, lo: float, hi: float, xyz: str) -> str:
+        return (
+            f'<joint name="{n}" type="{t}"><parent link="{p}"/><child link="{c}"/>'
+            f'<origin xyz="{xyz}"/><axis xyz="{ax}"/>' + lim.format(lo=lo, hi=hi) + "</joint>"
+        )
+
+    urdf = (
+        '<robot name="mobile">'
+        + "".join(f'<link name="l{i}"/>' for i in range(7))
+        + j("x", "l0", "l1", "prismatic", "1 0 0", -999999, 999999, "0 0 0")
+        + j("y", "l1", "l2", "prismatic", "0 1 0", -999999, 999999, "0 0 0")
+        + j("th", "l2", "l3", "revolute", "0 0 1", -3.14, 3.14, "0 0 0")
+        + j("a1", "l3", "l4", "revolute", "0 1 0", -2, 2, "0 0 0.2")
+        + j("a2", "l4", "l5", "revolute", "0 1 0", -2, 2, "0 0 0.4")
+        + j("a3", "l5", "l6", "revolute", "1 0 0", -2, 2, "0 0 0.4")
+        + "</robot>"
+    )
+    path = tmp_path / "mobile.urdf"
+    path.write_text(urdf)
+    r = swarm_ik.load_robot(path, "l6")
+    rng = np.random.default_rng(0)
+    qs = r.mid_q() + np.c_[rng.uniform(-3, 3, (10, 2)), rng.uniform(-1, 1, (10, 4))]
+    ok = sum(
+        swarm_ik.solve(IKProblem(r, r.fk(q)), seed=k, time_limit=0.2).success
+        for k, q in enumerate(qs)
+    )
+    assert ok == 10
+    assert swarm_ik.solve_batch(r, r.fk(qs)).success.all()

@@ -109,6 +109,11 @@ def splitmix64(x: np.uint64) -> np.uint64:  # pragma: no cover - compiled
     return z ^ (z >> np.uint64(31))
 
 
+SAMPLING_WIDTH = 20.0
+"""Widest joint range [rad or m] random starts sample uniformly (the compiled twin of
+:data:`swarm_ik.urdf.DEFAULT_MAX_SAMPLING_WIDTH`)."""
+
+
 @numba.njit(cache=True)
 def _uniform(key: np.uint64, c: np.uint64) -> float:  # pragma: no cover - compiled
     return float(splitmix64(key + c) >> np.uint64(11)) * (2.0**-53)
@@ -257,8 +262,15 @@ def swarm_search(
     gen = 0
     counter = np.uint64(0)
     has_time = time_limit >= 0.0
-    lo = b.lower
-    hi = b.upper
+    # random starts: uniform within the bounds, a range wider than SAMPLING_WIDTH narrowed
+    # to a window around the seed (swarm_ik.urdf.sampling_bounds; mobile-base joints)
+    lo = b.lower.copy()
+    hi = b.upper.copy()
+    for j in range(lo.shape[0]):
+        if hi[j] - lo[j] > SAMPLING_WIDTH:
+            a = min(max(seed_q[j] - 0.5 * SAMPLING_WIDTH, lo[j]), hi[j] - SAMPLING_WIDTH)
+            lo[j] = a
+            hi[j] = a + SAMPLING_WIDTH
     while True:
         if stopped or used >= max_evals:
             break

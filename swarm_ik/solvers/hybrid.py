@@ -377,6 +377,7 @@ def propose(
     n_swarm: int,
     n_total: int,
     a: float,
+    box: tuple[FloatArray, FloatArray] | None = None,
 ) -> FloatArray:
     """The next generation of starts: ``n_swarm`` grey-wolf moves of the archive of polished
     points (leaders = its three best; :func:`swarm_ik.solvers.gwo.gwo_move`) and uniform
@@ -390,6 +391,8 @@ def propose(
         n_swarm: Number of swarm-proposed starts (0 when the archive is empty).
         n_total: Generation size.
         a: The GWO coefficient ``a`` (2: exploration … 0: exploitation).
+        box: ``(lo, hi)`` of the uniform starts (default the bounds; see
+            :func:`swarm_ik.urdf.sampling_bounds`).
 
     Returns:
         Starts, shape ``(n_total, nq)``.
@@ -403,7 +406,8 @@ def propose(
         moved = gwo_move(arch_x[rows], leaders, a, rng)
         parts.append(ev.clip(moved))
     if n_total - n_swarm > 0:
-        parts.append(ev.lower + (ev.upper - ev.lower) * rng.random((n_total - n_swarm, ev.dim)))
+        lo, hi = (ev.lower, ev.upper) if box is None else box
+        parts.append(lo + (hi - lo) * rng.random((n_total - n_swarm, ev.dim)))
     return np.concatenate(parts) if parts else np.empty((0, ev.dim))
 
 
@@ -573,7 +577,10 @@ def run(
     # generation 0: the seed first; the other pop_size - 1 (uniform) only if it fails
     queue = seed[None]
     gen0_rest = m > 1
-    lo, width = ev.lower, ev.upper - ev.lower
+    from swarm_ik.urdf import sampling_bounds
+
+    s_lo, s_hi = sampling_bounds(ev.lower, ev.upper, seed)  # huge ranges: a window
+    lo, width = s_lo, s_hi - s_lo
     near_done = False
     open_gen = False
     sec_per_eval = 5e-6
@@ -684,7 +691,7 @@ def run(
             # (elapsed time is deliberately not used: proposals must not depend on the
             # machine's speed, so a run that the time limit does not cut is reproducible)
             a = 2.0 * max(0.0, 1.0 - frac)
-            queue = propose(ev, rng, arch_x, arch_f, n_swarm, m, a)
+            queue = propose(ev, rng, arch_x, arch_f, n_swarm, m, a, (s_lo, s_hi))
     if nearest:
         if sol_x:
             sols = np.asarray(sol_x)
