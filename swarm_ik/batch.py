@@ -184,15 +184,6 @@ def _solve_targets(
 
 
 # --------------------------------------------------------------------------- data
-BATCH_LAM0 = 0.3
-"""Initial LM damping of the batch solver.  Measured (10,000 FK-sampled targets, mid-range
-seed, up to 128 starts): with ``lam0 = 0.3`` and ``stall_rel = 0.05`` instead of
-:data:`swarm_ik.kernels.lm.DEFAULT_LM`'s 1e-2 / 1e-2 a target costs 23.3 instead of 29.4
-evaluations on Panda (UR5 26.9 / 31.6, xarm7 18.8 / 20.8) at the same success (1, 0, 0
-failures in 10,000 either way): the stronger initial damping makes the seed converge more
-often (2.2 instead of 2.9 starts per target on Panda)."""
-BATCH_STALL_REL = 0.05
-"""Stall threshold of the batch solver (see :data:`BATCH_LAM0`)."""
 BATCH_MAX_ITERS = 60
 """Evaluations per start of the batch solver (the default of :func:`solve_batch`, so that
 ``BatchSettings()`` is what ``solve_batch`` uses)."""
@@ -224,9 +215,9 @@ class BatchSettings:
     max_starts: int = 128
     max_iters: int = BATCH_MAX_ITERS
     seed: int = 0
-    lam0: float = BATCH_LAM0
+    lam0: float = lm.DEFAULT_LM.lam0
     max_step: float = lm.DEFAULT_LM.max_step
-    stall_rel: float = BATCH_STALL_REL
+    stall_rel: float = lm.DEFAULT_LM.stall_rel
     stall_iters: int = lm.DEFAULT_LM.stall_iters
     tol_margin: float = lm.DEFAULT_LM.tol_margin
 

@@ -79,16 +79,22 @@ def test_time_limit_includes_verification():
 
 
 def test_redundant_spread_beats_first_found():
+    """On a 7-joint arm solve_many returns a spread of the self-motion: the farthest-point
+    pick of 8 from a pool covers that pool better than random picks of 8 do."""
     robot = swarm_ik.load_robot("panda")
     problem = swarm_ik.IKProblem.from_q(robot, [0.2, -0.3, 0.1, -1.8, 0.2, 1.6, 0.5])
     sols = swarm_ik.solve_many(problem, n=8, method="numerical", seed=0)
     assert len(sols) == 8 and all(s.success for s in sols)
-    qs = np.array([s.q for s in sols])
     pool = np.array([s.q for s in swarm_ik.solve_many(problem, n=64, method="numerical", seed=5)])
     mask = br.periodic_mask(robot)
-    spread = br.covering_radius(qs, pool, mask)
-    first = br.covering_radius(pool[:8], pool, mask)
-    assert spread < first
+    picked = pool[br.spread_select(pool, 8, mask, robot.mid_q())]
+    spread = br.covering_radius(picked, pool, mask)
+    rng = np.random.default_rng(0)
+    random_pick = np.median(
+        [br.covering_radius(pool[rng.choice(len(pool), 8, replace=False)], pool, mask)
+         for _ in range(20)]
+    )  # fmt: skip
+    assert spread < random_pick
 
 
 def test_auto_uses_analytic_when_available():

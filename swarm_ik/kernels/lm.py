@@ -85,13 +85,17 @@ class LMSettings(NamedTuple):
 
     ``max_iters``, ``lam0``, ``max_step`` and ``stall_rel`` were tuned together on Panda,
     UR10 and Baxter (2000 targets each, 300 evaluations): 30 / 1e-2 / 1 rad / 1e-2 beat
-    60 / 1e-3 / 0.5 rad / 1e-3 by 0.2–0.6 points of success at fewer evaluations.
+    60 / 1e-3 / 0.5 rad / 1e-3 by 0.2–0.6 points of success at fewer evaluations; then
+    ``lam0 = 0.3``, ``stall_rel = 0.05`` (a stronger first damping, an earlier verdict on a
+    local minimum) cut the mean evaluations per target by 15–22 % (1000 FK-sampled targets
+    per robot: Panda 27.3 → 23.3, UR10 28.2 → 21.9) and the failures at 300 evaluations on
+    Panda from 12 to 4 and on Baxter from 19 to 12 (UR10: 3 → 4).
     """
 
     max_iters: int = 30
-    lam0: float = 1e-2
+    lam0: float = 0.3
     max_step: float = 1.0
-    stall_rel: float = 1e-2
+    stall_rel: float = 0.05
     stall_iters: int = 3
     tol_margin: float = 0.5
 

@@ -418,12 +418,12 @@ def run(
     pop_size: int = 12,
     iterations: int = 100,
     swarm_fraction: float = 0.5,
-    max_iters: int = 30,
-    lam0: float = 1e-2,
-    max_step: float = 1.0,
-    stall_rel: float = 1e-2,
-    stall_iters: int = 3,
-    tol_margin: float = 0.5,
+    max_iters: int = lm.DEFAULT_LM.max_iters,
+    lam0: float = lm.DEFAULT_LM.lam0,
+    max_step: float = lm.DEFAULT_LM.max_step,
+    stall_rel: float = lm.DEFAULT_LM.stall_rel,
+    stall_iters: int = lm.DEFAULT_LM.stall_iters,
+    tol_margin: float = lm.DEFAULT_LM.tol_margin,
     prefer: str = "best",
     nearest_starts: int = 8,
     nearest_sigma: float = 0.1,
@@ -479,10 +479,9 @@ def run(
             was worse (11–12 failures).  Local minima of the pose residual are rarely next
             to a solution, so most of the global search comes from the uniform starts.
         max_iters: Evaluations per start before it is abandoned (a converging LM start needs
-            about 10–20 on 6–7 joint arms).  ``max_iters``, ``lam0``, ``max_step`` and
-            ``stall_rel`` were tuned together on Panda, UR10 and Baxter (2000 targets each,
-            300 evaluations): 30 / 1e-2 / 1 rad / 1e-2 beat 60 / 1e-3 / 0.5 rad / 1e-3 by
-            0.2–0.6 points of success at fewer evaluations.
+            about 10–20 on 6–7 joint arms).  The defaults of ``max_iters``, ``lam0``,
+            ``max_step``, ``stall_rel``, ``stall_iters`` and ``tol_margin`` are those of
+            :data:`swarm_ik.kernels.lm.DEFAULT_LM` (how they were chosen: its docstring).
         lam0: Initial LM damping, relative to the mean diagonal of ``JᵀJ``.
         max_step: Largest joint change per LM step (rad, or m for prismatic joints).
         stall_rel: A step that reduces the squared residual by less than this fraction…
