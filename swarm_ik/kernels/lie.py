@@ -6,7 +6,7 @@ against Pinocchio's ``log3`` / ``Jlog3``.
 
 Conventions: a rotation vector ``φ = θ·u`` (``θ ∈ [0, π]``), ``exp([φ]×) = R``.  The right
 Jacobian inverse is ``Jr⁻¹(φ) = I + ½[φ]× + k(θ)[φ]×²`` with
-``k = 1/θ² − (1 + cos θ)/(2θ sin θ)`` (Solà et al., "A micro Lie theory", eq. 144, [LIE]).
+``k = 1/θ² − (1 + cos θ)/(2θ sin θ)`` ([LIE], eq. 144).
 """
 
 from __future__ import annotations
