@@ -21,7 +21,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from swarm_ik.errors import unknown
-from swarm_ik.pose import rotation_angle
+from swarm_ik.kernels.lie import angle as rotation_angle
 
 FloatArray = NDArray[np.float64]
 

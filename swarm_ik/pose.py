@@ -169,21 +169,8 @@ def as_pose(target: Any, *, orth_tol: float = 1e-6) -> FloatArray:
 
 
 def rotation_angle(rot_err: FloatArray) -> FloatArray:
-    """Angle [rad] of rotation matrices, accurate near 0 and π.
+    """Angle [rad] of rotation matrices ``(..., 3, 3)`` → ``(...)`` in ``[0, π]``, accurate
+    near 0 and π: :func:`swarm_ik.kernels.lie.angle` (the one set of rotation helpers)."""
+    from swarm_ik.kernels.lie import angle
 
-    Args:
-        rot_err: Rotation matrices, shape ``(..., 3, 3)``.
-
-    Returns:
-        Angles in ``[0, π]``, shape ``(...)``.
-    """
-    tr = rot_err[..., 0, 0] + rot_err[..., 1, 1] + rot_err[..., 2, 2]
-    s = np.stack(
-        [
-            rot_err[..., 2, 1] - rot_err[..., 1, 2],
-            rot_err[..., 0, 2] - rot_err[..., 2, 0],
-            rot_err[..., 1, 0] - rot_err[..., 0, 1],
-        ],
-        axis=-1,
-    )
-    return np.arctan2(0.5 * np.linalg.norm(s, axis=-1), 0.5 * (tr - 1.0))
+    return angle(rot_err)
