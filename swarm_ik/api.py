@@ -191,19 +191,22 @@ def _check_pose_goal(
     return (GoalError(gl.describe(), dp, dr, met),), within
 
 
-def _fast_path(
-    problem: IKProblem,
-    solver: str,
-    kwargs: dict[str, Any],
-    q_start: np.ndarray | None,
-    tol_pos: float,
-    tol_rot: float,
-    max_evals: int | None,
-    time_limit: float | None,
-    stop_on_success: bool,
-    prefer: str,
-    seed: int | None,
-) -> Result | None:
+class _Call(NamedTuple):
+    """One solve's settings, as :func:`solve` checked them (passed to its shortcuts)."""
+
+    solver: str
+    kwargs: dict[str, Any]
+    q_start: np.ndarray | None
+    tol_pos: float
+    tol_rot: float
+    max_evals: int | None
+    time_limit: float | None
+    stop_on_success: bool
+    prefer: str
+    seed: int | None
+
+
+def _fast_path(problem: IKProblem, call: _Call) -> Result | None:
     """The ``swarm`` solver without an ``Evaluator``: the whole search in one compiled call
     (:func:`swarm_ik.kernels.search.swarm_search`), then the Pinocchio check.
 
@@ -212,6 +215,18 @@ def _fast_path(
     secondary goal); its answer is bit-identical to the one :func:`swarm_ik.solvers.hybrid.run`
     returns through the ``Evaluator`` (same compiled search, same random key: the first draw
     of ``default_rng(seed)``).  Otherwise ``None`` and :func:`solve` runs the solver."""
+    (
+        solver,
+        kwargs,
+        q_start,
+        tol_pos,
+        tol_rot,
+        max_evals,
+        time_limit,
+        stop_on_success,
+        prefer,
+        seed,
+    ) = call
     if solver != "swarm" or not stop_on_success or prefer != "best" or seed is None:
         return None
     from swarm_ik.solvers import hybrid
@@ -281,32 +296,29 @@ class _Spent(NamedTuple):
     elapsed: float
 
 
-def _collision_first_try(
-    problem: IKProblem,
-    solver: str,
-    kwargs: dict[str, Any],
-    q_start: np.ndarray | None,
-    tol_pos: float,
-    tol_rot: float,
-    max_evals: int | None,
-    time_limit: float | None,
-    stop_on_success: bool,
-    prefer: str,
-    seed: int | None,
-) -> Result | None:
+def _collision_first_try(problem: IKProblem, call: _Call) -> Result | None:
     """A pose goal with a collision goal: first the compiled search for the pose alone; when
     its answer is collision-free by the exact check, that is the answer (most targets of an
     uncluttered scene), else ``None`` and the full search with the sphere rows follows."""
+    (
+        solver,
+        kwargs,
+        q_start,
+        tol_pos,
+        tol_rot,
+        max_evals,
+        time_limit,
+        stop_on_success,
+        prefer,
+        seed,
+    ) = call
     if problem.has_secondary or not stop_on_success or prefer != "best":
         return None
     free = problem.without_collisions()
     if free is None or len(free.goals) != 1:
         return None
     t0 = time.perf_counter()
-    first = _fast_path(
-        free, solver, kwargs, q_start, tol_pos, tol_rot, max_evals, time_limit,
-        stop_on_success, prefer, seed,
-    )  # fmt: skip
+    first = _fast_path(free, call)
     if first is None or not first.success:
         return None
     col = problem.collision_goal
@@ -391,19 +403,17 @@ def solve(
     q_start = prepare_q0(problem, q0)
     problem.robot.warm_up()  # compiled kernels loaded before the clock starts
     seed_val = None if isinstance(seed, np.random.Generator) else (0 if seed is None else int(seed))
-    fast = _fast_path(
-        problem, solver, kwargs, q_start, tol_pos, tol_rot, max_evals, time_limit,
-        stop_on_success, prefer, seed_val,
+    call = _Call(
+        solver, kwargs, q_start, tol_pos, tol_rot, max_evals, time_limit, stop_on_success,
+        prefer, seed_val,
     )  # fmt: skip
+    fast = _fast_path(problem, call)
     if fast is None and solver == "analytic" and on_improvement is None:
         from swarm_ik.solvers import analytic  # closed form: no search loop to run
 
         fast = analytic.solve_result(problem, q_start, tol_pos, tol_rot, seed_val)
     if fast is None and problem.collision_goal is not None:
-        fast = _collision_first_try(
-            problem, solver, kwargs, q_start, tol_pos, tol_rot, max_evals, time_limit,
-            stop_on_success, prefer, seed_val,
-        )  # fmt: skip
+        fast = _collision_first_try(problem, call)
     if fast is not None:
         if on_improvement is not None:
             on_improvement(fast.q.copy(), fast.fitness)

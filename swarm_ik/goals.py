@@ -497,9 +497,38 @@ def _joint_vector(value: Any, robot: RobotModel, what: str) -> FloatArray:
     return robot.check_q(value, what)
 
 
+@dataclass(frozen=True)
+class JointGoal(Goal):
+    """Base of the joint-space goals: ``r = w·w_j·(q_ref − q)`` with the reference and the
+    per-joint weights of :meth:`reference` (``JOINT`` rows of the kernel)."""
+
+    code: ClassVar[int] = JOINT
+    frame_goal: ClassVar[bool] = False
+
+    def __post_init__(self) -> None:
+        object.__setattr__(self, "weight", _weight(self.residual_weight))
+
+    def reference(self, robot: RobotModel, q0: FloatArray | None) -> tuple[FloatArray, FloatArray]:
+        """``(q_ref (nq,), joint weights (nq,))`` of the goal on ``robot`` (``q0``: the
+        solve's start)."""
+        raise NotImplementedError
+
+    def encode(self, robot: RobotModel, q0: FloatArray | None) -> GoalRow:
+        ref, jw = self.reference(robot, q0)
+        return _joint_rows(self, robot, ref, jw, self.is_primary)
+
+    def residual(self, pose, jac, q, robot, q0=None):  # type: ignore[no-untyped-def]
+        ref, jw = self.reference(robot, q0)
+        return _joint_residual(self, ref, jw, q, robot)
+
+    def errors(self, pose, q, robot, q0=None):  # type: ignore[no-untyped-def]
+        ref, jw = self.reference(robot, q0)
+        return _joint_errors(ref, jw, q, robot)
+
+
 @register_goal
 @dataclass(frozen=True)
-class Posture(Goal):
+class Posture(JointGoal):
     """Joints near a reference posture: ``r = w·(q_ref − q)`` (continuous joints wrapped).
 
     Secondary by default (optimised in the null space of the primary goals).
@@ -515,13 +544,8 @@ class Posture(Goal):
     weight: float = 1.0
     primary: bool = False
     joint_weights: Any = None
-    code: ClassVar[int] = JOINT
-    frame_goal: ClassVar[bool] = False
 
-    def __post_init__(self) -> None:
-        object.__setattr__(self, "weight", _weight(self.weight))
-
-    def _ref_w(self, robot: RobotModel, q0: FloatArray | None) -> tuple[FloatArray, FloatArray]:
+    def reference(self, robot: RobotModel, q0: FloatArray | None) -> tuple[FloatArray, FloatArray]:
         ref = _joint_vector(self.q_ref, robot, "Posture.q_ref")
         jw = (
             np.ones(robot.nq)
@@ -532,22 +556,10 @@ class Posture(Goal):
             raise InvalidArgumentError("Posture.joint_weights must be non-negative")
         return ref, jw
 
-    def encode(self, robot: RobotModel, q0: FloatArray | None) -> GoalRow:
-        ref, jw = self._ref_w(robot, q0)
-        return _joint_rows(self, robot, ref, jw, self.primary)
-
-    def residual(self, pose, jac, q, robot, q0=None):  # type: ignore[no-untyped-def]
-        ref, jw = self._ref_w(robot, q0)
-        return _joint_residual(self, ref, jw, q, robot)
-
-    def errors(self, pose, q, robot, q0=None):  # type: ignore[no-untyped-def]
-        ref, jw = self._ref_w(robot, q0)
-        return _joint_errors(ref, jw, q, robot)
-
 
 @register_goal
 @dataclass(frozen=True)
-class CenterJoints(Goal):
+class CenterJoints(JointGoal):
     """Joints near the middle of their ranges (BioIK's CenterJoints): a :class:`Posture` at
     the mid-range, each joint's row scaled by ``2/range`` so every joint counts alike.
 
@@ -558,26 +570,17 @@ class CenterJoints(Goal):
 
     weight: float = 1.0
     primary: bool = False
-    code: ClassVar[int] = JOINT
-    frame_goal: ClassVar[bool] = False
 
-    def __post_init__(self) -> None:
-        object.__setattr__(self, "weight", _weight(self.weight))
-
-    def _ref_w(self, robot: RobotModel, q0: FloatArray | None) -> tuple[FloatArray, FloatArray]:
+    def reference(self, robot: RobotModel, q0: FloatArray | None) -> tuple[FloatArray, FloatArray]:
         width = robot.upper - robot.lower
         jw = np.where(width > 0, 2.0 / np.where(width > 0, width, 1.0), 0.0)
         jw[robot.continuous_mask] = 0.0  # no centre on a circle
         return robot.mid_q(), jw
 
-    encode = Posture.encode
-    residual = Posture.residual
-    errors = Posture.errors
-
 
 @register_goal
 @dataclass(frozen=True)
-class MinimalDisplacement(Goal):
+class MinimalDisplacement(JointGoal):
     """Joints near the start ``q0`` of the solve (BioIK's MinimalDisplacement): a
     :class:`Posture` at ``q0`` (at the mid-range when the solve has no ``q0``).
 
@@ -588,24 +591,15 @@ class MinimalDisplacement(Goal):
 
     weight: float = 1.0
     primary: bool = False
-    code: ClassVar[int] = JOINT
-    frame_goal: ClassVar[bool] = False
 
-    def __post_init__(self) -> None:
-        object.__setattr__(self, "weight", _weight(self.weight))
-
-    def _ref_w(self, robot: RobotModel, q0: FloatArray | None) -> tuple[FloatArray, FloatArray]:
+    def reference(self, robot: RobotModel, q0: FloatArray | None) -> tuple[FloatArray, FloatArray]:
         ref = robot.mid_q() if q0 is None else np.asarray(q0, dtype=float)
         return ref, np.ones(robot.nq)
-
-    encode = Posture.encode
-    residual = Posture.residual
-    errors = Posture.errors
 
 
 @register_goal
 @dataclass(frozen=True)
-class JointValue(Goal):
+class JointValue(JointGoal):
     """One joint at a value: ``r = w·(v − q_j)``.  Primary by default.
 
     Args:
@@ -618,8 +612,6 @@ class JointValue(Goal):
     value: float
     weight: float = 1.0
     primary: bool = True
-    code: ClassVar[int] = JOINT
-    frame_goal: ClassVar[bool] = False
 
     def __post_init__(self) -> None:
         try:
@@ -631,12 +623,12 @@ class JointValue(Goal):
         if not np.isfinite(v):
             raise InvalidArgumentError(f"JointValue.value must be finite, got {self.value!r}")
         object.__setattr__(self, "value", v)
-        object.__setattr__(self, "weight", _weight(self.weight))
+        super().__post_init__()
 
     def describe(self) -> str:
         return f"JointValue({self.joint})"
 
-    def _ref_w(self, robot: RobotModel, q0: FloatArray | None) -> tuple[FloatArray, FloatArray]:
+    def reference(self, robot: RobotModel, q0: FloatArray | None) -> tuple[FloatArray, FloatArray]:
         if self.joint not in robot.joint_names:
             raise unknown("joint", self.joint, robot.joint_names)
         j = robot.joint_names.index(self.joint)
@@ -645,10 +637,6 @@ class JointValue(Goal):
         jw = np.zeros(robot.nq)
         jw[j] = 1.0
         return ref, jw
-
-    encode = Posture.encode
-    residual = Posture.residual
-    errors = Posture.errors
 
 
 # --------------------------------------------------------------------------- collisions
@@ -880,6 +868,7 @@ __all__ = [
     "CenterJoints",
     "Goal",
     "GoalRow",
+    "JointGoal",
     "JointValue",
     "LookAt",
     "MinimalDisplacement",
