@@ -545,3 +545,16 @@ def test_report_template_holds_no_measured_numbers() -> None:
     report = paper.build_report(plans.QUICK, Path("/nonexistent-bench-folder"))
     assert "QUICK run" in report and "not run yet" in report and "$" not in report
     assert f"a/b > {common.VERDICT_FACTOR:g}" in report
+
+
+def test_bench_outputs_and_sizes_are_checked_before_work(tmp_path, capsys) -> None:
+    """Issue 16 item 11: a file as --out and --sizes 0 exit 2 with one line."""
+    from swarm_ik.cli import main
+
+    afile = tmp_path / "afile"
+    afile.write_text("")
+    assert main(["bench", "ik", "--quick", "--out", str(afile)]) == 2
+    assert "is a file" in capsys.readouterr().err
+    assert main(["bench", "throughput", "--sizes", "0", "--out", str(tmp_path / "t")]) == 2
+    err = capsys.readouterr().err.strip()
+    assert "--sizes must be positive" in err and len(err.splitlines()) == 1

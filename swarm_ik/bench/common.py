@@ -116,9 +116,11 @@ def resolve_out(out: str | os.PathLike[str] | None, command: str, quick: bool) -
         The folder (not created).
 
     Raises:
-        InvalidArgumentError: the folder holds the other kind of run.
+        InvalidArgumentError: the path is a file, or the folder holds the other kind of run.
     """
     path = default_out(command, quick) if out is None else Path(out)
+    if path.exists() and not path.is_dir():
+        raise InvalidArgumentError(f"--out {str(path)!r} is a file; give a folder")
     info = path / RUN_INFO
     if info.exists():
         try:

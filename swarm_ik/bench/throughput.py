@@ -472,9 +472,14 @@ def report(csv_path: Path, prof_path: Path, md_path: Path, png_name: str, schedu
 def run(args: argparse.Namespace) -> int:
     """Entry point of ``swarm-ik bench throughput``; returns the exit code."""
     quick = bool(args.quick)
+    sizes = args.sizes or (QUICK_SIZES if quick else DEFAULT_SIZES)
+    bad = [n for n in sizes if n < 1]
+    if bad:
+        from swarm_ik.errors import InvalidArgumentError
+
+        raise InvalidArgumentError(f"--sizes must be positive numbers of targets, got {bad}")
     out = common.resolve_out(args.out, "throughput", quick)
     common.write_run_info(out, "throughput", quick)
-    sizes = args.sizes or (QUICK_SIZES if quick else DEFAULT_SIZES)
     loop_max = min(args.loop_max, 100) if quick else args.loop_max
     csv_path, prof_path = run_experiment(
         args.robots,
