@@ -46,7 +46,7 @@ from swarm_ik.errors import InvalidArgumentError, InvalidTargetError
 from swarm_ik.kernels import lie, lm
 from swarm_ik.kernels.fk import TreeArrays
 from swarm_ik.kernels.lm import CONVERGED, NOT_RUN
-from swarm_ik.kernels.search import SAMPLING_WIDTH
+from swarm_ik.kernels.search import SAMPLING_WIDTH, splitmix64
 from swarm_ik.pose import make_pose, matrix_to_quat
 from swarm_ik.robot import RobotModel
 
@@ -62,13 +62,7 @@ _RESTART_BLOCK = 8
 
 
 # --------------------------------------------------------------------------- kernels
-@numba.njit(cache=True)
-def _splitmix64(x: np.uint64) -> np.uint64:  # pragma: no cover - compiled
-    """One SplitMix64 output for state ``x`` (the state advances by the golden gamma)."""
-    z = x + np.uint64(0x9E3779B97F4A7C15)
-    z = (z ^ (z >> np.uint64(30))) * np.uint64(0xBF58476D1CE4E5B9)
-    z = (z ^ (z >> np.uint64(27))) * np.uint64(0x94D049BB133111EB)
-    return z ^ (z >> np.uint64(31))
+_splitmix64 = splitmix64  # one SplitMix64 (kernels/search.py): the restart streams
 
 
 @numba.njit(cache=True)
@@ -278,21 +272,6 @@ class BatchChain:
         """Number of joints."""
         return self.tree.nq
 
-    @property
-    def lower(self) -> FloatArray:
-        """Lower limits, ``(nq,)``."""
-        return self.bounds.lower
-
-    @property
-    def upper(self) -> FloatArray:
-        """Upper limits, ``(nq,)``."""
-        return self.bounds.upper
-
-    @property
-    def wrap(self) -> BoolArray:
-        """Continuous joints, ``(nq,)``."""
-        return self.bounds.wrap
-
 
 @dataclass(frozen=True)
 class ChunkResult:
@@ -487,7 +466,7 @@ def _seed_starts(bc: BatchChain, q0: Any, n: int) -> FloatArray:
     """First start per target ``(n, nq)``: ``q0`` (``(nq,)`` or ``(n, nq)``) wrapped and
     clipped into the limits (with one warning), else the middle of the joint ranges."""
     if q0 is None:
-        return np.tile(0.5 * (bc.lower + bc.upper), (n, 1))
+        return np.tile(0.5 * (bc.bounds.lower + bc.bounds.upper), (n, 1))
     arr = np.asarray(q0, dtype=float)
     if arr.shape == (bc.nq,):
         arr = np.tile(arr, (n, 1))
@@ -498,9 +477,10 @@ def _seed_starts(bc: BatchChain, q0: Any, n: int) -> FloatArray:
     if not np.all(np.isfinite(arr)):
         raise InvalidArgumentError("q0 contains NaN or infinite values")
     arr = arr.copy()
-    if bc.wrap.any():
-        arr[:, bc.wrap] = (arr[:, bc.wrap] + np.pi) % (2 * np.pi) - np.pi
-    fixed = np.clip(arr, bc.lower, bc.upper)
+    b = bc.bounds
+    if b.wrap.any():
+        arr[:, b.wrap] = (arr[:, b.wrap] + np.pi) % (2 * np.pi) - np.pi
+    fixed = np.clip(arr, b.lower, b.upper)
     outside = int(np.any(fixed != arr, axis=1).sum())
     if outside:
         warnings.warn(
@@ -570,7 +550,7 @@ def solve_chunk(
             starts,
         )
     dp, dr = pose_errors(bc.tree, q, targets)
-    within = np.all((q >= bc.lower - 1e-12) & (q <= bc.upper + 1e-12), axis=1)
+    within = np.all((q >= bc.bounds.lower - 1e-12) & (q <= bc.bounds.upper + 1e-12), axis=1)
     ok = within & (dp <= settings.tol_pos)
     if not settings.position_only:
         ok &= dr <= settings.tol_rot

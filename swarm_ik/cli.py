@@ -83,7 +83,7 @@ def _parse_param(text: str) -> tuple[str, Any]:
 
 
 def _build_parser() -> argparse.ArgumentParser:
-    from swarm_ik import solvers
+    from swarm_ik import cli_args, solvers
     from swarm_ik.api import DEFAULT_SOLVER
 
     parser = Parser(
@@ -106,13 +106,7 @@ def _build_parser() -> argparse.ArgumentParser:
         "--from-q are for the first",
     )
     tgt = p.add_mutually_exclusive_group(required=True)
-    tgt.add_argument(
-        "--pose",
-        nargs=7,
-        type=float,
-        metavar=("X", "Y", "Z", "QX", "QY", "QZ", "QW"),
-        help="target position [m] and quaternion qx qy qz qw (x y z w order)",
-    )
+    cli_args.add_pose(tgt)
     tgt.add_argument(
         "--goals",
         default=None,

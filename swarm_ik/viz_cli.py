@@ -19,6 +19,8 @@ from typing import Any
 
 import numpy as np
 
+from swarm_ik import cli_args
+
 NO_WAIT_ENV = "SWARM_IK_NO_WAIT"
 """Environment variable: when set (to anything but ``0`` or empty), the live viewer is not
 kept open (the command returns right after printing the URL)."""
@@ -50,13 +52,7 @@ def add_commands(subparsers: Any) -> dict[str, Any]:
         help="joint values (rad / m, one per joint); repeat --q for several",
     )
     tgt = p.add_mutually_exclusive_group()
-    tgt.add_argument(
-        "--pose",
-        nargs=7,
-        type=float,
-        metavar=("X", "Y", "Z", "QX", "QY", "QZ", "QW"),
-        help="target position [m] and quaternion (x, y, z, w)",
-    )
+    cli_args.add_pose(tgt)
     tgt.add_argument(
         "--from-q", nargs="+", type=float, metavar="Q", help="target = FK of these joint values"
     )
