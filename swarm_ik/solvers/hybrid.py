@@ -5,11 +5,12 @@ finds the basin, a Jacobian method finishes.  This module turns that into a solv
 exact (it stops at the tolerance, down to 1e-10), stays inside the joint limits, and is fast
 enough to compare with TRAC-IK:
 
-* **The polish** (:func:`lm_polish`) is one numba-compiled function: for a batch of starts
-  ``(k, nq)`` it runs a bounded Levenberg–Marquardt iteration on the pose residual
-  ``r(q) = [p* − p(q); log(R* R(q)ᵀ)]`` (world axes) with the exact residual Jacobian
-  ``[J_v; J_r⁻¹(φ) J_ω]`` built from the LOCAL_WORLD_ALIGNED frame Jacobian of
-  :func:`swarm_ik.kinematics.fk_jac_one` (checked against finite differences in the tests).
+* **The polish** (:func:`swarm_ik.kernels.lm.lm_polish`) is one numba-compiled function: for
+  a batch of starts ``(k, nq)`` it runs a bounded Levenberg–Marquardt iteration on the stacked
+  residual of the problem's primary goals (for a pose ``r(q) = [p* − p(q); log(R* R(q)ᵀ)]`` in
+  world axes) with the exact residual Jacobian (for a pose ``[J_v; J_r⁻¹(φ) J_ω]``) built from
+  the LOCAL_WORLD_ALIGNED frame Jacobians of :func:`swarm_ik.kernels.fk.fk_one` (checked
+  against finite differences in the tests).
   Joint limits are handled as an active set (a joint at a limit whose Gauss–Newton direction
   points outwards is frozen for that step) and by projection (clipping; continuous joints
   wrapped).  Each start stops at the tolerance, at a local minimum (no progress), or at its
