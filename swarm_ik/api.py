@@ -15,7 +15,7 @@ import numpy as np
 from swarm_ik.errors import InvalidArgumentError, unknown
 from swarm_ik.optimize import check_budget, make_rng
 from swarm_ik.pose import as_pose, is_finite_nonneg
-from swarm_ik.problem import IKProblem
+from swarm_ik.problem import IKProblem, largest_errors
 from swarm_ik.result import Result
 from swarm_ik.solvers import base
 
@@ -32,10 +32,7 @@ def verify(problem: IKProblem, q: Any) -> tuple[float, float]:
         raise InvalidArgumentError(f"problem must be an IKProblem, got {type(problem).__name__}")
     from swarm_ik._validate import joint_vector
 
-    errs = problem.verify(joint_vector(problem.robot, q))
-    dp = max((e.position_error for e in errs if not math.isnan(e.position_error)), default=0.0)
-    dr = max((e.rotation_error for e in errs if not math.isnan(e.rotation_error)), default=0.0)
-    return float(dp), float(dr)
+    return largest_errors(problem.verify(joint_vector(problem.robot, q)))
 
 
 def unreachable_goal(problem: IKProblem) -> str | None:
@@ -253,12 +250,7 @@ def _fast_path(problem: IKProblem, call: _Call) -> Result | None:
     else:
         goal_errors = problem.verify(q, tol_pos, tol_rot, q0=q_start)
         within = problem.within_bounds(q)
-    dp = max(
-        (e.position_error for e in goal_errors if not math.isnan(e.position_error)), default=0.0
-    )
-    dr = max(
-        (e.rotation_error for e in goal_errors if not math.isnan(e.rotation_error)), default=0.0
-    )
+    dp, dr = largest_errors(goal_errors)
     success = within and all(e.met for e in goal_errors)
     ev = _Spent(max_evals, out.used, time_limit, elapsed)
     return Result(
@@ -300,19 +292,7 @@ def _collision_first_try(problem: IKProblem, call: _Call) -> Result | None:
     """A pose goal with a collision goal: first the compiled search for the pose alone; when
     its answer is collision-free by the exact check, that is the answer (most targets of an
     uncluttered scene), else ``None`` and the full search with the sphere rows follows."""
-    (
-        solver,
-        kwargs,
-        q_start,
-        tol_pos,
-        tol_rot,
-        max_evals,
-        time_limit,
-        stop_on_success,
-        prefer,
-        seed,
-    ) = call
-    if problem.has_secondary or not stop_on_success or prefer != "best":
+    if problem.has_secondary or not call.stop_on_success or call.prefer != "best":
         return None
     free = problem.without_collisions()
     if free is None or len(free.goals) != 1:
@@ -326,7 +306,7 @@ def _collision_first_try(problem: IKProblem, call: _Call) -> Result | None:
         first.q, col.scene, col.margin, bool(col.self_collision)
     ):
         return None
-    goal_errors = problem.verify(first.q, tol_pos, tol_rot, q0=q_start)
+    goal_errors = problem.verify(first.q, call.tol_pos, call.tol_rot, q0=call.q_start)
     if not all(e.met for e in goal_errors):
         return None
     return dataclasses.replace(
@@ -445,12 +425,7 @@ def solve(
     else:
         fit = float(ev.best_f)
     goal_errors = problem.verify(q, tol_pos, tol_rot, q0=q_start)
-    dp = max(
-        (e.position_error for e in goal_errors if not math.isnan(e.position_error)), default=0.0
-    )
-    dr = max(
-        (e.rotation_error for e in goal_errors if not math.isnan(e.rotation_error)), default=0.0
-    )
+    dp, dr = largest_errors(goal_errors)
     within = problem.within_bounds(q)
     success = within and all(e.met for e in goal_errors)
     return Result(

@@ -202,9 +202,14 @@ def register_goal(cls: G) -> G:
     return cls
 
 
-def _frame_row(
-    goal: Goal, robot: RobotModel, code: int, par: FloatArray, weight: float, primary: bool
-) -> GoalRow:
+def _frame_row(goal: Goal, robot: RobotModel, head: Any = (), point: Any = None) -> GoalRow:
+    """The kernel row of a frame goal: ``head`` fills the first parameters (a row-major
+    rotation, or two 3-vectors), ``point`` the last three (see :mod:`swarm_ik.kernels.lm`)."""
+    par = np.zeros(N_PAR)
+    flat = np.ravel(head)
+    par[: flat.size] = flat
+    if point is not None:
+        par[9:12] = point
     frame = goal.frame_name()
     if frame not in robot.frames:
         raise UnknownNameError(
@@ -213,10 +218,10 @@ def _frame_row(
             "load_robot(name, ee_frame=[...]))"
         )
     return GoalRow(
-        code,
+        goal.code,
         robot.frames.index(frame),
-        weight,
-        primary,
+        goal.residual_weight,
+        goal.is_primary,
         par,
         np.zeros(robot.nq),
         np.zeros(robot.nq),
@@ -259,10 +264,7 @@ class Pose(Goal):
         return goal
 
     def encode(self, robot: RobotModel, q0: FloatArray | None) -> GoalRow:
-        par = np.zeros(N_PAR)
-        par[:9] = self.target[:3, :3].ravel()
-        par[9:12] = self.target[:3, 3]
-        return _frame_row(self, robot, self.code, par, self.weight, self.primary)
+        return _frame_row(self, robot, self.target[:3, :3], self.target[:3, 3])
 
     def residual(self, pose, jac, q, robot):  # type: ignore[no-untyped-def]
         phi = lie.log3(self.target[:3, :3] @ pose[:3, :3].T)
@@ -297,9 +299,7 @@ class Position(Goal):
         object.__setattr__(self, "weight", _weight(self.weight))
 
     def encode(self, robot: RobotModel, q0: FloatArray | None) -> GoalRow:
-        par = np.zeros(N_PAR)
-        par[9:12] = self.point
-        return _frame_row(self, robot, self.code, par, self.weight, self.primary)
+        return _frame_row(self, robot, point=self.point)
 
     def residual(self, pose, jac, q, robot):  # type: ignore[no-untyped-def]
         return self.weight * (self.point - pose[:3, 3]), self.weight * jac[:3].copy()
@@ -338,9 +338,7 @@ class Orientation(Goal):
         object.__setattr__(self, "weight", _weight(self.weight))
 
     def encode(self, robot: RobotModel, q0: FloatArray | None) -> GoalRow:
-        par = np.zeros(N_PAR)
-        par[:9] = self.rotation.ravel()
-        return _frame_row(self, robot, self.code, par, self.weight, self.primary)
+        return _frame_row(self, robot, self.rotation)
 
     def residual(self, pose, jac, q, robot):  # type: ignore[no-untyped-def]
         phi = lie.log3(self.rotation @ pose[:3, :3].T)
@@ -386,10 +384,7 @@ class Axis(Goal):
         object.__setattr__(self, "weight", _weight(self.weight))
 
     def encode(self, robot: RobotModel, q0: FloatArray | None) -> GoalRow:
-        par = np.zeros(N_PAR)
-        par[:3] = self.axis
-        par[3:6] = self.direction
-        return _frame_row(self, robot, self.code, par, self.weight, self.primary)
+        return _frame_row(self, robot, (self.axis, self.direction))
 
     def residual(self, pose, jac, q, robot):  # type: ignore[no-untyped-def]
         u = pose[:3, :3] @ self.axis
@@ -432,10 +427,7 @@ class LookAt(Goal):
         object.__setattr__(self, "weight", _weight(self.weight))
 
     def encode(self, robot: RobotModel, q0: FloatArray | None) -> GoalRow:
-        par = np.zeros(N_PAR)
-        par[:3] = self.axis
-        par[3:6] = self.point
-        return _frame_row(self, robot, self.code, par, self.weight, self.primary)
+        return _frame_row(self, robot, (self.axis, self.point))
 
     def residual(self, pose, jac, q, robot):  # type: ignore[no-untyped-def]
         u = pose[:3, :3] @ self.axis
@@ -766,8 +758,8 @@ class AvoidCollisions(Goal):
         )  # fmt: skip
 
     def errors(self, pose, q, robot, q0=None):  # type: ignore[no-untyped-def]
-        rep = robot.collision_model().check(q, self.scene, self.margin, bool(self.self_collision))
-        return (0.0 if rep.collision_free else max(0.0, self.margin - rep.clearance)), float("nan")
+        depth, nan, _met, _report = self.check(None, q, robot, 0.0, 0.0)
+        return depth, nan
 
     def check(self, poses, q, robot, tol_pos, tol_rot, q0=None):  # type: ignore[no-untyped-def]
         rep = robot.collision_model().check(q, self.scene, self.margin, bool(self.self_collision))

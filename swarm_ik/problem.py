@@ -73,6 +73,18 @@ class GoalError:
         return out
 
 
+def largest_errors(goal_errors: Sequence[GoalError]) -> tuple[float, float]:
+    """Largest position error [m] and angular error [rad] over checked goals (0 where no goal
+    has such an error): the summary figures of a :class:`~swarm_ik.result.Result`."""
+    dp = max(
+        (e.position_error for e in goal_errors if not math.isnan(e.position_error)), default=0.0
+    )
+    dr = max(
+        (e.rotation_error for e in goal_errors if not math.isnan(e.rotation_error)), default=0.0
+    )
+    return float(dp), float(dr)
+
+
 def judge(
     errors: FloatArray, primary: Sequence[bool] | NDArray[Any], tol_pos: float, tol_rot: float
 ) -> NDArray[np.bool_]:

@@ -418,6 +418,7 @@ def solve_result(
     import time
 
     from swarm_ik.api import unreachable_goal
+    from swarm_ik.problem import largest_errors
     from swarm_ik.result import Result
 
     t0 = time.perf_counter()
@@ -431,12 +432,7 @@ def solve_result(
     )
     elapsed = time.perf_counter() - t0
     goal_errors = problem.verify(q, tol_pos, tol_rot)
-    e_p = max(
-        (e.position_error for e in goal_errors if not math.isnan(e.position_error)), default=0.0
-    )
-    e_r = max(
-        (e.rotation_error for e in goal_errors if not math.isnan(e.rotation_error)), default=0.0
-    )
+    e_p, e_r = largest_errors(goal_errors)
     within = problem.within_bounds(q)
     success = bool(within and all(e.met for e in goal_errors))
     if success:
