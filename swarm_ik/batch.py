@@ -329,6 +329,34 @@ class BatchResult:
     settings: BatchSettings
     joint_names: tuple[str, ...] = ()
 
+    @classmethod
+    def from_chunks(
+        cls,
+        parts: list[ChunkResult],
+        robot: RobotModel,
+        settings: BatchSettings,
+        time_s: float,
+        setup_s: float,
+    ) -> BatchResult:
+        """The chunks' answers joined in order (none: empty arrays)."""
+
+        def cat(attr: str, empty: Any) -> Any:
+            return np.concatenate([getattr(p, attr) for p in parts]) if parts else empty
+
+        return cls(
+            q=cat("q", np.empty((0, robot.nq))),
+            position_error=cat("position_error", np.empty(0)),
+            rotation_error=cat("rotation_error", np.empty(0)),
+            success=cat("success", np.empty(0, dtype=bool)),
+            n_evals=cat("n_evals", np.empty(0, dtype=np.int64)),
+            n_starts=cat("n_starts", np.empty(0, dtype=np.int64)),
+            time_s=time_s,
+            setup_s=setup_s,
+            compute_s=float(sum(p.time_s for p in parts)),
+            settings=settings,
+            joint_names=tuple(robot.joint_names),
+        )
+
     @property
     def n(self) -> int:
         """Number of targets."""
@@ -663,24 +691,7 @@ def solve_batch(
             sizes=[len(it[1]) for it in items],
             unit="pose",
         )
-    nq = robot.nq
-
-    def cat(attr: str, empty: Any) -> Any:
-        return np.concatenate([getattr(p, attr) for p in parts]) if parts else empty
-
-    return BatchResult(
-        q=cat("q", np.empty((0, nq))),
-        position_error=cat("position_error", np.empty(0)),
-        rotation_error=cat("rotation_error", np.empty(0)),
-        success=cat("success", np.empty(0, dtype=bool)),
-        n_evals=cat("n_evals", np.empty(0, dtype=np.int64)),
-        n_starts=cat("n_starts", np.empty(0, dtype=np.int64)),
-        time_s=time.perf_counter() - t0,
-        setup_s=setup_s,
-        compute_s=float(sum(p.time_s for p in parts)),
-        settings=settings,
-        joint_names=tuple(robot.joint_names),
-    )
+    return BatchResult.from_chunks(parts, robot, settings, time.perf_counter() - t0, setup_s)
 
 
 # --------------------------------------------------------------------------- files

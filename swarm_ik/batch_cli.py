@@ -260,24 +260,7 @@ def solve_keeping_chunks(
             logging.getLogger("distributed").setLevel(logging.CRITICAL)
         finally:
             bar.close()
-    nq = robot.nq
-
-    def cat(attr: str, empty: Any) -> Any:
-        return np.concatenate([getattr(p, attr) for p in parts]) if parts else empty
-
-    res = BatchResult(
-        q=cat("q", np.empty((0, nq))),
-        position_error=cat("position_error", np.empty(0)),
-        rotation_error=cat("rotation_error", np.empty(0)),
-        success=cat("success", np.empty(0, dtype=bool)),
-        n_evals=cat("n_evals", np.empty(0, dtype=np.int64)),
-        n_starts=cat("n_starts", np.empty(0, dtype=np.int64)),
-        time_s=time.perf_counter() - t0,
-        setup_s=setup_s,
-        compute_s=float(sum(p.time_s for p in parts)),
-        settings=settings,
-        joint_names=tuple(robot.joint_names),
-    )
+    res = BatchResult.from_chunks(parts, robot, settings, time.perf_counter() - t0, setup_s)
     return res, interrupted
 
 

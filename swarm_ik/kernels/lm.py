@@ -563,19 +563,25 @@ def _chol_back(a: FloatArray, b: FloatArray, n: int, x: FloatArray) -> None:  # 
 
 
 @numba.njit(cache=True)
+def into_bounds(v: float, j: int, b: Bounds) -> float:  # pragma: no cover - compiled
+    """Value ``v`` of joint ``j`` wrapped into ``[-π, π)`` if continuous, then clipped to
+    the bounds (the compiled twin of :meth:`swarm_ik.solvers.base.Evaluator.clip`)."""
+    if b.wrap[j]:
+        v = (v + math.pi) % (2.0 * math.pi) - math.pi
+    if v < b.lower[j]:
+        return b.lower[j]
+    if v > b.upper[j]:
+        return b.upper[j]
+    return v
+
+
+@numba.njit(cache=True)
 def _step_into_bounds(
     q: FloatArray, delta: FloatArray, scale: float, b: Bounds, out: FloatArray
 ) -> None:  # pragma: no cover - compiled
     """``out = q + scale·delta``, continuous joints wrapped into [-π, π), then clipped."""
     for j in range(q.shape[0]):
-        v = q[j] + scale * delta[j]
-        if b.wrap[j]:
-            v = (v + math.pi) % (2.0 * math.pi) - math.pi
-        if v < b.lower[j]:
-            v = b.lower[j]
-        elif v > b.upper[j]:
-            v = b.upper[j]
-        out[j] = v
+        out[j] = into_bounds(q[j] + scale * delta[j], j, b)
 
 
 @numba.njit(cache=True)

@@ -165,14 +165,7 @@ def _clip_row(q: FloatArray, b: Bounds) -> None:  # pragma: no cover - compiled
     """Continuous joints wrapped into ``[-π, π)``, then clipped to the bounds (in place; the
     twin of :meth:`swarm_ik.solvers.base.Evaluator.clip`)."""
     for j in range(q.shape[0]):
-        v = q[j]
-        if b.wrap[j]:
-            v = (v + np.pi) % (2 * np.pi) - np.pi
-        if v < b.lower[j]:
-            v = b.lower[j]
-        elif v > b.upper[j]:
-            v = b.upper[j]
-        q[j] = v
+        q[j] = lm.into_bounds(q[j], j, b)
 
 
 # --------------------------------------------------------------------------- the search
