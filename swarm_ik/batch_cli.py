@@ -115,46 +115,16 @@ def add_commands(subparsers: Any) -> dict[str, Any]:
     b.add_argument("--chunk-size", type=int, default=None, help="targets per Dask task")
     _add_solver_options(b, max_starts=128)
 
+    from swarm_ik import reach
+
     r = subparsers.add_parser(
         "reach",
         help="reachability map on a voxel grid (npz + PNG slices + HTML point cloud)",
         description="Reachability index per voxel: the fraction of K orientations solved at "
         "its centre.",
     )
-    _add_robot(r)
-    r.add_argument("--resolution", type=float, default=0.1, help="voxel edge [m] (default 0.1)")
-    r.add_argument(
-        "--bounds",
-        nargs=6,
-        type=float,
-        default=None,
-        metavar=("XMIN", "YMIN", "ZMIN", "XMAX", "YMAX", "ZMAX"),
-        help="workspace box [m] (default: cube around the first joint, 1.1 × the sampled reach)",
-    )
-    r.add_argument(
-        "--orientations",
-        type=int,
-        default=8,
-        metavar="K",
-        help="orientations tried per voxel (default 8, seeded random rotations)",
-    )
-    r.add_argument(
-        "--out",
-        type=Path,
-        default=None,
-        metavar="FILE.npz",
-        help="map file (default reach_<robot>.npz)",
-    )
-    r.add_argument("--png", type=Path, default=None, help="slices picture (default: next to --out)")
-    r.add_argument(
-        "--html",
-        type=Path,
-        default=None,
-        help="meshcat point cloud page (default: next to --out, when meshcat is installed)",
-    )
-    r.add_argument("--no-html", action="store_true", help="do not write the HTML page")
-    _add_solver_options(r, max_starts=16)
-    return {"batch": run_batch, "reach": run_reach}
+    reach.add_arguments(r)
+    return {"batch": run_batch, "reach": reach.run}
 
 
 def _load(args: argparse.Namespace) -> Any:
@@ -318,68 +288,3 @@ def run_batch(args: argparse.Namespace) -> int:
         )
     print(f"wrote {args.out}")
     return 0 if n_ok == res.n else 1
-
-
-def run_reach(args: argparse.Namespace) -> int:
-    """Handler of ``swarm-ik reach``; returns the exit code."""
-    from swarm_ik import reach
-    from swarm_ik._validate import check_grid_size, check_output_path, positive_float
-
-    out = args.out if args.out is not None else Path(f"reach_{args.robot.replace('/', '_')}.npz")
-    if out.suffix.lower() != ".npz":
-        out = out.with_suffix(".npz")
-    check_output_path(out, "--out")  # before any work
-    check_output_path(args.png or out.with_suffix(".png"), "--png")
-    if not args.no_html:
-        check_output_path(args.html or out.with_suffix(".html"), "--html")
-    robot = _load(args)
-    # the grid's size is checked before anything is allocated (reach_map refuses too many
-    # poses only once the voxel centres exist); default_bounds with the same seed is what
-    # reach_map would compute itself, so the map is the same
-    if args.bounds is not None:
-        lo, hi = np.asarray(args.bounds[:3], float), np.asarray(args.bounds[3:], float)
-    else:
-        positive_float(args.resolution, "--resolution")
-        lo, hi = reach.default_bounds(robot, seed=args.seed)
-    check_grid_size(lo, hi, args.resolution)
-    bounds = np.concatenate([lo, hi])
-    rmap = reach.reach_map(
-        robot,
-        resolution=args.resolution,
-        bounds=bounds,
-        n_orientations=args.orientations,
-        seed=args.seed,
-        tol_pos=args.tol_pos,
-        tol_rot=args.tol_rot,
-        max_starts=args.max_starts,
-        max_iters=args.max_iters,
-        scheduler=args.scheduler,
-        progress=not args.no_progress and sys.stderr.isatty(),
-    )
-    rmap.save(out)
-    png = reach.plot_slices(rmap, args.png or out.with_suffix(".png"))
-    written = [str(out), str(png)]
-    if not args.no_html:
-        try:
-            import meshcat  # noqa: F401
-        except ImportError:
-            if args.html is not None:
-                print(
-                    'swarm-ik: error: --html needs meshcat (pip install "swarm_ik[viz]")',
-                    file=sys.stderr,
-                )
-                return 2
-        else:
-            written.append(str(reach.export_html(rmap, args.html or out.with_suffix(".html"))))
-    reachable = rmap.index > 0
-    print(
-        f"robot {robot.name}, frame {robot.ee_frame}: grid {rmap.index.shape} of "
-        f"{rmap.resolution:g} m voxels, K = {rmap.n_orientations} orientations"
-    )
-    mean = float(rmap.index[reachable].mean()) if reachable.any() else 0.0
-    print(
-        f"reachable voxels {int(reachable.sum())} of {int(rmap.solved.sum())} within the "
-        f"chain's reach; mean index {mean:.3f} ({rmap.time_s:.1f} s)"
-    )
-    print("wrote " + ", ".join(written))
-    return 0

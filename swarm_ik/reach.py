@@ -625,6 +625,7 @@ def run(args: Any) -> int:
     import sys
 
     import swarm_ik
+    from swarm_ik import _validate
     from swarm_ik.viz.export import check_output_path
 
     out = args.out if args.out is not None else Path(f"reach_{Path(args.robot).stem}.npz")
@@ -645,10 +646,18 @@ def run(args: Any) -> int:
         elif args.html is not None:
             raise InvalidArgumentError('--html needs meshcat: pip install "swarm_ik[viz]"')
     robot = swarm_ik.load_robot(args.robot, ee_frame=args.frame)
+    # the grid's size is checked before anything is allocated; default_bounds with the same
+    # seed is what reach_map would compute itself, so the map is the same
+    if args.bounds is not None:
+        lo, hi = np.asarray(args.bounds[:3], float), np.asarray(args.bounds[3:], float)
+    else:
+        _validate.positive_float(args.resolution, "--resolution")
+        lo, hi = default_bounds(robot, seed=args.seed)
+    _validate.check_grid_size(lo, hi, args.resolution)
     rmap = reach_map(
         robot,
         resolution=args.resolution,
-        bounds=args.bounds,
+        bounds=np.concatenate([lo, hi]),
         n_orientations=args.orientations,
         seed=args.seed,
         tol_pos=args.tol_pos,
