@@ -188,6 +188,39 @@ def _check_pose_goal(
     return (GoalError(gl.describe(), dp, dr, met),), within
 
 
+def _result(
+    problem: IKProblem,
+    q: np.ndarray,
+    fit: float,
+    goal_errors: tuple[Any, ...],
+    within: bool,
+    spent: Any,
+    elapsed: float,
+    history: np.ndarray,
+    solver: str,
+    seed: int | None,
+) -> Result:
+    """The :class:`Result` of a solve from its answer and its Pinocchio check (``spent``: the
+    evaluator, or what :func:`end_reason` reads of one)."""
+    dp, dr = largest_errors(goal_errors)
+    success = bool(within and all(e.met for e in goal_errors))
+    return Result(
+        q=q,
+        fitness=fit,
+        position_error=dp,
+        rotation_error=dr,
+        n_evals=int(spent.n_evals),
+        time_s=elapsed,
+        success=success,
+        within_limits=bool(within),
+        history=history,
+        solver=solver,
+        seed=seed,
+        goal_errors=goal_errors,
+        reason=end_reason(problem, success, spent),
+    )
+
+
 class _Call(NamedTuple):
     """One solve's settings, as :func:`solve` checked them (passed to its shortcuts)."""
 
@@ -250,24 +283,8 @@ def _fast_path(problem: IKProblem, call: _Call) -> Result | None:
     else:
         goal_errors = problem.verify(q, tol_pos, tol_rot, q0=q_start)
         within = problem.within_bounds(q)
-    dp, dr = largest_errors(goal_errors)
-    success = within and all(e.met for e in goal_errors)
-    ev = _Spent(max_evals, out.used, time_limit, elapsed)
-    return Result(
-        q=q,
-        fitness=fit,
-        position_error=dp,
-        rotation_error=dr,
-        n_evals=out.used,
-        time_s=elapsed,
-        success=bool(success),
-        within_limits=within,
-        history=out.history,
-        solver=solver,
-        seed=seed,
-        goal_errors=goal_errors,
-        reason=end_reason(problem, bool(success), ev),  # type: ignore[arg-type]
-    )
+    spent = _Spent(max_evals, out.used, time_limit, elapsed)
+    return _result(problem, q, fit, goal_errors, within, spent, elapsed, out.history, solver, seed)
 
 
 class _Out(NamedTuple):
@@ -425,24 +442,10 @@ def solve(
     else:
         fit = float(ev.best_f)
     goal_errors = problem.verify(q, tol_pos, tol_rot, q0=q_start)
-    dp, dr = largest_errors(goal_errors)
-    within = problem.within_bounds(q)
-    success = within and all(e.met for e in goal_errors)
-    return Result(
-        q=q,
-        fitness=fit,
-        position_error=dp,
-        rotation_error=dr,
-        n_evals=ev.n_evals,
-        time_s=elapsed,
-        success=bool(success),
-        within_limits=within,
-        history=np.asarray(ev.history, dtype=float),
-        solver=solver,
-        seed=None if isinstance(seed, np.random.Generator) else (0 if seed is None else int(seed)),
-        goal_errors=goal_errors,
-        reason=end_reason(problem, bool(success), ev),
-    )
+    return _result(
+        problem, q, fit, goal_errors, problem.within_bounds(q), ev, elapsed,
+        np.asarray(ev.history, dtype=float), solver, seed_val,
+    )  # fmt: skip
 
 
 class IKSolver:
