@@ -287,15 +287,6 @@ def _fast_path(problem: IKProblem, call: _Call) -> Result | None:
     return _result(problem, q, fit, goal_errors, within, spent, elapsed, out.history, solver, seed)
 
 
-class _Out(NamedTuple):
-    """The parts of a compiled search's outcome that :class:`IKSolver` reads."""
-
-    q: np.ndarray
-    fitness: float
-    used: int
-    history: np.ndarray
-
-
 class _Spent(NamedTuple):
     """What :func:`end_reason` reads of an evaluator, for the compiled path."""
 
@@ -377,6 +368,19 @@ def solve(
     """
     if not isinstance(problem, IKProblem):
         raise InvalidArgumentError(f"problem must be an IKProblem, got {type(problem).__name__}")
+    if (
+        problem.plain_pose
+        and solver == DEFAULT_SOLVER
+        and not params
+        and stop_on_success
+        and prefer == "best"
+        and on_improvement is None
+        and type(seed) is int
+        and 0 <= seed < 2**63
+    ):
+        ik = _lane(problem, tol_pos, tol_rot, time_limit, max_evals)
+        if ik is not None:
+            return ik._solve_pose(problem.target, q0, seed, target_checked=True)
     spec = base.get(solver)
     if prefer not in PREFER:
         raise unknown("prefer mode", prefer, PREFER)
@@ -446,6 +450,40 @@ def solve(
         problem, q, fit, goal_errors, problem.within_bounds(q), ev, elapsed,
         np.asarray(ev.history, dtype=float), solver, seed_val,
     )  # fmt: skip
+
+
+def _lane(
+    problem: IKProblem,
+    tol_pos: float,
+    tol_rot: float,
+    time_limit: float | None,
+    max_evals: int | None,
+) -> IKSolver | None:
+    """The cached :class:`IKSolver` that answers ``solve(problem, …)`` for a plain pose
+    problem (:attr:`IKProblem.plain_pose`) of the default solver with default parameters: the
+    same compiled search with the same key, so the same :class:`Result` as the general path,
+    without rebuilding the goal table and the search state on every call.  One per robot and
+    settings (made on first use: it validates the settings, raising what ``solve`` raises);
+    ``None`` when the problem's methods were replaced (then the general path runs)."""
+    from swarm_ik.solvers import hybrid
+
+    if not hybrid.compiled_ok(problem, "best"):
+        return None
+    lanes = problem.robot._cache.setdefault("solve_lanes", {})
+    key = (tol_pos, tol_rot, time_limit, max_evals, problem.w_rot)
+    try:
+        ik: IKSolver | None = lanes.get(key)
+    except TypeError:  # an unhashable setting: the general path checks and refuses it
+        return None
+    if ik is None:
+        if len(lanes) > 64:
+            lanes.clear()
+        ik = IKSolver(
+            problem.robot, tol_pos=tol_pos, tol_rot=tol_rot, time_limit=time_limit,
+            max_evals=max_evals, w_rot=problem.w_rot,
+        )  # fmt: skip
+        lanes[key] = ik
+    return ik if ik._state is not None else None
 
 
 class IKSolver:
@@ -522,6 +560,7 @@ class IKSolver:
             static = st.static(tpl.table(None))
             self._head = tuple(static[: search.PAR_INDEX])
             self._mid_args = tuple(static[search.PAR_INDEX + 1 :])
+            self._wrap = np.ascontiguousarray(tpl.bounds.wrap)
             lim = self.time_limit
             self._consts = (
                 st.pol.kernel_tol_pos,
@@ -543,7 +582,30 @@ class IKSolver:
         self._label = tpl.goals[0].describe()
         self._frame = robot.ee_frame
         self._position_only = tpl.position_only
+        if self._state is not None:  # the kernel's entry point for these argument types
+            from swarm_ik.kernels import search
+
+            eye = np.eye(4)
+            self._kernel = search.entry_point(
+                self._args(eye, self._mid, True, True, 0.0, 0, np.empty(tpl.nq))
+            )
         self.solve(self._template.target)  # the first solve's Python paths warmed too
+
+    def _args(
+        self,
+        target: np.ndarray,
+        q: np.ndarray,
+        target_checked: bool,
+        start_checked: bool,
+        t0: float,
+        seed: int,
+        out_q: np.ndarray,
+    ) -> tuple[Any, ...]:
+        """The argument tuple of :func:`swarm_ik.kernels.search.solve_pose_flat`."""
+        return (
+            *self._head, self._par0, *self._mid_args, target, q, target_checked, start_checked,
+            self._position_only, *self._consts, t0, seed, out_q,
+        )  # fmt: skip
 
     def solve(
         self, target: Any, q0: Any = None, seed: int | np.random.Generator | None = 0
@@ -573,69 +635,73 @@ class IKSolver:
                 time_limit=self.time_limit, q0=q0, tol_pos=self.tol_pos, tol_rot=self.tol_rot,
                 **self.params,
             )  # fmt: skip
-        from swarm_ik.kernels.search import pose_ok
+        return self._solve_pose(target, q0, seed)
 
-        if (
-            type(target) is np.ndarray
-            and target.shape == (4, 4)
-            and target.dtype == np.float64
-            and pose_ok(target, 1e-6)
-        ):
-            pose = target.copy()  # checked in compiled code (as_pose's checks, with margin)
-        else:
-            pose = as_pose(target)
-        return self._solve_pose(st, pose, q0, seed)
-
-    def _solve_pose(self, st: Any, pose: np.ndarray, q0: Any, seed: int) -> Result:
-        """The per-call path of a validated 4×4 target (the compiled search + the check)."""
-        from swarm_ik.kernels.search import pose_errors_one, swarm_search_flat
-        from swarm_ik.solvers.hybrid import search_key
+    def _solve_pose(self, target: Any, q0: Any, seed: int, target_checked: bool = False) -> Result:
+        """The per-call path of a 4×4 target: one compiled call (checks, search), the
+        Pinocchio check and the Result.  A target or start the compiled checks do not pass is
+        checked in Python (:func:`~swarm_ik.pose.as_pose`, :func:`prepare_q0`: refused, or
+        fixed and marked checked) and the call repeated."""
+        from swarm_ik.kernels.search import CHECK_TARGET, RAN, pose_errors_one
+        from swarm_ik.problem import GoalError
 
         tpl = self._template
-        q_start = None if q0 is None else prepare_q0(tpl, q0)
-        par = self._par0.copy()
-        if not self._position_only:
-            par[0, :9] = pose[:3, :3].ravel()
-        par[0, 9:12] = pose[:3, 3]
-        out_q = np.empty(tpl.nq)
-        t0 = time.perf_counter()
-        used, fit, _dp, _dr, _stopped, history = swarm_search_flat(
-            *self._head, par, *self._mid_args, self._mid if q_start is None else q_start,
-            *self._consts, t0, search_key(seed), out_q,
-        )  # fmt: skip
+        if type(target) is np.ndarray and target.dtype == np.float64 and target.shape == (4, 4):
+            pose = np.ascontiguousarray(target)
+            pose_checked = target_checked  # else checked when compiled
+        else:
+            pose, pose_checked = np.ascontiguousarray(as_pose(target), dtype=float), True
+        q_start: Any
+        if q0 is None:
+            q_start, start_checked = self._mid, True
+        elif (
+            type(q0) is np.ndarray
+            and q0.dtype == np.float64
+            and q0.shape == self._mid.shape
+            and q0.flags.c_contiguous
+        ):
+            q_start, start_checked = q0, False  # read, never written
+        else:
+            q_start, start_checked = prepare_q0(tpl, q0), True
+        q = np.empty(tpl.nq)
+        while True:
+            t0 = time.perf_counter()
+            status, used, fit, history = self._kernel(
+                self._args(pose, q_start, pose_checked, start_checked, t0, seed, q)
+            )
+            if status == RAN:
+                break
+            if status == CHECK_TARGET:
+                pose, pose_checked = np.ascontiguousarray(as_pose(pose), dtype=float), True
+            else:
+                q_start, start_checked = prepare_q0(tpl, q0), True
         elapsed = time.perf_counter() - t0
-        out = _Out(out_q, float(fit), int(used), history)
-        q = out.q
         reached = self.robot.fk_pinocchio(q, self._frame)  # the independent check
         dp, dr, within = pose_errors_one(reached, pose, q, tpl.lower, tpl.upper)
         if self._position_only:
             dr = math.nan
         met = not (dp > self.tol_pos) and not (dr > self.tol_rot)
         success = within and met
-        fit = out.fitness
         if not math.isfinite(fit):
             fit = dp + (0.0 if math.isnan(dr) else self._w_rot * dr)
         if success:
             reason = "converged"
         else:
-            problem = tpl.with_target(pose)
             reason = end_reason(
-                problem,
+                tpl.with_target(pose),
                 False,
-                _Spent(self.max_evals, out.used, self.time_limit, elapsed),  # type: ignore[arg-type]
+                _Spent(self.max_evals, used, self.time_limit, elapsed),  # type: ignore[arg-type]
             )
-        from swarm_ik.problem import GoalError
-
         return Result(
             q=q,
-            fitness=fit,
+            fitness=float(fit),
             position_error=dp,
             rotation_error=0.0 if math.isnan(dr) else dr,
-            n_evals=out.used,
+            n_evals=int(used),
             time_s=elapsed,
             success=bool(success),
             within_limits=within,
-            history=out.history,
+            history=history,
             solver=self.solver,
             seed=seed,
             goal_errors=(GoalError(self._label, dp, dr, bool(met)),),

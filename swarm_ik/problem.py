@@ -220,6 +220,10 @@ class IKProblem:
                 f"bounds [{self.lower[j]:g}, {self.upper[j]:g}] exceed its limits "
                 f"[{robot.lower[j]:g}, {robot.upper[j]:g}]"
             )
+        self.plain_pose = target is not None and goals is None and fitness == "se3" and not narrowed
+        """A pose (or, with ``w_rot=0``, position) target for the first goal frame within the
+        robot's own limits, nothing else: :func:`swarm_ik.solve` may answer it through a
+        cached :class:`swarm_ik.IKSolver` (the same result)."""
         self.position_only = (target is not None and self.w_rot == 0.0 and len(terms) == 1) or all(
             isinstance(gl, Position) for gl in terms if gl.is_primary
         )

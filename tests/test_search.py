@@ -111,26 +111,76 @@ def test_time_limit_is_honoured_inside_the_compiled_loop() -> None:
     assert r.time_s < 0.01 + 0.05  # one polish call of overshoot at most (loaded machine)
 
 
-def test_iksolver_equals_solve() -> None:
-    robot = swarm_ik.load_robot("panda")
-    ik = swarm_ik.IKSolver(robot, max_evals=3000)
-    rng = np.random.default_rng(8)
-    for q in robot.random_q(rng, 25):
-        T = robot.fk(q)
-        a = ik.solve(T, seed=2)
-        b = swarm_ik.solve(swarm_ik.IKProblem(robot, T), seed=2, max_evals=3000)
-        np.testing.assert_array_equal(a.q, b.q)
-        assert (a.n_evals, a.success, a.reason, a.fitness) == (
-            b.n_evals,
-            b.success,
-            b.reason,
-            b.fitness,
-        )
-        np.testing.assert_array_equal(a.history, b.history)
-        (ga,), (gb,) = a.goal_errors, b.goal_errors
-        assert ga.goal == gb.goal and ga.met == gb.met
-        assert ga.position_error == pytest.approx(gb.position_error, rel=1e-9, abs=1e-15)
+def _same_result(a: swarm_ik.Result, b: swarm_ik.Result) -> None:
+    np.testing.assert_array_equal(a.q, b.q)
+    assert (a.n_evals, a.success, a.reason, a.fitness) == (
+        b.n_evals,
+        b.success,
+        b.reason,
+        b.fitness,
+    )
+    np.testing.assert_array_equal(a.history, b.history)
+    (ga,), (gb,) = a.goal_errors, b.goal_errors
+    assert ga.goal == gb.goal and ga.met == gb.met
+    assert ga.position_error == pytest.approx(gb.position_error, rel=1e-9, abs=1e-15)
+    if np.isnan(gb.rotation_error):
+        assert np.isnan(ga.rotation_error)
+    else:
         assert ga.rotation_error == pytest.approx(gb.rotation_error, rel=1e-6, abs=1e-15)
+
+
+@pytest.mark.parametrize("w_rot", [1.0, 0.0])
+def test_iksolver_and_solve_equal_the_general_path(w_rot: float) -> None:
+    """IKSolver.solve, solve() (its cached IKSolver lane) and the general compiled path of
+    solve() (taken with a callback) give the same Result, with and without a start."""
+    robot = swarm_ik.load_robot("panda")
+    ik = swarm_ik.IKSolver(robot, max_evals=3000, w_rot=w_rot)
+    rng = np.random.default_rng(8)
+    seen: list[float] = []
+    for i, q in enumerate(robot.random_q(rng, 25)):
+        T = robot.fk(q)
+        q0 = None if i % 2 else robot.random_q(rng)
+        p = swarm_ik.IKProblem(robot, T, w_rot=w_rot)
+        a = ik.solve(T, q0=q0, seed=2 + i)
+        lane = swarm_ik.solve(p, seed=2 + i, max_evals=3000, q0=q0)
+        general = swarm_ik.solve(
+            p, seed=2 + i, max_evals=3000, q0=q0, on_improvement=lambda q, f: seen.append(f)
+        )
+        _same_result(a, general)
+        _same_result(lane, general)
+    assert seen  # the callback ran: the general path was taken
+
+
+def test_seed_key_is_numpys_first_draw() -> None:
+    """The compiled key of an integer seed equals one draw of default_rng(seed) (SeedSequence
+    + PCG64 reimplemented), so every solve path keys its stream alike."""
+    rng = np.random.default_rng(0)
+    seeds = [0, 1, 2, 41, 2**31 - 1, 2**32 - 1, 2**32, 2**32 + 1, 2**62, 2**63 - 1]
+    seeds += [int(s) for s in rng.integers(0, 2**63, 300)] + list(range(3, 200))
+    for s in seeds:
+        assert search.seed_key(s) == search.stream_key(np.random.default_rng(s)), s
+
+
+def test_iksolver_start_checked_like_solve() -> None:
+    """A start is refused, clipped (with a warning) or used as it is, as prepare_q0 does."""
+    robot = swarm_ik.load_robot("ur5")  # (continuous-free limits of ±2π)
+    ik = swarm_ik.IKSolver(robot, max_evals=2000)
+    T = robot.fk(robot.random_q(np.random.default_rng(1)))
+    with pytest.raises(swarm_ik.InvalidArgumentError, match="NaN"):
+        ik.solve(T, q0=np.full(robot.nq, np.nan))
+    with pytest.raises(swarm_ik.InvalidArgumentError, match="6 values"):
+        ik.solve(T, q0=np.zeros(robot.nq + 1))
+    q0 = robot.mid_q() + 0.2
+    ref = ik.solve(T, q0=q0, seed=3)
+    _same_result(ik.solve(T, q0=q0.tolist(), seed=3), ref)  # a list: checked in Python
+    outside = q0.copy()
+    outside[0] = robot.upper[0] + 1.0
+    clipped = q0.copy()
+    clipped[0] = robot.upper[0]
+    with pytest.warns(UserWarning, match="outside the joint limits"):
+        a = ik.solve(T, q0=outside, seed=3)
+    _same_result(a, ik.solve(T, q0=clipped, seed=3))
+    assert not np.array_equal(outside, clipped)  # the caller's start is not written
 
 
 def test_iksolver_refuses_bad_targets_like_solve() -> None:

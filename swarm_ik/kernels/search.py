@@ -44,14 +44,18 @@ from swarm_ik.kernels.fk import TreeArrays
 from swarm_ik.kernels.lm import BUDGET, CONVERGED, Bounds, GoalTable, LMSettings
 
 FloatArray = NDArray[np.float64]
+BoolArray = NDArray[np.bool_]
 
 __all__ = [
+    "entry_point",
     "flat_args",
     "gwo_move_into",
     "now",
     "pose_errors_one",
     "pose_ok",
+    "seed_key",
     "splitmix64",
+    "start_inside",
     "stream_key",
     "swarm_search",
     "swarm_search_flat",
@@ -71,6 +75,8 @@ N_STATIC = _E_CFG
 """Number of flat arguments that carry the tree, goal table, bounds and settings."""
 PAR_INDEX = N_TREE + GoalTable._fields.index("par")
 """Position of the goal table's ``par`` array among the flat arguments."""
+
+_PAR_NEXT = PAR_INDEX + 1
 
 NO_LIMIT = -1.0
 """``time_limit`` value meaning "no time limit"."""
@@ -131,6 +137,87 @@ def uniforms(key: np.uint64, first: int, n: int) -> FloatArray:  # pragma: no co
 def stream_key(rng: np.random.Generator) -> np.uint64:
     """The ``uint64`` key of a search's random stream, one draw from ``rng``."""
     return np.uint64(rng.integers(0, 2**64, dtype=np.uint64))
+
+
+_M32 = np.uint64(0xFFFFFFFF)
+
+
+@numba.njit(cache=True)
+def _mul128(ah: Any, al: Any, bh: Any, bl: Any) -> tuple[Any, Any]:  # pragma: no cover
+    """``(ah·2⁶⁴ + al)·(bh·2⁶⁴ + bl) mod 2¹²⁸`` as ``(high, low)`` words (uint64 each)."""
+    s32 = np.uint64(32)
+    a0, a1 = al & _M32, al >> s32
+    b0, b1 = bl & _M32, bl >> s32
+    p00 = a0 * b0
+    p01 = a0 * b1
+    p10 = a1 * b0
+    mid = (p00 >> s32) + (p01 & _M32) + (p10 & _M32)
+    hi = a1 * b1 + (p01 >> s32) + (p10 >> s32) + (mid >> s32)  # high word of al·bl
+    return hi + ah * bl + al * bh, al * bl
+
+
+@numba.njit(cache=True)
+def _add128(ah: Any, al: Any, bh: Any, bl: Any) -> tuple[Any, Any]:  # pragma: no cover
+    """``(ah·2⁶⁴ + al) + (bh·2⁶⁴ + bl) mod 2¹²⁸`` as ``(high, low)`` words (uint64 each)."""
+    lo = al + bl
+    return ah + bh + (np.uint64(1) if lo < al else np.uint64(0)), lo
+
+
+@numba.njit(cache=True)
+def seed_key(seed: int) -> np.uint64:  # pragma: no cover - compiled
+    """``stream_key(numpy.random.default_rng(seed))`` for an integer ``0 <= seed < 2**63``,
+    without making the Generator (≈ 10–16 µs in numpy; ≈ 0.1 µs here).
+
+    numpy's algorithms, step by step: ``SeedSequence(seed)`` (the integer as 32-bit words,
+    ``mix_entropy`` into a pool of 4 with ``hashmix``/``mix``, ``generate_state(4, uint64)``),
+    ``PCG64`` seeded with those words (``pcg_setseq_128_srandom_r``: state 0, increment
+    ``2·seq + 1``, step, add the initial state, step), and one ``next64`` (step, XSL-RR
+    output), which ``Generator.integers(0, 2**64, dtype=uint64)`` returns unchanged.  Equal to
+    numpy on every seed tested (``tests/test_search.py``)."""
+    u = np.uint64(seed)
+    s16, s32 = np.uint64(16), np.uint64(32)
+    words = np.zeros(4, dtype=np.uint64)
+    words[0] = u & _M32
+    words[1] = u >> s32
+    n_words = 2 if words[1] != np.uint64(0) else 1
+    pool = np.zeros(4, dtype=np.uint64)
+    h = np.uint64(0x43B0D7E5)  # INIT_A
+    mult_a = np.uint64(0x931E8875)
+    for i in range(4):
+        v = (words[i] if i < n_words else np.uint64(0)) ^ h
+        h = (h * mult_a) & _M32
+        v = (v * h) & _M32
+        pool[i] = v ^ (v >> s16)
+    for src in range(4):
+        for dst in range(4):
+            if src != dst:
+                v = pool[src] ^ h  # hashmix(pool[src])
+                h = (h * mult_a) & _M32
+                v = (v * h) & _M32
+                v = v ^ (v >> s16)
+                r = (np.uint64(0xCA01F9DD) * pool[dst] - np.uint64(0x4973F715) * v) & _M32
+                pool[dst] = r ^ (r >> s16)  # mix(pool[dst], v)
+    hb = np.uint64(0x8B51F9DD)  # INIT_B
+    st = np.zeros(8, dtype=np.uint64)
+    for i in range(8):
+        v = pool[i % 4] ^ hb
+        hb = (hb * np.uint64(0x58F38DED)) & _M32
+        v = (v * hb) & _M32
+        st[i] = v ^ (v >> s16)
+    init_h, init_l = st[0] | (st[1] << s32), st[2] | (st[3] << s32)
+    seq_h, seq_l = st[4] | (st[5] << s32), st[6] | (st[7] << s32)
+    inc_h = (seq_h << np.uint64(1)) | (seq_l >> np.uint64(63))
+    inc_l = (seq_l << np.uint64(1)) | np.uint64(1)
+    mul_h, mul_l = np.uint64(0x2360ED051FC65DA4), np.uint64(0x4385DF649FCCF645)
+    sh, sl = inc_h, inc_l  # state 0, one step: 0·mul + inc
+    sh, sl = _add128(sh, sl, init_h, init_l)
+    sh, sl = _mul128(sh, sl, mul_h, mul_l)
+    sh, sl = _add128(sh, sl, inc_h, inc_l)
+    sh, sl = _mul128(sh, sl, mul_h, mul_l)  # next64: one more step…
+    sh, sl = _add128(sh, sl, inc_h, inc_l)
+    x = sh ^ sl  # …and the XSL-RR output
+    rot = sh >> np.uint64(58)
+    return (x >> rot) | (x << ((np.uint64(64) - rot) & np.uint64(63)))
 
 
 # --------------------------------------------------------------------------- grey wolf
@@ -418,6 +505,70 @@ def swarm_search_flat(*a: Any) -> tuple[int, float, float, float, bool, FloatArr
     return swarm_search(t, g, b, cfg, *a[_E_CFG:])
 
 
+RAN = 0
+"""Status of :func:`solve_pose_flat`: the search ran."""
+CHECK_TARGET = 1
+"""Status of :func:`solve_pose_flat`: the target needs :func:`swarm_ik.pose.as_pose`'s check."""
+CHECK_START = 2
+"""Status of :func:`solve_pose_flat`: the start needs :func:`swarm_ik.api.prepare_q0`."""
+
+
+@numba.njit(cache=True)
+def solve_pose_flat(*a: Any) -> tuple[int, int, float, FloatArray]:  # type: ignore[no-untyped-def]  # pragma: no cover
+    """One :class:`swarm_ik.IKSolver` call of a 4×4 target in one compiled call: the checks of
+    the target (:func:`pose_ok`) and of the start (:func:`start_inside`), the goal row of the
+    target, the random key of the integer seed (:func:`seed_key`) and :func:`swarm_search`.
+
+    Arguments (flat): the :data:`N_STATIC` static arguments of :func:`swarm_search_flat` (the
+    goal table's ``par``: the template row, copied here), then ``target (4, 4)``,
+    ``q_start (nq,)``, ``target_checked``, ``start_checked``, ``position_only``, the
+    arguments of :func:`swarm_search` from ``kernel_tol_pos`` to ``time_limit``, ``t0``, the
+    integer ``seed`` and ``out_q (nq,)``.
+
+    Returns:
+        ``(status, evaluations, fitness, history)``; ``status`` is :data:`RAN`, or
+        :data:`CHECK_TARGET` / :data:`CHECK_START` when an unchecked target or start did not
+        pass (nothing ran: the caller checks it in Python, which raises or fixes it, and
+        calls again with it marked checked).
+    """
+    t = TreeArrays(*a[0:_E_TREE])
+    par0 = a[PAR_INDEX]
+    rest = a[_E_CFG:]
+    target, q_start, target_checked, start_checked, position_only = rest[0:5]
+    b = Bounds(*a[_E_TABLE:_E_BOUNDS])
+    if not target_checked and not pose_ok(target, 1e-6):
+        return CHECK_TARGET, 0, np.inf, np.empty(0)
+    if not start_checked and not start_inside(q_start, b.lower, b.upper, b.wrap):
+        return CHECK_START, 0, np.inf, np.empty(0)
+    par = par0.copy()
+    if not position_only:
+        for r in range(3):
+            for c in range(3):
+                par[0, 3 * r + c] = target[r, c]
+    for r in range(3):
+        par[0, 9 + r] = target[r, 3]
+    g = GoalTable(*a[_E_TREE:PAR_INDEX], par, *a[_PAR_NEXT:_E_TABLE])  # type: ignore[call-arg]
+    cfg = LMSettings(*a[_E_BOUNDS:_E_CFG])
+    used, fit, _dp, _dr, _stopped, hist = swarm_search(  # type: ignore[call-arg]
+        t, g, b, cfg, q_start, *rest[5:19], seed_key(rest[19]), rest[20]
+    )
+    return RAN, used, fit, hist
+
+
+def entry_point(args: tuple[Any, ...]) -> Any:
+    """A callable ``f(args)`` running :func:`solve_pose_flat` on the argument tuple ``args``
+    without the dispatcher's typing of every argument (≈ 5 µs of a 50-argument call; the
+    arguments are only unboxed).  It is numba's compiled entry point for exactly the types of
+    ``args`` (compiled first if needed); callers must pass tuples of those same types, as
+    :class:`swarm_ik.IKSolver` does (its arguments are fixed when it is made).  Without one
+    (another numba's internals), ``lambda a: solve_pose_flat(*a)``."""
+    solve_pose_flat(*args)  # type: ignore[call-arg]  # compiled (or loaded) for these types
+    try:
+        return solve_pose_flat.overloads[(numba.typeof(args),)].entry_point  # type: ignore[attr-defined]
+    except (AttributeError, KeyError, TypeError):  # pragma: no cover - numba internals moved
+        return lambda a: solve_pose_flat(*a)
+
+
 def flat_args(t: TreeArrays, g: GoalTable, b: Bounds, cfg: LMSettings) -> list[Any]:
     """The structures as the flat argument list of :func:`swarm_search_flat` (its first
     :data:`N_STATIC` entries; the goal table's ``par`` at :data:`PAR_INDEX`)."""
@@ -445,9 +596,27 @@ def warm_up(t: TreeArrays, g: GoalTable, b: Bounds) -> None:
     )  # fmt: skip
     eye = np.eye(4)
     pose_errors_one(eye, eye, seed, b.lower, b.upper)  # the check of solve's answer
+    seed_key(0)  # the random key of an integer seed
+    start_inside(seed, b.lower, b.upper, b.wrap)  # the check of a start
 
 
 # --------------------------------------------------------------------------- per-call checks
+@numba.njit(cache=True)
+def start_inside(
+    q: FloatArray, lower: FloatArray, upper: FloatArray, wrap: BoolArray
+) -> bool:  # pragma: no cover - compiled
+    """Whether the start ``q`` ``(nq,)`` is finite, inside ``[lower, upper]`` and, on the
+    continuous joints (``wrap``), a fixed point of the wrap into ``[-π, π)``: then
+    :func:`swarm_ik.api.prepare_q0` would return it unchanged, and it is used as it is."""
+    for j in range(q.shape[0]):
+        v = q[j]
+        if not (lower[j] <= v <= upper[j]):  # False for NaN
+            return False
+        if wrap[j] and (v + math.pi) % (2.0 * math.pi) - math.pi != v:
+            return False  # RobotModel.wrap would move it (by round-off at least)
+    return True
+
+
 @numba.njit(cache=True)
 def pose_ok(m: FloatArray, orth_tol: float) -> bool:  # pragma: no cover - compiled
     """Whether the ``(4, 4)`` matrix ``m`` passes :func:`swarm_ik.pose.as_pose`'s checks

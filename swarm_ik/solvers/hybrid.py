@@ -253,20 +253,11 @@ class SearchOutcome(NamedTuple):
 
 def search_key(seed: int | np.random.Generator) -> np.uint64:
     """The random-stream key of a compiled search (:func:`swarm_ik.kernels.search.stream_key`)
-    from a seed or a Generator: the first draw of ``numpy.random.default_rng(seed)``, memoised
-    for integer seeds (making a Generator costs ≈ 10–20 µs)."""
+    from a seed or a Generator: the first draw of ``numpy.random.default_rng(seed)``, computed
+    without making the Generator for an integer seed (:func:`swarm_ik.kernels.search.seed_key`)."""
     if isinstance(seed, np.random.Generator):
         return search.stream_key(seed)
-    key = _KEYS.get(seed)
-    if key is None:
-        key = search.stream_key(np.random.default_rng(int(seed)))
-        if len(_KEYS) > 4096:
-            _KEYS.clear()
-        _KEYS[int(seed)] = key
-    return key
-
-
-_KEYS: dict[int, np.uint64] = {}
+    return np.uint64(search.seed_key(int(seed)))
 
 
 def compiled_search(
