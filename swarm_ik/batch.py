@@ -29,11 +29,15 @@ True
 
 from __future__ import annotations
 
+import contextlib
 import csv
 import functools
+import logging
 import math
+import signal
 import time
 import warnings
+from collections.abc import Iterator
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
@@ -46,7 +50,7 @@ from swarm_ik.errors import InvalidArgumentError, InvalidTargetError
 from swarm_ik.kernels import lie, lm
 from swarm_ik.kernels.fk import TreeArrays
 from swarm_ik.kernels.lm import CONVERGED, NOT_RUN
-from swarm_ik.kernels.search import SAMPLING_WIDTH, splitmix64
+from swarm_ik.kernels.search import sampling_window, splitmix64
 from swarm_ik.pose import make_pose, matrix_to_quat
 from swarm_ik.robot import RobotModel
 
@@ -134,13 +138,7 @@ def _solve_targets(
         key = _splitmix64(seed_key ^ np.uint64(index[i]))
         for j in range(n):
             starts[0, j] = q_seed[i, j]
-            # uniform restarts; a range wider than SAMPLING_WIDTH: a window around the seed
-            s_lo[j] = bounds.lower[j]
-            s_hi[j] = bounds.upper[j]
-            if s_hi[j] - s_lo[j] > SAMPLING_WIDTH:
-                a = min(max(q_seed[i, j] - 0.5 * SAMPLING_WIDTH, s_lo[j]), s_hi[j] - SAMPLING_WIDTH)
-                s_lo[j] = a
-                s_hi[j] = a + SAMPLING_WIDTH
+        sampling_window(bounds.lower, bounds.upper, q_seed[i], s_lo, s_hi)  # uniform restarts
         k = 1  # starts in this call
         done = 0  # starts polished so far
         counter = np.uint64(0)
@@ -315,6 +313,8 @@ class BatchResult:
         compute_s: Seconds spent in the chunks, summed over chunks (workers).
         settings: The settings used.
         joint_names: Joint names, ``(nq,)``.
+        interrupted: Ctrl-C stopped the call (``keep_on_interrupt``): the rows are the
+            chunks finished before it, the first targets in order.
     """
 
     q: FloatArray
@@ -328,6 +328,7 @@ class BatchResult:
     compute_s: float
     settings: BatchSettings
     joint_names: tuple[str, ...] = ()
+    interrupted: bool = False
 
     @classmethod
     def from_chunks(
@@ -337,6 +338,7 @@ class BatchResult:
         settings: BatchSettings,
         time_s: float,
         setup_s: float,
+        interrupted: bool = False,
     ) -> BatchResult:
         """The chunks' answers joined in order (none: empty arrays)."""
 
@@ -355,6 +357,7 @@ class BatchResult:
             compute_s=float(sum(p.time_s for p in parts)),
             settings=settings,
             joint_names=tuple(robot.joint_names),
+            interrupted=interrupted,
         )
 
     @property
@@ -611,6 +614,7 @@ def solve_batch(
     scheduler: Any = None,
     chunk_size: int | None = None,
     progress: bool = False,
+    keep_on_interrupt: bool = False,
 ) -> BatchResult:
     """Solve many target poses of one robot at once.
 
@@ -639,6 +643,9 @@ def solve_batch(
             ``distributed.Client``.
         chunk_size: Targets per chunk (default: :func:`default_chunk_size`).
         progress: Show a progress bar (tqdm) over the chunks.
+        keep_on_interrupt: On Ctrl-C return the chunks finished so far (``interrupted``
+            set) instead of raising ``KeyboardInterrupt``; chunks then go out in waves of two
+            per worker, and worker processes are started ignoring SIGINT (``swarm-ik batch``).
 
     Returns:
         A :class:`BatchResult`, one row per target, in the order of ``targets``.
@@ -675,23 +682,56 @@ def solve_batch(
         or chunk_size < 1
     ):
         raise InvalidArgumentError(f"chunk_size must be a positive integer, got {chunk_size!r}")
-    t_setup = time.perf_counter()
-    with distributed.connect(scheduler) as client:
+    interrupted = False
+    with contextlib.ExitStack() as stack:
+        t_setup = time.perf_counter()
+        with _workers_ignore_sigint() if keep_on_interrupt else contextlib.nullcontext():
+            client = stack.enter_context(distributed.connect(scheduler))
         setup_s = time.perf_counter() - t_setup
         workers = distributed.n_workers(client)
         size = int(chunk_size) if chunk_size is not None else default_chunk_size(n, workers)
         items = [(s, poses[s : s + size], seeds[s : s + size]) for s in range(0, n, size)]
-        parts: list[ChunkResult] = distributed.map_chunks(
-            functools.partial(_run_chunk, bc, settings),
-            items,
-            client=client,
-            name="swarm-ik-batch",
-            progress=progress,
-            desc=f"IK {robot.name}",
-            sizes=[len(it[1]) for it in items],
-            unit="pose",
-        )
-    return BatchResult.from_chunks(parts, robot, settings, time.perf_counter() - t0, setup_s)
+        func = functools.partial(_run_chunk, bc, settings)
+        parts: list[ChunkResult] = []
+        if not keep_on_interrupt:
+            parts = distributed.map_chunks(
+                func, items, client=client, name="swarm-ik-batch", progress=progress,
+                desc=f"IK {robot.name}", sizes=[len(it[1]) for it in items], unit="pose",
+            )  # fmt: skip
+        else:  # in waves, keeping what finished
+            wave = 1 if client is None else 2 * workers
+            bar = distributed._progress_bar(progress, n, f"IK {robot.name}", "pose")
+            try:
+                for w in range(0, len(items), wave):
+                    chunk = items[w : w + wave]
+                    parts.extend(
+                        distributed.map_chunks(func, chunk, client=client, name="swarm-ik-batch")
+                    )
+                    bar.update(sum(len(it[1]) for it in chunk))
+            except KeyboardInterrupt:
+                interrupted = True
+                logging.getLogger("distributed").setLevel(logging.CRITICAL)
+            finally:
+                bar.close()
+    return BatchResult.from_chunks(
+        parts, robot, settings, time.perf_counter() - t0, setup_s, interrupted
+    )
+
+
+@contextlib.contextmanager
+def _workers_ignore_sigint() -> Iterator[None]:
+    """Ignore SIGINT while worker processes are started, so that they inherit the ignore
+    (Python keeps an inherited ignore) and Ctrl-C reaches this process only: no tracebacks
+    from every worker.  The handler is restored at once."""
+    try:
+        old = signal.signal(signal.SIGINT, signal.SIG_IGN)
+    except ValueError:  # not the main thread
+        yield
+        return
+    try:
+        yield
+    finally:
+        signal.signal(signal.SIGINT, old)
 
 
 # --------------------------------------------------------------------------- files

@@ -6,29 +6,23 @@ row per target (``.npz`` or ``.csv``); ``--random N`` solves N targets sampled b
 kinematics instead.  ``swarm-ik reach --robot panda`` writes a reachability map (``.npz``), a
 PNG of slices, and (with meshcat installed) an HTML point cloud.
 
-Both take ``--scheduler``: ``local`` (default: an embedded Dask LocalCluster, one worker
-process per core), ``none`` (this process, no Dask), or a scheduler address
+Both take ``--scheduler``: ``none`` (default: this process, no Dask), ``local`` (an embedded
+Dask LocalCluster, one worker process per core; extra ``dask``), or a scheduler address
 ``tcp://host:port``.  Exit codes: 0 all targets solved (``batch``) / map written (``reach``),
 1 some targets not solved (``batch``), 2 bad input (output paths are checked before any work),
 130 interrupted.
 
 Ctrl-C during ``batch`` stops after the chunks already finished: their rows (the first ``k``
 targets, in order) are written to ``--out`` and the command exits with 130, printing one line.
-The chunks are submitted in waves (one chunk at a time in-process, two per worker on Dask)
-and solved by :func:`swarm_ik.batch.solve_chunk` with their index in the whole batch, so the
-answers are bit-identical to :func:`swarm_ik.batch.solve_batch`'s.
+It is :func:`swarm_ik.batch.solve_batch` with ``keep_on_interrupt=True``: the chunks go out in
+waves (one chunk at a time in-process, two per worker on Dask), each solved with its index in
+the whole batch, so the answers are bit-identical to a plain ``solve_batch``'s.
 """
 
 from __future__ import annotations
 
 import argparse
-import contextlib
-import functools
-import logging
-import signal
 import sys
-import time
-from collections.abc import Iterator
 from pathlib import Path
 from typing import Any
 
@@ -37,12 +31,13 @@ import numpy as np
 EXIT_INTERRUPTED = 130
 
 SCHEDULER_HELP = (
-    "where to solve: 'local' (default: embedded Dask LocalCluster, one worker process per "
-    "core), 'none' (this process, no Dask), or a Dask scheduler address tcp://host:port"
+    "where to solve: 'none' (default: this process, no Dask), 'local' (an embedded Dask "
+    "LocalCluster, one worker process per core; pip install 'swarm_ik[dask]'), or a Dask "
+    "scheduler address tcp://host:port"
 )
 
 
-def add_scheduler_argument(parser: argparse.ArgumentParser, default: str = "local") -> None:
+def add_scheduler_argument(parser: argparse.ArgumentParser, default: str = "none") -> None:
     """Add ``--scheduler`` (for any command that distributes work with Dask)."""
     parser.add_argument(
         "--scheduler", default=default, metavar="local|none|tcp://HOST:PORT", help=SCHEDULER_HELP
@@ -133,107 +128,6 @@ def _load(args: argparse.Namespace) -> Any:
     return swarm_ik.load_robot(args.robot, ee_frame=args.frame)
 
 
-@contextlib.contextmanager
-def _workers_ignore_sigint() -> Iterator[None]:
-    """Ignore SIGINT while worker processes are started, so that they inherit the ignore
-    (Python keeps an inherited ignore) and Ctrl-C reaches this process only: no tracebacks
-    from every worker.  The handler is restored at once."""
-    try:
-        old = signal.signal(signal.SIGINT, signal.SIG_IGN)
-    except ValueError:  # not the main thread
-        yield
-        return
-    try:
-        yield
-    finally:
-        signal.signal(signal.SIGINT, old)
-
-
-def solve_keeping_chunks(
-    robot: Any,
-    targets: Any,
-    *,
-    seed: int = 0,
-    q0: Any = None,
-    tol_pos: float = 1e-5,
-    tol_rot: float = 1e-5,
-    position_only: bool = False,
-    max_starts: int = 128,
-    max_iters: int = 60,
-    scheduler: Any = None,
-    chunk_size: int | None = None,
-    progress: bool = False,
-) -> tuple[Any, bool]:
-    """:func:`swarm_ik.batch.solve_batch` that survives Ctrl-C with the chunks it finished.
-
-    Same arguments and answers as ``solve_batch``.
-
-    Returns:
-        ``(result, interrupted)``: on Ctrl-C the result holds the first ``k`` targets (the
-        chunks finished before it, in order) and ``interrupted`` is True.
-    """
-    from swarm_ik import distributed
-    from swarm_ik._validate import float_array, positive_float
-    from swarm_ik.batch import (
-        BatchChain,
-        BatchResult,
-        BatchSettings,
-        _run_chunk,
-        _seed_starts,
-        check_targets,
-        default_chunk_size,
-    )
-    from swarm_ik.errors import InvalidArgumentError
-
-    t0 = time.perf_counter()
-    settings = BatchSettings(
-        tol_pos=positive_float(tol_pos, "tol_pos"),
-        tol_rot=positive_float(tol_rot, "tol_rot"),
-        position_only=bool(position_only),
-        max_starts=max_starts,
-        max_iters=max_iters,
-        seed=seed,
-    )
-    poses = check_targets(float_array(targets))
-    n = poses.shape[0]
-    bc = BatchChain.from_robot(robot)
-    seeds = _seed_starts(bc, q0, n)
-    if chunk_size is not None and (
-        isinstance(chunk_size, bool)
-        or not isinstance(chunk_size, (int, np.integer))
-        or chunk_size < 1
-    ):
-        raise InvalidArgumentError(f"chunk_size must be a positive integer, got {chunk_size!r}")
-    parts: list[Any] = []
-    interrupted = False
-    setup_s = 0.0
-    with contextlib.ExitStack() as stack:
-        t_setup = time.perf_counter()
-        with _workers_ignore_sigint():
-            client = stack.enter_context(distributed.connect(scheduler))
-        setup_s = time.perf_counter() - t_setup
-        workers = distributed.n_workers(client)
-        size = int(chunk_size) if chunk_size is not None else default_chunk_size(n, workers)
-        items = [(s, poses[s : s + size], seeds[s : s + size]) for s in range(0, n, size)]
-        wave = 1 if client is None else 2 * workers
-        func = functools.partial(_run_chunk, bc, settings)
-        bar = distributed._progress_bar(progress, n, f"IK {robot.name}", "pose")
-        try:
-            for w in range(0, len(items), wave):
-                batch = items[w : w + wave]
-                parts.extend(
-                    distributed.map_chunks(func, batch, client=client, name="swarm-ik-batch")
-                )
-                bar.update(sum(len(it[1]) for it in batch))
-        except KeyboardInterrupt:
-            interrupted = True
-            logging.getLogger("distributed").setLevel(logging.CRITICAL)
-        finally:
-            bar.close()
-    res = BatchResult.from_chunks(parts, robot, settings, time.perf_counter() - t0, setup_s)
-    return res, interrupted
-
-
 def run_batch(args: argparse.Namespace) -> int:
     """Handler of ``swarm-ik batch``; returns the exit code."""
     from swarm_ik._validate import check_output_path, read_targets_file
@@ -250,7 +144,9 @@ def run_batch(args: argparse.Namespace) -> int:
         rng = np.random.default_rng(args.seed)
         targets = robot.fk(robot.random_q(rng, args.random))
         source = f"{args.random} FK-sampled targets (seed {args.seed})"
-    res, interrupted = solve_keeping_chunks(
+    from swarm_ik.batch import solve_batch
+
+    res = solve_batch(
         robot,
         targets,
         seed=args.seed,
@@ -263,8 +159,9 @@ def run_batch(args: argparse.Namespace) -> int:
         scheduler=args.scheduler,
         chunk_size=args.chunk_size,
         progress=not args.no_progress and sys.stderr.isatty(),
+        keep_on_interrupt=True,
     )
-    if interrupted:
+    if res.interrupted:
         if res.n:
             res.save(args.out, targets=targets[: res.n])
             kept = f"wrote the {res.n} finished targets (of {len(targets)}) to {args.out}"

@@ -606,7 +606,7 @@ def add_arguments(parser: Any) -> None:
         default=MAX_TARGETS,
         help=f"refuse grids of more poses (voxels × K) than this (default {MAX_TARGETS})",
     )
-    add_scheduler_argument(parser, default="none")
+    add_scheduler_argument(parser)
     parser.add_argument("--no-progress", action="store_true", help="no progress bar")
 
 

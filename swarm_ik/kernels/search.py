@@ -257,6 +257,44 @@ def _clip_row(q: FloatArray, b: Bounds) -> None:  # pragma: no cover - compiled
 
 # --------------------------------------------------------------------------- the search
 @numba.njit(cache=True)
+def _offer(
+    q: FloatArray, f: float, dp: float, dr: float, ev_q: FloatArray
+) -> tuple[float, float, float]:  # pragma: no cover - compiled
+    """Offer the best point ``q`` (fitness, errors) to the evaluator's best ``ev_q`` (copied
+    in); returns the evaluator's new fitness and errors."""
+    for j in range(q.shape[0]):
+        ev_q[j] = q[j]
+    return f, dp, dr
+
+
+@numba.njit(cache=True)
+def _append(hist: FloatArray, n: int, v: float) -> FloatArray:  # pragma: no cover - compiled
+    """``hist`` (``n`` entries used) with ``v`` appended, grown ×2 when full."""
+    if n == hist.shape[0]:
+        bigger = np.empty(max(2 * n, 1))
+        bigger[:n] = hist
+        hist = bigger
+    hist[n] = v
+    return hist
+
+
+@numba.njit(cache=True)
+def sampling_window(
+    lower: FloatArray, upper: FloatArray, seed_q: FloatArray, lo: FloatArray, hi: FloatArray
+) -> None:  # pragma: no cover - compiled
+    """The box random starts are drawn from, into ``lo``/``hi`` ``(nq,)``: the bounds, with a
+    range wider than :data:`SAMPLING_WIDTH` narrowed to a window around the seed (the
+    compiled twin of :func:`swarm_ik.urdf.sampling_bounds`; mobile-base joints)."""
+    for j in range(lower.shape[0]):
+        lo[j] = lower[j]
+        hi[j] = upper[j]
+        if hi[j] - lo[j] > SAMPLING_WIDTH:
+            a = min(max(seed_q[j] - 0.5 * SAMPLING_WIDTH, lo[j]), hi[j] - SAMPLING_WIDTH)
+            lo[j] = a
+            hi[j] = a + SAMPLING_WIDTH
+
+
+@numba.njit(cache=True)
 def swarm_search(
     t: TreeArrays,
     g: GoalTable,
@@ -342,15 +380,9 @@ def swarm_search(
     gen = 0
     counter = np.uint64(0)
     has_time = time_limit >= 0.0
-    # random starts: uniform within the bounds, a range wider than SAMPLING_WIDTH narrowed
-    # to a window around the seed (swarm_ik.urdf.sampling_bounds; mobile-base joints)
-    lo = b.lower.copy()
-    hi = b.upper.copy()
-    for j in range(lo.shape[0]):
-        if hi[j] - lo[j] > SAMPLING_WIDTH:
-            a = min(max(seed_q[j] - 0.5 * SAMPLING_WIDTH, lo[j]), hi[j] - SAMPLING_WIDTH)
-            lo[j] = a
-            hi[j] = a + SAMPLING_WIDTH
+    lo = np.empty(n)  # random starts: uniform in the sampling window
+    hi = np.empty(n)
+    sampling_window(b.lower, b.upper, seed_q, lo, hi)
     while True:
         if stopped or used >= max_evals:
             break
@@ -431,17 +463,9 @@ def swarm_search(
             n_queue = m - 1
         elif n_queue == 0:
             if best_f < np.inf and best_f < ev_f:
-                ev_f = best_f
-                ev_dp = best_dp
-                ev_dr = best_dr
-                for j in range(n):
-                    ev_q[j] = best_q[j]
+                ev_f, ev_dp, ev_dr = _offer(best_q, best_f, best_dp, best_dr, ev_q)
                 stopped = ev_dp <= tol_pos and ev_dr <= tol_rot
-            if n_hist == hist.shape[0]:
-                bigger = np.empty(2 * n_hist)
-                bigger[:n_hist] = hist
-                hist = bigger
-            hist[n_hist] = ev_f
+            hist = _append(hist, n_hist, ev_f)
             n_hist += 1
             open_gen = False
             gen += 1
@@ -476,18 +500,10 @@ def swarm_search(
                     queue[s, j] = min(lo[j] + (hi[j] - lo[j]) * _uniform(key, counter), hi[j])
             n_queue = m
     if best_f < np.inf and best_f < ev_f and not stopped:
-        ev_f = best_f
-        ev_dp = best_dp
-        ev_dr = best_dr
-        for j in range(n):
-            ev_q[j] = best_q[j]
+        ev_f, ev_dp, ev_dr = _offer(best_q, best_f, best_dp, best_dr, ev_q)
         stopped = ev_dp <= tol_pos and ev_dr <= tol_rot
     if open_gen or n_hist == 0:
-        if n_hist == hist.shape[0]:
-            bigger = np.empty(2 * n_hist)
-            bigger[:n_hist] = hist
-            hist = bigger
-        hist[n_hist] = ev_f
+        hist = _append(hist, n_hist, ev_f)
         n_hist += 1
     for j in range(n):
         out_q[j] = ev_q[j]

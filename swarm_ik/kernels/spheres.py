@@ -401,6 +401,126 @@ def _bound_centre(
 
 
 @numba.njit(cache=True)
+def _penetrate(
+    body_rot: FloatArray,
+    body_pos: FloatArray,
+    body_jac: FloatArray,
+    sph_body: IntArray,
+    sph_local: FloatArray,
+    sph_radius: FloatArray,
+    body_start: IntArray,
+    bound_local: FloatArray,
+    bound_radius: FloatArray,
+    self_pairs: IntArray,
+    obs_bodies: IntArray,
+    obs_kind: IntArray,
+    obs_rot: FloatArray,
+    obs_pos: FloatArray,
+    obs_dims: FloatArray,
+    margin: float,
+    scratch: FloatArray,
+    want_rows: bool,
+    out_res: FloatArray,
+    out_jac: FloatArray,
+    out_pair: IntArray,
+) -> tuple[int, float, float]:  # pragma: no cover - compiled
+    """The pass over every active sphere pair behind :func:`penetration` (``want_rows``: the
+    rows and their Jacobian) and :func:`penetration_cost` (only the sums); returns the rows
+    written, the sum of squared residuals [m²] over every active pair and the largest
+    residual [m]."""
+    nq = out_jac.shape[1]
+    sphere_centres(body_rot, body_pos, sph_body, sph_local, scratch)
+    ca = np.empty(3)
+    cb = np.empty(3)
+    rows = 0
+    total = 0.0
+    worst = 0.0
+    for pi in range(self_pairs.shape[0]):
+        a = self_pairs[pi, 0]
+        b = self_pairs[pi, 1]
+        _bound_centre(body_rot, body_pos, bound_local, a, ca)
+        _bound_centre(body_rot, body_pos, bound_local, b, cb)
+        dd = math.sqrt((ca[0] - cb[0]) ** 2 + (ca[1] - cb[1]) ** 2 + (ca[2] - cb[2]) ** 2)
+        if dd >= margin + bound_radius[a] + bound_radius[b]:
+            continue
+        for i in range(body_start[a], body_start[a + 1]):
+            di = math.sqrt(
+                (scratch[i, 0] - cb[0]) ** 2
+                + (scratch[i, 1] - cb[1]) ** 2
+                + (scratch[i, 2] - cb[2]) ** 2
+            )
+            if di >= margin + sph_radius[i] + bound_radius[b]:
+                continue
+            for j in range(body_start[b], body_start[b + 1]):
+                ux = scratch[i, 0] - scratch[j, 0]
+                uy = scratch[i, 1] - scratch[j, 1]
+                uz = scratch[i, 2] - scratch[j, 2]
+                dist = math.sqrt(ux * ux + uy * uy + uz * uz)
+                res = margin + sph_radius[i] + sph_radius[j] - dist
+                if res <= 0.0:
+                    continue
+                total += res * res
+                worst = max(worst, res)
+                if not want_rows:
+                    continue
+                s = _slot(res, out_res, rows)
+                if s < 0:
+                    continue
+                if s == rows:
+                    rows += 1
+                if dist > 1e-12:
+                    ux, uy, uz = ux / dist, uy / dist, uz / dist
+                else:
+                    ux, uy, uz = 1.0, 0.0, 0.0
+                out_res[s] = res
+                out_pair[s, 0] = i
+                out_pair[s, 1] = j
+                for k in range(nq):
+                    out_jac[s, k] = 0.0
+                _add_point_row(-1.0, ux, uy, uz, scratch[i, 3:], body_jac[a], out_jac[s])
+                _add_point_row(1.0, ux, uy, uz, scratch[j, 3:], body_jac[b], out_jac[s])
+    for ob in range(obs_kind.shape[0]):
+        for a in obs_bodies:
+            _bound_centre(body_rot, body_pos, bound_local, a, ca)
+            d0, _, _, _ = _sdf(obs_kind[ob], obs_rot[ob], obs_pos[ob], obs_dims[ob], ca)
+            if d0 >= margin + bound_radius[a]:
+                continue
+            for i in range(body_start[a], body_start[a + 1]):
+                d, gx, gy, gz = _sdf(
+                    obs_kind[ob], obs_rot[ob], obs_pos[ob], obs_dims[ob], scratch[i, :3]
+                )
+                res = margin + sph_radius[i] - d
+                if res <= 0.0:
+                    continue
+                total += res * res
+                worst = max(worst, res)
+                if not want_rows:
+                    continue
+                s = _slot(res, out_res, rows)
+                if s < 0:
+                    continue
+                if s == rows:
+                    rows += 1
+                out_res[s] = res
+                out_pair[s, 0] = i
+                out_pair[s, 1] = -1 - ob
+                for k in range(nq):
+                    out_jac[s, k] = 0.0
+                _add_point_row(-1.0, gx, gy, gz, scratch[i, 3:], body_jac[a], out_jac[s])
+    # insertion sort by decreasing residual (rows is small)
+    for m in range(1, rows):
+        k = m
+        while k > 0 and out_res[k - 1] < out_res[k]:
+            out_res[k - 1], out_res[k] = out_res[k], out_res[k - 1]
+            for c in range(2):
+                out_pair[k - 1, c], out_pair[k, c] = out_pair[k, c], out_pair[k - 1, c]
+            for c in range(nq):
+                out_jac[k - 1, c], out_jac[k, c] = out_jac[k, c], out_jac[k - 1, c]
+            k -= 1
+    return rows, total, worst
+
+
+@numba.njit(cache=True)
 def penetration(
     body_rot: FloatArray,
     body_pos: FloatArray,
@@ -455,85 +575,11 @@ def penetration(
         The number of rows written.  When more pairs are active than ``max_rows`` the largest
         residuals are kept; rows are sorted by decreasing residual.
     """
-    nq = out_jac.shape[1]
-    sphere_centres(body_rot, body_pos, sph_body, sph_local, scratch)
-    ca = np.empty(3)
-    cb = np.empty(3)
-    rows = 0
-    for pi in range(self_pairs.shape[0]):
-        a = self_pairs[pi, 0]
-        b = self_pairs[pi, 1]
-        _bound_centre(body_rot, body_pos, bound_local, a, ca)
-        _bound_centre(body_rot, body_pos, bound_local, b, cb)
-        dd = math.sqrt((ca[0] - cb[0]) ** 2 + (ca[1] - cb[1]) ** 2 + (ca[2] - cb[2]) ** 2)
-        if dd >= margin + bound_radius[a] + bound_radius[b]:
-            continue
-        for i in range(body_start[a], body_start[a + 1]):
-            di = math.sqrt(
-                (scratch[i, 0] - cb[0]) ** 2
-                + (scratch[i, 1] - cb[1]) ** 2
-                + (scratch[i, 2] - cb[2]) ** 2
-            )
-            if di >= margin + sph_radius[i] + bound_radius[b]:
-                continue
-            for j in range(body_start[b], body_start[b + 1]):
-                ux = scratch[i, 0] - scratch[j, 0]
-                uy = scratch[i, 1] - scratch[j, 1]
-                uz = scratch[i, 2] - scratch[j, 2]
-                dist = math.sqrt(ux * ux + uy * uy + uz * uz)
-                res = margin + sph_radius[i] + sph_radius[j] - dist
-                if res <= 0.0:
-                    continue
-                s = _slot(res, out_res, rows)
-                if s < 0:
-                    continue
-                if s == rows:
-                    rows += 1
-                if dist > 1e-12:
-                    ux, uy, uz = ux / dist, uy / dist, uz / dist
-                else:
-                    ux, uy, uz = 1.0, 0.0, 0.0
-                out_res[s] = res
-                out_pair[s, 0] = i
-                out_pair[s, 1] = j
-                for k in range(nq):
-                    out_jac[s, k] = 0.0
-                _add_point_row(-1.0, ux, uy, uz, scratch[i, 3:], body_jac[a], out_jac[s])
-                _add_point_row(1.0, ux, uy, uz, scratch[j, 3:], body_jac[b], out_jac[s])
-    for ob in range(obs_kind.shape[0]):
-        for a in obs_bodies:
-            _bound_centre(body_rot, body_pos, bound_local, a, ca)
-            d0, _, _, _ = _sdf(obs_kind[ob], obs_rot[ob], obs_pos[ob], obs_dims[ob], ca)
-            if d0 >= margin + bound_radius[a]:
-                continue
-            for i in range(body_start[a], body_start[a + 1]):
-                d, gx, gy, gz = _sdf(
-                    obs_kind[ob], obs_rot[ob], obs_pos[ob], obs_dims[ob], scratch[i, :3]
-                )
-                res = margin + sph_radius[i] - d
-                if res <= 0.0:
-                    continue
-                s = _slot(res, out_res, rows)
-                if s < 0:
-                    continue
-                if s == rows:
-                    rows += 1
-                out_res[s] = res
-                out_pair[s, 0] = i
-                out_pair[s, 1] = -1 - ob
-                for k in range(nq):
-                    out_jac[s, k] = 0.0
-                _add_point_row(-1.0, gx, gy, gz, scratch[i, 3:], body_jac[a], out_jac[s])
-    # insertion sort by decreasing residual (rows is small)
-    for m in range(1, rows):
-        k = m
-        while k > 0 and out_res[k - 1] < out_res[k]:
-            out_res[k - 1], out_res[k] = out_res[k], out_res[k - 1]
-            for c in range(2):
-                out_pair[k - 1, c], out_pair[k, c] = out_pair[k, c], out_pair[k - 1, c]
-            for c in range(nq):
-                out_jac[k - 1, c], out_jac[k, c] = out_jac[k, c], out_jac[k - 1, c]
-            k -= 1
+    rows, _, _ = _penetrate(
+        body_rot, body_pos, body_jac, sph_body, sph_local, sph_radius, body_start, bound_local,
+        bound_radius, self_pairs, obs_bodies, obs_kind, obs_rot, obs_pos, obs_dims, margin,
+        scratch, True, out_res, out_jac, out_pair,
+    )  # fmt: skip
     return rows
 
 
@@ -555,55 +601,15 @@ def penetration_cost(
     obs_dims: FloatArray,
     margin: float,
     scratch: FloatArray,
-) -> tuple[float, float]:
+) -> tuple[float, float]:  # pragma: no cover - compiled
     """Sum of squared residuals [m²] over every active pair and the largest residual [m]
     (0 when clear), without Jacobian: the swarm's fitness term.  Same arguments as
     :func:`penetration`."""
-    sphere_centres(body_rot, body_pos, sph_body, sph_local, scratch)
-    ca = np.empty(3)
-    cb = np.empty(3)
-    total = 0.0
-    worst = 0.0
-    for pi in range(self_pairs.shape[0]):
-        a = self_pairs[pi, 0]
-        b = self_pairs[pi, 1]
-        _bound_centre(body_rot, body_pos, bound_local, a, ca)
-        _bound_centre(body_rot, body_pos, bound_local, b, cb)
-        dd = math.sqrt((ca[0] - cb[0]) ** 2 + (ca[1] - cb[1]) ** 2 + (ca[2] - cb[2]) ** 2)
-        if dd >= margin + bound_radius[a] + bound_radius[b]:
-            continue
-        for i in range(body_start[a], body_start[a + 1]):
-            di = math.sqrt(
-                (scratch[i, 0] - cb[0]) ** 2
-                + (scratch[i, 1] - cb[1]) ** 2
-                + (scratch[i, 2] - cb[2]) ** 2
-            )
-            if di >= margin + sph_radius[i] + bound_radius[b]:
-                continue
-            for j in range(body_start[b], body_start[b + 1]):
-                dist = math.sqrt(
-                    (scratch[i, 0] - scratch[j, 0]) ** 2
-                    + (scratch[i, 1] - scratch[j, 1]) ** 2
-                    + (scratch[i, 2] - scratch[j, 2]) ** 2
-                )
-                res = margin + sph_radius[i] + sph_radius[j] - dist
-                if res > 0.0:
-                    total += res * res
-                    worst = max(worst, res)
-    for ob in range(obs_kind.shape[0]):
-        for a in obs_bodies:
-            _bound_centre(body_rot, body_pos, bound_local, a, ca)
-            d0, _, _, _ = _sdf(obs_kind[ob], obs_rot[ob], obs_pos[ob], obs_dims[ob], ca)
-            if d0 >= margin + bound_radius[a]:
-                continue
-            for i in range(body_start[a], body_start[a + 1]):
-                d, _, _, _ = _sdf(
-                    obs_kind[ob], obs_rot[ob], obs_pos[ob], obs_dims[ob], scratch[i, :3]
-                )
-                res = margin + sph_radius[i] - d
-                if res > 0.0:
-                    total += res * res
-                    worst = max(worst, res)
+    _, total, worst = _penetrate(
+        body_rot, body_pos, np.empty((0, 6, 0)), sph_body, sph_local, sph_radius, body_start,
+        bound_local, bound_radius, self_pairs, obs_bodies, obs_kind, obs_rot, obs_pos, obs_dims,
+        margin, scratch, False, np.empty(0), np.empty((0, 0)), np.empty((0, 2), dtype=np.int64),
+    )  # fmt: skip
     return total, worst
 
 
