@@ -544,7 +544,6 @@ class IKSolver:
         self.tol_pos, self.tol_rot = float(tol_pos), float(tol_rot)
         self.time_limit, self.max_evals = time_limit, max_evals
         self._template = IKProblem(robot, robot.fk(robot.mid_q()), w_rot=w_rot)
-        robot.warm_up()
         self._state = None
         if solver == "swarm":
             from swarm_ik.solvers import hybrid

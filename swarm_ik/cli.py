@@ -223,7 +223,7 @@ def _cmd_solve(args: argparse.Namespace) -> int:
     if args.html is not None:  # refuse an unwritable page before solving
         check_output_path(args.html, "--html")
     frames = None if not args.frame else (args.frame[0] if len(args.frame) == 1 else args.frame)
-    robot = swarm_ik.load_robot(args.robot, ee_frame=frames, srdf=args.srdf)
+    robot = swarm_ik.load_robot(args.robot, ee_frame=frames, srdf=args.srdf, warm_up=False)
     goals = None
     target = None
     if args.goals is not None:

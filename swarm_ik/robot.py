@@ -677,6 +677,7 @@ def load_robot(
     ee_frame: str | Sequence[str] | None = None,
     *,
     srdf: str | os.PathLike[str] | bool | None = None,
+    warm_up: bool = True,
 ) -> RobotModel:
     """Load a robot by bundled name, ``example-robot-data`` name, or URDF path.
 
@@ -689,6 +690,10 @@ def load_robot(
             robots, the tip of the deepest chain for a file.
         srdf: SRDF whose ``disable_collisions`` pairs the collision goal skips (default: the
             one next to the URDF, if any; ``False``: none).
+        warm_up: Load the compiled kernels now (:meth:`RobotModel.warm_up`).  ``False``
+            leaves each to the first call that needs it (``solve``, ``solve_many`` and
+            ``IKSolver`` load theirs before their clock starts): a one-shot command loads only
+            what it uses.
 
     Returns:
         The robot, reduced to the joints between the root and its goal frame(s).
@@ -709,5 +714,6 @@ def load_robot(
         if srdf is not False and (srdf is True or not Path(srdf).is_file()):
             raise RobotFileNotFoundError(f"SRDF file not found: {str(srdf)!r}")
         object.__setattr__(robot, "srdf", srdf)
-    robot.warm_up()
+    if warm_up:
+        robot.warm_up()
     return robot

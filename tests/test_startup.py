@@ -6,6 +6,8 @@ import json
 import subprocess
 import sys
 
+import pytest
+
 HEAVY = ("dask", "matplotlib", "meshcat", "yourdfpy", "trimesh", "swarm_ik.bench")
 """Optional dependencies kept off the solve path.  (``coal`` is not listed: Pinocchio itself
 imports it.)"""
@@ -41,14 +43,31 @@ def test_solve_path_imports_no_optional_heavy_dependency() -> None:
     assert json.loads(_run(code)) == []
 
 
-def test_first_solve_of_a_fresh_process_meets_5_ms() -> None:
+@pytest.mark.parametrize(
+    ("warm", "call"),
+    [
+        ("True", "swarm_ik.solve(swarm_ik.IKProblem(r, T), time_limit=0.005)"),
+        ("False", "swarm_ik.solve(swarm_ik.IKProblem(r, T), time_limit=0.005)"),
+        ("False", "swarm_ik.IKSolver(r, time_limit=0.005).solve(T)"),
+        ("False", "swarm_ik.solve(swarm_ik.IKProblem(r, T), time_limit=0.005, seed=rng)"),
+        (
+            "False",
+            "swarm_ik.solve_many(swarm_ik.IKProblem(r, T), n=2, time_limit=0.05, "
+            "method='numerical')[0]",
+        ),
+    ],
+)
+def test_first_solve_of_a_fresh_process_meets_its_budget(warm: str, call: str) -> None:
+    """Kernels are loaded before the clock starts: by load_robot, or (warm_up=False, as the
+    CLI does) by the first solve / IKSolver / solve_many itself."""
     code = (
         "import numpy as np, swarm_ik\n"
-        "r = swarm_ik.load_robot('panda')\n"
+        f"r = swarm_ik.load_robot('panda', warm_up={warm})\n"
+        "rng = np.random.default_rng(1)\n"
         "T = r.fk(np.array([0.1, -0.5, 0.3, -2.0, 0.2, 1.5, 0.4]))\n"
-        "res = swarm_ik.solve(swarm_ik.IKProblem(r, T), time_limit=0.005)\n"
+        f"res = {call}\n"
         "print(res.success, res.time_s)\n"
     )
     ok, t = _run(code).split()
     assert ok == "True", t
-    assert float(t) < 0.005
+    assert float(t) < (0.05 if "solve_many" in call else 0.005)
