@@ -691,7 +691,7 @@ class IKSolver:
                 False,
                 _Spent(self.max_evals, used, self.time_limit, elapsed),  # type: ignore[arg-type]
             )
-        return Result(
+        return Result.of(
             q=q,
             fitness=float(fit),
             position_error=dp,

@@ -215,3 +215,17 @@ def test_fast_check_of_the_answer_equals_problem_verify(w_rot: float) -> None:
             assert np.isnan(fast.rotation_error) and np.isnan(ref.rotation_error)
         else:
             assert fast.rotation_error == pytest.approx(ref.rotation_error, rel=1e-9)
+
+
+def test_result_of_is_the_dataclass_with_every_field() -> None:
+    import dataclasses
+
+    robot = swarm_ik.load_robot("ur5")
+    ik = swarm_ik.IKSolver(robot, max_evals=500)
+    r = ik.solve(robot.fk(robot.random_q(np.random.default_rng(2))), seed=1)
+    fields = {f.name: getattr(r, f.name) for f in dataclasses.fields(r)}
+    assert set(vars(r)) == set(fields)  # IKSolver's Result.of gave every field
+    again = swarm_ik.Result(**fields)
+    assert again == r and swarm_ik.Result.of(**fields) == again
+    with pytest.raises(dataclasses.FrozenInstanceError):
+        r.success = False  # type: ignore[misc]
