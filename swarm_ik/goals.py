@@ -748,8 +748,8 @@ class AvoidCollisions(Goal):
         from swarm_ik.kernels.lm import CollisionArrays
 
         sm = self.spheres(robot)
-        col = CollisionArrays(  # type: ignore[call-arg, misc]
-            len(robot.frames), int(sm.body_joint.shape[0]), *sm.arrays(), float(self.margin),
+        col = CollisionArrays(
+            len(robot.frames), int(sm.body_joint.shape[0]), sm.arrays, float(self.margin),
             sm.scratch(), np.zeros((self.max_rows, 2), dtype=np.int64),
         )  # fmt: skip
         return GoalRow(

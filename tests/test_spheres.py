@@ -89,13 +89,13 @@ def test_spheres_cover_every_collision_body(get_robot, name) -> None:
     sm = model(get_robot, name)
     rng = np.random.default_rng(0)
     for b, g in enumerate(sm.collision.geom_model.geometryObjects):
-        sl = slice(sm.body_start[b], sm.body_start[b + 1])
+        sl = slice(sm.arrays.body_start[b], sm.arrays.body_start[b + 1])
         pts = surface_points(g.geometry, 4000, rng)
-        assert _excess(pts, sm.sph_local[sl], sm.sph_radius[sl]).max() <= 1e-9, g.name
+        assert _excess(pts, sm.arrays.sph_local[sl], sm.arrays.sph_radius[sl]).max() <= 1e-9, g.name
         # and not absurdly inflated: within the body's bounding box grown by 2.5 tolerances
         lo, hi = pts.min(axis=0), pts.max(axis=0)
-        ext_lo = (sm.sph_local[sl] - sm.sph_radius[sl, None]).min(axis=0)
-        ext_hi = (sm.sph_local[sl] + sm.sph_radius[sl, None]).max(axis=0)
+        ext_lo = (sm.arrays.sph_local[sl] - sm.arrays.sph_radius[sl, None]).min(axis=0)
+        ext_hi = (sm.arrays.sph_local[sl] + sm.arrays.sph_radius[sl, None]).max(axis=0)
         assert np.all(ext_lo >= lo - 2.5 * sm.tolerance) and np.all(
             ext_hi <= hi + 2.5 * sm.tolerance
         )

@@ -39,7 +39,7 @@ from numpy.typing import NDArray
 
 from swarm_ik.kernels.fk import FKScratch, TreeArrays, fk_one
 from swarm_ik.kernels.lie import jr_inv_nb, log3_nb
-from swarm_ik.kernels.spheres import penetration
+from swarm_ik.kernels.spheres import SphereArrays, penetration
 
 FloatArray = NDArray[np.float64]
 IntArray = NDArray[np.int64]
@@ -156,15 +156,11 @@ class Bounds(NamedTuple):
 class CollisionArrays(NamedTuple):
     """The sphere model of an ``AvoidCollisions`` goal for the kernel (empty without one).
 
-    The collision bodies are frames ``body0 … body0 + nb − 1`` of the problem's tree; the
-    other fields are the arrays of :func:`swarm_ik.kernels.spheres.penetration`.
-
     Attributes:
-        body0: Index of the first body frame in the tree's frames.
+        body0: Index of the first body frame in the tree's frames (the collision bodies are
+            frames ``body0 … body0 + nb − 1``).
         nb: Number of bodies.
-        sph_body, sph_local, sph_radius, body_start, bound_local, bound_radius, self_pairs,
-        obs_bodies, obs_kind, obs_rot, obs_pos, obs_dims: See
-            :class:`swarm_ik.kernels.spheres.SphereModel`.
+        model: The arrays of :func:`swarm_ik.kernels.spheres.penetration`.
         margin: Wanted clearance [m].
         scratch: Work array ``(ns, 6)``.
         pair: Work array ``(max_rows, 2)``.
@@ -172,18 +168,7 @@ class CollisionArrays(NamedTuple):
 
     body0: int
     nb: int
-    sph_body: IntArray
-    sph_local: FloatArray
-    sph_radius: FloatArray
-    body_start: IntArray
-    bound_local: FloatArray
-    bound_radius: FloatArray
-    self_pairs: IntArray
-    obs_bodies: IntArray
-    obs_kind: IntArray
-    obs_rot: FloatArray
-    obs_pos: FloatArray
-    obs_dims: FloatArray
+    model: SphereArrays
     margin: float
     scratch: FloatArray
     pair: IntArray
@@ -198,11 +183,14 @@ def no_collision() -> CollisionArrays:
     if _NO_COLLISION:
         return _NO_COLLISION[0]
     i1 = np.zeros(0, dtype=np.int64)
-    _NO_COLLISION.append(CollisionArrays(
-        0, 0, i1, np.zeros((0, 3)), np.zeros(0), np.zeros(1, dtype=np.int64), np.zeros((0, 3)),
+    empty = SphereArrays(
+        i1, np.zeros((0, 3)), np.zeros(0), np.zeros(1, dtype=np.int64), np.zeros((0, 3)),
         np.zeros(0), np.zeros((0, 2), dtype=np.int64), i1, i1, np.zeros((0, 3, 3)),
-        np.zeros((0, 3)), np.zeros((0, 3)), 0.0, np.zeros((0, 6)), np.zeros((0, 2), dtype=np.int64),
-    ))  # fmt: skip
+        np.zeros((0, 3)), np.zeros((0, 3)),
+    )  # fmt: skip
+    _NO_COLLISION.append(
+        CollisionArrays(0, 0, empty, 0.0, np.zeros((0, 6)), np.zeros((0, 2), dtype=np.int64))
+    )
     return _NO_COLLISION[0]
 
 
@@ -433,10 +421,8 @@ def goal_rows(
             b0 = cl.body0
             b1 = b0 + cl.nb
             used = penetration(
-                s.f_rot[b0:b1], s.f_pos[b0:b1], s.f_jac[b0:b1], cl.sph_body, cl.sph_local,
-                cl.sph_radius, cl.body_start, cl.bound_local, cl.bound_radius, cl.self_pairs,
-                cl.obs_bodies, cl.obs_kind, cl.obs_rot, cl.obs_pos, cl.obs_dims, cl.margin,
-                cl.scratch, res[r0 : r0 + nr], jac[r0 : r0 + nr], cl.pair[:nr],
+                s.f_rot[b0:b1], s.f_pos[b0:b1], s.f_jac[b0:b1], cl.model, cl.margin, cl.scratch,
+                res[r0 : r0 + nr], jac[r0 : r0 + nr], cl.pair[:nr],
             )  # fmt: skip
             worst = 0.0
             for a in range(nr):

@@ -41,7 +41,7 @@ import hashlib
 import json
 import math
 from dataclasses import dataclass
-from typing import Any
+from typing import Any, NamedTuple
 
 import numba
 import numpy as np
@@ -267,6 +267,42 @@ def fit_bodies(
 
 
 # ======================================================================= compiled code
+class SphereArrays(NamedTuple):
+    """The sphere model as the penetration kernels read it (:func:`penetration`,
+    :func:`penetration_cost`; held by :class:`SphereModel` and by the LM kernel's
+    :class:`swarm_ik.kernels.lm.CollisionArrays`).
+
+    Attributes:
+        sph_body: Body of each sphere, ``(ns,)``, spheres grouped by body.
+        sph_local: Sphere centres in their body frame [m], ``(ns, 3)``.
+        sph_radius: Sphere radii [m], ``(ns,)``.
+        body_start: Spheres of body ``b`` are ``body_start[b]:body_start[b + 1]``, ``(nb + 1,)``.
+        bound_local: Centre of a sphere bounding each body's spheres, body frame, ``(nb, 3)``.
+        bound_radius: Its radius [m], ``(nb,)``.
+        self_pairs: Enabled self-collision body pairs, ``(npair, 2)``.
+        obs_bodies: Bodies checked against the obstacles, ``(nob,)`` (the moving ones: a body
+            fixed to the world cannot be moved by ``q`` and is left to the exact check).
+        obs_kind: Obstacle kinds (``SPHERE``, ``BOX``, ``CAPSULE``, ``CYLINDER``), ``(no,)``.
+        obs_rot: Obstacle world rotations, ``(no, 3, 3)``.
+        obs_pos: Obstacle world positions [m], ``(no, 3)``.
+        obs_dims: Sphere ``[r, 0, 0]``, box half extents, capsule and cylinder
+            ``[r, half length, 0]`` [m], ``(no, 3)``.
+    """
+
+    sph_body: IntArray
+    sph_local: FloatArray
+    sph_radius: FloatArray
+    body_start: IntArray
+    bound_local: FloatArray
+    bound_radius: FloatArray
+    self_pairs: IntArray
+    obs_bodies: IntArray
+    obs_kind: IntArray
+    obs_rot: FloatArray
+    obs_pos: FloatArray
+    obs_dims: FloatArray
+
+
 @numba.njit(cache=True)
 def _sdf(kind: int, rot: FloatArray, pos: FloatArray, dims: FloatArray, p: FloatArray):  # type: ignore[no-untyped-def]
     """Signed distance [m] of world point ``p`` to an obstacle and its world gradient."""
@@ -341,6 +377,20 @@ def _slot(res: float, out_res: FloatArray, rows: int) -> int:
 
 
 @numba.njit(cache=True)
+def _account(
+    res: float, want_rows: bool, out_res: FloatArray, rows: int, total: float, worst: float
+) -> tuple[int, int, float, float]:  # pragma: no cover - compiled
+    """Count an active pair's residual ``res`` [m] in the sums and, with ``want_rows``, find
+    its row (:func:`_slot`); returns ``(row or -1, rows used, total, worst)``."""
+    total += res * res
+    worst = max(worst, res)
+    s = _slot(res, out_res, rows) if want_rows else -1
+    if s == rows:
+        rows += 1
+    return s, rows, total, worst
+
+
+@numba.njit(cache=True)
 def _add_point_row(
     sign: float,
     ux: float,
@@ -405,18 +455,7 @@ def _penetrate(
     body_rot: FloatArray,
     body_pos: FloatArray,
     body_jac: FloatArray,
-    sph_body: IntArray,
-    sph_local: FloatArray,
-    sph_radius: FloatArray,
-    body_start: IntArray,
-    bound_local: FloatArray,
-    bound_radius: FloatArray,
-    self_pairs: IntArray,
-    obs_bodies: IntArray,
-    obs_kind: IntArray,
-    obs_rot: FloatArray,
-    obs_pos: FloatArray,
-    obs_dims: FloatArray,
+    model: SphereArrays,
     margin: float,
     scratch: FloatArray,
     want_rows: bool,
@@ -428,6 +467,8 @@ def _penetrate(
     rows and their Jacobian) and :func:`penetration_cost` (only the sums); returns the rows
     written, the sum of squared residuals [m²] over every active pair and the largest
     residual [m]."""
+    (sph_body, sph_local, sph_radius, body_start, bound_local, bound_radius, self_pairs,
+     obs_bodies, obs_kind, obs_rot, obs_pos, obs_dims) = model  # fmt: skip
     nq = out_jac.shape[1]
     sphere_centres(body_rot, body_pos, sph_body, sph_local, scratch)
     ca = np.empty(3)
@@ -459,15 +500,9 @@ def _penetrate(
                 res = margin + sph_radius[i] + sph_radius[j] - dist
                 if res <= 0.0:
                     continue
-                total += res * res
-                worst = max(worst, res)
-                if not want_rows:
-                    continue
-                s = _slot(res, out_res, rows)
+                s, rows, total, worst = _account(res, want_rows, out_res, rows, total, worst)
                 if s < 0:
                     continue
-                if s == rows:
-                    rows += 1
                 if dist > 1e-12:
                     ux, uy, uz = ux / dist, uy / dist, uz / dist
                 else:
@@ -492,15 +527,9 @@ def _penetrate(
                 res = margin + sph_radius[i] - d
                 if res <= 0.0:
                     continue
-                total += res * res
-                worst = max(worst, res)
-                if not want_rows:
-                    continue
-                s = _slot(res, out_res, rows)
+                s, rows, total, worst = _account(res, want_rows, out_res, rows, total, worst)
                 if s < 0:
                     continue
-                if s == rows:
-                    rows += 1
                 out_res[s] = res
                 out_pair[s, 0] = i
                 out_pair[s, 1] = -1 - ob
@@ -525,24 +554,13 @@ def penetration(
     body_rot: FloatArray,
     body_pos: FloatArray,
     body_jac: FloatArray,
-    sph_body: IntArray,
-    sph_local: FloatArray,
-    sph_radius: FloatArray,
-    body_start: IntArray,
-    bound_local: FloatArray,
-    bound_radius: FloatArray,
-    self_pairs: IntArray,
-    obs_bodies: IntArray,
-    obs_kind: IntArray,
-    obs_rot: FloatArray,
-    obs_pos: FloatArray,
-    obs_dims: FloatArray,
+    model: SphereArrays,
     margin: float,
     scratch: FloatArray,
     out_res: FloatArray,
     out_jac: FloatArray,
     out_pair: IntArray,
-) -> int:
+) -> int:  # pragma: no cover - compiled
     """Penetration residual rows and their Jacobian (see the module docstring).
 
     Args:
@@ -550,20 +568,7 @@ def penetration(
         body_pos: World position of each body origin [m], ``(nb, 3)``.
         body_jac: Jacobian of each body frame, LOCAL_WORLD_ALIGNED at the body origin, rows
             ``[v; ω]``, ``(nb, 6, nq)``.
-        sph_body: Body of each sphere, ``(ns,)``, spheres grouped by body.
-        sph_local: Sphere centres in their body frame [m], ``(ns, 3)``.
-        sph_radius: Sphere radii [m], ``(ns,)``.
-        body_start: Spheres of body ``b`` are ``body_start[b]:body_start[b + 1]``, ``(nb + 1,)``.
-        bound_local: Centre of a sphere bounding each body's spheres, body frame, ``(nb, 3)``.
-        bound_radius: Its radius [m], ``(nb,)``.
-        self_pairs: Enabled self-collision body pairs, ``(npair, 2)``.
-        obs_bodies: Bodies checked against the obstacles, ``(nob,)`` (the moving ones: a body
-            fixed to the world cannot be moved by ``q`` and is left to the exact check).
-        obs_kind: Obstacle kinds (``SPHERE``, ``BOX``, ``CAPSULE``, ``CYLINDER``), ``(no,)``.
-        obs_rot: Obstacle world rotations, ``(no, 3, 3)``.
-        obs_pos: Obstacle world positions [m], ``(no, 3)``.
-        obs_dims: Sphere ``[r, 0, 0]``, box half extents, capsule and cylinder
-            ``[r, half length, 0]`` [m], ``(no, 3)``.
+        model: The spheres, bounding spheres, self pairs and obstacles.
         margin: Wanted clearance [m].
         scratch: Work array, ``(ns, 6)``.
         out_res: Residual rows [m] (written), ``(max_rows,)``.
@@ -576,10 +581,8 @@ def penetration(
         residuals are kept; rows are sorted by decreasing residual.
     """
     rows, _, _ = _penetrate(
-        body_rot, body_pos, body_jac, sph_body, sph_local, sph_radius, body_start, bound_local,
-        bound_radius, self_pairs, obs_bodies, obs_kind, obs_rot, obs_pos, obs_dims, margin,
-        scratch, True, out_res, out_jac, out_pair,
-    )  # fmt: skip
+        body_rot, body_pos, body_jac, model, margin, scratch, True, out_res, out_jac, out_pair
+    )
     return rows
 
 
@@ -587,28 +590,16 @@ def penetration(
 def penetration_cost(
     body_rot: FloatArray,
     body_pos: FloatArray,
-    sph_body: IntArray,
-    sph_local: FloatArray,
-    sph_radius: FloatArray,
-    body_start: IntArray,
-    bound_local: FloatArray,
-    bound_radius: FloatArray,
-    self_pairs: IntArray,
-    obs_bodies: IntArray,
-    obs_kind: IntArray,
-    obs_rot: FloatArray,
-    obs_pos: FloatArray,
-    obs_dims: FloatArray,
+    model: SphereArrays,
     margin: float,
     scratch: FloatArray,
 ) -> tuple[float, float]:  # pragma: no cover - compiled
     """Sum of squared residuals [m²] over every active pair and the largest residual [m]
-    (0 when clear), without Jacobian: the swarm's fitness term.  Same arguments as
+    (0 when clear), without Jacobian: the swarm's fitness term.  Arguments as
     :func:`penetration`."""
     _, total, worst = _penetrate(
-        body_rot, body_pos, np.empty((0, 6, 0)), sph_body, sph_local, sph_radius, body_start,
-        bound_local, bound_radius, self_pairs, obs_bodies, obs_kind, obs_rot, obs_pos, obs_dims,
-        margin, scratch, False, np.empty(0), np.empty((0, 0)), np.empty((0, 2), dtype=np.int64),
+        body_rot, body_pos, np.empty((0, 6, 0)), model, margin, scratch, False, np.empty(0),
+        np.empty((0, 0)), np.empty((0, 2), dtype=np.int64),
     )  # fmt: skip
     return total, worst
 
@@ -659,21 +650,11 @@ def _drop_coarse_pairs(
         pos = np.array([np.array(m.translation) for m in gd.oMg])
         for k in range(npair):
             touch[k] += gd.collisionResults[k].isCollision()
-            c, _ = penetration_cost(
-                rot,
-                pos,
-                sph_body,
-                sph_local,
-                sph_radius,
-                body_start,
-                bound_local,
-                bound_radius,
-                pairs[k : k + 1],
-                no_bodies,
-                *no_obs,
-                0.0,
-                scratch,
-            )
+            pair_k = SphereArrays(
+                sph_body, sph_local, sph_radius, body_start, bound_local, bound_radius,
+                pairs[k : k + 1], no_bodies, *no_obs,
+            )  # fmt: skip
+            c, _ = penetration_cost(rot, pos, pair_k, 0.0, scratch)
             overlap[k] += c > 0.0
     coarse = (overlap >= 0.95 * samples) & (touch == 0)
     names = [(rc.body_links[int(a)], rc.body_links[int(b)]) for a, b in pairs[coarse]]
@@ -694,9 +675,8 @@ class SphereModel:
             tree joint index is ``body_joint - 1`` (``-1``: the root).
         body_frame_rot: Body placement in its joint frame, ``(nb, 3, 3)``.
         body_frame_pos: Its translation [m], ``(nb, 3)``.
-        sph_body, sph_local, sph_radius, body_start, bound_local, bound_radius, self_pairs,
-        obs_bodies, obs_kind, obs_rot, obs_pos, obs_dims: The arrays of :func:`penetration`
-            (``obs_bodies``: the bodies not fixed to the world).
+        arrays: The arrays of :func:`penetration` (:class:`SphereArrays`; ``obs_bodies``: the
+            bodies not fixed to the world).
         obs_names: Scene obstacle each obstacle entry comes from (a mesh gives several).
         tolerance: Fitting tolerance [m].
         coarse_pairs: Enabled self pairs (link names) left out of the residual because their
@@ -708,18 +688,7 @@ class SphereModel:
     body_joint: IntArray
     body_frame_rot: FloatArray
     body_frame_pos: FloatArray
-    sph_body: IntArray
-    sph_local: FloatArray
-    sph_radius: FloatArray
-    body_start: IntArray
-    bound_local: FloatArray
-    bound_radius: FloatArray
-    self_pairs: IntArray
-    obs_bodies: IntArray
-    obs_kind: IntArray
-    obs_rot: FloatArray
-    obs_pos: FloatArray
-    obs_dims: FloatArray
+    arrays: SphereArrays
     obs_names: tuple[str, ...]
     tolerance: float
     coarse_pairs: tuple[tuple[str, str], ...] = ()
@@ -821,18 +790,20 @@ class SphereModel:
             body_frame_pos=np.array([np.array(g.placement.translation) for g in objs]).reshape(
                 -1, 3
             ),
-            sph_body=sph_body,
-            sph_local=sph_local,
-            sph_radius=sph_radius,
-            body_start=body_start,
-            bound_local=bound_local,
-            bound_radius=bound_radius,
-            self_pairs=pairs,
-            obs_bodies=np.flatnonzero(np.array(rc.body_joint) != 0).astype(np.int64),
-            obs_kind=np.array(kinds, dtype=np.int64),
-            obs_rot=np.array(rots, dtype=float).reshape(-1, 3, 3),
-            obs_pos=np.array(poss, dtype=float).reshape(-1, 3),
-            obs_dims=np.array(dims, dtype=float).reshape(-1, 3),
+            arrays=SphereArrays(
+                sph_body,
+                sph_local,
+                sph_radius,
+                body_start,
+                bound_local,
+                bound_radius,
+                pairs,
+                np.flatnonzero(np.array(rc.body_joint) != 0).astype(np.int64),
+                np.array(kinds, dtype=np.int64),
+                np.array(rots, dtype=float).reshape(-1, 3, 3),
+                np.array(poss, dtype=float).reshape(-1, 3),
+                np.array(dims, dtype=float).reshape(-1, 3),
+            ),
             obs_names=tuple(names),
             tolerance=tolerance,
             coarse_pairs=tuple(coarse),
@@ -841,32 +812,12 @@ class SphereModel:
     @property
     def ns(self) -> int:
         """Number of robot spheres."""
-        return int(self.sph_radius.shape[0])
+        return int(self.arrays.sph_radius.shape[0])
 
     @property
     def nb(self) -> int:
         """Number of collision bodies."""
         return int(self.body_joint.shape[0])
-
-    def arrays(self) -> tuple[Any, ...]:
-        """The model arguments of :func:`penetration` and :func:`penetration_cost`, in order:
-        ``(sph_body, sph_local, sph_radius, body_start, bound_local, bound_radius,
-        self_pairs, obs_bodies, obs_kind, obs_rot, obs_pos, obs_dims)``, so that
-        ``penetration(rot, pos, jac, *sm.arrays(), margin, scratch, res, jac_out, pairs)``."""
-        return (
-            self.sph_body,
-            self.sph_local,
-            self.sph_radius,
-            self.body_start,
-            self.bound_local,
-            self.bound_radius,
-            self.self_pairs,
-            self.obs_bodies,
-            self.obs_kind,
-            self.obs_rot,
-            self.obs_pos,
-            self.obs_dims,
-        )
 
     def scratch(self) -> FloatArray:
         """A work array for :func:`penetration`, ``(ns, 6)``."""
@@ -919,27 +870,19 @@ class SphereModel:
         out_res = np.zeros(max_rows)
         out_jac = np.zeros((max_rows, nq))
         out_pair = np.zeros((max_rows, 2), dtype=np.int64)
-        n = penetration(  # type: ignore[call-arg]
-            rot,
-            pos,
-            jac,
-            *self.arrays(),
-            float(margin),
-            self.scratch(),
-            out_res,
-            out_jac,
-            out_pair,
+        n = penetration(
+            rot, pos, jac, self.arrays, float(margin), self.scratch(), out_res, out_jac, out_pair
         )
         return out_res[:n].copy(), out_jac[:n].copy(), out_pair[:n].copy()
 
     def cost(self, q: Any, margin: float = 0.0) -> tuple[float, float]:
         """:func:`penetration_cost` at ``q`` (Pinocchio kinematics)."""
         rot, pos, _ = self.body_kinematics(q)
-        return penetration_cost(rot, pos, *self.arrays(), float(margin), self.scratch())  # type: ignore[call-arg]
+        return penetration_cost(rot, pos, self.arrays, float(margin), self.scratch())  # type: ignore[no-any-return]
 
     def world_spheres(self, q: Any) -> tuple[FloatArray, FloatArray]:
         """World sphere centres ``(ns, 3)`` [m] and radii ``(ns,)`` at ``q`` (for drawing)."""
         rot, pos, _ = self.body_kinematics(q)
         s = self.scratch()
-        sphere_centres(rot, pos, self.sph_body, self.sph_local, s)
-        return s[:, :3].copy(), self.sph_radius.copy()
+        sphere_centres(rot, pos, self.arrays.sph_body, self.arrays.sph_local, s)
+        return s[:, :3].copy(), self.arrays.sph_radius.copy()
