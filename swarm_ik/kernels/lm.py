@@ -420,9 +420,9 @@ def goal_rows(
             nr = g.nrows[i]
             b0 = cl.body0
             b1 = b0 + cl.nb
-            used = penetration(
+            used, _, _ = penetration(
                 s.f_rot[b0:b1], s.f_pos[b0:b1], s.f_jac[b0:b1], cl.model, cl.margin, cl.scratch,
-                res[r0 : r0 + nr], jac[r0 : r0 + nr], cl.pair[:nr],
+                True, res[r0 : r0 + nr], jac[r0 : r0 + nr], cl.pair[:nr],
             )  # fmt: skip
             worst = 0.0
             for a in range(nr):

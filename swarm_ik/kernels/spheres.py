@@ -451,7 +451,7 @@ def _bound_centre(
 
 
 @numba.njit(cache=True)
-def _penetrate(
+def penetration(
     body_rot: FloatArray,
     body_pos: FloatArray,
     body_jac: FloatArray,
@@ -463,10 +463,28 @@ def _penetrate(
     out_jac: FloatArray,
     out_pair: IntArray,
 ) -> tuple[int, float, float]:  # pragma: no cover - compiled
-    """The pass over every active sphere pair behind :func:`penetration` (``want_rows``: the
-    rows and their Jacobian) and :func:`penetration_cost` (only the sums); returns the rows
-    written, the sum of squared residuals [m²] over every active pair and the largest
-    residual [m]."""
+    """Penetration residual rows and their Jacobian (see the module docstring), and the sums
+    over every active pair (:func:`penetration_cost` is this without rows).
+
+    Args:
+        body_rot: World rotation of each collision body, ``(nb, 3, 3)``.
+        body_pos: World position of each body origin [m], ``(nb, 3)``.
+        body_jac: Jacobian of each body frame, LOCAL_WORLD_ALIGNED at the body origin, rows
+            ``[v; ω]``, ``(nb, 6, nq)`` (not read without ``want_rows``).
+        model: The spheres, bounding spheres, self pairs and obstacles.
+        margin: Wanted clearance [m].
+        scratch: Work array, ``(ns, 6)``.
+        want_rows: Write the rows (else only the sums).
+        out_res: Residual rows [m] (written), ``(max_rows,)``.
+        out_jac: Their Jacobian (written), ``(max_rows, nq)``.
+        out_pair: Per row ``(sphere i, sphere j)`` for a self pair or ``(sphere i, -1 - k)`` for
+            obstacle ``k`` (written), ``(max_rows, 2)``.
+
+    Returns:
+        ``(rows, total, worst)``: the rows written (when more pairs are active than
+        ``max_rows`` the largest residuals are kept; rows are sorted by decreasing residual),
+        the sum of squared residuals [m²] over every active pair and the largest [m].
+    """
     (sph_body, sph_local, sph_radius, body_start, bound_local, bound_radius, self_pairs,
      obs_bodies, obs_kind, obs_rot, obs_pos, obs_dims) = model  # fmt: skip
     nq = out_jac.shape[1]
@@ -550,43 +568,6 @@ def _penetrate(
 
 
 @numba.njit(cache=True)
-def penetration(
-    body_rot: FloatArray,
-    body_pos: FloatArray,
-    body_jac: FloatArray,
-    model: SphereArrays,
-    margin: float,
-    scratch: FloatArray,
-    out_res: FloatArray,
-    out_jac: FloatArray,
-    out_pair: IntArray,
-) -> int:  # pragma: no cover - compiled
-    """Penetration residual rows and their Jacobian (see the module docstring).
-
-    Args:
-        body_rot: World rotation of each collision body, ``(nb, 3, 3)``.
-        body_pos: World position of each body origin [m], ``(nb, 3)``.
-        body_jac: Jacobian of each body frame, LOCAL_WORLD_ALIGNED at the body origin, rows
-            ``[v; ω]``, ``(nb, 6, nq)``.
-        model: The spheres, bounding spheres, self pairs and obstacles.
-        margin: Wanted clearance [m].
-        scratch: Work array, ``(ns, 6)``.
-        out_res: Residual rows [m] (written), ``(max_rows,)``.
-        out_jac: Their Jacobian (written), ``(max_rows, nq)``.
-        out_pair: Per row ``(sphere i, sphere j)`` for a self pair or ``(sphere i, -1 - k)`` for
-            obstacle ``k`` (written), ``(max_rows, 2)``.
-
-    Returns:
-        The number of rows written.  When more pairs are active than ``max_rows`` the largest
-        residuals are kept; rows are sorted by decreasing residual.
-    """
-    rows, _, _ = _penetrate(
-        body_rot, body_pos, body_jac, model, margin, scratch, True, out_res, out_jac, out_pair
-    )
-    return rows
-
-
-@numba.njit(cache=True)
 def penetration_cost(
     body_rot: FloatArray,
     body_pos: FloatArray,
@@ -597,7 +578,7 @@ def penetration_cost(
     """Sum of squared residuals [m²] over every active pair and the largest residual [m]
     (0 when clear), without Jacobian: the swarm's fitness term.  Arguments as
     :func:`penetration`."""
-    _, total, worst = _penetrate(
+    _, total, worst = penetration(
         body_rot, body_pos, np.empty((0, 6, 0)), model, margin, scratch, False, np.empty(0),
         np.empty((0, 0)), np.empty((0, 2), dtype=np.int64),
     )  # fmt: skip
@@ -616,16 +597,12 @@ def obstacle_sdf(
 def _drop_coarse_pairs(
     rc: Any,
     pairs: IntArray,
-    sph_body: IntArray,
-    sph_local: FloatArray,
-    sph_radius: FloatArray,
-    body_start: IntArray,
-    bound_local: FloatArray,
-    bound_radius: FloatArray,
+    spheres: tuple[IntArray, FloatArray, FloatArray, IntArray, FloatArray, FloatArray],
     samples: int,
 ) -> tuple[IntArray, list[tuple[str, str]]]:
     """Split off the self body pairs whose spheres overlap in >= 95 % of ``samples`` random
-    configurations (seed 0) while coal finds the two bodies in contact in none."""
+    configurations (seed 0) while coal finds the two bodies in contact in none (``spheres``:
+    the first six fields of :class:`SphereArrays`)."""
     import pinocchio as pin
 
     robot = rc.robot
@@ -639,7 +616,7 @@ def _drop_coarse_pairs(
     npair = len(pairs)
     overlap = np.zeros(npair, dtype=np.int64)
     touch = np.zeros(npair, dtype=np.int64)
-    scratch = np.empty((len(sph_radius), 6))
+    scratch = np.empty((len(spheres[2]), 6))
     no_bodies = np.zeros(0, np.int64)
     no_obs = (np.zeros(0, np.int64), np.zeros((0, 3, 3)), np.zeros((0, 3)), np.zeros((0, 3)))
     rng = np.random.default_rng(0)
@@ -650,10 +627,7 @@ def _drop_coarse_pairs(
         pos = np.array([np.array(m.translation) for m in gd.oMg])
         for k in range(npair):
             touch[k] += gd.collisionResults[k].isCollision()
-            pair_k = SphereArrays(
-                sph_body, sph_local, sph_radius, body_start, bound_local, bound_radius,
-                pairs[k : k + 1], no_bodies, *no_obs,
-            )  # fmt: skip
+            pair_k = SphereArrays(*spheres, pairs[k : k + 1], no_bodies, *no_obs)
             c, _ = penetration_cost(rot, pos, pair_k, 0.0, scratch)
             overlap[k] += c > 0.0
     coarse = (overlap >= 0.95 * samples) & (touch == 0)
@@ -740,19 +714,10 @@ class SphereModel:
             bound_local[k] = mid
             bound_radius[k] = float(np.max(np.linalg.norm(c - mid, axis=1) + r))
         pairs = np.array(rc.self_pairs if self_collision else [], dtype=np.int64).reshape(-1, 2)
+        spheres = (sph_body, sph_local, sph_radius, body_start, bound_local, bound_radius)
         coarse: list[tuple[str, str]] = []
         if len(pairs) and coarse_samples > 0:
-            pairs, coarse = _drop_coarse_pairs(
-                rc,
-                pairs,
-                sph_body,
-                sph_local,
-                sph_radius,
-                body_start,
-                bound_local,
-                bound_radius,
-                coarse_samples,
-            )
+            pairs, coarse = _drop_coarse_pairs(rc, pairs, spheres, coarse_samples)
         kinds, rots, poss, dims, names = [], [], [], [], []
         sc = as_scene(scene)
         for name, o in zip(sc.names, sc.obstacles, strict=True):
@@ -791,12 +756,7 @@ class SphereModel:
                 -1, 3
             ),
             arrays=SphereArrays(
-                sph_body,
-                sph_local,
-                sph_radius,
-                body_start,
-                bound_local,
-                bound_radius,
+                *spheres,
                 pairs,
                 np.flatnonzero(np.array(rc.body_joint) != 0).astype(np.int64),
                 np.array(kinds, dtype=np.int64),
@@ -870,9 +830,10 @@ class SphereModel:
         out_res = np.zeros(max_rows)
         out_jac = np.zeros((max_rows, nq))
         out_pair = np.zeros((max_rows, 2), dtype=np.int64)
-        n = penetration(
-            rot, pos, jac, self.arrays, float(margin), self.scratch(), out_res, out_jac, out_pair
-        )
+        n, _, _ = penetration(
+            rot, pos, jac, self.arrays, float(margin), self.scratch(), True, out_res, out_jac,
+            out_pair,
+        )  # fmt: skip
         return out_res[:n].copy(), out_jac[:n].copy(), out_pair[:n].copy()
 
     def cost(self, q: Any, margin: float = 0.0) -> tuple[float, float]:
