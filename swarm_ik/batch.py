@@ -272,32 +272,35 @@ class BatchChain:
 
 
 @dataclass(frozen=True)
-class ChunkResult:
-    """Answers for one contiguous chunk of targets (what a worker sends back).
+class _Rows:
+    """One row per target: the answers and their check (shared by :class:`ChunkResult` and
+    :class:`BatchResult`; shapes ``(n, nq)`` and ``(n,)``)."""
 
-    Attributes:
-        start: Index of the chunk's first target in the batch.
-        q: Answers, shape ``(n, nq)``.
-        position_error: ‖Δp‖ [m], ``(n,)``.
-        rotation_error: Geodesic angle [rad], ``(n,)``.
-        success: Within tolerance and limits, ``(n,)``.
-        n_evals: FK + Jacobian evaluations, ``(n,)``.
-        n_starts: Starts polished, ``(n,)``.
-        time_s: Seconds the worker spent on the chunk.
-    """
-
-    start: int
     q: FloatArray
     position_error: FloatArray
     rotation_error: FloatArray
     success: BoolArray
     n_evals: IntArray
     n_starts: IntArray
+
+
+@dataclass(frozen=True)
+class ChunkResult(_Rows):
+    """Answers for one contiguous chunk of targets (what a worker sends back).
+
+    Attributes:
+        q, position_error, rotation_error, success, n_evals, n_starts: As
+            :class:`BatchResult`, for the chunk's targets.
+        start: Index of the chunk's first target in the batch.
+        time_s: Seconds the worker spent on the chunk.
+    """
+
+    start: int
     time_s: float
 
 
 @dataclass(frozen=True)
-class BatchResult:
+class BatchResult(_Rows):
     """What :func:`solve_batch` returns: one row per target.
 
     Attributes:
@@ -317,12 +320,6 @@ class BatchResult:
             chunks finished before it, the first targets in order.
     """
 
-    q: FloatArray
-    position_error: FloatArray
-    rotation_error: FloatArray
-    success: BoolArray
-    n_evals: IntArray
-    n_starts: IntArray
     time_s: float
     setup_s: float
     compute_s: float
@@ -585,7 +582,10 @@ def solve_chunk(
     ok = within & (dp <= settings.tol_pos)
     if not settings.position_only:
         ok &= dr <= settings.tol_rot
-    return ChunkResult(start, q, dp, dr, ok, evals, starts, time.perf_counter() - t0)
+    return ChunkResult(
+        q=q, position_error=dp, rotation_error=dr, success=ok, n_evals=evals, n_starts=starts,
+        start=start, time_s=time.perf_counter() - t0,
+    )  # fmt: skip
 
 
 def _run_chunk(
