@@ -380,7 +380,7 @@ def solve(
     ):
         ik = _lane(problem, tol_pos, tol_rot, time_limit, max_evals)
         if ik is not None:
-            return ik._solve_pose(problem.target, q0, seed, target_checked=True)
+            return ik._solve_pose(problem.target, q0, seed, problem=problem)
     spec = base.get(solver)
     if prefer not in PREFER:
         raise unknown("prefer mode", prefer, PREFER)
@@ -636,11 +636,15 @@ class IKSolver:
             )  # fmt: skip
         return self._solve_pose(target, q0, seed)
 
-    def _solve_pose(self, target: Any, q0: Any, seed: int, target_checked: bool = False) -> Result:
+    def _solve_pose(
+        self, target: Any, q0: Any, seed: int, problem: IKProblem | None = None
+    ) -> Result:
         """The per-call path of a 4×4 target: one compiled call (checks, search), the
         Pinocchio check and the Result.  A target or start the compiled checks do not pass is
         checked in Python (:func:`~swarm_ik.pose.as_pose`, :func:`prepare_q0`: refused, or
-        fixed and marked checked) and the call repeated."""
+        fixed and marked checked) and the call repeated.  ``problem``: the plain pose problem
+        whose (already validated) target this is, when :func:`solve` calls (its lane)."""
+        target_checked = problem is not None
         from swarm_ik.kernels.search import CHECK_TARGET, RAN, pose_errors_one
         from swarm_ik.problem import GoalError
 
@@ -687,7 +691,7 @@ class IKSolver:
             reason = "converged"
         else:
             reason = end_reason(
-                tpl.with_target(pose),
+                problem if problem is not None else tpl.with_target(pose),
                 False,
                 _Spent(self.max_evals, used, self.time_limit, elapsed),  # type: ignore[arg-type]
             )

@@ -229,3 +229,18 @@ def test_result_of_is_the_dataclass_with_every_field() -> None:
     assert again == r and swarm_ik.Result.of(**fields) == again
     with pytest.raises(dataclasses.FrozenInstanceError):
         r.success = False  # type: ignore[misc]
+
+
+def test_solve_lane_keeps_the_problems_own_target_check() -> None:
+    """A target accepted by a looser orth_tol is not re-checked at 1e-6 by the lane, also
+    when the solve fails (its end reason is read off the user's problem)."""
+    robot = swarm_ik.load_robot("panda")
+    target = np.eye(4)
+    target[:3, 3] = [3.0, 0.0, 0.5]  # out of reach
+    target[0, 1] = 2e-4  # not a rotation at 1e-6, accepted at 1e-3
+    p = swarm_ik.IKProblem(robot, target, orth_tol=1e-3)
+    seen: list[float] = []
+    lane = swarm_ik.solve(p, seed=3, max_evals=300)
+    general = swarm_ik.solve(p, seed=3, max_evals=300, on_improvement=lambda q, f: seen.append(f))
+    assert not lane.success and lane.reason == general.reason == "unreachable"
+    _same_result(lane, general)
