@@ -165,8 +165,6 @@ def _check_pose_goal(
     ``Position.errors`` (compiled: equal to them to round-off), and whether ``q`` lies within
     the bounds.  ``None`` for any other problem (then ``verify`` runs)."""
     from swarm_ik.goals import Pose, Position
-    from swarm_ik.kernels.search import pose_errors_one
-    from swarm_ik.problem import GoalError
 
     if len(problem.goals) != 1:
         return None
@@ -180,12 +178,37 @@ def _check_pose_goal(
         position_only = True
     else:
         return None
-    reached = problem.robot.fk_pinocchio(q, gl.frame)
-    dp, dr, within = pose_errors_one(reached, target, q, problem.lower, problem.upper)
+    return _pose_check(
+        problem.robot, gl.frame, gl.describe(), target, position_only, q, problem.lower,
+        problem.upper, tol_pos, tol_rot,
+    )  # fmt: skip
+
+
+def _pose_check(
+    robot: Any,
+    frame: str,
+    label: str,
+    target: np.ndarray,
+    position_only: bool,
+    q: np.ndarray,
+    lower: np.ndarray,
+    upper: np.ndarray,
+    tol_pos: float,
+    tol_rot: float,
+) -> tuple[tuple[Any, ...], bool]:
+    """The independent check of one pose (``position_only``: position) goal on ``frame``:
+    Pinocchio's pose of the frame at ``q``, its errors against ``target`` ``(4, 4)`` (the
+    compiled twin of ``Pose.errors``) and whether ``q`` lies within ``[lower, upper]``;
+    returns ``((GoalError,), within)``."""
+    from swarm_ik.kernels.search import pose_errors_one
+    from swarm_ik.problem import GoalError
+
+    reached = robot.fk_pinocchio(q, frame)
+    dp, dr, within = pose_errors_one(reached, target, q, lower, upper)
     if position_only:
         dr = math.nan
     met = not (dp > tol_pos) and not (dr > tol_rot)
-    return (GoalError(gl.describe(), dp, dr, met),), within
+    return (GoalError(label, dp, dr, bool(met)),), bool(within)
 
 
 def _result(
@@ -204,7 +227,7 @@ def _result(
     evaluator, or what :func:`end_reason` reads of one)."""
     dp, dr = largest_errors(goal_errors)
     success = bool(within and all(e.met for e in goal_errors))
-    return Result(
+    return Result.of(
         q=q,
         fitness=fit,
         position_error=dp,
@@ -645,8 +668,7 @@ class IKSolver:
         fixed and marked checked) and the call repeated.  ``problem``: the plain pose problem
         whose (already validated) target this is, when :func:`solve` calls (its lane)."""
         target_checked = problem is not None
-        from swarm_ik.kernels.search import CHECK_TARGET, RAN, pose_errors_one
-        from swarm_ik.problem import GoalError
+        from swarm_ik.kernels.search import CHECK_TARGET, RAN
 
         tpl = self._template
         if type(target) is np.ndarray and target.dtype == np.float64 and target.shape == (4, 4):
@@ -679,37 +701,22 @@ class IKSolver:
             else:
                 q_start, start_checked = prepare_q0(tpl, q0), True
         elapsed = time.perf_counter() - t0
-        reached = self.robot.fk_pinocchio(q, self._frame)  # the independent check
-        dp, dr, within = pose_errors_one(reached, pose, q, tpl.lower, tpl.upper)
-        if self._position_only:
-            dr = math.nan
-        met = not (dp > self.tol_pos) and not (dr > self.tol_rot)
-        success = within and met
+        goal_errors, within = _pose_check(  # the independent check
+            self.robot, self._frame, self._label, pose, self._position_only, q, tpl.lower,
+            tpl.upper, self.tol_pos, self.tol_rot,
+        )  # fmt: skip
+        (ge,) = goal_errors
         if not math.isfinite(fit):
-            fit = dp + (0.0 if math.isnan(dr) else self._w_rot * dr)
-        if success:
-            reason = "converged"
-        else:
-            reason = end_reason(
-                problem if problem is not None else tpl.with_target(pose),
-                False,
-                _Spent(self.max_evals, used, self.time_limit, elapsed),  # type: ignore[arg-type]
+            fit = ge.position_error + (
+                0.0 if math.isnan(ge.rotation_error) else self._w_rot * ge.rotation_error
             )
-        return Result.of(
-            q=q,
-            fitness=float(fit),
-            position_error=dp,
-            rotation_error=0.0 if math.isnan(dr) else dr,
-            n_evals=int(used),
-            time_s=elapsed,
-            success=bool(success),
-            within_limits=within,
-            history=history,
-            solver=self.solver,
-            seed=seed,
-            goal_errors=(GoalError(self._label, dp, dr, bool(met)),),
-            reason=reason,
-        )
+        if problem is None and not (within and ge.met):  # end_reason reads its target
+            problem = tpl.with_target(pose)
+        spent = _Spent(self.max_evals, used, self.time_limit, elapsed)
+        return _result(
+            problem if problem is not None else tpl, q, float(fit), goal_errors, within, spent,
+            elapsed, history, self.solver, seed,
+        )  # fmt: skip
 
     def __repr__(self) -> str:
         return (

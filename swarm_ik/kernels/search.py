@@ -597,10 +597,12 @@ def flat_args(t: TreeArrays, g: GoalTable, b: Bounds, cfg: LMSettings) -> list[A
 
 def warm_up(t: TreeArrays, g: GoalTable, b: Bounds) -> None:
     """Compile (or load from numba's cache) :func:`swarm_search_flat` for these types, outside
-    any timed solve (called by :func:`swarm_ik.kernels.lm.warm_up`), and
-    :func:`pose_errors_one` (the check of the answer).  Each cached kernel costs ≈ 10–70 ms
-    to load, so :func:`pose_ok` is loaded by the first (untimed) solve of an
-    :class:`swarm_ik.IKSolver`, and the test helpers (:func:`gwo_move_into` on its own,
+    any timed solve (called by :func:`swarm_ik.kernels.lm.warm_up`), :func:`pose_errors_one`
+    (the check of the answer) and :func:`seed_key` (called from Python by
+    :func:`swarm_ik.solvers.hybrid.search_key`).  Each cached kernel costs ≈ 10–70 ms to
+    load, so the rest load where they are used: :func:`solve_pose_flat` (with
+    :func:`pose_ok` and :func:`start_inside` compiled into it) when an
+    :class:`swarm_ik.IKSolver` is made, the test helpers (:func:`gwo_move_into` on its own,
     :func:`uniforms`) on first use."""
     nq = t.nq
     seed = np.ascontiguousarray(0.5 * (b.lower + b.upper))
@@ -613,7 +615,6 @@ def warm_up(t: TreeArrays, g: GoalTable, b: Bounds) -> None:
     eye = np.eye(4)
     pose_errors_one(eye, eye, seed, b.lower, b.upper)  # the check of solve's answer
     seed_key(0)  # the random key of an integer seed
-    start_inside(seed, b.lower, b.upper, b.wrap)  # the check of a start
 
 
 # --------------------------------------------------------------------------- per-call checks
