@@ -607,8 +607,9 @@ class IKSolver:
         if self._state is not None:  # the kernel's entry point for these argument types
             from swarm_ik.kernels import search
 
-            self._kernel = search.entry_point(  # (its target is reached from the start)
-                self._args(tpl.target, self._mid, True, True, 0.0, 0, np.empty(tpl.nq))
+            reached = robot.fk(self._mid)  # the template's target: reached from the start
+            self._kernel = search.entry_point(
+                self._args(reached, self._mid, True, True, 0.0, 0, np.empty(tpl.nq))
             )
         self.solve(self._template.target)  # the first solve's Python paths warmed too
 
