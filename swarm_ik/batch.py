@@ -130,6 +130,7 @@ def _solve_targets(
     s_hi = np.empty(n)
     scale = 2.0**-53
     par = goals.par[0]
+    work = lm.make_work(tree, goals, goals.rows_primary)
     for i in range(n_targets):
         for a in range(3):
             for c in range(3):
@@ -146,9 +147,9 @@ def _solve_targets(
         best_cost = np.inf
         converged = False
         while True:
-            used = lm.lm_polish(
+            used = lm.lm_run(
                 starts[:k], tree, goals, bounds, cfg, tol_pos, tol_rot, k * cfg.max_iters,
-                True, pq[:k], pdp[:k], pdr[:k], pst[:k], pev[:k],
+                True, pq[:k], pdp[:k], pdr[:k], pst[:k], pev[:k], work,
             )  # fmt: skip
             evals += used
             for s in range(k):

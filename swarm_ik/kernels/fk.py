@@ -215,7 +215,7 @@ def fk_scratch(tree: TreeArrays) -> FKScratch:
     )
 
 
-@numba.njit(cache=True)
+@numba.njit(cache=True, _nrt=False)
 def fk_one(
     q: FloatArray, t: TreeArrays, s: FKScratch, want_jac: bool
 ) -> None:  # pragma: no cover - compiled

@@ -273,7 +273,7 @@ def goal_table(
 
 
 # --------------------------------------------------------------------------- residuals
-@numba.njit(cache=True)
+@numba.njit(cache=True, _nrt=False)
 def goal_rows(
     q: FloatArray,
     s: FKScratch,
@@ -444,7 +444,7 @@ def goal_rows(
     return cost
 
 
-@numba.njit(cache=True)
+@numba.njit(cache=True, _nrt=False)
 def within_tolerance(
     err: FloatArray, g: GoalTable, tol_pos: float, tol_rot: float
 ) -> bool:  # pragma: no cover - compiled
@@ -459,7 +459,7 @@ def within_tolerance(
     return True
 
 
-@numba.njit(cache=True)
+@numba.njit(cache=True, _nrt=False)
 def max_errors(err: FloatArray, g: GoalTable) -> tuple[float, float]:  # pragma: no cover
     """Largest primary position error [m] and angular error [rad] (0 where none)."""
     dp = 0.0
@@ -474,7 +474,8 @@ def max_errors(err: FloatArray, g: GoalTable) -> tuple[float, float]:  # pragma:
 
 
 class Work(NamedTuple):
-    """Scratch of the LM kernels for one problem (allocated once per compiled call)."""
+    """Scratch of the LM kernels for one problem: every buffer :func:`lm_run` writes, so that
+    a solver loop allocates it once (:func:`make_work`) and polishes many times."""
 
     fk: FKScratch
     res: FloatArray
@@ -485,11 +486,20 @@ class Work(NamedTuple):
     err_t: FloatArray
     m3: FloatArray
     v3: FloatArray
+    a_mat: FloatArray
+    grad: FloatArray
+    delta: FloatArray
+    q: FloatArray
+    q_t: FloatArray
+    idx: IntArray
+    a_red: FloatArray
+    b_red: FloatArray
+    x_red: FloatArray
 
 
 @numba.njit(cache=True)
 def make_work(t: TreeArrays, g: GoalTable, rows: int) -> Work:  # pragma: no cover - compiled
-    """Scratch for :func:`lm_polish` and friends (``rows``: the largest stack)."""
+    """Scratch for :func:`lm_run` and friends (``rows``: the largest stack)."""
     nq = t.nq
     nj = t.kind.shape[0]
     nf = t.frame_joint.shape[0]
@@ -511,10 +521,19 @@ def make_work(t: TreeArrays, g: GoalTable, rows: int) -> Work:  # pragma: no cov
         np.full((ng, 2), np.nan),
         np.empty((3, 3)),
         np.empty(3),
+        np.empty((nq, nq)),
+        np.empty(nq),
+        np.empty(nq),
+        np.empty(nq),
+        np.empty(nq),
+        np.empty(nq, dtype=np.int64),
+        np.empty((nq, nq)),
+        np.empty(nq),
+        np.empty(nq),
     )
 
 
-@numba.njit(cache=True)
+@numba.njit(cache=True, _nrt=False)
 def _chol_factor(a: FloatArray, n: int) -> bool:  # pragma: no cover - compiled
     """Cholesky factor of the SPD ``a[:n, :n]`` in place (lower); False if not SPD."""
     for j in range(n):
@@ -533,7 +552,7 @@ def _chol_factor(a: FloatArray, n: int) -> bool:  # pragma: no cover - compiled
     return True
 
 
-@numba.njit(cache=True)
+@numba.njit(cache=True, _nrt=False)
 def _chol_back(a: FloatArray, b: FloatArray, n: int, x: FloatArray) -> None:  # pragma: no cover
     """Solve ``L Lᵀ x = b`` with the factor of :func:`_chol_factor`."""
     for i in range(n):
@@ -548,7 +567,7 @@ def _chol_back(a: FloatArray, b: FloatArray, n: int, x: FloatArray) -> None:  # 
         x[i] = s / a[i, i]
 
 
-@numba.njit(cache=True)
+@numba.njit(cache=True, _nrt=False)
 def into_bounds(v: float, j: int, b: Bounds) -> float:  # pragma: no cover - compiled
     """Value ``v`` of joint ``j`` wrapped into ``[-π, π)`` if continuous, then clipped to
     the bounds (the compiled twin of :meth:`swarm_ik.solvers.base.Evaluator.clip`)."""
@@ -561,7 +580,7 @@ def into_bounds(v: float, j: int, b: Bounds) -> float:  # pragma: no cover - com
     return v
 
 
-@numba.njit(cache=True)
+@numba.njit(cache=True, _nrt=False)
 def _step_into_bounds(
     q: FloatArray, delta: FloatArray, scale: float, b: Bounds, out: FloatArray
 ) -> None:  # pragma: no cover - compiled
@@ -570,7 +589,7 @@ def _step_into_bounds(
         out[j] = into_bounds(q[j] + scale * delta[j], j, b)
 
 
-@numba.njit(cache=True)
+@numba.njit(cache=True, _nrt=False)
 def evaluate(
     q: FloatArray,
     t: TreeArrays,
@@ -588,8 +607,8 @@ def evaluate(
     return goal_rows(q, w.fk, g, b, True, want_jac, w.res, w.jac, w.err, w.m3, w.v3)
 
 
-@numba.njit(cache=True)
-def lm_polish(
+@numba.njit(cache=True, _nrt=False)
+def lm_run(
     starts: FloatArray,
     t: TreeArrays,
     g: GoalTable,
@@ -604,6 +623,7 @@ def lm_polish(
     out_dr: FloatArray,
     out_status: IntArray,
     out_evals: IntArray,
+    w: Work,
 ) -> int:  # pragma: no cover - compiled
     """Bounded Levenberg–Marquardt on the primary stack from each start; returns the
     evaluations used (never more than ``max_evals``).
@@ -627,19 +647,12 @@ def lm_polish(
         out_dr: Largest primary angular error of each [rad], ``(k,)``.
         out_status: ``NOT_RUN``, ``CONVERGED``, ``LOCAL_MIN``, ``ITER_CAP`` or ``BUDGET``.
         out_evals: Evaluations used per start, ``(k,)``.
+        w: Scratch from :func:`make_work` (at least ``g.rows_primary`` rows).
     """
     k_starts, n = starts.shape
     m = g.rows_primary
-    w = make_work(t, g, m)
-    a_mat = np.empty((n, n))
-    grad = np.empty(n)
-    delta = np.empty(n)
-    q = np.empty(n)
-    q_t = np.empty(n)
-    idx = np.empty(n, dtype=np.int64)
-    a_red = np.empty((n, n))
-    b_red = np.empty(n)
-    x_red = np.empty(n)
+    a_mat, grad, delta, q, q_t = w.a_mat, w.grad, w.delta, w.q, w.q_t
+    idx, a_red, b_red, x_red = w.idx, w.a_red, w.b_red, w.x_red
     used = 0
     for s in range(k_starts):
         out_status[s] = NOT_RUN
@@ -763,6 +776,31 @@ def lm_polish(
 
 
 @numba.njit(cache=True)
+def lm_polish(
+    starts: FloatArray,
+    t: TreeArrays,
+    g: GoalTable,
+    b: Bounds,
+    cfg: LMSettings,
+    tol_pos: float,
+    tol_rot: float,
+    max_evals: int,
+    stop_first: bool,
+    out_q: FloatArray,
+    out_dp: FloatArray,
+    out_dr: FloatArray,
+    out_status: IntArray,
+    out_evals: IntArray,
+) -> int:  # pragma: no cover - compiled
+    """:func:`lm_run` with scratch of its own (for callers that polish once)."""
+    w = make_work(t, g, g.rows_primary)
+    return lm_run(
+        starts, t, g, b, cfg, tol_pos, tol_rot, max_evals, stop_first,
+        out_q, out_dp, out_dr, out_status, out_evals, w,
+    )  # fmt: skip
+
+
+@numba.njit(cache=True, _nrt=False)
 def secondary_cost(
     q: FloatArray,
     t: TreeArrays,

@@ -106,7 +106,7 @@ now = _now_libc if sys.platform.startswith("linux") else _now_objmode
 
 
 # --------------------------------------------------------------------------- randomness
-@numba.njit(cache=True)
+@numba.njit(cache=True, _nrt=False)
 def splitmix64(x: np.uint64) -> np.uint64:  # pragma: no cover - compiled
     """One SplitMix64 output for state ``x`` (the state advances by the golden gamma)."""
     z = x + np.uint64(0x9E3779B97F4A7C15)
@@ -221,7 +221,7 @@ def seed_key(seed: int) -> np.uint64:  # pragma: no cover - compiled
 
 
 # --------------------------------------------------------------------------- grey wolf
-@numba.njit(cache=True)
+@numba.njit(cache=True, _nrt=False)
 def gwo_move_into(
     x: FloatArray,
     rows: int,
@@ -247,7 +247,7 @@ def gwo_move_into(
             out[i, j] = s / 3.0
 
 
-@numba.njit(cache=True)
+@numba.njit(cache=True, _nrt=False)
 def _clip_row(q: FloatArray, b: Bounds) -> None:  # pragma: no cover - compiled
     """Continuous joints wrapped into ``[-π, π)``, then clipped to the bounds (in place; the
     twin of :meth:`swarm_ik.solvers.base.Evaluator.clip`)."""
@@ -256,7 +256,7 @@ def _clip_row(q: FloatArray, b: Bounds) -> None:  # pragma: no cover - compiled
 
 
 # --------------------------------------------------------------------------- the search
-@numba.njit(cache=True)
+@numba.njit(cache=True, _nrt=False)
 def _offer(
     q: FloatArray, f: float, dp: float, dr: float, ev_q: FloatArray
 ) -> tuple[float, float, float]:  # pragma: no cover - compiled
@@ -278,7 +278,7 @@ def _append(hist: FloatArray, n: int, v: float) -> FloatArray:  # pragma: no cov
     return hist
 
 
-@numba.njit(cache=True)
+@numba.njit(cache=True, _nrt=False)
 def sampling_window(
     lower: FloatArray, upper: FloatArray, seed_q: FloatArray, lo: FloatArray, hi: FloatArray
 ) -> None:  # pragma: no cover - compiled
@@ -359,6 +359,7 @@ def swarm_search(
     r2 = np.empty((3, rows, n))
     moved = np.empty((rows, n))
     hist = np.empty(64)
+    work = lm.make_work(t, g, g.rows_primary)
     n_hist = 0
     n_arch = 0
     for j in range(n):
@@ -395,9 +396,9 @@ def swarm_search(
         if has_time:
             left = time_limit - (t_call - t0)
             cap = min(cap, max(8, int(0.8 * left / sec_per_eval)))
-        u = lm.lm_polish(
+        u = lm.lm_run(
             queue[:n_queue], t, g, b, cfg, kernel_tol_pos, kernel_tol_rot, cap, True,
-            pq[:n_queue], pdp[:n_queue], pdr[:n_queue], pst[:n_queue], pev[:n_queue],
+            pq[:n_queue], pdp[:n_queue], pdr[:n_queue], pst[:n_queue], pev[:n_queue], work,
         )  # fmt: skip
         if u > 0 and has_time:
             sec_per_eval = 0.5 * sec_per_eval + 0.5 * (now() - t_call) / u
@@ -618,7 +619,7 @@ def warm_up(t: TreeArrays, g: GoalTable, b: Bounds) -> None:
 
 
 # --------------------------------------------------------------------------- per-call checks
-@numba.njit(cache=True)
+@numba.njit(cache=True, _nrt=False)
 def start_inside(
     q: FloatArray, lower: FloatArray, upper: FloatArray, wrap: BoolArray
 ) -> bool:  # pragma: no cover - compiled
@@ -634,7 +635,7 @@ def start_inside(
     return True
 
 
-@numba.njit(cache=True)
+@numba.njit(cache=True, _nrt=False)
 def pose_ok(m: FloatArray, orth_tol: float) -> bool:  # pragma: no cover - compiled
     """Whether the ``(4, 4)`` matrix ``m`` passes :func:`swarm_ik.pose.as_pose`'s checks
     with a margin (finite, bottom row ``[0, 0, 0, 1]``, rotation block within ``orth_tol/2``
