@@ -5,3 +5,14 @@ penetration residual (``spheres``).
 
 Each compiled function has a numpy twin or a Pinocchio reference it is tested against.
 """
+
+from typing import Any
+
+import numba
+
+leaf: Any = numba.njit(cache=True, _nrt=False)  # type: ignore[call-overload]
+"""Decorator of the kernels that only read and write their callers' arrays (no allocation):
+compiled without numba's reference counting.  A compiled call that passes arrays (or tuples
+of them) otherwise costs an atomic increment and decrement per array, about 0.4 µs per call
+of :func:`swarm_ik.kernels.fk.fk_one` inside the LM loop; the callers own the arrays and
+keep them alive.  (A leaf that tried to allocate would fail to compile, not misbehave.)"""

@@ -21,6 +21,8 @@ import numba
 import numpy as np
 from numpy.typing import NDArray
 
+from swarm_ik.kernels import leaf
+
 FloatArray = NDArray[np.float64]
 IntArray = NDArray[np.int64]
 
@@ -215,7 +217,7 @@ def fk_scratch(tree: TreeArrays) -> FKScratch:
     )
 
 
-@numba.njit(cache=True, _nrt=False)
+@leaf
 def fk_one(
     q: FloatArray, t: TreeArrays, s: FKScratch, want_jac: bool
 ) -> None:  # pragma: no cover - compiled

@@ -13,14 +13,15 @@ from __future__ import annotations
 
 import math
 
-import numba
 import numpy as np
 from numpy.typing import NDArray
+
+from swarm_ik.kernels import leaf
 
 FloatArray = NDArray[np.float64]
 
 
-@numba.njit(cache=True, _nrt=False)
+@leaf
 def angle_nb(m: FloatArray) -> float:  # pragma: no cover - compiled
     """Rotation angle θ ∈ [0, π] of the rotation matrix ``m`` (3, 3), accurate near 0 and π
     (``atan2`` of the skew and trace parts)."""
@@ -31,7 +32,7 @@ def angle_nb(m: FloatArray) -> float:  # pragma: no cover - compiled
     return math.atan2(math.sqrt(s0 * s0 + s1 * s1 + s2 * s2), c)
 
 
-@numba.njit(cache=True, _nrt=False)
+@leaf
 def log3_nb(m: FloatArray, out: FloatArray) -> float:  # pragma: no cover - compiled
     """Rotation vector of ``m`` (3, 3) into ``out`` (3,); returns the angle θ.
 
@@ -80,7 +81,7 @@ def log3_nb(m: FloatArray, out: FloatArray) -> float:  # pragma: no cover - comp
     return theta
 
 
-@numba.njit(cache=True, _nrt=False)
+@leaf
 def jr_inv_nb(phi: FloatArray, theta: float, out: FloatArray) -> None:  # pragma: no cover
     """``Jr⁻¹(φ)`` (3, 3) into ``out`` for the rotation vector ``φ`` of angle ``θ``.
 

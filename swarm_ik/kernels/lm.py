@@ -31,12 +31,13 @@ for prismatic joints, radians otherwise).
 from __future__ import annotations
 
 import math
-from typing import NamedTuple
+from typing import Any, NamedTuple
 
 import numba
 import numpy as np
 from numpy.typing import NDArray
 
+from swarm_ik.kernels import leaf
 from swarm_ik.kernels.fk import FKScratch, TreeArrays, fk_one
 from swarm_ik.kernels.lie import jr_inv_nb, log3_nb
 from swarm_ik.kernels.spheres import SphereArrays, penetration
@@ -273,7 +274,7 @@ def goal_table(
 
 
 # --------------------------------------------------------------------------- residuals
-@numba.njit(cache=True, _nrt=False)
+@leaf
 def goal_rows(
     q: FloatArray,
     s: FKScratch,
@@ -444,7 +445,7 @@ def goal_rows(
     return cost
 
 
-@numba.njit(cache=True, _nrt=False)
+@leaf
 def within_tolerance(
     err: FloatArray, g: GoalTable, tol_pos: float, tol_rot: float
 ) -> bool:  # pragma: no cover - compiled
@@ -459,7 +460,7 @@ def within_tolerance(
     return True
 
 
-@numba.njit(cache=True, _nrt=False)
+@leaf
 def max_errors(err: FloatArray, g: GoalTable) -> tuple[float, float]:  # pragma: no cover
     """Largest primary position error [m] and angular error [rad] (0 where none)."""
     dp = 0.0
@@ -533,7 +534,7 @@ def make_work(t: TreeArrays, g: GoalTable, rows: int) -> Work:  # pragma: no cov
     )
 
 
-@numba.njit(cache=True, _nrt=False)
+@leaf
 def _chol_factor(a: FloatArray, n: int) -> bool:  # pragma: no cover - compiled
     """Cholesky factor of the SPD ``a[:n, :n]`` in place (lower); False if not SPD."""
     for j in range(n):
@@ -552,7 +553,7 @@ def _chol_factor(a: FloatArray, n: int) -> bool:  # pragma: no cover - compiled
     return True
 
 
-@numba.njit(cache=True, _nrt=False)
+@leaf
 def _chol_back(a: FloatArray, b: FloatArray, n: int, x: FloatArray) -> None:  # pragma: no cover
     """Solve ``L Lᵀ x = b`` with the factor of :func:`_chol_factor`."""
     for i in range(n):
@@ -567,7 +568,7 @@ def _chol_back(a: FloatArray, b: FloatArray, n: int, x: FloatArray) -> None:  # 
         x[i] = s / a[i, i]
 
 
-@numba.njit(cache=True, _nrt=False)
+@leaf
 def into_bounds(v: float, j: int, b: Bounds) -> float:  # pragma: no cover - compiled
     """Value ``v`` of joint ``j`` wrapped into ``[-π, π)`` if continuous, then clipped to
     the bounds (the compiled twin of :meth:`swarm_ik.solvers.base.Evaluator.clip`)."""
@@ -580,7 +581,7 @@ def into_bounds(v: float, j: int, b: Bounds) -> float:  # pragma: no cover - com
     return v
 
 
-@numba.njit(cache=True, _nrt=False)
+@leaf
 def _step_into_bounds(
     q: FloatArray, delta: FloatArray, scale: float, b: Bounds, out: FloatArray
 ) -> None:  # pragma: no cover - compiled
@@ -589,7 +590,7 @@ def _step_into_bounds(
         out[j] = into_bounds(q[j] + scale * delta[j], j, b)
 
 
-@numba.njit(cache=True, _nrt=False)
+@leaf
 def evaluate(
     q: FloatArray,
     t: TreeArrays,
@@ -607,7 +608,7 @@ def evaluate(
     return goal_rows(q, w.fk, g, b, True, want_jac, w.res, w.jac, w.err, w.m3, w.v3)
 
 
-@numba.njit(cache=True, _nrt=False)
+@leaf
 def lm_run(
     starts: FloatArray,
     t: TreeArrays,
@@ -776,31 +777,14 @@ def lm_run(
 
 
 @numba.njit(cache=True)
-def lm_polish(
-    starts: FloatArray,
-    t: TreeArrays,
-    g: GoalTable,
-    b: Bounds,
-    cfg: LMSettings,
-    tol_pos: float,
-    tol_rot: float,
-    max_evals: int,
-    stop_first: bool,
-    out_q: FloatArray,
-    out_dp: FloatArray,
-    out_dr: FloatArray,
-    out_status: IntArray,
-    out_evals: IntArray,
-) -> int:  # pragma: no cover - compiled
-    """:func:`lm_run` with scratch of its own (for callers that polish once)."""
-    w = make_work(t, g, g.rows_primary)
-    return lm_run(
-        starts, t, g, b, cfg, tol_pos, tol_rot, max_evals, stop_first,
-        out_q, out_dp, out_dr, out_status, out_evals, w,
-    )  # fmt: skip
+def lm_polish(*a: Any) -> int:  # type: ignore[no-untyped-def]  # pragma: no cover - compiled
+    """:func:`lm_run` with scratch of its own, for callers that polish once: the arguments of
+    :func:`lm_run` but the last (``starts, t, g, b, cfg, tol_pos, tol_rot, max_evals,
+    stop_first, out_q, out_dp, out_dr, out_status, out_evals``)."""
+    return lm_run(*a, make_work(a[1], a[2], a[2].rows_primary))
 
 
-@numba.njit(cache=True, _nrt=False)
+@leaf
 def secondary_cost(
     q: FloatArray,
     t: TreeArrays,

@@ -39,7 +39,7 @@ import numpy as np
 from numba import types
 from numpy.typing import NDArray
 
-from swarm_ik.kernels import lm
+from swarm_ik.kernels import leaf, lm
 from swarm_ik.kernels.fk import TreeArrays
 from swarm_ik.kernels.lm import BUDGET, CONVERGED, Bounds, GoalTable, LMSettings
 
@@ -106,7 +106,7 @@ now = _now_libc if sys.platform.startswith("linux") else _now_objmode
 
 
 # --------------------------------------------------------------------------- randomness
-@numba.njit(cache=True, _nrt=False)
+@leaf
 def splitmix64(x: np.uint64) -> np.uint64:  # pragma: no cover - compiled
     """One SplitMix64 output for state ``x`` (the state advances by the golden gamma)."""
     z = x + np.uint64(0x9E3779B97F4A7C15)
@@ -221,7 +221,7 @@ def seed_key(seed: int) -> np.uint64:  # pragma: no cover - compiled
 
 
 # --------------------------------------------------------------------------- grey wolf
-@numba.njit(cache=True, _nrt=False)
+@leaf
 def gwo_move_into(
     x: FloatArray,
     rows: int,
@@ -247,7 +247,7 @@ def gwo_move_into(
             out[i, j] = s / 3.0
 
 
-@numba.njit(cache=True, _nrt=False)
+@leaf
 def _clip_row(q: FloatArray, b: Bounds) -> None:  # pragma: no cover - compiled
     """Continuous joints wrapped into ``[-π, π)``, then clipped to the bounds (in place; the
     twin of :meth:`swarm_ik.solvers.base.Evaluator.clip`)."""
@@ -256,7 +256,7 @@ def _clip_row(q: FloatArray, b: Bounds) -> None:  # pragma: no cover - compiled
 
 
 # --------------------------------------------------------------------------- the search
-@numba.njit(cache=True, _nrt=False)
+@leaf
 def _offer(
     q: FloatArray, f: float, dp: float, dr: float, ev_q: FloatArray
 ) -> tuple[float, float, float]:  # pragma: no cover - compiled
@@ -278,7 +278,7 @@ def _append(hist: FloatArray, n: int, v: float) -> FloatArray:  # pragma: no cov
     return hist
 
 
-@numba.njit(cache=True, _nrt=False)
+@leaf
 def sampling_window(
     lower: FloatArray, upper: FloatArray, seed_q: FloatArray, lo: FloatArray, hi: FloatArray
 ) -> None:  # pragma: no cover - compiled
@@ -619,7 +619,7 @@ def warm_up(t: TreeArrays, g: GoalTable, b: Bounds) -> None:
 
 
 # --------------------------------------------------------------------------- per-call checks
-@numba.njit(cache=True, _nrt=False)
+@leaf
 def start_inside(
     q: FloatArray, lower: FloatArray, upper: FloatArray, wrap: BoolArray
 ) -> bool:  # pragma: no cover - compiled
@@ -635,7 +635,7 @@ def start_inside(
     return True
 
 
-@numba.njit(cache=True, _nrt=False)
+@leaf
 def pose_ok(m: FloatArray, orth_tol: float) -> bool:  # pragma: no cover - compiled
     """Whether the ``(4, 4)`` matrix ``m`` passes :func:`swarm_ik.pose.as_pose`'s checks
     with a margin (finite, bottom row ``[0, 0, 0, 1]``, rotation block within ``orth_tol/2``

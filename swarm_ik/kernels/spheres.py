@@ -47,6 +47,8 @@ import numba
 import numpy as np
 from numpy.typing import NDArray
 
+from swarm_ik.kernels import leaf
+
 FloatArray = NDArray[np.float64]
 IntArray = NDArray[np.int64]
 
@@ -303,12 +305,15 @@ class SphereArrays(NamedTuple):
     obs_dims: FloatArray
 
 
-@numba.njit(cache=True)
-def _sdf(kind: int, rot: FloatArray, pos: FloatArray, dims: FloatArray, p: FloatArray):  # type: ignore[no-untyped-def]
-    """Signed distance [m] of world point ``p`` to an obstacle and its world gradient."""
-    dx = p[0] - pos[0]
-    dy = p[1] - pos[1]
-    dz = p[2] - pos[2]
+@leaf
+def _sdf(  # type: ignore[no-untyped-def]
+    kind: int, rot: FloatArray, pos: FloatArray, dims: FloatArray, px: float, py: float, pz: float
+):
+    """Signed distance [m] of the world point ``(px, py, pz)`` to an obstacle and its world
+    gradient."""
+    dx = px - pos[0]
+    dy = py - pos[1]
+    dz = pz - pos[2]
     x = rot[0, 0] * dx + rot[1, 0] * dy + rot[2, 0] * dz
     y = rot[0, 1] * dx + rot[1, 1] * dy + rot[2, 1] * dz
     z = rot[0, 2] * dx + rot[1, 2] * dy + rot[2, 2] * dz
@@ -363,7 +368,7 @@ def _sdf(kind: int, rot: FloatArray, pos: FloatArray, dims: FloatArray, p: Float
     return d, wx, wy, wz
 
 
-@numba.njit(cache=True)
+@leaf
 def _slot(res: float, out_res: FloatArray, rows: int) -> int:
     """Row to write a residual ``res`` into: the next free one, else the smallest one if
     ``res`` is larger, else -1."""
@@ -376,7 +381,7 @@ def _slot(res: float, out_res: FloatArray, rows: int) -> int:
     return m if out_res[m] < res else -1
 
 
-@numba.njit(cache=True)
+@leaf
 def _account(
     res: float, want_rows: bool, out_res: FloatArray, rows: int, total: float, worst: float
 ) -> tuple[int, int, float, float]:  # pragma: no cover - compiled
@@ -390,7 +395,7 @@ def _account(
     return s, rows, total, worst
 
 
-@numba.njit(cache=True)
+@leaf
 def _add_point_row(
     sign: float,
     ux: float,
@@ -415,7 +420,7 @@ def _add_point_row(
         )
 
 
-@numba.njit(cache=True)
+@leaf
 def sphere_centres(
     body_rot: FloatArray,
     body_pos: FloatArray,
@@ -437,20 +442,33 @@ def sphere_centres(
             scratch[i, r] = w + body_pos[b, r]
 
 
-@numba.njit(cache=True)
+@leaf
 def _bound_centre(
-    body_rot: FloatArray, body_pos: FloatArray, bound_local: FloatArray, b: int, out: FloatArray
-) -> None:
-    for r in range(3):
-        out[r] = (
-            body_rot[b, r, 0] * bound_local[b, 0]
-            + body_rot[b, r, 1] * bound_local[b, 1]
-            + body_rot[b, r, 2] * bound_local[b, 2]
-            + body_pos[b, r]
-        )
+    body_rot: FloatArray, body_pos: FloatArray, bound_local: FloatArray, b: int
+) -> tuple[float, float, float]:  # pragma: no cover - compiled
+    """World centre of body ``b``'s bounding sphere."""
+    x = (
+        body_rot[b, 0, 0] * bound_local[b, 0]
+        + body_rot[b, 0, 1] * bound_local[b, 1]
+        + body_rot[b, 0, 2] * bound_local[b, 2]
+        + body_pos[b, 0]
+    )
+    y = (
+        body_rot[b, 1, 0] * bound_local[b, 0]
+        + body_rot[b, 1, 1] * bound_local[b, 1]
+        + body_rot[b, 1, 2] * bound_local[b, 2]
+        + body_pos[b, 1]
+    )
+    z = (
+        body_rot[b, 2, 0] * bound_local[b, 0]
+        + body_rot[b, 2, 1] * bound_local[b, 1]
+        + body_rot[b, 2, 2] * bound_local[b, 2]
+        + body_pos[b, 2]
+    )
+    return x, y, z
 
 
-@numba.njit(cache=True)
+@leaf
 def penetration(
     body_rot: FloatArray,
     body_pos: FloatArray,
@@ -489,24 +507,20 @@ def penetration(
      obs_bodies, obs_kind, obs_rot, obs_pos, obs_dims) = model  # fmt: skip
     nq = out_jac.shape[1]
     sphere_centres(body_rot, body_pos, sph_body, sph_local, scratch)
-    ca = np.empty(3)
-    cb = np.empty(3)
     rows = 0
     total = 0.0
     worst = 0.0
     for pi in range(self_pairs.shape[0]):
         a = self_pairs[pi, 0]
         b = self_pairs[pi, 1]
-        _bound_centre(body_rot, body_pos, bound_local, a, ca)
-        _bound_centre(body_rot, body_pos, bound_local, b, cb)
-        dd = math.sqrt((ca[0] - cb[0]) ** 2 + (ca[1] - cb[1]) ** 2 + (ca[2] - cb[2]) ** 2)
+        ax, ay, az = _bound_centre(body_rot, body_pos, bound_local, a)
+        bx, by, bz = _bound_centre(body_rot, body_pos, bound_local, b)
+        dd = math.sqrt((ax - bx) ** 2 + (ay - by) ** 2 + (az - bz) ** 2)
         if dd >= margin + bound_radius[a] + bound_radius[b]:
             continue
         for i in range(body_start[a], body_start[a + 1]):
             di = math.sqrt(
-                (scratch[i, 0] - cb[0]) ** 2
-                + (scratch[i, 1] - cb[1]) ** 2
-                + (scratch[i, 2] - cb[2]) ** 2
+                (scratch[i, 0] - bx) ** 2 + (scratch[i, 1] - by) ** 2 + (scratch[i, 2] - bz) ** 2
             )
             if di >= margin + sph_radius[i] + bound_radius[b]:
                 continue
@@ -534,14 +548,15 @@ def penetration(
                 _add_point_row(1.0, ux, uy, uz, scratch[j, 3:], body_jac[b], out_jac[s])
     for ob in range(obs_kind.shape[0]):
         for a in obs_bodies:
-            _bound_centre(body_rot, body_pos, bound_local, a, ca)
-            d0, _, _, _ = _sdf(obs_kind[ob], obs_rot[ob], obs_pos[ob], obs_dims[ob], ca)
+            ax, ay, az = _bound_centre(body_rot, body_pos, bound_local, a)
+            d0, _, _, _ = _sdf(obs_kind[ob], obs_rot[ob], obs_pos[ob], obs_dims[ob], ax, ay, az)
             if d0 >= margin + bound_radius[a]:
                 continue
             for i in range(body_start[a], body_start[a + 1]):
                 d, gx, gy, gz = _sdf(
-                    obs_kind[ob], obs_rot[ob], obs_pos[ob], obs_dims[ob], scratch[i, :3]
-                )
+                    obs_kind[ob], obs_rot[ob], obs_pos[ob], obs_dims[ob],
+                    scratch[i, 0], scratch[i, 1], scratch[i, 2],
+                )  # fmt: skip
                 res = margin + sph_radius[i] - d
                 if res <= 0.0:
                     continue
@@ -591,7 +606,7 @@ def obstacle_sdf(
 ) -> tuple[float, float, float, float]:
     """Signed distance [m] of world point ``p`` (3,) to one obstacle, and its world gradient
     (exposed for tests and for the lead's kernels)."""
-    return _sdf(kind, rot, pos, dims, p)
+    return _sdf(kind, rot, pos, dims, p[0], p[1], p[2])
 
 
 def _drop_coarse_pairs(
