@@ -5,6 +5,7 @@ All poses are 4x4 homogeneous transforms in metres.  Quaternions are ``(x, y, z,
 
 from __future__ import annotations
 
+import math
 import reprlib
 from typing import Any
 
@@ -27,6 +28,8 @@ def _floats(value: Any, what: str) -> FloatArray:
 
 def is_finite_nonneg(value: Any) -> bool:
     """Whether ``value`` is a finite number ``>= 0`` (strings, booleans and None are not)."""
+    if type(value) is float:  # the common case, first
+        return 0.0 <= value < math.inf
     if isinstance(value, (str, bytes, bool, np.bool_)):
         return False
     try:
@@ -114,6 +117,30 @@ def project_to_se3(matrix: Any) -> FloatArray:
 _EYE3 = np.eye(3)
 
 
+def _clearly_pose(m: list[list[float]], orth_tol: float) -> bool:
+    """Whether the 4×4 matrix ``m`` (nested lists) passes :func:`as_pose`'s checks with a
+    margin: finite, bottom row ``[0, 0, 0, 1]`` within 1e-9, ``max |RᵀR − I|`` and
+    ``|det R − 1|`` within ``orth_tol / 2``.  Scalar arithmetic: 2 µs where the numpy checks
+    take 12 µs.  False means "let the full checks judge" (a borderline or bad matrix)."""
+    (a, b, c, x), (d, e, f, y), (g, h, i, z), (p, q, r, w) = m
+    if not math.isfinite(a + b + c + x + d + e + f + y + g + h + i + z + p + q + r + w):
+        return False  # (a sum of finite numbers may overflow: then the full check decides)
+    if abs(p) > 1e-9 or abs(q) > 1e-9 or abs(r) > 1e-9 or abs(w - 1.0) > 1e-9:
+        return False
+    tol = 0.5 * orth_tol
+    if (
+        abs(a * a + d * d + g * g - 1.0) > tol
+        or abs(b * b + e * e + h * h - 1.0) > tol
+        or abs(c * c + f * f + i * i - 1.0) > tol
+        or abs(a * b + d * e + g * h) > tol
+        or abs(a * c + d * f + g * i) > tol
+        or abs(b * c + e * f + h * i) > tol
+    ):
+        return False
+    det = a * (e * i - f * h) - b * (d * i - f * g) + c * (d * h - e * g)
+    return abs(det - 1.0) <= tol
+
+
 def as_pose(target: Any, *, orth_tol: float = 1e-6) -> FloatArray:
     """Validate and convert a target to a 4x4 pose.
 
@@ -133,6 +160,13 @@ def as_pose(target: Any, *, orth_tol: float = 1e-6) -> FloatArray:
         raise InvalidArgumentError(
             f"orth_tol must be a finite non-negative number, got {orth_tol!r}"
         )
+    if (
+        type(target) is np.ndarray
+        and target.shape == (4, 4)
+        and target.dtype == np.float64
+        and _clearly_pose(target.tolist(), orth_tol)
+    ):
+        return target.copy()  # (the checks below would accept it)
     if hasattr(target, "homogeneous"):  # pinocchio.SE3
         target = np.asarray(target.homogeneous)
     if isinstance(target, (tuple, list)) and len(target) == 2:

@@ -105,6 +105,11 @@ def judge(
     return (ok_p & ok_r) | ~np.asarray(primary, dtype=bool)
 
 
+_ONE_PRIMARY = np.ones(1, dtype=np.bool_)
+_ONE_PRIMARY.flags.writeable = False
+"""The primary mask of a problem made of a target alone (shared, read-only)."""
+
+
 class IKProblem:
     """Inverse kinematics of a set of goals.
 
@@ -227,7 +232,11 @@ class IKProblem:
         self.position_only = (target is not None and self.w_rot == 0.0 and len(terms) == 1) or all(
             isinstance(gl, Position) for gl in terms if gl.is_primary
         )
-        self.primary: NDArray[np.bool_] = np.array([gl.is_primary for gl in terms], dtype=np.bool_)
+        self.primary: NDArray[np.bool_] = (
+            _ONE_PRIMARY
+            if goals is None  # the target's goal alone
+            else np.array([gl.is_primary for gl in terms], dtype=np.bool_)
+        )
         self.tree = robot.tree
         """The kinematic tree the kernels evaluate: the robot's goal frames (first, in order)
         and any frames the goals add (collision bodies)."""

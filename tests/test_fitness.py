@@ -126,3 +126,30 @@ def test_residual_jacobian_is_a_gauss_newton_direction() -> None:
     f, err, jac = prob.residual_jacobian(q1[None])
     q2 = q1 + np.linalg.pinv(jac[0]) @ err[0]
     assert prob.fitness(q2[None])[0] < 1e-2 * f[0]
+
+
+def test_as_pose_fast_check_accepts_only_what_the_full_check_accepts() -> None:
+    """as_pose's scalar fast check of a float64 4×4 array (``_clearly_pose``) passes only
+    matrices the full numpy checks accept; a matrix it does not pass gets the full verdict
+    (the same error or acceptance as a list of lists, which always takes the full path)."""
+    from swarm_ik.pose import _clearly_pose
+
+    rng = np.random.default_rng(7)
+    n_fast = 0
+    for k in range(3000):
+        m = make_pose(rng.normal(size=3), rng.normal(size=4))
+        scale = 10.0 ** rng.uniform(-9, -4)
+        m[rng.integers(0, 4), rng.integers(0, 4)] += scale * rng.normal()
+        if k % 50 == 0:
+            m[rng.integers(0, 4), rng.integers(0, 4)] = [np.nan, np.inf, -np.inf, 1e308][k % 4]
+        fast = _clearly_pose(m.tolist(), 1e-6)
+        n_fast += fast
+        try:
+            full = as_pose(m.tolist())  # nested lists: the full checks only
+        except swarm_ik.InvalidTargetError as err:
+            assert not fast, m
+            with pytest.raises(swarm_ik.InvalidTargetError, match=str(err)[:20]):
+                as_pose(m)
+        else:
+            np.testing.assert_array_equal(as_pose(m), full)
+    assert 500 < n_fast < 3000  # both verdicts occur
