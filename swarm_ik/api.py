@@ -15,7 +15,7 @@ import numpy as np
 from swarm_ik.errors import InvalidArgumentError, unknown
 from swarm_ik.optimize import check_budget, make_rng
 from swarm_ik.pose import as_pose, is_finite_nonneg
-from swarm_ik.problem import IKProblem, largest_errors
+from swarm_ik.problem import GoalError, IKProblem, largest_errors
 from swarm_ik.result import Result
 from swarm_ik.solvers import base
 
@@ -200,15 +200,18 @@ def _pose_check(
     Pinocchio's pose of the frame at ``q``, its errors against ``target`` ``(4, 4)`` (the
     compiled twin of ``Pose.errors``) and whether ``q`` lies within ``[lower, upper]``;
     returns ``((GoalError,), within)``."""
-    from swarm_ik.kernels.search import pose_errors_one
-    from swarm_ik.problem import GoalError
+    if not _ERRORS_ONE:  # (the kernel loads on first use: not on import)
+        from swarm_ik.kernels.search import pose_errors_one
 
-    reached = robot.fk_pinocchio(q, frame)
-    dp, dr, within = pose_errors_one(reached, target, q, lower, upper)
+        _ERRORS_ONE.append(pose_errors_one)
+    dp, dr, within = _ERRORS_ONE[0](robot.fk_pinocchio(q, frame), target, q, lower, upper)
     if position_only:
         dr = math.nan
     met = not (dp > tol_pos) and not (dr > tol_rot)
     return (GoalError(label, dp, dr, bool(met)),), bool(within)
+
+
+_ERRORS_ONE: list[Any] = []
 
 
 def _result(

@@ -8,6 +8,7 @@
 
 from __future__ import annotations
 
+import math
 import os
 import reprlib
 import sys
@@ -511,19 +512,26 @@ class RobotModel:
         """Pinocchio configuration of :attr:`model` for ``q`` (continuous → cos, sin; mimic
         followers set from their drivers)."""
         q = np.asarray(q, dtype=float).reshape(self.nq)
-        t = self.tree
         if self.model.nq == self.nq and not self.mimic:  # the same vector
             return q.copy()
-        out = np.empty(self.model.nq)
-        for j in range(1, self.model.njoints):
-            jm = self.model.joints[j]
-            v = t.multiplier[j - 1] * q[t.q_index[j - 1]] + t.offset[j - 1]
-            if jm.nq == 2:
-                out[jm.idx_q] = np.cos(v)
-                out[jm.idx_q + 1] = np.sin(v)
+        plan = self._cache.get("to_pinocchio")
+        if plan is None:  # (driver, multiplier, offset, index in Pinocchio's q, continuous)
+            t = self.tree
+            plan = self._cache["to_pinocchio"] = [
+                (int(t.q_index[j - 1]), float(t.multiplier[j - 1]), float(t.offset[j - 1]),
+                 int(self.model.joints[j].idx_q), self.model.joints[j].nq == 2)
+                for j in range(1, self.model.njoints)
+            ]  # fmt: skip
+        qv = q.tolist()  # scalar maths: a few joints (this runs in every solve's check)
+        out = [0.0] * self.model.nq
+        for qi, mult, offset, at, continuous in plan:
+            v = mult * qv[qi] + offset  # mimic followers read their drivers
+            if continuous:
+                out[at] = math.cos(v)
+                out[at + 1] = math.sin(v)
             else:
-                out[jm.idx_q] = v
-        return out
+                out[at] = v
+        return np.array(out)
 
     def from_pinocchio(self, q_pin: FloatArray) -> FloatArray:
         """Inverse of :meth:`to_pinocchio`: one value per solved joint."""
@@ -568,10 +576,11 @@ class RobotModel:
         Returns:
             Pose, shape ``(4, 4)``.
         """
-        fid = self.frame_ids[self.frame_index(frame)]
+        fid = self.frame_ids[0 if frame is None else self.frame_index(frame)]
         data = self._data()
         pin.forwardKinematics(self.model, data, self.to_pinocchio(q))
-        return np.array(pin.updateFramePlacement(self.model, data, fid).homogeneous)
+        # (eigenpy returns the 4x4 as a new array of its own: no copy needed)
+        return pin.updateFramePlacement(self.model, data, fid).homogeneous  # type: ignore[no-any-return]
 
     def fk_pinocchio_all(self, q: FloatArray) -> FloatArray:
         """Reference poses of every goal frame with Pinocchio, shape ``(nf, 4, 4)``."""

@@ -350,11 +350,10 @@ def goal_rows(
             if want_jac:
                 jr_inv_nb(v3, theta, m3)
                 for a in range(3):
+                    ma0, ma1, ma2 = m3[a, 0], m3[a, 1], m3[a, 2]  # (not reloaded per column)
                     for j in range(nq):
                         jac[rr + a, j] = w * (
-                            m3[a, 0] * s.f_jac[f, 3, j]
-                            + m3[a, 1] * s.f_jac[f, 4, j]
-                            + m3[a, 2] * s.f_jac[f, 5, j]
+                            ma0 * s.f_jac[f, 3, j] + ma1 * s.f_jac[f, 4, j] + ma2 * s.f_jac[f, 5, j]
                         )
         elif c == AXIS or c == LOOK_AT:
             ux = s.f_rot[f, 0, 0] * par[0] + s.f_rot[f, 0, 1] * par[1] + s.f_rot[f, 0, 2] * par[2]
