@@ -228,8 +228,14 @@ def _result(
 ) -> Result:
     """The :class:`Result` of a solve from its answer and its Pinocchio check (``spent``: the
     evaluator, or what :func:`end_reason` reads of one)."""
-    dp, dr = largest_errors(goal_errors)
-    success = bool(within and all(e.met for e in goal_errors))
+    if len(goal_errors) == 1:  # (one goal: the common case, without the generators)
+        (ge,) = goal_errors
+        success = bool(within and ge.met)
+        dp = 0.0 if math.isnan(ge.position_error) else float(ge.position_error)
+        dr = 0.0 if math.isnan(ge.rotation_error) else float(ge.rotation_error)
+    else:
+        dp, dr = largest_errors(goal_errors)
+        success = bool(within and all(e.met for e in goal_errors))
     return Result.of(
         q=q,
         fitness=fit,
@@ -512,6 +518,11 @@ def _lane(
     return ik if ik._state is not None else None
 
 
+_RAN, _CHECK_TARGET = 0, 1
+"""``swarm_ik.kernels.search.RAN`` and ``CHECK_TARGET`` (that module loads numba; a test checks
+they are equal)."""
+
+
 class IKSolver:
     """A solver bound to one robot: validate once, solve many targets.
 
@@ -671,8 +682,6 @@ class IKSolver:
         fixed and marked checked) and the call repeated.  ``problem``: the plain pose problem
         whose (already validated) target this is, when :func:`solve` calls (its lane)."""
         target_checked = problem is not None
-        from swarm_ik.kernels.search import CHECK_TARGET, RAN
-
         tpl = self._template
         if type(target) is np.ndarray and target.dtype == np.float64 and target.shape == (4, 4):
             pose = np.ascontiguousarray(target)
@@ -697,9 +706,9 @@ class IKSolver:
             status, used, fit, history = self._kernel(
                 self._args(pose, q_start, pose_checked, start_checked, t0, seed, q)
             )
-            if status == RAN:
+            if status == _RAN:
                 break
-            if status == CHECK_TARGET:
+            if status == _CHECK_TARGET:
                 pose, pose_checked = np.ascontiguousarray(as_pose(pose), dtype=float), True
             else:
                 q_start, start_checked = prepare_q0(tpl, q0), True

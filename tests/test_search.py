@@ -244,3 +244,11 @@ def test_solve_lane_keeps_the_problems_own_target_check() -> None:
     general = swarm_ik.solve(p, seed=3, max_evals=300, on_improvement=lambda q, f: seen.append(f))
     assert not lane.success and lane.reason == general.reason == "unreachable"
     _same_result(lane, general)
+
+
+def test_api_status_codes_are_the_kernels() -> None:
+    """IKSolver reads the compiled call's status with copies of the kernel's codes."""
+    from swarm_ik import api
+    from swarm_ik.kernels import search
+
+    assert (api._RAN, api._CHECK_TARGET) == (search.RAN, search.CHECK_TARGET)
