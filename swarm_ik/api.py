@@ -214,6 +214,19 @@ def _pose_check(
 _ERRORS_ONE: list[Any] = []
 
 
+def _compiled_ok(problem: IKProblem, prefer: str) -> bool:
+    """:func:`swarm_ik.solvers.hybrid.compiled_ok` (that module loads the search kernels'
+    module: imported on first use, then looked up once)."""
+    if not _COMPILED_OK:
+        from swarm_ik.solvers import hybrid
+
+        _COMPILED_OK.append(hybrid.compiled_ok)
+    return bool(_COMPILED_OK[0](problem, prefer))
+
+
+_COMPILED_OK: list[Any] = []
+
+
 def _result(
     problem: IKProblem,
     q: np.ndarray,
@@ -497,9 +510,7 @@ def _lane(
     without rebuilding the goal table and the search state on every call.  One per robot and
     settings (made on first use: it validates the settings, raising what ``solve`` raises);
     ``None`` when the problem's methods were replaced (then the general path runs)."""
-    from swarm_ik.solvers import hybrid
-
-    if not hybrid.compiled_ok(problem, "best"):
+    if not _compiled_ok(problem, "best"):
         return None
     lanes = problem.robot._cache.setdefault("solve_lanes", {})
     key = (tol_pos, tol_rot, time_limit, max_evals, problem.w_rot)

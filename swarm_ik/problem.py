@@ -24,7 +24,7 @@ from numpy.typing import NDArray
 
 from swarm_ik.errors import InvalidArgumentError, InvalidTargetError, unknown
 from swarm_ik.fitness import FITNESS, get_fitness
-from swarm_ik.goals import Goal, Pose, Position
+from swarm_ik.goals import AvoidCollisions, Goal, Pose, Position
 from swarm_ik.kernels import lm
 from swarm_ik.pose import as_pose, is_finite_nonneg
 from swarm_ik.robot import RobotModel
@@ -240,9 +240,7 @@ class IKProblem:
         self.tree = robot.tree
         """The kinematic tree the kernels evaluate: the robot's goal frames (first, in order)
         and any frames the goals add (collision bodies)."""
-        from swarm_ik.goals import AvoidCollisions
-
-        avoid = [gl for gl in terms if isinstance(gl, AvoidCollisions)]
+        avoid = [] if goals is None else [gl for gl in terms if isinstance(gl, AvoidCollisions)]
         if len(avoid) > 1:
             raise InvalidArgumentError("at most one AvoidCollisions goal per problem")
         self._encoded: dict[int, Any] = {}
