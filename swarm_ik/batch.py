@@ -120,11 +120,7 @@ def _solve_targets(
     n = bounds.lower.shape[0]
     block = min(_RESTART_BLOCK, max(max_starts - 1, 1))
     starts = np.empty((block, n))
-    pq = np.empty((block, n))
-    pdp = np.empty(block)
-    pdr = np.empty(block)
-    pst = np.empty(block, dtype=np.int64)
-    pev = np.empty(block, dtype=np.int64)
+    pq, pdp, pdr, pst, pev = lm.polish_outputs(block, n)
     seed_key = _splitmix64(np.uint64(seed))
     s_lo = np.empty(n)
     s_hi = np.empty(n)

@@ -534,6 +534,31 @@ def make_work(t: TreeArrays, g: GoalTable, rows: int) -> Work:  # pragma: no cov
 
 
 @leaf
+def gram(jac: FloatArray, m: int, n: int, out: FloatArray) -> float:  # pragma: no cover
+    """``out[:n, :n] = JᵀJ`` of ``J = jac[:m, :n]`` (both triangles); returns its trace."""
+    trace = 0.0
+    for i in range(n):
+        for j in range(i, n):
+            s_a = 0.0
+            for a in range(m):
+                s_a += jac[a, i] * jac[a, j]
+            out[i, j] = s_a
+            out[j, i] = s_a
+        trace += out[i, i]
+    return trace
+
+
+@numba.njit(cache=True)
+def polish_outputs(
+    k: int, n: int
+) -> tuple[FloatArray, FloatArray, FloatArray, IntArray, IntArray]:  # pragma: no cover
+    """The output arrays of :func:`lm_run` for ``k`` starts of ``n`` joints: ``(out_q,
+    out_dp, out_dr, out_status, out_evals)``."""
+    i64 = np.int64
+    return np.empty((k, n)), np.empty(k), np.empty(k), np.empty(k, dtype=i64), np.empty(k, i64)
+
+
+@leaf
 def _chol_factor(a: FloatArray, n: int) -> bool:  # pragma: no cover - compiled
     """Cholesky factor of the SPD ``a[:n, :n]`` in place (lower); False if not SPD."""
     for j in range(n):
@@ -686,19 +711,12 @@ def lm_run(
                 status = LOCAL_MIN
                 break
             # normal equations A = JᵀJ, g = Jᵀr
-            trace = 0.0
+            trace = gram(w.jac, m, n, a_mat)
             for i in range(n):
                 s_g = 0.0
                 for a in range(m):
                     s_g += w.jac[a, i] * w.res[a]
                 grad[i] = s_g
-                for j in range(i, n):
-                    s_a = 0.0
-                    for a in range(m):
-                        s_a += w.jac[a, i] * w.jac[a, j]
-                    a_mat[i, j] = s_a
-                    a_mat[j, i] = s_a
-                trace += a_mat[i, i]
             scale = trace / n + 1e-300
             nfree = 0
             for j in range(n):
@@ -861,15 +879,7 @@ def secondary_descent(
     mu = 1e-3
     while used < max_evals and mu < 1e6 and cost2 > 0.0:
         # A1 = J1ᵀJ1 + εI, factor
-        tr = 0.0
-        for i in range(n):
-            for j in range(i, n):
-                s_a = 0.0
-                for a in range(m1):
-                    s_a += w.jac[a, i] * w.jac[a, j]
-                a1[i, j] = s_a
-                a1[j, i] = s_a
-            tr += a1[i, i]
+        tr = gram(w.jac, m1, n, a1)
         eps = 1e-10 * (tr / n) + 1e-14
         for i in range(n):
             a1[i, i] += eps
@@ -899,19 +909,12 @@ def secondary_descent(
                 for k in range(n):
                     s_b += jac2[a, k] * proj[k, j]
                 bmat[a, j] = s_b
-        tr2 = 0.0
+        tr2 = gram(bmat, m2, n, a2)
         for i in range(n):
             s_r = 0.0
             for a in range(m2):
                 s_r += bmat[a, i] * res2[a]
             rhs[i] = s_r
-            for j in range(i, n):
-                s_a = 0.0
-                for a in range(m2):
-                    s_a += bmat[a, i] * bmat[a, j]
-                a2[i, j] = s_a
-                a2[j, i] = s_a
-            tr2 += a2[i, i]
         if tr2 <= 1e-300:
             break  # the secondary goals cannot move in the null space
         for i in range(n):

@@ -346,11 +346,7 @@ def swarm_search(
     m = pop_size
     rows = max(m, 1)
     queue = np.empty((rows, n))
-    pq = np.empty((rows, n))
-    pdp = np.empty(rows)
-    pdr = np.empty(rows)
-    pst = np.empty(rows, dtype=np.int64)
-    pev = np.empty(rows, dtype=np.int64)
+    pq, pdp, pdr, pst, pev = lm.polish_outputs(rows, n)
     arch_x = np.empty((2 * rows, n))
     arch_f = np.empty(2 * rows)
     tmp_x = np.empty(n)
