@@ -186,7 +186,7 @@ class IKProblem:
             terms.extend(gl for gl in goals if isinstance(gl, Goal))
         if not terms:
             raise InvalidTargetError("give a target pose or a list of goals; got None")
-        if not any(gl.is_primary for gl in terms):
+        if goals is not None and not any(gl.is_primary for gl in terms):  # (a target is)
             raise InvalidArgumentError(
                 "at least one goal must be primary (Posture, CenterJoints and "
                 "MinimalDisplacement are secondary unless primary=True)"
@@ -213,10 +213,10 @@ class IKProblem:
                 "lower bounds exceed upper bounds at joints "
                 f"{np.flatnonzero(self.lower > self.upper).tolist()}"
             )
-        outside: NDArray[np.intp] = (
+        outside: Any = (
             np.flatnonzero((self.lower < robot.lower) | (self.upper > robot.upper))
             if narrowed
-            else np.zeros(0, dtype=np.intp)
+            else ()  # (the robot's own limits)
         )
         if len(outside):  # wider bounds would let a "success" break the joint limits
             j = int(outside[0])
@@ -229,8 +229,11 @@ class IKProblem:
         """A pose (or, with ``w_rot=0``, position) target for the first goal frame within the
         robot's own limits, nothing else: :func:`swarm_ik.solve` may answer it through a
         cached :class:`swarm_ik.IKSolver` (the same result)."""
-        self.position_only = (target is not None and self.w_rot == 0.0 and len(terms) == 1) or all(
-            isinstance(gl, Position) for gl in terms if gl.is_primary
+        self.position_only = (
+            isinstance(terms[0], Position)  # (the target's goal alone: Pose or Position)
+            if goals is None
+            else (target is not None and self.w_rot == 0.0 and len(terms) == 1)
+            or all(isinstance(gl, Position) for gl in terms if gl.is_primary)
         )
         self.primary: NDArray[np.bool_] = (
             _ONE_PRIMARY
