@@ -206,21 +206,7 @@ def pose_errors(problem: IKProblem, qs: Any) -> tuple[FloatArray, FloatArray]:
 
         errs = np.array([verify(problem, q) for q in qs]).reshape(-1, 2)
         return errs[:, 0].copy(), errs[:, 1].copy()
-    robot = problem.robot
-    model = robot.model
-    fid = robot.frame_ids[robot.frame_index(goal.frame)]
-    data = robot._data()  # the robot's per-thread Pinocchio Data (as fk_pinocchio uses)
-    fk, upd = pin.forwardKinematics, pin.updateFramePlacement
-    k = qs.shape[0]
-    m = np.empty((k, 4, 4))
-    if model.nq == robot.nq:
-        for i in range(k):
-            fk(model, data, qs[i])
-            m[i] = upd(model, data, fid).homogeneous
-    else:
-        for i in range(k):
-            fk(model, data, robot.to_pinocchio(qs[i]))
-            m[i] = upd(model, data, fid).homogeneous
+    m = problem.robot.fk_pinocchio_many(qs, goal.frame)
     return pose_errors_of(m, goal)
 
 

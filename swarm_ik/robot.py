@@ -582,6 +582,19 @@ class RobotModel:
         # (eigenpy returns the 4x4 as a new array of its own: no copy needed)
         return pin.updateFramePlacement(self.model, data, fid).homogeneous  # type: ignore[no-any-return]
 
+    def fk_pinocchio_many(self, qs: FloatArray, frame: str | None = None) -> FloatArray:
+        """Reference poses of one goal frame (default the first) for each row of ``qs``
+        ``(k, nq)``, as :meth:`fk_pinocchio` computes them: shape ``(k, 4, 4)``."""
+        fid = self.frame_ids[0 if frame is None else self.frame_index(frame)]
+        model, data = self.model, self._data()
+        fk, upd = pin.forwardKinematics, pin.updateFramePlacement
+        same = model.nq == self.nq and not self.mimic  # (to_pinocchio would copy q as it is)
+        out = np.empty((len(qs), 4, 4))
+        for i in range(len(qs)):
+            fk(model, data, qs[i] if same else self.to_pinocchio(qs[i]))
+            out[i] = upd(model, data, fid).homogeneous
+        return out
+
     def fk_pinocchio_all(self, q: FloatArray) -> FloatArray:
         """Reference poses of every goal frame with Pinocchio, shape ``(nf, 4, 4)``."""
         data = self._data()

@@ -145,3 +145,16 @@ def test_mimic_whose_driver_is_off_the_chain_is_refused(tmp_path) -> None:
     path.write_text(urdf)
     with pytest.raises(swarm_ik.RobotModelError, match="mimics joint 'j3', which is not on the"):
         swarm_ik.load_robot(path, "c")
+
+
+@pytest.mark.parametrize("name", ["panda", "kinova", "baxter"])
+def test_fk_pinocchio_many_is_fk_pinocchio_row_by_row(name: str) -> None:
+    """The batched reference FK (used by the branch checks) equals the single one exactly,
+    continuous joints included (kinova: Pinocchio's q holds (cos, sin))."""
+    robot = swarm_ik.load_robot(name)
+    qs = robot.random_q(np.random.default_rng(5), 6)
+    many = robot.fk_pinocchio_many(qs)
+    assert many.shape == (6, 4, 4)
+    for q, m in zip(qs, many, strict=True):
+        np.testing.assert_array_equal(m, robot.fk_pinocchio(q))
+        np.testing.assert_allclose(m, robot.fk(q), atol=1e-12)

@@ -356,18 +356,7 @@ def solve_supported(
     key = np.empty(k)
     c = _fold_unique(qs, sol.is_LS, lo, hi, ref, BRANCH_TOL * BRANCH_TOL, out, key)
     # the check: Pinocchio's own FK of each branch left
-    model, data = robot.model, robot._data()
-    fid = robot.ee_frame_id
-    fk, upd = pin.forwardKinematics, pin.updateFramePlacement
-    m = np.empty((c, 4, 4))
-    if model.nq == nq:
-        for i in range(c):
-            fk(model, data, out[i])
-            m[i] = upd(model, data, fid).homogeneous
-    else:
-        for i in range(c):
-            fk(model, data, robot.to_pinocchio(out[i]))
-            m[i] = upd(model, data, fid).homogeneous
+    m = robot.fk_pinocchio_many(out[:c])
     dp, dr = pose_errors_of(m, problem.goals[0])  # bit for bit as swarm_ik.verify
     good = (dp <= tol_pos) & (dr <= tol_rot)
     if c < k or not good.all():
