@@ -2,7 +2,7 @@
 
 :func:`solve_batch` solves ``N`` target poses of one robot in one call.  The work is one
 numba-compiled loop over the targets (:func:`_solve_targets`); for each target it runs the
-bounded Levenberg–Marquardt polish of the default solver (:func:`swarm_ik.kernels.lm.lm_polish`:
+bounded Levenberg–Marquardt polish of the default solver (:func:`swarm_ik.kernels.lm.lm_run`:
 pose residual in world axes, exact residual Jacobian, active-set joint limits, adaptive
 damping with accept/reject, stall detection), first from the seed (``q0``, else the middle of
 the joint ranges), then from random restarts until one start converges or ``max_starts``

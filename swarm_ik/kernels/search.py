@@ -8,7 +8,7 @@ starts, one after the other, until one converges; the polished points that did n
 form an archive of local minima (best first, ``pop_size`` kept); each later generation
 polishes ``n_swarm`` grey-wolf moves of the archive ([GWO] eqs. 3.3–3.7, :func:`gwo_move_into`,
 the twin of :func:`swarm_ik.solvers.gwo.gwo_move`) and uniform starts for the rest.  The polish
-is :func:`swarm_ik.kernels.lm.lm_polish`.
+is :func:`swarm_ik.kernels.lm.lm_run` (on a workspace made once per search).
 
 Randomness is a counter-based stream: uniform number ``c`` of a run is
 ``splitmix64(key + c) >> 11 · 2⁻⁵³`` (SplitMix64: Steele, Lea & Flood, OOPSLA 2014), with
