@@ -42,6 +42,7 @@ from numpy.typing import NDArray
 from swarm_ik.kernels import leaf, lm
 from swarm_ik.kernels.fk import TreeArrays
 from swarm_ik.kernels.lm import BUDGET, CONVERGED, Bounds, GoalTable, LMSettings
+from swarm_ik.pose import clearly_pose
 
 FloatArray = NDArray[np.float64]
 BoolArray = NDArray[np.bool_]
@@ -631,32 +632,19 @@ def start_inside(
     return True
 
 
+_clearly_pose = leaf(clearly_pose)
+
+
 @leaf
 def pose_ok(m: FloatArray, orth_tol: float) -> bool:  # pragma: no cover - compiled
     """Whether the ``(4, 4)`` matrix ``m`` passes :func:`swarm_ik.pose.as_pose`'s checks
-    with a margin (finite, bottom row ``[0, 0, 0, 1]``, rotation block within ``orth_tol/2``
-    of orthonormal with ``det`` within ``orth_tol/2`` of 1).  False means "let ``as_pose``
-    judge" (it raises the error, naming the fault, or accepts a borderline matrix)."""
-    for i in range(4):
-        for j in range(4):
-            if not math.isfinite(m[i, j]):
-                return False
-    if abs(m[3, 0]) > 1e-9 or abs(m[3, 1]) > 1e-9 or abs(m[3, 2]) > 1e-9:
-        return False
-    if abs(m[3, 3] - 1.0) > 1e-9:
-        return False
-    half = 0.5 * orth_tol
-    for a in range(3):
-        for c in range(3):
-            s = m[0, a] * m[0, c] + m[1, a] * m[1, c] + m[2, a] * m[2, c]
-            if abs(s - (1.0 if a == c else 0.0)) > half:
-                return False
-    det = (
-        m[0, 0] * (m[1, 1] * m[2, 2] - m[1, 2] * m[2, 1])
-        - m[0, 1] * (m[1, 0] * m[2, 2] - m[1, 2] * m[2, 0])
-        + m[0, 2] * (m[1, 0] * m[2, 1] - m[1, 1] * m[2, 0])
-    )
-    return abs(det - 1.0) <= half
+    with a margin: :func:`swarm_ik.pose.clearly_pose` compiled.  False means "let
+    ``as_pose`` judge" (it raises the error, naming the fault, or accepts a borderline
+    matrix)."""
+    return _clearly_pose(
+        orth_tol, m[0, 0], m[0, 1], m[0, 2], m[0, 3], m[1, 0], m[1, 1], m[1, 2], m[1, 3],
+        m[2, 0], m[2, 1], m[2, 2], m[2, 3], m[3, 0], m[3, 1], m[3, 2], m[3, 3],
+    )  # fmt: skip
 
 
 @numba.njit(cache=True)
