@@ -241,14 +241,8 @@ def _result(
 ) -> Result:
     """The :class:`Result` of a solve from its answer and its Pinocchio check (``spent``: the
     evaluator, or what :func:`end_reason` reads of one)."""
-    if len(goal_errors) == 1:  # (one goal: the common case, without the generators)
-        (ge,) = goal_errors
-        success = bool(within and ge.met)
-        dp = 0.0 if math.isnan(ge.position_error) else float(ge.position_error)
-        dr = 0.0 if math.isnan(ge.rotation_error) else float(ge.rotation_error)
-    else:
-        dp, dr = largest_errors(goal_errors)
-        success = bool(within and all(e.met for e in goal_errors))
+    dp, dr = largest_errors(goal_errors)
+    success = bool(within and all(e.met for e in goal_errors))
     return Result.of(
         q=q,
         fitness=fit,
@@ -607,7 +601,6 @@ class IKSolver:
             static = st.static(tpl.table(None))
             self._head = tuple(static[: search.PAR_INDEX])
             self._mid_args = tuple(static[search.PAR_INDEX + 1 :])
-            self._wrap = np.ascontiguousarray(tpl.bounds.wrap)
             lim = self.time_limit
             self._consts = (
                 st.pol.kernel_tol_pos,

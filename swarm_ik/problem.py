@@ -76,6 +76,12 @@ class GoalError:
 def largest_errors(goal_errors: Sequence[GoalError]) -> tuple[float, float]:
     """Largest position error [m] and angular error [rad] over checked goals (0 where no goal
     has such an error): the summary figures of a :class:`~swarm_ik.result.Result`."""
+    if len(goal_errors) == 1:  # (the common case, on every solve's path: no generators)
+        e = goal_errors[0]
+        return (
+            0.0 if math.isnan(e.position_error) else float(e.position_error),
+            0.0 if math.isnan(e.rotation_error) else float(e.rotation_error),
+        )
     dp = max(
         (e.position_error for e in goal_errors if not math.isnan(e.position_error)), default=0.0
     )
