@@ -576,7 +576,7 @@ class RobotModel:
         Returns:
             Pose, shape ``(4, 4)``.
         """
-        fid = self.frame_ids[0 if frame is None else self.frame_index(frame)]
+        fid = self.frame_ids[self.frame_index(frame)]
         data = self._data()
         pin.forwardKinematics(self.model, data, self.to_pinocchio(q))
         # (eigenpy returns the 4x4 as a new array of its own: no copy needed)
@@ -585,15 +585,7 @@ class RobotModel:
     def fk_pinocchio_many(self, qs: FloatArray, frame: str | None = None) -> FloatArray:
         """Reference poses of one goal frame (default the first) for each row of ``qs``
         ``(k, nq)``, as :meth:`fk_pinocchio` computes them: shape ``(k, 4, 4)``."""
-        fid = self.frame_ids[0 if frame is None else self.frame_index(frame)]
-        model, data = self.model, self._data()
-        fk, upd = pin.forwardKinematics, pin.updateFramePlacement
-        same = model.nq == self.nq and not self.mimic  # (to_pinocchio would copy q as it is)
-        out = np.empty((len(qs), 4, 4))
-        for i in range(len(qs)):
-            fk(model, data, qs[i] if same else self.to_pinocchio(qs[i]))
-            out[i] = upd(model, data, fid).homogeneous
-        return out
+        return np.array([self.fk_pinocchio(q, frame) for q in qs]).reshape(len(qs), 4, 4)
 
     def fk_pinocchio_all(self, q: FloatArray) -> FloatArray:
         """Reference poses of every goal frame with Pinocchio, shape ``(nf, 4, 4)``."""
