@@ -697,7 +697,7 @@ def solve_batch(
             )  # fmt: skip
         else:  # in waves, keeping what finished
             wave = 1 if client is None else 2 * workers
-            bar = distributed._progress_bar(progress, n, f"IK {robot.name}", "pose")
+            bar = distributed.progress_bar(progress, n, f"IK {robot.name}", "pose")
             try:
                 for w in range(0, len(items), wave):
                     chunk = items[w : w + wave]

@@ -164,7 +164,9 @@ class _NoBar:
         pass
 
 
-def _progress_bar(enabled: bool, total: int, desc: str | None, unit: str) -> Any:
+def progress_bar(enabled: bool, total: int, desc: str | None, unit: str) -> Any:
+    """A tqdm bar of ``total`` ``unit``s (or one that does nothing when not ``enabled``), for
+    :func:`map_chunks` and callers that send chunks in waves (``solve_batch``)."""
     if not enabled:
         return _NoBar()
     from tqdm.auto import tqdm
@@ -222,7 +224,7 @@ def map_chunks(
                 sizes=sizes,
                 unit=unit,
             )
-    bar = _progress_bar(progress, int(sum(weights)), desc, unit)
+    bar = progress_bar(progress, int(sum(weights)), desc, unit)
     try:
         if client is None:
             out = []
