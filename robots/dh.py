@@ -42,12 +42,15 @@ import math
 import re
 from collections.abc import Sequence
 from dataclasses import dataclass
-from typing import Literal
+from typing import TYPE_CHECKING, Literal, TypedDict
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from swarm_ik.errors import InvalidArgumentError
+
+if TYPE_CHECKING:  # typing.Unpack is Python 3.11+
+    from typing_extensions import Unpack
 
 JointKind = Literal["revolute", "prismatic", "continuous"]
 """Joint types a chain step / DH row may have."""
@@ -395,6 +398,24 @@ def _inertial_xml(mass: float, inertia: float) -> str:
     )
 
 
+class _UrdfNames(TypedDict):
+    robot_name: str
+    base_link: str
+    ee_link: str
+
+
+class UrdfOptions(_UrdfNames, total=False):
+    """The keyword-only arguments of :func:`chain_to_urdf`, also taken by :func:`dh_to_urdf`.
+
+    ``robot_name``, ``base_link`` and ``ee_link`` are required; see :func:`chain_to_urdf`.
+    """
+
+    tool: ArrayLike | None
+    link_radius: float | None
+    link_mass: float
+    comment: str | None
+
+
 def chain_to_urdf(
     steps: Sequence[ChainStep],
     *,
@@ -529,17 +550,7 @@ def chain_to_urdf(
     return "".join(out)
 
 
-def dh_to_urdf(
-    table: Sequence[DHRow],
-    *,
-    robot_name: str,
-    base_link: str,
-    ee_link: str,
-    tool: ArrayLike | None = None,
-    link_radius: float | None = None,
-    link_mass: float = 0.1,
-    comment: str | None = None,
-) -> str:
+def dh_to_urdf(table: Sequence[DHRow], **options: Unpack[UrdfOptions]) -> str:
     """Write a standard DH table as URDF text whose FK equals :func:`dh_fk`.
 
     The URDF joint value is the DH variable (``theta_i = q_i + theta_offset_i`` for
@@ -549,13 +560,10 @@ def dh_to_urdf(
 
     Args:
         table: DH rows, base to flange (metres, radians).
-        robot_name: ``<robot name=...>``.
-        base_link: Name of the root link (DH frame 0).
-        ee_link: Name of the end-effector link.
-        tool: Optional fixed (4, 4) flange-to-tool transform; identity if omitted.
-        link_radius: Radius (m) of the schematic link cylinders; see :func:`chain_to_urdf`.
-        link_mass: Mass (kg) of every moving link (schematic inertial).
-        comment: Optional XML comment written at the top.
+        **options: The keyword-only arguments of :func:`chain_to_urdf` (:class:`UrdfOptions`:
+            ``robot_name``, ``base_link`` = DH frame 0, ``ee_link``, ``link_radius``,
+            ``link_mass``, ``comment``); here ``tool`` is the optional fixed (4, 4)
+            flange-to-tool transform (identity if omitted).
 
     Returns:
         The URDF document as a string.
@@ -569,19 +577,11 @@ def dh_to_urdf(
     """
     if len(table) == 0:
         raise InvalidArgumentError("a DH table needs at least one row, got none")
+    tool = options.get("tool")
     tool_mat = np.eye(4) if tool is None else np.array(tool, dtype=np.float64)
     _check_transform("tool", tool_mat)
-    steps, last = _dh_to_chain(table, tool_mat)
-    return chain_to_urdf(
-        steps,
-        robot_name=robot_name,
-        base_link=base_link,
-        ee_link=ee_link,
-        tool=last,
-        link_radius=link_radius,
-        link_mass=link_mass,
-        comment=comment,
-    )
+    steps, options["tool"] = _dh_to_chain(table, tool_mat)  # the flange-to-ee transform
+    return chain_to_urdf(steps, **options)
 
 
 __all__ = [
@@ -589,6 +589,7 @@ __all__ = [
     "ChainStep",
     "DHRow",
     "JointKind",
+    "UrdfOptions",
     "chain_to_urdf",
     "dh_fk",
     "dh_to_urdf",

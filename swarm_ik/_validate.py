@@ -23,11 +23,9 @@ from pathlib import Path
 from typing import Any
 
 import numpy as np
-from numpy.typing import NDArray
 
+from swarm_ik._types import FloatArray
 from swarm_ik.errors import InvalidArgumentError, InvalidTargetError, SwarmIKError
-
-FloatArray = NDArray[np.float64]
 
 
 def float_array(value: Any, what: str = "targets", *, target: bool = True) -> FloatArray:

@@ -44,8 +44,8 @@ from typing import Any
 
 import numba
 import numpy as np
-from numpy.typing import NDArray
 
+from swarm_ik._types import BoolArray, FloatArray, IntArray
 from swarm_ik.errors import InvalidArgumentError, InvalidTargetError
 from swarm_ik.kernels import lie, lm
 from swarm_ik.kernels.fk import TreeArrays
@@ -53,10 +53,6 @@ from swarm_ik.kernels.lm import CONVERGED, NOT_RUN
 from swarm_ik.kernels.search import sampling_window, splitmix64
 from swarm_ik.pose import make_pose, matrix_to_quat
 from swarm_ik.robot import RobotModel
-
-FloatArray = NDArray[np.float64]
-IntArray = NDArray[np.int64]
-BoolArray = NDArray[np.bool_]
 
 POSE_COLUMNS = ("x", "y", "z", "qx", "qy", "qz", "qw")
 """Columns of a target table: position [m] and quaternion ``(x, y, z, w)``."""

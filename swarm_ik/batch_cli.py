@@ -28,6 +28,8 @@ from typing import Any
 
 import numpy as np
 
+from swarm_ik import cli_args
+
 EXIT_INTERRUPTED = 130
 
 SCHEDULER_HELP = (
@@ -44,21 +46,11 @@ def add_scheduler_argument(parser: argparse.ArgumentParser, default: str = "none
     )
 
 
-def _add_robot(p: argparse.ArgumentParser) -> None:
-    p.add_argument(
-        "--robot", required=True, help="bundled or example-robot-data name, or a .urdf path"
-    )
-    p.add_argument(
-        "--frame", default=None, help="end-effector frame (default: the robot's tool frame)"
-    )
-
-
 def _add_solver_options(p: argparse.ArgumentParser, max_starts: int) -> None:
     p.add_argument(
         "--seed", type=int, default=0, help="seed of the restarts (and of sampled targets)"
     )
-    p.add_argument("--tol-pos", type=float, default=1e-5, help="position tolerance [m]")
-    p.add_argument("--tol-rot", type=float, default=1e-5, help="rotation tolerance [rad]")
+    cli_args.add_tolerances(p)
     p.add_argument(
         "--max-starts",
         type=int,
@@ -77,7 +69,7 @@ def add_commands(subparsers: Any) -> dict[str, Any]:
         help="solve many targets at once (vectorised, optionally on Dask)",
         description="Solve many target poses of one robot; writes one row per target.",
     )
-    _add_robot(b)
+    cli_args.add_robot(b)
     src = b.add_mutually_exclusive_group(required=True)
     src.add_argument(
         "--targets",

@@ -37,14 +37,13 @@ import numpy as np
 import pinocchio as pin
 from numpy.typing import NDArray
 
+from swarm_ik._types import BoolArray, FloatArray
 from swarm_ik.errors import InvalidArgumentError
 
 if TYPE_CHECKING:
     from swarm_ik.problem import IKProblem
     from swarm_ik.robot import RobotModel
 
-FloatArray = NDArray[np.float64]
-BoolArray = NDArray[np.bool_]
 
 TWO_PI = 2.0 * np.pi
 BRANCH_TOL = 1e-6

@@ -23,6 +23,7 @@ from typing import Any, NoReturn
 
 import numpy as np
 
+from swarm_ik import cli_args
 from swarm_ik.errors import SwarmIKError
 
 EXIT_NOT_REACHED = 1
@@ -83,7 +84,7 @@ def _parse_param(text: str) -> tuple[str, Any]:
 
 
 def _build_parser() -> argparse.ArgumentParser:
-    from swarm_ik import cli_args, solvers
+    from swarm_ik import solvers
     from swarm_ik.api import DEFAULT_SOLVER
 
     parser = Parser(
@@ -95,9 +96,7 @@ def _build_parser() -> argparse.ArgumentParser:
     sub.add_parser("robots", help="list the robots loadable by name")
 
     p = sub.add_parser("solve", help="solve one IK target")
-    p.add_argument(
-        "--robot", required=True, help="bundled or example-robot-data name, or a .urdf path"
-    )
+    cli_args.add_robot(p, frame=False)
     p.add_argument(
         "--frame",
         action="append",
@@ -131,8 +130,7 @@ def _build_parser() -> argparse.ArgumentParser:
     p.add_argument("--seed", type=int, default=0)
     p.add_argument("--max-evals", type=int, default=None)
     p.add_argument("--time-limit", type=float, default=None, help="seconds")
-    p.add_argument("--tol-pos", type=float, default=1e-5, help="position tolerance [m]")
-    p.add_argument("--tol-rot", type=float, default=1e-5, help="rotation tolerance [rad]")
+    cli_args.add_tolerances(p)
     p.add_argument("--q0", nargs="+", type=float, default=None, help="starting joint values")
     p.add_argument(
         "--scene",
@@ -243,17 +241,7 @@ def _cmd_solve(args: argparse.Namespace) -> int:
     problem = swarm_ik.IKProblem(
         robot, target, goals, args.fitness, w_rot=0.0 if args.position_only else 1.0
     )
-    res = swarm_ik.solve(
-        problem,
-        args.solver,
-        seed=args.seed,
-        max_evals=args.max_evals,
-        time_limit=args.time_limit,
-        q0=args.q0,
-        tol_pos=args.tol_pos,
-        tol_rot=args.tol_rot,
-        **dict(args.param),
-    )
+    res = swarm_ik.solve(problem, args.solver, **cli_args.solve_kwargs(args), **dict(args.param))
     if args.json:
         d = res.to_dict()
         d.pop("history")

@@ -40,12 +40,10 @@ from typing import Any
 
 import numpy as np
 import pinocchio as pin
-from numpy.typing import NDArray
 
+from swarm_ik._types import FloatArray
 from swarm_ik.errors import RobotFileNotFoundError, RobotModelError, SwarmIKError
 from swarm_ik.scene import Scene, as_scene
-
-FloatArray = NDArray[np.float64]
 
 SAMPLES = 2000
 """Random configurations of the no-SRDF rule (MoveIt's setup assistant uses 10,000 by

@@ -18,12 +18,10 @@ from collections.abc import Callable
 from typing import Any
 
 import numpy as np
-from numpy.typing import NDArray
 
+from swarm_ik._types import FloatArray
 from swarm_ik.errors import unknown
 from swarm_ik.kernels.lie import angle as rotation_angle
-
-FloatArray = NDArray[np.float64]
 
 
 def wrap_angle(a: FloatArray) -> FloatArray:

@@ -10,11 +10,9 @@ import reprlib
 from typing import Any
 
 import numpy as np
-from numpy.typing import NDArray
 
+from swarm_ik._types import FloatArray
 from swarm_ik.errors import InvalidArgumentError, InvalidTargetError
-
-FloatArray = NDArray[np.float64]
 
 
 def _floats(value: Any, what: str) -> FloatArray:

@@ -22,14 +22,13 @@ from typing import Any
 import numpy as np
 from numpy.typing import NDArray
 
+from swarm_ik._types import FloatArray
 from swarm_ik.errors import InvalidArgumentError, InvalidTargetError, unknown
 from swarm_ik.fitness import FITNESS, get_fitness
 from swarm_ik.goals import AvoidCollisions, Goal, Pose, Position
 from swarm_ik.kernels import lm
 from swarm_ik.pose import as_pose, is_finite_nonneg
 from swarm_ik.robot import RobotModel
-
-FloatArray = NDArray[np.float64]
 
 SECONDARY_WEIGHT = 1e-3
 """Weight of the secondary goals' cost (½‖r₂‖²) in the scalar cost of the swarm solvers."""

@@ -545,14 +545,10 @@ def export_html(
 # ------------------------------------------------------------------------ command line
 def add_arguments(parser: Any) -> None:
     """The options of ``swarm-ik reach`` (see :func:`run`)."""
+    from swarm_ik import cli_args
     from swarm_ik.batch_cli import add_scheduler_argument
 
-    parser.add_argument(
-        "--robot", required=True, help="bundled or example-robot-data name, or a .urdf path"
-    )
-    parser.add_argument(
-        "--frame", default=None, help="end-effector frame (default: the robot's tool frame)"
-    )
+    cli_args.add_robot(parser)
     parser.add_argument(
         "--resolution", type=float, default=0.1, help="voxel edge [m] (default 0.1)"
     )
@@ -594,8 +590,7 @@ def add_arguments(parser: Any) -> None:
     )
     parser.add_argument("--no-html", action="store_true", help="do not write the HTML page")
     parser.add_argument("--seed", type=int, default=0, help="seed of the orientations and restarts")
-    parser.add_argument("--tol-pos", type=float, default=1e-5, help="position tolerance [m]")
-    parser.add_argument("--tol-rot", type=float, default=1e-5, help="rotation tolerance [rad]")
+    cli_args.add_tolerances(parser)
     parser.add_argument(
         "--max-starts", type=int, default=16, help="most LM starts per pose (default 16)"
     )

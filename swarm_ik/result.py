@@ -6,9 +6,8 @@ from dataclasses import dataclass, fields
 from typing import Any
 
 import numpy as np
-from numpy.typing import NDArray
 
-FloatArray = NDArray[np.float64]
+from swarm_ik._types import FloatArray
 
 
 @dataclass(frozen=True)

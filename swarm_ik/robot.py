@@ -25,10 +25,9 @@ import pinocchio as pin
 from numpy.typing import NDArray
 
 from swarm_ik import urdf
+from swarm_ik._types import FloatArray
 from swarm_ik.errors import InvalidArgumentError, RobotFileNotFoundError, RobotModelError, unknown
 from swarm_ik.kernels.fk import CONTINUOUS, KIND_NAMES, PRISMATIC, REVOLUTE, TreeArrays
-
-FloatArray = NDArray[np.float64]
 
 BUNDLED: dict[str, tuple[str, str]] = {
     "yumi_left": ("yumi_left.urdf", "yumi_tool"),

@@ -150,37 +150,37 @@ class Box:
 
 
 @dataclass(frozen=True)
-class Capsule:
-    """A capsule: the points within ``radius`` [m] of a segment of ``length`` [m] along the
-    local z axis of ``pose``, centred on its origin."""
+class _Rod:
+    """The fields and checks of :class:`Capsule` and :class:`Cylinder`: a ``radius`` and a
+    ``length`` [m] along the local z axis of ``pose``, centred on its origin (the messages
+    name the subclass's ``kind``)."""
 
     radius: float
     length: float
     pose: Matrix4 = None  # type: ignore[assignment]  # validated in __post_init__
     name: str | None = None
-    kind: ClassVar[str] = "capsule"
+    kind: ClassVar[str]
 
     def __post_init__(self) -> None:
-        object.__setattr__(self, "radius", _positive("capsule", "radius", self.radius))
-        object.__setattr__(self, "length", _positive("capsule", "length", self.length))
-        object.__setattr__(self, "pose", _pose("capsule", self.pose))
+        object.__setattr__(self, "radius", _positive(self.kind, "radius", self.radius))
+        object.__setattr__(self, "length", _positive(self.kind, "length", self.length))
+        object.__setattr__(self, "pose", _pose(self.kind, self.pose))
 
 
 @dataclass(frozen=True)
-class Cylinder:
+class Capsule(_Rod):
+    """A capsule: the points within ``radius`` [m] of a segment of ``length`` [m] along the
+    local z axis of ``pose``, centred on its origin."""
+
+    kind: ClassVar[str] = "capsule"
+
+
+@dataclass(frozen=True)
+class Cylinder(_Rod):
     """A solid cylinder of ``radius`` and ``length`` [m] along the local z axis of ``pose``,
     centred on its origin."""
 
-    radius: float
-    length: float
-    pose: Matrix4 = None  # type: ignore[assignment]  # validated in __post_init__
-    name: str | None = None
     kind: ClassVar[str] = "cylinder"
-
-    def __post_init__(self) -> None:
-        object.__setattr__(self, "radius", _positive("cylinder", "radius", self.radius))
-        object.__setattr__(self, "length", _positive("cylinder", "length", self.length))
-        object.__setattr__(self, "pose", _pose("cylinder", self.pose))
 
 
 @dataclass(frozen=True)

@@ -29,11 +29,9 @@ from collections.abc import Callable
 from dataclasses import dataclass
 
 import numpy as np
-from numpy.typing import NDArray
 
+from swarm_ik._types import FloatArray
 from swarm_ik.errors import InvalidArgumentError, unknown
-
-FloatArray = NDArray[np.float64]
 
 
 def _rows(x: FloatArray) -> FloatArray:

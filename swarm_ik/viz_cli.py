@@ -36,12 +36,7 @@ def add_commands(subparsers: Any) -> dict[str, Any]:
         "(--pose or --from-q); with a target and no --q, solve it first "
         "(--solutions N distinct solutions).",
     )
-    p.add_argument(
-        "--robot", required=True, help="bundled or example-robot-data name, or a .urdf path"
-    )
-    p.add_argument(
-        "--frame", default=None, help="end-effector frame (default: the robot's tool frame)"
-    )
+    cli_args.add_robot(p)
     p.add_argument(
         "--q",
         nargs="+",
@@ -139,18 +134,6 @@ def present(scene: Any, args: argparse.Namespace, *, live: bool) -> None:
         scene.close()
 
 
-def solve_kwargs(args: argparse.Namespace) -> dict[str, Any]:
-    """The options of ``swarm-ik solve`` that :func:`swarm_ik.solve` takes (no solver params)."""
-    return {
-        "seed": args.seed,
-        "max_evals": args.max_evals,
-        "time_limit": args.time_limit,
-        "q0": args.q0,
-        "tol_pos": args.tol_pos,
-        "tol_rot": args.tol_rot,
-    }
-
-
 def _result_line(res: Any) -> str:
     status = "reached" if res.success else "NOT reached"
     return (
@@ -181,7 +164,7 @@ def after_solve(args: argparse.Namespace, problem: Any, result: Any) -> None:
     viz.require_meshcat()
     if args.html:
         viz.check_output_path(args.html, "--html", (".html", ".htm"))
-    kwargs = solve_kwargs(args)
+    kwargs = cli_args.solve_kwargs(args)
     trace = None
     if args.animate:
         traced, trace = viz.solve_traced(problem, args.solver, **kwargs, **dict(args.param))

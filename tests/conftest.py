@@ -1,4 +1,5 @@
-"""Shared fixtures: robots are loaded once per session (loading parses URDFs)."""
+"""Shared fixtures and helpers: robots are loaded once per session (loading parses URDFs);
+small URDFs are written as text with ``urdf_text`` / ``urdf_joint``."""
 
 from __future__ import annotations
 
@@ -19,6 +20,7 @@ except ImportError:  # pragma: no cover
     pass
 
 import swarm_ik
+from swarm_ik.scene import Box, Capsule, Cylinder, Scene, Sphere
 
 _CACHE: dict[str, swarm_ik.RobotModel] = {}
 
@@ -39,30 +41,63 @@ def get_robot():
 @pytest.fixture(scope="session")
 def planar2_urdf(tmp_path_factory) -> str:
     """A 2-link planar arm (links 1 m and 0.8 m, joints about z) as a URDF file."""
-    text = """<?xml version="1.0"?>
-<robot name="planar2">
-  <link name="base"/>
-  <link name="l1"/>
-  <link name="l2"/>
-  <link name="tip"/>
-  <joint name="j1" type="revolute">
-    <parent link="base"/><child link="l1"/>
-    <origin xyz="0 0 0" rpy="0 0 0"/><axis xyz="0 0 1"/>
-    <limit lower="-3.1" upper="3.1" effort="1" velocity="1"/>
-  </joint>
-  <joint name="j2" type="revolute">
-    <parent link="l1"/><child link="l2"/>
-    <origin xyz="1 0 0" rpy="0 0 0"/><axis xyz="0 0 1"/>
-    <limit lower="-3.1" upper="3.1" effort="1" velocity="1"/>
-  </joint>
-  <joint name="tool" type="fixed">
-    <parent link="l2"/><child link="tip"/><origin xyz="0.8 0 0" rpy="0 0 0"/>
-  </joint>
-</robot>
-"""
+    limit = '<limit lower="-3.1" upper="3.1" effort="1" velocity="1"/>'
+    text = urdf_text(
+        "base l1 l2 tip",
+        urdf_joint("j1", "base", "l1", xyz="0 0 0", limit=limit),
+        urdf_joint("j2", "l1", "l2", xyz="1 0 0", limit=limit),
+        urdf_joint("tool", "l2", "tip", "fixed", xyz="0.8 0 0", axis="", limit=""),
+        name="planar2",
+    )
     path = tmp_path_factory.mktemp("planar") / "planar2.urdf"
     path.write_text(text)
     return str(path)
+
+
+# ----------------------------------------------------------------- small URDFs as text
+URDF_LIMIT = '<limit lower="-1" upper="1" effort="1" velocity="1"/>'
+
+
+def urdf_joint(
+    name: str,
+    parent: str,
+    child: str,
+    jtype: str = "revolute",
+    *,
+    xyz: str = "0 0 0.1",
+    limit: str = URDF_LIMIT,
+    axis: str = '<axis xyz="0 0 1"/>',
+    origin: str | None = None,
+    extra: str = "",
+) -> str:
+    """One ``<joint>`` element; ``origin`` (a whole element) replaces the one made of ``xyz``."""
+    if origin is None:
+        origin = f'<origin xyz="{xyz}" rpy="0 0 0"/>'
+    return (
+        f'<joint name="{name}" type="{jtype}"><parent link="{parent}"/><child link="{child}"/>'
+        f"{origin}{axis}{limit}{extra}</joint>"
+    )
+
+
+def urdf_text(links: str, *joints: str | tuple[str, ...], name: str = "bad") -> str:
+    """A URDF document: the links named in ``links`` (space-separated, repeats kept), then
+    the joints, each a ``<joint>`` text or the positional arguments of :func:`urdf_joint`
+    (``(name, parent, child[, type])``)."""
+    parts = [f'<link name="{n}"/>' for n in links.split()]
+    parts += [j if isinstance(j, str) else urdf_joint(*j) for j in joints]
+    return f'<?xml version="1.0"?><robot name="{name}">' + "".join(parts) + "</robot>"
+
+
+def scene_near_robot() -> Scene:
+    """A table and one obstacle of every other primitive kind, around a robot at the origin."""
+    return Scene(
+        [
+            Box((1.2, 1.2, 0.04), (0.3, 0.0, -0.05), name="table"),
+            Sphere(0.12, (0.45, 0.15, 0.45)),
+            Capsule(0.05, 0.5, (0.0, 0.45, 0.4)),
+            Cylinder(0.06, 0.6, (-0.35, -0.25, 0.3)),
+        ]
+    )
 
 
 @pytest.fixture()

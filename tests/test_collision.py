@@ -9,10 +9,11 @@ import coal
 import numpy as np
 import pinocchio as pin
 import pytest
+from conftest import scene_near_robot
 
 from swarm_ik.collision import RobotCollision, find_srdf, parse_srdf
 from swarm_ik.errors import InvalidArgumentError, RobotFileNotFoundError
-from swarm_ik.scene import Box, Capsule, Cylinder, Scene, Sphere
+from swarm_ik.scene import Scene
 
 _RC: dict[str, RobotCollision] = {}
 
@@ -21,17 +22,6 @@ def collision(get_robot, name: str) -> RobotCollision:
     if name not in _RC:
         _RC[name] = RobotCollision.from_robot(get_robot(name))
     return _RC[name]
-
-
-def scene_near_robot() -> Scene:
-    return Scene(
-        [
-            Box((1.2, 1.2, 0.04), (0.3, 0.0, -0.05), name="table"),
-            Sphere(0.12, (0.45, 0.15, 0.45)),
-            Capsule(0.05, 0.5, (0.0, 0.45, 0.4)),
-            Cylinder(0.06, 0.6, (-0.35, -0.25, 0.3)),
-        ]
-    )
 
 
 def _key(a: str, b: str) -> tuple[str, str]:

@@ -13,6 +13,27 @@ EXAMPLES = sorted((Path(__file__).resolve().parents[1] / "examples").glob("[0-9]
 TIMEOUT_S = 120
 
 
+def _run_script(
+    script: Path, *args: str, cwd: Path, quick: bool = True
+) -> subprocess.CompletedProcess[str]:
+    """Run an example headless (no viewer window, no waiting), short unless ``quick=False``."""
+    env = dict(os.environ, MPLBACKEND="Agg", SWARM_IK_NO_WAIT="1")
+    env.pop("DISPLAY", None)  # no viewer window, whatever the machine has
+    if quick:
+        env["SWARM_IK_QUICK"] = "1"
+    else:
+        env.pop("SWARM_IK_QUICK", None)
+    return subprocess.run(
+        [sys.executable, str(script), *args],
+        cwd=cwd,
+        env=env,
+        stdin=subprocess.DEVNULL,
+        capture_output=True,
+        text=True,
+        timeout=TIMEOUT_S,
+    )
+
+
 def test_examples_exist() -> None:
     numbers = [p.name[:2] for p in EXAMPLES]
     for n in ("01", "02", "03", "04", "06"):
@@ -21,17 +42,7 @@ def test_examples_exist() -> None:
 
 @pytest.mark.parametrize("script", EXAMPLES, ids=[p.name for p in EXAMPLES])
 def test_example_runs(script: Path, tmp_path: Path) -> None:
-    env = dict(os.environ, SWARM_IK_QUICK="1", MPLBACKEND="Agg", SWARM_IK_NO_WAIT="1")
-    env.pop("DISPLAY", None)  # no viewer window, whatever the machine has
-    proc = subprocess.run(
-        [sys.executable, str(script)],
-        cwd=tmp_path,
-        env=env,
-        stdin=subprocess.DEVNULL,
-        capture_output=True,
-        text=True,
-        timeout=TIMEOUT_S,
-    )
+    proc = _run_script(script, cwd=tmp_path)
     assert proc.returncode == 0, (
         f"{script.name} exited {proc.returncode}\n--- stdout\n{proc.stdout[-3000:]}"
         f"\n--- stderr\n{proc.stderr[-3000:]}"
@@ -42,22 +53,9 @@ def test_example_runs(script: Path, tmp_path: Path) -> None:
 
 
 def _run(name: str, *args: str, cwd: Path, quick: bool = True) -> subprocess.CompletedProcess[str]:
-    env = dict(os.environ, MPLBACKEND="Agg", SWARM_IK_NO_WAIT="1")
-    env.pop("DISPLAY", None)
-    if quick:
-        env["SWARM_IK_QUICK"] = "1"
-    else:
-        env.pop("SWARM_IK_QUICK", None)
+    """Run the example whose file name starts with ``name`` (e.g. ``"04"``)."""
     script = next(p for p in EXAMPLES if p.name.startswith(name))
-    return subprocess.run(
-        [sys.executable, str(script), *args],
-        cwd=cwd,
-        env=env,
-        stdin=subprocess.DEVNULL,
-        capture_output=True,
-        text=True,
-        timeout=TIMEOUT_S,
-    )
+    return _run_script(script, *args, cwd=cwd, quick=quick)
 
 
 def test_example_04_writes_its_plot_where_asked_and_nowhere_else(tmp_path: Path) -> None:

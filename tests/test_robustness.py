@@ -14,17 +14,11 @@ from pathlib import Path
 
 import numpy as np
 import pytest
+from conftest import URDF_LIMIT as LIMIT
+from conftest import urdf_joint, urdf_text
 
 import swarm_ik
-from swarm_ik import (
-    IKProblem,
-    InvalidArgumentError,
-    InvalidTargetError,
-    RobotFileNotFoundError,
-    RobotModelError,
-    SwarmIKError,
-    UnknownNameError,
-)
+from swarm_ik import IKProblem, errors
 from swarm_ik.cli import main
 from swarm_ik.fitness import FITNESS
 from swarm_ik.solvers import base
@@ -33,35 +27,7 @@ SOLVERS = swarm_ik.solvers.search_names()
 POP_SOLVERS = [n for n in SOLVERS if "pop_size" in base.get(n).params]
 ITER_SOLVERS = [n for n in SOLVERS if "iterations" in base.get(n).params]
 
-LIMIT = '<limit lower="-1" upper="1" effort="1" velocity="1"/>'
-
-
-def _joint(
-    name: str,
-    parent: str,
-    child: str,
-    jtype: str = "revolute",
-    *,
-    limit: str = LIMIT,
-    axis: str = '<axis xyz="0 0 1"/>',
-    origin: str = '<origin xyz="0 0 0.1" rpy="0 0 0"/>',
-    extra: str = "",
-) -> str:
-    return (
-        f'<joint name="{name}" type="{jtype}"><parent link="{parent}"/><child link="{child}"/>'
-        f"{origin}{axis}{limit}{extra}</joint>"
-    )
-
-
-def _links(*names: str) -> str:
-    return "".join(f'<link name="{n}"/>' for n in names)
-
-
-def _robot(*parts: str) -> str:
-    return '<?xml version="1.0"?><robot name="bad">' + "".join(parts) + "</robot>"
-
-
-GOOD = _robot(_links("a", "b", "c"), _joint("j1", "a", "b"), _joint("j2", "b", "c"))
+GOOD = urdf_text("a b c", ("j1", "a", "b"), ("j2", "b", "c"))
 
 BAD_URDFS: dict[str, tuple[str, str]] = {
     # id: (file text, regex the message must match)
@@ -69,105 +35,85 @@ BAD_URDFS: dict[str, tuple[str, str]] = {
     "not XML": ("this is <<< not xml", r"not a valid XML file"),
     "XML but not URDF": ("<sdf><model/></sdf>", r"not a URDF \(root element is <sdf>"),
     "loop (cycle)": (
-        _robot(
-            _links("a", "b", "c"),
-            _joint("j1", "a", "b"),
-            _joint("j2", "b", "c"),
-            _joint("j3", "c", "a"),
-        ),
+        urdf_text("a b c", ("j1", "a", "b"), ("j2", "b", "c"), ("j3", "c", "a")),
         r"exactly one root link, found none \(a loop",
     ),
     "loop (two parents)": (
-        _robot(
-            _links("a", "b", "c"),
-            _joint("j1", "a", "b"),
-            _joint("j2", "b", "c"),
-            _joint("j3", "a", "c"),
-        ),
+        urdf_text("a b c", ("j1", "a", "b"), ("j2", "b", "c"), ("j3", "a", "c")),
         r"link 'c' is the child of two joints \(a kinematic loop\)",
     ),
     "missing parent link": (
-        _robot(_links("a", "b"), _joint("j1", "nowhere", "b")),
+        urdf_text("a b", ("j1", "nowhere", "b")),
         r"joint 'j1' names parent link 'nowhere', which is not defined",
     ),
     "missing child element": (
-        _robot(
-            _links("a", "b"),
-            '<joint name="j1" type="revolute"><parent link="a"/>' + LIMIT + "</joint>",
+        urdf_text(
+            "a b", '<joint name="j1" type="revolute"><parent link="a"/>' + LIMIT + "</joint>"
         ),
         r"joint 'j1' names child link None",
     ),
     "two root links": (
-        _robot(_links("a", "b", "c"), _joint("j1", "a", "b")),
+        urdf_text("a b c", ("j1", "a", "b")),
         r"exactly one root link, found \['a', 'c'\]",
     ),
     "unknown joint type": (
-        _robot(_links("a", "b"), _joint("j1", "a", "b", "screw")),
+        urdf_text("a b", ("j1", "a", "b", "screw")),
         r"joint 'j1' has unknown type 'screw'; valid types: revolute, continuous, prismatic",
     ),
     "NaN limit": (
-        _robot(_links("a", "b"), _joint("j1", "a", "b", limit=LIMIT.replace('"-1"', '"nan"'))),
+        urdf_text("a b", urdf_joint("j1", "a", "b", limit=LIMIT.replace('"-1"', '"nan"'))),
         r"joint 'j1' has non-finite limits \[nan, 1.0\]",
     ),
     "inf limit": (
-        _robot(
-            _links("a", "b"),
-            _joint("j1", "a", "b", "prismatic", limit=LIMIT.replace('"1"', '"inf"', 1)),
+        urdf_text(
+            "a b", urdf_joint("j1", "a", "b", "prismatic", limit=LIMIT.replace('"1"', '"inf"', 1))
         ),
         r"joint 'j1' has non-finite limits",
     ),
     "lower > upper": (
-        _robot(_links("a", "b"), _joint("j1", "a", "b", limit=LIMIT.replace('"-1"', '"2"'))),
+        urdf_text("a b", urdf_joint("j1", "a", "b", limit=LIMIT.replace('"-1"', '"2"'))),
         r"joint 'j1' has lower limit 2.0 > upper limit 1.0",
     ),
     "non-numeric limit": (
-        _robot(_links("a", "b"), _joint("j1", "a", "b", limit=LIMIT.replace('"-1"', '"abc"'))),
+        urdf_text("a b", urdf_joint("j1", "a", "b", limit=LIMIT.replace('"-1"', '"abc"'))),
         r"joint 'j1' has non-numeric limits \['abc', '1'\]",
     ),
     "revolute without limit": (
-        _robot(_links("a", "b"), _joint("j1", "a", "b", limit="")),
+        urdf_text("a b", urdf_joint("j1", "a", "b", limit="")),
         r"revolute joint 'j1' has no <limit.*use type 'continuous'",
     ),
     "no movable joint (fixed only)": (
-        _robot(_links("a", "b"), _joint("j1", "a", "b", "fixed", limit="")),
+        urdf_text("a b", urdf_joint("j1", "a", "b", "fixed", limit="")),
         r"no movable joint between the root and frame 'b'",
     ),
-    "no joint at all": (_robot(_links("a")), r"no movable joint between the root and frame 'a'"),
-    "no link at all": (_robot(), r"the URDF is empty: <robot name=.bad.> defines no <link>"),
+    "no joint at all": (urdf_text("a"), r"no movable joint between the root and frame 'a'"),
+    "no link at all": (urdf_text(""), r"the URDF is empty: <robot name=.bad.> defines no <link>"),
     "zero axis": (
-        _robot(_links("a", "b"), _joint("j1", "a", "b", axis='<axis xyz="0 0 0"/>')),
+        urdf_text("a b", urdf_joint("j1", "a", "b", axis='<axis xyz="0 0 0"/>')),
         r"joint 'j1' has a zero axis",
     ),
     "NaN axis": (
-        _robot(_links("a", "b"), _joint("j1", "a", "b", axis='<axis xyz="nan 0 1"/>')),
+        urdf_text("a b", urdf_joint("j1", "a", "b", axis='<axis xyz="nan 0 1"/>')),
         r"joint 'j1': <axis xyz='nan 0 1'> must be 3 finite numbers",
     ),
     "malformed origin": (
-        _robot(_links("a", "b"), _joint("j1", "a", "b", origin='<origin xyz="0 0"/>')),
+        urdf_text("a b", urdf_joint("j1", "a", "b", origin='<origin xyz="0 0"/>')),
         r"joint 'j1': <origin xyz='0 0'> must be 3 finite numbers",
     ),
     "duplicate joint name": (
-        _robot(_links("a", "b", "c"), _joint("j1", "a", "b"), _joint("j1", "b", "c")),
+        urdf_text("a b c", ("j1", "a", "b"), ("j1", "b", "c")),
         r"joint name\(s\) \['j1'\] defined more than once",
     ),
     "duplicate link name": (
-        _robot(_links("a", "a", "b"), _joint("j1", "a", "b")),
+        urdf_text("a a b", ("j1", "a", "b")),
         r"link name\(s\) \['a'\] defined more than once",
     ),
     "floating joint on the chain": (
-        _robot(
-            _links("a", "b", "c"),
-            _joint("j0", "a", "b", "floating", limit=""),
-            _joint("j1", "b", "c"),
-        ),
+        urdf_text("a b c", urdf_joint("j0", "a", "b", "floating", limit=""), ("j1", "b", "c")),
         r"joint 'j0' on the chain to 'c': .*not supported.*supported: revolute, continuous",
     ),
     "planar joint on the chain": (
-        _robot(
-            _links("a", "b", "c"),
-            _joint("j0", "a", "b", "planar", limit=""),
-            _joint("j1", "b", "c"),
-        ),
+        urdf_text("a b c", urdf_joint("j0", "a", "b", "planar", limit=""), ("j1", "b", "c")),
         r"joint 'j0' on the chain to 'c': .*Planar.*not supported",
     ),
 }
@@ -183,15 +129,15 @@ def _write(tmp_path: Path, text: str, name: str = "robot.urdf") -> Path:
 @pytest.mark.parametrize(
     ("cls", "builtin"),
     [
-        (RobotFileNotFoundError, FileNotFoundError),
-        (RobotModelError, ValueError),
-        (UnknownNameError, KeyError),
-        (InvalidTargetError, ValueError),
-        (InvalidArgumentError, ValueError),
+        (errors.RobotFileNotFoundError, FileNotFoundError),
+        (errors.RobotModelError, ValueError),
+        (errors.UnknownNameError, KeyError),
+        (errors.InvalidTargetError, ValueError),
+        (errors.InvalidArgumentError, ValueError),
     ],
 )
 def test_every_error_is_a_swarmik_error_and_its_builtin(cls: type, builtin: type) -> None:
-    assert issubclass(cls, SwarmIKError) and issubclass(cls, builtin)
+    assert issubclass(cls, errors.SwarmIKError) and issubclass(cls, builtin)
     assert getattr(swarm_ik, cls.__name__) is cls
 
 
@@ -208,13 +154,13 @@ def test_bad_urdf_is_refused_with_a_message_naming_the_problem(
 ) -> None:
     text, message = BAD_URDFS[case]
     path = _write(tmp_path, text)
-    with pytest.raises(RobotModelError, match=message) as info:
+    with pytest.raises(errors.RobotModelError, match=message) as info:
         swarm_ik.RobotModel.from_urdf(path)
     assert str(path) in str(info.value)  # the message names the file
     # the user sees one message: nothing printed by urdfdom / Pinocchio on the side
     assert capfd.readouterr().err == ""
     # load_robot (the entry point of the CLI) refuses it the same way
-    with pytest.raises(RobotModelError, match=message):
+    with pytest.raises(errors.RobotModelError, match=message):
         swarm_ik.load_robot(path)
 
 
@@ -227,12 +173,12 @@ def test_the_valid_reference_urdf_loads(tmp_path: Path) -> None:
 
 def test_mimic_joint_off_the_chain_is_accepted(tmp_path: Path) -> None:
     # a gripper finger mimicking another one is locked (off the chain): no reason to refuse
-    text = _robot(
-        _links("a", "b", "c", "f1", "f2"),
-        _joint("j1", "a", "b"),
-        _joint("j2", "b", "c"),
-        _joint("finger1", "c", "f1", "prismatic"),
-        _joint("finger2", "c", "f2", "prismatic", extra='<mimic joint="finger1"/>'),
+    text = urdf_text(
+        "a b c f1 f2",
+        ("j1", "a", "b"),
+        ("j2", "b", "c"),
+        ("finger1", "c", "f1", "prismatic"),
+        urdf_joint("finger2", "c", "f2", "prismatic", extra='<mimic joint="finger1"/>'),
     )
     robot = swarm_ik.RobotModel.from_urdf(_write(tmp_path, text), ee_frame="c")
     assert robot.joint_names == ("j1", "j2")
@@ -241,14 +187,14 @@ def test_mimic_joint_off_the_chain_is_accepted(tmp_path: Path) -> None:
 
 def test_missing_file_is_refused(tmp_path: Path) -> None:
     missing = tmp_path / "nothere.urdf"
-    with pytest.raises(RobotFileNotFoundError, match=r"URDF file not found: .*nothere.urdf"):
+    with pytest.raises(errors.RobotFileNotFoundError, match=r"URDF file not found: .*nothere.urdf"):
         swarm_ik.RobotModel.from_urdf(missing)
     with pytest.raises(FileNotFoundError, match="nothere.urdf"):  # the built-in still catches
         swarm_ik.load_robot(str(missing))
 
 
 def test_unknown_robot_name_lists_the_robots() -> None:
-    with pytest.raises(UnknownNameError) as info:
+    with pytest.raises(errors.UnknownNameError) as info:
         swarm_ik.load_robot("yumi")
     msg = str(info.value)
     assert msg.startswith("unknown robot 'yumi'; valid robots: ")
@@ -257,7 +203,7 @@ def test_unknown_robot_name_lists_the_robots() -> None:
 
 
 def test_unknown_end_effector_frame_lists_the_frames(tmp_path: Path) -> None:
-    with pytest.raises(UnknownNameError) as info:
+    with pytest.raises(errors.UnknownNameError) as info:
         swarm_ik.RobotModel.from_urdf(_write(tmp_path, GOOD), ee_frame="tool1")
     assert str(info.value) == "unknown frame 'tool1'; valid frames: a, b, c"
     with pytest.raises(KeyError):  # a built-in KeyError too
@@ -321,7 +267,7 @@ BAD_TARGETS: dict[str, tuple[object, str]] = {
 @pytest.mark.parametrize("case", list(BAD_TARGETS))
 def test_bad_target_is_refused(case: str, yumi: swarm_ik.RobotModel) -> None:
     target, message = BAD_TARGETS[case]
-    with pytest.raises(InvalidTargetError, match=message):
+    with pytest.raises(errors.InvalidTargetError, match=message):
         IKProblem(yumi, target)
 
 
@@ -333,37 +279,41 @@ def test_rotation_within_tolerance_is_accepted_and_beyond_is_refused(
     slightly[:3, :3] *= 1 + 1e-8  # a rounded matrix: within the default tolerance 1e-6
     IKProblem(yumi, slightly)
     rounded = np.round(pose, 3)  # printed with 3 decimals, as the [HLFOA] paper's target
-    with pytest.raises(InvalidTargetError, match="not orthonormal"):
+    with pytest.raises(errors.InvalidTargetError, match="not orthonormal"):
         IKProblem(yumi, rounded)
     IKProblem(yumi, rounded, orth_tol=1e-2)  # the user may raise the tolerance...
     fixed = swarm_ik.project_to_se3(rounded)  # ...or project the matrix onto SE(3)
     np.testing.assert_allclose(fixed[:3, :3].T @ fixed[:3, :3], np.eye(3), atol=1e-12)
     IKProblem(yumi, fixed)
     for bad in (np.nan, -1.0, "1e-3"):
-        with pytest.raises(InvalidArgumentError, match="orth_tol must be a finite"):
+        with pytest.raises(errors.InvalidArgumentError, match="orth_tol must be a finite"):
             IKProblem(yumi, pose, orth_tol=bad)  # type: ignore[arg-type]
 
 
 # --------------------------------------------------------------------- problem arguments
 def test_bad_problem_arguments_are_refused(yumi: swarm_ik.RobotModel) -> None:
     pose = yumi.fk(yumi.mid_q())
-    with pytest.raises(UnknownNameError, match="unknown fitness 'l2'; valid fitnesses: euler-zyz"):
+    with pytest.raises(
+        errors.UnknownNameError, match="unknown fitness 'l2'; valid fitnesses: euler-zyz"
+    ):
         IKProblem(yumi, pose, fitness="l2")
-    with pytest.raises(UnknownNameError, match=r"unknown fitness \['se3'\]"):
+    with pytest.raises(errors.UnknownNameError, match=r"unknown fitness \['se3'\]"):
         IKProblem(yumi, pose, fitness=["se3"])  # type: ignore[arg-type]
     for label in ("w_rot", "lam", "mu"):
         for bad in (-1.0, np.nan, np.inf, "a", None):
-            with pytest.raises(InvalidArgumentError, match=f"{label} must be a finite non-neg"):
+            with pytest.raises(
+                errors.InvalidArgumentError, match=f"{label} must be a finite non-neg"
+            ):
                 IKProblem(yumi, pose, **{label: bad})  # type: ignore[arg-type]
-    with pytest.raises(InvalidArgumentError, match="robot must be a RobotModel"):
+    with pytest.raises(errors.InvalidArgumentError, match="robot must be a RobotModel"):
         IKProblem("yumi_left", pose)  # type: ignore[arg-type]
-    with pytest.raises(InvalidArgumentError, match="lower bounds exceed upper bounds"):
+    with pytest.raises(errors.InvalidArgumentError, match="lower bounds exceed upper bounds"):
         IKProblem(yumi, pose, lower=yumi.mid_q() + 0.1, upper=yumi.mid_q())
     with pytest.raises(
-        InvalidArgumentError, match="bounds may only narrow the joint limits; joint"
+        errors.InvalidArgumentError, match="bounds may only narrow the joint limits; joint"
     ):
         IKProblem(yumi, pose, lower=yumi.lower - 1.0)
-    with pytest.raises(InvalidArgumentError, match="upper must hold 7 values"):
+    with pytest.raises(errors.InvalidArgumentError, match="upper must hold 7 values"):
         IKProblem(yumi, pose, upper=[1.0, 2.0])
 
 
@@ -374,11 +324,11 @@ def problem(yumi: swarm_ik.RobotModel) -> IKProblem:
 
 
 def test_unknown_solver_lists_every_solver(problem: IKProblem) -> None:
-    with pytest.raises(UnknownNameError) as info:
+    with pytest.raises(errors.UnknownNameError) as info:
         swarm_ik.solve(problem, "abc")
     every = ", ".join(swarm_ik.solvers.names())
     assert str(info.value) == f"unknown solver 'abc'; valid solvers: {every}"
-    with pytest.raises(UnknownNameError, match="unknown solver"):
+    with pytest.raises(errors.UnknownNameError, match="unknown solver"):
         swarm_ik.solve(problem, ["dls"])  # type: ignore[arg-type]
 
 
@@ -393,7 +343,7 @@ def test_unknown_solver_lists_every_solver(problem: IKProblem) -> None:
     ],
 )
 def test_bad_q0_is_refused(problem: IKProblem, q0: object, message: str) -> None:
-    with pytest.raises(InvalidArgumentError, match=message):
+    with pytest.raises(errors.InvalidArgumentError, match=message):
         swarm_ik.solve(problem, "dls", q0=q0, max_evals=10)
 
 
@@ -441,12 +391,14 @@ def test_q0_outside_the_limits_is_clipped_with_a_warning(
 def test_bad_budget_seed_or_tolerance_is_refused(
     problem: IKProblem, kwargs: dict[str, object], message: str
 ) -> None:
-    with pytest.raises(InvalidArgumentError, match=message):
+    with pytest.raises(errors.InvalidArgumentError, match=message):
         swarm_ik.solve(problem, "gwo", **kwargs)  # type: ignore[arg-type]
 
 
 def test_problem_must_be_an_ikproblem(yumi: swarm_ik.RobotModel) -> None:
-    with pytest.raises(InvalidArgumentError, match="problem must be an IKProblem, got ndarray"):
+    with pytest.raises(
+        errors.InvalidArgumentError, match="problem must be an IKProblem, got ndarray"
+    ):
         swarm_ik.solve(yumi.fk(yumi.mid_q()))  # type: ignore[arg-type]
 
 
@@ -455,7 +407,7 @@ def test_population_below_four_is_refused_for_every_population_solver(
     name: str, problem: IKProblem
 ) -> None:
     for bad in (3, 0, -1, 4.5, "8", True):
-        with pytest.raises(InvalidArgumentError, match=rf"pop_size must be >= 4 .*{name!r}"):
+        with pytest.raises(errors.InvalidArgumentError, match=rf"pop_size must be >= 4 .*{name!r}"):
             swarm_ik.solve(problem, name, pop_size=bad, max_evals=50)
     res = swarm_ik.solve(problem, name, pop_size=4, max_evals=50)  # the smallest one runs
     assert 0 < res.n_evals <= 50 and res.within_limits
@@ -464,13 +416,15 @@ def test_population_below_four_is_refused_for_every_population_solver(
 @pytest.mark.parametrize("name", ITER_SOLVERS)
 def test_non_positive_iterations_are_refused(name: str, problem: IKProblem) -> None:
     for bad in (0, -3, 2.5):
-        with pytest.raises(InvalidArgumentError, match=rf"iterations must be >= 1 .*{name!r}"):
+        with pytest.raises(
+            errors.InvalidArgumentError, match=rf"iterations must be >= 1 .*{name!r}"
+        ):
             swarm_ik.solve(problem, name, iterations=bad)
 
 
 @pytest.mark.parametrize("name", SOLVERS)
 def test_unknown_solver_parameter_lists_the_valid_ones(name: str, problem: IKProblem) -> None:
-    with pytest.raises(InvalidArgumentError) as info:
+    with pytest.raises(errors.InvalidArgumentError) as info:
         swarm_ik.solve(problem, name, popsize=10, max_evals=10)
     msg = str(info.value)
     valid = ", ".join(sorted(base.get(name).params)) or "(none)"
@@ -482,27 +436,37 @@ def test_minimize_refuses_bad_objectives_bounds_and_starts() -> None:
         return (x**2).sum(axis=1)
 
     lo, hi = [-1.0, -1.0], [1.0, 1.0]
-    with pytest.raises(InvalidArgumentError, match="objective must be a callable"):
+    with pytest.raises(errors.InvalidArgumentError, match="objective must be a callable"):
         swarm_ik.minimize(3, lo, hi)  # type: ignore[arg-type]
-    with pytest.raises(InvalidArgumentError, match=r"returned shape \(30, 2\) for 30 points"):
+    with pytest.raises(
+        errors.InvalidArgumentError, match=r"returned shape \(30, 2\) for 30 points"
+    ):
         swarm_ik.minimize(lambda x: x, lo, hi, "gwo", max_evals=60)
-    with pytest.raises(InvalidArgumentError, match=r"lower > upper at indices \[0, 1\]"):
+    with pytest.raises(errors.InvalidArgumentError, match=r"lower > upper at indices \[0, 1\]"):
         swarm_ik.minimize(sphere, hi, lo)
-    with pytest.raises(InvalidArgumentError, match="non-empty finite arrays of the same shape"):
+    with pytest.raises(
+        errors.InvalidArgumentError, match="non-empty finite arrays of the same shape"
+    ):
         swarm_ik.minimize(sphere, [], [])
-    with pytest.raises(InvalidArgumentError, match="non-empty finite arrays of the same shape"):
+    with pytest.raises(
+        errors.InvalidArgumentError, match="non-empty finite arrays of the same shape"
+    ):
         swarm_ik.minimize(sphere, [-1.0, np.nan], hi)
-    with pytest.raises(InvalidArgumentError, match="non-empty finite arrays of the same shape"):
+    with pytest.raises(
+        errors.InvalidArgumentError, match="non-empty finite arrays of the same shape"
+    ):
         swarm_ik.minimize(sphere, [-1.0], hi)
-    with pytest.raises(InvalidArgumentError, match="lower and upper must be arrays of numbers"):
+    with pytest.raises(
+        errors.InvalidArgumentError, match="lower and upper must be arrays of numbers"
+    ):
         swarm_ik.minimize(sphere, ["a", "b"], hi)
-    with pytest.raises(InvalidArgumentError, match=r"x0 must hold 2 finite numbers"):
+    with pytest.raises(errors.InvalidArgumentError, match=r"x0 must hold 2 finite numbers"):
         swarm_ik.minimize(sphere, lo, hi, x0=[0.0, 0.0, 0.0])
-    with pytest.raises(InvalidArgumentError, match="f_target must be a finite number"):
+    with pytest.raises(errors.InvalidArgumentError, match="f_target must be a finite number"):
         swarm_ik.minimize(sphere, lo, hi, f_target=float("nan"))
-    with pytest.raises(InvalidArgumentError, match="needs an IK problem"):
+    with pytest.raises(errors.InvalidArgumentError, match="needs an IK problem"):
         swarm_ik.minimize(sphere, lo, hi, "dls")
-    with pytest.raises(InvalidArgumentError, match="pop_size must be >= 4"):
+    with pytest.raises(errors.InvalidArgumentError, match="pop_size must be >= 4"):
         swarm_ik.minimize(sphere, lo, hi, "gwo", pop_size=3)
     with pytest.warns(UserWarning, match=r"x0 lies outside the bounds at indices \[0\]"):
         res = swarm_ik.minimize(sphere, lo, hi, "gwo", x0=[5.0, 0.0], max_evals=1, pop_size=4)
@@ -547,30 +511,9 @@ def test_time_limit_is_honoured_within_ten_percent_on_a_slow_fitness(
 
 # ------------------------------------------------------------ unreachable / degenerate targets
 @pytest.fixture(scope="module")
-def planar(tmp_path_factory: pytest.TempPathFactory) -> swarm_ik.RobotModel:
+def planar(planar2_urdf: str) -> swarm_ik.RobotModel:
     """Two links of 1 m and 0.8 m about z: reach 1.8 m, stretched = singular."""
-    text = _robot(
-        _links("base", "l1", "l2", "tip"),
-        _joint(
-            "j1",
-            "base",
-            "l1",
-            limit=LIMIT.replace('"-1"', '"-3.1"').replace('"1"', '"3.1"'),
-            origin='<origin xyz="0 0 0"/>',
-        ),
-        _joint(
-            "j2",
-            "l1",
-            "l2",
-            limit=LIMIT.replace('"-1"', '"-3.1"').replace('"1"', '"3.1"'),
-            origin='<origin xyz="1 0 0"/>',
-        ),
-        '<joint name="tool" type="fixed"><parent link="l2"/><child link="tip"/>'
-        '<origin xyz="0.8 0 0"/></joint>',
-    )
-    path = tmp_path_factory.mktemp("planar") / "planar.urdf"
-    path.write_text(text)
-    return swarm_ik.load_robot(path)
+    return swarm_ik.load_robot(planar2_urdf)
 
 
 def _planar_pose(radius: float, angle: float = 0.7) -> np.ndarray:
@@ -719,7 +662,9 @@ def test_every_numeric_parameter_of_every_solver_has_a_constraint() -> None:
 def test_float_parameter_refuses_nan_inf_strings_and_booleans(
     name: str, key: str, value: object
 ) -> None:
-    with pytest.raises(InvalidArgumentError, match=rf"parameter {key} of solver '{name}' must"):
+    with pytest.raises(
+        errors.InvalidArgumentError, match=rf"parameter {key} of solver '{name}' must"
+    ):
         base.get(name).resolve({key: value})
 
 
@@ -732,7 +677,9 @@ def test_float_parameter_refuses_values_just_outside_its_range(name: str, key: s
     if np.isfinite(con.hi):
         outside.append(con.hi if con.hi_open else np.nextafter(con.hi, np.inf))
     for v in outside:
-        with pytest.raises(InvalidArgumentError, match=rf"parameter {key} of solver '{name}'"):
+        with pytest.raises(
+            errors.InvalidArgumentError, match=rf"parameter {key} of solver '{name}'"
+        ):
             base.get(name).resolve({key: float(v)})
     # an integer value is a number too, converted to float
     default = base.get(name).params[key]
@@ -742,7 +689,7 @@ def test_float_parameter_refuses_values_just_outside_its_range(name: str, key: s
 @pytest.mark.parametrize(("name", "key"), _int_params())
 @pytest.mark.parametrize("value", [1.5, "3", True, float("nan")])
 def test_integer_parameter_refuses_non_integers(name: str, key: str, value: object) -> None:
-    with pytest.raises(InvalidArgumentError, match=rf"{key}"):
+    with pytest.raises(errors.InvalidArgumentError, match=rf"{key}"):
         base.get(name).resolve({key: value})
 
 
@@ -766,7 +713,7 @@ def test_bad_solver_parameters_are_refused_before_running(
     problem: IKProblem, solver: str, params: dict, message: str
 ) -> None:
     t0 = time.perf_counter()
-    with pytest.raises(InvalidArgumentError, match=message):
+    with pytest.raises(errors.InvalidArgumentError, match=message):
         swarm_ik.solve(problem, solver, time_limit=0.5, **params)
     assert time.perf_counter() - t0 < 0.5  # refused at the door, not after a (hung) run
 
@@ -797,9 +744,11 @@ def test_constraint_specs_parse_and_refuse_unknown_ones() -> None:
     assert con.describe() == "a number in (0, 1]"
     assert base.Constraint.parse("int>=2").convert(2) == (True, 2)
     assert base.Constraint.parse("int>=2").convert(1)[0] is False
-    with pytest.raises(InvalidArgumentError, match=r"prefer of solver 'swarm' must be one of"):
+    with pytest.raises(
+        errors.InvalidArgumentError, match=r"prefer of solver 'swarm' must be one of"
+    ):
         base.get("swarm").resolve({"prefer": "closest"})
-    with pytest.raises(InvalidArgumentError, match="unknown parameter constraint 'huge'"):
+    with pytest.raises(errors.InvalidArgumentError, match="unknown parameter constraint 'huge'"):
         base.Constraint.parse("huge")
 
 
@@ -807,7 +756,7 @@ def test_register_refuses_constraints_for_missing_parameters() -> None:
     def run(ev: object, rng: object, *, a: float = 1.0) -> None:
         return None
 
-    with pytest.raises(InvalidArgumentError, match=r"constraints for \['b'\] given"):
+    with pytest.raises(errors.InvalidArgumentError, match=r"constraints for \['b'\] given"):
         base.register("_test_bad_constraints", run, constraints={"b": "positive"})
     assert "_test_bad_constraints" not in SOLVERS
 
@@ -852,14 +801,14 @@ def test_cli_pose_with_huge_quaternion_points_the_tool_down(
 
 # ---------------------------------------------------------- item 10: population memory
 def test_population_larger_than_the_cap_is_refused_before_allocating(problem: IKProblem) -> None:
-    with pytest.raises(InvalidArgumentError, match=r"pop_size must be <= 1000000"):
+    with pytest.raises(errors.InvalidArgumentError, match=r"pop_size must be <= 1000000"):
         swarm_ik.solve(problem, "pso", pop_size=20_000_000)
-    with pytest.raises(InvalidArgumentError, match=r"exceeds the cap of 10000000"):
+    with pytest.raises(errors.InvalidArgumentError, match=r"exceeds the cap of 10000000"):
         base.get("pso").resolve({"pop_size": 1_000_000}, dim=20)
     # through minimize: 600 000 x 20 variables = 1.2e7 values, refused by the evaluator
     lower, upper = -np.ones(20), np.ones(20)
     t0 = time.perf_counter()
-    with pytest.raises(InvalidArgumentError, match=r"pop_size 600000 x 20 joints"):
+    with pytest.raises(errors.InvalidArgumentError, match=r"pop_size 600000 x 20 joints"):
         swarm_ik.minimize(lambda x: (x**2).sum(axis=1), lower, upper, "pso", pop_size=600_000)
     assert time.perf_counter() - t0 < 2.0
 
@@ -1078,17 +1027,19 @@ def test_cli_interrupt_elsewhere_exits_130_with_one_line(
 def test_validate_helpers_name_the_bad_input(yumi: swarm_ik.RobotModel) -> None:
     from swarm_ik import _validate
 
-    with pytest.raises(InvalidTargetError, match=r"targets must be an array of numbers, got 'abc'"):
+    with pytest.raises(
+        errors.InvalidTargetError, match=r"targets must be an array of numbers, got 'abc'"
+    ):
         _validate.float_array("abc")
-    with pytest.raises(InvalidTargetError, match="got None"):
+    with pytest.raises(errors.InvalidTargetError, match="got None"):
         _validate.float_array(None)
-    with pytest.raises(InvalidTargetError, match="array of numbers"):
+    with pytest.raises(errors.InvalidTargetError, match="array of numbers"):
         _validate.float_array([[1, 2], [3]])
     for bad in ("a", float("nan"), 0, -1.0, True, None):
-        with pytest.raises(InvalidArgumentError, match="tol_pos must be a positive number"):
+        with pytest.raises(errors.InvalidArgumentError, match="tol_pos must be a positive number"):
             _validate.positive_float(bad, "tol_pos")
     assert _validate.positive_float(1, "tol_pos") == 1.0
-    with pytest.raises(InvalidArgumentError, match="q must hold 7 values"):
+    with pytest.raises(errors.InvalidArgumentError, match="q must hold 7 values"):
         _validate.joint_vector(yumi, [0, 0])
 
 
@@ -1096,7 +1047,7 @@ def test_validate_helpers_name_the_bad_input(yumi: swarm_ik.RobotModel) -> None:
 def test_api_refuses_bad_input_with_a_swarmik_error(
     case: str, yumi: swarm_ik.RobotModel, problem: IKProblem
 ) -> None:
-    with pytest.raises(SwarmIKError):
+    with pytest.raises(errors.SwarmIKError):
         if case == "targets":
             swarm_ik.solve_batch(yumi, "abc")
         elif case == "tol_pos":
@@ -1104,7 +1055,7 @@ def test_api_refuses_bad_input_with_a_swarmik_error(
 
 
 def test_verify_refuses_a_bad_joint_vector(problem: IKProblem) -> None:
-    with pytest.raises(SwarmIKError, match="q must"):
+    with pytest.raises(errors.SwarmIKError, match="q must"):
         swarm_ik.verify(problem, [0, 0])
 
 
@@ -1150,7 +1101,7 @@ def test_grid_size_check_counts_without_allocating() -> None:
         x, y, z = grid_axes(lo, hi, res)
         assert grid_cells(lo, hi, res) == x.size * y.size * z.size
         assert check_grid_size(lo, hi, res) == x.size * y.size * z.size
-    with pytest.raises(InvalidArgumentError, match=r"use --resolution 0.0"):
+    with pytest.raises(errors.InvalidArgumentError, match=r"use --resolution 0.0"):
         check_grid_size(lo, hi, 1e-4)
 
 

@@ -7,23 +7,13 @@ import coal
 import numpy as np
 import pinocchio as pin
 import pytest
+from conftest import scene_near_robot
 
 from swarm_ik.collision import RobotCollision
 from swarm_ik.kernels import spheres as S
-from swarm_ik.scene import Box, Capsule, Cylinder, Mesh, Scene, Sphere
+from swarm_ik.scene import Mesh
 
 _SM: dict[str, S.SphereModel] = {}
-
-
-def scene_near_robot() -> Scene:
-    return Scene(
-        [
-            Box((1.2, 1.2, 0.04), (0.3, 0.0, -0.05), name="table"),
-            Sphere(0.12, (0.45, 0.15, 0.45)),
-            Capsule(0.05, 0.5, (0.0, 0.45, 0.4)),
-            Cylinder(0.06, 0.6, (-0.35, -0.25, 0.3)),
-        ]
-    )
 
 
 def model(get_robot, name: str) -> S.SphereModel:

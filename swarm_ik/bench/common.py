@@ -2,16 +2,18 @@
 
 * robots: :func:`cached_robot` (a per-process cache of :func:`swarm_ik.load_robot`);
 * targets: :func:`fk_targets` (FK of joint vectors drawn uniformly within the limits);
-* files: :func:`read_csv` (rows as strings), :func:`resolve_out` (the ``--out`` / ``--quick``
-  rules), :func:`write_run_info`, :func:`render` (reports from template files in
-  ``swarm_ik/bench/templates``);
+* files: :func:`read_csv` (rows as strings), :func:`add_out` and :func:`resolve_out` (the
+  ``--out`` / ``--quick`` rules), :func:`write_run_info`, :func:`render` (reports from
+  template files in ``swarm_ik/bench/templates``);
 * the machine: :func:`machine_info`, :func:`cpu_count`, :func:`single_thread`;
 * statistics: :func:`summarize`, :func:`timing`, :func:`success_rate`, :func:`judge`;
-* C-library plumbing for peers: :func:`quiet_c_output`, :func:`urdf_root_link`.
+* C-library plumbing for peers: :func:`quiet_c_output`, :func:`urdf_root_link`;
+* the command line: :func:`run_main` (the ``main(argv)`` of ``python -m swarm_ik.bench.NAME``).
 """
 
 from __future__ import annotations
 
+import argparse
 import contextlib
 import csv
 import functools
@@ -22,7 +24,7 @@ import platform
 import string
 import sys
 import xml.etree.ElementTree as ET
-from collections.abc import Iterable, Iterator, Mapping, Sequence
+from collections.abc import Callable, Iterable, Iterator, Mapping, Sequence
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
@@ -45,6 +47,23 @@ TEMPLATES = Path(__file__).with_name("templates")
 
 RUN_INFO = "run.json"
 """File recording what kind of run (full or quick) wrote an output folder."""
+
+
+# --------------------------------------------------------------------------- command line
+def run_main(
+    add_arguments: Callable[[argparse.ArgumentParser], None],
+    run: Callable[[argparse.Namespace], int],
+    argv: Sequence[str] | None = None,
+    *,
+    prog: str | None = None,
+    description: str | None = None,
+) -> int:
+    """The ``main(argv)`` of a benchmark module run as ``python -m swarm_ik.bench.NAME``: a
+    parser (``prog`` and ``description`` as given) with the module's options, the same as
+    ``swarm-ik bench NAME``'s (``add_arguments``), then ``run`` on the parsed options."""
+    parser = argparse.ArgumentParser(prog=prog, description=description)
+    add_arguments(parser)
+    return run(parser.parse_args(argv))
 
 
 # --------------------------------------------------------------------------- robots, targets
@@ -98,6 +117,18 @@ def default_out(command: str, quick: bool) -> Path:
     """Default output folder of ``swarm-ik bench COMMAND``: ``./bench-COMMAND`` in the current
     folder (``./bench-COMMAND-quick`` with ``--quick``), never the package's ``docs/``."""
     return Path(f"bench-{command}" + ("-quick" if quick else ""))
+
+
+def add_out(parser: argparse.ArgumentParser, command: str, **kwargs: Any) -> None:
+    """``--out FOLDER`` of ``swarm-ik bench COMMAND``, default ``None`` (:func:`resolve_out`
+    then picks :func:`default_out`); ``kwargs`` go to ``add_argument`` (e.g. ``type=Path``)."""
+    full, quick = default_out(command, False), default_out(command, True)
+    parser.add_argument(
+        "--out",
+        default=None,
+        help=f"output folder (default ./{full}, or ./{quick} with --quick)",
+        **kwargs,
+    )
 
 
 def resolve_out(out: str | os.PathLike[str] | None, command: str, quick: bool) -> Path:

@@ -185,9 +185,7 @@ def run(args: argparse.Namespace) -> int:
 
 def main(argv: list[str] | None = None) -> int:
     """``python -m swarm_ik.bench.goals``."""
-    parser = argparse.ArgumentParser(description=HELP)
-    add_arguments(parser)
-    return run(parser.parse_args(argv))
+    return common.run_main(add_arguments, run, argv, description=HELP)
 
 
 if __name__ == "__main__":

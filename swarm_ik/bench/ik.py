@@ -344,11 +344,7 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
         help="'none' (default: this process or --jobs processes), 'local' (a Dask "
         "LocalCluster) or a Dask scheduler address; timings on shared workers are noisier",
     )
-    parser.add_argument(
-        "--out",
-        default=None,
-        help="output folder (default ./bench-ik, or ./bench-ik-quick with --quick)",
-    )
+    common.add_out(parser, COMMAND)
     parser.add_argument(
         "--quick",
         action="store_true",
@@ -441,9 +437,7 @@ def run(args: argparse.Namespace) -> int:
 
 def main(argv: Sequence[str] | None = None) -> int:
     """``python -m swarm_ik.bench.ik [options]``."""
-    parser = argparse.ArgumentParser(prog="python -m swarm_ik.bench.ik")
-    add_arguments(parser)
-    return run(parser.parse_args(argv))
+    return common.run_main(add_arguments, run, argv, prog="python -m swarm_ik.bench.ik")
 
 
 if __name__ == "__main__":

@@ -368,9 +368,11 @@ def run(args: argparse.Namespace) -> int:
 
 def main(argv: list[str] | None = None) -> int:
     """``python -m swarm_ik.bench.many``: the same as ``swarm-ik bench many``."""
-    parser = argparse.ArgumentParser(prog="swarm-ik bench many", description=__doc__)
-    add_arguments(parser)
-    return run(parser.parse_args(argv))
+    from swarm_ik.bench import common
+
+    return common.run_main(
+        add_arguments, run, argv, prog="swarm-ik bench many", description=__doc__
+    )
 
 
 if __name__ == "__main__":

@@ -717,12 +717,7 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
         "'swarm-ik batch', because on one machine a LocalCluster is no faster than the pool; "
         "the results are the same either way (only time_s differs)",
     )
-    parser.add_argument(
-        "--out",
-        type=Path,
-        default=None,
-        help="output folder (default ./bench-paper, or ./bench-paper-quick with --quick)",
-    )
+    common.add_out(parser, "paper", type=Path)
     parser.add_argument(
         "--experiments",
         nargs="+",
@@ -863,9 +858,7 @@ def run(args: argparse.Namespace) -> int:
 
 def main(argv: Sequence[str] | None = None) -> int:
     """``python -m swarm_ik.bench.paper [options]``."""
-    parser = argparse.ArgumentParser(prog="python -m swarm_ik.bench.paper")
-    add_arguments(parser)
-    return run(parser.parse_args(argv))
+    return common.run_main(add_arguments, run, argv, prog="python -m swarm_ik.bench.paper")
 
 
 if __name__ == "__main__":

@@ -45,6 +45,16 @@ def _figure(
     return fig, axes
 
 
+def _save(fig: Any, path: Path, title: str, note: str = "") -> Path:
+    """Write ``fig`` as a PNG to ``path`` (its folder made) and return ``path``; with a
+    ``title``, the figure is titled with it (``note`` on a second line when given)."""
+    if title:
+        fig.suptitle(f"{title}\n{note}" if note else title, fontsize=10)
+    path.parent.mkdir(parents=True, exist_ok=True)
+    fig.savefig(path, dpi=110)
+    return path
+
+
 EXTRA_COLORS = ("#000000", "#b8860b", "#008080", "#000080", "#800000")
 """Colours after matplotlib's ten ``tab10`` ones."""
 
@@ -150,15 +160,10 @@ def convergence(
         ax.legend(fontsize=7, loc="upper right")
     if not drawn:
         return None
-    if title:
-        fig.suptitle(
-            f"{title}\nmean over runs (line), inter-quartile range (band); "
-            f"values ≤ {CLIP:g} drawn at {CLIP:g}",
-            fontsize=10,
-        )
-    path.parent.mkdir(parents=True, exist_ok=True)
-    fig.savefig(path, dpi=110)
-    return path
+    note = (
+        f"mean over runs (line), inter-quartile range (band); values ≤ {CLIP:g} drawn at {CLIP:g}"
+    )
+    return _save(fig, path, title, note)
 
 
 def boxes(
@@ -198,11 +203,7 @@ def boxes(
         drawn = True
     if not drawn:
         return None
-    if title:
-        fig.suptitle(f"{title}\nvalues ≤ {CLIP:g} drawn at {CLIP:g}", fontsize=10)
-    path.parent.mkdir(parents=True, exist_ok=True)
-    fig.savefig(path, dpi=110)
-    return path
+    return _save(fig, path, title, f"values ≤ {CLIP:g} drawn at {CLIP:g}")
 
 
 def budget_success(
@@ -246,8 +247,4 @@ def budget_success(
         ax.set_xlabel("success rate [%]")
         ax.grid(True, axis="x", alpha=0.3)
         ax.legend(fontsize=7, loc="lower right")
-    if title:
-        fig.suptitle(title, fontsize=10)
-    path.parent.mkdir(parents=True, exist_ok=True)
-    fig.savefig(path, dpi=110)
-    return path
+    return _save(fig, path, title)

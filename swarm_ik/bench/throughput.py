@@ -37,7 +37,7 @@ import numpy as np
 
 import swarm_ik
 from swarm_ik import distributed, solve_batch
-from swarm_ik.batch import BatchChain, check_targets, pose_errors
+from swarm_ik.batch import BatchChain, BatchResult, check_targets, pose_errors
 from swarm_ik.bench import common, plans
 from swarm_ik.robot import RobotModel
 
@@ -114,11 +114,7 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
         action="store_true",
         help="small sizes (a smoke test); never writes into a full run's folder",
     )
-    parser.add_argument(
-        "--out",
-        default=None,
-        help="output folder (default ./bench-throughput, or ./bench-throughput-quick with --quick)",
-    )
+    common.add_out(parser, "throughput")
 
 
 def make_targets(robot: RobotModel, n: int, seed: int) -> np.ndarray:
@@ -286,8 +282,42 @@ def run_experiment(
         ]
         return min(runs, key=lambda r: r.time_s)
 
-    out.mkdir(parents=True, exist_ok=True)
     rows: list[dict[str, Any]] = []
+
+    def record(
+        method: str,
+        time_s: float,
+        success: np.ndarray,
+        note: str,
+        *,
+        n_workers: int = 1,
+        setup_s: float = 0.0,
+        evals: float = np.nan,
+        starts: float = np.nan,
+    ) -> None:
+        """Add the row of ``method`` on the current robot and size to ``throughput.csv`` and
+        print its line (``note`` after the rate)."""
+        rows.append(_row(robot, method, n, n_workers, time_s, setup_s, success, evals, starts, tol))
+        print(f"  {method:<12s} N={n:>7d} {n / time_s:9.0f} poses/s {note}", flush=True)
+
+    def record_batch(
+        method: str, res: BatchResult, note: str, n_workers: int = 1, setup_s: float = 0.0
+    ) -> None:
+        """:func:`record` of a batch result (its time, success flags, mean evaluations and
+        starts)."""
+        evals, starts = float(res.n_evals.mean()), float(res.n_starts.mean())
+        record(
+            method,
+            res.time_s,
+            res.success,
+            note,
+            n_workers=n_workers,
+            setup_s=setup_s,
+            evals=evals,
+            starts=starts,
+        )
+
+    out.mkdir(parents=True, exist_ok=True)
     prof: list[dict[str, Any]] = []
     loaded = [swarm_ik.load_robot(name) for name in robots]
     for robot in loaded:  # compile / load the kernels once
@@ -306,76 +336,18 @@ def run_experiment(
             for n in sizes:
                 targets = make_targets(robot, n, seed)
                 res = fastest()
-                rows.append(
-                    _row(
-                        robot,
-                        "batch-1proc",
-                        n,
-                        1,
-                        res.time_s,
-                        0.0,
-                        res.success,
-                        res.n_evals.mean(),
-                        res.n_starts.mean(),
-                        tol,
-                    )
-                )
-                print(
-                    f"  batch-1proc  N={n:>7d} {res.poses_per_s:9.0f} poses/s "
-                    f"success {res.success_rate:.4f}",
-                    flush=True,
-                )
+                record_batch("batch-1proc", res, f"success {res.success_rate:.4f}")
                 if use_dask:
                     res_d = fastest(scheduler=client)
                     if not np.array_equal(res_d.q, res.q):  # pragma: no cover - a bug
                         raise RuntimeError("Dask and in-process results differ")
-                    rows.append(
-                        _row(
-                            robot,
-                            "batch-dask",
-                            n,
-                            workers,
-                            res_d.time_s,
-                            setup_s,
-                            res_d.success,
-                            res_d.n_evals.mean(),
-                            res_d.n_starts.mean(),
-                            tol,
-                        )
-                    )
-                    print(
-                        f"  batch-dask   N={n:>7d} {res_d.poses_per_s:9.0f} poses/s "
-                        f"({workers} workers)",
-                        flush=True,
-                    )
+                    record_batch("batch-dask", res_d, f"({workers} workers)", workers, setup_s)
                 if n <= loop_max:
                     t, ok, ev = loop_solve(robot, targets, tol, seed)
-                    rows.append(_row(robot, "loop-solve", n, 1, t, 0.0, ok, ev, np.nan, tol))
-                    print(
-                        f"  loop-solve   N={n:>7d} {n / t:9.0f} poses/s success {ok.mean():.4f}",
-                        flush=True,
-                    )
+                    record("loop-solve", t, ok, f"success {ok.mean():.4f}", evals=ev)
                     trac = loop_tracik(robot, targets, tol) if with_tracik else None
                     if trac is not None:
-                        rows.append(
-                            _row(
-                                robot,
-                                "loop-tracik",
-                                n,
-                                1,
-                                trac[0],
-                                0.0,
-                                trac[1],
-                                np.nan,
-                                np.nan,
-                                tol,
-                            )
-                        )
-                        print(
-                            f"  loop-tracik  N={n:>7d} {n / trac[0]:9.0f} poses/s success "
-                            f"{trac[1].mean():.4f}",
-                            flush=True,
-                        )
+                        record("loop-tracik", *trac, f"success {trac[1].mean():.4f}")
             prof += profile_batch(robot, min(max(sizes), 10_000), seed, tol)
     csv_path = common.write_csv(out / "throughput.csv", FIELDS, rows)
     prof_path = common.write_csv(out / "profile.csv", PROFILE_FIELDS, prof)

@@ -14,11 +14,9 @@ from __future__ import annotations
 import math
 
 import numpy as np
-from numpy.typing import NDArray
 
+from swarm_ik._types import FloatArray
 from swarm_ik.kernels import leaf
-
-FloatArray = NDArray[np.float64]
 
 
 @leaf

@@ -35,16 +35,12 @@ from typing import Any, NamedTuple
 
 import numba
 import numpy as np
-from numpy.typing import NDArray
 
+from swarm_ik._types import BoolArray, FloatArray, IntArray
 from swarm_ik.kernels import leaf
 from swarm_ik.kernels.fk import FKScratch, TreeArrays, fk_one
 from swarm_ik.kernels.lie import jr_inv_nb, log3_nb
 from swarm_ik.kernels.spheres import SphereArrays, penetration
-
-FloatArray = NDArray[np.float64]
-IntArray = NDArray[np.int64]
-BoolArray = NDArray[np.bool_]
 
 # residual codes
 POSE = 0

@@ -37,15 +37,12 @@ from typing import Any
 import numba
 import numpy as np
 from numba import types
-from numpy.typing import NDArray
 
+from swarm_ik._types import BoolArray, FloatArray
 from swarm_ik.kernels import leaf, lm
 from swarm_ik.kernels.fk import TreeArrays
 from swarm_ik.kernels.lm import BUDGET, CONVERGED, Bounds, GoalTable, LMSettings
 from swarm_ik.pose import clearly_pose
-
-FloatArray = NDArray[np.float64]
-BoolArray = NDArray[np.bool_]
 
 __all__ = [
     "entry_point",

@@ -45,12 +45,9 @@ from typing import Any, NamedTuple
 
 import numba
 import numpy as np
-from numpy.typing import NDArray
 
+from swarm_ik._types import FloatArray, IntArray
 from swarm_ik.kernels import leaf
-
-FloatArray = NDArray[np.float64]
-IntArray = NDArray[np.int64]
 
 SPHERE = 0
 BOX = 1

@@ -42,6 +42,7 @@ import numpy as np
 import pinocchio as pin
 from numpy.typing import NDArray
 
+from swarm_ik._types import FloatArray
 from swarm_ik.branches import BRANCH_TOL, TWO_PI, pose_errors, pose_errors_of
 from swarm_ik.errors import SwarmIKError
 from swarm_ik.solvers.base import Evaluator, register
@@ -50,7 +51,6 @@ if TYPE_CHECKING:
     from swarm_ik.problem import IKProblem
     from swarm_ik.robot import RobotModel
 
-FloatArray = NDArray[np.float64]
 
 EXTRA_HINT = "pip install 'swarm_ik[analytic]' (or pip install eaik)"
 

@@ -26,14 +26,13 @@ from dataclasses import dataclass, field, replace
 from typing import TYPE_CHECKING, Any
 
 import numpy as np
-from numpy.typing import NDArray
 
+from swarm_ik._types import FloatArray
 from swarm_ik.errors import InvalidArgumentError, unknown
 
 if TYPE_CHECKING:
     from swarm_ik.problem import IKProblem
 
-FloatArray = NDArray[np.float64]
 _UNLIMITED = int(np.iinfo(np.int64).max)
 MIN_POP_SIZE = 4
 """Smallest ``pop_size`` any population solver accepts (HLFOA needs 4 distinct members)."""

@@ -15,11 +15,9 @@ Two registrations of the same :func:`run`:
 from __future__ import annotations
 
 import numpy as np
-from numpy.typing import NDArray
 
+from swarm_ik._types import IntArray
 from swarm_ik.solvers.base import Evaluator, register
-
-IntArray = NDArray[np.int64]
 
 
 def distinct_indices(rng: np.random.Generator, m: int) -> IntArray:

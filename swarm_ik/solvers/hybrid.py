@@ -37,14 +37,13 @@ from typing import Any, NamedTuple
 import numpy as np
 from numpy.typing import NDArray
 
+from swarm_ik._types import IntArray
 from swarm_ik.errors import InvalidArgumentError, unknown
 from swarm_ik.kernels import lm, search
 from swarm_ik.kernels.lm import BUDGET, CONVERGED, ITER_CAP, LOCAL_MIN, NOT_RUN, LMSettings
 from swarm_ik.problem import IKProblem
 from swarm_ik.solvers.base import Evaluator, FloatArray, register
 from swarm_ik.solvers.gwo import gwo_move
-
-IntArray = NDArray[np.int64]
 
 __all__ = [
     "BUDGET",

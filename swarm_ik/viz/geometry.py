@@ -10,13 +10,11 @@ from typing import Any
 
 import numpy as np
 import pinocchio as pin
-from numpy.typing import NDArray
 
 from swarm_ik import collision
+from swarm_ik._types import FloatArray
 from swarm_ik.errors import RobotModelError
 from swarm_ik.robot import RobotModel
-
-FloatArray = NDArray[np.float64]
 
 
 def package_dirs(robot: RobotModel) -> list[str]:

@@ -11,12 +11,10 @@ from collections.abc import Sequence
 from typing import Any
 
 import numpy as np
-from numpy.typing import NDArray
 
+from swarm_ik._types import FloatArray
 from swarm_ik.robot import RobotModel
 from swarm_ik.viz.scene import Scene
-
-FloatArray = NDArray[np.float64]
 
 OBSTACLE_RGBA = (0.55, 0.58, 0.62, 0.45)
 """Colour of an obstacle clear of the robot."""

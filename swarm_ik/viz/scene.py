@@ -18,14 +18,12 @@ from typing import Any
 
 import numpy as np
 import pinocchio as pin
-from numpy.typing import NDArray
 
+from swarm_ik._types import FloatArray
 from swarm_ik.errors import SwarmIKError
 from swarm_ik.robot import RobotModel
 from swarm_ik.viz.export import CommandLog, check_output_path, static_html
 from swarm_ik.viz.geometry import full_configuration, rgb_int, shape_loader, visual_model
-
-FloatArray = NDArray[np.float64]
 
 INSTALL_HINT = "pip install swarm_ik[viz]"
 ROOT = "swarm_ik"

@@ -13,13 +13,11 @@ from dataclasses import dataclass
 from typing import Any
 
 import numpy as np
-from numpy.typing import NDArray
 
+from swarm_ik._types import FloatArray
 from swarm_ik.errors import InvalidArgumentError
 from swarm_ik.problem import IKProblem
 from swarm_ik.result import Result
-
-FloatArray = NDArray[np.float64]
 
 
 @dataclass(frozen=True)

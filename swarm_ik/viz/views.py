@@ -9,8 +9,8 @@ from typing import Any, cast
 
 import numpy as np
 import pinocchio as pin
-from numpy.typing import NDArray
 
+from swarm_ik._types import FloatArray
 from swarm_ik.errors import InvalidArgumentError, unknown
 from swarm_ik.problem import IKProblem
 from swarm_ik.result import Result
@@ -18,8 +18,6 @@ from swarm_ik.robot import RobotModel
 from swarm_ik.viz.geometry import full_configuration, reach_length
 from swarm_ik.viz.scene import GHOST_COLOR, LAYOUTS, ROOT, Scene, text_png, translation
 from swarm_ik.viz.trace import Trace
-
-FloatArray = NDArray[np.float64]
 
 
 def error_lines(result: Result, label: str | None = None) -> list[str]:
