@@ -186,7 +186,7 @@ def _check_pose_goal(
 
 def _pose_check(
     robot: Any,
-    frame: str,
+    frame: str | None,
     label: str,
     target: np.ndarray,
     position_only: bool,
@@ -196,7 +196,8 @@ def _pose_check(
     tol_pos: float,
     tol_rot: float,
 ) -> tuple[tuple[Any, ...], bool]:
-    """The independent check of one pose (``position_only``: position) goal on ``frame``:
+    """The independent check of one pose (``position_only``: position) goal on ``frame``
+    (``None``: the first goal frame):
     Pinocchio's pose of the frame at ``q``, its errors against ``target`` ``(4, 4)`` (the
     compiled twin of ``Pose.errors``) and whether ``q`` lies within ``[lower, upper]``;
     returns ``((GoalError,), within)``."""
@@ -208,7 +209,7 @@ def _pose_check(
     if position_only:
         dr = math.nan
     met = not (dp > tol_pos) and not (dr > tol_rot)
-    return (GoalError(label, dp, dr, bool(met)),), bool(within)
+    return (GoalError.of(label, dp, dr, met),), within
 
 
 _ERRORS_ONE: list[Any] = []
@@ -242,7 +243,10 @@ def _result(
     """The :class:`Result` of a solve from its answer and its Pinocchio check (``spent``: the
     evaluator, or what :func:`end_reason` reads of one)."""
     dp, dr = largest_errors(goal_errors)
-    success = bool(within and all(e.met for e in goal_errors))
+    if len(goal_errors) == 1:  # (the common case: no generator on every solve's path)
+        success = bool(within and goal_errors[0].met)
+    else:
+        success = bool(within and all(e.met for e in goal_errors))
     return Result.of(
         q=q,
         fitness=fit,
@@ -256,7 +260,7 @@ def _result(
         solver=solver,
         seed=seed,
         goal_errors=goal_errors,
-        reason=end_reason(problem, success, spent),
+        reason="converged" if success else end_reason(problem, success, spent),
     )
 
 
@@ -620,8 +624,11 @@ class IKSolver:
         self._mid = np.ascontiguousarray(0.5 * (tpl.lower + tpl.upper))
         self._par0 = np.ascontiguousarray(tpl.table(None).par)
         self._label = tpl.goals[0].describe()
-        self._frame = robot.ee_frame
+        self._frame = None  # (fk_pinocchio: the first goal frame, robot.ee_frame)
         self._position_only = tpl.position_only
+        if self._state is not None:  # the arguments before and after the per-call ones
+            self._pre = (*self._head, self._par0, *self._mid_args)
+            self._post = (self._position_only, *self._consts)
         if self._state is not None:  # the kernel's entry point for these argument types
             from swarm_ik.kernels import search
 
@@ -641,11 +648,9 @@ class IKSolver:
         seed: int,
         out_q: np.ndarray,
     ) -> tuple[Any, ...]:
-        """The argument tuple of :func:`swarm_ik.kernels.search.solve_pose_flat`."""
-        return (
-            *self._head, self._par0, *self._mid_args, target, q, target_checked, start_checked,
-            self._position_only, *self._consts, t0, seed, out_q,
-        )  # fmt: skip
+        """The argument tuple of :func:`swarm_ik.kernels.search.solve_pose_flat` (built
+        in line by :meth:`_solve_pose`: a call less on the per-call path)."""
+        return (*self._pre, target, q, target_checked, start_checked, *self._post, t0, seed, out_q)
 
     def solve(
         self, target: Any, q0: Any = None, seed: int | np.random.Generator | None = 0
@@ -708,8 +713,8 @@ class IKSolver:
         while True:
             t0 = time.perf_counter()
             status, used, fit, history = self._kernel(
-                self._args(pose, q_start, pose_checked, start_checked, t0, seed, q)
-            )
+                (*self._pre, pose, q_start, pose_checked, start_checked, *self._post, t0, seed, q)
+            )  # (the tuple of self._args)
             if status == _RAN:
                 break
             if status == _CHECK_TARGET:

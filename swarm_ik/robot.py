@@ -507,12 +507,13 @@ class RobotModel:
         t, j = self.tree.fk_jacobian(q)
         return t[..., f, :, :], j[..., f, :, :]
 
-    def to_pinocchio(self, q: FloatArray) -> FloatArray:
+    def to_pinocchio(self, q: FloatArray, copy: bool = True) -> FloatArray:
         """Pinocchio configuration of :attr:`model` for ``q`` (continuous → cos, sin; mimic
-        followers set from their drivers)."""
+        followers set from their drivers); ``copy=False``: ``q`` itself where the two vectors
+        are the same (for a caller that only reads it, such as Pinocchio's FK)."""
         q = np.asarray(q, dtype=float).reshape(self.nq)
         if self.model.nq == self.nq and not self.mimic:  # the same vector
-            return q.copy()
+            return q.copy() if copy else q
         plan = self._cache.get("to_pinocchio")
         if plan is None:  # (driver, multiplier, offset, index in Pinocchio's q, continuous)
             t = self.tree
@@ -575,9 +576,9 @@ class RobotModel:
         Returns:
             Pose, shape ``(4, 4)``.
         """
-        fid = self.frame_ids[self.frame_index(frame)]
+        fid = self.frame_ids[0 if frame is None else self.frame_index(frame)]
         data = self._data()
-        pin.forwardKinematics(self.model, data, self.to_pinocchio(q))
+        pin.forwardKinematics(self.model, data, self.to_pinocchio(q, copy=False))
         # (eigenpy returns the 4x4 as a new array of its own: no copy needed)
         return pin.updateFramePlacement(self.model, data, fid).homogeneous  # type: ignore[no-any-return]
 

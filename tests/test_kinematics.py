@@ -88,3 +88,15 @@ def test_fk_refuses_wrong_shapes() -> None:
         r.fk(np.zeros(6))
     with pytest.raises(swarm_ik.InvalidArgumentError):
         r.fk(np.zeros((3, 8)))
+
+
+@pytest.mark.parametrize("name", ["panda", "kinova"])
+def test_to_pinocchio_copies_unless_asked_not_to(name: str) -> None:
+    r = robot(name)
+    q = r.random_q(np.random.default_rng(5))
+    out = r.to_pinocchio(q)
+    assert out is not q and np.array_equal(r.to_pinocchio(q, copy=False), out)
+    same = r.model.nq == r.nq and not r.mimic  # panda: the same vector; kinova: (cos, sin)
+    assert np.shares_memory(r.to_pinocchio(q, copy=False), q) == same
+    out[:] = 0.0  # the default copy is the caller's to change
+    assert np.array_equal(r.to_pinocchio(q), r.to_pinocchio(q, copy=False))

@@ -252,3 +252,11 @@ def test_api_status_codes_are_the_kernels() -> None:
     from swarm_ik.kernels import search
 
     assert (api._RAN, api._CHECK_TARGET) == (search.RAN, search.CHECK_TARGET)
+
+
+def test_goal_error_of_is_the_dataclass() -> None:
+    from swarm_ik.problem import GoalError
+
+    fast = GoalError.of("Pose(tool0)", 1e-6, 2e-6, True)
+    assert fast == GoalError("Pose(tool0)", 1e-6, 2e-6, True) and fast.details is None
+    assert repr(fast) == repr(GoalError("Pose(tool0)", 1e-6, 2e-6, True))
