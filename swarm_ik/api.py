@@ -14,7 +14,7 @@ import numpy as np
 
 from swarm_ik.errors import InvalidArgumentError, unknown
 from swarm_ik.optimize import check_budget, make_rng
-from swarm_ik.pose import as_pose, is_finite_nonneg
+from swarm_ik.pose import FLOAT64, as_pose, is_finite_nonneg
 from swarm_ik.problem import GoalError, IKProblem, largest_errors
 from swarm_ik.result import Result
 from swarm_ik.solvers import base
@@ -692,7 +692,7 @@ class IKSolver:
         whose (already validated) target this is, when :func:`solve` calls (its lane)."""
         target_checked = problem is not None
         tpl = self._template
-        if type(target) is np.ndarray and target.dtype == np.float64 and target.shape == (4, 4):
+        if type(target) is np.ndarray and target.dtype is FLOAT64 and target.shape == (4, 4):
             pose = np.ascontiguousarray(target)
             pose_checked = target_checked  # else checked when compiled
         else:
@@ -702,7 +702,7 @@ class IKSolver:
             q_start, start_checked = self._mid, True
         elif (
             type(q0) is np.ndarray
-            and q0.dtype == np.float64
+            and q0.dtype is FLOAT64
             and q0.shape == self._mid.shape
             and q0.flags.c_contiguous
         ):

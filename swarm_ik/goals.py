@@ -258,9 +258,7 @@ class Pose(Goal):
         """A Pose of a target already validated by :func:`swarm_ik.pose.as_pose` (no second
         check: the hot path of :class:`swarm_ik.IKSolver`)."""
         goal = object.__new__(cls)
-        for name, v in (("frame", frame), ("target", target), ("weight", 1.0),
-                        ("primary", True), ("orth_tol", 1e-6)):  # fmt: skip
-            object.__setattr__(goal, name, v)
+        goal.__dict__.update(frame=frame, target=target, weight=1.0, primary=True, orth_tol=1e-6)
         return goal
 
     def encode(self, robot: RobotModel, q0: FloatArray | None) -> GoalRow:

@@ -113,6 +113,9 @@ def project_to_se3(matrix: Any) -> FloatArray:
 
 
 _EYE3 = np.eye(3)
+FLOAT64 = np.dtype(np.float64)
+"""float64 (an array's dtype is this object, except for rare equal copies: those take the
+full checks, which accept them)."""
 
 
 def clearly_pose(
@@ -165,13 +168,10 @@ def as_pose(target: Any, *, orth_tol: float = 1e-6) -> FloatArray:
         raise InvalidArgumentError(
             f"orth_tol must be a finite non-negative number, got {orth_tol!r}"
         )
-    if (
-        type(target) is np.ndarray
-        and target.shape == (4, 4)
-        and target.dtype == np.float64
-        and clearly_pose(orth_tol, *target.ravel().tolist())
-    ):
-        return target.copy()  # (the checks below would accept it)
+    if type(target) is np.ndarray and target.dtype is FLOAT64 and target.shape == (4, 4):
+        (a, b, c, x), (d, e, f, y), (g, h, i, z), (p, q, r, w) = target.tolist()
+        if clearly_pose(orth_tol, a, b, c, x, d, e, f, y, g, h, i, z, p, q, r, w):
+            return target.copy()  # (the checks below would accept it)
     if hasattr(target, "homogeneous"):  # pinocchio.SE3
         target = np.asarray(target.homogeneous)
     if isinstance(target, (tuple, list)) and len(target) == 2:

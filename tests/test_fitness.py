@@ -156,3 +156,15 @@ def test_as_pose_fast_check_accepts_only_what_the_full_check_accepts() -> None:
         else:
             np.testing.assert_array_equal(as_pose(m), full)
     assert 500 < n_fast < 3000  # both verdicts occur
+
+
+def test_as_pose_accepts_a_float64_dtype_that_is_not_numpys_own_object() -> None:
+    # (the fast path tests the dtype by identity: an equal copy takes the full checks)
+    from swarm_ik.pose import as_pose
+
+    t = np.eye(4)
+    t[:3, 3] = (0.3, -0.2, 0.5)
+    other = np.dtype("f8").newbyteorder("=")
+    assert other == np.float64 and other is not np.dtype(np.float64)
+    out = as_pose(t.view(other))
+    assert np.array_equal(out, t) and out.dtype == np.float64

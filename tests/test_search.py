@@ -260,3 +260,15 @@ def test_goal_error_of_is_the_dataclass() -> None:
     fast = GoalError.of("Pose(tool0)", 1e-6, 2e-6, True)
     assert fast == GoalError("Pose(tool0)", 1e-6, 2e-6, True) and fast.details is None
     assert repr(fast) == repr(GoalError("Pose(tool0)", 1e-6, 2e-6, True))
+
+
+def test_ik_solver_takes_arrays_whose_float64_dtype_is_an_equal_copy() -> None:
+    # (the per-call path tests dtypes by identity; equal copies take the checked path)
+    robot = swarm_ik.load_robot("panda")
+    ik = swarm_ik.IKSolver(robot, max_evals=2000)
+    rng = np.random.default_rng(4)
+    target, q0 = robot.fk(robot.random_q(rng)), robot.random_q(rng)
+    other = np.dtype("f8").newbyteorder("=")
+    ref = ik.solve(target, q0=q0, seed=3)
+    got = ik.solve(target.view(other), q0=q0.view(other), seed=3)
+    assert ref.success and np.array_equal(got.q, ref.q) and got.n_evals == ref.n_evals
