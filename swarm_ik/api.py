@@ -510,7 +510,9 @@ def _lane(
     ``None`` when the problem's methods were replaced (then the general path runs)."""
     if not _compiled_ok(problem, "best"):
         return None
-    lanes = problem.robot._cache.setdefault("solve_lanes", {})
+    lanes = problem.robot._cache.get("solve_lanes")
+    if lanes is None:
+        lanes = problem.robot._cache["solve_lanes"] = {}
     key = (tol_pos, tol_rot, time_limit, max_evals, problem.w_rot)
     try:
         ik: IKSolver | None = lanes.get(key)

@@ -176,11 +176,12 @@ class IKProblem:
         if isinstance(goals, str):  # IKProblem(robot, target, "paper-l1"): the 0.1 signature
             fitness, goals = goals, None
         self.robot = robot
-        for label, v in (("w_rot", w_rot), ("lam", lam), ("mu", mu)):
-            if not is_finite_nonneg(v):
-                raise InvalidArgumentError(
-                    f"{label} must be a finite non-negative number, got {v!r}"
-                )
+        if not (is_finite_nonneg(w_rot) and is_finite_nonneg(lam) and is_finite_nonneg(mu)):
+            label, v = next(
+                (k, v) for k, v in (("w_rot", w_rot), ("lam", lam), ("mu", mu))
+                if not is_finite_nonneg(v)
+            )  # fmt: skip
+            raise InvalidArgumentError(f"{label} must be a finite non-negative number, got {v!r}")
         self.w_rot = float(w_rot)
         terms: list[Goal] = []
         self.target: FloatArray | None = None

@@ -1138,3 +1138,16 @@ def test_mobile_base_with_virtual_joints_of_a_million_metres_is_solved(tmp_path:
     )
     assert ok == 10
     assert swarm_ik.solve_batch(r, r.fk(qs)).success.all()
+
+
+@pytest.mark.parametrize(
+    "kwargs, name",
+    [({"w_rot": -1.0}, "w_rot"), ({"lam": float("nan")}, "lam"), ({"mu": "a"}, "mu"),
+     ({"w_rot": 1.0, "lam": 2.0, "mu": float("inf")}, "mu")],
+)  # fmt: skip
+def test_problem_refuses_bad_fitness_weights(kwargs: dict, name: str) -> None:
+    robot = swarm_ik.load_robot("panda")
+    with pytest.raises(
+        errors.InvalidArgumentError, match=rf"^{name} must be a finite non-negative"
+    ):
+        IKProblem(robot, robot.fk(robot.mid_q()), **kwargs)
