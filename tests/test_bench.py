@@ -3,8 +3,10 @@
 from __future__ import annotations
 
 import csv
+import importlib
 import math
 import pickle
+import re
 import subprocess
 import sys
 import textwrap
@@ -14,11 +16,13 @@ import numpy as np
 import pytest
 
 import swarm_ik
+from swarm_ik import cli
 from swarm_ik.bench import common, paper, plans, published, runner, solve_runs
 from swarm_ik.bench.common import judge, summarize
 from swarm_ik.bench.plans import RunSpec
 from swarm_ik.bench.report import Comparison, Headline, render_comparison
 from swarm_ik.bench.solve_runs import RUN_FIELDS
+from swarm_ik.cli import BENCHMARKS
 from swarm_ik.errors import InvalidArgumentError, UnknownNameError
 
 
@@ -558,3 +562,17 @@ def test_bench_outputs_and_sizes_are_checked_before_work(tmp_path, capsys) -> No
     assert main(["bench", "throughput", "--sizes", "0", "--out", str(tmp_path / "t")]) == 2
     err = capsys.readouterr().err.strip()
     assert "--sizes must be positive" in err and len(err.splitlines()) == 1
+
+
+@pytest.mark.parametrize("name", sorted(BENCHMARKS))
+def test_every_benchmark_runs_as_a_module_with_the_commands_options(name: str, capsys) -> None:
+    module = importlib.import_module(cli.BENCHMARKS[name])
+    with pytest.raises(SystemExit) as done:
+        module.main(["--help"])  # python -m swarm_ik.bench.NAME --help
+    assert done.value.code == 0
+    as_module = capsys.readouterr().out
+    with pytest.raises(SystemExit):
+        cli.main(["bench", name, "--help"])
+    as_command = capsys.readouterr().out
+    options = set(re.findall(r"(?<![\w-])--[a-z][\w-]*", as_command))
+    assert options and options == set(re.findall(r"(?<![\w-])--[a-z][\w-]*", as_module))

@@ -468,3 +468,12 @@ def run(args: argparse.Namespace) -> int:
     md = report(csv_path, prof_path, out / "throughput.md", png.name, str(args.scheduler))
     print(f"wrote {csv_path}, {prof_path}, {png}, {md}")
     return 0
+
+
+def main(argv: Sequence[str] | None = None) -> int:
+    """``python -m swarm_ik.bench.throughput [options]``."""
+    return common.run_main(add_arguments, run, argv, prog="python -m swarm_ik.bench.throughput")
+
+
+if __name__ == "__main__":
+    raise SystemExit(main())
