@@ -260,7 +260,7 @@ def _result(
         solver=solver,
         seed=seed,
         goal_errors=goal_errors,
-        reason="converged" if success else end_reason(problem, success, spent),
+        reason=end_reason(problem, success, spent),
     )
 
 
@@ -650,8 +650,8 @@ class IKSolver:
         seed: int,
         out_q: np.ndarray,
     ) -> tuple[Any, ...]:
-        """The argument tuple of :func:`swarm_ik.kernels.search.solve_pose_flat` (built
-        in line by :meth:`_solve_pose`: a call less on the per-call path)."""
+        """The argument tuple of :func:`swarm_ik.kernels.search.solve_pose_flat` (the one
+        definition: the entry point is compiled for it and does not type its arguments)."""
         return (*self._pre, target, q, target_checked, start_checked, *self._post, t0, seed, out_q)
 
     def solve(
@@ -715,8 +715,8 @@ class IKSolver:
         while True:
             t0 = time.perf_counter()
             status, used, fit, history = self._kernel(
-                (*self._pre, pose, q_start, pose_checked, start_checked, *self._post, t0, seed, q)
-            )  # (the tuple of self._args)
+                self._args(pose, q_start, pose_checked, start_checked, t0, seed, q)
+            )
             if status == _RAN:
                 break
             if status == _CHECK_TARGET:

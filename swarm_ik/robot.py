@@ -576,7 +576,7 @@ class RobotModel:
         Returns:
             Pose, shape ``(4, 4)``.
         """
-        fid = self.frame_ids[0 if frame is None else self.frame_index(frame)]
+        fid = self.frame_ids[self.frame_index(frame)]
         data = self._data()
         pin.forwardKinematics(self.model, data, self.to_pinocchio(q, copy=False))
         # (eigenpy returns the 4x4 as a new array of its own: no copy needed)
