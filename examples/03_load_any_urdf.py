@@ -26,24 +26,17 @@ ARM_URDF = """<?xml version="1.0"?>
   <link name="arm2"/>
   <link name="quill"/>
   <link name="tip"/>
-  <joint name="shoulder" type="revolute">
-    <parent link="base"/><child link="arm1"/>
+  <joint name="shoulder" type="revolute"><parent link="base"/><child link="arm1"/>
     <origin xyz="0 0 0.4"/><axis xyz="0 0 1"/>
-    <limit lower="-2.5" upper="2.5" effort="10" velocity="2"/>
-  </joint>
-  <joint name="elbow" type="revolute">
-    <parent link="arm1"/><child link="arm2"/>
-    <origin xyz="0.35 0 0"/><axis xyz="0 0 1"/>
-    <limit lower="-2.5" upper="2.5" effort="10" velocity="2"/>
-  </joint>
-  <joint name="lift" type="prismatic">
-    <parent link="arm2"/><child link="quill"/>
+    <limit lower="-2.5" upper="2.5" effort="10" velocity="2"/></joint>
+  <joint name="elbow" type="revolute"><parent link="arm1"/><child link="arm2"/>
+    <origin xyz="0.35 0 0"/><axis xyz="0 0 1"/><dynamics damping="0.05"/>
+    <limit lower="-2.5" upper="2.5" effort="10" velocity="2"/></joint>
+  <joint name="lift" type="prismatic"><parent link="arm2"/><child link="quill"/>
     <origin xyz="0.3 0 0"/><axis xyz="0 0 -1"/>
-    <limit lower="0" upper="0.3" effort="10" velocity="0.5"/>
-  </joint>
-  <joint name="tool" type="fixed">
-    <parent link="quill"/><child link="tip"/><origin xyz="0 0 -0.05"/>
-  </joint>
+    <limit lower="0" upper="0.3" effort="10" velocity="0.5"/></joint>
+  <joint name="tool" type="fixed"><parent link="quill"/><child link="tip"/>
+    <origin xyz="0 0 -0.05"/></joint>
 </robot>
 """
 

@@ -41,7 +41,7 @@ from __future__ import annotations
 import math
 import re
 from collections.abc import Sequence
-from dataclasses import dataclass
+from dataclasses import dataclass, fields
 from typing import TYPE_CHECKING, Literal, TypedDict
 
 import numpy as np
@@ -145,17 +145,12 @@ def _check_name(label: str, name: str | None) -> None:
         )
 
 
-@dataclass(frozen=True)
-class DHRow:
-    """One row of a standard DH table (``Rz(theta) Tz(d) Tx(a) Rx(alpha)``).
+@dataclass(frozen=True, kw_only=True)
+class JointSpec:
+    """What a :class:`DHRow` and a :class:`ChainStep` say of their joint besides its motion:
+    limits and names, keyword-only.
 
     Attributes:
-        kind: ``"revolute"``, ``"continuous"`` (variable ``theta = q + theta_offset``) or
-            ``"prismatic"`` (variable ``d + q``).
-        d: Link offset (m); for a prismatic row the value at ``q = 0``.
-        theta_offset: Constant added to the joint value to give DH theta (rad).
-        a: Link length (m).
-        alpha: Link twist (rad).
         lower: Lower limit of the joint value ``q`` (rad, or m for prismatic); ignored for
             continuous joints.
         upper: Upper limit of ``q`` (rad or m); ignored for continuous joints.
@@ -165,11 +160,6 @@ class DHRow:
         link_name: URDF name of the link this joint moves; default ``link{i}``.
     """
 
-    kind: JointKind
-    d: float
-    theta_offset: float
-    a: float
-    alpha: float
     lower: float = -math.pi
     upper: float = math.pi
     effort: float = 100.0
@@ -177,19 +167,48 @@ class DHRow:
     joint_name: str | None = None
     link_name: str | None = None
 
-    def __post_init__(self) -> None:
-        _check_kind(self.kind)
-        for label in ("d", "theta_offset", "a", "alpha"):
-            value = getattr(self, label)
-            if not math.isfinite(value):
-                raise InvalidArgumentError(f"DH parameter {label} must be finite, got {value!r}")
-        _check_limits(self.kind, self.lower, self.upper, self.effort, self.velocity)
+    def joint_spec(self) -> dict[str, float | str | None]:
+        """The :class:`JointSpec` fields by name (to pass on to another row or step)."""
+        return {f.name: getattr(self, f.name) for f in fields(JointSpec)}
+
+    def _check_joint(self, kind: str) -> None:
+        _check_kind(kind)
+        _check_limits(kind, self.lower, self.upper, self.effort, self.velocity)
         _check_name("joint name", self.joint_name)
         _check_name("link name", self.link_name)
 
 
+@dataclass(frozen=True)
+class DHRow(JointSpec):
+    """One row of a standard DH table (``Rz(theta) Tz(d) Tx(a) Rx(alpha)``).
+
+    Attributes:
+        kind: ``"revolute"``, ``"continuous"`` (variable ``theta = q + theta_offset``) or
+            ``"prismatic"`` (variable ``d + q``).
+        d: Link offset (m); for a prismatic row the value at ``q = 0``.
+        theta_offset: Constant added to the joint value to give DH theta (rad).
+        a: Link length (m).
+        alpha: Link twist (rad).
+        lower, upper, effort, velocity, joint_name, link_name: As :class:`JointSpec`
+            (keyword-only).
+    """
+
+    kind: JointKind
+    d: float
+    theta_offset: float
+    a: float
+    alpha: float
+
+    def __post_init__(self) -> None:
+        for label in ("d", "theta_offset", "a", "alpha"):
+            value = getattr(self, label)
+            if not math.isfinite(value):
+                raise InvalidArgumentError(f"DH parameter {label} must be finite, got {value!r}")
+        self._check_joint(self.kind)
+
+
 @dataclass(frozen=True, eq=False)
-class ChainStep:
+class ChainStep(JointSpec):
     """A fixed transform followed by one joint: the building block of :func:`chain_to_urdf`.
 
     The link moved by this joint has, at joint value ``q``, the pose
@@ -202,30 +221,20 @@ class ChainStep:
             link) to this joint's frame; translation in m. Stored read-only.
         kind: ``"revolute"``, ``"prismatic"`` or ``"continuous"``.
         axis: Joint axis in the joint frame (unit-normalised on construction); shape (3,).
-        lower: Lower limit of ``q`` (rad or m); ignored for continuous joints.
-        upper: Upper limit of ``q`` (rad or m); ignored for continuous joints.
-        effort: URDF effort limit (N m or N).
-        velocity: URDF velocity limit (rad/s or m/s).
-        joint_name: URDF joint name; default ``joint{i}`` (1-based).
-        link_name: URDF name of the link this joint moves; default ``link{i}``.
+        lower, upper, effort, velocity, joint_name, link_name: As :class:`JointSpec`
+            (keyword-only).
     """
 
     origin: NDArray[np.float64]
     kind: JointKind
     axis: tuple[float, float, float] = (0.0, 0.0, 1.0)
-    lower: float = -math.pi
-    upper: float = math.pi
-    effort: float = 100.0
-    velocity: float = 1.0
-    joint_name: str | None = None
-    link_name: str | None = None
 
     def __post_init__(self) -> None:
         origin = np.array(self.origin, dtype=np.float64)
         _check_transform("origin", origin)
         origin.setflags(write=False)
         object.__setattr__(self, "origin", origin)
-        _check_kind(self.kind)
+        _check_kind(self.kind)  # before the axis: a bad kind is the first thing to name
         axis = np.asarray(self.axis, dtype=np.float64)
         norm = float(np.linalg.norm(axis)) if axis.shape == (3,) else 0.0
         if not (math.isfinite(norm) and norm > 1e-12):
@@ -234,9 +243,7 @@ class ChainStep:
             )
         unit = axis / norm
         object.__setattr__(self, "axis", (float(unit[0]), float(unit[1]), float(unit[2])))
-        _check_limits(self.kind, self.lower, self.upper, self.effort, self.velocity)
-        _check_name("joint name", self.joint_name)
-        _check_name("link name", self.link_name)
+        self._check_joint(self.kind)
 
 
 def _check_transform(label: str, mat: NDArray[np.float64]) -> None:
@@ -294,19 +301,7 @@ def _dh_to_chain(
         else:
             pre = rot_z(row.theta_offset)
             post = translation(z=row.d) @ translation(x=row.a) @ rot_x(row.alpha)
-        steps.append(
-            ChainStep(
-                origin=post_prev @ pre,
-                kind=row.kind,
-                axis=(0.0, 0.0, 1.0),
-                lower=row.lower,
-                upper=row.upper,
-                effort=row.effort,
-                velocity=row.velocity,
-                joint_name=row.joint_name,
-                link_name=row.link_name,
-            )
-        )
+        steps.append(ChainStep(post_prev @ pre, row.kind, **row.joint_spec()))  # type: ignore[arg-type]
         post_prev = post
     return steps, post_prev @ tool
 

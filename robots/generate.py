@@ -129,10 +129,12 @@ def loading_manipulator_steps(stroke: float) -> list[ChainStep]:
 
     def rev(origin: np.ndarray, axis: tuple[float, float, float], limit: float, name: str,
             link: str) -> ChainStep:  # fmt: skip
-        return ChainStep(origin, "revolute", axis, -limit, limit, 1.0e4, 1.0, name, link)
+        return ChainStep(origin, "revolute", axis, lower=-limit, upper=limit, effort=1.0e4,
+                         velocity=1.0, joint_name=name, link_name=link)  # fmt: skip
 
     def pri(origin: np.ndarray, name: str, link: str) -> ChainStep:
-        return ChainStep(origin, "prismatic", z, 0.0, stroke, 1.0e4, 0.5, name, link)
+        return ChainStep(origin, "prismatic", z, lower=0.0, upper=stroke, effort=1.0e4,
+                         velocity=0.5, joint_name=name, link_name=link)  # fmt: skip
 
     return [
         rev(translation(z=LM_L1), z, pi, "theta1", "turret"),

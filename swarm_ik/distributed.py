@@ -29,7 +29,7 @@ from __future__ import annotations
 import logging
 import os
 from collections.abc import Callable, Iterator, Sequence
-from contextlib import contextmanager
+from contextlib import ExitStack, closing, contextmanager
 from typing import Any, TypeVar
 
 from swarm_ik.errors import InvalidArgumentError
@@ -212,20 +212,10 @@ def map_chunks(
             f"sizes must have one entry per item ({len(items)}), got {len(sizes)}"
         )
     weights = list(sizes) if sizes is not None else [1] * len(items)
-    if client is None and check_scheduler(scheduler) is not None:
-        with connect(scheduler) as c:
-            return map_chunks(
-                func,
-                items,
-                client=c,
-                name=name,
-                progress=progress,
-                desc=desc,
-                sizes=sizes,
-                unit=unit,
-            )
-    bar = progress_bar(progress, int(sum(weights)), desc, unit)
-    try:
+    with ExitStack() as stack:
+        if client is None and check_scheduler(scheduler) is not None:
+            client = stack.enter_context(connect(scheduler))
+        bar = stack.enter_context(closing(progress_bar(progress, sum(weights), desc, unit)))
         if client is None:
             out = []
             for item, w in zip(items, weights, strict=True):
@@ -248,5 +238,3 @@ def map_chunks(
         except BaseException:
             client.cancel(futures)
             raise
-    finally:
-        bar.close()

@@ -40,7 +40,7 @@ import json
 import os
 import reprlib
 from collections.abc import Callable, Mapping, Sequence
-from dataclasses import MISSING, dataclass, fields
+from dataclasses import MISSING, Field, dataclass, field, fields
 from pathlib import Path
 from typing import TYPE_CHECKING, Any, ClassVar, TypeVar
 
@@ -105,23 +105,39 @@ class Goal:
 
     Attributes:
         weight: Weight of the goal's residual rows (dimensionless; a Pose's rotation rows are
-            in radians, its position rows in metres).
+            in radians, its position rows in metres); keyword-only, positive.
         primary: Must be met to tolerance (True) or optimised after the primary goals in
-            their null space (False).
+            their null space (False); keyword-only (default True, False for the joint-space
+            preferences).
     """
 
+    weight: float = field(default=1.0, kw_only=True)
+    primary: bool = field(default=True, kw_only=True)
     code: ClassVar[int] = -1
     frame_goal: ClassVar[bool] = True
+    units: ClassVar[tuple[str, ...]] = ()
+    """Fields that are directions: 3 finite numbers, not zero, stored normalised."""
+    vectors: ClassVar[tuple[str, ...]] = ()
+    """Fields that are points or vectors: 3 finite numbers, stored as a float array."""
+
+    def __post_init__(self) -> None:
+        name = type(self).__name__
+        for label in self.units:
+            value = _vec3(getattr(self, label), f"{name}.{label}", unit=True)
+            object.__setattr__(self, label, value)
+        for label in self.vectors:
+            object.__setattr__(self, label, _vec3(getattr(self, label), f"{name}.{label}"))
+        object.__setattr__(self, "weight", _weight(self.weight))
 
     @property
     def is_primary(self) -> bool:
-        """The goal's ``primary`` field (every goal type declares one)."""
-        return bool(getattr(self, "primary", True))
+        """The goal's ``primary`` field."""
+        return bool(self.primary)
 
     @property
     def residual_weight(self) -> float:
-        """The goal's ``weight`` field (every goal type declares one)."""
-        return float(getattr(self, "weight", 1.0))
+        """The goal's ``weight`` field."""
+        return float(self.weight)
 
     def frame_name(self) -> str | None:
         """The goal frame (None for joint-space goals)."""
@@ -237,21 +253,18 @@ class Pose(Goal):
     Args:
         frame: Goal frame name.
         target: ``(4, 4)`` pose [m], ``(position, quaternion xyzw)``, 7 numbers, or SE3.
-        weight: Residual weight.
-        primary: Must be met to tolerance (default True).
         orth_tol: Tolerance on the orthonormality of the target rotation.
+        weight, primary: As :class:`Goal` (keyword-only).
     """
 
     frame: str
     target: Any
-    weight: float = 1.0
-    primary: bool = True
     orth_tol: float = 1e-6
     code: ClassVar[int] = POSE
 
     def __post_init__(self) -> None:
         object.__setattr__(self, "target", as_pose(self.target, orth_tol=self.orth_tol))
-        object.__setattr__(self, "weight", _weight(self.weight))
+        super().__post_init__()
 
     @classmethod
     def checked(cls, frame: str, target: FloatArray) -> Pose:
@@ -283,18 +296,13 @@ class Position(Goal):
     Args:
         frame: Goal frame name.
         point: World point [m], 3 numbers.
-        weight, primary: As :class:`Pose`.
+        weight, primary: As :class:`Goal` (keyword-only).
     """
 
     frame: str
     point: Any
-    weight: float = 1.0
-    primary: bool = True
     code: ClassVar[int] = POSITION
-
-    def __post_init__(self) -> None:
-        object.__setattr__(self, "point", _vec3(self.point, "Position.point"))
-        object.__setattr__(self, "weight", _weight(self.weight))
+    vectors: ClassVar[tuple[str, ...]] = ("point",)
 
     def encode(self, robot: RobotModel, q0: FloatArray | None) -> GoalRow:
         return _frame_row(self, robot, point=self.point)
@@ -312,15 +320,13 @@ class Orientation(Goal):
     """The frame at a world orientation: ``r = w·log(R* Rᵀ)`` [rad].
 
     Args:
-        frame: Goal frame name.
+        frame, orth_tol: As :class:`Pose`.
+        weight, primary: As :class:`Goal` (keyword-only).
         rotation: ``(3, 3)`` rotation matrix or a quaternion ``(x, y, z, w)``.
-        weight, primary, orth_tol: As :class:`Pose`.
     """
 
     frame: str
     rotation: Any
-    weight: float = 1.0
-    primary: bool = True
     orth_tol: float = 1e-6
     code: ClassVar[int] = ORIENTATION
 
@@ -333,7 +339,7 @@ class Orientation(Goal):
         else:
             rot = as_pose((np.zeros(3), self.rotation), orth_tol=self.orth_tol)[:3, :3]
         object.__setattr__(self, "rotation", rot)
-        object.__setattr__(self, "weight", _weight(self.weight))
+        super().__post_init__()
 
     def encode(self, robot: RobotModel, q0: FloatArray | None) -> GoalRow:
         return _frame_row(self, robot, self.rotation)
@@ -354,9 +360,19 @@ def _is_array(v: Any) -> bool:
     return True
 
 
+@dataclass(frozen=True)
+class _FrameAxis(Goal):
+    """Base of the goals on one axis ``a`` of a frame, the rotation about it free
+    (:class:`Axis`, :class:`LookAt`): its fields ``frame`` and ``axis`` (normalised)."""
+
+    frame: str
+    axis: Any
+    units: ClassVar[tuple[str, ...]] = ("axis",)
+
+
 @register_goal
 @dataclass(frozen=True)
-class Axis(Goal):
+class Axis(_FrameAxis):
     """A frame axis along a world direction, the rotation about it free.
 
     ``u = R·a`` (the frame axis ``a`` in world axes), ``r = w·(d − u)``: zero only when the
@@ -366,20 +382,12 @@ class Axis(Goal):
         frame: Goal frame name.
         axis: The axis in the frame's own coordinates (normalised; not zero).
         direction: The world direction (normalised; not zero).
-        weight, primary: As :class:`Pose`.
+        weight, primary: As :class:`Goal` (keyword-only).
     """
 
-    frame: str
-    axis: Any
     direction: Any
-    weight: float = 1.0
-    primary: bool = True
     code: ClassVar[int] = AXIS
-
-    def __post_init__(self) -> None:
-        object.__setattr__(self, "axis", _vec3(self.axis, "Axis.axis", unit=True))
-        object.__setattr__(self, "direction", _vec3(self.direction, "Axis.direction", unit=True))
-        object.__setattr__(self, "weight", _weight(self.weight))
+    units: ClassVar[tuple[str, ...]] = ("axis", "direction")
 
     def encode(self, robot: RobotModel, q0: FloatArray | None) -> GoalRow:
         return _frame_row(self, robot, (self.axis, self.direction))
@@ -400,29 +408,20 @@ def _angle_between(u: FloatArray, v: FloatArray) -> float:
 
 @register_goal
 @dataclass(frozen=True)
-class LookAt(Goal):
+class LookAt(_FrameAxis):
     """A frame axis pointing at a world point (a camera looking at a target).
 
     ``u = R·a``, ``d = (t − p)/‖t − p‖``, ``r = w·(d − u)``.  Error: the angle between them.
 
     Args:
-        frame: Goal frame name.
-        axis: The viewing axis in the frame's coordinates (normalised; not zero).
+        frame, axis: As :class:`Axis` (``axis``: the viewing axis).
         point: The world point to look at [m].
-        weight, primary: As :class:`Pose`.
+        weight, primary: As :class:`Goal` (keyword-only).
     """
 
-    frame: str
-    axis: Any
     point: Any
-    weight: float = 1.0
-    primary: bool = True
     code: ClassVar[int] = LOOK_AT
-
-    def __post_init__(self) -> None:
-        object.__setattr__(self, "axis", _vec3(self.axis, "LookAt.axis", unit=True))
-        object.__setattr__(self, "point", _vec3(self.point, "LookAt.point"))
-        object.__setattr__(self, "weight", _weight(self.weight))
+    vectors: ClassVar[tuple[str, ...]] = ("point",)
 
     def encode(self, robot: RobotModel, q0: FloatArray | None) -> GoalRow:
         return _frame_row(self, robot, (self.axis, self.point))
@@ -492,11 +491,9 @@ class JointGoal(Goal):
     """Base of the joint-space goals: ``r = w·w_j·(q_ref − q)`` with the reference and the
     per-joint weights of :meth:`reference` (``JOINT`` rows of the kernel)."""
 
+    primary: bool = field(default=False, kw_only=True)
     code: ClassVar[int] = JOINT
     frame_goal: ClassVar[bool] = False
-
-    def __post_init__(self) -> None:
-        object.__setattr__(self, "weight", _weight(self.residual_weight))
 
     def reference(self, robot: RobotModel, q0: FloatArray | None) -> tuple[FloatArray, FloatArray]:
         """``(q_ref (nq,), joint weights (nq,))`` of the goal on ``robot`` (``q0``: the
@@ -525,14 +522,11 @@ class Posture(JointGoal):
 
     Args:
         q_ref: Reference joint vector ``(nq,)`` (rad / m).
-        weight: Residual weight.
-        primary: Default False.
         joint_weights: Optional per-joint weights ``(nq,)`` (default all 1).
+        weight, primary: As :class:`Goal` (keyword-only; ``primary`` default False).
     """
 
     q_ref: Any
-    weight: float = 1.0
-    primary: bool = False
     joint_weights: Any = None
 
     def reference(self, robot: RobotModel, q0: FloatArray | None) -> tuple[FloatArray, FloatArray]:
@@ -554,12 +548,8 @@ class CenterJoints(JointGoal):
     the mid-range, each joint's row scaled by ``2/range`` so every joint counts alike.
 
     Args:
-        weight: Residual weight.
-        primary: Default False.
+        weight, primary: As :class:`Goal` (keyword-only; ``primary`` default False).
     """
-
-    weight: float = 1.0
-    primary: bool = False
 
     def reference(self, robot: RobotModel, q0: FloatArray | None) -> tuple[FloatArray, FloatArray]:
         width = robot.upper - robot.lower
@@ -575,12 +565,8 @@ class MinimalDisplacement(JointGoal):
     :class:`Posture` at ``q0`` (at the mid-range when the solve has no ``q0``).
 
     Args:
-        weight: Residual weight.
-        primary: Default False.
+        weight, primary: As :class:`Goal` (keyword-only; ``primary`` default False).
     """
-
-    weight: float = 1.0
-    primary: bool = False
 
     def reference(self, robot: RobotModel, q0: FloatArray | None) -> tuple[FloatArray, FloatArray]:
         ref = robot.mid_q() if q0 is None else np.asarray(q0, dtype=float)
@@ -595,13 +581,12 @@ class JointValue(JointGoal):
     Args:
         joint: Joint name (one of ``robot.joint_names``).
         value: The value (rad or m).
-        weight, primary: As :class:`Pose`.
+        weight, primary: As :class:`Goal` (keyword-only).
     """
 
     joint: str
     value: float
-    weight: float = 1.0
-    primary: bool = True
+    primary: bool = field(default=True, kw_only=True)
 
     def __post_init__(self) -> None:
         try:
@@ -650,17 +635,14 @@ class AvoidCollisions(Goal):
         self_collision: Check the robot against itself (pairs: all link pairs minus adjacent
             links minus the SRDF's disabled pairs, see :mod:`swarm_ik.collision`).
         margin: Wanted clearance [m], ``>= 0``.
-        weight: Residual weight.
-        primary: Default True.
         max_rows: Most penetration rows per evaluation.
         tolerance: Sphere fitting tolerance [m] (how far a sphere may stick out of its body).
+        weight, primary: As :class:`Goal` (keyword-only).
     """
 
     scene: Any = None
     self_collision: bool = True
     margin: float = 0.0
-    weight: float = 1.0
-    primary: bool = True
     max_rows: int = 24
     tolerance: float = 0.02
     code: ClassVar[int] = COLLISION
@@ -670,7 +652,7 @@ class AvoidCollisions(Goal):
         from swarm_ik.scene import as_scene
 
         object.__setattr__(self, "scene", as_scene(self.scene))
-        object.__setattr__(self, "weight", _weight(self.weight))
+        super().__post_init__()
         m = float(self.margin) if _is_array(self.margin) else float("nan")
         if not (np.isfinite(m) and m >= 0.0):
             raise InvalidArgumentError(
@@ -784,7 +766,7 @@ def goal_from_dict(data: Mapping[str, Any]) -> Goal:
     if kind not in GOALS:
         raise unknown("goal type", kind, GOALS)
     cls = GOALS[str(kind)]
-    valid = [f.name for f in fields(cls) if f.init]
+    valid = [f.name for f in _init_fields(cls)]
     given = {k: v for k, v in data.items() if k != "type"}
     bad = sorted(set(given) - set(valid))
     if bad:
@@ -792,9 +774,7 @@ def goal_from_dict(data: Mapping[str, Any]) -> Goal:
             f"goal {kind}: unknown field(s) {bad}; valid fields: {', '.join(valid)}"
         )
     required = [
-        f.name
-        for f in fields(cls)
-        if f.init and f.default is MISSING and f.default_factory is MISSING
+        f.name for f in _init_fields(cls) if f.default is MISSING and f.default_factory is MISSING
     ]
     missing = [name for name in required if name not in given]
     if missing:
@@ -814,12 +794,17 @@ def goal_from_dict(data: Mapping[str, Any]) -> Goal:
         raise InvalidArgumentError(f"goal {kind}: {exc}") from None
 
 
+def _init_fields(cls: type[Goal]) -> list[Field[Any]]:
+    """The goal type's constructor fields in the order of its signature (the keyword-only
+    ``weight`` and ``primary`` last)."""
+    init = [f for f in fields(cls) if f.init]
+    return sorted(init, key=lambda f: bool(f.kw_only))
+
+
 def goal_to_dict(goal: Goal) -> dict[str, Any]:
     """JSON form of a goal (inverse of :func:`goal_from_dict`)."""
     out: dict[str, Any] = {"type": type(goal).__name__}
-    for f in fields(goal):
-        if not f.init:
-            continue
+    for f in _init_fields(type(goal)):
         v = getattr(goal, f.name)
         out[f.name] = v.tolist() if isinstance(v, np.ndarray) else v
     return out

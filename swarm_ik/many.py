@@ -253,12 +253,12 @@ def solve_many(
     method: str = "auto",
     windings: bool = False,
     min_distance: float | None = None,
-    seed: int | np.random.Generator | None = 0,
-    max_evals: int | None = None,
-    time_limit: float | None = None,
     q0: Any = None,
     tol_pos: float = 1e-5,
     tol_rot: float = 1e-5,
+    seed: int | np.random.Generator | None = 0,
+    max_evals: int | None = None,
+    time_limit: float | None = None,
     batch: int = 16,
     max_starts: int | None = None,
     max_iters: int = 30,
@@ -313,13 +313,13 @@ def solve_many(
             the copies by distance to the reference).
         min_distance: Optional coarser filter (rad / m, ``> 0``): drop a solution closer than
             this to a kept one.  Default ``None``: branches only.
-        seed: Seed or Generator for the random starts.
-        max_evals: Most FK + Jacobian evaluations in total (numerical path).
-        time_limit: Most wall-clock seconds, verification included (numerical path).
         q0: Optional reference and first start, shape ``(nq,)`` (clipped into the limits with a
             warning).
         tol_pos: Position tolerance [m] of every solution.
         tol_rot: Rotation tolerance [rad] of every solution.
+        seed: Seed or Generator for the random starts.
+        max_evals: Most FK + Jacobian evaluations in total (numerical path).
+        time_limit: Most wall-clock seconds, verification included (numerical path).
         batch: Starts polished per compiled call.
         max_starts: Most starts; default ``64 · n`` when neither ``max_evals`` nor
             ``time_limit`` is given, else unlimited.

@@ -339,16 +339,9 @@ def reach_map(
     targets[:, :, :3, 3] = pts[:, None, :]
     targets[:, :, 3, 3] = 1.0
     res = solve_batch(
-        robot,
-        targets.reshape(-1, 4, 4),
-        seed=seed,
-        tol_pos=tol_pos,
-        tol_rot=tol_rot,
-        max_starts=max_starts,
-        max_iters=max_iters,
-        scheduler=scheduler,
-        progress=progress,
-    )
+        robot, targets.reshape(-1, 4, 4), seed=seed, tol_pos=tol_pos, tol_rot=tol_rot,
+        max_starts=max_starts, max_iters=max_iters, scheduler=scheduler, progress=progress,
+    )  # fmt: skip
     hits = np.zeros((centres.shape[0], k), dtype=bool)
     hits[inside] = res.success.reshape(-1, k)
     index = hits.mean(axis=1)
@@ -570,21 +563,18 @@ def add_arguments(parser: Any) -> None:
     parser.add_argument(
         "--out",
         type=Path,
-        default=None,
         metavar="FILE.npz",
         help="map file (default reach_<robot>.npz)",
     )
     parser.add_argument(
         "--png",
         type=Path,
-        default=None,
         help="slices picture (default: next to --out; needs [plot])",
     )
     parser.add_argument("--no-png", action="store_true", help="do not draw the slices picture")
     parser.add_argument(
         "--html",
         type=Path,
-        default=None,
         help="meshcat page: point cloud, robot, colour legend (default: next to --out, when "
         "meshcat is installed)",
     )

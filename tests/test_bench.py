@@ -571,6 +571,7 @@ def test_every_benchmark_runs_as_a_module_with_the_commands_options(name: str, c
         module.main(["--help"])  # python -m swarm_ik.bench.NAME --help
     assert done.value.code == 0
     as_module = capsys.readouterr().out
+    assert as_module.startswith(f"usage: python -m {cli.BENCHMARKS[name]} ")
     with pytest.raises(SystemExit):
         cli.main(["bench", name, "--help"])
     as_command = capsys.readouterr().out

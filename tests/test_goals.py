@@ -4,6 +4,7 @@ solved on reachable targets, secondary goals never costing primary accuracy, bad
 from __future__ import annotations
 
 import json
+import math
 
 import numpy as np
 import pytest
@@ -249,3 +250,22 @@ def test_goals_json_round_trip(tmp_path) -> None:
     assert G.load_goals([quat])[0].target[2, 2] == pytest.approx(-1.0)
     with pytest.raises(swarm_ik.InvalidArgumentError, match="non-empty JSON list"):
         G.load_goals([])
+
+
+def test_weight_and_primary_are_keyword_only_fields_of_every_goal() -> None:
+    f = "panda_hand_tcp"
+    with pytest.raises(TypeError):
+        G.Axis(f, [0, 0, 1], [0, 0, -1], 2.0)  # type: ignore[misc]
+    axis = G.Axis(f, [0, 0, 2], [0, 0, -1], weight=2.0, primary=False)
+    assert (axis.weight, axis.primary) == (2.0, False)
+    np.testing.assert_array_equal(axis.axis, [0.0, 0.0, 1.0])  # a direction is normalised
+    # the JSON form and the error messages list the positional fields first
+    assert list(G.goal_to_dict(axis)) == ["type", "frame", "axis", "direction", "weight", "primary"]
+    assert [G.Posture([0.0]).primary, G.CenterJoints().primary] == [False, False]
+    assert [G.JointValue("j", 0.0).primary, G.Position(f, [0, 0, 0]).primary] == [True, True]
+    with pytest.raises(swarm_ik.InvalidArgumentError, match="LookAt.point must be finite"):
+        G.LookAt(f, [0, 0, 1], [0, math.inf, 0])
+    with pytest.raises(swarm_ik.InvalidArgumentError, match="Axis.direction must not be the zero"):
+        G.Axis(f, [0, 0, 1], [0, 0, 0])
+    with pytest.raises(swarm_ik.InvalidArgumentError, match="weight must be a positive"):
+        G.CenterJoints(weight=0.0)

@@ -398,6 +398,19 @@ def test_dh_fk_prismatic_variable_is_d() -> None:
     np.testing.assert_allclose(pose[:3, 3], expected_p, atol=1e-15)
 
 
+def test_limits_and_names_are_keyword_only_and_carried_into_the_urdf() -> None:
+    with pytest.raises(TypeError):
+        DHRow("revolute", 0.1, 0.0, 0.2, 0.0, -1.0, 1.0)  # type: ignore[misc]
+    spec = {"lower": -1.0, "upper": 1.5, "effort": 7.0, "velocity": 2.0,
+            "joint_name": "j_a", "link_name": "l_a"}  # fmt: skip
+    row = DHRow("revolute", d=0.1, theta_offset=0.0, a=0.2, alpha=0.0, **spec)  # type: ignore[arg-type]
+    assert row.joint_spec() == spec
+    assert ChainStep(np.eye(4), "prismatic", **row.joint_spec()).joint_spec() == spec  # type: ignore[arg-type]
+    text = dh_to_urdf([row], robot_name="r", base_link="b", ee_link="e")
+    assert '<joint name="j_a" type="revolute">' in text and '<child link="l_a"/>' in text
+    assert '<limit lower="-1.0" upper="1.5" effort="7.0" velocity="2.0"/>' in text
+
+
 @pytest.mark.parametrize(
     ("make", "message"),
     [

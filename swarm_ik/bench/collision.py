@@ -964,9 +964,7 @@ def run(args: argparse.Namespace) -> int:
     return 0
 
 
-def main(argv: list[str] | None = None) -> int:
-    """``python -m swarm_ik.bench.collision``."""
-    return common.run_main(add_arguments, run, argv, description=HELP)
+main = common.module_main(add_arguments, run, "collision", HELP)
 
 
 if __name__ == "__main__":

@@ -27,7 +27,7 @@ import xml.etree.ElementTree as ET
 from collections.abc import Callable, Iterable, Iterator, Mapping, Sequence
 from dataclasses import dataclass
 from pathlib import Path
-from typing import Any
+from typing import Any, Protocol
 
 import numpy as np
 
@@ -50,20 +50,32 @@ RUN_INFO = "run.json"
 
 
 # --------------------------------------------------------------------------- command line
-def run_main(
+class ModuleMain(Protocol):
+    """A benchmark module's ``main``: parses ``argv`` (default ``sys.argv[1:]``), runs, and
+    returns the exit status."""
+
+    def __call__(self, argv: Sequence[str] | None = None) -> int: ...
+
+
+def module_main(
     add_arguments: Callable[[argparse.ArgumentParser], None],
     run: Callable[[argparse.Namespace], int],
-    argv: Sequence[str] | None = None,
-    *,
-    prog: str | None = None,
+    name: str,
     description: str | None = None,
-) -> int:
-    """The ``main(argv)`` of a benchmark module run as ``python -m swarm_ik.bench.NAME``: a
-    parser (``prog`` and ``description`` as given) with the module's options, the same as
+) -> ModuleMain:
+    """The ``main(argv=None) -> int`` of the benchmark module ``swarm_ik.bench.NAME``, run as
+    ``python -m swarm_ik.bench.NAME``: a parser with the module's options, the same as
     ``swarm-ik bench NAME``'s (``add_arguments``), then ``run`` on the parsed options."""
-    parser = argparse.ArgumentParser(prog=prog, description=description)
-    add_arguments(parser)
-    return run(parser.parse_args(argv))
+
+    def main(argv: Sequence[str] | None = None) -> int:
+        parser = argparse.ArgumentParser(
+            prog=f"python -m swarm_ik.bench.{name}", description=description
+        )
+        add_arguments(parser)
+        return run(parser.parse_args(argv))
+
+    main.__doc__ = f"``python -m swarm_ik.bench.{name} [options]``."
+    return main
 
 
 # --------------------------------------------------------------------------- robots, targets

@@ -435,9 +435,7 @@ def run(args: argparse.Namespace) -> int:
     return 130 if interrupted else 0
 
 
-def main(argv: Sequence[str] | None = None) -> int:
-    """``python -m swarm_ik.bench.ik [options]``."""
-    return common.run_main(add_arguments, run, argv, prog="python -m swarm_ik.bench.ik")
+main = common.module_main(add_arguments, run, "ik")
 
 
 if __name__ == "__main__":

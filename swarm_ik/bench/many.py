@@ -22,6 +22,8 @@ from typing import Any, cast
 
 import numpy as np
 
+from swarm_ik.bench import common
+
 ARMS = ("ur5", "ur10", "z1")
 
 
@@ -366,13 +368,7 @@ def run(args: argparse.Namespace) -> int:
     return 0
 
 
-def main(argv: list[str] | None = None) -> int:
-    """``python -m swarm_ik.bench.many``: the same as ``swarm-ik bench many``."""
-    from swarm_ik.bench import common
-
-    return common.run_main(
-        add_arguments, run, argv, prog="swarm-ik bench many", description=__doc__
-    )
+main = common.module_main(add_arguments, run, "many", __doc__)
 
 
 if __name__ == "__main__":

@@ -336,16 +336,12 @@ def _f_min(key: str) -> float:
 
 
 def _setup_003(block: str, cfg: Config, **values: Any) -> str:
-    return _text(
-        block,
-        pop=cfg.pop_003,
-        iterations=cfg.iterations_003,
-        runs=cfg.runs_003,
-        paper_pop=FULL.pop_003,
-        paper_iterations=FULL.iterations_003,
-        paper_runs=FULL.runs_003,
-        **values,
-    )
+    """``block`` filled with the [MGWO] set-up of this run (``pop``, ``iterations``, ``runs``)
+    and of the paper (``paper_pop``, …), then ``values``."""
+    keys = ("pop", "iterations", "runs")
+    ours = {k: getattr(cfg, f"{k}_003") for k in keys}
+    paper = {f"paper_{k}": getattr(FULL, f"{k}_003") for k in keys}
+    return _text(block, **ours, **paper, **values)
 
 
 def _section_003_table3(cfg: Config, rows: list[dict[str, Any]], hl: Headline, out: Path) -> str:
@@ -718,19 +714,10 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
         "the results are the same either way (only time_s differs)",
     )
     common.add_out(parser, "paper", type=Path)
-    parser.add_argument(
-        "--experiments",
-        nargs="+",
-        default=None,
-        metavar="ID",
-        help="subset to run: " + ", ".join(EXPERIMENTS),
-    )
-    parser.add_argument(
-        "--runs",
-        type=int,
-        default=None,
-        help="override the number of runs per case and solver everywhere",
-    )
+    subset = "subset to run: " + ", ".join(EXPERIMENTS)
+    parser.add_argument("--experiments", nargs="+", metavar="ID", help=subset)
+    runs = "override the number of runs per case and solver everywhere"
+    parser.add_argument("--runs", type=int, help=runs)
     parser.add_argument("--no-plots", action="store_true", help="skip the PNG plots")
     parser.add_argument("--no-progress", action="store_true", help="no progress bar")
     parser.add_argument(
@@ -856,9 +843,7 @@ def run(args: argparse.Namespace) -> int:
     return 0
 
 
-def main(argv: Sequence[str] | None = None) -> int:
-    """``python -m swarm_ik.bench.paper [options]``."""
-    return common.run_main(add_arguments, run, argv, prog="python -m swarm_ik.bench.paper")
+main = common.module_main(add_arguments, run, "paper")
 
 
 if __name__ == "__main__":

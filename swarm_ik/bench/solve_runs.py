@@ -88,20 +88,15 @@ def run_one(spec: RunSpec) -> Outcome:
     """
     import swarm_ik
 
+    # the same seed, budget and solver parameters for a test function and an IK target
+    shared: dict[str, Any] = {"seed": spec.seed, "max_evals": spec.max_evals}
+    shared.update(spec.solver_params())
     if spec.fitness_name == "function":
         from swarm_ik.testfunctions import get_function
 
         fn = get_function(spec.robot)
         lo, hi = fn.bounds
-        res = swarm_ik.minimize(
-            fn.function,
-            lo,
-            hi,
-            spec.solver,
-            seed=spec.seed,
-            max_evals=spec.max_evals,
-            **spec.solver_params(),
-        )
+        res = swarm_ik.minimize(fn.function, lo, hi, spec.solver, **shared)
         fit, hist, n_evals, t = float(res.fun), res.history, res.n_evals, res.time_s
         pos = rot = math.nan
         success = fit - fn.f_min <= FUNCTION_SUCCESS_GAP
@@ -112,16 +107,8 @@ def run_one(spec: RunSpec) -> Outcome:
         robot = cached_robot(spec.robot)
         target = np.asarray(spec.target, dtype=float).reshape(4, 4)
         problem = swarm_ik.IKProblem(robot, target, spec.fitness_name, orth_tol=spec.orth_tol)
-        r = swarm_ik.solve(
-            problem,
-            spec.solver,
-            seed=spec.seed,
-            max_evals=spec.max_evals,
-            tol_pos=spec.tol_pos,
-            tol_rot=spec.tol_rot,
-            stop_on_success=spec.stop_on_success,
-            **spec.solver_params(),
-        )
+        shared.update(tol_pos=spec.tol_pos, tol_rot=spec.tol_rot)
+        r = swarm_ik.solve(problem, spec.solver, stop_on_success=spec.stop_on_success, **shared)
         fit, hist, n_evals, t = r.fitness, r.history, r.n_evals, r.time_s
         pos, rot, success, within = r.position_error, r.rotation_error, r.success, r.within_limits
     row = {

@@ -470,9 +470,7 @@ def run(args: argparse.Namespace) -> int:
     return 0
 
 
-def main(argv: Sequence[str] | None = None) -> int:
-    """``python -m swarm_ik.bench.throughput [options]``."""
-    return common.run_main(add_arguments, run, argv, prog="python -m swarm_ik.bench.throughput")
+main = common.module_main(add_arguments, run, "throughput")
 
 
 if __name__ == "__main__":

@@ -68,17 +68,8 @@ BUDGET = 4
 
 
 class LMSettings(NamedTuple):
-    """Settings of the Levenberg–Marquardt polish (the one set of defaults: :data:`DEFAULT_LM`).
-
-    Attributes:
-        max_iters: Most FK + Jacobian evaluations per start (a converging start needs about
-            10–20 on 6–7 joint arms).
-        lam0: Initial damping, relative to the mean diagonal of ``JᵀJ``, ``> 0``.
-        max_step: Largest joint change per step (rad, or m for prismatic joints), ``> 0``.
-        stall_rel: A step that lowers the squared residual by less than this fraction…
-        stall_iters: …this many times in a row marks a local minimum.
-        tol_margin: The polish stops at this fraction of the success tolerances, in
-            ``(0, 1]``, so that the independent Pinocchio check passes with margin.
+    """Settings of the Levenberg–Marquardt polish (the one set of defaults: :data:`DEFAULT_LM`),
+    each documented under its field.
 
     ``max_iters``, ``lam0``, ``max_step`` and ``stall_rel`` were tuned together on Panda,
     UR10 and Baxter (2000 targets each, 300 evaluations): 30 / 1e-2 / 1 rad / 1e-2 beat
@@ -90,11 +81,19 @@ class LMSettings(NamedTuple):
     """
 
     max_iters: int = 30
+    """Most FK + Jacobian evaluations per start (a converging start needs about 10–20 on
+    6–7 joint arms)."""
     lam0: float = 0.3
+    """Initial damping, relative to the mean diagonal of ``JᵀJ``, ``> 0``."""
     max_step: float = 1.0
+    """Largest joint change per step (rad, or m for prismatic joints), ``> 0``."""
     stall_rel: float = 0.05
+    """A step that lowers the squared residual by less than this fraction…"""
     stall_iters: int = 3
+    """…this many times in a row marks a local minimum."""
     tol_margin: float = 0.5
+    """The polish stops at this fraction of the success tolerances, in ``(0, 1]``, so that
+    the independent Pinocchio check passes with margin."""
 
     def checked(self) -> LMSettings:
         """The settings as the kernel's types, validated.
@@ -952,14 +951,8 @@ def secondary_descent(
 
 
 @numba.njit(cache=True)
-def errors_batch(
-    q: FloatArray,
-    t: TreeArrays,
-    g: GoalTable,
-    b: Bounds,
-    out_err: FloatArray,
-    out_cost2: FloatArray,
-) -> None:  # pragma: no cover - compiled
+def errors_batch(q: FloatArray, t: TreeArrays, g: GoalTable, b: Bounds,
+                 out_err: FloatArray, out_cost2: FloatArray) -> None:  # fmt: skip
     """Errors of every goal ``(pop, ng, 2)`` and the secondary cost ``(pop,)`` of each row of
     ``q`` ``(pop, nq)`` (no Jacobians)."""
     m = max(g.rows_primary, g.rows_secondary)

@@ -265,13 +265,13 @@ def compiled_search(
     seed_q: FloatArray,
     key: np.uint64,
     *,
+    pop_size: int,
+    n_swarm: int,
+    iterations: int,
     stop: bool,
     tol_pos: float,
     tol_rot: float,
     w_rot: float,
-    pop_size: int,
-    n_swarm: int,
-    iterations: int,
     max_evals: int | None,
     remaining: int,
     evals_before: int,
@@ -286,10 +286,10 @@ def compiled_search(
         pol: The polisher (kernel tolerances).
         seed_q: First start, ``(nq,)``, inside the bounds.
         key: Random stream key (:func:`search_key`).
+        pop_size, n_swarm, iterations: As :func:`run`.
         stop: Stop at the first point within ``tol_pos``/``tol_rot``.
         tol_pos, tol_rot: Success tolerances [m], [rad].
         w_rot: Angle weight of the fitness [m/rad].
-        pop_size, n_swarm, iterations: As :func:`run`.
         max_evals: The evaluation budget of the solve (``None``: none).
         remaining: Evaluations this call may spend.
         evals_before: Evaluations counted before (for the ``a`` schedule).
@@ -497,21 +497,15 @@ def run(
     tol_pos, tol_rot = ev.tolerance if ev.tolerance is not None else (1e-5, 1e-5)
     if not ev.stops_on_success:  # the whole budget runs: polish down to round-off
         tol_pos, tol_rot = min(tol_pos, FULL_BUDGET_TOL), min(tol_rot, FULL_BUDGET_TOL)
-    pol = Polisher.from_problem(
-        problem,
-        ev.lower,
-        ev.upper,
-        tol_pos,
-        tol_rot,
-        wrap=ev.wrap_mask,
-        q0=ev.q0,
-        tol_margin=tol_margin,
-        max_iters=max_iters,
-        lam0=lam0,
-        max_step=max_step,
-        stall_rel=stall_rel,
-        stall_iters=stall_iters,
-    )
+    settings = lm.LMSettings(max_iters, lam0, max_step, stall_rel, stall_iters, tol_margin)
+
+    def polisher(of: IKProblem) -> Polisher:
+        return Polisher.from_problem(
+            of, ev.lower, ev.upper, tol_pos, tol_rot, wrap=ev.wrap_mask, q0=ev.q0,
+            settings=settings,
+        )  # fmt: skip
+
+    pol = polisher(problem)
     # a single-goal se3 cost is dp + w_rot·θ, which the kernel computes; any other cost (or
     # an overridden one) is evaluated by the problem itself
     se3 = (
@@ -579,11 +573,7 @@ def run(
     if exact_check:
         free = problem.without_collisions()
         if free is not None:
-            pol_free = Polisher.from_problem(
-                free, ev.lower, ev.upper, tol_pos, tol_rot, wrap=ev.wrap_mask, q0=ev.q0,
-                tol_margin=tol_margin, max_iters=max_iters, lam0=lam0, max_step=max_step,
-                stall_rel=stall_rel, stall_iters=stall_iters,
-            )  # fmt: skip
+            pol_free = polisher(free)
     t = 0
     while not ev.done and (not unlimited or t < iterations):
         cap = ev.remaining
