@@ -529,9 +529,17 @@ def _lane(
     return ik if ik._state is not None else None
 
 
+_HISTORY_CAP = 62
+"""History entries an :class:`IKSolver` call receives in its output buffer (a longer history
+comes back as its own array)."""
+
 _RAN, _CHECK_TARGET = 0, 1
 """``swarm_ik.kernels.search.RAN`` and ``CHECK_TARGET`` (that module loads numba; a test checks
 they are equal)."""
+
+
+def _rebuild_ik_solver(robot: Any, solver: str, kwargs: dict[str, Any]) -> IKSolver:
+    return IKSolver(robot, solver, **kwargs)
 
 
 class IKSolver:
@@ -600,59 +608,41 @@ class IKSolver:
                 self._state = _compiled(self._template, self._kwargs, self.tol_pos, self.tol_rot)
         tpl = self._template
         self._w_rot = 0.0 if tpl.position_only else float(tpl.w_rot)
-        if self._state is not None:  # the kernel's arguments, all but the target and seed
-            from swarm_ik.kernels import search
-
-            st = self._state
-            static = st.static(tpl.table(None))
-            self._head = tuple(static[: search.PAR_INDEX])
-            self._mid_args = tuple(static[search.PAR_INDEX + 1 :])
-            lim = self.time_limit
-            self._consts = (
-                st.pol.kernel_tol_pos,
-                st.pol.kernel_tol_rot,
-                self.tol_pos,
-                self.tol_rot,
-                self._w_rot,
-                st.pop_size,
-                st.n_swarm,
-                st.iterations,
-                self.max_evals is None and lim is None,
-                int(self.max_evals) if self.max_evals is not None else 2**62,
-                -1 if self.max_evals is None else int(self.max_evals),
-                0,
-                search.NO_LIMIT if lim is None else float(lim),
-            )  # in the order of search.swarm_search's arguments
         self._mid = np.ascontiguousarray(0.5 * (tpl.lower + tpl.upper))
-        self._par0 = np.ascontiguousarray(tpl.table(None).par)
         self._label = tpl.goals[0].describe()
         self._frame = None  # (fk_pinocchio: the first goal frame, robot.ee_frame)
         self._position_only = tpl.position_only
-        if self._state is not None:  # the arguments before and after the per-call ones
-            self._pre = (*self._head, self._par0, *self._mid_args)
-            self._post = (self._position_only, *self._consts)
-        if self._state is not None:  # the kernel's entry point for these argument types
+        self._out_len = tpl.nq + _HISTORY_CAP
+        if self._state is not None:  # the compiled state and the kernel's entry point
             from swarm_ik.kernels import search
 
+            st = self._state
+            lim = self.time_limit
+            search_args = (
+                st.pol.kernel_tol_pos, st.pol.kernel_tol_rot, self.tol_pos, self.tol_rot,
+                self._w_rot, st.pop_size, st.n_swarm, st.iterations,
+                self.max_evals is None and lim is None,
+                int(self.max_evals) if self.max_evals is not None else 2**62,
+                -1 if self.max_evals is None else int(self.max_evals), 0,
+                search.NO_LIMIT if lim is None else float(lim),
+            )  # fmt: skip
+            self._solver = search.pose_solver(
+                st.pol.tree, tpl.table(None), st.pol.bounds, st.pol.cfg, search_args,
+                self._position_only,
+            )  # fmt: skip
             reached = robot.fk(self._mid)  # the template's target: reached from the start
             self._kernel = search.entry_point(
-                self._args(reached, self._mid, True, True, 0.0, 0, np.empty(tpl.nq))
+                (self._solver, reached, self._mid, True, True, 0.0, 0, np.empty(self._out_len))
             )
         self.solve(self._template.target)  # the first solve's Python paths warmed too
 
-    def _args(
-        self,
-        target: np.ndarray,
-        q: np.ndarray,
-        target_checked: bool,
-        start_checked: bool,
-        t0: float,
-        seed: int,
-        out_q: np.ndarray,
-    ) -> tuple[Any, ...]:
-        """The argument tuple of :func:`swarm_ik.kernels.search.solve_pose_flat` (the one
-        definition: the entry point is compiled for it and does not type its arguments)."""
-        return (*self._pre, target, q, target_checked, start_checked, *self._post, t0, seed, out_q)
+    def __reduce__(self) -> tuple[Any, ...]:
+        """Pickled as its arguments (the compiled state is rebuilt where it is unpickled)."""
+        kwargs = dict(
+            tol_pos=self.tol_pos, tol_rot=self.tol_rot, time_limit=self.time_limit,
+            max_evals=self.max_evals, w_rot=self._template.w_rot, **self.params,
+        )  # fmt: skip
+        return (_rebuild_ik_solver, (self.robot, self.solver, kwargs))
 
     def solve(
         self, target: Any, q0: Any = None, seed: int | np.random.Generator | None = 0
@@ -711,11 +701,11 @@ class IKSolver:
             q_start, start_checked = q0, False  # read, never written
         else:
             q_start, start_checked = prepare_q0(tpl, q0), True
-        q = np.empty(tpl.nq)
+        out = np.empty(self._out_len)
         while True:
             t0 = time.perf_counter()
-            status, used, fit, history = self._kernel(
-                self._args(pose, q_start, pose_checked, start_checked, t0, seed, q)
+            status, used, fit, n_hist, history = self._kernel(
+                self._solver, pose, q_start, pose_checked, start_checked, t0, seed, out
             )
             if status == _RAN:
                 break
@@ -724,6 +714,10 @@ class IKSolver:
             else:
                 q_start, start_checked = prepare_q0(tpl, q0), True
         elapsed = time.perf_counter() - t0
+        nq = tpl.nq
+        q = out[:nq]
+        if history is None:  # (it fit in out)
+            history = out[nq : nq + n_hist]
         goal_errors, within = _pose_check(  # the independent check
             self.robot, self._frame, self._label, pose, self._position_only, q, tpl.lower,
             tpl.upper, self.tol_pos, self.tol_rot,

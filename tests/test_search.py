@@ -272,3 +272,46 @@ def test_ik_solver_takes_arrays_whose_float64_dtype_is_an_equal_copy() -> None:
     ref = ik.solve(target, q0=q0, seed=3)
     got = ik.solve(target.view(other), q0=q0.view(other), seed=3)
     assert ref.success and np.array_equal(got.q, ref.q) and got.n_evals == ref.n_evals
+
+
+def test_iksolver_returns_a_history_longer_than_its_buffer_whole() -> None:
+    """A search of many generations (an unreachable target) gives IKSolver a history longer
+    than its output buffer: it comes back as its own array, equal to the general path's."""
+    from swarm_ik import api
+
+    robot = swarm_ik.load_robot("panda")
+    far = np.eye(4)
+    far[:3, 3] = (3.0, 0.0, 0.5)  # out of reach
+    ik = swarm_ik.IKSolver(robot, max_evals=20_000, pop_size=4)
+    a = ik.solve(far, seed=1)
+    general = swarm_ik.solve(
+        swarm_ik.IKProblem(robot, far), seed=1, max_evals=20_000, pop_size=4,
+        on_improvement=lambda q, f: None,
+    )  # fmt: skip
+    assert not a.success and len(a.history) > api._HISTORY_CAP
+    _same_result(a, general)
+    short = ik.solve(robot.fk(robot.mid_q()), seed=1)  # a short one: from the output buffer
+    assert short.success and 1 <= len(short.history) <= api._HISTORY_CAP
+    assert short.q.shape == (robot.nq,) and not np.shares_memory(a.q, short.q)
+
+
+def test_iksolver_pickles_as_its_arguments() -> None:
+    import pickle
+
+    robot = swarm_ik.load_robot("ur5")
+    ik = swarm_ik.IKSolver(robot, time_limit=0.01, tol_pos=2e-5, pop_size=8)
+    back = pickle.loads(pickle.dumps(ik))
+    assert (back.tol_pos, back.time_limit, back.params) == (2e-5, 0.01, {"pop_size": 8})
+    T = robot.fk(robot.random_q(np.random.default_rng(3)))
+    _same_result(back.solve(T, seed=4), ik.solve(T, seed=4))
+
+
+def test_pose_solver_rebuilds_the_goal_table_field_by_field() -> None:
+    """solve_pose names every GoalTable field (numba cannot slice a mixed NamedTuple)."""
+    from swarm_ik.kernels.lm import GoalTable
+
+    assert GoalTable._fields == (
+        "code", "frame", "weight", "primary", "par", "jref", "jw", "row0", "nrows",
+        "rows_primary", "rows_secondary", "col",
+    )  # fmt: skip
+    assert search.POSE_SOLVER_FIELDS[:4] == ("tree", "table", "bounds", "cfg")

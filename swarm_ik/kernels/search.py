@@ -24,7 +24,11 @@ Argument passing: numba types a ``NamedTuple`` argument in Python on every call 
 the tree, goal table, bounds and settings on the project machine), a flat run of arrays and
 scalars in C (≈ 1–2 µs).  :func:`flat_args` flattens the structures once and
 :func:`swarm_search_flat` rebuilds them inside the compiled code; the structures stay opaque
-(their field counts are read off the classes).
+(their field counts are read off the classes).  :class:`swarm_ik.IKSolver`, called many times
+with the same structures, goes further: they live in a :class:`PoseSolver` (a numba
+``StructRef``, made once), and :func:`solve_pose` takes it, the target, the start and an
+output buffer, and returns no new array — with cold caches, between other libraries' calls,
+that entry costs ≈ 10 µs where the fifty flat arguments and a returned history cost ≈ 27 µs.
 """
 
 from __future__ import annotations
@@ -37,6 +41,7 @@ from typing import Any
 import numba
 import numpy as np
 from numba import types
+from numba.experimental import structref
 
 from swarm_ik._types import BoolArray, FloatArray
 from swarm_ik.kernels import leaf, lm
@@ -45,13 +50,17 @@ from swarm_ik.kernels.lm import BUDGET, CONVERGED, Bounds, GoalTable, LMSettings
 from swarm_ik.pose import clearly_pose
 
 __all__ = [
+    "POSE_SOLVER_FIELDS",
+    "PoseSolver",
     "entry_point",
     "flat_args",
+    "pose_solver",
     "gwo_move_into",
     "now",
     "pose_errors_one",
     "pose_ok",
     "seed_key",
+    "solve_pose",
     "splitmix64",
     "start_inside",
     "stream_key",
@@ -71,10 +80,6 @@ _E_BOUNDS = _E_TABLE + N_BOUNDS
 _E_CFG = _E_BOUNDS + N_CFG
 N_STATIC = _E_CFG
 """Number of flat arguments that carry the tree, goal table, bounds and settings."""
-PAR_INDEX = N_TREE + GoalTable._fields.index("par")
-"""Position of the goal table's ``par`` array among the flat arguments."""
-
-_PAR_NEXT = PAR_INDEX + 1
 
 NO_LIMIT = -1.0
 """``time_limit`` value meaning "no time limit"."""
@@ -517,72 +522,151 @@ def swarm_search_flat(*a: Any) -> tuple[int, float, float, float, bool, FloatArr
 
 
 RAN = 0
-"""Status of :func:`solve_pose_flat`: the search ran."""
+"""Status of :func:`solve_pose`: the search ran."""
 CHECK_TARGET = 1
-"""Status of :func:`solve_pose_flat`: the target needs :func:`swarm_ik.pose.as_pose`'s check."""
+"""Status of :func:`solve_pose`: the target needs :func:`swarm_ik.pose.as_pose`'s check."""
 CHECK_START = 2
-"""Status of :func:`solve_pose_flat`: the start needs :func:`swarm_ik.api.prepare_q0`."""
+"""Status of :func:`solve_pose`: the start needs :func:`swarm_ik.api.prepare_q0`."""
+
+
+@structref.register
+class PoseSolverType(types.StructRef):
+    """The numba type of a :class:`PoseSolver` (one per set of field types)."""
+
+    def preprocess_fields(self, fields: Any) -> Any:
+        return tuple((name, types.unliteral(typ)) for name, typ in fields)
+
+
+class PoseSolver(structref.StructRefProxy):  # type: ignore[misc]
+    """The compiled state of one :class:`swarm_ik.IKSolver`, made by :func:`pose_solver` and
+    read by :func:`solve_pose`: the tree, the goal table (its one pose row the template that
+    each call fills with its target), the bounds, the LM settings and the search settings
+    (the arguments of :func:`swarm_search` from ``kernel_tol_pos`` to ``time_limit``), plus
+    ``position_only``.
+
+    One object where the flat arguments were about fifty: the compiled entry unboxes a pointer
+    instead of some forty arrays (≈ 10 µs of a call with cold caches)."""
+
+
+POSE_SOLVER_FIELDS = (
+    "tree", "table", "bounds", "cfg", "kernel_tol_pos", "kernel_tol_rot", "tol_pos", "tol_rot",
+    "w_rot", "pop_size", "n_swarm", "iterations", "unlimited", "max_evals", "budget_total",
+    "evals_before", "time_limit", "position_only",
+)  # fmt: skip
+"""The fields of :class:`PoseSolver`, in the order of its constructor."""
+
+structref.define_proxy(PoseSolver, PoseSolverType, list(POSE_SOLVER_FIELDS))
 
 
 @numba.njit(cache=True)
-def solve_pose_flat(*a: Any) -> tuple[int, int, float, FloatArray]:  # type: ignore[no-untyped-def]  # pragma: no cover
+def _new_pose_solver(*a: Any) -> Any:  # type: ignore[no-untyped-def]  # pragma: no cover
+    return PoseSolver(*a)
+
+
+def pose_solver(
+    t: TreeArrays,
+    g: GoalTable,
+    b: Bounds,
+    cfg: LMSettings,
+    search_args: tuple[Any, ...],
+    position_only: bool,
+) -> PoseSolver:
+    """A :class:`PoseSolver` (compiled constructor, loaded from numba's cache).
+
+    Args:
+        t, g, b, cfg: The structures (``g``: one pose row, its parameters the template's).
+        search_args: The arguments of :func:`swarm_search` from ``kernel_tol_pos`` to
+            ``time_limit`` (13 values).
+        position_only: The pose row is a position row (its rotation is not set per call).
+    """
+    kinds = (float, float, float, float, float, int, int, int, bool, int, int, int, float)
+    if len(search_args) != len(kinds):
+        raise ValueError(f"pose_solver: {len(kinds)} search arguments, got {len(search_args)}")
+    typed = tuple(k(v) for k, v in zip(kinds, search_args, strict=True))
+    cfg_t = LMSettings(*flat_args(t, g, b, cfg)[_E_BOUNDS:_E_CFG])  # (its fields typed)
+    return _new_pose_solver(t, g, b, cfg_t, *typed, bool(position_only))  # type: ignore[no-any-return]
+
+
+@numba.njit(cache=True)
+def solve_pose(
+    s: Any,
+    target: FloatArray,
+    q_start: FloatArray,
+    target_checked: bool,
+    start_checked: bool,
+    t0: float,
+    seed: int,
+    out: FloatArray,
+) -> tuple[int, int, float, int, FloatArray | None]:  # pragma: no cover - compiled
     """One :class:`swarm_ik.IKSolver` call of a 4×4 target in one compiled call: the checks of
     the target (:func:`pose_ok`) and of the start (:func:`start_inside`), the goal row of the
     target, the random key of the integer seed (:func:`seed_key`) and :func:`swarm_search`.
 
-    Arguments (flat): the :data:`N_STATIC` static arguments of :func:`swarm_search_flat` (the
-    goal table's ``par``: the template row, copied here), then ``target (4, 4)``,
-    ``q_start (nq,)``, ``target_checked``, ``start_checked``, ``position_only``, the
-    arguments of :func:`swarm_search` from ``kernel_tol_pos`` to ``time_limit``, ``t0``, the
-    integer ``seed`` and ``out_q (nq,)``.
+    Args:
+        s: The :class:`PoseSolver`.
+        target: The pose, ``(4, 4)``.
+        q_start: The first start, ``(nq,)``.
+        target_checked, start_checked: Already checked in Python (else checked here).
+        t0: Start of the solve, ``time.perf_counter()`` [s].
+        seed: The integer seed.
+        out: ``(nq + cap,)``: receives the answer ``q`` in its first ``nq`` entries and the
+            history after them when it fits in ``cap`` entries.
 
     Returns:
-        ``(status, evaluations, fitness, history)``; ``status`` is :data:`RAN`, or
-        :data:`CHECK_TARGET` / :data:`CHECK_START` when an unchecked target or start did not
-        pass (nothing ran: the caller checks it in Python, which raises or fixes it, and
-        calls again with it marked checked).
+        ``(status, evaluations, fitness, n_history, history)``: ``history`` is None when it
+        was written to ``out`` (a returned array costs ≈ 8 µs to box with cold caches), else
+        the whole history.  ``status`` is :data:`RAN`, or :data:`CHECK_TARGET` /
+        :data:`CHECK_START` when an unchecked target or start did not pass (nothing ran: the
+        caller checks it in Python, which raises or fixes it, and calls again with it marked
+        checked).
     """
-    t = TreeArrays(*a[0:_E_TREE])
-    par0 = a[PAR_INDEX]
-    rest = a[_E_CFG:]
-    target, q_start, target_checked, start_checked, position_only = rest[0:5]
-    b = Bounds(*a[_E_TABLE:_E_BOUNDS])
+    b = s.bounds
     if not target_checked and not pose_ok(target, 1e-6):
-        return CHECK_TARGET, 0, np.inf, np.empty(0)
+        return CHECK_TARGET, 0, np.inf, 0, None
     if not start_checked and not start_inside(q_start, b.lower, b.upper, b.wrap):
-        return CHECK_START, 0, np.inf, np.empty(0)
-    par = par0.copy()
-    if not position_only:
+        return CHECK_START, 0, np.inf, 0, None
+    g0 = s.table
+    par = g0.par.copy()
+    if not s.position_only:
         for r in range(3):
             for c in range(3):
                 par[0, 3 * r + c] = target[r, c]
     for r in range(3):
         par[0, 9 + r] = target[r, 3]
-    g = GoalTable(*a[_E_TREE:PAR_INDEX], par, *a[_PAR_NEXT:_E_TABLE])  # type: ignore[call-arg]
-    cfg = LMSettings(*a[_E_BOUNDS:_E_CFG])
-    used, fit, _dp, _dr, _stopped, hist = swarm_search(  # type: ignore[call-arg]
-        t, g, b, cfg, q_start, *rest[5:19], seed_key(rest[19]), rest[20]
-    )
-    return RAN, used, fit, hist
+    g = GoalTable(  # (every field of GoalTable, in order: a test checks the list)
+        g0.code, g0.frame, g0.weight, g0.primary, par, g0.jref, g0.jw, g0.row0, g0.nrows,
+        g0.rows_primary, g0.rows_secondary, g0.col,
+    )  # fmt: skip
+    nq = q_start.shape[0]
+    used, fit, _dp, _dr, _stopped, hist = swarm_search(
+        s.tree, g, b, s.cfg, q_start, s.kernel_tol_pos, s.kernel_tol_rot, s.tol_pos, s.tol_rot,
+        s.w_rot, s.pop_size, s.n_swarm, s.iterations, s.unlimited, s.max_evals, s.budget_total,
+        s.evals_before, s.time_limit, t0, seed_key(seed), out[:nq],
+    )  # fmt: skip
+    n = hist.shape[0]
+    if n <= out.shape[0] - nq:
+        out[nq : nq + n] = hist
+        return RAN, used, fit, n, None
+    return RAN, used, fit, n, hist
 
 
 def entry_point(args: tuple[Any, ...]) -> Any:
-    """A callable ``f(args)`` running :func:`solve_pose_flat` on the argument tuple ``args``
-    without the dispatcher's typing of every argument (≈ 5 µs of a 50-argument call; the
-    arguments are only unboxed).  It is numba's compiled entry point for exactly the types of
-    ``args`` (compiled first if needed); callers must pass tuples of those same types, as
-    :class:`swarm_ik.IKSolver` does (its arguments are fixed when it is made).  Without one
-    (another numba's internals), ``lambda a: solve_pose_flat(*a)``."""
-    solve_pose_flat(*args)  # type: ignore[call-arg]  # compiled (or loaded) for these types
+    """A callable ``f(*args)`` running :func:`solve_pose` on arguments of the types of
+    ``args`` without the dispatcher's typing of each argument: numba's compiled entry point
+    for exactly those types (compiled or loaded first if needed); callers must pass arguments
+    of those same types, as :class:`swarm_ik.IKSolver` does.  Without one (another numba's
+    internals), the dispatcher itself."""
+    solve_pose(*args)  # compiled (or loaded) for these types
     try:
-        return solve_pose_flat.overloads[(numba.typeof(args),)].entry_point  # type: ignore[attr-defined]
+        sig = tuple(numba.typeof(a) for a in args)
+        return solve_pose.overloads[sig].entry_point  # type: ignore[attr-defined]
     except (AttributeError, KeyError, TypeError):  # pragma: no cover - numba internals moved
-        return lambda a: solve_pose_flat(*a)
+        return solve_pose
 
 
 def flat_args(t: TreeArrays, g: GoalTable, b: Bounds, cfg: LMSettings) -> list[Any]:
     """The structures as the flat argument list of :func:`swarm_search_flat` (its first
-    :data:`N_STATIC` entries; the goal table's ``par`` at :data:`PAR_INDEX`)."""
+    :data:`N_STATIC` entries)."""
     cfg_t = LMSettings(
         int(cfg.max_iters), float(cfg.lam0), float(cfg.max_step), float(cfg.stall_rel),
         int(cfg.stall_iters), float(cfg.tol_margin),
@@ -595,7 +679,7 @@ def warm_up(t: TreeArrays, g: GoalTable, b: Bounds) -> None:
     any timed solve (called by :func:`swarm_ik.kernels.lm.warm_up`), :func:`pose_errors_one`
     (the check of the answer) and :func:`seed_key` (called from Python by
     :func:`swarm_ik.solvers.hybrid.search_key`).  Each cached kernel costs ≈ 10–70 ms to
-    load, so the rest load where they are used: :func:`solve_pose_flat` (with
+    load, so the rest load where they are used: :func:`solve_pose` (with
     :func:`pose_ok` and :func:`start_inside` compiled into it) when an
     :class:`swarm_ik.IKSolver` is made, the test helpers (:func:`gwo_move_into` on its own,
     :func:`uniforms`) on first use."""
