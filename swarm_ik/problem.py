@@ -127,6 +127,26 @@ _ONE_PRIMARY.flags.writeable = False
 """The primary mask of a problem made of a target alone (shared, read-only)."""
 
 
+REPLACEABLE = frozenset(("fitness", "is_success", "residual_jacobian", "cost"))
+"""Methods of :class:`IKProblem` that may be replaced on an instance (e.g. wrapped to record a
+trace); a problem with one replaced runs the general Python path of the solvers."""
+
+_W_ROT, _LAM, _MU, _ORTH_TOL = 1.0, 10.0, 1.0, 1e-6
+"""The defaults of :class:`IKProblem`'s options (a call that leaves them all out, the common
+one, takes its fast path: they are compared by identity)."""
+
+
+def _plain_problem(robot: RobotModel) -> dict[str, Any]:
+    """The attributes that every ``IKProblem(robot, T)`` (options left at their defaults) of
+    ``robot`` shares — all but its target, its goal and its two caches — from one made by the
+    general path (with the target FK(mid-range)).  ``lower`` and ``upper`` are then shared, as
+    :meth:`IKProblem.with_target` shares them."""
+    ref = IKProblem.__new__(IKProblem)
+    ref._make(robot, robot.fk(robot.mid_q()), None, "se3", _W_ROT, _LAM, _MU, _ORTH_TOL, None, None)
+    own = ("target", "goals", "_encoded", "_table_cache")
+    return {k: v for k, v in vars(ref).items() if k not in own}
+
+
 class IKProblem:
     """Inverse kinematics of a set of goals.
 
@@ -155,6 +175,11 @@ class IKProblem:
         upper, nq, position_only (a single Position goal from ``target`` with ``w_rot=0``).
     """
 
+    target: FloatArray | None
+    goals: tuple[Goal, ...]
+    _encoded: dict[int, Any]
+    _table_cache: dict[Any, lm.GoalTable]
+
     def __init__(
         self,
         robot: RobotModel,
@@ -162,10 +187,10 @@ class IKProblem:
         goals: Sequence[Goal] | str | None = None,
         fitness: str = "se3",
         *,
-        w_rot: float = 1.0,
-        lam: float = 10.0,
-        mu: float = 1.0,
-        orth_tol: float = 1e-6,
+        w_rot: float = _W_ROT,
+        lam: float = _LAM,
+        mu: float = _MU,
+        orth_tol: float = _ORTH_TOL,
         lower: Any = None,
         upper: Any = None,
     ) -> None:
@@ -173,6 +198,43 @@ class IKProblem:
             raise InvalidArgumentError(
                 f"robot must be a RobotModel (see swarm_ik.load_robot), got {type(robot).__name__}"
             )
+        if (  # IKProblem(robot, T), every option at its default (left out): the common call
+            goals is None
+            and target is not None
+            and fitness == "se3"
+            and lower is None
+            and upper is None
+            and w_rot is _W_ROT
+            and lam is _LAM
+            and mu is _MU
+            and orth_tol is _ORTH_TOL
+        ):
+            plain = robot._cache.get("plain_problem")
+            if plain is None:  # what every such problem of this robot shares, made once
+                plain = robot._cache["plain_problem"] = _plain_problem(robot)
+            pose = as_pose(target)
+            self.__dict__.update(plain)
+            self.target = pose
+            self.goals = (Pose.checked(robot.ee_frame, pose),)
+            self._encoded = {}
+            self._table_cache = {}
+            return
+        self._make(robot, target, goals, fitness, w_rot, lam, mu, orth_tol, lower, upper)
+
+    def _make(
+        self,
+        robot: RobotModel,
+        target: Any,
+        goals: Sequence[Goal] | str | None,
+        fitness: str,
+        w_rot: float,
+        lam: float,
+        mu: float,
+        orth_tol: float,
+        lower: Any,
+        upper: Any,
+    ) -> None:
+        """The constructor's general path (any goals and options)."""
         if isinstance(goals, str):  # IKProblem(robot, target, "paper-l1"): the 0.1 signature
             fitness, goals = goals, None
         self.robot = robot
@@ -184,7 +246,7 @@ class IKProblem:
             raise InvalidArgumentError(f"{label} must be a finite non-negative number, got {v!r}")
         self.w_rot = float(w_rot)
         terms: list[Goal] = []
-        self.target: FloatArray | None = None
+        self.target = None
         if target is not None:
             self.target = as_pose(target, orth_tol=orth_tol)
             if self.w_rot == 0.0:
@@ -209,7 +271,7 @@ class IKProblem:
                 "at least one goal must be primary (Posture, CenterJoints and "
                 "MinimalDisplacement are secondary unless primary=True)"
             )
-        self.goals: tuple[Goal, ...] = tuple(terms)
+        self.goals = tuple(terms)
         if self.target is None:
             first = next((gl for gl in terms if isinstance(gl, Pose)), None)
             self.target = None if first is None else first.target
@@ -264,12 +326,12 @@ class IKProblem:
         avoid = [] if goals is None else [gl for gl in terms if isinstance(gl, AvoidCollisions)]
         if len(avoid) > 1:
             raise InvalidArgumentError("at most one AvoidCollisions goal per problem")
-        self._encoded: dict[int, Any] = {}
+        self._encoded = {}
         if avoid:
             self.tree, row = avoid[0].encode_cached(robot)
             self._encoded[id(avoid[0])] = row
         # angular errors in the se3 cost: w_rot (m/rad); position errors: 1
-        self._table_cache: dict[Any, lm.GoalTable] = {}
+        self._table_cache = {}
         if narrowed:
             self.bounds = lm.Bounds(
                 np.ascontiguousarray(self.lower),

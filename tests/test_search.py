@@ -315,3 +315,48 @@ def test_pose_solver_rebuilds_the_goal_table_field_by_field() -> None:
         "rows_primary", "rows_secondary", "col",
     )  # fmt: skip
     assert search.POSE_SOLVER_FIELDS[:4] == ("tree", "table", "bounds", "cfg")
+
+
+@pytest.mark.parametrize("name", ["panda", "kinova"])
+def test_iksolver_checks_with_pinocchios_pose_of_the_first_goal_frame(name: str) -> None:
+    """IKSolver's check reads Pinocchio directly where its configuration is q itself (panda),
+    else through fk_pinocchio (kinova's continuous joints): the same pose either way."""
+    from swarm_ik import api
+
+    robot = swarm_ik.load_robot(name)
+    pose = api._first_frame_pose(robot)
+    for q in robot.random_q(np.random.default_rng(5), 5):
+        np.testing.assert_array_equal(pose(q), robot.fk_pinocchio(q))
+
+
+@pytest.mark.parametrize("name", ["panda", "kinova"])
+def test_plain_problem_fast_path_equals_the_general_path(name: str) -> None:
+    """IKProblem(robot, T) with every option left out shares a per-robot template; its
+    attributes equal those the general path makes, its caches are its own, and options
+    given (even at their default values) or refused take the general path."""
+    from swarm_ik import problem as P
+
+    robot = swarm_ik.load_robot(name)
+    T = robot.fk(robot.random_q(np.random.default_rng(2)))
+    fast = swarm_ik.IKProblem(robot, T)
+    general = swarm_ik.IKProblem.__new__(swarm_ik.IKProblem)
+    general._make(robot, T, None, "se3", 1.0, 10.0, 1.0, 1e-6, None, None)
+    assert vars(fast).keys() == vars(general).keys()
+    for key, value in vars(general).items():
+        got = vars(fast)[key]
+        if isinstance(value, np.ndarray):
+            np.testing.assert_array_equal(got, value)
+        elif key == "goals":
+            assert [type(g) for g in got] == [type(g) for g in value]
+            np.testing.assert_array_equal(got[0].target, value[0].target)
+        elif key != "bounds":
+            assert got == value, key
+    other = swarm_ik.IKProblem(robot, robot.fk(robot.mid_q()))
+    assert other._table_cache is not fast._table_cache and other.target is not fast.target
+    fast.table(None)
+    assert fast._table_cache and not other._table_cache
+    assert robot._cache["plain_problem"]["w_rot"] == 1.0 and P._W_ROT == 1.0
+    with pytest.raises(swarm_ik.InvalidArgumentError, match="w_rot must be"):
+        swarm_ik.IKProblem(robot, T, w_rot=True)  # type: ignore[arg-type]
+    with pytest.raises(swarm_ik.InvalidTargetError):
+        swarm_ik.IKProblem(robot, np.zeros((4, 4)))

@@ -41,7 +41,7 @@ from swarm_ik._types import IntArray
 from swarm_ik.errors import InvalidArgumentError, unknown
 from swarm_ik.kernels import lm, search
 from swarm_ik.kernels.lm import BUDGET, CONVERGED, ITER_CAP, LOCAL_MIN, NOT_RUN, LMSettings
-from swarm_ik.problem import IKProblem
+from swarm_ik.problem import REPLACEABLE, IKProblem
 from swarm_ik.solvers.base import Evaluator, FloatArray, register
 from swarm_ik.solvers.gwo import gwo_move
 
@@ -319,11 +319,8 @@ def compiled_ok(problem: IKProblem, prefer: str) -> bool:
         and problem.fitness_name == "se3"
         and type(problem).fitness is IKProblem.fitness
         and type(problem).is_success is IKProblem.is_success
-        and vars(problem).keys().isdisjoint(_REPLACEABLE)
+        and REPLACEABLE.isdisjoint(vars(problem))
     )
-
-
-_REPLACEABLE = ("fitness", "is_success", "residual_jacobian", "cost")
 
 
 def _check_params(
