@@ -568,11 +568,12 @@ class IKSolver:
 
     Like roboticstoolbox's ``IKSolver`` or TRAC-IK's solver object: the settings are checked,
     the compiled kernels loaded and the compiled search state (tree, goal table, bounds,
-    settings as flat kernel arguments) built when it is made, so each :meth:`solve` of a
-    4×4 target spends its Python time on checking the arguments, one compiled call
-    (:func:`swarm_ik.kernels.search.swarm_search`), the Pinocchio check and the
+    settings: one :class:`swarm_ik.kernels.search.PoseSolver`) built when it is made, so each
+    :meth:`solve` of a 4×4 target spends its Python time on checking the arguments, one
+    compiled call (:func:`swarm_ik.kernels.search.solve_pose`), the Pinocchio check and the
     :class:`~swarm_ik.result.Result`.  Its results are exactly those of :func:`solve` with the
-    same arguments.  Safe to share between threads (no per-call state is kept).
+    same arguments.  Safe to share between threads (no per-call state is kept: the compiled
+    state is only read).  Pickled as its arguments.
 
     Args:
         robot: The robot (its first goal frame is the one a 4×4 target is for).
