@@ -621,7 +621,7 @@ class IKSolver:
                 raise InvalidArgumentError(f"{label} must be a positive number, got {tol!r}")
         self.tol_pos, self.tol_rot = float(tol_pos), float(tol_rot)
         self.time_limit, self.max_evals = time_limit, max_evals
-        self._template = IKProblem(robot, robot.fk(robot.mid_q()), w_rot=w_rot)
+        self._template = IKProblem(robot, robot.fk_pinocchio(robot.mid_q()), w_rot=w_rot)
         self._state = None
         if solver == "swarm":
             from swarm_ik.solvers import hybrid
@@ -652,7 +652,8 @@ class IKSolver:
                 st.pol.tree, tpl.table(None), st.pol.bounds, st.pol.cfg, search_args,
                 self._position_only,
             )  # fmt: skip
-            reached = robot.fk(self._mid)  # the template's target: reached from the start
+            # the template's target (Pinocchio's FK: no FK kernel to load), as calls pass it
+            reached = np.ascontiguousarray(robot.fk_pinocchio(self._mid))
             self._kernel = search.entry_point(
                 (self._solver, reached, self._mid, True, True, 0.0, 0, np.empty(self._out_len))
             )

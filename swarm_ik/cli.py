@@ -230,7 +230,7 @@ def _cmd_solve(args: argparse.Namespace) -> int:
         poses = robot.fk_all(robot.check_q(args.from_q, "--from-q"))
         goals = [swarm_ik.goals.Pose(f, t) for f, t in zip(robot.frames, poses, strict=True)]
     elif args.from_q is not None:
-        target = robot.fk(robot.check_q(args.from_q, "--from-q"))
+        target = robot.fk_pinocchio(robot.check_q(args.from_q, "--from-q"))
     else:
         target = np.asarray(args.pose, dtype=float)
     if args.scene is not None:

@@ -142,7 +142,8 @@ def _plain_problem(robot: RobotModel) -> dict[str, Any]:
     general path (with the target FK(mid-range)).  ``lower`` and ``upper`` are then shared, as
     :meth:`IKProblem.with_target` shares them."""
     ref = IKProblem.__new__(IKProblem)
-    ref._make(robot, robot.fk(robot.mid_q()), None, "se3", _W_ROT, _LAM, _MU, _ORTH_TOL, None, None)
+    mid = robot.fk_pinocchio(robot.mid_q())  # (Pinocchio's FK: no FK kernel to load)
+    ref._make(robot, mid, None, "se3", _W_ROT, _LAM, _MU, _ORTH_TOL, None, None)
     own = ("target", "goals", "_encoded", "_table_cache")
     return {k: v for k, v in vars(ref).items() if k not in own}
 
