@@ -145,7 +145,7 @@ def _check_name(label: str, name: str | None) -> None:
         )
 
 
-@dataclass(frozen=True, kw_only=True)
+@dataclass(frozen=True, kw_only=True, eq=False)
 class JointSpec:
     """What a :class:`DHRow` and a :class:`ChainStep` say of their joint besides its motion:
     limits and names, keyword-only.
@@ -172,7 +172,7 @@ class JointSpec:
         return {f.name: getattr(self, f.name) for f in fields(JointSpec)}
 
     def _check_joint(self, kind: str) -> None:
-        _check_kind(kind)
+        """The limits and names, for a joint of ``kind`` (already checked)."""
         _check_limits(kind, self.lower, self.upper, self.effort, self.velocity)
         _check_name("joint name", self.joint_name)
         _check_name("link name", self.link_name)
@@ -200,6 +200,7 @@ class DHRow(JointSpec):
     alpha: float
 
     def __post_init__(self) -> None:
+        _check_kind(self.kind)  # a bad kind is the first thing to name
         for label in ("d", "theta_offset", "a", "alpha"):
             value = getattr(self, label)
             if not math.isfinite(value):
@@ -234,7 +235,7 @@ class ChainStep(JointSpec):
         _check_transform("origin", origin)
         origin.setflags(write=False)
         object.__setattr__(self, "origin", origin)
-        _check_kind(self.kind)  # before the axis: a bad kind is the first thing to name
+        _check_kind(self.kind)  # a bad kind is the first thing to name
         axis = np.asarray(self.axis, dtype=np.float64)
         norm = float(np.linalg.norm(axis)) if axis.shape == (3,) else 0.0
         if not (math.isfinite(norm) and norm > 1e-12):

@@ -253,13 +253,13 @@ class Pose(Goal):
     Args:
         frame: Goal frame name.
         target: ``(4, 4)`` pose [m], ``(position, quaternion xyzw)``, 7 numbers, or SE3.
-        orth_tol: Tolerance on the orthonormality of the target rotation.
+        orth_tol: Tolerance on the orthonormality of the target rotation (keyword-only).
         weight, primary: As :class:`Goal` (keyword-only).
     """
 
     frame: str
     target: Any
-    orth_tol: float = 1e-6
+    orth_tol: float = field(default=1e-6, kw_only=True)
     code: ClassVar[int] = POSE
 
     def __post_init__(self) -> None:
@@ -320,14 +320,14 @@ class Orientation(Goal):
     """The frame at a world orientation: ``r = w·log(R* Rᵀ)`` [rad].
 
     Args:
-        frame, orth_tol: As :class:`Pose`.
+        frame, orth_tol: As :class:`Pose` (``orth_tol`` keyword-only).
         weight, primary: As :class:`Goal` (keyword-only).
         rotation: ``(3, 3)`` rotation matrix or a quaternion ``(x, y, z, w)``.
     """
 
     frame: str
     rotation: Any
-    orth_tol: float = 1e-6
+    orth_tol: float = field(default=1e-6, kw_only=True)
     code: ClassVar[int] = ORIENTATION
 
     def __post_init__(self) -> None:
@@ -522,12 +522,12 @@ class Posture(JointGoal):
 
     Args:
         q_ref: Reference joint vector ``(nq,)`` (rad / m).
-        joint_weights: Optional per-joint weights ``(nq,)`` (default all 1).
+        joint_weights: Optional per-joint weights ``(nq,)`` (default all 1; keyword-only).
         weight, primary: As :class:`Goal` (keyword-only; ``primary`` default False).
     """
 
     q_ref: Any
-    joint_weights: Any = None
+    joint_weights: Any = field(default=None, kw_only=True)
 
     def reference(self, robot: RobotModel, q0: FloatArray | None) -> tuple[FloatArray, FloatArray]:
         ref = _joint_vector(self.q_ref, robot, "Posture.q_ref")
@@ -635,16 +635,17 @@ class AvoidCollisions(Goal):
         self_collision: Check the robot against itself (pairs: all link pairs minus adjacent
             links minus the SRDF's disabled pairs, see :mod:`swarm_ik.collision`).
         margin: Wanted clearance [m], ``>= 0``.
-        max_rows: Most penetration rows per evaluation.
-        tolerance: Sphere fitting tolerance [m] (how far a sphere may stick out of its body).
+        max_rows: Most penetration rows per evaluation (keyword-only).
+        tolerance: Sphere fitting tolerance [m] (how far a sphere may stick out of its body;
+            keyword-only).
         weight, primary: As :class:`Goal` (keyword-only).
     """
 
     scene: Any = None
     self_collision: bool = True
     margin: float = 0.0
-    max_rows: int = 24
-    tolerance: float = 0.02
+    max_rows: int = field(default=24, kw_only=True)
+    tolerance: float = field(default=0.02, kw_only=True)
     code: ClassVar[int] = COLLISION
     frame_goal: ClassVar[bool] = False
 

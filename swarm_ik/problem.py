@@ -139,8 +139,7 @@ one, takes its fast path: they are compared by identity)."""
 def _plain_problem(robot: RobotModel) -> dict[str, Any]:
     """The attributes that every ``IKProblem(robot, T)`` (options left at their defaults) of
     ``robot`` shares — all but its target, its goal and its two caches — from one made by the
-    general path (with the target FK(mid-range)).  ``lower`` and ``upper`` are then shared, as
-    :meth:`IKProblem.with_target` shares them."""
+    general path (with the target FK(mid-range)); the constructor copies the mutable ones."""
     ref = IKProblem.__new__(IKProblem)
     mid = robot.fk_pinocchio(robot.mid_q())  # (Pinocchio's FK: no FK kernel to load)
     ref._make(robot, mid, None, "se3", _W_ROT, _LAM, _MU, _ORTH_TOL, None, None)
@@ -215,6 +214,9 @@ class IKProblem:
                 plain = robot._cache["plain_problem"] = _plain_problem(robot)
             pose = as_pose(target)
             self.__dict__.update(plain)
+            self.lower = plain["lower"].copy()  # (each problem its own)
+            self.upper = plain["upper"].copy()
+            self._weights = dict(plain["_weights"])
             self.target = pose
             self.goals = (Pose.checked(robot.ee_frame, pose),)
             self._encoded = {}

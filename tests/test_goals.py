@@ -254,8 +254,19 @@ def test_goals_json_round_trip(tmp_path) -> None:
 
 def test_weight_and_primary_are_keyword_only_fields_of_every_goal() -> None:
     f = "panda_hand_tcp"
-    with pytest.raises(TypeError):
-        G.Axis(f, [0, 0, 1], [0, 0, -1], 2.0)  # type: ignore[misc]
+    pose = np.eye(4)
+    for positional_weight in (
+        lambda: G.Axis(f, [0, 0, 1], [0, 0, -1], 2.0),
+        lambda: G.Pose(f, pose, 2.0),  # (not taken as orth_tol)
+        lambda: G.Orientation(f, pose[:3, :3], 2.0),
+        lambda: G.Posture([0.0] * 7, 2.0),  # (not taken as joint_weights)
+        lambda: G.AvoidCollisions(None, True, 0.0, 5),  # (not taken as max_rows)
+    ):
+        with pytest.raises(TypeError):
+            positional_weight()  # type: ignore[misc]
+    assert list(G.goal_to_dict(G.Pose(f, pose))) == [
+        "type", "frame", "target", "weight", "primary", "orth_tol",
+    ]  # fmt: skip
     axis = G.Axis(f, [0, 0, 2], [0, 0, -1], weight=2.0, primary=False)
     assert (axis.weight, axis.primary) == (2.0, False)
     np.testing.assert_array_equal(axis.axis, [0.0, 0.0, 1.0])  # a direction is normalised

@@ -406,6 +406,10 @@ def test_limits_and_names_are_keyword_only_and_carried_into_the_urdf() -> None:
     row = DHRow("revolute", d=0.1, theta_offset=0.0, a=0.2, alpha=0.0, **spec)  # type: ignore[arg-type]
     assert row.joint_spec() == spec
     assert ChainStep(np.eye(4), "prismatic", **row.joint_spec()).joint_spec() == spec  # type: ignore[arg-type]
+    a, b = ChainStep(np.eye(4), "revolute"), ChainStep(np.eye(4), "prismatic", (1.0, 0.0, 0.0))
+    assert a != b and a == a and len({a, b}) == 2  # steps compare by identity
+    assert row == DHRow("revolute", d=0.1, theta_offset=0.0, a=0.2, alpha=0.0, **spec)  # type: ignore[arg-type]
+    assert row != DHRow("revolute", d=0.2, theta_offset=0.0, a=0.2, alpha=0.0, **spec)  # type: ignore[arg-type]
     text = dh_to_urdf([row], robot_name="r", base_link="b", ee_link="e")
     assert '<joint name="j_a" type="revolute">' in text and '<child link="l_a"/>' in text
     assert '<limit lower="-1.0" upper="1.5" effort="7.0" velocity="2.0"/>' in text

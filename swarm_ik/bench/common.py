@@ -8,7 +8,7 @@
 * the machine: :func:`machine_info`, :func:`cpu_count`, :func:`single_thread`;
 * statistics: :func:`summarize`, :func:`timing`, :func:`success_rate`, :func:`judge`;
 * C-library plumbing for peers: :func:`quiet_c_output`, :func:`urdf_root_link`;
-* the command line: :func:`run_main` (the ``main(argv)`` of ``python -m swarm_ik.bench.NAME``).
+* the command line: :func:`module_main` (the ``main(argv)`` of ``python -m swarm_ik.bench.NAME``).
 """
 
 from __future__ import annotations
