@@ -539,26 +539,6 @@ _RAN, _CHECK_TARGET = 0, 1
 they are equal)."""
 
 
-def _first_frame_pose(robot: Any) -> Callable[[np.ndarray], np.ndarray]:
-    """``q ↦ robot.fk_pinocchio(q)`` (Pinocchio's pose of the first goal frame, the check of
-    :class:`IKSolver`'s answers) with its lookups made once, for a robot whose Pinocchio
-    configuration is ``q`` itself (no continuous or mimic joints; else ``fk_pinocchio``):
-    with cold caches 7 µs instead of 12."""
-    if robot.model.nq != robot.nq or robot.mimic:
-        return lambda q: robot.fk_pinocchio(q)  # type: ignore[no-any-return]
-    import pinocchio as pin
-
-    forward, place = pin.forwardKinematics, pin.updateFramePlacement
-    model, fid, data_of = robot.model, robot.frame_ids[0], robot._data
-
-    def pose(q: np.ndarray) -> np.ndarray:
-        data = data_of()  # (one per thread)
-        forward(model, data, q)
-        return place(model, data, fid).homogeneous  # type: ignore[no-any-return]
-
-    return pose
-
-
 def _rebuild_ik_solver(robot: Any, solver: str, kwargs: dict[str, Any]) -> IKSolver:
     return IKSolver(robot, solver, **kwargs)
 
@@ -632,7 +612,7 @@ class IKSolver:
         self._w_rot = 0.0 if tpl.position_only else float(tpl.w_rot)
         self._mid = np.ascontiguousarray(0.5 * (tpl.lower + tpl.upper))
         self._label = tpl.goals[0].describe()
-        self._pinocchio_pose = _first_frame_pose(robot)
+        self._pinocchio_pose = robot.fk_pinocchio_bound()
         self._position_only = tpl.position_only
         self._out_len = tpl.nq + _HISTORY_CAP
         if self._state is not None:  # the compiled state and the kernel's entry point

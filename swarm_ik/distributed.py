@@ -215,7 +215,7 @@ def map_chunks(
     with ExitStack() as stack:
         if client is None and check_scheduler(scheduler) is not None:
             client = stack.enter_context(connect(scheduler))
-        bar = stack.enter_context(closing(progress_bar(progress, sum(weights), desc, unit)))
+        bar = stack.enter_context(closing(progress_bar(progress, int(sum(weights)), desc, unit)))
         if client is None:
             out = []
             for item, w in zip(items, weights, strict=True):

@@ -320,9 +320,10 @@ class Orientation(Goal):
     """The frame at a world orientation: ``r = w·log(R* Rᵀ)`` [rad].
 
     Args:
-        frame, orth_tol: As :class:`Pose` (``orth_tol`` keyword-only).
-        weight, primary: As :class:`Goal` (keyword-only).
+        frame: Goal frame name.
         rotation: ``(3, 3)`` rotation matrix or a quaternion ``(x, y, z, w)``.
+        orth_tol: As :class:`Pose` (keyword-only).
+        weight, primary: As :class:`Goal` (keyword-only).
     """
 
     frame: str

@@ -14,7 +14,7 @@ import reprlib
 import sys
 import threading
 import warnings
-from collections.abc import Sequence
+from collections.abc import Callable, Sequence
 from dataclasses import dataclass, field
 from importlib import resources
 from pathlib import Path
@@ -507,12 +507,17 @@ class RobotModel:
         t, j = self.tree.fk_jacobian(q)
         return t[..., f, :, :], j[..., f, :, :]
 
+    def _pinocchio_q_is_q(self) -> bool:
+        """Whether Pinocchio's configuration of :attr:`model` is ``q`` itself (no continuous
+        joint in (cos, sin), no mimic follower)."""
+        return self.model.nq == self.nq and not self.mimic
+
     def to_pinocchio(self, q: FloatArray, copy: bool = True) -> FloatArray:
         """Pinocchio configuration of :attr:`model` for ``q`` (continuous → cos, sin; mimic
         followers set from their drivers); ``copy=False``: ``q`` itself where the two vectors
         are the same (for a caller that only reads it, such as Pinocchio's FK)."""
         q = np.asarray(q, dtype=float).reshape(self.nq)
-        if self.model.nq == self.nq and not self.mimic:  # the same vector
+        if self._pinocchio_q_is_q():
             return q.copy() if copy else q
         plan = self._cache.get("to_pinocchio")
         if plan is None:  # (driver, multiplier, offset, index in Pinocchio's q, continuous)
@@ -581,6 +586,23 @@ class RobotModel:
         pin.forwardKinematics(self.model, data, self.to_pinocchio(q, copy=False))
         # (eigenpy returns the 4x4 as a new array of its own: no copy needed)
         return pin.updateFramePlacement(self.model, data, fid).homogeneous  # type: ignore[no-any-return]
+
+    def fk_pinocchio_bound(self) -> Callable[[FloatArray], FloatArray]:
+        """:meth:`fk_pinocchio` of the first goal frame as a function of ``q`` with its
+        lookups made once (the check of :class:`swarm_ik.IKSolver`'s answers; 7 µs instead of
+        12 with cold caches).  Where Pinocchio's configuration is not ``q`` itself, it is
+        :meth:`fk_pinocchio` (its conversion is needed)."""
+        if not self._pinocchio_q_is_q():
+            return self.fk_pinocchio
+        forward, place = pin.forwardKinematics, pin.updateFramePlacement
+        model, fid, data_of = self.model, self.frame_ids[0], self._data
+
+        def pose(q: FloatArray) -> FloatArray:
+            data = data_of()  # (one per thread)
+            forward(model, data, q)
+            return place(model, data, fid).homogeneous  # type: ignore[no-any-return]
+
+        return pose
 
     def fk_pinocchio_many(self, qs: FloatArray, frame: str | None = None) -> FloatArray:
         """Reference poses of one goal frame (default the first) for each row of ``qs``

@@ -66,6 +66,7 @@ __all__ = [
     "stream_key",
     "swarm_search",
     "swarm_search_flat",
+    "typed_settings",
     "uniforms",
     "warm_up",
 ]
@@ -583,8 +584,7 @@ def pose_solver(
     if len(search_args) != len(kinds):
         raise ValueError(f"pose_solver: {len(kinds)} search arguments, got {len(search_args)}")
     typed = tuple(k(v) for k, v in zip(kinds, search_args, strict=True))
-    cfg_t = LMSettings(*flat_args(t, g, b, cfg)[_E_BOUNDS:_E_CFG])  # (its fields typed)
-    return _new_pose_solver(t, g, b, cfg_t, *typed, bool(position_only))  # type: ignore[no-any-return]
+    return _new_pose_solver(t, g, b, typed_settings(cfg), *typed, bool(position_only))  # type: ignore[no-any-return]
 
 
 @numba.njit(cache=True)
@@ -664,14 +664,19 @@ def entry_point(args: tuple[Any, ...]) -> Any:
         return solve_pose
 
 
-def flat_args(t: TreeArrays, g: GoalTable, b: Bounds, cfg: LMSettings) -> list[Any]:
-    """The structures as the flat argument list of :func:`swarm_search_flat` (its first
-    :data:`N_STATIC` entries)."""
-    cfg_t = LMSettings(
+def typed_settings(cfg: LMSettings) -> LMSettings:
+    """``cfg`` with each field of the type the compiled kernels are typed for (a Python
+    ``int`` given for a float setting would make numba compile another version)."""
+    return LMSettings(
         int(cfg.max_iters), float(cfg.lam0), float(cfg.max_step), float(cfg.stall_rel),
         int(cfg.stall_iters), float(cfg.tol_margin),
     )  # fmt: skip
-    return [*t, *g, *b, *cfg_t]
+
+
+def flat_args(t: TreeArrays, g: GoalTable, b: Bounds, cfg: LMSettings) -> list[Any]:
+    """The structures as the flat argument list of :func:`swarm_search_flat` (its first
+    :data:`N_STATIC` entries)."""
+    return [*t, *g, *b, *typed_settings(cfg)]
 
 
 def warm_up(t: TreeArrays, g: GoalTable, b: Bounds) -> None:
