@@ -199,15 +199,21 @@ def _pose_check(
     ``reached`` ``(4, 4)``, Pinocchio's pose of the goal frame at ``q``, against ``target``
     ``(4, 4)`` (the compiled twin of ``Pose.errors``) and whether ``q`` lies within
     ``[lower, upper]``; returns ``((GoalError,), within)``."""
-    if not _ERRORS_ONE:  # (the kernel loads on first use: not on import)
-        from swarm_ik.kernels.search import pose_errors_one
-
-        _ERRORS_ONE.append(pose_errors_one)
-    dp, dr, within = _ERRORS_ONE[0](reached, target, q, lower, upper)
+    dp, dr, within = _pose_errors()(reached, target, q, lower, upper)
     if position_only:
         dr = math.nan
     met = not (dp > tol_pos) and not (dr > tol_rot)
     return (GoalError.of(label, dp, dr, met),), within
+
+
+def _pose_errors() -> Any:
+    """:func:`swarm_ik.kernels.search.pose_errors_one` (the kernel loads on first use: not
+    on import)."""
+    if not _ERRORS_ONE:
+        from swarm_ik.kernels.search import pose_errors_one
+
+        _ERRORS_ONE.append(pose_errors_one)
+    return _ERRORS_ONE[0]
 
 
 _ERRORS_ONE: list[Any] = []
@@ -635,7 +641,11 @@ class IKSolver:
             # the template's target (Pinocchio's FK: no FK kernel to load), as calls pass it
             reached = np.ascontiguousarray(robot.fk_pinocchio(self._mid))
             self._kernel = search.entry_point(
-                (self._solver, reached, self._mid, True, True, 0.0, 0, np.empty(self._out_len))
+                search.solve_pose,
+                (self._solver, reached, self._mid, True, True, 0.0, 0, np.empty(self._out_len)),
+            )
+            self._errors = search.entry_point(
+                search.pose_errors_one, (reached, reached, self._mid, tpl.lower, tpl.upper)
             )
         self.solve(self._template.target)  # the first solve's Python paths warmed too
 
@@ -705,10 +715,11 @@ class IKSolver:
         else:
             q_start, start_checked = prepare_q0(tpl, q0), True
         out = np.empty(self._out_len)
+        kernel, state = self._kernel, self._solver
         while True:
             t0 = time.perf_counter()
-            status, used, fit, n_hist, history = self._kernel(
-                self._solver, pose, q_start, pose_checked, start_checked, t0, seed, out
+            status, used, fit, n_hist, history = kernel(
+                state, pose, q_start, pose_checked, start_checked, t0, seed, out
             )
             if status == _RAN:
                 break
@@ -721,21 +732,29 @@ class IKSolver:
         q = out[:nq]
         if history is None:  # (it fit in out)
             history = out[nq : nq + n_hist]
-        goal_errors, within = _pose_check(  # the independent check
-            self._pinocchio_pose(q), self._label, pose, self._position_only, q, tpl.lower,
-            tpl.upper, self.tol_pos, self.tol_rot,
-        )  # fmt: skip
-        (ge,) = goal_errors
+        reached = self._pinocchio_pose(q)  # the independent check: Pinocchio's pose of q
+        errors = self._errors if reached.flags.c_contiguous else _pose_errors()
+        dp, dr, within = errors(reached, pose, q, tpl.lower, tpl.upper)
+        if self._position_only:
+            dr = math.nan
+        if within and not (dp > self.tol_pos) and not (dr > self.tol_rot) and math.isfinite(fit):
+            # (the common case, with every field as _result gives it)
+            return Result.of(
+                q=q, fitness=fit, position_error=dp, rotation_error=0.0 if dr != dr else dr,
+                n_evals=used, time_s=elapsed, success=True, within_limits=True,
+                history=history, solver=self.solver, seed=seed,
+                goal_errors=(GoalError.of(self._label, dp, dr, True),), reason="converged",
+            )  # fmt: skip
+        met = not (dp > self.tol_pos) and not (dr > self.tol_rot)
+        goal_errors = (GoalError.of(self._label, dp, dr, met),)
         if not math.isfinite(fit):
-            fit = ge.position_error + (
-                0.0 if math.isnan(ge.rotation_error) else self._w_rot * ge.rotation_error
-            )
-        if problem is None and not (within and ge.met):  # end_reason reads its target
+            fit = dp + (0.0 if math.isnan(dr) else self._w_rot * dr)
+        if problem is None:  # end_reason reads its target
             problem = tpl.with_target(pose)
         spent = _Spent(self.max_evals, used, self.time_limit, elapsed)
         return _result(
-            problem if problem is not None else tpl, q, float(fit), goal_errors, within, spent,
-            elapsed, history, self.solver, seed,
+            problem, q, float(fit), goal_errors, within, spent, elapsed, history, self.solver,
+            seed,
         )  # fmt: skip
 
     def __repr__(self) -> str:

@@ -363,3 +363,36 @@ def test_plain_problem_fast_path_equals_the_general_path(name: str) -> None:
         swarm_ik.IKProblem(robot, T, w_rot=True)  # type: ignore[arg-type]
     with pytest.raises(swarm_ik.InvalidTargetError):
         swarm_ik.IKProblem(robot, np.zeros((4, 4)))
+
+
+def test_iksolver_scratch_reused_after_a_long_failed_search_gives_a_new_ones_result() -> None:
+    """IKSolver keeps its search scratch between calls (its PoseSolver's SearchWork): after a
+    failed search that filled the archive and the grey-wolf buffers, a target gives exactly
+    the Result of a freshly made IKSolver."""
+    robot = swarm_ik.load_robot("panda")
+    far = np.eye(4)
+    far[:3, 3] = (3.0, 0.0, 0.5)  # out of reach: every generation runs
+    T = robot.fk(robot.random_q(np.random.default_rng(4)))
+    used = swarm_ik.IKSolver(robot, max_evals=3000, pop_size=6)
+    assert not used.solve(far, seed=3).success
+    after = used.solve(T, seed=5)
+    fresh = swarm_ik.IKSolver(robot, max_evals=3000, pop_size=6).solve(T, seed=5)
+    _same_result(after, fresh)
+    assert np.array_equal(after.q, fresh.q) and after.n_evals == fresh.n_evals
+
+
+def test_swarm_search_refuses_scratch_made_for_fewer_starts() -> None:
+    from swarm_ik.kernels import lm, search
+
+    robot = swarm_ik.load_robot("panda")
+    p = swarm_ik.IKProblem(robot, robot.fk(robot.mid_q()))
+    t, g = robot.tree, p.table(None)
+    b = lm.Bounds(p.lower, p.upper, robot.continuous_mask, robot.prismatic_mask)
+    small = search.make_search_work(t, g, 2)
+    seed_q = np.ascontiguousarray(robot.mid_q())
+    with pytest.raises(ValueError, match="scratch made for fewer starts"):
+        search.swarm_search(
+            t, g, b, search.typed_settings(lm.DEFAULT_LM), seed_q, 5e-6, 5e-6, 1e-5, 1e-5, 1.0,
+            8, 4, 10, True, 1000, -1, 0, search.NO_LIMIT, 0.0, search.seed_key(0),
+            np.empty(robot.nq), small,
+        )  # fmt: skip

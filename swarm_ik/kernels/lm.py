@@ -529,6 +529,19 @@ def make_work(t: TreeArrays, g: GoalTable, rows: int) -> Work:  # pragma: no cov
 
 
 @leaf
+def reset_work(w: Work) -> None:  # pragma: no cover - compiled
+    """Set the buffers of ``w`` that :func:`make_work` initialises back to those values (the
+    residuals and Jacobians to 0, the errors to NaN), so that a reused scratch behaves as a
+    new one."""
+    w.res[:] = 0.0
+    w.jac[:] = 0.0
+    w.res_t[:] = 0.0
+    w.jac_t[:] = 0.0
+    w.err[:] = np.nan
+    w.err_t[:] = np.nan
+
+
+@leaf
 def gram(jac: FloatArray, m: int, n: int, out: FloatArray) -> float:  # pragma: no cover
     """``out[:n, :n] = JᵀJ`` of ``J = jac[:m, :n]`` (both triangles); returns its trace."""
     trace = 0.0

@@ -36,14 +36,14 @@ from __future__ import annotations
 import math
 import sys
 import time
-from typing import Any
+from typing import Any, NamedTuple
 
 import numba
 import numpy as np
 from numba import types
 from numba.experimental import structref
 
-from swarm_ik._types import BoolArray, FloatArray
+from swarm_ik._types import BoolArray, FloatArray, IntArray
 from swarm_ik.kernels import leaf, lm
 from swarm_ik.kernels.fk import TreeArrays
 from swarm_ik.kernels.lm import BUDGET, CONVERGED, Bounds, GoalTable, LMSettings
@@ -52,10 +52,12 @@ from swarm_ik.pose import clearly_pose
 __all__ = [
     "POSE_SOLVER_FIELDS",
     "PoseSolver",
+    "SearchWork",
     "entry_point",
     "flat_args",
     "pose_solver",
     "gwo_move_into",
+    "make_search_work",
     "now",
     "pose_errors_one",
     "pose_ok",
@@ -298,6 +300,62 @@ def sampling_window(
             hi[j] = a + SAMPLING_WIDTH
 
 
+class SearchWork(NamedTuple):
+    """Scratch of :func:`swarm_search`: every buffer it writes, made once by
+    :func:`make_search_work` (per call by :func:`swarm_search_flat`; once per
+    :class:`swarm_ik.IKSolver`, in its :class:`PoseSolver`, so that a call allocates nothing:
+    about 40 allocations, ≈ 15 µs of a call with cold caches).  Each call sets what it reads
+    before reading it, so a reused scratch gives the results of a new one."""
+
+    queue: FloatArray
+    """Starts to polish, ``(rows, nq)``."""
+    pq: FloatArray
+    """Polished points, ``(rows, nq)``; ``pdp``, ``pdr``, ``pst``, ``pev``: their errors,
+    status and evaluations (:func:`swarm_ik.kernels.lm.polish_outputs`)."""
+    pdp: FloatArray
+    pdr: FloatArray
+    pst: IntArray
+    pev: IntArray
+    arch_x: FloatArray
+    """Archive of local minima, ``(2 rows, nq)``, and their fitness ``arch_f``."""
+    arch_f: FloatArray
+    lead: FloatArray
+    """The three leaders, ``(3, nq)``; ``r1``, ``r2``: the grey-wolf draws ``(3, rows, nq)``;
+    ``moved``: the moved wolves ``(rows, nq)``; ``tmp_x``, ``best_q``, ``ev_q``, ``lo``,
+    ``hi``: ``(nq,)``."""
+    r1: FloatArray
+    r2: FloatArray
+    moved: FloatArray
+    tmp_x: FloatArray
+    best_q: FloatArray
+    ev_q: FloatArray
+    lo: FloatArray
+    hi: FloatArray
+    hist: FloatArray
+    """The history (64 entries; a longer history grows into a new array)."""
+    par: FloatArray
+    """The goal parameters of a :func:`solve_pose` call, ``g.par``'s shape."""
+    lm_work: lm.Work
+    """The scratch of :func:`swarm_ik.kernels.lm.lm_run`."""
+
+
+@numba.njit(cache=True)
+def make_search_work(
+    t: TreeArrays, g: GoalTable, pop_size: int
+) -> SearchWork:  # pragma: no cover - compiled
+    """The :class:`SearchWork` of :func:`swarm_search` for ``pop_size`` starts per
+    generation."""
+    n = t.nq
+    rows = max(pop_size, 1)
+    pq, pdp, pdr, pst, pev = lm.polish_outputs(rows, n)
+    return SearchWork(
+        np.empty((rows, n)), pq, pdp, pdr, pst, pev, np.empty((2 * rows, n)),
+        np.empty(2 * rows), np.empty((3, n)), np.empty((3, rows, n)), np.empty((3, rows, n)),
+        np.empty((rows, n)), np.empty(n), np.empty(n), np.empty(n), np.empty(n), np.empty(n),
+        np.empty(64), np.empty_like(g.par), lm.make_work(t, g, g.rows_primary),
+    )  # fmt: skip
+
+
 @numba.njit(cache=True)
 def swarm_search(
     t: TreeArrays,
@@ -321,7 +379,8 @@ def swarm_search(
     t0: float,
     key: np.uint64,
     out_q: FloatArray,
-) -> tuple[int, float, float, float, bool, FloatArray]:  # pragma: no cover - compiled
+    sw: SearchWork,
+) -> tuple[int, float, float, float, bool, FloatArray, int]:  # pragma: no cover - compiled
     """The memetic search of the ``swarm`` solver (see the module docstring).
 
     Args:
@@ -340,36 +399,36 @@ def swarm_search(
         t0: Start of the solve on the clock of :func:`now` [s].
         key: Random stream key (:func:`stream_key`).
         out_q: The answer (lowest fitness seen), ``(nq,)``.
+        sw: Scratch (:func:`make_search_work` for ``pop_size``).
 
     Returns:
-        ``(evaluations, fitness, dp, dr, stopped, history)``: evaluations used, the answer's
-        fitness, its position [m] and angular [rad] errors, whether the stop test ended the run
-        and the best fitness after each generation.
+        ``(evaluations, fitness, dp, dr, stopped, history, n_history)``: evaluations used,
+        the answer's fitness, its position [m] and angular [rad] errors, whether the stop test
+        ended the run, and the best fitness after each generation in ``history[:n_history]``
+        (``sw.hist``, or a longer array it grew into).
     """
     n = seed_q.shape[0]
     m = pop_size
     rows = max(m, 1)
-    queue = np.empty((rows, n))
-    pq, pdp, pdr, pst, pev = lm.polish_outputs(rows, n)
-    arch_x = np.empty((2 * rows, n))
-    arch_f = np.empty(2 * rows)
-    tmp_x = np.empty(n)
-    lead = np.empty((3, n))
-    r1 = np.empty((3, rows, n))
-    r2 = np.empty((3, rows, n))
-    moved = np.empty((rows, n))
-    hist = np.empty(64)
-    work = lm.make_work(t, g, g.rows_primary)
+    queue, pq, pdp, pdr, pst, pev = sw.queue, sw.pq, sw.pdp, sw.pdr, sw.pst, sw.pev
+    arch_x, arch_f, tmp_x, lead, r1, r2 = sw.arch_x, sw.arch_f, sw.tmp_x, sw.lead, sw.r1, sw.r2
+    moved, hist, work = sw.moved, sw.hist, sw.lm_work
+    if queue.shape[0] < rows or queue.shape[1] != n:
+        raise ValueError("swarm_search: scratch made for fewer starts or another robot")
+    lm.reset_work(work)
     n_hist = 0
     n_arch = 0
     for j in range(n):
         queue[0, j] = seed_q[j]
     n_queue = 1
-    best_q = seed_q.copy()  # lowest fitness seen (not yet offered to the stop test)
+    best_q = sw.best_q  # lowest fitness seen (not yet offered to the stop test)
+    ev_q = sw.ev_q  # the evaluator's best (what the stop test has seen)
+    for j in range(n):
+        best_q[j] = seed_q[j]
+        ev_q[j] = seed_q[j]
     best_f = np.inf
     best_dp = np.inf
     best_dr = np.inf
-    ev_q = seed_q.copy()  # the evaluator's best (what the stop test has seen)
     ev_f = np.inf
     ev_dp = np.inf
     ev_dr = np.inf
@@ -381,8 +440,7 @@ def swarm_search(
     gen = 0
     counter = np.uint64(0)
     has_time = time_limit >= 0.0
-    lo = np.empty(n)  # random starts: uniform in the sampling window
-    hi = np.empty(n)
+    lo, hi = sw.lo, sw.hi  # random starts: uniform in the sampling window
     sampling_window(b.lower, b.upper, seed_q, lo, hi)
     while True:
         if stopped or used >= max_evals:
@@ -508,7 +566,7 @@ def swarm_search(
         n_hist += 1
     for j in range(n):
         out_q[j] = ev_q[j]
-    return used, ev_f, ev_dp, ev_dr, stopped, hist[:n_hist].copy()
+    return used, ev_f, ev_dp, ev_dr, stopped, hist, n_hist
 
 
 @numba.njit(cache=True)
@@ -519,7 +577,11 @@ def swarm_search_flat(*a: Any) -> tuple[int, float, float, float, bool, FloatArr
     g = GoalTable(*a[_E_TREE:_E_TABLE])
     b = Bounds(*a[_E_TABLE:_E_BOUNDS])
     cfg = LMSettings(*a[_E_BOUNDS:_E_CFG])
-    return swarm_search(t, g, b, cfg, *a[_E_CFG:])
+    rest = a[_E_CFG:]
+    used, fit, dp, dr, stopped, hist, n_hist = swarm_search(  # type: ignore[call-arg]
+        t, g, b, cfg, *rest, make_search_work(t, g, rest[6])
+    )
+    return used, fit, dp, dr, stopped, hist[:n_hist].copy()
 
 
 RAN = 0
@@ -552,7 +614,7 @@ class PoseSolver(structref.StructRefProxy):  # type: ignore[misc]
 POSE_SOLVER_FIELDS = (
     "tree", "table", "bounds", "cfg", "kernel_tol_pos", "kernel_tol_rot", "tol_pos", "tol_rot",
     "w_rot", "pop_size", "n_swarm", "iterations", "unlimited", "max_evals", "budget_total",
-    "evals_before", "time_limit", "position_only",
+    "evals_before", "time_limit", "position_only", "work",
 )  # fmt: skip
 """The fields of :class:`PoseSolver`, in the order of its constructor."""
 
@@ -584,7 +646,8 @@ def pose_solver(
     if len(search_args) != len(kinds):
         raise ValueError(f"pose_solver: {len(kinds)} search arguments, got {len(search_args)}")
     typed = tuple(k(v) for k, v in zip(kinds, search_args, strict=True))
-    return _new_pose_solver(t, g, b, typed_settings(cfg), *typed, bool(position_only))  # type: ignore[no-any-return]
+    work = make_search_work(t, g, typed[5])
+    return _new_pose_solver(t, g, b, typed_settings(cfg), *typed, bool(position_only), work)  # type: ignore[no-any-return]
 
 
 @numba.njit(cache=True)
@@ -626,7 +689,8 @@ def solve_pose(
     if not start_checked and not start_inside(q_start, b.lower, b.upper, b.wrap):
         return CHECK_START, 0, np.inf, 0, None
     g0 = s.table
-    par = g0.par.copy()
+    par = s.work.par
+    par[:] = g0.par
     if not s.position_only:
         for r in range(3):
             for c in range(3):
@@ -638,30 +702,31 @@ def solve_pose(
         g0.rows_primary, g0.rows_secondary, g0.col,
     )  # fmt: skip
     nq = q_start.shape[0]
-    used, fit, _dp, _dr, _stopped, hist = swarm_search(
+    used, fit, _dp, _dr, _stopped, hist, n = swarm_search(
         s.tree, g, b, s.cfg, q_start, s.kernel_tol_pos, s.kernel_tol_rot, s.tol_pos, s.tol_rot,
         s.w_rot, s.pop_size, s.n_swarm, s.iterations, s.unlimited, s.max_evals, s.budget_total,
-        s.evals_before, s.time_limit, t0, seed_key(seed), out[:nq],
+        s.evals_before, s.time_limit, t0, seed_key(seed), out[:nq], s.work,
     )  # fmt: skip
-    n = hist.shape[0]
     if n <= out.shape[0] - nq:
-        out[nq : nq + n] = hist
+        out[nq : nq + n] = hist[:n]
         return RAN, used, fit, n, None
-    return RAN, used, fit, n, hist
+    return RAN, used, fit, n, hist[:n].copy()
 
 
-def entry_point(args: tuple[Any, ...]) -> Any:
-    """A callable ``f(*args)`` running :func:`solve_pose` on arguments of the types of
-    ``args`` without the dispatcher's typing of each argument: numba's compiled entry point
-    for exactly those types (compiled or loaded first if needed); callers must pass arguments
-    of those same types, as :class:`swarm_ik.IKSolver` does.  Without one (another numba's
-    internals), the dispatcher itself."""
-    solve_pose(*args)  # compiled (or loaded) for these types
+def entry_point(kernel: Any, args: tuple[Any, ...]) -> Any:
+    """A callable ``f(*args)`` running the compiled ``kernel`` (:func:`solve_pose`,
+    :func:`pose_errors_one`) on arguments of the types of ``args`` without the dispatcher's
+    typing of each argument: numba's compiled entry point for exactly those types (compiled
+    or loaded first if needed; ≈ 2 µs less per call with cold caches, 8 µs for a
+    :class:`PoseSolver`).  Callers must pass arguments of those same types (arrays of the
+    same dtype, dimensions and layout), as :class:`swarm_ik.IKSolver` does.  Without one
+    (another numba's internals), the dispatcher itself."""
+    kernel(*args)  # compiled (or loaded) for these types
     try:
         sig = tuple(numba.typeof(a) for a in args)
-        return solve_pose.overloads[sig].entry_point  # type: ignore[attr-defined]
+        return kernel.overloads[sig].entry_point
     except (AttributeError, KeyError, TypeError):  # pragma: no cover - numba internals moved
-        return solve_pose
+        return kernel
 
 
 def typed_settings(cfg: LMSettings) -> LMSettings:
