@@ -558,8 +558,10 @@ class IKSolver:
     :meth:`solve` of a 4×4 target spends its Python time on checking the arguments, one
     compiled call (:func:`swarm_ik.kernels.search.solve_pose`), the Pinocchio check and the
     :class:`~swarm_ik.result.Result`.  Its results are exactly those of :func:`solve` with the
-    same arguments.  Safe to share between threads (no per-call state is kept: the compiled
-    state is only read).  Pickled as its arguments.
+    same arguments.  Safe to share between threads: the compiled call holds the GIL (it is
+    not ``nogil``), so the search scratch kept in its ``PoseSolver`` serves one call at a
+    time, and each call has its own output buffer and Pinocchio data.  Pickled as its
+    arguments.
 
     Args:
         robot: The robot (its first goal frame is the one a 4×4 target is for).

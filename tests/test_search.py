@@ -396,3 +396,22 @@ def test_swarm_search_refuses_scratch_made_for_fewer_starts() -> None:
             8, 4, 10, True, 1000, -1, 0, search.NO_LIMIT, 0.0, search.seed_key(0),
             np.empty(robot.nq), small,
         )  # fmt: skip
+
+
+def test_solve_pose_holds_the_gil_so_threads_take_turns_with_its_scratch() -> None:
+    """IKSolver's thread safety rests on the compiled call holding the GIL (its search scratch
+    lives in the shared PoseSolver): solve_pose must not be compiled ``nogil``; and threads
+    sharing one IKSolver get the sequential results."""
+    from concurrent.futures import ThreadPoolExecutor
+
+    from swarm_ik.kernels import search
+
+    assert not search.solve_pose.targetoptions.get("nogil", False)
+    robot = swarm_ik.load_robot("ur5")
+    ik = swarm_ik.IKSolver(robot, max_evals=2000)
+    targets = list(robot.fk(robot.random_q(np.random.default_rng(6), 24)))
+    seq = [ik.solve(T, seed=i) for i, T in enumerate(targets)]
+    with ThreadPoolExecutor(4) as pool:
+        par = list(pool.map(lambda it: ik.solve(it[1], seed=it[0]), enumerate(targets)))
+    for a, b in zip(seq, par, strict=True):
+        assert np.array_equal(a.q, b.q) and a.n_evals == b.n_evals

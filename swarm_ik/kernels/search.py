@@ -675,6 +675,9 @@ def solve_pose(
         out: ``(nq + cap,)``: receives the answer ``q`` in its first ``nq`` entries and the
             history after them when it fits in ``cap`` entries.
 
+    Compiled without ``nogil``: the call holds the GIL, so threads sharing one
+    :class:`PoseSolver` take turns with its scratch (``s.work``).
+
     Returns:
         ``(status, evaluations, fitness, n_history, history)``: ``history`` is None when it
         was written to ``out`` (a returned array costs ≈ 8 µs to box with cold caches), else
