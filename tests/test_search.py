@@ -394,7 +394,7 @@ def test_swarm_search_refuses_scratch_made_for_fewer_starts() -> None:
         search.swarm_search(
             t, g, b, search.typed_settings(lm.DEFAULT_LM), seed_q, 5e-6, 5e-6, 1e-5, 1e-5, 1.0,
             8, 4, 10, True, 1000, -1, 0, search.NO_LIMIT, 0.0, search.seed_key(0),
-            np.empty(robot.nq), small,
+            np.empty(robot.nq), small, small.hist, False,
         )  # fmt: skip
 
 
@@ -415,3 +415,33 @@ def test_solve_pose_holds_the_gil_so_threads_take_turns_with_its_scratch() -> No
         par = list(pool.map(lambda it: ik.solve(it[1], seed=it[0]), enumerate(targets)))
     for a, b in zip(seq, par, strict=True):
         assert np.array_equal(a.q, b.q) and a.n_evals == b.n_evals
+
+
+def test_search_paused_by_a_full_history_resumes_to_the_same_run() -> None:
+    """swarm_search cannot allocate (it is compiled without numba's runtime): a full history
+    pauses it and run_search resumes it with a longer buffer.  A buffer of one entry (paused
+    at almost every generation) gives exactly the run of a buffer that never fills."""
+    from swarm_ik.kernels import lm, search
+
+    robot = swarm_ik.load_robot("panda")
+    far = np.eye(4)
+    far[:3, 3] = (3.0, 0.0, 0.5)  # out of reach: every generation runs
+    p = swarm_ik.IKProblem(robot, far)
+    t, g = robot.tree, p.table(None)
+    b = lm.Bounds(p.lower, p.upper, robot.continuous_mask, robot.prismatic_mask)
+    seed_q = np.ascontiguousarray(robot.mid_q())
+    runs = []
+    for cap in (1, 4096):
+        sw = search.make_search_work(t, g, 4)._replace(hist=np.empty(cap))
+        out = np.empty(robot.nq)
+        res = search.run_search(
+            t, g, b, search.typed_settings(lm.DEFAULT_LM), seed_q, 5e-6, 5e-6, 1e-5, 1e-5,
+            1.0, 4, 2, 10, False, 6000, 6000, 0, search.NO_LIMIT, 0.0, search.seed_key(3), out,
+            sw,
+        )  # fmt: skip
+        runs.append((res, out))
+    (a, qa), (c, qc) = runs
+    assert a[6] > 100  # generations: the one-entry buffer grew many times
+    assert a[:5] == c[:5] and a[6] == c[6]
+    np.testing.assert_array_equal(a[5][: a[6]], c[5][: c[6]])
+    np.testing.assert_array_equal(qa, qc)

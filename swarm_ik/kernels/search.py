@@ -8,7 +8,8 @@ starts, one after the other, until one converges; the polished points that did n
 form an archive of local minima (best first, ``pop_size`` kept); each later generation
 polishes ``n_swarm`` grey-wolf moves of the archive ([GWO] eqs. 3.3–3.7, :func:`gwo_move_into`,
 the twin of :func:`swarm_ik.solvers.gwo.gwo_move`) and uniform starts for the rest.  The polish
-is :func:`swarm_ik.kernels.lm.lm_run` (on a workspace made once per search).
+is :func:`swarm_ik.kernels.lm.lm_run` (on a workspace made once per search, or once per
+:class:`swarm_ik.IKSolver`: :class:`SearchWork`).
 
 Randomness is a counter-based stream: uniform number ``c`` of a run is
 ``splitmix64(key + c) >> 11 · 2⁻⁵³`` (SplitMix64: Steele, Lea & Flood, OOPSLA 2014), with
@@ -40,8 +41,11 @@ from typing import Any, NamedTuple
 
 import numba
 import numpy as np
+from llvmlite import ir
 from numba import types
+from numba.core import cgutils
 from numba.experimental import structref
+from numba.extending import intrinsic
 
 from swarm_ik._types import BoolArray, FloatArray, IntArray
 from swarm_ik.kernels import leaf, lm
@@ -57,7 +61,9 @@ __all__ = [
     "flat_args",
     "pose_solver",
     "gwo_move_into",
+    "grown",
     "make_search_work",
+    "run_search",
     "now",
     "pose_errors_one",
     "pose_ok",
@@ -89,15 +95,34 @@ NO_LIMIT = -1.0
 
 
 # --------------------------------------------------------------------------- clock
-_clock_gettime = types.ExternalFunction("clock_gettime", types.int32(types.int32, types.voidptr))
 _CLOCK_MONOTONIC = 1  # Linux
 
 
-@numba.njit(cache=True)
+@intrinsic
+def _clock_monotonic(typingctx: Any) -> Any:  # pragma: no cover - compiled
+    """``clock_gettime(CLOCK_MONOTONIC)`` of libc in seconds, its ``struct timespec`` on the
+    stack (no allocation: callable from the kernels compiled without numba's runtime)."""
+
+    def codegen(context: Any, builder: Any, signature: Any, args: Any) -> Any:
+        i32, i64 = ir.IntType(32), ir.IntType(64)
+        ts = cgutils.alloca_once(builder, ir.ArrayType(i64, 2))  # {tv_sec, tv_nsec}
+        fnty = ir.FunctionType(i32, [i32, ir.IntType(8).as_pointer()])
+        fn = cgutils.get_or_insert_function(builder.module, fnty, "clock_gettime")
+        builder.call(fn, [ir.Constant(i32, _CLOCK_MONOTONIC), builder.bitcast(ts, fnty.args[1])])
+        sec = builder.load(builder.gep(ts, [ir.Constant(i32, 0), ir.Constant(i32, 0)]))
+        nsec = builder.load(builder.gep(ts, [ir.Constant(i32, 0), ir.Constant(i32, 1)]))
+        f64 = ir.DoubleType()
+        return builder.fadd(
+            builder.sitofp(sec, f64),
+            builder.fmul(builder.sitofp(nsec, f64), ir.Constant(f64, 1e-9)),
+        )
+
+    return types.float64(), codegen
+
+
+@leaf
 def _now_libc() -> float:  # pragma: no cover - compiled
-    ts = np.zeros(2, dtype=np.int64)  # struct timespec {time_t tv_sec; long tv_nsec}
-    _clock_gettime(_CLOCK_MONOTONIC, ts.ctypes.data)  # type: ignore[call-overload]
-    return float(ts[0]) + 1e-9 * float(ts[1])
+    return _clock_monotonic()  # type: ignore[call-arg,no-any-return]
 
 
 @numba.njit(cache=True)
@@ -107,8 +132,15 @@ def _now_objmode() -> float:  # pragma: no cover - compiled
     return t
 
 
-now = _now_libc if sys.platform.startswith("linux") else _now_objmode
-"""Seconds of the clock of ``time.perf_counter`` (compiled; usable inside ``njit`` code)."""
+_LINUX = sys.platform.startswith("linux")
+now = _now_libc if _LINUX else _now_objmode
+"""Seconds of the clock of ``time.perf_counter`` (compiled; usable inside ``njit`` code; on
+Linux also inside the kernels compiled without numba's runtime)."""
+
+_search_kernel: Any = leaf if _LINUX else numba.njit(cache=True)
+"""The decorator of :func:`swarm_search`: a leaf (no reference counting) where :func:`now`
+allocates nothing (Linux); elsewhere the clock goes through object mode, which needs numba's
+runtime."""
 
 
 # --------------------------------------------------------------------------- randomness
@@ -274,14 +306,71 @@ def _offer(
 
 
 @numba.njit(cache=True)
-def _append(hist: FloatArray, n: int, v: float) -> FloatArray:  # pragma: no cover - compiled
-    """``hist`` (``n`` entries used) with ``v`` appended, grown ×2 when full."""
-    if n == hist.shape[0]:
-        bigger = np.empty(max(2 * n, 1))
-        bigger[:n] = hist
-        hist = bigger
-    hist[n] = v
-    return hist
+def grown(hist: FloatArray, n: int) -> FloatArray:  # pragma: no cover - compiled
+    """A copy of ``hist``'s first ``n`` entries in a buffer twice as long."""
+    bigger = np.empty(max(2 * hist.shape[0], n + 1, 1))
+    bigger[:n] = hist[:n]
+    return bigger
+
+
+SEARCH_DONE = 0
+"""Code of :func:`swarm_search`: the run ended."""
+SEARCH_PAUSED = 1
+"""Code of :func:`swarm_search`: the history buffer is full (call again with a longer one and
+``resume=True``)."""
+
+
+@numba.njit(cache=True, inline="always")
+def run_search(
+    t: TreeArrays,
+    g: GoalTable,
+    b: Bounds,
+    cfg: LMSettings,
+    seed_q: FloatArray,
+    kernel_tol_pos: float,
+    kernel_tol_rot: float,
+    tol_pos: float,
+    tol_rot: float,
+    w_rot: float,
+    pop_size: int,
+    n_swarm: int,
+    iterations: int,
+    unlimited: bool,
+    max_evals: int,
+    budget_total: int,
+    evals_before: int,
+    time_limit: float,
+    t0: float,
+    key: np.uint64,
+    out_q: FloatArray,
+    sw: SearchWork,
+) -> tuple[int, float, float, float, bool, FloatArray, int]:  # pragma: no cover - compiled
+    """:func:`swarm_search` run to its end, the history grown whenever it fills (inlined
+    into its callers, so the structures are not passed through one more call).
+
+    Returns:
+        ``(evaluations, fitness, dp, dr, stopped, history, n_history)``: as
+        :func:`swarm_search`, with the best fitness after each generation in
+        ``history[:n_history]`` (``sw.hist``, or a longer array it grew into).
+    """
+    hist = sw.hist
+    resume = False
+    while True:
+        code, used, fit, dp, dr, stopped, n_hist, last = swarm_search(
+            t, g, b, cfg, seed_q, kernel_tol_pos, kernel_tol_rot, tol_pos, tol_rot, w_rot,
+            pop_size, n_swarm, iterations, unlimited, max_evals, budget_total, evals_before,
+            time_limit, t0, key, out_q, sw, hist, resume,
+        )  # fmt: skip
+        if code == SEARCH_DONE:
+            break
+        hist = grown(hist, n_hist)
+        resume = True
+    if last:
+        if n_hist == hist.shape[0]:
+            hist = grown(hist, n_hist)
+        hist[n_hist] = fit
+        n_hist += 1
+    return used, fit, dp, dr, stopped, hist, n_hist
 
 
 @leaf
@@ -335,6 +424,10 @@ class SearchWork(NamedTuple):
     """The history (64 entries; a longer history grows into a new array)."""
     par: FloatArray
     """The goal parameters of a :func:`solve_pose` call, ``g.par``'s shape."""
+    state_i: IntArray
+    """The integer state of a paused :func:`swarm_search` (9 entries); ``state_f``: its
+    float state (7)."""
+    state_f: FloatArray
     lm_work: lm.Work
     """The scratch of :func:`swarm_ik.kernels.lm.lm_run`."""
 
@@ -352,11 +445,12 @@ def make_search_work(
         np.empty((rows, n)), pq, pdp, pdr, pst, pev, np.empty((2 * rows, n)),
         np.empty(2 * rows), np.empty((3, n)), np.empty((3, rows, n)), np.empty((3, rows, n)),
         np.empty((rows, n)), np.empty(n), np.empty(n), np.empty(n), np.empty(n), np.empty(n),
-        np.empty(64), np.empty_like(g.par), lm.make_work(t, g, g.rows_primary),
+        np.empty(64), np.empty_like(g.par), np.zeros(9, dtype=np.int64), np.zeros(7),
+        lm.make_work(t, g, g.rows_primary),
     )  # fmt: skip
 
 
-@numba.njit(cache=True)
+@_search_kernel
 def swarm_search(
     t: TreeArrays,
     g: GoalTable,
@@ -380,7 +474,9 @@ def swarm_search(
     key: np.uint64,
     out_q: FloatArray,
     sw: SearchWork,
-) -> tuple[int, float, float, float, bool, FloatArray, int]:  # pragma: no cover - compiled
+    hist: FloatArray,
+    resume: bool,
+) -> tuple[int, int, float, float, float, bool, int, bool]:  # pragma: no cover - compiled
     """The memetic search of the ``swarm`` solver (see the module docstring).
 
     Args:
@@ -400,173 +496,197 @@ def swarm_search(
         key: Random stream key (:func:`stream_key`).
         out_q: The answer (lowest fitness seen), ``(nq,)``.
         sw: Scratch (:func:`make_search_work` for ``pop_size``).
+        hist: The history's buffer (first ``sw.hist``).
+        resume: Continue the run that returned :data:`SEARCH_PAUSED` (its state is in
+            ``sw``; ``hist``: a longer copy of the full buffer, :func:`grown`).
+
+    Compiled without reference counting (a leaf: its callers own every array), so it cannot
+    allocate: when a generation ends with ``hist`` full it saves its state in ``sw`` and
+    returns :data:`SEARCH_PAUSED`; the caller calls again with a longer copy of ``hist`` and
+    ``resume=True`` (:func:`run_search` is that loop's one home in the callers).
 
     Returns:
-        ``(evaluations, fitness, dp, dr, stopped, history, n_history)``: evaluations used,
-        the answer's fitness, its position [m] and angular [rad] errors, whether the stop test
-        ended the run, and the best fitness after each generation in ``history[:n_history]``
-        (``sw.hist``, or a longer array it grew into).
+        ``(code, evaluations, fitness, dp, dr, stopped, n_history, last_pending)``:
+        :data:`SEARCH_DONE` or :data:`SEARCH_PAUSED`; evaluations used, the answer's fitness,
+        its position [m] and angular [rad] errors, whether the stop test ended the run, the
+        entries of ``hist`` written (the best fitness after each generation) and whether the
+        caller appends the fitness as the last entry (an open generation, or none ended).
     """
     n = seed_q.shape[0]
     m = pop_size
     rows = max(m, 1)
     queue, pq, pdp, pdr, pst, pev = sw.queue, sw.pq, sw.pdp, sw.pdr, sw.pst, sw.pev
     arch_x, arch_f, tmp_x, lead, r1, r2 = sw.arch_x, sw.arch_f, sw.tmp_x, sw.lead, sw.r1, sw.r2
-    moved, hist, work = sw.moved, sw.hist, sw.lm_work
+    moved, work, si, sf = sw.moved, sw.lm_work, sw.state_i, sw.state_f
     if queue.shape[0] < rows or queue.shape[1] != n:
         raise ValueError("swarm_search: scratch made for fewer starts or another robot")
-    lm.reset_work(work)
-    n_hist = 0
-    n_arch = 0
-    for j in range(n):
-        queue[0, j] = seed_q[j]
-    n_queue = 1
     best_q = sw.best_q  # lowest fitness seen (not yet offered to the stop test)
     ev_q = sw.ev_q  # the evaluator's best (what the stop test has seen)
-    for j in range(n):
-        best_q[j] = seed_q[j]
-        ev_q[j] = seed_q[j]
-    best_f = np.inf
-    best_dp = np.inf
-    best_dr = np.inf
-    ev_f = np.inf
-    ev_dp = np.inf
-    ev_dr = np.inf
-    stopped = False
-    used = 0
-    gen0_rest = m > 1
-    open_gen = False
-    sec_per_eval = 5e-6
-    gen = 0
-    counter = np.uint64(0)
-    has_time = time_limit >= 0.0
     lo, hi = sw.lo, sw.hi  # random starts: uniform in the sampling window
-    sampling_window(b.lower, b.upper, seed_q, lo, hi)
+    has_time = time_limit >= 0.0
+    if resume:  # the state saved when the history filled (below)
+        n_hist, n_arch, n_queue, used, gen = si[0], si[1], si[2], si[3], si[4]
+        counter = np.uint64(si[5])
+        stopped, gen0_rest, open_gen = si[6] != 0, si[7] != 0, si[8] != 0
+        best_f, best_dp, best_dr, ev_f, ev_dp, ev_dr = sf[0], sf[1], sf[2], sf[3], sf[4], sf[5]
+        sec_per_eval = sf[6]
+    else:
+        lm.reset_work(work)
+        n_hist = 0
+        n_arch = 0
+        for j in range(n):
+            queue[0, j] = seed_q[j]
+            best_q[j] = seed_q[j]
+            ev_q[j] = seed_q[j]
+        n_queue = 1
+        best_f = np.inf
+        best_dp = np.inf
+        best_dr = np.inf
+        ev_f = np.inf
+        ev_dp = np.inf
+        ev_dr = np.inf
+        stopped = False
+        used = 0
+        gen0_rest = m > 1
+        open_gen = False
+        sec_per_eval = 5e-6
+        gen = 0
+        counter = np.uint64(0)
+        sampling_window(b.lower, b.upper, seed_q, lo, hi)
     while True:
-        if stopped or used >= max_evals:
-            break
-        t_call = now()
-        if has_time and t_call - t0 >= time_limit:
-            break
-        if unlimited and gen >= iterations:
-            break
-        cap = max_evals - used
-        if has_time:
-            left = time_limit - (t_call - t0)
-            cap = min(cap, max(8, int(0.8 * left / sec_per_eval)))
-        u = lm.lm_run(
-            queue[:n_queue], t, g, b, cfg, kernel_tol_pos, kernel_tol_rot, cap, True,
-            pq[:n_queue], pdp[:n_queue], pdr[:n_queue], pst[:n_queue], pev[:n_queue], work,
-        )  # fmt: skip
-        if u > 0 and has_time:
-            sec_per_eval = 0.5 * sec_per_eval + 0.5 * (now() - t_call) / u
-        open_gen = True
-        r = 0
-        while r < n_queue and pst[r] != 0:
-            r += 1
-        fi = np.inf
-        i_min = 0
-        for s in range(r):
-            f = pdp[s] + w_rot * pdr[s]
-            if f < fi:
-                fi = f
-                i_min = s
-        used += u
-        if fi < best_f:
-            best_f = fi
-            best_dp = pdp[i_min]
-            best_dr = pdr[i_min]
-            for j in range(n):
-                best_q[j] = pq[i_min, j]
-        if r > 0 and pst[r - 1] == CONVERGED:  # offered to the stop test at once
-            f_c = pdp[r - 1] + w_rot * pdr[r - 1]
-            if f_c < ev_f:
-                ev_f = f_c
-                ev_dp = pdp[r - 1]
-                ev_dr = pdr[r - 1]
-                for j in range(n):
-                    ev_q[j] = pq[r - 1, j]
-                stopped = ev_dp <= tol_pos and ev_dr <= tol_rot
-            if stopped or used >= max_evals or (has_time and now() - t0 >= time_limit):
+        if resume:  # straight to the end of the generation that filled the history
+            resume = False
+        else:
+            if stopped or used >= max_evals:
                 break
-        n_done = r - 1 if (r > 0 and pst[r - 1] == BUDGET) else r
-        # archive of polished local minima, best first (stable), pop_size kept
-        for s in range(n_done):
-            if pst[s] == CONVERGED:
+            t_call = now()
+            if has_time and t_call - t0 >= time_limit:
+                break
+            if unlimited and gen >= iterations:
+                break
+            cap = max_evals - used
+            if has_time:
+                left = time_limit - (t_call - t0)
+                cap = min(cap, max(8, int(0.8 * left / sec_per_eval)))
+            u = lm.lm_run(
+                queue[:n_queue], t, g, b, cfg, kernel_tol_pos, kernel_tol_rot, cap, True,
+                pq[:n_queue], pdp[:n_queue], pdr[:n_queue], pst[:n_queue], pev[:n_queue], work,
+            )  # fmt: skip
+            if u > 0 and has_time:
+                sec_per_eval = 0.5 * sec_per_eval + 0.5 * (now() - t_call) / u
+            open_gen = True
+            r = 0
+            while r < n_queue and pst[r] != 0:
+                r += 1
+            fi = np.inf
+            i_min = 0
+            for s in range(r):
+                f = pdp[s] + w_rot * pdr[s]
+                if f < fi:
+                    fi = f
+                    i_min = s
+            used += u
+            if fi < best_f:
+                best_f = fi
+                best_dp = pdp[i_min]
+                best_dr = pdr[i_min]
+                for j in range(n):
+                    best_q[j] = pq[i_min, j]
+            if r > 0 and pst[r - 1] == CONVERGED:  # offered to the stop test at once
+                f_c = pdp[r - 1] + w_rot * pdr[r - 1]
+                if f_c < ev_f:
+                    ev_f = f_c
+                    ev_dp = pdp[r - 1]
+                    ev_dr = pdr[r - 1]
+                    for j in range(n):
+                        ev_q[j] = pq[r - 1, j]
+                    stopped = ev_dp <= tol_pos and ev_dr <= tol_rot
+                if stopped or used >= max_evals or (has_time and now() - t0 >= time_limit):
+                    break
+            n_done = r - 1 if (r > 0 and pst[r - 1] == BUDGET) else r
+            # archive of polished local minima, best first (stable), pop_size kept
+            for s in range(n_done):
+                if pst[s] == CONVERGED:
+                    continue
+                f_new = pdp[s] + pdr[s]
+                k = n_arch
+                while k > 0 and arch_f[k - 1] > f_new:
+                    k -= 1
+                for z in range(n_arch, k, -1):
+                    arch_f[z] = arch_f[z - 1]
+                    for j in range(n):
+                        arch_x[z, j] = arch_x[z - 1, j]
+                arch_f[k] = f_new
+                for j in range(n):
+                    arch_x[k, j] = pq[s, j]
+                n_arch += 1
+            if n_arch > m:
+                n_arch = m
+            # unfinished rows (cut by the budget, or not reached) stay queued, partially polished
+            for s in range(n_done, n_queue):
+                for j in range(n):
+                    queue[s - n_done, j] = pq[s, j]
+            n_queue -= n_done
+            if n_queue == 0 and gen0_rest:
+                gen0_rest = False
+                for s in range(m - 1):
+                    for j in range(n):
+                        counter += np.uint64(1)
+                        queue[s, j] = min(lo[j] + (hi[j] - lo[j]) * _uniform(key, counter), hi[j])
+                n_queue = m - 1
                 continue
-            f_new = pdp[s] + pdr[s]
-            k = n_arch
-            while k > 0 and arch_f[k - 1] > f_new:
-                k -= 1
-            for z in range(n_arch, k, -1):
-                arch_f[z] = arch_f[z - 1]
-                for j in range(n):
-                    arch_x[z, j] = arch_x[z - 1, j]
-            arch_f[k] = f_new
-            for j in range(n):
-                arch_x[k, j] = pq[s, j]
-            n_arch += 1
-        if n_arch > m:
-            n_arch = m
-        # unfinished rows (cut by the budget, or not reached) stay queued, partially polished
-        for s in range(n_done, n_queue):
-            for j in range(n):
-                queue[s - n_done, j] = pq[s, j]
-        n_queue -= n_done
-        if n_queue == 0 and gen0_rest:
-            gen0_rest = False
-            for s in range(m - 1):
-                for j in range(n):
-                    counter += np.uint64(1)
-                    queue[s, j] = min(lo[j] + (hi[j] - lo[j]) * _uniform(key, counter), hi[j])
-            n_queue = m - 1
-        elif n_queue == 0:
+            if n_queue != 0:
+                continue
             if best_f < np.inf and best_f < ev_f:
                 ev_f, ev_dp, ev_dr = _offer(best_q, best_f, best_dp, best_dr, ev_q)
                 stopped = ev_dp <= tol_pos and ev_dr <= tol_rot
-            hist = _append(hist, n_hist, ev_f)
-            n_hist += 1
-            open_gen = False
-            gen += 1
-            frac = gen / max(iterations, 1)
-            if budget_total > 0:
-                frac = max(frac, (evals_before + used) / budget_total)
-            a = 2.0 * max(0.0, 1.0 - frac)
-            n_sw = min(n_swarm, m) if n_arch > 0 else 0
-            if n_sw > 0:
-                for L in range(3):
-                    for j in range(n):
-                        lead[L, j] = arch_x[L % n_arch, j]
-                for s in range(n_sw):
-                    for j in range(n):
-                        queue[s, j] = arch_x[s % n_arch, j]
-                for rr in (r1, r2):
-                    for L in range(3):
-                        for s in range(n_sw):
-                            for j in range(n):
-                                counter += np.uint64(1)
-                                rr[L, s, j] = _uniform(key, counter)
-                gwo_move_into(queue, n_sw, lead, a, r1, r2, moved)
-                for s in range(n_sw):
-                    for j in range(n):
-                        tmp_x[j] = moved[s, j]
-                    _clip_row(tmp_x, b)
-                    for j in range(n):
-                        queue[s, j] = tmp_x[j]
-            for s in range(n_sw, m):
+            if n_hist == hist.shape[0]:  # full: saved, grown by the caller, resumed here
+                si[0], si[1], si[2], si[3], si[4] = n_hist, n_arch, n_queue, used, gen
+                si[5] = np.int64(counter)
+                si[6], si[7], si[8] = stopped, gen0_rest, open_gen
+                sf[0], sf[1], sf[2], sf[3] = best_f, best_dp, best_dr, ev_f
+                sf[4], sf[5], sf[6] = ev_dp, ev_dr, sec_per_eval
+                return SEARCH_PAUSED, used, ev_f, ev_dp, ev_dr, stopped, n_hist, False
+        hist[n_hist] = ev_f
+        n_hist += 1
+        open_gen = False
+        gen += 1
+        frac = gen / max(iterations, 1)
+        if budget_total > 0:
+            frac = max(frac, (evals_before + used) / budget_total)
+        a = 2.0 * max(0.0, 1.0 - frac)
+        n_sw = min(n_swarm, m) if n_arch > 0 else 0
+        if n_sw > 0:
+            for L in range(3):
                 for j in range(n):
-                    counter += np.uint64(1)
-                    queue[s, j] = min(lo[j] + (hi[j] - lo[j]) * _uniform(key, counter), hi[j])
-            n_queue = m
+                    lead[L, j] = arch_x[L % n_arch, j]
+            for s in range(n_sw):
+                for j in range(n):
+                    queue[s, j] = arch_x[s % n_arch, j]
+            for rr in (r1, r2):
+                for L in range(3):
+                    for s in range(n_sw):
+                        for j in range(n):
+                            counter += np.uint64(1)
+                            rr[L, s, j] = _uniform(key, counter)
+            gwo_move_into(queue, n_sw, lead, a, r1, r2, moved)
+            for s in range(n_sw):
+                for j in range(n):
+                    tmp_x[j] = moved[s, j]
+                _clip_row(tmp_x, b)
+                for j in range(n):
+                    queue[s, j] = tmp_x[j]
+        for s in range(n_sw, m):
+            for j in range(n):
+                counter += np.uint64(1)
+                queue[s, j] = min(lo[j] + (hi[j] - lo[j]) * _uniform(key, counter), hi[j])
+        n_queue = m
     if best_f < np.inf and best_f < ev_f and not stopped:
         ev_f, ev_dp, ev_dr = _offer(best_q, best_f, best_dp, best_dr, ev_q)
         stopped = ev_dp <= tol_pos and ev_dr <= tol_rot
-    if open_gen or n_hist == 0:
-        hist = _append(hist, n_hist, ev_f)
-        n_hist += 1
     for j in range(n):
         out_q[j] = ev_q[j]
-    return used, ev_f, ev_dp, ev_dr, stopped, hist, n_hist
+    return SEARCH_DONE, used, ev_f, ev_dp, ev_dr, stopped, n_hist, open_gen or n_hist == 0
 
 
 @numba.njit(cache=True)
@@ -578,9 +698,11 @@ def swarm_search_flat(*a: Any) -> tuple[int, float, float, float, bool, FloatArr
     b = Bounds(*a[_E_TABLE:_E_BOUNDS])
     cfg = LMSettings(*a[_E_BOUNDS:_E_CFG])
     rest = a[_E_CFG:]
-    used, fit, dp, dr, stopped, hist, n_hist = swarm_search(  # type: ignore[call-arg]
-        t, g, b, cfg, *rest, make_search_work(t, g, rest[6])
-    )
+    used, fit, dp, dr, stopped, hist, n_hist = run_search(  # (inlined: no *args)
+        t, g, b, cfg, rest[0], rest[1], rest[2], rest[3], rest[4], rest[5], rest[6], rest[7],
+        rest[8], rest[9], rest[10], rest[11], rest[12], rest[13], rest[14], rest[15], rest[16],
+        make_search_work(t, g, rest[6]),
+    )  # fmt: skip
     return used, fit, dp, dr, stopped, hist[:n_hist].copy()
 
 
@@ -705,7 +827,7 @@ def solve_pose(
         g0.rows_primary, g0.rows_secondary, g0.col,
     )  # fmt: skip
     nq = q_start.shape[0]
-    used, fit, _dp, _dr, _stopped, hist, n = swarm_search(
+    used, fit, _dp, _dr, _stopped, hist, n = run_search(
         s.tree, g, b, s.cfg, q_start, s.kernel_tol_pos, s.kernel_tol_rot, s.tol_pos, s.tol_rot,
         s.w_rot, s.pop_size, s.n_swarm, s.iterations, s.unlimited, s.max_evals, s.budget_total,
         s.evals_before, s.time_limit, t0, seed_key(seed), out[:nq], s.work,
