@@ -620,6 +620,7 @@ class IKSolver:
         self._w_rot = 0.0 if tpl.position_only else float(tpl.w_rot)
         self._mid = np.ascontiguousarray(0.5 * (tpl.lower + tpl.upper))
         self._label = tpl.goals[0].describe()
+        self._nq = tpl.nq
         self._pinocchio_pose = robot.fk_pinocchio_bound()
         self._position_only = tpl.position_only
         self._out_len = tpl.nq + _HISTORY_CAP
@@ -730,7 +731,7 @@ class IKSolver:
             else:
                 q_start, start_checked = prepare_q0(tpl, q0), True
         elapsed = time.perf_counter() - t0
-        nq = tpl.nq
+        nq = self._nq
         q = out[:nq]
         if history is None:  # (it fit in out)
             history = out[nq : nq + n_hist]

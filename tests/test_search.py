@@ -445,3 +445,35 @@ def test_search_paused_by_a_full_history_resumes_to_the_same_run() -> None:
     assert a[:5] == c[:5] and a[6] == c[6]
     np.testing.assert_array_equal(a[5][: a[6]], c[5][: c[6]])
     np.testing.assert_array_equal(qa, qc)
+
+
+def test_packed_structures_are_equal_copies_in_one_buffer_per_dtype() -> None:
+    """search.packed (the IKSolver's state) copies every array of nested structures into
+    views of one buffer per dtype, keeping values, shapes, layout, writeability and so the
+    compiled types."""
+    import numba
+
+    from swarm_ik.kernels import lm, search
+
+    robot = swarm_ik.load_robot("panda")
+    p = swarm_ik.IKProblem(robot, robot.fk(robot.mid_q()))
+    b = lm.Bounds(p.lower, p.upper, robot.continuous_mask, robot.prismatic_mask)
+    src = (robot.tree, p.table(None), b)
+    out = search.packed(src)
+
+    def leaves(x: object) -> list[np.ndarray]:
+        if isinstance(x, np.ndarray):
+            return [x]
+        return [a for y in x for a in leaves(y)] if isinstance(x, tuple) else []
+
+    a_src, a_out = leaves(src), leaves(out)
+    assert len(a_src) == len(a_out) > 20
+    for x, y in zip(a_src, a_out, strict=True):
+        assert y is not x and y.base is not None and not np.shares_memory(x, y)
+        np.testing.assert_array_equal(x, y)
+        assert y.shape == x.shape and y.dtype == x.dtype and y.flags.c_contiguous
+        assert y.flags.writeable == x.flags.writeable
+        assert numba.typeof(y) == numba.typeof(x)
+    bases = {id(y.base) for y in a_out}
+    assert len(bases) == len({y.dtype for y in a_out})
+    assert type(out[1]) is lm.GoalTable and out[1].rows_primary == src[1].rows_primary
