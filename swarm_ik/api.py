@@ -611,6 +611,7 @@ class IKSolver:
         self.time_limit, self.max_evals = time_limit, max_evals
         self._template = IKProblem(robot, robot.fk_pinocchio(robot.mid_q()), w_rot=w_rot)
         self._state = None
+        self._fast: tuple[Any, ...] | None = None
         if solver == "swarm":
             from swarm_ik.solvers import hybrid
 
@@ -650,6 +651,11 @@ class IKSolver:
             self._errors = search.entry_point(
                 search.pose_errors_one, (reached, reached, self._mid, tpl.lower, tpl.upper)
             )
+            self._fast = (  # what the common call reads, in one tuple
+                self._kernel, self._solver, self._nq, self._out_len, self._mid,
+                self._pinocchio_pose, self._errors, tpl.lower, tpl.upper,
+                (self.tol_pos, self.tol_rot, self._position_only),
+            )  # fmt: skip
         self.solve(self._template.target)  # the first solve's Python paths warmed too
 
     def __reduce__(self) -> tuple[Any, ...]:
@@ -674,9 +680,46 @@ class IKSolver:
         Returns:
             The :class:`~swarm_ik.result.Result`, checked with Pinocchio.
         """
-        st = self._state
+        fast = self._fast
+        if (  # the common call, inline (with cold caches each Python call level costs µs)
+            fast is not None
+            and type(target) is np.ndarray
+            and target.dtype is FLOAT64
+            and target.shape == (4, 4)
+            and target.flags.c_contiguous
+            and type(seed) is int
+            and 0 <= seed < 2**63
+            and (q0 is None or (type(q0) is np.ndarray and q0.dtype is FLOAT64))
+        ):
+            kernel, state, nq, out_len, mid, pin_pose, errors, lower, upper, tols = fast
+            if q0 is None:
+                q_start, start_checked = mid, True
+            elif q0.shape == mid.shape and q0.flags.c_contiguous:
+                q_start, start_checked = q0, False  # read, never written
+            else:
+                return self._solve_pose(target, q0, seed)
+            out = np.empty(out_len)
+            t0 = time.perf_counter()
+            status, used, fit, n_hist, history = kernel(
+                state, target, q_start, False, start_checked, t0, seed, out
+            )
+            elapsed = time.perf_counter() - t0
+            if status != _RAN:  # (a target or start to check in Python: nothing ran)
+                return self._solve_pose(target, q0, seed)
+            q = out[:nq]
+            if history is None:  # (it fit in out)
+                history = out[nq : nq + n_hist]
+            reached = pin_pose(q)  # the independent check: Pinocchio's pose of q
+            if reached.flags.c_contiguous:
+                dp, dr, within = errors(reached, target, q, lower, upper)
+                tol_pos, tol_rot, position_only = tols
+                if position_only:
+                    dr = math.nan
+                if within and not (dp > tol_pos) and not (dr > tol_rot) and fit < math.inf:
+                    return self._converged(q, fit, dp, dr, used, elapsed, history, seed)
+            return self._finish(target, q, fit, used, elapsed, history, seed, None)
         if (
-            st is None
+            self._state is None
             or isinstance(target, IKProblem)
             or not (type(seed) is int and 0 <= seed < 2**63)
         ):
@@ -693,8 +736,8 @@ class IKSolver:
     def _solve_pose(
         self, target: Any, q0: Any, seed: int, problem: IKProblem | None = None
     ) -> Result:
-        """The per-call path of a 4×4 target: one compiled call (checks, search), the
-        Pinocchio check and the Result.  A target or start the compiled checks do not pass is
+        """The per-call path of a pose target in any form: one compiled call (checks,
+        search), then :meth:`_finish`.  A target or start the compiled checks do not pass is
         checked in Python (:func:`~swarm_ik.pose.as_pose`, :func:`prepare_q0`: refused, or
         fixed and marked checked) and the call repeated.  ``problem``: the plain pose problem
         whose (already validated) target this is, when :func:`solve` calls (its lane)."""
@@ -735,20 +778,31 @@ class IKSolver:
         q = out[:nq]
         if history is None:  # (it fit in out)
             history = out[nq : nq + n_hist]
+        return self._finish(pose, q, fit, used, elapsed, history, seed, problem)
+
+    def _finish(
+        self,
+        pose: np.ndarray,
+        q: np.ndarray,
+        fit: float,
+        used: int,
+        elapsed: float,
+        history: np.ndarray,
+        seed: int,
+        problem: IKProblem | None,
+    ) -> Result:
+        """The Pinocchio check of the answer ``q`` to ``pose`` and its :class:`Result` (the
+        reason of a failed solve read off ``problem``, or off the template with this
+        target)."""
+        tpl = self._template
         reached = self._pinocchio_pose(q)  # the independent check: Pinocchio's pose of q
         errors = self._errors if reached.flags.c_contiguous else _pose_errors()
         dp, dr, within = errors(reached, pose, q, tpl.lower, tpl.upper)
         if self._position_only:
             dr = math.nan
-        if within and not (dp > self.tol_pos) and not (dr > self.tol_rot) and math.isfinite(fit):
-            # (the common case, with every field as _result gives it)
-            return Result.of(
-                q=q, fitness=fit, position_error=dp, rotation_error=0.0 if dr != dr else dr,
-                n_evals=used, time_s=elapsed, success=True, within_limits=True,
-                history=history, solver=self.solver, seed=seed,
-                goal_errors=(GoalError.of(self._label, dp, dr, True),), reason="converged",
-            )  # fmt: skip
         met = not (dp > self.tol_pos) and not (dr > self.tol_rot)
+        if within and met and math.isfinite(fit):
+            return self._converged(q, fit, dp, dr, used, elapsed, history, seed)
         goal_errors = (GoalError.of(self._label, dp, dr, met),)
         if not math.isfinite(fit):
             fit = dp + (0.0 if math.isnan(dr) else self._w_rot * dr)
@@ -759,6 +813,35 @@ class IKSolver:
             problem, q, float(fit), goal_errors, within, spent, elapsed, history, self.solver,
             seed,
         )  # fmt: skip
+
+    def _converged(
+        self,
+        q: np.ndarray,
+        fit: float,
+        dp: float,
+        dr: float,
+        used: int,
+        elapsed: float,
+        history: np.ndarray,
+        seed: int,
+    ) -> Result:
+        """The :class:`Result` of a converged solve whose Pinocchio check passed (every field
+        as :func:`_result` gives it)."""
+        goal_error = object.__new__(GoalError)  # (GoalError.of and Result.of with dict
+        object.__setattr__(  # displays: no keyword dicts to build, ≈ 4 µs less cold)
+            goal_error, "__dict__",
+            {"goal": self._label, "position_error": dp, "rotation_error": dr, "met": True,
+             "details": None},
+        )  # fmt: skip
+        result = object.__new__(Result)
+        object.__setattr__(
+            result, "__dict__",
+            {"q": q, "fitness": fit, "position_error": dp,
+             "rotation_error": 0.0 if dr != dr else dr, "n_evals": used, "time_s": elapsed,
+             "success": True, "within_limits": True, "history": history, "solver": self.solver,
+             "seed": seed, "goal_errors": (goal_error,), "reason": "converged"},
+        )  # fmt: skip
+        return result
 
     def __repr__(self) -> str:
         return (

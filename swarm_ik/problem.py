@@ -60,9 +60,10 @@ class GoalError:
         ``__init__`` (the per-call path of :class:`swarm_ik.IKSolver`, as
         :meth:`swarm_ik.result.Result.of`)."""
         e = object.__new__(cls)
-        e.__dict__.update(
-            goal=goal, position_error=position_error, rotation_error=rotation_error, met=met,
-            details=None,
+        object.__setattr__(
+            e, "__dict__",
+            {"goal": goal, "position_error": position_error, "rotation_error": rotation_error,
+             "met": met, "details": None},
         )  # fmt: skip
         return e
 

@@ -477,3 +477,30 @@ def test_packed_structures_are_equal_copies_in_one_buffer_per_dtype() -> None:
     bases = {id(y.base) for y in a_out}
     assert len(bases) == len({y.dtype for y in a_out})
     assert type(out[1]) is lm.GoalTable and out[1].rows_primary == src[1].rows_primary
+
+
+def test_iksolver_common_call_gives_the_result_of_its_general_per_call_path() -> None:
+    """IKSolver.solve answers a C-contiguous float64 4x4 target with an integer seed inline;
+    every field of its Result (types included) equals that of the per-call path that takes
+    any target form (_solve_pose), for a start given and not."""
+    import dataclasses
+
+    robot = swarm_ik.load_robot("ur5")
+    ik = swarm_ik.IKSolver(robot, time_limit=0.005)
+    rng = np.random.default_rng(12)
+    for i, q in enumerate(robot.random_q(rng, 6)):
+        T = robot.fk(q)
+        q0 = None if i % 2 else robot.random_q(rng)
+        a, b = ik.solve(T, q0=q0, seed=i), ik._solve_pose(T, q0, i)
+        assert a.success and b.success
+        for f in dataclasses.fields(swarm_ik.Result):
+            x, y = getattr(a, f.name), getattr(b, f.name)
+            assert type(x) is type(y), f.name
+            if f.name == "time_s":
+                continue
+            if isinstance(x, np.ndarray):
+                np.testing.assert_array_equal(x, y)
+            elif f.name == "goal_errors":
+                assert [vars(e) for e in x] == [vars(e) for e in y]
+            else:
+                assert x == y, f.name
