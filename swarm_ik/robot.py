@@ -595,10 +595,13 @@ class RobotModel:
         if not self._pinocchio_q_is_q():
             return self.fk_pinocchio
         forward, place = pin.forwardKinematics, pin.updateFramePlacement
-        model, fid, data_of = self.model, self.frame_ids[0], self._data
+        model, fid, data_of, local = self.model, self.frame_ids[0], self._data, self._local
 
         def pose(q: FloatArray) -> FloatArray:
-            data = data_of()  # (one per thread)
+            try:
+                data = local.data  # (one per thread; made by _data on a thread's first call)
+            except AttributeError:
+                data = data_of()
             forward(model, data, q)
             return place(model, data, fid).homogeneous  # type: ignore[no-any-return]
 
