@@ -14,7 +14,7 @@ import numpy as np
 
 from swarm_ik.errors import InvalidArgumentError, unknown
 from swarm_ik.optimize import check_budget, make_rng
-from swarm_ik.pose import FLOAT64, as_pose, is_finite_nonneg
+from swarm_ik.pose import FLOAT64, ORTH_TOL, as_pose, is_finite_nonneg
 from swarm_ik.problem import REPLACEABLE, GoalError, IKProblem, largest_errors
 from swarm_ik.result import Result
 from swarm_ik.solvers import base
@@ -427,6 +427,8 @@ def solve(
     ):
         ik = _lane(problem, tol_pos, tol_rot, time_limit, max_evals)
         if ik is not None:
+            if problem.orth_tol == ORTH_TOL:  # (IKSolver re-checks a target at as_pose's)
+                return ik.solve(problem.target, q0, seed)
             return ik._solve_pose(problem.target, q0, seed, problem=problem)
     spec = base.get(solver)
     if prefer not in PREFER:

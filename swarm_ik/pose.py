@@ -149,7 +149,11 @@ def clearly_pose(
     return abs(det - 1.0) <= tol
 
 
-def as_pose(target: Any, *, orth_tol: float = 1e-6) -> FloatArray:
+ORTH_TOL = 1e-6
+"""The default tolerance on the orthonormality of a target's rotation (:func:`as_pose`)."""
+
+
+def as_pose(target: Any, *, orth_tol: float = ORTH_TOL) -> FloatArray:
     """Validate and convert a target to a 4x4 pose.
 
     Args:

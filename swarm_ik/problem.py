@@ -27,7 +27,7 @@ from swarm_ik.errors import InvalidArgumentError, InvalidTargetError, unknown
 from swarm_ik.fitness import FITNESS, get_fitness
 from swarm_ik.goals import AvoidCollisions, Goal, Pose, Position
 from swarm_ik.kernels import lm
-from swarm_ik.pose import as_pose, is_finite_nonneg
+from swarm_ik.pose import ORTH_TOL, as_pose, is_finite_nonneg
 from swarm_ik.robot import RobotModel
 
 SECONDARY_WEIGHT = 1e-3
@@ -132,7 +132,7 @@ REPLACEABLE = frozenset(("fitness", "is_success", "residual_jacobian", "cost"))
 """Methods of :class:`IKProblem` that may be replaced on an instance (e.g. wrapped to record a
 trace); a problem with one replaced runs the general Python path of the solvers."""
 
-_W_ROT, _LAM, _MU, _ORTH_TOL = 1.0, 10.0, 1.0, 1e-6
+_W_ROT, _LAM, _MU, _ORTH_TOL = 1.0, 10.0, 1.0, ORTH_TOL
 """The defaults of :class:`IKProblem`'s options (a call that leaves them all out, the common
 one, takes its fast path: they are compared by identity)."""
 
@@ -251,6 +251,8 @@ class IKProblem:
         self.w_rot = float(w_rot)
         terms: list[Goal] = []
         self.target = None
+        self.orth_tol = float(orth_tol)
+        """The orthonormality tolerance the target's rotation was checked with."""
         if target is not None:
             self.target = as_pose(target, orth_tol=orth_tol)
             if self.w_rot == 0.0:

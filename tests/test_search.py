@@ -504,3 +504,22 @@ def test_iksolver_common_call_gives_the_result_of_its_general_per_call_path() ->
                 assert [vars(e) for e in x] == [vars(e) for e in y]
             else:
                 assert x == y, f.name
+
+
+def test_problem_records_its_target_check_and_the_lane_uses_it() -> None:
+    """IKProblem keeps the orthonormality tolerance its target was checked with (template and
+    general constructor alike); solve()'s lane hands a problem checked at as_pose's default
+    to IKSolver.solve (which re-checks the target the same way) and the others to the path
+    that keeps the problem's own check (test_solve_lane_keeps_the_problems_own_target_check)."""
+    from swarm_ik.pose import ORTH_TOL, as_pose
+
+    robot = swarm_ik.load_robot("panda")
+    T = robot.fk(robot.mid_q())
+    assert as_pose.__kwdefaults__["orth_tol"] == ORTH_TOL
+    assert swarm_ik.IKProblem(robot, T).orth_tol == ORTH_TOL  # the template path
+    assert swarm_ik.IKProblem(robot, T, w_rot=0.5).orth_tol == ORTH_TOL  # the general one
+    assert swarm_ik.IKProblem(robot, T, orth_tol=1e-3).orth_tol == 1e-3
+    p = swarm_ik.IKProblem(robot, robot.fk(robot.random_q(np.random.default_rng(2))))
+    lane = swarm_ik.solve(p, seed=4, time_limit=0.005)
+    assert lane.success
+    _same_result(lane, swarm_ik.IKSolver(robot, time_limit=0.005).solve(p.target, seed=4))
