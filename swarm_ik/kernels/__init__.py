@@ -15,4 +15,7 @@ leaf: Any = numba.njit(cache=True, _nrt=False)  # type: ignore[call-overload]
 compiled without numba's reference counting.  A compiled call that passes arrays (or tuples
 of them) otherwise costs an atomic increment and decrement per array, about 0.4 µs per call
 of :func:`swarm_ik.kernels.fk.fk_one` inside the LM loop; the callers own the arrays and
-keep them alive.  (A leaf that tried to allocate would fail to compile, not misbehave.)"""
+keep them alive.  (A leaf that tried to allocate would fail to compile, not misbehave.)  A
+leaf calls only kernels that allocate nothing: numba compiles a callee first reached from a
+leaf with the leaf's flags, runtime off (hence the compiled clock's stack-allocated
+``timespec`` in ``search.now``, which the leaf ``search.swarm_search`` calls)."""
