@@ -199,21 +199,15 @@ def _pose_check(
     ``reached`` ``(4, 4)``, Pinocchio's pose of the goal frame at ``q``, against ``target``
     ``(4, 4)`` (the compiled twin of ``Pose.errors``) and whether ``q`` lies within
     ``[lower, upper]``; returns ``((GoalError,), within)``."""
-    dp, dr, within = _pose_errors()(reached, target, q, lower, upper)
+    if not _ERRORS_ONE:  # (the kernel loads on first use: not on import)
+        from swarm_ik.kernels.search import pose_errors_one
+
+        _ERRORS_ONE.append(pose_errors_one)
+    dp, dr, within = _ERRORS_ONE[0](reached, target, q, lower, upper)
     if position_only:
         dr = math.nan
     met = not (dp > tol_pos) and not (dr > tol_rot)
     return (GoalError.of(label, dp, dr, met),), within
-
-
-def _pose_errors() -> Any:
-    """:func:`swarm_ik.kernels.search.pose_errors_one` (the kernel loads on first use: not
-    on import)."""
-    if not _ERRORS_ONE:
-        from swarm_ik.kernels.search import pose_errors_one
-
-        _ERRORS_ONE.append(pose_errors_one)
-    return _ERRORS_ONE[0]
 
 
 _ERRORS_ONE: list[Any] = []
@@ -814,17 +808,17 @@ class IKSolver:
         reason of a failed solve read off ``problem``, or off the template with this
         target)."""
         tpl = self._template
-        reached = self._pinocchio_pose(q)  # the independent check: Pinocchio's pose of q
-        errors = self._errors if reached.flags.c_contiguous else _pose_errors()
-        dp, dr, within = errors(reached, pose, q, tpl.lower, tpl.upper)
-        if self._position_only:
-            dr = math.nan
-        met = not (dp > self.tol_pos) and not (dr > self.tol_rot)
-        goal_errors = (GoalError.of(self._label, dp, dr, met),)
+        goal_errors, within = _pose_check(  # the independent check
+            self._pinocchio_pose(q), self._label, pose, self._position_only, q, tpl.lower,
+            tpl.upper, self.tol_pos, self.tol_rot,
+        )  # fmt: skip
+        (ge,) = goal_errors
         if not math.isfinite(fit):
-            fit = dp + (0.0 if math.isnan(dr) else self._w_rot * dr)
+            fit = ge.position_error + (
+                0.0 if math.isnan(ge.rotation_error) else self._w_rot * ge.rotation_error
+            )
         if problem is None:  # end_reason reads its target when the solve failed
-            problem = tpl if within and met else tpl.with_target(pose)
+            problem = tpl if within and ge.met else tpl.with_target(pose)
         spent = _Spent(self.max_evals, used, self.time_limit, elapsed)
         return _result(
             problem, q, float(fit), goal_errors, within, spent, elapsed, history, self.solver,
