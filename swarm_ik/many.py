@@ -385,6 +385,7 @@ def solve_many(
 
     if not use_analytic:
         problem.robot.warm_up()  # compiled kernels loaded before the clock starts
+        _warm_up()
     t0 = time.perf_counter()
     if use_analytic:
         qs, dps, drs = analytic.solve_supported(problem, ref, tol_pos, tol_rot)
@@ -593,6 +594,21 @@ def _new_rows(
             out[c] = s
             c += 1
     return c
+
+
+_WARM: list[bool] = []
+
+
+def _warm_up() -> None:
+    """Compile (or load from numba's cache) this module's kernels once per process, before a
+    solve's clock starts (their types do not depend on the robot)."""
+    if _WARM:
+        return
+    z, flags = np.zeros((1, 1)), np.ones(1, dtype=np.bool_)
+    _fold_rows(z, z[0], z[0], flags, z[0], np.empty((1, 1)), np.empty(1, dtype=np.bool_))
+    _min_dist2(z, z, flags, np.empty(1))
+    _new_rows(z, z, flags, 1.0, np.empty(1, dtype=np.int64))
+    _WARM.append(True)
 
 
 class _Folder:

@@ -71,3 +71,32 @@ def test_first_solve_of_a_fresh_process_meets_its_budget(warm: str, call: str) -
     ok, t = _run(code).split()
     assert ok == "True", t
     assert float(t) < (0.05 if "solve_many" in call else 0.005)
+
+
+def test_console_script_start_up_keeps_scipy_importable() -> None:
+    """The console script hides scipy.linalg from numba's one BLAS probe, then puts it back;
+    its solve is the same, and the collector is off only for its own process."""
+    code = (
+        "import gc, json, sys\n"
+        "sys.argv = ['swarm-ik', 'solve', '--robot', 'panda', '--json', '--from-q',"
+        " '0.1', '-0.5', '0.3', '-2.0', '0.2', '1.5', '0.4']\n"
+        "from swarm_ik import cli\n"
+        "import contextlib, io\n"
+        "buf = io.StringIO()\n"
+        "with contextlib.redirect_stdout(buf):\n"
+        "    rc = cli.main()\n"
+        "hidden = 'scipy.linalg' in sys.modules\n"
+        "import scipy.linalg.cython_blas\n"
+        "print(json.dumps([rc, json.loads(buf.getvalue())['success'], hidden, gc.isenabled()]))\n"
+    )
+    assert json.loads(_run(code)) == [0, True, False, False]
+
+
+def test_main_with_argv_leaves_the_collector_alone() -> None:
+    import gc
+
+    from swarm_ik import cli
+
+    assert gc.isenabled()
+    assert cli.main(["robots"]) == 0
+    assert gc.isenabled()
