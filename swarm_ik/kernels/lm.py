@@ -37,7 +37,7 @@ import numba
 import numpy as np
 
 from swarm_ik._types import BoolArray, FloatArray, IntArray
-from swarm_ik.kernels import leaf
+from swarm_ik.kernels import inline_copy, leaf
 from swarm_ik.kernels.fk import FKScratch, TreeArrays, fk_one
 from swarm_ik.kernels.lie import jr_inv_nb, log3_nb
 from swarm_ik.kernels.spheres import SphereArrays, penetration
@@ -568,20 +568,23 @@ def polish_outputs(
 
 @leaf
 def _chol_factor(a: FloatArray, n: int) -> bool:  # pragma: no cover - compiled
-    """Cholesky factor of the SPD ``a[:n, :n]`` in place (lower); False if not SPD."""
+    """Cholesky factor ``L`` of the SPD ``a[:n, :n]`` in place, below the diagonal, with
+    ``1 / L[j, j]`` on the diagonal (one division per column instead of one per entry, in
+    this and in :func:`_chol_back`: divisions were half the time of an LM step); False if
+    not SPD."""
     for j in range(n):
         s = a[j, j]
         for k in range(j):
             s -= a[j, k] * a[j, k]
         if not s > 0.0:
             return False
-        d = math.sqrt(s)
-        a[j, j] = d
+        inv = 1.0 / math.sqrt(s)
+        a[j, j] = inv
         for i in range(j + 1, n):
             s = a[i, j]
             for k in range(j):
                 s -= a[i, k] * a[j, k]
-            a[i, j] = s / d
+            a[i, j] = s * inv
     return True
 
 
@@ -592,12 +595,12 @@ def _chol_back(a: FloatArray, b: FloatArray, n: int, x: FloatArray) -> None:  # 
         s = b[i]
         for k in range(i):
             s -= a[i, k] * x[k]
-        x[i] = s / a[i, i]
+        x[i] = s * a[i, i]
     for i in range(n - 1, -1, -1):
         s = x[i]
         for k in range(i + 1, n):
             s -= a[k, i] * x[k]
-        x[i] = s / a[i, i]
+        x[i] = s * a[i, i]
 
 
 @leaf
@@ -638,6 +641,20 @@ def evaluate(
     if trial:
         return goal_rows(q, w.fk, g, b, True, want_jac, w.res_t, w.jac_t, w.err_t, w.m3, w.v3)
     return goal_rows(q, w.fk, g, b, True, want_jac, w.res, w.jac, w.err, w.m3, w.v3)
+
+
+_fk_one_inline = inline_copy(fk_one)
+_goal_rows_inline = inline_copy(goal_rows)
+_within_tolerance_inline = inline_copy(within_tolerance)
+
+
+@inline_copy
+def _evaluate_inline(
+    q: FloatArray, t: TreeArrays, g: GoalTable, b: Bounds, w: Work
+) -> float:  # pragma: no cover - compiled
+    """:func:`evaluate` of a trial point (with Jacobians) inlined into the LM step."""
+    _fk_one_inline(q, t, w.fk, True)
+    return _goal_rows_inline(q, w.fk, g, b, True, True, w.res_t, w.jac_t, w.err_t, w.m3, w.v3)
 
 
 @leaf
@@ -706,7 +723,7 @@ def lm_run(
         lam = cfg.lam0
         stall = 0
         while True:
-            if within_tolerance(w.err, g, tol_pos, tol_rot):
+            if _within_tolerance_inline(w.err, g, tol_pos, tol_rot):
                 status = CONVERGED
                 break
             if ev_s >= cfg.max_iters:
@@ -761,7 +778,7 @@ def lm_run(
             if big > cfg.max_step:
                 shrink = cfg.max_step / big
             _step_into_bounds(q, delta, shrink, b, q_t)
-            cost_t = evaluate(q_t, t, g, b, w, True, True)
+            cost_t = _evaluate_inline(q_t, t, g, b, w)
             used += 1
             ev_s += 1
             if cost_t < cost:
