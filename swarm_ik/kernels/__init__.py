@@ -21,16 +21,11 @@ leaf with the leaf's flags, runtime off (hence the compiled clock's stack-alloca
 ``timespec`` in ``search.now``, which the leaf ``search.swarm_search`` calls)."""
 
 
-def inline_copy(kernel: Any) -> Any:
-    """A copy of the leaf ``kernel`` (or a plain function) that numba inlines into each
-    compiled caller (its code typed in place of a call), for the one hot call site that
-    needs it.
-
-    A call of a kernel taking the tree, goal table and scratch tuples passes every array of
-    them field by field (a few hundred words).  Inlining FK, the goal residuals and the
-    success test into the LM step took an evaluation from 1.13-1.2 µs to 0.79 µs (Panda,
-    batch).  Only the LM loop's trial evaluation uses the copies: every inlined site is
-    compiled again in each caller, and inlining them at every site made the first compile
-    4x longer (this one site: 46 s -> 71 s for :func:`swarm_ik.load_robot`'s kernels).
-    """
-    return numba.njit(_nrt=False, inline="always")(getattr(kernel, "py_func", kernel))
+hot: Any = numba.njit(cache=True, _nrt=False, forceinline=True)  # type: ignore[call-overload]
+"""A :data:`leaf` that LLVM inlines into every compiled caller (``alwaysinline``): the
+forward kinematics, the goal residuals, the success test and the evaluation around them.
+A call of a kernel taking the tree, goal table and scratch tuples passes every array of them
+field by field (a few hundred words); inlined, an LM evaluation went from 1.13-1.2 µs to
+0.75-0.85 µs (Panda, batch), for 16 s more of first compile (46 s -> 62 s for
+:func:`swarm_ik.load_robot`'s kernels).  (numba's own ``inline="always"``, which types the
+callee again at each site, made that compile 4x longer.)"""

@@ -21,7 +21,7 @@ import numba
 import numpy as np
 
 from swarm_ik._types import FloatArray, IntArray
-from swarm_ik.kernels import leaf
+from swarm_ik.kernels import hot
 
 REVOLUTE = 0
 PRISMATIC = 1
@@ -214,7 +214,7 @@ def fk_scratch(tree: TreeArrays) -> FKScratch:
     )
 
 
-@leaf
+@hot
 def fk_one(
     q: FloatArray, t: TreeArrays, s: FKScratch, want_jac: bool
 ) -> None:  # pragma: no cover - compiled

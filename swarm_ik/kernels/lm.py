@@ -37,7 +37,7 @@ import numba
 import numpy as np
 
 from swarm_ik._types import BoolArray, FloatArray, IntArray
-from swarm_ik.kernels import inline_copy, leaf
+from swarm_ik.kernels import hot, leaf
 from swarm_ik.kernels.fk import FKScratch, TreeArrays, fk_one
 from swarm_ik.kernels.lie import jr_inv_nb, log3_nb
 from swarm_ik.kernels.spheres import SphereArrays, penetration
@@ -269,7 +269,7 @@ def goal_table(
 
 
 # --------------------------------------------------------------------------- residuals
-@leaf
+@hot
 def goal_rows(
     q: FloatArray,
     s: FKScratch,
@@ -439,7 +439,7 @@ def goal_rows(
     return cost
 
 
-@leaf
+@hot
 def within_tolerance(
     err: FloatArray, g: GoalTable, tol_pos: float, tol_rot: float
 ) -> bool:  # pragma: no cover - compiled
@@ -625,7 +625,7 @@ def _step_into_bounds(
         out[j] = into_bounds(q[j] + scale * delta[j], j, b)
 
 
-@leaf
+@hot
 def evaluate(
     q: FloatArray,
     t: TreeArrays,
@@ -641,20 +641,6 @@ def evaluate(
     if trial:
         return goal_rows(q, w.fk, g, b, True, want_jac, w.res_t, w.jac_t, w.err_t, w.m3, w.v3)
     return goal_rows(q, w.fk, g, b, True, want_jac, w.res, w.jac, w.err, w.m3, w.v3)
-
-
-_fk_one_inline = inline_copy(fk_one)
-_goal_rows_inline = inline_copy(goal_rows)
-_within_tolerance_inline = inline_copy(within_tolerance)
-
-
-@inline_copy
-def _evaluate_inline(
-    q: FloatArray, t: TreeArrays, g: GoalTable, b: Bounds, w: Work
-) -> float:  # pragma: no cover - compiled
-    """:func:`evaluate` of a trial point (with Jacobians) inlined into the LM step."""
-    _fk_one_inline(q, t, w.fk, True)
-    return _goal_rows_inline(q, w.fk, g, b, True, True, w.res_t, w.jac_t, w.err_t, w.m3, w.v3)
 
 
 @leaf
@@ -723,7 +709,7 @@ def lm_run(
         lam = cfg.lam0
         stall = 0
         while True:
-            if _within_tolerance_inline(w.err, g, tol_pos, tol_rot):
+            if within_tolerance(w.err, g, tol_pos, tol_rot):
                 status = CONVERGED
                 break
             if ev_s >= cfg.max_iters:
@@ -778,7 +764,7 @@ def lm_run(
             if big > cfg.max_step:
                 shrink = cfg.max_step / big
             _step_into_bounds(q, delta, shrink, b, q_t)
-            cost_t = _evaluate_inline(q_t, t, g, b, w)
+            cost_t = evaluate(q_t, t, g, b, w, True, True)
             used += 1
             ev_s += 1
             if cost_t < cost:
