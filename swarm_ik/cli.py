@@ -340,6 +340,7 @@ def main(argv: Sequence[str] | None = None) -> int:
         as_json = bool(getattr(args, "json", False))
         if script and args.command not in SHORT_COMMANDS:
             gc.enable()
+            script = False  # a long command: collect, and exit the usual way
         with warnings.catch_warnings():
             warnings.simplefilter("default")
             # Dask's start-up chatter (dashboard port taken, sockets) is not the user's concern
@@ -364,8 +365,8 @@ def main(argv: Sequence[str] | None = None) -> int:
             type(exc).__name__,
         )
     finally:
-        if script:  # interpreter shutdown then skips the ~10^6 objects numba made (~0.25 s)
-            gc.freeze()
+        if script:  # shutdown then skips the ~10^6 objects numba made (~0.25 s): a short
+            gc.freeze()  # command only (extensions that report leaks at exit stay quiet)
 
 
 SHORT_COMMANDS = ("solve", "robots")
