@@ -701,14 +701,44 @@ def lm_run(
         if used >= max_evals:
             break
         for j in range(n):
-            q[j] = starts[s, j]
-        cost = evaluate(q, t, g, b, w, True, False)
-        used += 1
-        ev_s = 1
+            q_t[j] = starts[s, j]
+        cost = np.inf
+        ev_s = 0
         status = ITER_CAP
         lam = cfg.lam0
         stall = 0
         while True:
+            # the one evaluation site (the start, then each trial): one inlined copy of the
+            # FK and the goal rows in this kernel
+            cost_t = evaluate(q_t, t, g, b, w, True, True)
+            used += 1
+            ev_s += 1
+            if ev_s == 1 or cost_t < cost:  # the start, or an accepted step
+                if ev_s > 1:
+                    if cost_t > cost * (1.0 - cfg.stall_rel):
+                        stall += 1
+                    else:
+                        stall = 0
+                    lam = max(lam * 0.1, 1e-12)
+                for j in range(n):
+                    q[j] = q_t[j]
+                for a in range(m):
+                    w.res[a] = w.res_t[a]
+                    for j in range(n):
+                        w.jac[a, j] = w.jac_t[a, j]
+                for i in range(w.err.shape[0]):
+                    w.err[i, 0] = w.err_t[i, 0]
+                    w.err[i, 1] = w.err_t[i, 1]
+                cost = cost_t
+                if stall >= cfg.stall_iters and not within_tolerance(w.err, g, tol_pos, tol_rot):
+                    status = LOCAL_MIN
+                    break
+            else:
+                lam = max(lam * 10.0, 1e-12)
+                stall += 1
+                if lam > 1e8 or stall >= cfg.stall_iters:
+                    status = LOCAL_MIN
+                    break
             if within_tolerance(w.err, g, tol_pos, tol_rot):
                 status = CONVERGED
                 break
@@ -764,34 +794,6 @@ def lm_run(
             if big > cfg.max_step:
                 shrink = cfg.max_step / big
             _step_into_bounds(q, delta, shrink, b, q_t)
-            cost_t = evaluate(q_t, t, g, b, w, True, True)
-            used += 1
-            ev_s += 1
-            if cost_t < cost:
-                if cost_t > cost * (1.0 - cfg.stall_rel):
-                    stall += 1
-                else:
-                    stall = 0
-                for j in range(n):
-                    q[j] = q_t[j]
-                for a in range(m):
-                    w.res[a] = w.res_t[a]
-                    for j in range(n):
-                        w.jac[a, j] = w.jac_t[a, j]
-                for i in range(w.err.shape[0]):
-                    w.err[i, 0] = w.err_t[i, 0]
-                    w.err[i, 1] = w.err_t[i, 1]
-                cost = cost_t
-                lam = max(lam * 0.1, 1e-12)
-                if stall >= cfg.stall_iters and not within_tolerance(w.err, g, tol_pos, tol_rot):
-                    status = LOCAL_MIN
-                    break
-            else:
-                lam = max(lam * 10.0, 1e-12)
-                stall += 1
-                if lam > 1e8 or stall >= cfg.stall_iters:
-                    status = LOCAL_MIN
-                    break
         dp, dr = max_errors(w.err, g)
         for j in range(n):
             out_q[s, j] = q[j]
