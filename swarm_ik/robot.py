@@ -276,6 +276,23 @@ def _reduce(
     )
 
 
+def _converted(
+    plan: tuple[tuple[int, float, float, int, bool], ...], nq_pin: int, qv: list[float]
+) -> list[float]:
+    """Pinocchio's configuration (``nq_pin`` values) of the joint values ``qv`` by
+    :meth:`RobotModel._to_pinocchio_plan`: mimic followers read their drivers, continuous
+    joints become (cos, sin).  Scalar maths: a few joints, in every solve's check."""
+    out = [0.0] * nq_pin
+    for qi, mult, offset, at, continuous in plan:
+        v = mult * qv[qi] + offset
+        if continuous:
+            out[at] = math.cos(v)
+            out[at + 1] = math.sin(v)
+        else:
+            out[at] = v
+    return out
+
+
 @dataclass(frozen=True, eq=False)
 class RobotModel:
     """A URDF reduced to the joints between the root and its goal frames, with limits, joint
@@ -519,24 +536,20 @@ class RobotModel:
         q = np.asarray(q, dtype=float).reshape(self.nq)
         if self._pinocchio_q_is_q():
             return q.copy() if copy else q
+        return np.array(_converted(self._to_pinocchio_plan(), self.model.nq, q.tolist()))
+
+    def _to_pinocchio_plan(self) -> tuple[tuple[int, float, float, int, bool], ...]:
+        """Per Pinocchio joint: (driver's index in ``q``, multiplier, offset, index in
+        Pinocchio's configuration, continuous), made once."""
         plan = self._cache.get("to_pinocchio")
-        if plan is None:  # (driver, multiplier, offset, index in Pinocchio's q, continuous)
+        if plan is None:
             t = self.tree
-            plan = self._cache["to_pinocchio"] = [
+            plan = self._cache["to_pinocchio"] = tuple(
                 (int(t.q_index[j - 1]), float(t.multiplier[j - 1]), float(t.offset[j - 1]),
                  int(self.model.joints[j].idx_q), self.model.joints[j].nq == 2)
                 for j in range(1, self.model.njoints)
-            ]  # fmt: skip
-        qv = q.tolist()  # scalar maths: a few joints (this runs in every solve's check)
-        out = [0.0] * self.model.nq
-        for qi, mult, offset, at, continuous in plan:
-            v = mult * qv[qi] + offset  # mimic followers read their drivers
-            if continuous:
-                out[at] = math.cos(v)
-                out[at + 1] = math.sin(v)
-            else:
-                out[at] = v
-        return np.array(out)
+            )  # fmt: skip
+        return plan  # type: ignore[no-any-return]
 
     def from_pinocchio(self, q_pin: FloatArray) -> FloatArray:
         """Inverse of :meth:`to_pinocchio`: one value per solved joint."""
@@ -590,22 +603,33 @@ class RobotModel:
     def fk_pinocchio_bound(self) -> Callable[[FloatArray], FloatArray]:
         """:meth:`fk_pinocchio` of the first goal frame as a function of ``q`` with its
         lookups made once (the check of :class:`swarm_ik.IKSolver`'s answers; 7 µs instead of
-        12 with cold caches).  Where Pinocchio's configuration is not ``q`` itself, it is
-        :meth:`fk_pinocchio` (its conversion is needed)."""
-        if not self._pinocchio_q_is_q():
-            return self.fk_pinocchio
+        12 with cold caches).  Where Pinocchio's configuration is not ``q`` itself
+        (continuous joints in (cos, sin), mimic followers), the conversion's plan is bound
+        too (:meth:`to_pinocchio`'s scalar loop, without its checks and lookups)."""
         forward, place = pin.forwardKinematics, pin.updateFramePlacement
         model, fid, data_of, local = self.model, self.frame_ids[0], self._data, self._local
+        if self._pinocchio_q_is_q():
 
-        def pose(q: FloatArray) -> FloatArray:
+            def pose(q: FloatArray) -> FloatArray:
+                try:
+                    data = local.data  # (one per thread; made by _data on a thread's first call)
+                except AttributeError:
+                    data = data_of()
+                forward(model, data, q)
+                return place(model, data, fid).homogeneous  # type: ignore[no-any-return]
+
+            return pose
+        plan, nq_pin, array = self._to_pinocchio_plan(), model.nq, np.array
+
+        def pose_converted(q: FloatArray) -> FloatArray:
             try:
-                data = local.data  # (one per thread; made by _data on a thread's first call)
+                data = local.data
             except AttributeError:
                 data = data_of()
-            forward(model, data, q)
+            forward(model, data, array(_converted(plan, nq_pin, q.tolist())))
             return place(model, data, fid).homogeneous  # type: ignore[no-any-return]
 
-        return pose
+        return pose_converted
 
     def fk_pinocchio_many(self, qs: FloatArray, frame: str | None = None) -> FloatArray:
         """Reference poses of one goal frame (default the first) for each row of ``qs``

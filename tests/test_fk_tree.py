@@ -122,6 +122,7 @@ def test_mimic_follower_on_the_chain_is_driven_by_its_driver(tmp_path) -> None:
         np.testing.assert_allclose(robot.fk_jacobian(q)[1], robot.jacobian_pinocchio(q), atol=1e-12)
         qp = robot.to_pinocchio(q)
         assert qp[2] == pytest.approx(-0.5 * q[0] + 0.2)
+        np.testing.assert_array_equal(robot.fk_pinocchio_bound()(q), robot.fk_pinocchio(q))
     target = robot.fk(robot.random_q(rng))
     res = swarm_ik.solve(swarm_ik.IKProblem(robot, target, w_rot=0.0), seed=0)
     assert res.success

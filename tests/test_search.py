@@ -320,10 +320,11 @@ def test_pose_solver_rebuilds_the_goal_table_field_by_field() -> None:
 @pytest.mark.parametrize("name", ["panda", "kinova"])
 def test_iksolver_checks_with_pinocchios_pose_of_the_first_goal_frame(name: str) -> None:
     """IKSolver's check reads Pinocchio directly where its configuration is q itself (panda),
-    else through fk_pinocchio (kinova's continuous joints): the same pose either way."""
+    else through a bound conversion (kinova's continuous joints): fk_pinocchio's pose either
+    way (a mimic chain: tests/test_fk_tree.py)."""
     robot = swarm_ik.load_robot(name)
     pose = robot.fk_pinocchio_bound()
-    assert (pose.__name__ == "pose") == (name == "panda")  # the direct binding, or the fallback
+    assert pose.__name__ == ("pose" if name == "panda" else "pose_converted")
     for q in robot.random_q(np.random.default_rng(5), 5):
         np.testing.assert_array_equal(pose(q), robot.fk_pinocchio(q))
 
