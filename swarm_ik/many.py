@@ -26,6 +26,7 @@ path when it applies and eaik is installed, else the numerical one.
 from __future__ import annotations
 
 import dataclasses
+import functools
 import math
 import time
 import weakref
@@ -596,19 +597,14 @@ def _new_rows(
     return c
 
 
-_WARM: list[bool] = []
-
-
+@functools.cache
 def _warm_up() -> None:
     """Compile (or load from numba's cache) this module's kernels once per process, before a
     solve's clock starts (their types do not depend on the robot)."""
-    if _WARM:
-        return
     z, flags = np.zeros((1, 1)), np.ones(1, dtype=np.bool_)
     _fold_rows(z, z[0], z[0], flags, z[0], np.empty((1, 1)), np.empty(1, dtype=np.bool_))
     _min_dist2(z, z, flags, np.empty(1))
     _new_rows(z, z, flags, 1.0, np.empty(1, dtype=np.int64))
-    _WARM.append(True)
 
 
 class _Folder:
