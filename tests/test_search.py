@@ -394,9 +394,41 @@ def test_swarm_search_refuses_scratch_made_for_fewer_starts() -> None:
     with pytest.raises(ValueError, match="scratch made for fewer starts"):
         search.swarm_search(
             t, g, b, search.typed_settings(lm.DEFAULT_LM), seed_q, 5e-6, 5e-6, 1e-5, 1e-5, 1.0,
-            8, 4, 10, True, 1000, -1, 0, search.NO_LIMIT, 0.0, search.seed_key(0),
+            8, 4, 10, True, 1000, -1, 0, search.NO_LIMIT, 0.0, search.seed_key(0), -1,
             np.empty(robot.nq), small, small.hist, False,
         )  # fmt: skip
+
+
+def test_swarm_search_keyed_by_a_seed_draws_what_the_seeds_key_draws() -> None:
+    """swarm_search given an integer seed makes its key (seed_key) at its first draw: the
+    same run as given that key, on a target whose first start does not converge (so the run
+    draws), and no draw at all when the first start converges (same result either way)."""
+    from swarm_ik.kernels import lm, search
+
+    robot = swarm_ik.load_robot("panda")
+    far = np.eye(4)
+    far[:3, 3] = (3.0, 0.0, 0.5)  # out of reach: every generation draws
+    near = robot.fk(robot.mid_q() + 0.05)
+    seed_q = np.ascontiguousarray(robot.mid_q())
+    for target in (far, near):
+        p = swarm_ik.IKProblem(robot, target)
+        t, g = robot.tree, p.table(None)
+        b = lm.Bounds(p.lower, p.upper, robot.continuous_mask, robot.prismatic_mask)
+        runs = []
+        for key, seed in ((search.seed_key(11), -1), (np.uint64(0), 11)):
+            sw = search.make_search_work(t, g, 4)
+            out = np.empty(robot.nq)
+            res = search.swarm_search(
+                t, g, b, search.typed_settings(lm.DEFAULT_LM), seed_q, 5e-6, 5e-6, 1e-5,
+                1e-5, 1.0, 4, 2, 10, False, 3000, 3000, 0, search.NO_LIMIT, 0.0, key, seed, out,
+                sw, sw.hist, False,
+            )  # fmt: skip
+            runs.append((res, out, sw.hist[: res[6]].copy()))
+        (ra, qa, ha), (rb, qb, hb) = runs
+        assert ra == rb
+        np.testing.assert_array_equal(qa, qb)
+        np.testing.assert_array_equal(ha, hb)
+    assert ra[1] < 50  # (the near target: converged from its first start, nothing drawn)
 
 
 def test_solve_pose_holds_the_gil_so_threads_take_turns_with_its_scratch() -> None:

@@ -48,7 +48,7 @@ from numba.experimental import structref
 from numba.extending import intrinsic
 
 from swarm_ik._types import BoolArray, FloatArray, IntArray
-from swarm_ik.kernels import leaf, lm
+from swarm_ik.kernels import hot, leaf, lm
 from swarm_ik.kernels.fk import TreeArrays
 from swarm_ik.kernels.lm import BUDGET, CONVERGED, Bounds, GoalTable, LMSettings
 from swarm_ik.pose import clearly_pose
@@ -181,7 +181,7 @@ def stream_key(rng: np.random.Generator) -> np.uint64:
 _M32 = np.uint64(0xFFFFFFFF)
 
 
-@numba.njit(cache=True)
+@leaf
 def _mul128(ah: Any, al: Any, bh: Any, bl: Any) -> tuple[Any, Any]:  # pragma: no cover
     """``(ah·2⁶⁴ + al)·(bh·2⁶⁴ + bl) mod 2¹²⁸`` as ``(high, low)`` words (uint64 each)."""
     s32 = np.uint64(32)
@@ -195,17 +195,38 @@ def _mul128(ah: Any, al: Any, bh: Any, bl: Any) -> tuple[Any, Any]:  # pragma: n
     return hi + ah * bl + al * bh, al * bl
 
 
-@numba.njit(cache=True)
+@leaf
 def _add128(ah: Any, al: Any, bh: Any, bl: Any) -> tuple[Any, Any]:  # pragma: no cover
     """``(ah·2⁶⁴ + al) + (bh·2⁶⁴ + bl) mod 2¹²⁸`` as ``(high, low)`` words (uint64 each)."""
     lo = al + bl
     return ah + bh + (np.uint64(1) if lo < al else np.uint64(0)), lo
 
 
-@numba.njit(cache=True)
+@leaf
+def _hashmix(
+    value: np.uint64, h: np.uint64, mult: np.uint64
+) -> tuple[Any, Any]:  # pragma: no cover
+    """numpy ``SeedSequence``'s ``hashmix`` of ``value`` with the hash constant ``h``:
+    ``(mixed, next h)``."""
+    v = value ^ h
+    h = (h * mult) & _M32
+    v = (v * h) & _M32
+    return v ^ (v >> np.uint64(16)), h
+
+
+@leaf
+def _mix(x: np.uint64, y: np.uint64) -> np.uint64:  # pragma: no cover - compiled
+    """numpy ``SeedSequence``'s ``mix``."""
+    r = (np.uint64(0xCA01F9DD) * x - np.uint64(0x4973F715) * y) & _M32
+    return r ^ (r >> np.uint64(16))
+
+
+@leaf
 def seed_key(seed: int) -> np.uint64:  # pragma: no cover - compiled
     """``stream_key(numpy.random.default_rng(seed))`` for an integer ``0 <= seed < 2**63``,
-    without making the Generator (≈ 10–16 µs in numpy; ≈ 0.1 µs here).
+    without making the Generator (≈ 10–16 µs in numpy; ≈ 0.1 µs here), in scalars (a leaf:
+    :func:`swarm_search` computes it when it first draws, so a solve that converges from its
+    first start never does).
 
     numpy's algorithms, step by step: ``SeedSequence(seed)`` (the integer as 32-bit words,
     ``mix_entropy`` into a pool of 4 with ``hashmix``/``mix``, ``generate_state(4, uint64)``),
@@ -214,37 +235,51 @@ def seed_key(seed: int) -> np.uint64:  # pragma: no cover - compiled
     output), which ``Generator.integers(0, 2**64, dtype=uint64)`` returns unchanged.  Equal to
     numpy on every seed tested (``tests/test_search.py``)."""
     u = np.uint64(seed)
-    s16, s32 = np.uint64(16), np.uint64(32)
-    words = np.zeros(4, dtype=np.uint64)
-    words[0] = u & _M32
-    words[1] = u >> s32
-    n_words = 2 if words[1] != np.uint64(0) else 1
-    pool = np.zeros(4, dtype=np.uint64)
-    h = np.uint64(0x43B0D7E5)  # INIT_A
-    mult_a = np.uint64(0x931E8875)
-    for i in range(4):
-        v = (words[i] if i < n_words else np.uint64(0)) ^ h
-        h = (h * mult_a) & _M32
-        v = (v * h) & _M32
-        pool[i] = v ^ (v >> s16)
-    for src in range(4):
-        for dst in range(4):
-            if src != dst:
-                v = pool[src] ^ h  # hashmix(pool[src])
-                h = (h * mult_a) & _M32
-                v = (v * h) & _M32
-                v = v ^ (v >> s16)
-                r = (np.uint64(0xCA01F9DD) * pool[dst] - np.uint64(0x4973F715) * v) & _M32
-                pool[dst] = r ^ (r >> s16)  # mix(pool[dst], v)
-    hb = np.uint64(0x8B51F9DD)  # INIT_B
-    st = np.zeros(8, dtype=np.uint64)
-    for i in range(8):
-        v = pool[i % 4] ^ hb
-        hb = (hb * np.uint64(0x58F38DED)) & _M32
-        v = (v * hb) & _M32
-        st[i] = v ^ (v >> s16)
-    init_h, init_l = st[0] | (st[1] << s32), st[2] | (st[3] << s32)
-    seq_h, seq_l = st[4] | (st[5] << s32), st[6] | (st[7] << s32)
+    s32 = np.uint64(32)
+    h, ma = np.uint64(0x43B0D7E5), np.uint64(0x931E8875)  # INIT_A, MULT_A
+    zero = np.uint64(0)
+    # mix_entropy: the seed's two 32-bit words (a high word of 0 is as no word), into 4
+    p0, h = _hashmix(u & _M32, h, ma)
+    p1, h = _hashmix(u >> s32, h, ma)
+    p2, h = _hashmix(zero, h, ma)
+    p3, h = _hashmix(zero, h, ma)
+    # every source into every other entry of the pool, in numpy's order (src, then dst)
+    v, h = _hashmix(p0, h, ma)
+    p1 = _mix(p1, v)
+    v, h = _hashmix(p0, h, ma)
+    p2 = _mix(p2, v)
+    v, h = _hashmix(p0, h, ma)
+    p3 = _mix(p3, v)
+    v, h = _hashmix(p1, h, ma)
+    p0 = _mix(p0, v)
+    v, h = _hashmix(p1, h, ma)
+    p2 = _mix(p2, v)
+    v, h = _hashmix(p1, h, ma)
+    p3 = _mix(p3, v)
+    v, h = _hashmix(p2, h, ma)
+    p0 = _mix(p0, v)
+    v, h = _hashmix(p2, h, ma)
+    p1 = _mix(p1, v)
+    v, h = _hashmix(p2, h, ma)
+    p3 = _mix(p3, v)
+    v, h = _hashmix(p3, h, ma)
+    p0 = _mix(p0, v)
+    v, h = _hashmix(p3, h, ma)
+    p1 = _mix(p1, v)
+    v, h = _hashmix(p3, h, ma)
+    p2 = _mix(p2, v)
+    # generate_state(4, uint64): eight 32-bit words from the pool, in turn
+    hb, mb = np.uint64(0x8B51F9DD), np.uint64(0x58F38DED)  # INIT_B, MULT_B
+    s0, hb = _hashmix(p0, hb, mb)
+    s1, hb = _hashmix(p1, hb, mb)
+    s2, hb = _hashmix(p2, hb, mb)
+    s3, hb = _hashmix(p3, hb, mb)
+    s4, hb = _hashmix(p0, hb, mb)
+    s5, hb = _hashmix(p1, hb, mb)
+    s6, hb = _hashmix(p2, hb, mb)
+    s7, hb = _hashmix(p3, hb, mb)
+    init_h, init_l = s0 | (s1 << s32), s2 | (s3 << s32)
+    seq_h, seq_l = s4 | (s5 << s32), s6 | (s7 << s32)
     inc_h = (seq_h << np.uint64(1)) | (seq_l >> np.uint64(63))
     inc_l = (seq_l << np.uint64(1)) | np.uint64(1)
     mul_h, mul_l = np.uint64(0x2360ED051FC65DA4), np.uint64(0x4385DF649FCCF645)
@@ -360,7 +395,7 @@ def run_search(
         code, used, fit, dp, dr, stopped, n_hist, last = swarm_search(
             t, g, b, cfg, seed_q, kernel_tol_pos, kernel_tol_rot, tol_pos, tol_rot, w_rot,
             pop_size, n_swarm, iterations, unlimited, max_evals, budget_total, evals_before,
-            time_limit, t0, key, out_q, sw, hist, resume,
+            time_limit, t0, key, -1, out_q, sw, hist, resume,
         )  # fmt: skip
         if code == SEARCH_DONE:
             break
@@ -473,6 +508,7 @@ def swarm_search(
     time_limit: float,
     t0: float,
     key: np.uint64,
+    seed: int,
     out_q: FloatArray,
     sw: SearchWork,
     hist: FloatArray,
@@ -494,7 +530,9 @@ def swarm_search(
         evals_before: Evaluations the evaluator had counted before this call.
         time_limit: Seconds since ``t0`` after which no polish starts (``NO_LIMIT``: none).
         t0: Start of the solve on the clock of :func:`now` [s].
-        key: Random stream key (:func:`stream_key`).
+        key: Random stream key (:func:`stream_key`); with ``seed >= 0`` not read.
+        seed: ``-1``, or an integer seed whose key (:func:`seed_key`) this computes when it
+            first draws (a solve that converges from its first start never does).
         out_q: The answer (lowest fitness seen), ``(nq,)``.
         sw: Scratch (:func:`make_search_work` for ``pop_size``).
         hist: The history's buffer (first ``sw.hist``).
@@ -525,6 +563,7 @@ def swarm_search(
     ev_q = sw.ev_q  # the evaluator's best (what the stop test has seen)
     lo, hi = sw.lo, sw.hi  # random starts: uniform in the sampling window
     has_time = time_limit >= 0.0
+    stream = np.uint64(key)  # (one type whether the key came typed uint64 or int64)
     if resume:  # the state saved when the history filled (below)
         n_hist, n_arch, n_queue, used, gen = si[0], si[1], si[2], si[3], si[4]
         counter = np.uint64(si[5])
@@ -630,10 +669,14 @@ def swarm_search(
             n_queue -= n_done
             if n_queue == 0 and gen0_rest:
                 gen0_rest = False
+                if seed >= 0:  # the key, at the first draw
+                    stream, seed = seed_key(seed), -1
                 for s in range(m - 1):
                     for j in range(n):
                         counter += np.uint64(1)
-                        queue[s, j] = min(lo[j] + (hi[j] - lo[j]) * _uniform(key, counter), hi[j])
+                        queue[s, j] = min(
+                            lo[j] + (hi[j] - lo[j]) * _uniform(stream, counter), hi[j]
+                        )
                 n_queue = m - 1
                 continue
             if n_queue != 0:
@@ -657,6 +700,8 @@ def swarm_search(
             frac = max(frac, (evals_before + used) / budget_total)
         a = 2.0 * max(0.0, 1.0 - frac)
         n_sw = min(n_swarm, m) if n_arch > 0 else 0
+        if seed >= 0:
+            stream, seed = seed_key(seed), -1
         if n_sw > 0:
             for L in range(3):
                 for j in range(n):
@@ -669,7 +714,7 @@ def swarm_search(
                     for s in range(n_sw):
                         for j in range(n):
                             counter += np.uint64(1)
-                            rr[L, s, j] = _uniform(key, counter)
+                            rr[L, s, j] = _uniform(stream, counter)
             gwo_move_into(queue, n_sw, lead, a, r1, r2, moved)
             for s in range(n_sw):
                 for j in range(n):
@@ -680,7 +725,7 @@ def swarm_search(
         for s in range(n_sw, m):
             for j in range(n):
                 counter += np.uint64(1)
-                queue[s, j] = min(lo[j] + (hi[j] - lo[j]) * _uniform(key, counter), hi[j])
+                queue[s, j] = min(lo[j] + (hi[j] - lo[j]) * _uniform(stream, counter), hi[j])
         n_queue = m
     if best_f < np.inf and best_f < ev_f and not stopped:
         ev_f, ev_dp, ev_dr = _offer(best_q, best_f, best_dp, best_dr, ev_q)
@@ -815,6 +860,105 @@ def packed(structures: Any) -> Any:
     return rebuild(structures)
 
 
+_MEMINFO = ir.LiteralStructType(
+    [ir.IntType(types.intp.bitwidth), ir.IntType(8).as_pointer(), ir.IntType(8).as_pointer(),
+     ir.IntType(8).as_pointer(), ir.IntType(types.intp.bitwidth)]
+)  # fmt: skip
+"""Layout of numba's ``NRT_MemInfo`` (``refct``, ``dtor``, ``dtor_info``, ``data``, ``size``;
+``numba.core.runtime.nrtdynmod``)."""
+
+
+@intrinsic(prefer_literal=True)
+def borrowed(typingctx: Any, struct: Any, name: Any) -> Any:  # pragma: no cover - compiled
+    """``struct.name`` of a numba ``StructRef`` (``name`` a string constant) without taking a
+    reference: what a :data:`~swarm_ik.kernels.leaf` reads its fields with (numba's own
+    attribute access increments each array's reference count, which a leaf compiled without
+    the runtime cannot do; the caller holds the structure, so its fields stay alive)."""
+    if not isinstance(struct, types.StructRef) or not isinstance(name, types.StringLiteral):
+        return None
+    attr = name.literal_value
+    if attr not in struct.field_dict:
+        return None
+
+    def codegen(context: Any, builder: Any, signature: Any, args: Any) -> Any:
+        # numba's getattr of a StructRef, without the runtime: the payload pointer read off
+        # the MemInfo (field 3, as NRT_MemInfo_data_fast does) and no reference taken
+        meminfo = cgutils.create_struct_proxy(struct)(context, builder, value=args[0]).meminfo
+        info = builder.bitcast(meminfo, _MEMINFO.as_pointer())
+        data_type = struct.get_data_type()
+        data = builder.bitcast(
+            builder.load(cgutils.gep(builder, info, 0, 3)),
+            context.data_model_manager[data_type].get_value_type().as_pointer(),
+        )
+        payload = cgutils.create_struct_proxy(data_type)(context, builder, ref=data)
+        return getattr(payload, attr)
+
+    return struct.field_dict[attr](struct, name), codegen
+
+
+@leaf
+def pose_search(
+    s: Any,
+    target: FloatArray,
+    q_start: FloatArray,
+    target_checked: bool,
+    start_checked: bool,
+    t0: float,
+    seed: int,
+    out_q: FloatArray,
+    hist: FloatArray,
+    resume: bool,
+) -> tuple[int, int, int, float, int, bool]:  # pragma: no cover - compiled
+    """The body of :func:`solve_pose`: the checks, the goal row of the target and
+    :func:`swarm_search` (one run, or its resumption with a longer ``hist``).
+
+    A leaf: it reads the :class:`PoseSolver`'s fields without numba's reference counting.
+    In :func:`solve_pose` itself every array field read off the structure and passed on was
+    an atomic increment and decrement of that array's count (about 90 of each per call,
+    on some sixty separate counters: cache misses when the caches are cold).
+
+    Returns:
+        ``(status, code, evaluations, fitness, n_history, last_pending)``: ``status`` as
+        :func:`solve_pose`'s; the rest as :func:`swarm_search`'s (``code``: :data:`SEARCH_DONE`
+        or :data:`SEARCH_PAUSED`).
+    """
+    b = borrowed(s, "bounds")
+    work = borrowed(s, "work")
+    table = borrowed(s, "table")
+    par = work.par
+    if not resume:
+        if not target_checked and not pose_ok(target, 1e-6):
+            return CHECK_TARGET, SEARCH_DONE, 0, np.inf, 0, False
+        if not start_checked and not start_inside(q_start, b.lower, b.upper, b.wrap):
+            return CHECK_START, SEARCH_DONE, 0, np.inf, 0, False
+        p0 = table.par
+        for r in range(par.shape[0]):
+            for c in range(par.shape[1]):
+                par[r, c] = p0[r, c]
+        if not borrowed(s, "position_only"):
+            for r in range(3):
+                for c in range(3):
+                    par[0, 3 * r + c] = target[r, c]
+        for r in range(3):
+            par[0, 9 + r] = target[r, 3]
+    g0 = table
+    g = GoalTable(  # (every field of GoalTable, in order: a test checks the list)
+        g0.code, g0.frame, g0.weight, g0.primary, par, g0.jref, g0.jw, g0.row0, g0.nrows,
+        g0.rows_primary, g0.rows_secondary, g0.col,
+    )  # fmt: skip
+    code, used, fit, _dp, _dr, _stopped, n, last = swarm_search(
+        borrowed(s, "tree"), g, b, borrowed(s, "cfg"), q_start,
+        borrowed(s, "kernel_tol_pos"), borrowed(s, "kernel_tol_rot"),
+        borrowed(s, "tol_pos"), borrowed(s, "tol_rot"), borrowed(s, "w_rot"),
+        borrowed(s, "pop_size"), borrowed(s, "n_swarm"), borrowed(s, "iterations"),
+        borrowed(s, "unlimited"), borrowed(s, "max_evals"), borrowed(s, "budget_total"),
+        borrowed(s, "evals_before"), borrowed(s, "time_limit"), t0, np.uint64(0), seed, out_q,
+        work, hist,
+        resume,
+    )  # fmt: skip
+    return RAN, code, used, fit, n, last
+
+
 @numba.njit(cache=True)
 def solve_pose(
     s: Any,
@@ -828,7 +972,8 @@ def solve_pose(
 ) -> tuple[int, int, float, int, FloatArray | None]:  # pragma: no cover - compiled
     """One :class:`swarm_ik.IKSolver` call of a 4×4 target in one compiled call: the checks of
     the target (:func:`pose_ok`) and of the start (:func:`start_inside`), the goal row of the
-    target, the random key of the integer seed (:func:`seed_key`) and :func:`swarm_search`.
+    target and :func:`swarm_search` (its random key made from the integer seed when it first
+    draws), in the leaf :func:`pose_search`.
 
     Args:
         s: The :class:`PoseSolver`.
@@ -851,34 +996,30 @@ def solve_pose(
         caller checks it in Python, which raises or fixes it, and calls again with it marked
         checked).
     """
-    b = s.bounds
-    if not target_checked and not pose_ok(target, 1e-6):
-        return CHECK_TARGET, 0, np.inf, 0, None
-    if not start_checked and not start_inside(q_start, b.lower, b.upper, b.wrap):
-        return CHECK_START, 0, np.inf, 0, None
-    g0 = s.table
-    par = s.work.par
-    par[:] = g0.par
-    if not s.position_only:
-        for r in range(3):
-            for c in range(3):
-                par[0, 3 * r + c] = target[r, c]
-    for r in range(3):
-        par[0, 9 + r] = target[r, 3]
-    g = GoalTable(  # (every field of GoalTable, in order: a test checks the list)
-        g0.code, g0.frame, g0.weight, g0.primary, par, g0.jref, g0.jw, g0.row0, g0.nrows,
-        g0.rows_primary, g0.rows_secondary, g0.col,
-    )  # fmt: skip
     nq = q_start.shape[0]
-    used, fit, _dp, _dr, _stopped, hist, n = run_search(
-        s.tree, g, b, s.cfg, q_start, s.kernel_tol_pos, s.kernel_tol_rot, s.tol_pos, s.tol_rot,
-        s.w_rot, s.pop_size, s.n_swarm, s.iterations, s.unlimited, s.max_evals, s.budget_total,
-        s.evals_before, s.time_limit, t0, seed_key(seed), out[:nq], s.work,
-    )  # fmt: skip
-    if n <= out.shape[0] - nq:
-        out[nq : nq + n] = hist[:n]
-        return RAN, used, fit, n, None
-    return RAN, used, fit, n, hist[:n].copy()
+    out_q = out[:nq]
+    hist = out[nq:]  # the history is written into out until it fills
+    status, code, used, fit, n, last = pose_search(
+        s, target, q_start, target_checked, start_checked, t0, seed, out_q, hist, False
+    )
+    if status != RAN:
+        return status, 0, np.inf, 0, None
+    grew = False
+    while code == SEARCH_PAUSED:  # full: a longer copy, and the run resumed
+        hist = grown(hist, n)
+        grew = True
+        status, code, used, fit, n, last = pose_search(
+            s, target, q_start, True, True, t0, seed, out_q, hist, True
+        )
+    if last:
+        if n == hist.shape[0]:
+            hist = grown(hist, n)
+            grew = True
+        hist[n] = fit
+        n += 1
+    if grew:
+        return RAN, used, fit, n, hist[:n]
+    return RAN, used, fit, n, None
 
 
 def entry_point(kernel: Any, args: tuple[Any, ...]) -> Any:
@@ -966,6 +1107,14 @@ def pose_ok(m: FloatArray, orth_tol: float) -> bool:  # pragma: no cover - compi
     )  # fmt: skip
 
 
+@hot
+def _rtr(target: FloatArray, reached: FloatArray, a: int, c: int) -> float:  # pragma: no cover
+    """Entry ``(a, c)`` of ``R*ᵀR`` of two poses ``(4, 4)``."""
+    return (
+        target[0, a] * reached[0, c] + target[1, a] * reached[1, c] + (target[2, a] * reached[2, c])
+    )
+
+
 @numba.njit(cache=True)
 def pose_errors_one(
     reached: FloatArray, target: FloatArray, q: FloatArray, lower: FloatArray, upper: FloatArray
@@ -977,18 +1126,14 @@ def pose_errors_one(
     dy = reached[1, 3] - target[1, 3]
     dz = reached[2, 3] - target[2, 3]
     dp = math.sqrt(dx * dx + dy * dy + dz * dz)
-    r = np.empty((3, 3))
-    for a in range(3):
-        for c in range(3):
-            r[a, c] = (
-                target[0, a] * reached[0, c]
-                + target[1, a] * reached[1, c]
-                + (target[2, a] * reached[2, c])
-            )
-    s0 = r[2, 1] - r[1, 2]
-    s1 = r[0, 2] - r[2, 0]
-    s2 = r[1, 0] - r[0, 1]
-    c0 = r[0, 0] + r[1, 1] + r[2, 2] - 1.0
+    # the entries of R*ᵀR that the angle needs, as scalars (an array here was an allocation
+    # per call, ≈ 1 µs with cold caches)
+    s0 = _rtr(target, reached, 2, 1) - _rtr(target, reached, 1, 2)
+    s1 = _rtr(target, reached, 0, 2) - _rtr(target, reached, 2, 0)
+    s2 = _rtr(target, reached, 1, 0) - _rtr(target, reached, 0, 1)
+    c0 = (
+        _rtr(target, reached, 0, 0) + _rtr(target, reached, 1, 1) + _rtr(target, reached, 2, 2)
+    ) - 1.0
     dr = math.atan2(math.sqrt(s0 * s0 + s1 * s1 + s2 * s2), c0)
     within = True
     for j in range(q.shape[0]):
