@@ -556,3 +556,24 @@ def test_problem_records_its_target_check_and_the_lane_uses_it() -> None:
     lane = swarm_ik.solve(p, seed=4, time_limit=0.005)
     assert lane.success
     _same_result(lane, swarm_ik.IKSolver(robot, time_limit=0.005).solve(p.target, seed=4))
+
+
+def test_borrowed_reads_a_pose_solvers_fields_without_the_runtime() -> None:
+    """search.borrowed reads a StructRef's field in code compiled without numba's runtime
+    (where numba's own attribute access refuses to compile): the values the structure was
+    made with, scalars and arrays alike."""
+    import numba
+
+    from swarm_ik.kernels import search
+
+    @numba.njit(_nrt=False)
+    def read(s):  # type: ignore[no-untyped-def]
+        lower = search.borrowed(s, "bounds").lower
+        return search.borrowed(s, "time_limit"), search.borrowed(s, "pop_size"), lower[0]
+
+    robot = swarm_ik.load_robot("panda")
+    ik = swarm_ik.IKSolver(robot, time_limit=0.004, pop_size=5)
+    state = ik._solver
+    assert read(state) == (0.004, 5, robot.lower[0])
+    with pytest.raises(numba.TypingError):  # a name that is no field is refused when compiled
+        numba.njit(_nrt=False)(lambda s: search.borrowed(s, "no_such_field"))(state)

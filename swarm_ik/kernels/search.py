@@ -860,16 +860,16 @@ def packed(structures: Any) -> Any:
     return rebuild(structures)
 
 
+_WORD_BITS = 64 if sys.maxsize > 2**32 else 32
 _MEMINFO = ir.LiteralStructType(
-    [ir.IntType(types.intp.bitwidth), ir.IntType(8).as_pointer(), ir.IntType(8).as_pointer(),
-     ir.IntType(8).as_pointer(), ir.IntType(types.intp.bitwidth)]
+    [ir.IntType(_WORD_BITS), ir.IntType(8).as_pointer(), ir.IntType(8).as_pointer(),
+     ir.IntType(8).as_pointer(), ir.IntType(_WORD_BITS)]
 )  # fmt: skip
 """Layout of numba's ``NRT_MemInfo`` (``refct``, ``dtor``, ``dtor_info``, ``data``, ``size``;
 ``numba.core.runtime.nrtdynmod``)."""
 
 
-@intrinsic(prefer_literal=True)
-def borrowed(typingctx: Any, struct: Any, name: Any) -> Any:  # pragma: no cover - compiled
+def _borrowed(typingctx: Any, struct: Any, name: Any) -> Any:  # pragma: no cover - compiled
     """``struct.name`` of a numba ``StructRef`` (``name`` a string constant) without taking a
     reference: what a :data:`~swarm_ik.kernels.leaf` reads its fields with (numba's own
     attribute access increments each array's reference count, which a leaf compiled without
@@ -894,6 +894,10 @@ def borrowed(typingctx: Any, struct: Any, name: Any) -> Any:  # pragma: no cover
         return getattr(payload, attr)
 
     return struct.field_dict[attr](struct, name), codegen
+
+
+borrowed: Any = intrinsic(prefer_literal=True)(_borrowed)
+"""``borrowed(struct, "name")`` in compiled code (:func:`_borrowed`)."""
 
 
 @leaf
