@@ -416,7 +416,7 @@ def test_swarm_search_keyed_by_a_seed_draws_what_the_seeds_key_draws() -> None:
         b = lm.Bounds(p.lower, p.upper, robot.continuous_mask, robot.prismatic_mask)
         runs = []
         for key, seed in ((search.seed_key(11), -1), (np.uint64(0), 11)):
-            sw = search.make_search_work(t, g, 4)
+            sw = search.make_search_work(t, g, 4)._replace(hist=np.empty(4096))  # never full
             out = np.empty(robot.nq)
             res = search.swarm_search(
                 t, g, b, search.typed_settings(lm.DEFAULT_LM), seed_q, 5e-6, 5e-6, 1e-5,
@@ -425,7 +425,7 @@ def test_swarm_search_keyed_by_a_seed_draws_what_the_seeds_key_draws() -> None:
             )  # fmt: skip
             runs.append((res, out, sw.hist[: res[6]].copy()))
         (ra, qa, ha), (rb, qb, hb) = runs
-        assert ra == rb
+        assert ra[0] == search.SEARCH_DONE and ra == rb
         np.testing.assert_array_equal(qa, qb)
         np.testing.assert_array_equal(ha, hb)
     assert ra[1] < 50  # (the near target: converged from its first start, nothing drawn)

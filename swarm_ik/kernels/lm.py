@@ -643,7 +643,7 @@ def evaluate(
     return goal_rows(q, w.fk, g, b, True, want_jac, w.res, w.jac, w.err, w.m3, w.v3)
 
 
-@leaf
+@hot
 def lm_run(
     starts: FloatArray,
     t: TreeArrays,

@@ -138,10 +138,13 @@ now = _now_libc if _LINUX else _now_objmode
 """Seconds of the clock of ``time.perf_counter`` (compiled; usable inside ``njit`` code; on
 Linux also inside the kernels compiled without numba's runtime)."""
 
-_search_kernel: Any = leaf if _LINUX else numba.njit(cache=True)
-"""The decorator of :func:`swarm_search`: a leaf (no reference counting) where :func:`now`
-allocates nothing (Linux); elsewhere the clock goes through object mode, which needs numba's
-runtime."""
+_search_kernel: Any = hot if _LINUX else numba.njit(cache=True)
+"""The decorator of :func:`swarm_search`: a :data:`~swarm_ik.kernels.hot` leaf (no reference
+counting, inlined into its callers) where :func:`now` allocates nothing (Linux); elsewhere
+the clock goes through object mode, which needs numba's runtime."""
+
+_pose_kernel: Any = leaf if _LINUX else numba.njit(cache=True)
+"""The decorator of :func:`pose_search` (a leaf where :func:`swarm_search` is one)."""
 
 
 # --------------------------------------------------------------------------- randomness
@@ -900,7 +903,7 @@ borrowed: Any = intrinsic(prefer_literal=True)(_borrowed)
 """``borrowed(struct, "name")`` in compiled code (:func:`_borrowed`)."""
 
 
-@leaf
+@_pose_kernel
 def pose_search(
     s: Any,
     target: FloatArray,
