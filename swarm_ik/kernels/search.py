@@ -1006,18 +1006,19 @@ def solve_pose(
     nq = q_start.shape[0]
     out_q = out[:nq]
     hist = out[nq:]  # the history is written into out until it fills
-    status, code, used, fit, n, last = pose_search(
-        s, target, q_start, target_checked, start_checked, t0, seed, out_q, hist, False
-    )
-    if status != RAN:
-        return status, 0, np.inf, 0, None
     grew = False
-    while code == SEARCH_PAUSED:  # full: a longer copy, and the run resumed
-        hist = grown(hist, n)
-        grew = True
+    resume = False  # (one call site, its flags variables: one compiled pose_search)
+    while True:
         status, code, used, fit, n, last = pose_search(
-            s, target, q_start, True, True, t0, seed, out_q, hist, True
-        )
+            s, target, q_start, target_checked or resume, start_checked or resume, t0, seed,
+            out_q, hist, resume,
+        )  # fmt: skip
+        if status != RAN:
+            return status, 0, np.inf, 0, None
+        if code != SEARCH_PAUSED:
+            break
+        hist = grown(hist, n)  # full: a longer copy, and the run resumed
+        grew = resume = True
     if last:
         if n == hist.shape[0]:
             hist = grown(hist, n)
