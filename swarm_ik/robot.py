@@ -25,7 +25,7 @@ import pinocchio as pin
 from numpy.typing import NDArray
 
 from swarm_ik import urdf
-from swarm_ik._types import FloatArray
+from swarm_ik._types import FloatArray, IntArray
 from swarm_ik.errors import InvalidArgumentError, RobotFileNotFoundError, RobotModelError, unknown
 from swarm_ik.kernels.fk import CONTINUOUS, KIND_NAMES, PRISMATIC, REVOLUTE, TreeArrays
 
@@ -538,6 +538,16 @@ class RobotModel:
             return q.copy() if copy else q
         return np.array(_converted(self._to_pinocchio_plan(), self.model.nq, q.tolist()))
 
+    def pinocchio_plan_arrays(self) -> tuple[IntArray, FloatArray]:
+        """The conversion of :meth:`to_pinocchio` as arrays for compiled code: per Pinocchio
+        joint ``(index in q, index in Pinocchio's configuration, continuous)`` ``(k, 3)`` and
+        ``(multiplier, offset)`` ``(k, 2)``; no rows where the configuration is ``q``
+        itself (:func:`swarm_ik.kernels.search.pinocchio_config` computes it)."""
+        plan = () if self._pinocchio_q_is_q() else self._to_pinocchio_plan()
+        index = np.array([(qi, at, c) for qi, _, _, at, c in plan], dtype=np.int64)
+        affine = np.array([(m, o) for _, m, o, _, _ in plan], dtype=float)
+        return index.reshape(len(plan), 3), affine.reshape(len(plan), 2)
+
     def _to_pinocchio_plan(self) -> tuple[tuple[int, float, float, int, bool], ...]:
         """Per Pinocchio joint: (driver's index in ``q``, multiplier, offset, index in
         Pinocchio's configuration, continuous), made once."""
@@ -600,15 +610,17 @@ class RobotModel:
         # (eigenpy returns the 4x4 as a new array of its own: no copy needed)
         return pin.updateFramePlacement(self.model, data, fid).homogeneous  # type: ignore[no-any-return]
 
-    def fk_pinocchio_bound(self) -> Callable[[FloatArray], FloatArray]:
+    def fk_pinocchio_bound(self, configuration: bool = False) -> Callable[[FloatArray], FloatArray]:
         """:meth:`fk_pinocchio` of the first goal frame as a function of ``q`` with its
         lookups made once (the check of :class:`swarm_ik.IKSolver`'s answers; 7 µs instead of
         12 with cold caches).  Where Pinocchio's configuration is not ``q`` itself
         (continuous joints in (cos, sin), mimic followers), the conversion's plan is bound
-        too (:meth:`to_pinocchio`'s scalar loop, without its checks and lookups)."""
+        too (:meth:`to_pinocchio`'s scalar loop, without its checks and lookups), unless
+        ``configuration``: then the function takes Pinocchio's configuration
+        (:meth:`to_pinocchio` of ``q``, ``(model.nq,)``) itself."""
         forward, place = pin.forwardKinematics, pin.updateFramePlacement
         model, fid, data_of, local = self.model, self.frame_ids[0], self._data, self._local
-        if self._pinocchio_q_is_q():
+        if configuration or self._pinocchio_q_is_q():
 
             def pose(q: FloatArray) -> FloatArray:
                 try:

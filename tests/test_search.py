@@ -512,13 +512,16 @@ def test_packed_structures_are_equal_copies_in_one_buffer_per_dtype() -> None:
     assert type(out[1]) is lm.GoalTable and out[1].rows_primary == src[1].rows_primary
 
 
-def test_iksolver_common_call_gives_the_result_of_its_general_per_call_path() -> None:
+@pytest.mark.parametrize("name", ["ur5", "kinova"])
+def test_iksolver_common_call_gives_the_result_of_its_general_per_call_path(name: str) -> None:
     """IKSolver.solve answers a C-contiguous float64 4x4 target with an integer seed inline;
     every field of its Result (types included) equals that of the per-call path that takes
-    any target form (_solve_pose), for a start given and not."""
+    any target form (_solve_pose), for a start given and not.  On kinova (continuous joints)
+    the inline check reads the Pinocchio configuration the compiled call wrote, the other
+    path converts q in Python: the same errors to the last bit."""
     import dataclasses
 
-    robot = swarm_ik.load_robot("ur5")
+    robot = swarm_ik.load_robot(name)
     ik = swarm_ik.IKSolver(robot, time_limit=0.005)
     rng = np.random.default_rng(12)
     for i, q in enumerate(robot.random_q(rng, 6)):
@@ -577,3 +580,35 @@ def test_borrowed_reads_a_pose_solvers_fields_without_the_runtime() -> None:
     assert read(state) == (0.004, 5, robot.lower[0])
     with pytest.raises(numba.TypingError):  # a name that is no field is refused when compiled
         numba.njit(_nrt=False)(lambda s: search.borrowed(s, "no_such_field"))(state)
+
+
+def test_compiled_pinocchio_configuration_equals_to_pinocchio(tmp_path) -> None:
+    """search.pinocchio_config (what IKSolver's compiled call writes after q) equals
+    RobotModel.to_pinocchio to the last bit: continuous joints as (cos, sin) (kinova), a mimic
+    follower from its driver, and no rows at all where the configuration is q (panda)."""
+    from swarm_ik.kernels import search
+
+    urdf = (
+        '<robot name="m"><link name="a"/><link name="b"/><link name="c"/><link name="d"/>'
+        '<joint name="j1" type="continuous"><parent link="a"/><child link="b"/>'
+        '<origin xyz="0 0 0.3"/><axis xyz="0 0 1"/></joint>'
+        '<joint name="j2" type="revolute"><parent link="b"/><child link="c"/>'
+        '<origin xyz="0 0 0.3"/><axis xyz="0 1 0"/>'
+        '<limit lower="-2" upper="2" effort="1" velocity="1"/></joint>'
+        '<joint name="j3" type="revolute"><parent link="c"/><child link="d"/>'
+        '<origin xyz="0 0 0.3"/><axis xyz="1 0 0"/>'
+        '<limit lower="-2" upper="2" effort="1" velocity="1"/>'
+        '<mimic joint="j2" multiplier="-0.5" offset="0.2"/></joint></robot>'
+    )
+    path = tmp_path / "mimic.urdf"
+    path.write_text(urdf)
+    rng = np.random.default_rng(4)
+    for robot in (swarm_ik.load_robot("kinova"), swarm_ik.load_robot(path, "d")):
+        index, affine = robot.pinocchio_plan_arrays()
+        assert index.shape == (robot.model.njoints - 1, 3) and affine.shape[0] == index.shape[0]
+        for q in robot.random_q(rng, 20):
+            out = np.full(robot.model.nq, np.nan)
+            search.pinocchio_config(q, index, affine, out)
+            np.testing.assert_array_equal(out, robot.to_pinocchio(q))
+    index, affine = swarm_ik.load_robot("panda").pinocchio_plan_arrays()
+    assert index.shape == (0, 3) and affine.shape == (0, 2)

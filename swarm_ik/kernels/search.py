@@ -785,7 +785,7 @@ class PoseSolver(structref.StructRefProxy):  # type: ignore[misc]
 POSE_SOLVER_FIELDS = (
     "tree", "table", "bounds", "cfg", "kernel_tol_pos", "kernel_tol_rot", "tol_pos", "tol_rot",
     "w_rot", "pop_size", "n_swarm", "iterations", "unlimited", "max_evals", "budget_total",
-    "evals_before", "time_limit", "position_only", "work",
+    "evals_before", "time_limit", "position_only", "work", "pin_index", "pin_affine", "nq_pin",
 )  # fmt: skip
 """The fields of :class:`PoseSolver`, in the order of its constructor."""
 
@@ -804,6 +804,7 @@ def pose_solver(
     cfg: LMSettings,
     search_args: tuple[Any, ...],
     position_only: bool,
+    pin_plan: tuple[IntArray, FloatArray, int] | None = None,
 ) -> PoseSolver:
     """A :class:`PoseSolver` (compiled constructor, loaded from numba's cache).
 
@@ -812,6 +813,9 @@ def pose_solver(
         search_args: The arguments of :func:`swarm_search` from ``kernel_tol_pos`` to
             ``time_limit`` (13 values).
         position_only: The pose row is a position row (its rotation is not set per call).
+        pin_plan: Where Pinocchio's configuration is not ``q`` itself, its conversion
+            (:meth:`swarm_ik.robot.RobotModel.pinocchio_plan_arrays` and ``model.nq``):
+            :func:`solve_pose` then writes the answer's configuration too.
     """
     kinds = (float, float, float, float, float, int, int, int, bool, int, int, int, float)
     if len(search_args) != len(kinds):
@@ -819,7 +823,14 @@ def pose_solver(
     typed = tuple(k(v) for k, v in zip(kinds, search_args, strict=True))
     t, g, b = packed((t, g, b))
     work = packed(make_search_work(t, g, typed[5]))  # (its scratch contiguous too)
-    return _new_pose_solver(t, g, b, typed_settings(cfg), *typed, bool(position_only), work)  # type: ignore[no-any-return]
+    if pin_plan is None:
+        pin_plan = (np.zeros((0, 3), dtype=np.int64), np.zeros((0, 2)), 0)
+    index, affine, nq_pin = pin_plan
+    return _new_pose_solver(  # type: ignore[no-any-return]
+        t, g, b, typed_settings(cfg), *typed, bool(position_only), work,
+        np.ascontiguousarray(index, dtype=np.int64), np.ascontiguousarray(affine, dtype=float),
+        int(nq_pin),
+    )  # fmt: skip
 
 
 def packed(structures: Any) -> Any:
@@ -903,6 +914,24 @@ borrowed: Any = intrinsic(prefer_literal=True)(_borrowed)
 """``borrowed(struct, "name")`` in compiled code (:func:`_borrowed`)."""
 
 
+@leaf
+def pinocchio_config(
+    q: FloatArray, index: IntArray, affine: FloatArray, out: FloatArray
+) -> None:  # pragma: no cover - compiled
+    """Pinocchio's configuration of ``q`` into ``out`` by the plan of
+    :meth:`swarm_ik.robot.RobotModel.pinocchio_plan_arrays` (``index`` ``(k, 3)``, ``affine``
+    ``(k, 2)``): each joint's value ``multiplier · q[i] + offset``, a continuous joint's as
+    (cos, sin); the compiled twin of :meth:`~swarm_ik.robot.RobotModel.to_pinocchio`."""
+    for k in range(index.shape[0]):
+        v = affine[k, 0] * q[index[k, 0]] + affine[k, 1]
+        at = index[k, 1]
+        if index[k, 2] != 0:
+            out[at] = math.cos(v)
+            out[at + 1] = math.sin(v)
+        else:
+            out[at] = v
+
+
 @_pose_kernel
 def pose_search(
     s: Any,
@@ -913,6 +942,7 @@ def pose_search(
     t0: float,
     seed: int,
     out_q: FloatArray,
+    q_pin: FloatArray,
     hist: FloatArray,
     resume: bool,
 ) -> tuple[int, int, int, float, int, bool]:  # pragma: no cover - compiled
@@ -963,6 +993,8 @@ def pose_search(
         work, hist,
         resume,
     )  # fmt: skip
+    if code == SEARCH_DONE:  # the answer's Pinocchio configuration, where it is not q
+        pinocchio_config(out_q, borrowed(s, "pin_index"), borrowed(s, "pin_affine"), q_pin)
     return RAN, code, used, fit, n, last
 
 
@@ -989,7 +1021,9 @@ def solve_pose(
         target_checked, start_checked: Already checked in Python (else checked here).
         t0: Start of the solve, ``time.perf_counter()`` [s].
         seed: The integer seed.
-        out: ``(nq + cap,)``: receives the answer ``q`` in its first ``nq`` entries and the
+        out: ``(nq + nq_pin + cap,)``: receives the answer ``q`` in its first ``nq``
+            entries, its Pinocchio configuration in the next ``nq_pin`` (the
+            :class:`PoseSolver`'s; 0 where that configuration is ``q`` itself) and the
             history after them when it fits in ``cap`` entries.
 
     Compiled without ``nogil``: the call holds the GIL, so threads sharing one
@@ -1004,14 +1038,16 @@ def solve_pose(
         checked).
     """
     nq = q_start.shape[0]
+    nq_pin = borrowed(s, "nq_pin")
     out_q = out[:nq]
-    hist = out[nq:]  # the history is written into out until it fills
+    q_pin = out[nq : nq + nq_pin]
+    hist = out[nq + nq_pin :]  # the history is written into out until it fills
     grew = False
     resume = False  # (one call site, its flags variables: one compiled pose_search)
     while True:
         status, code, used, fit, n, last = pose_search(
             s, target, q_start, target_checked or resume, start_checked or resume, t0, seed,
-            out_q, hist, resume,
+            out_q, q_pin, hist, resume,
         )  # fmt: skip
         if status != RAN:
             return status, 0, np.inf, 0, None
