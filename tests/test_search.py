@@ -274,12 +274,14 @@ def test_ik_solver_takes_arrays_whose_float64_dtype_is_an_equal_copy() -> None:
     assert ref.success and np.array_equal(got.q, ref.q) and got.n_evals == ref.n_evals
 
 
-def test_iksolver_returns_a_history_longer_than_its_buffer_whole() -> None:
+@pytest.mark.parametrize("name", ["panda", "kinova"])
+def test_iksolver_returns_a_history_longer_than_its_buffer_whole(name: str) -> None:
     """A search of many generations (an unreachable target) gives IKSolver a history longer
-    than its output buffer: it comes back as its own array, equal to the general path's."""
+    than its output buffer: it comes back as its own array, equal to the general path's
+    (kinova: the buffer holds Pinocchio's configuration between q and the history)."""
     from swarm_ik import api
 
-    robot = swarm_ik.load_robot("panda")
+    robot = swarm_ik.load_robot(name)
     far = np.eye(4)
     far[:3, 3] = (3.0, 0.0, 0.5)  # out of reach
     ik = swarm_ik.IKSolver(robot, max_evals=20_000, pop_size=4)
@@ -400,9 +402,10 @@ def test_swarm_search_refuses_scratch_made_for_fewer_starts() -> None:
 
 
 def test_swarm_search_keyed_by_a_seed_draws_what_the_seeds_key_draws() -> None:
-    """swarm_search given an integer seed makes its key (seed_key) at its first draw: the
+    """swarm_search given an integer seed makes its key (seed_key) before its first draw: the
     same run as given that key, on a target whose first start does not converge (so the run
-    draws), and no draw at all when the first start converges (same result either way)."""
+    draws); when the first start converges nothing is drawn (the same result as a run given
+    another seed's key)."""
     from swarm_ik.kernels import lm, search
 
     robot = swarm_ik.load_robot("panda")
@@ -415,7 +418,8 @@ def test_swarm_search_keyed_by_a_seed_draws_what_the_seeds_key_draws() -> None:
         t, g = robot.tree, p.table(None)
         b = lm.Bounds(p.lower, p.upper, robot.continuous_mask, robot.prismatic_mask)
         runs = []
-        for key, seed in ((search.seed_key(11), -1), (np.uint64(0), 11)):
+        given = np.uint64(search.seed_key(11 if target is far else 99))
+        for key, seed in ((given, -1), (np.uint64(0), 11)):
             sw = search.make_search_work(t, g, 4)._replace(hist=np.empty(4096))  # never full
             out = np.empty(robot.nq)
             res = search.swarm_search(
@@ -612,3 +616,33 @@ def test_compiled_pinocchio_configuration_equals_to_pinocchio(tmp_path) -> None:
             np.testing.assert_array_equal(out, robot.to_pinocchio(q))
     index, affine = swarm_ik.load_robot("panda").pinocchio_plan_arrays()
     assert index.shape == (0, 3) and affine.shape == (0, 2)
+
+
+def test_borrowed_returns_a_reference_where_the_runtime_counts_them() -> None:
+    """Compiled with numba's runtime on (pose_search off Linux), search.borrowed returns its
+    value with a reference, as numba's own attribute access does: reading a field many times
+    leaves the array's reference count as it was (it would be released once per read, and
+    the structure's arrays freed, otherwise)."""
+    import numba
+    from numba.core.unsafe.refcount import get_refcount
+
+    from swarm_ik.kernels import search
+
+    @numba.njit
+    def count(s):  # type: ignore[no-untyped-def]
+        return get_refcount(search.borrowed(s, "bounds").lower)
+
+    @numba.njit
+    def read_many(s, n):  # type: ignore[no-untyped-def]
+        total = 0.0
+        for _ in range(n):
+            total += search.borrowed(s, "bounds").lower[0]
+        return total
+
+    robot = swarm_ik.load_robot("panda")
+    ik = swarm_ik.IKSolver(robot, time_limit=0.005)
+    before = count(ik._solver)
+    assert read_many(ik._solver, 100) == pytest.approx(100 * robot.lower[0])
+    assert count(ik._solver) == before
+    T = robot.fk(robot.random_q(np.random.default_rng(2)))
+    assert ik.solve(T, seed=0).success  # the state intact

@@ -44,6 +44,7 @@ import numpy as np
 from llvmlite import ir
 from numba import types
 from numba.core import cgutils
+from numba.core.imputils import impl_ret_borrowed
 from numba.experimental import structref
 from numba.extending import intrinsic
 
@@ -144,7 +145,8 @@ counting, inlined into its callers) where :func:`now` allocates nothing (Linux);
 the clock goes through object mode, which needs numba's runtime."""
 
 _pose_kernel: Any = leaf if _LINUX else numba.njit(cache=True)
-"""The decorator of :func:`pose_search` (a leaf where :func:`swarm_search` is one)."""
+"""The decorator of :func:`pose_search`: a leaf where :func:`swarm_search` compiles without
+numba's runtime (Linux)."""
 
 
 # --------------------------------------------------------------------------- randomness
@@ -228,8 +230,8 @@ def _mix(x: np.uint64, y: np.uint64) -> np.uint64:  # pragma: no cover - compile
 def seed_key(seed: int) -> np.uint64:  # pragma: no cover - compiled
     """``stream_key(numpy.random.default_rng(seed))`` for an integer ``0 <= seed < 2**63``,
     without making the Generator (≈ 10–16 µs in numpy; ≈ 0.1 µs here), in scalars (a leaf:
-    :func:`swarm_search` computes it when it first draws, so a solve that converges from its
-    first start never does).
+    :func:`swarm_search` computes it once its first polish has not ended the run, so a solve
+    that converges from its first start never does).
 
     numpy's algorithms, step by step: ``SeedSequence(seed)`` (the integer as 32-bit words,
     ``mix_entropy`` into a pool of 4 with ``hashmix``/``mix``, ``generate_state(4, uint64)``),
@@ -534,18 +536,21 @@ def swarm_search(
         time_limit: Seconds since ``t0`` after which no polish starts (``NO_LIMIT``: none).
         t0: Start of the solve on the clock of :func:`now` [s].
         key: Random stream key (:func:`stream_key`); with ``seed >= 0`` not read.
-        seed: ``-1``, or an integer seed whose key (:func:`seed_key`) this computes when it
-            first draws (a solve that converges from its first start never does).
+        seed: ``-1``, or an integer seed whose key (:func:`seed_key`) this computes once its
+            first polish has not ended the run (a solve that converges from its first start
+            never computes it).
         out_q: The answer (lowest fitness seen), ``(nq,)``.
         sw: Scratch (:func:`make_search_work` for ``pop_size``).
-        hist: The history's buffer (first ``sw.hist``).
+        hist: The history's buffer (``sw.hist`` from :func:`run_search`; the tail of the
+            output buffer from :func:`solve_pose`).
         resume: Continue the run that returned :data:`SEARCH_PAUSED` (its state is in
             ``sw``; ``hist``: a longer copy of the full buffer, :func:`grown`).
 
     Compiled without reference counting (a leaf: its callers own every array), so it cannot
     allocate: when a generation ends with ``hist`` full it saves its state in ``sw`` and
     returns :data:`SEARCH_PAUSED`; the caller calls again with a longer copy of ``hist`` and
-    ``resume=True`` (:func:`run_search` is that loop's one home in the callers).
+    ``resume=True`` (:func:`run_search` is that loop for the callers with a
+    :class:`SearchWork` history; :func:`solve_pose` has its own, over its output buffer).
 
     Returns:
         ``(code, evaluations, fitness, dp, dr, stopped, n_history, last_pending)``:
@@ -775,8 +780,10 @@ class PoseSolver(structref.StructRefProxy):  # type: ignore[misc]
     """The compiled state of one :class:`swarm_ik.IKSolver`, made by :func:`pose_solver` and
     read by :func:`solve_pose`: the tree, the goal table (its one pose row the template that
     each call fills with its target), the bounds, the LM settings and the search settings
-    (the arguments of :func:`swarm_search` from ``kernel_tol_pos`` to ``time_limit``), plus
-    ``position_only``.
+    (the arguments of :func:`swarm_search` from ``kernel_tol_pos`` to ``time_limit``),
+    ``position_only``, the search's scratch ``work`` and the conversion of the answer to
+    Pinocchio's configuration (``pin_index``, ``pin_affine``, ``nq_pin``: no rows and 0 where
+    that configuration is ``q`` itself).
 
     One object where the flat arguments were about fifty: the compiled entry unboxes a pointer
     instead of some forty arrays (≈ 10 µs of a call with cold caches)."""
@@ -884,10 +891,12 @@ _MEMINFO = ir.LiteralStructType(
 
 
 def _borrowed(typingctx: Any, struct: Any, name: Any) -> Any:  # pragma: no cover - compiled
-    """``struct.name`` of a numba ``StructRef`` (``name`` a string constant) without taking a
-    reference: what a :data:`~swarm_ik.kernels.leaf` reads its fields with (numba's own
-    attribute access increments each array's reference count, which a leaf compiled without
-    the runtime cannot do; the caller holds the structure, so its fields stay alive)."""
+    """``struct.name`` of a numba ``StructRef`` (``name`` a string constant), readable where
+    numba's runtime is off: what a :data:`~swarm_ik.kernels.leaf` reads its fields with
+    (numba's own attribute access asks the runtime for the payload and increments each
+    array's reference count, which a leaf cannot do; its caller holds the structure, so the
+    fields stay alive).  Compiled with the runtime on (``pose_search`` off Linux), the value
+    is returned with a reference, as numba's own access returns it."""
     if not isinstance(struct, types.StructRef) or not isinstance(name, types.StringLiteral):
         return None
     attr = name.literal_value
@@ -905,7 +914,9 @@ def _borrowed(typingctx: Any, struct: Any, name: Any) -> Any:  # pragma: no cove
             context.data_model_manager[data_type].get_value_type().as_pointer(),
         )
         payload = cgutils.create_struct_proxy(data_type)(context, builder, ref=data)
-        return getattr(payload, attr)
+        # a reference for the caller where it counts them (numba's runtime on: it releases
+        # what a call returns); nothing in a leaf
+        return impl_ret_borrowed(context, builder, signature.return_type, getattr(payload, attr))
 
     return struct.field_dict[attr](struct, name), codegen
 
