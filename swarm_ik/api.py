@@ -623,7 +623,8 @@ class IKSolver:
         # Pinocchio's configuration of the answer, written by the compiled call after q where
         # it is not q itself (continuous joints, mimic followers): the check's conversion
         # in compiled code (kinova: 11.6 -> 6.9 µs per check with cold caches, staged)
-        self._nq_pin = 0 if robot._pinocchio_q_is_q() else int(robot.model.nq)
+        pin_plan = robot.pinocchio_plan_arrays()
+        self._nq_pin = pin_plan[2]
         self._out_len = tpl.nq + self._nq_pin + _HISTORY_CAP
         if self._state is not None:  # the compiled state and the kernel's entry point
             from swarm_ik.kernels import search
@@ -640,8 +641,7 @@ class IKSolver:
             )  # fmt: skip
             self._solver = search.pose_solver(
                 st.pol.tree, tpl.table(None), st.pol.bounds, st.pol.cfg, search_args,
-                self._position_only,
-                (*robot.pinocchio_plan_arrays(), self._nq_pin) if self._nq_pin else None,
+                self._position_only, pin_plan,
             )  # fmt: skip
             # the template's target (Pinocchio's FK: no FK kernel to load), as calls pass it
             reached = np.ascontiguousarray(robot.fk_pinocchio(self._mid))

@@ -538,15 +538,18 @@ class RobotModel:
             return q.copy() if copy else q
         return np.array(_converted(self._to_pinocchio_plan(), self.model.nq, q.tolist()))
 
-    def pinocchio_plan_arrays(self) -> tuple[IntArray, FloatArray]:
+    def pinocchio_plan_arrays(self) -> tuple[IntArray, FloatArray, int]:
         """The conversion of :meth:`to_pinocchio` as arrays for compiled code: per Pinocchio
-        joint ``(index in q, index in Pinocchio's configuration, continuous)`` ``(k, 3)`` and
-        ``(multiplier, offset)`` ``(k, 2)``; no rows where the configuration is ``q``
-        itself (:func:`swarm_ik.kernels.search.pinocchio_config` computes it)."""
-        plan = () if self._pinocchio_q_is_q() else self._to_pinocchio_plan()
+        joint ``(index in q, index in Pinocchio's configuration, continuous)`` ``(k, 3)``,
+        ``(multiplier, offset)`` ``(k, 2)`` and the length of the configuration; no rows and
+        length 0 where the configuration is ``q`` itself
+        (:func:`swarm_ik.kernels.search.pinocchio_config` computes it)."""
+        same = self._pinocchio_q_is_q()
+        plan = () if same else self._to_pinocchio_plan()
         index = np.array([(qi, at, c) for qi, _, _, at, c in plan], dtype=np.int64)
         affine = np.array([(m, o) for _, m, o, _, _ in plan], dtype=float)
-        return index.reshape(len(plan), 3), affine.reshape(len(plan), 2)
+        nq_pin = 0 if same else int(self.model.nq)
+        return index.reshape(len(plan), 3), affine.reshape(len(plan), 2), nq_pin
 
     def _to_pinocchio_plan(self) -> tuple[tuple[int, float, float, int, bool], ...]:
         """Per Pinocchio joint: (driver's index in ``q``, multiplier, offset, index in

@@ -608,14 +608,15 @@ def test_compiled_pinocchio_configuration_equals_to_pinocchio(tmp_path) -> None:
     path.write_text(urdf)
     rng = np.random.default_rng(4)
     for robot in (swarm_ik.load_robot("kinova"), swarm_ik.load_robot(path, "d")):
-        index, affine = robot.pinocchio_plan_arrays()
+        index, affine, nq_pin = robot.pinocchio_plan_arrays()
         assert index.shape == (robot.model.njoints - 1, 3) and affine.shape[0] == index.shape[0]
+        assert nq_pin == robot.model.nq
         for q in robot.random_q(rng, 20):
             out = np.full(robot.model.nq, np.nan)
             search.pinocchio_config(q, index, affine, out)
             np.testing.assert_array_equal(out, robot.to_pinocchio(q))
-    index, affine = swarm_ik.load_robot("panda").pinocchio_plan_arrays()
-    assert index.shape == (0, 3) and affine.shape == (0, 2)
+    index, affine, nq_pin = swarm_ik.load_robot("panda").pinocchio_plan_arrays()
+    assert index.shape == (0, 3) and affine.shape == (0, 2) and nq_pin == 0
 
 
 def test_borrowed_returns_a_reference_where_the_runtime_counts_them() -> None:

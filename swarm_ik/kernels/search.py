@@ -811,7 +811,7 @@ def pose_solver(
     cfg: LMSettings,
     search_args: tuple[Any, ...],
     position_only: bool,
-    pin_plan: tuple[IntArray, FloatArray, int] | None = None,
+    pin_plan: tuple[IntArray, FloatArray, int],
 ) -> PoseSolver:
     """A :class:`PoseSolver` (compiled constructor, loaded from numba's cache).
 
@@ -820,9 +820,9 @@ def pose_solver(
         search_args: The arguments of :func:`swarm_search` from ``kernel_tol_pos`` to
             ``time_limit`` (13 values).
         position_only: The pose row is a position row (its rotation is not set per call).
-        pin_plan: Where Pinocchio's configuration is not ``q`` itself, its conversion
-            (:meth:`swarm_ik.robot.RobotModel.pinocchio_plan_arrays` and ``model.nq``):
-            :func:`solve_pose` then writes the answer's configuration too.
+        pin_plan: The conversion of the answer to Pinocchio's configuration
+            (:meth:`swarm_ik.robot.RobotModel.pinocchio_plan_arrays`; no rows where that
+            configuration is ``q`` itself): :func:`solve_pose` writes it after ``q``.
     """
     kinds = (float, float, float, float, float, int, int, int, bool, int, int, int, float)
     if len(search_args) != len(kinds):
@@ -830,8 +830,6 @@ def pose_solver(
     typed = tuple(k(v) for k, v in zip(kinds, search_args, strict=True))
     t, g, b = packed((t, g, b))
     work = packed(make_search_work(t, g, typed[5]))  # (its scratch contiguous too)
-    if pin_plan is None:
-        pin_plan = (np.zeros((0, 3), dtype=np.int64), np.zeros((0, 2)), 0)
     index, affine, nq_pin = pin_plan
     return _new_pose_solver(  # type: ignore[no-any-return]
         t, g, b, typed_settings(cfg), *typed, bool(position_only), work,
@@ -904,8 +902,8 @@ def _borrowed(typingctx: Any, struct: Any, name: Any) -> Any:  # pragma: no cove
         return None
 
     def codegen(context: Any, builder: Any, signature: Any, args: Any) -> Any:
-        # numba's getattr of a StructRef, without the runtime: the payload pointer read off
-        # the MemInfo (field 3, as NRT_MemInfo_data_fast does) and no reference taken
+        # numba's getattr of a StructRef, without asking the runtime for the payload: its
+        # pointer read off the MemInfo (field 3, as NRT_MemInfo_data_fast does)
         meminfo = cgutils.create_struct_proxy(struct)(context, builder, value=args[0]).meminfo
         info = builder.bitcast(meminfo, _MEMINFO.as_pointer())
         data_type = struct.get_data_type()
@@ -1001,8 +999,7 @@ def pose_search(
         borrowed(s, "pop_size"), borrowed(s, "n_swarm"), borrowed(s, "iterations"),
         borrowed(s, "unlimited"), borrowed(s, "max_evals"), borrowed(s, "budget_total"),
         borrowed(s, "evals_before"), borrowed(s, "time_limit"), t0, np.uint64(0), seed, out_q,
-        work, hist,
-        resume,
+        work, hist, resume,
     )  # fmt: skip
     if code == SEARCH_DONE:  # the answer's Pinocchio configuration, where it is not q
         pinocchio_config(out_q, borrowed(s, "pin_index"), borrowed(s, "pin_affine"), q_pin)
