@@ -92,7 +92,7 @@ def test_unknown_shape_type_lists_the_valid_ones() -> None:
     with pytest.raises(UnknownNameError) as exc:
         Scene.from_dict({"obstacles": [{"type": "cone", "radius": 1.0}]})
     msg = str(exc.value)
-    assert "'cone'" in msg and "box" in msg and "cylinder" in msg and "\n" not in msg
+    assert "'cone'" in msg and "Box" in msg and "Cylinder" in msg and "\n" not in msg
     assert isinstance(exc.value, SwarmIKError)
 
 
