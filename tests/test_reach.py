@@ -1,6 +1,6 @@
 """swarm_ik.reach: the grid size is checked before allocating, the HTML page is the viewer's
-scene (point cloud, robot, colour legend), and the command line refuses bad output paths and
-missing extras before computing."""
+scene (point cloud, robot, colour legend), and the command line (swarm_ik.cli.reach) refuses
+bad output paths and missing extras before computing."""
 
 from __future__ import annotations
 
@@ -16,6 +16,7 @@ import pytest
 
 import swarm_ik
 from swarm_ik import reach
+from swarm_ik.cli import reach as reach_cli
 from swarm_ik.errors import InvalidArgumentError
 
 
@@ -26,7 +27,7 @@ def yumi() -> swarm_ik.RobotModel:
 
 def _parse(*argv: str) -> argparse.Namespace:
     parser = argparse.ArgumentParser()
-    reach.add_arguments(parser)
+    reach_cli.add_arguments(parser)
     return parser.parse_args(list(argv))
 
 
@@ -90,7 +91,7 @@ def test_cli_checks_output_paths_before_computing(
     monkeypatch.setattr(reach, "reach_map", lambda *a, **k: called.append(1))
     args = _parse("--robot", "yumi_left", option, bad)
     with pytest.raises(InvalidArgumentError, match=message):
-        reach.run(args)
+        reach_cli.run(args)
     assert not called  # nothing was computed
     assert list(tmp_path.iterdir()) == []
 
@@ -98,10 +99,10 @@ def test_cli_checks_output_paths_before_computing(
 def test_cli_missing_matplotlib_is_refused_first(
     tmp_path: Path, monkeypatch: pytest.MonkeyPatch
 ) -> None:
-    monkeypatch.setattr(reach, "_has", lambda name: name != "matplotlib")
+    monkeypatch.setattr(reach_cli, "has_module", lambda name: name != "matplotlib")
     monkeypatch.setattr(reach, "reach_map", lambda *a, **k: pytest.fail("computed"))
     with pytest.raises(InvalidArgumentError, match=r"swarm_ik\[plot\].*--no-png"):
-        reach.run(_parse("--robot", "yumi_left", "--out", str(tmp_path / "m.npz")))
+        reach_cli.run(_parse("--robot", "yumi_left", "--out", str(tmp_path / "m.npz")))
 
 
 def test_cli_writes_map_picture_and_page(tmp_path: Path, capsys: Any) -> None:
@@ -110,11 +111,11 @@ def test_cli_writes_map_picture_and_page(tmp_path: Path, capsys: Any) -> None:
         "--robot", "yumi_left", "--resolution", "0.25", "--orientations", "2",
         "--max-starts", "4", "--out", str(out), "--no-progress",
     )  # fmt: skip
-    assert reach.run(args) == 0
+    assert reach_cli.run(args) == 0
     assert "reachable voxels" in capsys.readouterr().out
     rmap = reach.ReachMap.load(out)
     assert rmap.n_orientations == 2
     assert out.with_suffix(".png").stat().st_size > 10_000
-    if reach._has("meshcat"):
+    if reach_cli.has_module("meshcat"):
         assert "MeshCat.Viewer" in out.with_suffix(".html").read_text()
     np.testing.assert_array_equal(rmap.index, rmap.hits.mean(axis=-1))

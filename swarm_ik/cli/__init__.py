@@ -1,0 +1,235 @@
+"""Command line: ``swarm-ik robots | solve | show | batch | reach | bench …``.
+
+One module per sub-command (:data:`COMMANDS`), each with ``add_parser(subparsers)`` and
+``run(args) -> int``; this module builds the top parser, dispatches, and turns every error
+into an exit code and one line:
+
+* 0 success;
+* 1 target not reached (the best found is still printed), or some targets of ``batch``;
+* 2 bad input (one line on stderr, no traceback; with ``--json`` one JSON object
+  ``{"error": …, "exit_code": 2, …}`` on stdout instead);
+* 3 an unexpected error inside swarm_ik (one line; set ``SWARM_IK_DEBUG=1`` to see the
+  traceback);
+* 130 interrupted (Ctrl-C, at any point of the command).
+
+Numbers may be negative in any notation (``--from-q -1e-3 0.5 -2``): the parser does not take
+``-1e-3`` for an option.  Usage errors are one line too, naming the sub-command's ``--help``.
+
+Importing this package loads only the standard library (the sub-command modules import what
+they need when they run), so that a Ctrl-C during start-up is caught by :func:`main` too.
+"""
+
+from __future__ import annotations
+
+import argparse
+import gc
+import importlib
+import json
+import os
+import re
+import sys
+import warnings
+from collections.abc import Sequence
+from typing import Any, NoReturn
+
+from swarm_ik.cli import batch, bench, reach, robots, show, solve
+from swarm_ik.cli._args import (
+    EXIT_BAD_INPUT,
+    EXIT_INTERNAL,
+    EXIT_INTERRUPTED,
+    EXIT_NOT_REACHED,
+    EXIT_OK,
+    UsageError,
+)
+from swarm_ik.cli.bench import BENCHMARKS
+from swarm_ik.errors import SwarmIKError
+
+__all__ = [
+    "BENCHMARKS",
+    "COMMANDS",
+    "EXIT_BAD_INPUT",
+    "EXIT_INTERNAL",
+    "EXIT_INTERRUPTED",
+    "EXIT_NOT_REACHED",
+    "EXIT_OK",
+    "Formatter",
+    "Parser",
+    "UsageError",
+    "build_parser",
+    "main",
+]
+
+COMMANDS = {
+    "robots": robots,
+    "solve": solve,
+    "show": show,
+    "batch": batch,
+    "reach": reach,
+    "bench": bench,
+}
+"""The sub-commands, in the order ``swarm-ik --help`` lists them: name -> module with
+``add_parser(subparsers)`` and ``run(args) -> int``."""
+
+_NEGATIVE_NUMBER = re.compile(
+    r"^-(?:\d+\.?\d*|\.\d+)(?:[eE][-+]?\d+)?$|^-(?:inf|infinity|nan)$", re.IGNORECASE
+)
+"""What the parser reads as a negative number rather than an option: ``-1``, ``-.5``,
+``-1e-3``, ``-2.5E+4``, ``-inf``."""
+
+
+class Formatter(argparse.HelpFormatter):
+    """Help layout: an option whose ``metavar`` is one string describing all its values
+    (``--pose X Y Z [QX QY QZ QW]``) is shown with it as written, not repeated; and the
+    column of the help texts counts the indent of sub-command names, so that a name as long
+    as ``throughput`` keeps its help on its own line (argparse leaves it out)."""
+
+    def add_argument(self, action: argparse.Action) -> None:
+        super().add_argument(action)
+        if action.help is argparse.SUPPRESS or not isinstance(action, argparse._SubParsersAction):
+            return
+        names = [self._format_action_invocation(a) for a in action._get_subactions()]
+        if names:
+            width = max(map(len, names)) + self._current_indent + self._indent_increment
+            self._action_max_length = max(self._action_max_length, width)
+
+    def _format_args(self, action: argparse.Action, default_metavar: str) -> str:
+        if getattr(action, "whole_metavar", False) and isinstance(action.metavar, str):
+            return action.metavar
+        return super()._format_args(action, default_metavar)
+
+
+class Parser(argparse.ArgumentParser):
+    """``argparse.ArgumentParser`` that takes ``-1e-3`` for a number and reports usage errors
+    as :class:`UsageError` (printed as one line by :func:`main`) instead of eight lines of
+    usage.  Sub-parsers inherit the class (and with it the :class:`Formatter`)."""
+
+    def __init__(self, *args: Any, **kwargs: Any) -> None:
+        kwargs.setdefault("formatter_class", Formatter)
+        super().__init__(*args, **kwargs)
+        self._negative_number_matcher = _NEGATIVE_NUMBER
+
+    def error(self, message: str) -> NoReturn:
+        raise UsageError(f"{self.prog}: error: {message} (see `{self.prog} --help`)")
+
+
+EPILOG = (
+    "exit codes: 0 success, 1 target not reached (the best found is printed), 2 bad input "
+    "(one line on stderr), 3 internal error (one line; SWARM_IK_DEBUG=1 shows the "
+    "traceback), 130 interrupted (Ctrl-C).  `swarm-ik COMMAND --help` describes a command."
+)
+
+
+def build_parser(command: str | None = None) -> argparse.ArgumentParser:
+    """The whole parser; given the ``command`` about to run (``argv[0]``), the benchmarks'
+    options are added (their modules imported) only if it is ``bench``."""
+    parser = Parser(
+        prog="swarm-ik",
+        description="Inverse kinematics for URDF robots with swarm optimisers and Pinocchio.",
+        epilog=EPILOG,
+    )
+    sub = parser.add_subparsers(dest="command", required=True, metavar="COMMAND")
+    for module in COMMANDS.values():
+        if module is bench:
+            bench.add_parser(sub, with_options=command in (None, "bench"))
+        else:
+            module.add_parser(sub)
+    return parser
+
+
+def _fail(message: str, code: int, as_json: bool, kind: str) -> int:
+    """Report an error as one line on stderr (or one JSON object on stdout); returns ``code``."""
+    message = " ".join(str(message).split())
+    if as_json:
+        print(json.dumps({"error": message, "kind": kind, "exit_code": code}), flush=True)
+    else:
+        prefix = "" if message.startswith("swarm-ik") else "swarm-ik: error: "
+        print(prefix + message, file=sys.stderr, flush=True)
+    return code
+
+
+def _dispatch(args: argparse.Namespace) -> int:
+    module = COMMANDS.get(args.command)
+    if module is None:  # pragma: no cover - argparse refuses unknown commands first
+        raise UsageError(f"swarm-ik: error: unknown command {args.command!r}")
+    return int(module.run(args))
+
+
+def main(argv: Sequence[str] | None = None) -> int:
+    """Entry point of the ``swarm-ik`` console script; returns the exit code.
+
+    Never raises (except ``SystemExit`` from ``--help``): bad input gives 2 and one line,
+    anything unexpected 3 and one line (``SWARM_IK_DEBUG=1`` re-raises it), Ctrl-C 130.
+    """
+    script = argv is None  # the console script: this process is ours to tune
+    argv = list(sys.argv[1:] if argv is None else argv)
+    as_json = "--json" in argv
+    try:
+        if script:
+            _own_process()
+        parser = build_parser(argv[0] if argv else None)
+        args = parser.parse_args(argv)
+        as_json = bool(getattr(args, "json", False))
+        if script and args.command not in SHORT_COMMANDS:
+            gc.enable()
+            script = False  # a long command: collect, and exit the usual way
+        with warnings.catch_warnings():
+            warnings.simplefilter("default")
+            # Dask's start-up chatter (dashboard port taken, sockets) is not the user's concern
+            warnings.filterwarnings("ignore", module=r"distributed(\.|$)")
+            warnings.filterwarnings("ignore", category=ResourceWarning)
+            return _dispatch(args)
+    except UsageError as exc:
+        return _fail(str(exc), EXIT_BAD_INPUT, as_json, "UsageError")
+    except SwarmIKError as exc:
+        return _fail(str(exc), EXIT_BAD_INPUT, as_json, type(exc).__name__)
+    except KeyboardInterrupt:
+        return _interrupted(as_json)
+    except Exception as exc:
+        if os.environ.get("SWARM_IK_DEBUG"):
+            raise
+        what = "out of memory" if isinstance(exc, MemoryError) else f"{type(exc).__name__}: {exc}"
+        return _fail(
+            f"swarm-ik: internal error ({what}); please report it, with the command line "
+            "(set SWARM_IK_DEBUG=1 for the traceback)",
+            EXIT_INTERNAL,
+            as_json,
+            type(exc).__name__,
+        )
+    finally:
+        if script:  # shutdown then skips the ~10^6 objects numba made (~0.25 s): a short
+            gc.freeze()  # command only (extensions that report leaks at exit stay quiet)
+
+
+def _interrupted(as_json: bool) -> int:
+    """Exit 130 with one line; a second Ctrl-C while it is printed changes nothing."""
+    try:
+        return _fail("swarm-ik: interrupted", EXIT_INTERRUPTED, as_json, "KeyboardInterrupt")
+    except KeyboardInterrupt:
+        return EXIT_INTERRUPTED
+
+
+SHORT_COMMANDS = ("solve", "robots")
+"""Commands run with the cyclic garbage collector off: they make few objects after start-up,
+and its passes over numba's ~10^6 import-time objects cost ~0.08 s of a ~0.7 s solve."""
+
+
+def _own_process() -> None:
+    """Start-up tuning for the console script only (never for :func:`main` called with
+    ``argv``, in someone else's process).
+
+    The collector is off until the command is known (:data:`SHORT_COMMANDS` keep it off), and
+    numba's array-maths module is imported with ``scipy.linalg.cython_blas`` hidden: numba
+    imports scipy.linalg (≈ 0.13 s) at that point only to learn whether ``np.convolve`` and
+    ``np.correlate`` may call BLAS (without it they use numba's own loop).  No swarm_ik kernel
+    calls BLAS, and scipy stays importable: only this one import sees it hidden.
+    """
+    gc.disable()
+    blas = "scipy.linalg.cython_blas"
+    if "numba.np.arraymath" in sys.modules or "scipy.linalg" in sys.modules:
+        return
+    sys.modules[blas] = None  # type: ignore[assignment]  # `import` of it now fails at once
+    try:
+        importlib.import_module("numba.np.arraymath")
+    finally:
+        if sys.modules.get(blas, 0) is None:
+            del sys.modules[blas]

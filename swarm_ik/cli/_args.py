@@ -1,0 +1,355 @@
+"""What several sub-commands of ``swarm-ik`` share: options (one definition each), the checks
+of input and output paths made before any work, and the exit codes.
+
+Only the standard library and :mod:`swarm_ik.errors` are imported here at module level, so
+that ``import swarm_ik.cli`` stays light (the console script imports it before :func:`main`
+can catch a Ctrl-C).
+"""
+
+from __future__ import annotations
+
+import argparse
+import os
+import stat
+import tempfile
+from pathlib import Path
+from typing import Any
+
+from swarm_ik.errors import InvalidArgumentError
+
+EXIT_OK = 0
+EXIT_NOT_REACHED = 1
+EXIT_BAD_INPUT = 2
+EXIT_INTERNAL = 3
+EXIT_INTERRUPTED = 130
+
+
+class UsageError(Exception):
+    """A command-line usage error (bad option, missing argument); exit code 2."""
+
+
+POSE_HELP = "target position [m] and quaternion qx qy qz qw (x y z w order)"
+POSE_HELP_POSITION_ONLY = (
+    "target position [m] and quaternion qx qy qz qw (x y z w order); with --position-only "
+    "the position X Y Z alone is enough (a quaternion given is ignored)"
+)
+ROBOT_HELP = (
+    "bundled or example-robot-data name (see `swarm-ik robots`), or a .urdf path "
+    "(a .xacro must be expanded first)"
+)
+FRAME_HELP = "end-effector frame (default: the robot's tool frame)"
+SCHEDULER_HELP = (
+    "where to solve: 'none' (default: this process, no Dask), 'local' (an embedded Dask "
+    "LocalCluster, one worker process per core; pip install 'swarm_ik[dask]'), or a Dask "
+    "scheduler address tcp://host:port"
+)
+
+MAX_GOALS_BYTES = 16 * 2**20
+"""Largest ``--goals`` file read [bytes] (16 MiB); larger files are refused unread."""
+MAX_JSON_DEPTH = 100
+"""Deepest nesting of ``[`` / ``{`` accepted in a ``--goals`` file (a goal list needs 4)."""
+
+
+# ------------------------------------------------------------------------------ options
+class _PoseAction(argparse.Action):
+    """``--pose`` taking 7 numbers, or 3 (a position) where ``--position-only`` is offered."""
+
+    whole_metavar = True  # the help shows the metavar as written (swarm_ik.cli.Formatter)
+
+    def __init__(self, *args: Any, three_ok: bool = False, **kwargs: Any) -> None:
+        super().__init__(*args, **kwargs)
+        self.three_ok = three_ok
+
+    def __call__(
+        self,
+        parser: argparse.ArgumentParser,
+        namespace: argparse.Namespace,
+        values: Any,
+        option_string: str | None = None,
+    ) -> None:
+        n = len(values)
+        if n != 7 and not (self.three_ok and n == 3):
+            valid = "7 arguments (X Y Z QX QY QZ QW)"
+            if self.three_ok:
+                valid += ", or 3 (X Y Z) with --position-only"
+            raise argparse.ArgumentError(self, f"expected {valid}, got {n}")
+        setattr(namespace, self.dest, list(values))
+
+
+def add_pose(group: Any, *, position_only: bool = False) -> None:
+    """``--pose X Y Z QX QY QZ QW`` on a parser or a mutually exclusive group; with
+    ``position_only`` (the command has ``--position-only``) ``--pose X Y Z`` is taken too
+    (:func:`pose_target` then checks that ``--position-only`` is given)."""
+    if position_only:
+        group.add_argument(
+            "--pose",
+            nargs="+",
+            type=float,
+            action=_PoseAction,
+            three_ok=True,
+            metavar="X Y Z [QX QY QZ QW]",
+            help=POSE_HELP_POSITION_ONLY,
+        )
+        return
+    group.add_argument(
+        "--pose",
+        nargs="+",
+        type=float,
+        action=_PoseAction,
+        metavar="X Y Z QX QY QZ QW",
+        help=POSE_HELP,
+    )
+
+
+def pose_target(pose: list[float], position_only: bool) -> list[float]:
+    """The 7 numbers of ``--pose``: given as they are, or, for ``--pose X Y Z`` (accepted only
+    with ``--position-only``), the position with an identity quaternion that nothing reads.
+
+    Raises:
+        UsageError: three numbers without ``--position-only``.
+    """
+    if len(pose) == 7:
+        return list(pose)
+    if not position_only:
+        raise UsageError(
+            "swarm-ik solve: error: argument --pose: expected 7 arguments (X Y Z QX QY QZ QW); "
+            "3 (X Y Z) only with --position-only (see `swarm-ik solve --help`)"
+        )
+    return [*pose, 0.0, 0.0, 0.0, 1.0]
+
+
+def robot_argument(text: str) -> str:
+    """``--robot``'s type: the name or path, unchanged, except that a ``.xacro`` file (a
+    macro file, not a URDF) is refused before anything is loaded."""
+    name = Path(text).name
+    if name.lower().endswith(".xacro"):
+        stem = name[: -len(".xacro")]
+        urdf = stem if stem.lower().endswith(".urdf") else stem + ".urdf"
+        raise argparse.ArgumentTypeError(
+            f"{text!r} is a xacro file: xacro files must be expanded first: run "
+            f"`xacro {name} > {urdf}` (ROS's xacro package) and pass {urdf}"
+        )
+    return text
+
+
+def add_robot(parser: Any, *, frame: bool = True) -> None:
+    """``--robot NAME`` (required) and, with ``frame``, ``--frame NAME`` (one end-effector
+    frame; ``swarm-ik solve`` defines its own, repeatable)."""
+    parser.add_argument("--robot", required=True, type=robot_argument, help=ROBOT_HELP)
+    if frame:
+        parser.add_argument("--frame", default=None, help=FRAME_HELP)
+
+
+def add_tolerances(parser: Any) -> None:
+    """``--tol-pos M`` and ``--tol-rot RAD`` (default 1e-5 each)."""
+    parser.add_argument(
+        "--tol-pos", type=float, default=1e-5, help="position tolerance [m] (default 1e-5)"
+    )
+    parser.add_argument(
+        "--tol-rot", type=float, default=1e-5, help="rotation tolerance [rad] (default 1e-5)"
+    )
+
+
+def add_scheduler(parser: Any, default: str = "none") -> None:
+    """``--scheduler`` (for any command that distributes work with Dask)."""
+    parser.add_argument(
+        "--scheduler", default=default, metavar="local|none|tcp://HOST:PORT", help=SCHEDULER_HELP
+    )
+
+
+def non_negative_seconds(text: str) -> float:
+    """A number of seconds >= 0 (``inf`` allowed), for ``--show-wait``."""
+    try:
+        value = float(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"expected a number of seconds, got {text!r}") from None
+    if not value >= 0.0:  # also refuses NaN
+        raise argparse.ArgumentTypeError(f"must be 0 or more seconds (or inf), got {text!r}")
+    return value
+
+
+def solve_kwargs(args: argparse.Namespace) -> dict[str, Any]:
+    """The options of ``swarm-ik solve`` that :func:`swarm_ik.solve` takes (no solver params)."""
+    return {
+        "seed": args.seed,
+        "max_evals": args.max_evals,
+        "time_limit": args.time_limit,
+        "q0": args.q0,
+        "tol_pos": args.tol_pos,
+        "tol_rot": args.tol_rot,
+    }
+
+
+# --------------------------------------------------------------------------- input files
+def _kind(mode: int) -> str:
+    if stat.S_ISDIR(mode):
+        return "a folder"
+    if stat.S_ISFIFO(mode):
+        return "a named pipe (FIFO)"
+    if stat.S_ISCHR(mode) or stat.S_ISBLK(mode):
+        return "a device"
+    if stat.S_ISSOCK(mode):
+        return "a socket"
+    return "not a regular file"
+
+
+def check_input_file(path: str | os.PathLike[str], what: str, max_bytes: int | None) -> Path:
+    """Refuse an input path that is not a regular file (a folder, a FIFO, ``/dev/zero``),
+    or, with ``max_bytes``, a file larger than that, before opening it.
+
+    A path that does not exist is let through: the reader names it as missing.
+
+    Raises:
+        InvalidArgumentError: naming the option, the path and the limit.
+    """
+    p = Path(path)
+    try:
+        st = p.stat()  # follows links: a link to a FIFO is a FIFO
+    except FileNotFoundError:
+        return p
+    except OSError as exc:
+        raise InvalidArgumentError(f"{what} {str(p)!r}: cannot be read ({exc.strerror})") from None
+    if not stat.S_ISREG(st.st_mode):
+        raise InvalidArgumentError(f"{what} {str(p)!r} is {_kind(st.st_mode)}; give a regular file")
+    if max_bytes is not None and st.st_size > max_bytes:
+        raise InvalidArgumentError(
+            f"{what} {str(p)!r}: {st.st_size} bytes, over the limit of {_size(max_bytes)} "
+            "for this file"
+        )
+    return p
+
+
+def _size(n: int) -> str:
+    return f"{n // 2**20} MiB" if n % 2**20 == 0 else f"{n} bytes"
+
+
+def json_depth(data: bytes) -> int:
+    """How deeply ``[`` and ``{`` nest in JSON text, brackets inside strings not counted,
+    found in linear time without parsing (so without recursion).
+
+    A quote ends or starts a string unless an odd number of backslashes precedes it.  For a
+    file that is valid JSON up to some point, the count over that part is exactly the depth
+    the parser reaches there.
+
+    >>> json_depth(b'[{"a": [1, "]]"], "b": "[{["}]')
+    3
+    """
+    import numpy as np
+
+    arr = np.frombuffer(data, dtype=np.uint8)
+    if arr.size == 0:
+        return 0
+    pos = np.arange(arr.size, dtype=np.int32)  # files are capped far below 2**31
+    # length of the run of backslashes just before each byte
+    last_other = np.maximum.accumulate(np.where(arr != ord("\\"), pos, -1))
+    before = np.empty(arr.size, dtype=np.int32)
+    before[0] = 0
+    before[1:] = pos[:-1] - last_other[:-1]
+    quote = (arr == ord('"')) & (before % 2 == 0)
+    del pos, last_other, before  # the file may be 16 MiB: keep the peak low
+    outside = ~np.logical_xor.accumulate(quote)  # a bracket is never a quote
+    opens = outside & ((arr == ord("[")) | (arr == ord("{")))
+    closes = outside & ((arr == ord("]")) | (arr == ord("}")))
+    step = opens.astype(np.int32) - closes.astype(np.int32)
+    return max(0, int(np.cumsum(step, dtype=np.int32).max()))
+
+
+def check_goals_file(path: str | os.PathLike[str], what: str = "--goals") -> None:
+    """The checks made on ``--goals FILE`` before :func:`swarm_ik.goals.load_goals` reads it:
+    a regular file of at most :data:`MAX_GOALS_BYTES`, its JSON nested at most
+    :data:`MAX_JSON_DEPTH` deep (a deeper one would exhaust Python's recursion in the
+    parser).
+
+    Raises:
+        InvalidArgumentError: one line naming the limit.
+    """
+    p = check_input_file(path, what, MAX_GOALS_BYTES)
+    try:
+        data = p.read_bytes()
+    except OSError:
+        return  # missing or unreadable: load_goals says so
+    depth = json_depth(data)
+    if depth > MAX_JSON_DEPTH:
+        raise InvalidArgumentError(
+            f"{what} {str(p)!r}: JSON nested {depth} levels deep, over the limit of "
+            f"{MAX_JSON_DEPTH} (a goal list needs about 4)"
+        )
+
+
+# -------------------------------------------------------------------------- output paths
+def _probe(folder: Path) -> str | None:
+    """Why a new file cannot be created in ``folder`` (``None``: it can), found by creating
+    and removing an empty one: permission bits alone do not tell (root, read-only mounts)."""
+    try:
+        fd, name = tempfile.mkstemp(prefix=".swarm-ik-probe-", dir=folder)
+    except OSError as exc:
+        return exc.strerror or type(exc).__name__
+    os.close(fd)
+    os.unlink(name)
+    return None
+
+
+def check_output_file(
+    path: str | os.PathLike[str], what: str, suffixes: tuple[str, ...] | None = None
+) -> Path:
+    """Refuse an output file that cannot be written, before any work: a folder, a wrong
+    suffix, a missing folder (:func:`swarm_ik._validate.check_output_path`), an existing
+    file that does not open for writing, or, for a new file, a folder where no file can be
+    created (tried, not guessed from permission bits, which do not stop root or tell a
+    read-only mount).
+
+    Returns:
+        The path.
+
+    Raises:
+        InvalidArgumentError: one line naming the option and why.
+    """
+    from swarm_ik._validate import check_output_path
+
+    p = check_output_path(path, what, suffixes)
+    if p.exists():  # overwritten in place: it must open for writing
+        if not p.is_file():
+            raise InvalidArgumentError(f"{what} {str(p)!r} is {_kind(p.stat().st_mode)}")
+        try:
+            with open(p, "ab"):  # opened for writing, not truncated
+                pass
+        except OSError as exc:
+            raise InvalidArgumentError(
+                f"{what} {str(p)!r}: not writable ({exc.strerror})"
+            ) from None
+        return p
+    parent = p.parent if str(p.parent) else Path(".")
+    reason = _probe(parent)
+    if reason is not None:
+        raise InvalidArgumentError(
+            f"{what} {str(p)!r}: cannot write in folder {str(parent)!r} ({reason})"
+        )
+    return p
+
+
+def check_output_folder(path: str | os.PathLike[str], what: str = "--out") -> Path:
+    """Refuse an output folder that cannot be written, before any work: a file, or a folder
+    (or, when it is to be created, its nearest existing parent) where nothing can be written.
+
+    Raises:
+        InvalidArgumentError: one line naming the option and why.
+    """
+    p = Path(path)
+    if p.exists() and not p.is_dir():
+        raise InvalidArgumentError(f"{what} {str(p)!r} is a file; give a folder")
+    existing = p
+    while not existing.exists():
+        up = existing.parent
+        if up == existing:
+            break
+        existing = up
+    if not existing.is_dir():
+        raise InvalidArgumentError(
+            f"{what} {str(p)!r}: {str(existing)!r} is a file, so the folder cannot be made"
+        )
+    reason = _probe(existing)
+    if reason is not None:
+        raise InvalidArgumentError(
+            f"{what} {str(p)!r}: cannot write in folder {str(existing)!r} ({reason})"
+        )
+    return p

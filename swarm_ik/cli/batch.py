@@ -1,0 +1,162 @@
+"""``swarm-ik batch``: many target poses of one robot solved at once (vectorised, optionally
+on Dask).
+
+``swarm-ik batch --robot panda --targets poses.npz --out result.npz`` solves every target of
+the file (``.npz``/``.npy``/``.csv``, see :func:`swarm_ik.batch.read_targets`) and writes one
+row per target (``.npz`` or ``.csv``); ``--random N`` solves N targets sampled by forward
+kinematics instead.  ``--scheduler``: ``none`` (default: this process, no Dask), ``local``
+(an embedded Dask LocalCluster, one worker process per core; extra ``dask``), or a scheduler
+address ``tcp://host:port``.
+
+Exit codes: 0 all targets solved, 1 some not solved, 2 bad input (``--out`` is checked,
+written to and removed, before any work), 130 interrupted.
+
+Ctrl-C stops after the chunks already finished: their rows (the first ``k`` targets, in
+order) are written to ``--out`` and the command exits with 130, printing one line.  It is
+:func:`swarm_ik.batch.solve_batch` with ``keep_on_interrupt=True``: the chunks go out in waves
+(one chunk at a time in-process, two per worker on Dask), each solved with its index in the
+whole batch, so the answers are bit-identical to a plain ``solve_batch``'s.
+"""
+
+from __future__ import annotations
+
+import argparse
+import sys
+from pathlib import Path
+from typing import Any
+
+from swarm_ik.cli._args import (
+    EXIT_INTERRUPTED,
+    EXIT_NOT_REACHED,
+    EXIT_OK,
+    add_robot,
+    add_scheduler,
+    add_tolerances,
+    check_input_file,
+    check_output_file,
+)
+
+
+def add_parser(subparsers: Any) -> argparse.ArgumentParser:
+    """Add ``batch`` to the ``swarm-ik`` sub-parsers."""
+    b: argparse.ArgumentParser = subparsers.add_parser(
+        "batch",
+        help="solve many targets at once (vectorised, optionally on Dask)",
+        description="Solve many target poses of one robot with the compiled "
+        "Levenberg-Marquardt polish and restarts; writes one row per target.  Exit 0 when "
+        "every target is solved, 1 when some are not, 130 on Ctrl-C (the finished rows are "
+        "written).",
+    )
+    add_robot(b)
+    src = b.add_mutually_exclusive_group(required=True)
+    src.add_argument(
+        "--targets",
+        type=Path,
+        metavar="FILE",
+        help="targets: .npz/.npy ((N,4,4) or (N,7) array) or .csv "
+        "(x,y,z,qx,qy,qz,qw or 16 matrix columns)",
+    )
+    src.add_argument(
+        "--random",
+        type=int,
+        metavar="N",
+        help="N targets = FK of configurations drawn uniformly within the limits",
+    )
+    b.add_argument(
+        "--out",
+        type=Path,
+        required=True,
+        metavar="FILE",
+        help="result file: .npz (q, errors, success, ...) or .csv; its folder must exist and "
+        "be writable (checked before solving)",
+    )
+    b.add_argument(
+        "--q0",
+        nargs="+",
+        type=float,
+        default=None,
+        help="first start for every target (one value per joint); default mid-range",
+    )
+    b.add_argument("--position-only", action="store_true", help="ignore the target orientation")
+    b.add_argument("--chunk-size", type=int, default=None, help="targets per task")
+    b.add_argument(
+        "--seed", type=int, default=0, help="seed of the restarts (and of sampled targets)"
+    )
+    add_tolerances(b)
+    b.add_argument(
+        "--max-starts",
+        type=int,
+        default=128,
+        help="most LM starts per target, the seed included (default 128)",
+    )
+    b.add_argument(
+        "--max-iters", type=int, default=60, help="most LM iterations per start (default 60)"
+    )
+    add_scheduler(b)
+    b.add_argument("--no-progress", action="store_true", help="no progress bar")
+    return b
+
+
+def run(args: argparse.Namespace) -> int:
+    """``swarm-ik batch``; returns the exit code."""
+    import numpy as np
+
+    import swarm_ik
+    from swarm_ik._validate import read_targets_file
+    from swarm_ik.errors import InvalidArgumentError
+
+    check_output_file(args.out, "--out", (".csv", ".npz"))  # before any work
+    if args.random is not None and args.random < 1:
+        raise InvalidArgumentError(f"--random must be a positive count, got {args.random}")
+    if args.targets is not None:
+        check_input_file(args.targets, "--targets", None)
+    robot = swarm_ik.load_robot(args.robot, ee_frame=args.frame)
+    if args.targets is not None:
+        targets = read_targets_file(args.targets)
+        source = str(args.targets)
+    else:
+        rng = np.random.default_rng(args.seed)
+        targets = robot.fk(robot.random_q(rng, args.random))
+        source = f"{args.random} FK-sampled targets (seed {args.seed})"
+    from swarm_ik.batch import solve_batch
+
+    res = solve_batch(
+        robot,
+        targets,
+        seed=args.seed,
+        q0=args.q0,
+        tol_pos=args.tol_pos,
+        tol_rot=args.tol_rot,
+        position_only=args.position_only,
+        max_starts=args.max_starts,
+        max_iters=args.max_iters,
+        scheduler=args.scheduler,
+        chunk_size=args.chunk_size,
+        progress=not args.no_progress and sys.stderr.isatty(),
+        keep_on_interrupt=True,
+    )
+    if res.interrupted:
+        if res.n:
+            res.save(args.out, targets=targets[: res.n])
+            kept = f"wrote the {res.n} finished targets (of {len(targets)}) to {args.out}"
+        else:
+            kept = "no chunk had finished; nothing written"
+        print(f"swarm-ik: interrupted; {kept}", file=sys.stderr)
+        return EXIT_INTERRUPTED
+    res.save(args.out, targets=targets)
+    n_ok = int(res.success.sum())
+    print(f"robot {robot.name} ({robot.nq} joints), frame {robot.ee_frame}; targets: {source}")
+    rot = "" if args.position_only else f" / {args.tol_rot:g} rad"
+    print(
+        f"solved {n_ok}/{res.n} ({100 * res.success_rate:.2f} %) within "
+        f"{args.tol_pos:g} m{rot} in {res.time_s:.3f} s "
+        f"({res.poses_per_s:.0f} poses/s, scheduler {args.scheduler}"
+        + (f", of which {res.setup_s:.2f} s cluster start-up)" if res.setup_s > 0.01 else ")")
+    )
+    if res.n:
+        print(
+            f"LM evaluations per target: mean {res.n_evals.mean():.1f}, starts per target: "
+            f"mean {res.n_starts.mean():.2f}"
+        )
+    print(f"wrote {args.out}")
+    return EXIT_OK if n_ok == res.n else EXIT_NOT_REACHED

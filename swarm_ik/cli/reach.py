@@ -1,0 +1,207 @@
+"""``swarm-ik reach``: a reachability map of a robot on a voxel grid (:mod:`swarm_ik.reach`),
+written as ``.npz``, a PNG of three slices and (with meshcat installed) an HTML point cloud.
+
+Everything that can be refused is refused before the work: non-finite or inverted
+``--bounds``, a grid too large, missing extras, output files that cannot be written (each
+folder tried), meshes of the robot that cannot be found for the HTML page.  Exit codes: 0 the
+files are written, 2 bad input, 130 interrupted.
+"""
+
+from __future__ import annotations
+
+import argparse
+import importlib.util
+import math
+import sys
+from pathlib import Path
+from typing import Any
+
+from swarm_ik.cli import _viewer
+from swarm_ik.cli._args import (
+    EXIT_OK,
+    add_robot,
+    add_scheduler,
+    add_tolerances,
+    check_output_file,
+)
+from swarm_ik.errors import InvalidArgumentError
+
+MAX_TARGETS = 5_000_000
+"""Default of ``--max-targets`` (:data:`swarm_ik.reach.MAX_TARGETS`, restated here so that
+building the parser imports no numerics; a test keeps the two equal)."""
+
+
+def add_parser(subparsers: Any) -> argparse.ArgumentParser:
+    """Add ``reach`` to the ``swarm-ik`` sub-parsers."""
+    p: argparse.ArgumentParser = subparsers.add_parser(
+        "reach",
+        help="reachability map on a voxel grid (npz + PNG slices + HTML point cloud)",
+        description="Reachability index per voxel: the fraction of K orientations solved at "
+        "its centre.  Writes the map (.npz), a PNG of three slices (needs [plot]) and, with "
+        "meshcat installed, an HTML point cloud; every output is checked before solving.",
+    )
+    add_arguments(p)
+    return p
+
+
+def add_arguments(parser: Any) -> None:
+    """The options of ``swarm-ik reach`` (see :func:`run`)."""
+    add_robot(parser)
+    parser.add_argument(
+        "--resolution", type=float, default=0.1, help="voxel edge [m] (default 0.1)"
+    )
+    parser.add_argument(
+        "--bounds",
+        nargs=6,
+        type=float,
+        default=None,
+        metavar=("XMIN", "YMIN", "ZMIN", "XMAX", "YMAX", "ZMAX"),
+        help="workspace box [m], finite, each min below its max (default: cube around the "
+        "first joint, 1.1 × the sampled reach)",
+    )
+    parser.add_argument(
+        "--orientations",
+        type=int,
+        default=8,
+        metavar="K",
+        help="orientations tried per voxel (default 8, seeded random rotations)",
+    )
+    parser.add_argument(
+        "--out",
+        type=Path,
+        metavar="FILE.npz",
+        help="map file (default reach_<robot>.npz)",
+    )
+    parser.add_argument(
+        "--png",
+        type=Path,
+        metavar="FILE.png",
+        help="slices picture (default: next to --out; needs [plot])",
+    )
+    parser.add_argument("--no-png", action="store_true", help="do not draw the slices picture")
+    parser.add_argument(
+        "--html",
+        type=Path,
+        metavar="FILE.html",
+        help="meshcat page: point cloud, robot, colour legend (default: next to --out, when "
+        "meshcat is installed)",
+    )
+    parser.add_argument("--no-html", action="store_true", help="do not write the HTML page")
+    parser.add_argument(
+        "--seed", type=int, default=0, help="seed of the orientations and restarts (default 0)"
+    )
+    add_tolerances(parser)
+    parser.add_argument(
+        "--max-starts", type=int, default=16, help="most LM starts per pose (default 16)"
+    )
+    parser.add_argument(
+        "--max-iters", type=int, default=60, help="most LM iterations per start (default 60)"
+    )
+    parser.add_argument(
+        "--max-targets",
+        type=int,
+        default=MAX_TARGETS,
+        help=f"refuse grids of more poses (voxels × K) than this (default {MAX_TARGETS})",
+    )
+    add_scheduler(parser)
+    parser.add_argument("--no-progress", action="store_true", help="no progress bar")
+
+
+def has_module(module: str) -> bool:
+    """Whether ``module`` can be imported (without importing it)."""
+    try:
+        return importlib.util.find_spec(module) is not None
+    except ValueError:  # pragma: no cover - a module without a spec
+        return False
+
+
+def check_bounds(bounds: Any) -> tuple[list[float], list[float]]:
+    """``--bounds`` as (lower, upper) corners: six finite numbers, each min below its max.
+
+    Raises:
+        InvalidArgumentError: one line naming the bad values.
+    """
+    values = [float(b) for b in bounds]
+    lo, hi = values[:3], values[3:]
+    if not all(math.isfinite(v) for v in values):
+        raise InvalidArgumentError(
+            f"--bounds must be 6 finite numbers (XMIN YMIN ZMIN XMAX YMAX ZMAX), got {values}"
+        )
+    bad = [axis for axis, a, b in zip("xyz", lo, hi, strict=True) if not a < b]
+    if bad:
+        raise InvalidArgumentError(
+            f"--bounds: each min must be below its max (XMIN YMIN ZMIN XMAX YMAX ZMAX); not on "
+            f"{', '.join(bad)}: lower {lo}, upper {hi}"
+        )
+    return lo, hi
+
+
+def run(args: argparse.Namespace) -> int:
+    """``swarm-ik reach``: everything that can be refused is refused before the work (bounds,
+    missing extras, output paths, a grid too large); returns 0 when the files are written."""
+    import numpy as np
+
+    import swarm_ik
+    from swarm_ik import _validate, reach
+
+    if args.bounds is not None:
+        bounds = check_bounds(args.bounds)
+    _validate.positive_float(args.resolution, "--resolution")
+    out = args.out if args.out is not None else Path(f"reach_{Path(args.robot).stem}.npz")
+    out = check_output_file(out, "--out", (".npz",))
+    png = None
+    if not args.no_png:
+        if not has_module("matplotlib"):
+            raise InvalidArgumentError(
+                'the slices picture needs matplotlib: pip install "swarm_ik[plot]" (or --no-png)'
+            )
+        png = check_output_file(args.png or out.with_suffix(".png"), "--png", (".png",))
+    html = None
+    if not args.no_html:
+        if has_module("meshcat"):
+            html = check_output_file(
+                args.html or out.with_suffix(".html"), "--html", _viewer.HTML_SUFFIXES
+            )
+        elif args.html is not None:
+            raise InvalidArgumentError('--html needs meshcat: pip install "swarm_ik[viz]"')
+    robot = swarm_ik.load_robot(args.robot, ee_frame=args.frame)
+    if html is not None:
+        _viewer.check_meshes(robot, "reach --html (--no-html skips the page)")
+    # the grid's size is checked before anything is allocated; default_bounds with the same
+    # seed is what reach_map would compute itself, so the map is the same
+    if args.bounds is not None:
+        lo, hi = np.asarray(bounds[0], float), np.asarray(bounds[1], float)
+    else:
+        lo, hi = reach.default_bounds(robot, seed=args.seed)
+    _validate.check_grid_size(lo, hi, args.resolution)
+    rmap = reach.reach_map(
+        robot,
+        resolution=args.resolution,
+        bounds=np.concatenate([lo, hi]),
+        n_orientations=args.orientations,
+        seed=args.seed,
+        tol_pos=args.tol_pos,
+        tol_rot=args.tol_rot,
+        max_starts=args.max_starts,
+        max_iters=args.max_iters,
+        scheduler=None if args.scheduler in (None, "none") else args.scheduler,
+        progress=not args.no_progress and sys.stderr.isatty(),
+        max_targets=args.max_targets,
+    )
+    written = [str(rmap.save(out))]
+    if png is not None:
+        written.append(str(reach.plot_slices(rmap, png)))
+    if html is not None:
+        written.append(str(reach.export_html(rmap, html, robot=robot)))
+    reachable = rmap.index > 0
+    print(
+        f"robot {robot.name}, frame {robot.ee_frame}: grid {rmap.index.shape} of "
+        f"{rmap.resolution:g} m voxels, K = {rmap.n_orientations} orientations"
+    )
+    mean = float(rmap.index[reachable].mean()) if reachable.any() else 0.0
+    print(
+        f"reachable voxels {int(reachable.sum())} of {int(rmap.solved.sum())} within the "
+        f"chain's reach; mean index {mean:.3f} ({rmap.time_s:.1f} s)"
+    )
+    print("wrote " + ", ".join(written))
+    return EXIT_OK

@@ -1,0 +1,150 @@
+"""``swarm-ik show``: a robot configuration, or several solutions of a target, in meshcat
+(live, or exported to a self-contained HTML page); see :mod:`swarm_ik.cli._viewer` for how
+long the live viewer stays up."""
+
+from __future__ import annotations
+
+import argparse
+from typing import Any
+
+from swarm_ik.cli import _viewer
+from swarm_ik.cli._args import EXIT_NOT_REACHED, EXIT_OK, add_pose, add_robot
+
+
+def add_parser(subparsers: Any) -> argparse.ArgumentParser:
+    """Add ``show`` to the ``swarm-ik`` sub-parsers."""
+    p: argparse.ArgumentParser = subparsers.add_parser(
+        "show",
+        help="look at a robot configuration, or at several solutions of a target, in meshcat "
+        "(live, or exported to a self-contained HTML file)",
+        description="Draw a robot at given joint values (--q, repeatable) and/or a target pose "
+        "(--pose or --from-q); with a target and no --q, solve it first "
+        "(--solutions N distinct solutions).  Without --html the live viewer opens (its URL "
+        "is printed); needs [viz].",
+    )
+    add_robot(p)
+    p.add_argument(
+        "--q",
+        nargs="+",
+        type=float,
+        action="append",
+        default=None,
+        metavar="Q",
+        help="joint values (rad / m, one per joint); repeat --q for several",
+    )
+    tgt = p.add_mutually_exclusive_group()
+    add_pose(tgt)
+    tgt.add_argument(
+        "--from-q", nargs="+", type=float, metavar="Q", help="target = FK of these joint values"
+    )
+    p.add_argument(
+        "--solutions",
+        type=int,
+        default=1,
+        metavar="N",
+        help="with a target and no --q: how many distinct solutions to find and show (default 1)",
+    )
+    p.add_argument(
+        "--min-distance",
+        type=float,
+        default=0.5,
+        help="smallest joint-space distance between two shown solutions (rad / m, default 0.5)",
+    )
+    p.add_argument(
+        "--solver",
+        default=None,
+        help="solver for the target (default: swarm_ik.solve_many; with a name, that solver "
+        "from successive seeds)",
+    )
+    p.add_argument("--seed", type=int, default=0, help="random seed (default 0)")
+    p.add_argument(
+        "--layout",
+        default="side",
+        choices=["side", "steps"],
+        help="several configurations: side by side (default), or one robot stepping through them",
+    )
+    p.add_argument("--html", default=None, metavar="FILE", help="write a self-contained HTML page")
+    p.add_argument(
+        "--show", action="store_true", help="also keep the live viewer open when --html is given"
+    )
+    _viewer.add_show_wait(p)
+    p.add_argument("--open", action="store_true", help="open the live viewer in a web browser")
+    return p
+
+
+def run(args: argparse.Namespace) -> int:
+    """``swarm-ik show``: returns 0, or 1 when a target was given and not reached."""
+    import numpy as np
+
+    import swarm_ik
+    from swarm_ik import viz
+    from swarm_ik.errors import InvalidArgumentError
+
+    live = bool(args.show or not args.html)
+    _viewer.check_viewer(args, live=live)
+    robot = swarm_ik.load_robot(args.robot, ee_frame=args.frame)
+    _viewer.check_meshes(robot, "show")
+    target = None
+    if args.from_q is not None:
+        target = robot.fk(robot.check_q(args.from_q, "--from-q"))
+    elif args.pose is not None:
+        target = np.asarray(args.pose, dtype=float)
+    if args.q:
+        qs = [robot.check_q(q, "--q") for q in args.q]
+        if target is None:
+            lines = [f"{robot.name}: " + ", ".join(f"{v:.3f}" for v in q) for q in qs]
+            scene = (
+                viz.show_pose(robot, qs[0], lines=lines)
+                if len(qs) == 1
+                else viz.show_configurations(robot, qs, lines=lines, layout=args.layout)
+            )
+            _viewer.present(scene, args, live=live)
+            return EXIT_OK
+        problem = swarm_ik.IKProblem(robot, target)
+        results = [_as_result(problem, q) for q in qs]
+    else:
+        if target is None:
+            raise InvalidArgumentError("show needs --q, or a target (--pose or --from-q)")
+        problem = swarm_ik.IKProblem(robot, target)
+        results = viz.several_solutions(
+            problem,
+            args.solutions,
+            solver=args.solver,
+            min_distance=args.min_distance,
+            seed=args.seed,
+        )
+    for k, r in enumerate(results):
+        print(
+            f"#{k + 1} " + _viewer.result_line(r) + "\n   q = " + " ".join(f"{v:.6f}" for v in r.q)
+        )
+    if len(results) == 1:
+        scene = viz.show_result(problem, results[0])
+    else:
+        scene = viz.show_solutions(problem, results, layout=args.layout)
+    _viewer.present(scene, args, live=live)
+    return EXIT_OK if all(r.success for r in results) else EXIT_NOT_REACHED
+
+
+def _as_result(problem: Any, q: Any) -> Any:
+    """A :class:`~swarm_ik.result.Result` describing a given configuration (no solve)."""
+    import numpy as np
+
+    from swarm_ik.api import verify
+    from swarm_ik.result import Result
+
+    q = np.asarray(q, dtype=float)
+    dp, dr = verify(problem, q)
+    within = problem.robot.within_limits(q)
+    return Result(
+        q=q,
+        fitness=float(problem.fitness(q[None])[0]),
+        position_error=dp,
+        rotation_error=dr,
+        n_evals=0,
+        time_s=0.0,
+        success=bool(within and dp <= 1e-5 and dr <= 1e-5),
+        within_limits=within,
+        history=np.empty(0),
+        solver="given q",
+        seed=None,
+    )

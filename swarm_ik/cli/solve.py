@@ -1,0 +1,242 @@
+"""``swarm-ik solve``: one IK target (a pose, the FK of joint values, or a JSON list of goals)
+solved and printed; optionally drawn (``--show``, ``--html``, ``--animate``, ``--compare``).
+
+Exit codes: 0 reached, 1 not reached (the best found is printed), 2 bad input, 3 internal
+error, 130 interrupted.
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+from typing import Any
+
+from swarm_ik.cli import _viewer
+from swarm_ik.cli._args import (
+    EXIT_NOT_REACHED,
+    EXIT_OK,
+    add_pose,
+    add_robot,
+    add_tolerances,
+    check_goals_file,
+    pose_target,
+    solve_kwargs,
+)
+from swarm_ik.errors import InvalidArgumentError
+
+
+def _parse_param(text: str) -> tuple[str, Any]:
+    """``name=value`` → (name, value); the value parsed as JSON when possible."""
+    if "=" not in text:
+        raise argparse.ArgumentTypeError(
+            f"solver parameter must look like name=value, got {text!r}"
+        )
+    key, raw = text.split("=", 1)
+    try:
+        value = json.loads(raw)
+    except (json.JSONDecodeError, RecursionError):
+        value = raw
+    return key.strip(), value
+
+
+def add_parser(subparsers: Any) -> argparse.ArgumentParser:
+    """Add ``solve`` to the ``swarm-ik`` sub-parsers."""
+    from swarm_ik import solvers
+    from swarm_ik.api import DEFAULT_SOLVER
+
+    p: argparse.ArgumentParser = subparsers.add_parser(
+        "solve",
+        help="solve one IK target (a pose, FK of joint values, or a goals file)",
+        description="Solve one IK target of a robot and print the joint values; exit 0 when "
+        "the target is reached within the tolerances, 1 when not (the best found is printed).",
+    )
+    add_robot(p, frame=False)
+    p.add_argument(
+        "--frame",
+        action="append",
+        default=None,
+        help="goal frame; repeat for several (default: the robot's tool frame); --pose is for "
+        "the first, --from-q poses every frame",
+    )
+    tgt = p.add_mutually_exclusive_group(required=True)
+    add_pose(tgt, position_only=True)
+    tgt.add_argument(
+        "--goals",
+        default=None,
+        metavar="FILE",
+        help="JSON list of goal terms (schema in docs/goals.md), e.g. "
+        '[{"type": "Position", "frame": "tool0", "point": [0.4, 0, 0.3]}]; a regular file '
+        "of at most 16 MiB",
+    )
+    tgt.add_argument(
+        "--from-q",
+        nargs="+",
+        type=float,
+        metavar="Q",
+        help="target = FK of these joint values (rad / m), one per joint",
+    )
+    p.add_argument(
+        "--solver",
+        default=DEFAULT_SOLVER,
+        help=f"one of: {', '.join(solvers.names())} (default {DEFAULT_SOLVER})",
+    )
+    p.add_argument(
+        "--fitness",
+        default="se3",
+        help="se3 (default), paper-l1, euler-zyz or paper-pso",
+    )
+    p.add_argument(
+        "--position-only",
+        action="store_true",
+        help="solve for the position of the target only (e.g. chains with fewer than six "
+        "joints): --pose X Y Z is enough, and no rotation error is reported",
+    )
+    p.add_argument("--seed", type=int, default=0, help="random seed (default 0)")
+    p.add_argument("--max-evals", type=int, default=None, help="most fitness evaluations")
+    p.add_argument("--time-limit", type=float, default=None, help="seconds")
+    add_tolerances(p)
+    p.add_argument(
+        "--q0", nargs="+", type=float, default=None, help="starting joint values (one per joint)"
+    )
+    p.add_argument(
+        "--scene",
+        default=None,
+        metavar="FILE",
+        help="scene JSON of obstacles: the answer must be collision-free (self and scene)",
+    )
+    p.add_argument(
+        "--no-self-collision",
+        action="store_true",
+        help="with --scene: check the robot against the scene only",
+    )
+    p.add_argument(
+        "--srdf",
+        default=None,
+        metavar="FILE",
+        help="SRDF of disabled self-collision pairs (default: found)",
+    )
+    p.add_argument(
+        "--param",
+        action="append",
+        type=_parse_param,
+        default=[],
+        metavar="NAME=VALUE",
+        help="solver parameter, repeatable (e.g. --param pop_size=50)",
+    )
+    p.add_argument("--json", action="store_true", help="print one JSON object")
+    p.add_argument(
+        "--show",
+        action="store_true",
+        help="look at the solution in meshcat's live viewer (prints its URL; needs [viz]); "
+        "see --show-wait for how long it stays up",
+    )
+    _viewer.add_show_wait(p)
+    p.add_argument(
+        "--animate",
+        action="store_true",
+        help="with --show or --html: replay the optimiser's best-so-far configuration over its "
+        "iterations",
+    )
+    p.add_argument(
+        "--html",
+        default=None,
+        metavar="FILE",
+        help="write the scene to a self-contained .html file (no server needed; needs [viz])",
+    )
+    p.add_argument(
+        "--compare",
+        default=None,
+        metavar="SOLVER",
+        help="with --show or --html: also solve with SOLVER (e.g. dls) and draw its answer ghosted",
+    )
+    return p
+
+
+def run(args: argparse.Namespace) -> int:
+    """``swarm-ik solve``: returns 0 when the target is reached, 1 when not."""
+    import numpy as np
+
+    import swarm_ik
+
+    drawing = _viewer.wants_drawing(args)
+    if drawing:  # refused before solving: meshcat missing, an unwritable page
+        _viewer.check_viewer(args, live=bool(args.show))
+    if args.goals is not None:
+        check_goals_file(args.goals)
+    pose = None if args.pose is None else pose_target(args.pose, args.position_only)
+    frames = None if not args.frame else (args.frame[0] if len(args.frame) == 1 else args.frame)
+    robot = swarm_ik.load_robot(args.robot, ee_frame=frames, srdf=args.srdf, warm_up=False)
+    if drawing:
+        _viewer.check_meshes(robot, "--html" if args.html else "--show")
+    goals = None
+    target = None
+    if args.goals is not None:
+        try:
+            goals = swarm_ik.goals.load_goals(args.goals)
+        except RecursionError:  # checked before (check_goals_file): a second guard
+            raise InvalidArgumentError(f"--goals {args.goals!r}: JSON nested too deep") from None
+    elif args.from_q is not None and len(robot.frames) > 1:  # a Pose goal on every frame
+        poses = robot.fk_all(robot.check_q(args.from_q, "--from-q"))
+        goals = [swarm_ik.goals.Pose(f, t) for f, t in zip(robot.frames, poses, strict=True)]
+    elif args.from_q is not None:
+        target = robot.fk_pinocchio(robot.check_q(args.from_q, "--from-q"))
+    else:
+        target = np.asarray(pose, dtype=float)
+    if args.scene is not None:
+        avoid = swarm_ik.goals.AvoidCollisions(
+            swarm_ik.Scene.from_json(args.scene), self_collision=not args.no_self_collision
+        )
+        goals = [*(goals or []), avoid]
+    problem = swarm_ik.IKProblem(
+        robot, target, goals, args.fitness, w_rot=0.0 if args.position_only else 1.0
+    )
+    res = swarm_ik.solve(problem, args.solver, **solve_kwargs(args), **dict(args.param))
+    if args.json:
+        _print_json(args, robot, res)
+    else:
+        _print_text(args, robot, res)
+    if args.show or args.animate or args.html or args.compare:
+        _viewer.after_solve(args, problem, res)
+    return EXIT_OK if res.success else EXIT_NOT_REACHED
+
+
+def _print_json(args: argparse.Namespace, robot: Any, res: Any) -> None:
+    d = res.to_dict()
+    d.pop("history")
+    if args.position_only:
+        d["rotation_error"] = None  # not measured: the target's rotation was not asked for
+    d.update(
+        robot=robot.name,
+        joint_names=list(robot.joint_names),
+        ee_frame=robot.ee_frame,
+        frames=list(robot.frames),
+    )
+    print(json.dumps(d))
+
+
+def _print_text(args: argparse.Namespace, robot: Any, res: Any) -> None:
+    status = "reached" if res.success else "NOT reached (best found below)"
+    print(f"robot {robot.name} ({robot.nq} joints), frame {robot.ee_frame}, solver {res.solver}")
+    print(f"target {status}")
+    for name, kind, v in zip(robot.joint_names, robot.joint_kinds, res.q, strict=True):
+        unit = "m" if kind == "prismatic" else "rad"
+        print(f"  {name:24s} {v: .10f} {unit}")
+    if len(res.goal_errors) > 1:
+        for e in res.goal_errors:
+            parts = [f"{e.position_error:.3e} m"] if e.position_error == e.position_error else []
+            if e.rotation_error == e.rotation_error:
+                parts.append(f"{e.rotation_error:.3e} rad")
+            rep = e.details
+            if rep is not None and hasattr(rep, "clearance"):
+                parts = [f"clearance {rep.clearance:.4f} m"]
+                if rep.pairs_in_contact:
+                    parts.append(
+                        "in contact: " + ", ".join("-".join(p) for p in rep.pairs_in_contact)
+                    )
+            print(f"  {e.goal}: {', '.join(parts)} ({'met' if e.met else 'NOT met'})")
+    rot = "n/a (--position-only)" if args.position_only else f"{res.rotation_error:.3e} rad"
+    print(f"position error {res.position_error:.3e} m, rotation error {rot} ({res.reason})")
+    print(
+        f"evaluations {res.n_evals}, time {res.time_s * 1e3:.2f} ms, "
+        f"within limits {res.within_limits}"
+    )

@@ -1,0 +1,495 @@
+"""The ``swarm_ik.cli`` package: one module per sub-command, and its edge cases — the help
+texts, ``--goals`` files that are not files (or too large, or too deep), ``--show`` with no
+terminal, ``--position-only`` with a position alone, ``reach --bounds``, output paths checked
+before the work, meshes not found, Ctrl-C and unexpected errors in every sub-command, and
+``.xacro`` robots."""
+
+from __future__ import annotations
+
+import argparse
+import io
+import json
+import os
+import signal
+import subprocess
+import sys
+import time
+from pathlib import Path
+from typing import Any
+
+import pytest
+
+import swarm_ik
+from swarm_ik import cli
+from swarm_ik.cli import _args, _viewer
+from swarm_ik.cli import bench as bench_cli
+from swarm_ik.cli import reach as reach_cli
+
+FROM_Q = ["--from-q", "0.1", "-0.5", "0.2", "0.3", "-0.2", "0.4", "0.1"]
+"""A reachable target of yumi_left."""
+
+ARGS = {
+    "robots": ["robots"],
+    "solve": ["solve", "--robot", "yumi_left", *FROM_Q],
+    "show": ["show", "--robot", "yumi_left", "--q", "0", "0", "0", "0", "0", "0", "0"],
+    "batch": ["batch", "--robot", "yumi_left", "--random", "2", "--out", "{tmp}/r.npz"],
+    "reach": ["reach", "--robot", "yumi_left", "--out", "{tmp}/m.npz"],
+    "bench": ["bench", "ik", "--quick", "--out", "{tmp}/b"],
+}
+"""A valid command line of every sub-command."""
+
+
+def _never(*args: object, **kwargs: object) -> None:
+    raise AssertionError("the work started before the input was checked")
+
+
+def _err_line(capsys: pytest.CaptureFixture[str]) -> str:
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1, err
+    return err[0]
+
+
+def _run(*argv: str, timeout: float = 300, **kwargs: Any) -> subprocess.CompletedProcess[str]:
+    env = {k: v for k, v in os.environ.items() if k != "SWARM_IK_NO_WAIT"}
+    return subprocess.run(
+        [sys.executable, "-m", "swarm_ik.cli", *argv],
+        capture_output=True,
+        text=True,
+        timeout=timeout,
+        env=env,
+        **kwargs,
+    )
+
+
+# ------------------------------------------------------------------------ the package
+def test_every_sub_command_is_a_module_with_add_parser_and_run() -> None:
+    assert list(cli.COMMANDS) == ["robots", "solve", "show", "batch", "reach", "bench"]
+    for name, module in cli.COMMANDS.items():
+        assert module.__name__ == f"swarm_ik.cli.{name}"
+        assert callable(module.add_parser) and callable(module.run)
+    from swarm_ik.reach import MAX_TARGETS
+
+    assert reach_cli.MAX_TARGETS == MAX_TARGETS
+
+
+def test_import_is_light_and_python_m_works() -> None:
+    code = "import sys, swarm_ik.cli; print(sorted({'numpy', 'numba'} & set(sys.modules)))"
+    out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True)
+    assert out.stdout.strip() == "[]", out.stderr
+    proc = _run("robots", timeout=120)
+    assert proc.returncode == 0 and "panda" in proc.stdout, proc.stderr
+
+
+# --------------------------------------------------------------------------- 1: help
+def test_help_lists_every_benchmark_and_says_what_each_measures(
+    monkeypatch: pytest.MonkeyPatch, capsys: pytest.CaptureFixture[str]
+) -> None:
+    monkeypatch.setenv("COLUMNS", "80")  # one line per entry on a common terminal
+    with pytest.raises(SystemExit) as done:
+        cli.main(["--help"])
+    assert done.value.code == 0
+    top = capsys.readouterr().out
+    bench_line = next(ln for ln in top.splitlines() if ln.strip().startswith("bench "))
+    assert all(name in bench_line for name in cli.BENCHMARKS)
+    with pytest.raises(SystemExit):
+        cli.main(["bench", "--help"])
+    text = capsys.readouterr().out
+    assert set(bench_cli.MEASURES) == set(cli.BENCHMARKS)
+    for name, measures in bench_cli.MEASURES.items():
+        line = next(ln for ln in text.splitlines() if ln.split()[:1] == [name])
+        assert measures in line  # one line each
+        assert f"benchmark {name}" not in line and name not in measures.split()
+
+
+@pytest.mark.parametrize(
+    "argv",
+    [
+        [],
+        ["robots"],
+        ["solve"],
+        ["show"],
+        ["batch"],
+        ["reach"],
+        ["bench"],
+    ],
+)
+def test_every_help_renders(
+    argv: list[str], monkeypatch: pytest.MonkeyPatch, capsys: pytest.CaptureFixture[str]
+) -> None:
+    monkeypatch.setenv("COLUMNS", "100")
+    with pytest.raises(SystemExit) as done:
+        cli.main([*argv, "--help"])
+    assert done.value.code == 0
+    text = capsys.readouterr().out
+    assert text.startswith("usage: swarm-ik")
+    if argv == ["solve"]:
+        assert "--pose X Y Z [QX QY QZ QW]" in text and "--show-wait SECONDS" in text
+        assert "stdin not a TTY" in " ".join(text.split())
+    if argv == ["show"]:
+        assert "--pose X Y Z QX QY QZ QW " in text and "--show-wait" in text
+
+
+# -------------------------------------------------------------------- 2: --goals files
+@pytest.mark.parametrize("kind", ["fifo", "device", "folder", "too large"])
+def test_goals_that_is_not_a_small_regular_file_exits_2(
+    kind: str,
+    tmp_path: Path,
+    monkeypatch: pytest.MonkeyPatch,
+    capsys: pytest.CaptureFixture[str],
+) -> None:
+    if kind == "fifo":
+        if not hasattr(os, "mkfifo"):
+            pytest.skip("no FIFOs here")
+        path = tmp_path / "goals.json"
+        os.mkfifo(path)
+        expect = "named pipe (FIFO)"
+    elif kind == "device":
+        path = Path("/dev/zero")
+        if not path.exists():
+            pytest.skip("no /dev/zero here")
+        expect = "is a device"
+    elif kind == "folder":
+        path = tmp_path
+        expect = "is a folder"
+    else:
+        path = tmp_path / "goals.json"
+        with open(path, "wb") as fh:  # sparse: nothing written
+            fh.truncate(_args.MAX_GOALS_BYTES + 1)
+        expect = "over the limit of 16 MiB"
+    monkeypatch.setattr(swarm_ik, "load_robot", _never)
+    t0 = time.perf_counter()
+    assert cli.main(["solve", "--robot", "panda", "--goals", str(path)]) == 2
+    assert time.perf_counter() - t0 < 5.0  # refused, never opened
+    line = _err_line(capsys)
+    assert "--goals" in line and expect in line
+
+
+def test_goals_nested_too_deep_exits_2_with_one_line(
+    tmp_path: Path, monkeypatch: pytest.MonkeyPatch, capsys: pytest.CaptureFixture[str]
+) -> None:
+    path = tmp_path / "deep.json"
+    path.write_text("[" * 100_000 + "]" * 100_000)
+    monkeypatch.setattr(swarm_ik, "load_robot", _never)
+    assert cli.main(["solve", "--robot", "panda", "--goals", str(path)]) == 2
+    line = _err_line(capsys)
+    assert "nested 100000 levels deep, over the limit of 100" in line
+
+
+def test_json_depth_skips_brackets_inside_strings() -> None:
+    assert _args.json_depth(b"") == 0
+    assert _args.json_depth(b'[{"a": [1, 2]}]') == 3
+    assert _args.json_depth(b'["]]]]]]", [[1]]]') == 3
+    assert _args.json_depth(b'["\\"[[[", [1]]') == 2  # an escaped quote does not end it
+    assert _args.json_depth(b'["\\\\", [[1]]]') == 3  # an escaped backslash does not escape
+    assert _args.json_depth(b'"' + b"[" * 500 + b'"') == 0
+    deep = b'["' + b"]" * 1000 + b'", ' + b"[" * 200 + b"]" * 200 + b"]"
+    assert _args.json_depth(deep) == 201  # closing brackets in a string hide nothing
+
+
+def test_goals_file_of_a_normal_size_still_solves(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    path = tmp_path / "goals.json"
+    path.write_text(json.dumps([{"type": "Position", "frame": "panda_hand_tcp",
+                                 "point": [0.5, 0.0, 0.3]}], indent=2))  # fmt: skip
+    assert cli.main(["solve", "--robot", "panda", "--goals", str(path), "--json"]) in (0, 1)
+    assert json.loads(capsys.readouterr().out)["goal_errors"][0]["goal"].startswith("Position")
+
+
+# ------------------------------------------------------------ 3: --show with no terminal
+def _wait_args(**kw: Any) -> argparse.Namespace:
+    return argparse.Namespace(json=False, **kw)
+
+
+def test_viewer_wait_returns_at_once_without_a_terminal(
+    monkeypatch: pytest.MonkeyPatch, capsys: pytest.CaptureFixture[str]
+) -> None:
+    monkeypatch.delenv(_viewer.NO_WAIT_ENV, raising=False)
+    monkeypatch.setattr(sys, "stdin", io.StringIO(""))  # not a TTY
+    t0 = time.perf_counter()
+    _viewer.wait(_wait_args(show_wait=None))
+    assert time.perf_counter() - t0 < 1.0
+    assert "stdin is not a TTY" in capsys.readouterr().out
+    t0 = time.perf_counter()
+    _viewer.wait(_wait_args(show_wait=0.3))  # --show-wait: kept up that long, no longer
+    assert 0.25 < time.perf_counter() - t0 < 3.0
+    assert "stays up for 0.3 s" in capsys.readouterr().out
+
+
+def test_show_wait_refuses_negative_and_nan(capsys: pytest.CaptureFixture[str]) -> None:
+    for bad in ("-1", "nan", "soon"):
+        assert cli.main(["solve", "--robot", "yumi_left", *FROM_Q, "--show-wait", bad]) == 2
+        assert "--show-wait" in _err_line(capsys)
+
+
+def test_solve_show_with_no_terminal_does_not_block(tmp_path: Path) -> None:
+    pytest.importorskip("meshcat")
+    proc = _run(
+        "solve", "--robot", "yumi_left", *FROM_Q, "--show",
+        stdin=subprocess.DEVNULL, timeout=240, cwd=tmp_path,
+    )  # fmt: skip
+    assert proc.returncode == 0, proc.stderr
+    assert "meshcat viewer: http" in proc.stdout and "stdin is not a TTY" in proc.stdout
+
+
+# -------------------------------------------------------------------- 4: --position-only
+def test_position_only_takes_a_position_and_reports_no_rotation_error(
+    capsys: pytest.CaptureFixture[str],
+) -> None:
+    pose = ["--pose", "0.4", "0.1", "0.4"]
+    assert cli.main(["solve", "--robot", "panda", "--position-only", *pose, "--json"]) == 0
+    out = json.loads(capsys.readouterr().out)
+    assert out["success"] and out["rotation_error"] is None
+    assert out["goal_errors"][0]["rotation_error"] is None
+    assert cli.main(["solve", "--robot", "panda", "--position-only", *pose]) == 0
+    text = capsys.readouterr().out
+    assert "rotation error n/a" in text and "0.000e+00 rad" not in text
+    # a quaternion given anyway is accepted (and ignored)
+    assert (
+        cli.main(["solve", "--robot", "panda", "--position-only", *pose, "0", "0", "0", "1"]) == 0
+    )
+    capsys.readouterr()
+
+
+@pytest.mark.parametrize(
+    ("argv", "message"),
+    [
+        (["--pose", "0.4", "0.1", "0.4"], "3 (X Y Z) only with --position-only"),
+        (["--pose", "0.4", "0.1", "0.4", "0"], "expected 7 arguments"),
+        (["--position-only", "--pose", "0.4", "0.1"], "or 3 (X Y Z) with --position-only"),
+    ],
+)
+def test_pose_of_the_wrong_length_is_one_usage_line(
+    argv: list[str],
+    message: str,
+    monkeypatch: pytest.MonkeyPatch,
+    capsys: pytest.CaptureFixture[str],
+) -> None:
+    monkeypatch.setattr(swarm_ik, "load_robot", _never)
+    assert cli.main(["solve", "--robot", "panda", *argv]) == 2
+    line = _err_line(capsys)
+    assert message in line and "swarm-ik solve --help" in line
+
+
+# ------------------------------------------------------------------ 5: bounds, outputs
+@pytest.mark.parametrize(
+    ("bounds", "message"),
+    [
+        (["nan", "0", "0", "1", "1", "1"], "6 finite numbers"),
+        (["0", "0", "0", "1", "inf", "1"], "6 finite numbers"),
+        (["-inf", "0", "0", "1", "1", "1"], "6 finite numbers"),
+        (["1", "0", "0", "0", "1", "1"], "not on x"),
+        (["0", "0", "0", "1", "1", "0"], "not on z"),
+    ],
+)
+def test_reach_refuses_non_finite_or_inverted_bounds_before_loading(
+    bounds: list[str],
+    message: str,
+    tmp_path: Path,
+    monkeypatch: pytest.MonkeyPatch,
+    capsys: pytest.CaptureFixture[str],
+) -> None:
+    monkeypatch.setattr(swarm_ik, "load_robot", _never)
+    argv = ["reach", "--robot", "yumi_left", "--out", str(tmp_path / "m.npz"), "--bounds"]
+    assert cli.main([*argv, *bounds]) == 2
+    line = _err_line(capsys)
+    assert "--bounds" in line and message in line
+    assert list(tmp_path.iterdir()) == []
+
+
+@pytest.fixture
+def read_only_dir(tmp_path: Path) -> Path:
+    """A folder where no file can be created: chmod 555, or, where that does not stop this
+    user (root), a folder of a read-only file system."""
+    d = tmp_path / "ro"
+    d.mkdir()
+    d.chmod(0o555)
+    try:
+        if _args._probe(d) is not None:
+            yield d
+            return
+        for alt in (Path("/proc"), Path("/sys")):
+            if alt.is_dir() and _args._probe(alt) is not None:
+                yield alt
+                return
+        pytest.skip("no read-only folder available to this user")
+    finally:
+        d.chmod(0o755)
+
+
+@pytest.mark.parametrize(
+    ("command", "option", "name"),
+    [
+        ("batch", "--out", "r.npz"),
+        ("reach", "--out", "m.npz"),
+        ("reach", "--png", "m.png"),
+        ("solve", "--html", "s.html"),
+        ("show", "--html", "s.html"),
+        ("bench", "--out", "bench-out"),
+    ],
+)
+def test_outputs_in_a_read_only_folder_exit_2_before_any_work(
+    command: str,
+    option: str,
+    name: str,
+    read_only_dir: Path,
+    tmp_path: Path,
+    monkeypatch: pytest.MonkeyPatch,
+    capsys: pytest.CaptureFixture[str],
+) -> None:
+    if command in ("solve", "show"):
+        pytest.importorskip("meshcat")
+    monkeypatch.setattr(swarm_ik, "load_robot", _never)
+    monkeypatch.chdir(tmp_path)
+    argv = [a.format(tmp=tmp_path) for a in ARGS[command]]
+    if option in argv:
+        argv = argv[: argv.index(option)]
+    if command == "bench":
+        import swarm_ik.bench.ik as bench_ik
+
+        monkeypatch.setattr(bench_ik, "run", _never)
+    assert cli.main([*argv, option, str(read_only_dir / name)]) == 2
+    line = _err_line(capsys)
+    assert option in line and "cannot write in folder" in line
+
+
+def test_output_probe_leaves_nothing_behind(tmp_path: Path) -> None:
+    assert _args.check_output_file(tmp_path / "r.npz", "--out", (".npz",)) == tmp_path / "r.npz"
+    assert _args.check_output_folder(tmp_path / "a" / "b") == tmp_path / "a" / "b"
+    assert list(tmp_path.iterdir()) == []
+
+
+# ------------------------------------------------------------------- 6: --html, meshes
+MESHES_URDF = """<?xml version="1.0"?>
+<robot name="arm"><link name="a"/>
+<link name="b"><visual><geometry><mesh filename="package://nowhere_pkg/meshes/b.stl"/>
+</geometry></visual></link>
+<link name="c"><visual><geometry><mesh filename="meshes/c.stl"/></geometry></visual></link>
+<joint name="j" type="revolute"><parent link="a"/><child link="b"/><axis xyz="0 0 1"/>
+<limit lower="-1" upper="1" effort="1" velocity="1"/></joint>
+<joint name="k" type="revolute"><parent link="b"/><child link="c"/><origin xyz="0 0 0.3"/>
+<axis xyz="0 1 0"/><limit lower="-1" upper="1" effort="1" velocity="1"/></joint></robot>"""
+
+
+@pytest.mark.parametrize("command", ["solve", "show"])
+def test_meshes_not_found_are_named_in_one_line_before_solving(
+    command: str,
+    tmp_path: Path,
+    monkeypatch: pytest.MonkeyPatch,
+    capsys: pytest.CaptureFixture[str],
+) -> None:
+    pytest.importorskip("meshcat")
+    urdf = tmp_path / "arm.urdf"
+    urdf.write_text(MESHES_URDF)
+    monkeypatch.setattr(swarm_ik, "solve", _never)
+    monkeypatch.setattr(swarm_ik, "solve_many", _never)
+    argv = [command, "--robot", str(urdf), "--html", str(tmp_path / "a.html")]
+    argv += ["--from-q", "0.1", "0.2"] + (["--position-only"] if command == "solve" else [])
+    assert cli.main(argv) == 2
+    line = _err_line(capsys)
+    assert "2 of the 2 meshes of robot 'arm' cannot be found" in line
+    assert "package://nowhere_pkg/meshes/b.stl" in line and "meshes/c.stl" in line
+    assert "ROS_PACKAGE_PATH" in line
+    assert not (tmp_path / "a.html").exists()
+
+
+def test_mesh_look_up_follows_pinocchio(tmp_path: Path) -> None:
+    (tmp_path / "pkg" / "meshes").mkdir(parents=True)
+    (tmp_path / "pkg" / "meshes" / "b.stl").write_text("solid b\nendsolid b\n")
+    (tmp_path / "urdf").mkdir()
+    urdf = tmp_path / "urdf" / "arm.urdf"
+    urdf.write_text(MESHES_URDF.replace("nowhere_pkg", "pkg"))
+    missing, total = _viewer.missing_meshes(urdf, [str(tmp_path / "urdf"), str(tmp_path)])
+    assert (missing, total) == (["meshes/c.stl"], 2)
+    panda = swarm_ik.load_robot("panda", warm_up=False)
+    from swarm_ik import viz
+
+    assert _viewer.missing_meshes(panda.urdf_path, viz.package_dirs(panda))[0] == []
+
+
+# ----------------------------------------------------------- 7: Ctrl-C, internal errors
+@pytest.mark.parametrize("command", list(ARGS))
+def test_ctrl_c_and_unexpected_errors_in_every_sub_command(
+    command: str,
+    tmp_path: Path,
+    monkeypatch: pytest.MonkeyPatch,
+    capsys: pytest.CaptureFixture[str],
+) -> None:
+    argv = [a.format(tmp=tmp_path) for a in ARGS[command]]
+    module = cli.COMMANDS[command]
+
+    def ctrl_c(args: argparse.Namespace) -> int:
+        raise KeyboardInterrupt
+
+    def boom(args: argparse.Namespace) -> int:
+        raise RuntimeError("broken\nhere")
+
+    monkeypatch.delenv("SWARM_IK_DEBUG", raising=False)
+    monkeypatch.setattr(module, "run", ctrl_c)
+    assert cli.main(argv) == 130
+    assert capsys.readouterr().err.strip() == "swarm-ik: interrupted"
+    monkeypatch.setattr(module, "run", boom)
+    assert cli.main(argv) == 3
+    assert "internal error (RuntimeError: broken here)" in _err_line(capsys)
+    monkeypatch.setenv("SWARM_IK_DEBUG", "1")
+    with pytest.raises(RuntimeError):
+        cli.main(argv)
+
+
+def test_ctrl_c_while_building_the_parser_exits_130(
+    monkeypatch: pytest.MonkeyPatch, capsys: pytest.CaptureFixture[str]
+) -> None:
+    def ctrl_c(command: str | None = None) -> None:
+        raise KeyboardInterrupt
+
+    monkeypatch.setattr(cli, "build_parser", ctrl_c)
+    assert cli.main(["solve", "--json"]) == 130
+    assert json.loads(capsys.readouterr().out)["exit_code"] == 130
+
+
+def test_ctrl_c_during_start_up_of_the_console_script_exits_130() -> None:
+    code = (
+        "import sys\n"
+        "sys.argv = ['swarm-ik', 'robots']\n"
+        "from swarm_ik import cli\n"
+        "def ctrl_c():\n"
+        "    raise KeyboardInterrupt\n"
+        "cli._own_process = ctrl_c\n"
+        "sys.exit(cli.main())\n"
+    )
+    proc = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True)
+    assert proc.returncode == 130 and proc.stderr.strip() == "swarm-ik: interrupted"
+
+
+@pytest.mark.skipif(sys.platform == "win32", reason="POSIX signals")
+def test_real_sigint_during_a_solve_is_one_line_and_130(tmp_path: Path) -> None:
+    proc = subprocess.Popen(
+        [sys.executable, "-m", "swarm_ik.cli", "solve", "--robot", "yumi_left", *FROM_Q,
+         "--solver", "dls", "--max-evals", "1000000000", "--time-limit", "120",
+         "--tol-pos", "1e-300", "--tol-rot", "1e-300"],
+        stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True, cwd=tmp_path,
+    )  # fmt: skip
+    time.sleep(6.0)
+    proc.send_signal(signal.SIGINT)
+    out, err = proc.communicate(timeout=120)
+    assert proc.returncode == 130, err
+    assert err.strip() == "swarm-ik: interrupted" and "Traceback" not in err
+
+
+# ------------------------------------------------------------------------------ 8: xacro
+@pytest.mark.parametrize("command", ["solve", "show", "batch", "reach"])
+def test_xacro_robot_is_refused_before_loading(
+    command: str,
+    tmp_path: Path,
+    monkeypatch: pytest.MonkeyPatch,
+    capsys: pytest.CaptureFixture[str],
+) -> None:
+    xacro = tmp_path / "arm.urdf.xacro"
+    xacro.write_text('<robot xmlns:xacro="http://www.ros.org/wiki/xacro" name="arm"/>')
+    monkeypatch.setattr(swarm_ik, "load_robot", _never)
+    argv = [a.format(tmp=tmp_path) for a in ARGS[command]]
+    argv[argv.index("yumi_left")] = str(xacro)
+    assert cli.main(argv) == 2
+    line = _err_line(capsys)
+    assert "xacro files must be expanded first" in line
+    assert "`xacro arm.urdf.xacro > arm.urdf`" in line
