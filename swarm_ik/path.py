@@ -1,0 +1,1440 @@
+"""Jump-free Cartesian paths: one IK solution per waypoint, consecutive ones close in joint space.
+
+:func:`solve_path` takes ``N`` waypoints (poses of a frame, or goal lists) and returns a joint
+path ``q (N, nq)`` whose consecutive configurations differ by at most ``max_joint_step`` on
+every joint, when one exists among the candidates it builds, else the path with the fewest
+such jumps (each one reported with its waypoint and size).
+
+**Method.**
+
+1. *Candidates per waypoint.*
+
+   * every IK branch from :func:`swarm_ik.solve_many`; where the closed form applies (eaik,
+     6R arms such as UR5/UR10) every in-limit 2π copy of each branch too, and the exact
+     solutions eaik classes as least squares (a pair of branches merging at a singularity);
+   * where the set is not known complete: solutions *tracked* from the previous waypoint's
+     best candidates (each solved starting from that candidate, so the local polish lands on
+     the nearest solution);
+   * on a 7-joint arm with pose waypoints, samples covering its self-motion (a curve): the
+     previous waypoint's samples tracked (one :func:`swarm_ik.solve_batch` call), the gaps
+     and ends filled by walking along the null space of the Jacobian, a sample every
+     :data:`COVER_STEP` of the bound, each polished back onto the waypoint; on other
+     redundant problems, samples pushed along the self-motion around each tracked solution;
+   * where every tracked candidate jumps, or none meets the waypoint, the waypoint's own
+     spread of solutions (``solve_many``); if the path still jumps, a second pass tracks
+     backwards from the last waypoint.
+
+2. *Dynamic programming* through the layered graph: minimise lexicographically (number of
+   steps beyond the bound, joint travel), the travel of a step being
+   ``Σ_j |Δq_j| / max_joint_step_j`` (continuous joints wrapped).
+3. ``densify=k``: each chosen step is checked by tracking ``k`` poses interpolated between
+   its two waypoints (position lerp, rotation slerp) from the first configuration and on to
+   the second; a step whose tracked chain loses the path or moves some joint, in total (out
+   and back counts twice), by more than the bound counts as a jump, and the search is run
+   again without it.
+
+**Guarantees.**  ``success`` and the per-waypoint errors come from
+:meth:`swarm_ik.IKProblem.verify` (Pinocchio's FK, coal for collisions), never from the
+solver.  ``jump_free`` is measured on the returned ``q``.  When every waypoint's candidate
+set is *certified complete* (closed form on a 6R arm with three parallel axes or a spherical
+wrist, so at most 8 branches; eaik's least-squares solutions checked; no candidate with a
+Jacobian singular value below :data:`SINGULAR_SIGMA`, where a continuum of solutions or a
+pair about to merge could hide one) the dynamic programme is exhaustive: a path with jumps
+then proves that no jump-free sequence of IK solutions through these waypoints exists (the
+``reason`` says so, and ``exhaustive`` is True).  Otherwise the verdict is the best found.
+
+>>> import numpy as np, swarm_ik
+>>> from swarm_ik.path import solve_path
+>>> robot = swarm_ik.load_robot("ur5")
+>>> qs = np.linspace([0.2, -1.2, 1.4, -0.6, 1.2, 0.1], [0.8, -0.9, 1.0, -0.9, 1.5, 0.4], 20)
+>>> res = solve_path(robot, robot.fk(qs))
+>>> res.success, res.jump_free
+(True, True)
+"""
+
+from __future__ import annotations
+
+import math
+import time
+from collections.abc import Sequence
+from dataclasses import dataclass
+from typing import Any
+
+import numba
+import numpy as np
+from numpy.typing import NDArray
+
+from swarm_ik.errors import InvalidArgumentError, InvalidTargetError
+
+FloatArray = NDArray[np.float64]
+
+DEFAULT_MAX_JOINT_STEP = 0.2
+"""Default bound on each joint's change between consecutive waypoints [rad, or m]."""
+BEAM = 8
+"""Candidates of a waypoint (the best by the running dynamic programme) tracked into the next."""
+SEEDS = 8
+"""``n`` of :func:`swarm_ik.solve_many` for a waypoint's own spread of solutions (numerical)."""
+CLOSED_FORM_N = 16
+"""``n`` of :func:`swarm_ik.solve_many` where the closed form applies (every branch: ≤ 16)."""
+TRACK_EVALS = 3000
+"""Evaluation budget of one tracking solve (a budget, not a time limit: deterministic)."""
+FULL_BRANCHES = 8
+"""Branches (modulo 2π) of a generic pose of a 6R arm with three parallel axes or a
+spherical wrist: a closed-form set with this many is complete."""
+SINGULAR_SIGMA = 1e-4
+"""A candidate whose smallest Jacobian singular value is below this is near a singularity
+(where a continuum of solutions may exist): its waypoint's set is then not certified."""
+DUPLICATE = 1e-3
+"""Two candidates closer than this (largest ``|Δq_j| / max_joint_step_j``) are one."""
+DIVERSE = 0.25
+"""Tracked parents are picked at least this far apart (same measure) while there is choice."""
+TIE_BREAK = 1e-6
+"""Weight of the first configuration's distance to mid-range in the travel (ties only)."""
+COVER_STEP = 0.3
+"""Spacing of the self-motion samples of a 7-joint arm (largest ``|Δq_j| / max_joint_step_j``):
+a path within ``1 − 2·COVER_STEP/2`` of the bound keeps a neighbour within the bound."""
+COVER_MERGE = 0.1
+"""Self-motion samples closer than this (same measure) are one."""
+COVER_GAP = 2.0
+"""A sample with no neighbour within ``COVER_GAP · COVER_STEP`` along the self-motion on one
+side walks that way (a gap opened, or the end of the covered stretch)."""
+MAX_COVER = 160
+"""Most samples of one waypoint's self-motion (those of the previous waypoint tracked, then
+the walks)."""
+MAX_WALK = 200
+"""Most steps of the walks along the self-motion of one waypoint."""
+DENSIFY_ROUNDS = 32
+"""Most rounds of the densify check (each removes the failing steps and searches again)."""
+_STEP_SLACK = 1e-9
+"""Relative slack on the bound (round-off)."""
+
+
+class InvalidWaypointError(InvalidArgumentError, InvalidTargetError):
+    """A waypoint that is not a finite rigid transform (caught as either parent class)."""
+
+
+@dataclass(frozen=True)
+class PathResult:
+    """What :func:`solve_path` returns.
+
+    Attributes:
+        q: The joint path, shape ``(N, nq)`` (rad / m; continuous joints in ``[-π, π)``).
+        success: Every waypoint met to tolerance (judged with Pinocchio's FK by
+            :meth:`swarm_ik.IKProblem.verify`, coal for collisions) and within the limits.
+        jump_free: Every consecutive step (and the step from ``q0``, when given) within
+            ``max_joint_step`` on every joint, and, with ``densify``, every step's tracked
+            chain through the interpolated poses too (each pose met, each joint's travel
+            within the bound).
+        reconfigurations: ``(index, size)`` per step beyond the bound: ``index`` is the
+            waypoint the step arrives at (0: the step from ``q0``), ``size`` the largest
+            joint change of that step [rad / m] (a step failing the densify check: the
+            largest joint travel along its tracked chain).
+        max_step: Largest joint change between consecutive configurations [rad / m].
+        max_step_ratio: Largest ``|Δq_j| / max_joint_step_j`` (≤ 1 when jump-free).
+        position_errors: Per waypoint, the largest position error of its goals [m], ``(N,)``.
+        rotation_errors: Per waypoint, the largest angular error [rad], ``(N,)``.
+        reached: Per waypoint, whether it is met, ``(N,)``.
+        reason: One line: what was found and why it is (not) a success.
+        time_s: Wall-clock time [s].
+        exhaustive: Every waypoint's candidate set was certified complete (closed form), so
+            the jump verdict is exact: with jumps, no jump-free path through the waypoints
+            exists.
+        n_candidates: Candidates considered per waypoint, ``(N,)``.
+        travel: Joint travel of the path, ``Σ_steps Σ_j |Δq_j|`` [rad / m].
+        q_dense: With ``densify=k``: the checked path through the interpolated poses,
+            shape ``((N − 1)(k + 1) + 1, nq)``; else None.
+    """
+
+    q: FloatArray
+    success: bool
+    jump_free: bool
+    reconfigurations: tuple[tuple[int, float], ...]
+    max_step: float
+    max_step_ratio: float
+    position_errors: FloatArray
+    rotation_errors: FloatArray
+    reached: NDArray[np.bool_]
+    reason: str
+    time_s: float
+    exhaustive: bool = False
+    n_candidates: NDArray[np.int64] | None = None
+    travel: float = 0.0
+    q_dense: FloatArray | None = None
+
+    def __repr__(self) -> str:
+        return (
+            f"PathResult(success={self.success}, jump_free={self.jump_free}, "
+            f"waypoints={self.q.shape[0]}, reconfigurations={list(self.reconfigurations)}, "
+            f"max_step={self.max_step:.4g}, time_s={self.time_s:.4f}, reason={self.reason!r})"
+        )
+
+
+# ------------------------------------------------------------------------------- API
+def solve_path(
+    robot: Any,
+    poses: Any = None,
+    *,
+    max_joint_step: Any = DEFAULT_MAX_JOINT_STEP,
+    q0: Any = None,
+    goals: Any = None,
+    scene: Any = None,
+    frame: str | None = None,
+    time_limit: float | None = None,
+    seed: int | np.random.Generator = 0,
+    densify: int = 0,
+    tol_pos: float = 1e-5,
+    tol_rot: float = 1e-5,
+) -> PathResult:
+    """A joint path through Cartesian waypoints with no jump between consecutive ones.
+
+    Args:
+        robot: The robot (:func:`swarm_ik.load_robot`).
+        poses: Waypoints of ``frame``: shape ``(N, 4, 4)`` [m], or ``(N, 7)`` rows
+            ``[x y z qx qy qz qw]`` (metres, quaternion x y z w, as
+            :func:`swarm_ik.make_pose`); ``N >= 2``.  None when ``goals`` lists each
+            waypoint's goals.
+        max_joint_step: Largest change of each joint between consecutive waypoints: a number
+            or one per joint, shape ``(nq,)`` [rad, or m for prismatic joints], ``> 0``.
+        q0: Optional current configuration ``(nq,)``: the path must start within the bound
+            of it (the step ``q0 → q[0]`` counts as a step).  Refused outside the limits.
+        goals: With ``poses``: a flat list of goal terms (:mod:`swarm_ik.goals`, e.g. a
+            secondary ``Posture``) added at every waypoint.  With ``poses=None``: a list of
+            ``N`` goal lists, one per waypoint (paths of other goals, e.g. ``Position`` +
+            ``Axis``).
+        scene: Obstacles (a :class:`swarm_ik.scene.Scene`, shapes, or a scene JSON file):
+            shortcut for adding ``AvoidCollisions(scene)`` at every waypoint.
+        frame: The goal frame of ``poses`` (default ``robot.ee_frame``).
+        time_limit: Most wall-clock seconds for building candidates [s]; when reached, the
+            remaining waypoints are only tracked (the reason says so).  Results are
+            deterministic for a seed only when the limit is not reached.
+        seed: Seed (or Generator) of every random choice (the solvers' seeds are drawn from
+            it): the same seed gives the same path.
+        densify: Poses interpolated between consecutive waypoints (position lerp, rotation
+            slerp) that each chosen step is checked through by tracking, ``>= 0``; needs
+            ``poses``.
+        tol_pos: Position tolerance of every waypoint [m].
+        tol_rot: Angular tolerance of every waypoint [rad].
+
+    Returns:
+        The :class:`PathResult`.
+
+    Raises:
+        InvalidArgumentError: a bad shape, ``N < 2``, a non-positive or wrongly sized
+            ``max_joint_step``, ``q0`` of the wrong length, not finite or outside the limits,
+            a bad ``densify``, ``time_limit``, tolerance, seed or goal list.
+        InvalidWaypointError: a pose that is not a finite rigid transform (a subclass of
+            both :class:`InvalidArgumentError` and :class:`InvalidTargetError`).
+        UnknownNameError: ``frame`` is not a goal frame of the robot.
+    """
+    from swarm_ik.robot import RobotModel
+
+    t_start = time.perf_counter()
+    if not isinstance(robot, RobotModel):
+        raise InvalidArgumentError(
+            f"robot must be a RobotModel (see swarm_ik.load_robot), got {type(robot).__name__}"
+        )
+    step = _check_step(robot, max_joint_step)
+    start = _check_q0(robot, q0)
+    if isinstance(densify, bool) or not isinstance(densify, (int, np.integer)) or densify < 0:
+        raise InvalidArgumentError(f"densify must be an integer >= 0, got {densify!r}")
+    for label, tol in (("tol_pos", tol_pos), ("tol_rot", tol_rot)):
+        if not _positive(tol):
+            raise InvalidArgumentError(f"{label} must be a positive number, got {tol!r}")
+    if time_limit is not None and not _positive(time_limit):
+        raise InvalidArgumentError(
+            f"time_limit must be a positive number or None, got {time_limit!r}"
+        )
+    rng = _make_rng(seed)
+    wps = _Waypoints.build(robot, poses, goals, scene, frame)
+    if densify and wps.poses is None:
+        raise InvalidArgumentError("densify needs poses (goal lists are not interpolated)")
+    deadline = None if time_limit is None else t_start + float(time_limit)
+    ctx = _Context(robot, wps, step, float(tol_pos), float(tol_rot), rng, deadline)
+    graph = _build(ctx, start)
+    rejected: Rejected = {}
+    choice = _search(graph, start, ctx, rejected)
+    proof = graph.exhaustive and choice.reconfigs > 0  # before densify: waypoints alone
+    dense, densify_ok = None, True
+    if densify:
+        choice, dense, densify_ok = _densify(ctx, graph, start, choice, int(densify), rejected)
+    return _finish(
+        ctx, graph, start, choice, proof, dense, densify_ok, rejected, t_start, int(densify)
+    )
+
+
+# -------------------------------------------------------------------- input checks
+def _positive(value: Any) -> bool:
+    if isinstance(value, (bool, np.bool_)) or not isinstance(
+        value, (int, float, np.integer, np.floating)
+    ):
+        return False
+    return bool(math.isfinite(float(value)) and float(value) > 0)
+
+
+def _check_step(robot: Any, value: Any) -> FloatArray:
+    """``max_joint_step`` as ``(nq,)`` positive finite floats."""
+    if isinstance(value, (str, bytes, bool, np.bool_)) or value is None:
+        raise InvalidArgumentError(
+            f"max_joint_step must be a positive number or {robot.nq} of them, got {value!r}"
+        )
+    try:
+        arr = np.array(value, dtype=float)
+    except (TypeError, ValueError):
+        raise InvalidArgumentError(
+            f"max_joint_step must be a positive number or {robot.nq} of them, got {value!r}"
+        ) from None
+    if arr.ndim == 0:
+        arr = np.full(robot.nq, float(arr))
+    if arr.shape != (robot.nq,):
+        raise InvalidArgumentError(
+            f"max_joint_step must be one number or {robot.nq} (one per joint: "
+            f"{', '.join(robot.joint_names)}); got shape {arr.shape}"
+        )
+    if not np.all(np.isfinite(arr) & (arr > 0)):
+        raise InvalidArgumentError(
+            f"max_joint_step must be finite and > 0 on every joint, got {arr.tolist()}"
+        )
+    return arr
+
+
+def _check_q0(robot: Any, q0: Any) -> FloatArray | None:
+    """``q0`` checked: ``(nq,)``, finite, continuous joints wrapped, within the limits."""
+    if q0 is None:
+        return None
+    q = robot.wrap(robot.check_q(q0, "q0"))  # wrong length / not finite: refused there
+    outside = np.flatnonzero((q < robot.lower - 1e-9) | (q > robot.upper + 1e-9))
+    if outside.size:
+        j = int(outside[0])
+        raise InvalidArgumentError(
+            f"q0 lies outside the joint limits at joint {robot.joint_names[j]!r}: "
+            f"{q[j]:g} not in [{robot.lower[j]:g}, {robot.upper[j]:g}]"
+        )
+    return np.clip(q, robot.lower, robot.upper)
+
+
+def _make_rng(seed: Any) -> np.random.Generator:
+    if isinstance(seed, np.random.Generator):
+        return seed
+    if isinstance(seed, (bool, np.bool_)) or not isinstance(seed, (int, np.integer)):
+        raise InvalidArgumentError(
+            f"seed must be a non-negative integer or a Generator, got {seed!r}"
+        )
+    if not 0 <= int(seed) < 2**63:
+        raise InvalidArgumentError(f"seed must be in [0, 2**63), got {seed}")
+    return np.random.default_rng(int(seed))
+
+
+def _goal_list(value: Any, what: str) -> list[Any]:
+    from swarm_ik.goals import Goal
+
+    if isinstance(value, (str, bytes)) or not isinstance(value, Sequence):
+        raise InvalidArgumentError(f"{what} must be a list of goal terms, got {value!r}")
+    out = list(value)
+    for g in out:
+        if not isinstance(g, Goal):
+            raise InvalidArgumentError(
+                f"{what} must hold swarm_ik.goals terms, got {type(g).__name__}"
+            )
+    return out
+
+
+def interpolate_pose(a: FloatArray, b: FloatArray, s: float) -> FloatArray:
+    """The pose a fraction ``s`` ∈ [0, 1] of the way from ``a`` to ``b`` (both ``(4, 4)``):
+    position interpolated linearly, rotation along the geodesic (slerp)."""
+    from scipy.spatial.transform import Rotation
+
+    out = np.eye(4)
+    out[:3, 3] = (1.0 - s) * a[:3, 3] + s * b[:3, 3]
+    rel = Rotation.from_matrix(a[:3, :3].T @ b[:3, :3]).as_rotvec()
+    out[:3, :3] = a[:3, :3] @ Rotation.from_rotvec(s * rel).as_matrix()
+    return out
+
+
+# -------------------------------------------------------------------- waypoints
+@dataclass
+class _Waypoints:
+    """The waypoints: poses of a frame and/or goal lists, and their problems (made lazily)."""
+
+    robot: Any
+    n: int
+    poses: FloatArray | None
+    frame: str
+    extra: list[Any]
+    goal_lists: list[list[Any]] | None
+    plain: bool
+    _problems: dict[int, Any]
+
+    @classmethod
+    def build(cls, robot: Any, poses: Any, goals: Any, scene: Any, frame: str | None) -> _Waypoints:
+        from swarm_ik.goals import AvoidCollisions
+
+        extra: list[Any] = []
+        goal_lists = None
+        if poses is None:
+            if goals is None:
+                raise InvalidArgumentError("give poses (N, 4, 4) or (N, 7), or goals= per waypoint")
+            if frame is not None:
+                raise InvalidArgumentError(
+                    "frame applies to poses; with goals= name each goal's frame"
+                )
+            if isinstance(goals, (str, bytes)) or not isinstance(goals, Sequence):
+                raise InvalidArgumentError(
+                    f"goals must be a list of N goal lists (one per waypoint), got {goals!r}"
+                )
+            goal_lists = [_goal_list(g, f"goals[{i}]") for i, g in enumerate(goals)]
+            n = len(goal_lists)
+            frame_name = robot.ee_frame
+            arr = None
+        else:
+            frame_name = robot.ee_frame if frame is None else frame
+            robot.frame_index(frame_name)  # UnknownNameError naming the goal frames
+            arr = _parse_poses(poses)
+            n = arr.shape[0]
+            if goals is not None:
+                extra = _goal_list(goals, "goals (with poses: goal terms added at every waypoint)")
+        if n < 2:
+            raise InvalidArgumentError(f"a path needs at least 2 waypoints, got {n}")
+        if scene is not None:
+            extra.append(AvoidCollisions(scene))
+        plain = arr is not None and not extra and frame_name == robot.ee_frame
+        wps = cls(robot, n, arr, frame_name, extra, goal_lists, plain, {})
+        for i in range(n):  # every goal list validated against the robot now
+            try:
+                wps.problem(i)
+            except InvalidArgumentError as exc:
+                raise type(exc)(f"waypoint {i}: {exc}") from None
+        return wps
+
+    def problem(self, i: int) -> Any:
+        """The IK problem of waypoint ``i`` (cached)."""
+        p = self._problems.get(i)
+        if p is None:
+            p = self._problems[i] = self.problem_at(
+                self.poses[i] if self.poses is not None else None, i
+            )
+        return p
+
+    def problem_at(self, pose: FloatArray | None, i: int) -> Any:
+        """The problem of a pose of the path's frame with the extra goals (``pose`` None: the
+        goal list of waypoint ``i``)."""
+        import swarm_ik
+        from swarm_ik.goals import Pose
+
+        if pose is None:
+            assert self.goal_lists is not None
+            return swarm_ik.IKProblem(self.robot, goals=[*self.goal_lists[i], *self.extra])
+        if self.plain:
+            return swarm_ik.IKProblem(self.robot, pose)
+        return swarm_ik.IKProblem(self.robot, goals=[Pose(self.frame, pose), *self.extra])
+
+    def pose_only(self, i: int) -> Any:
+        """The plain pose problem of waypoint ``i`` when the closed form could apply (poses of
+        the end effector), else None."""
+        import swarm_ik
+
+        if self.poses is None or self.frame != self.robot.ee_frame:
+            return None
+        if self.plain:
+            return self.problem(i)
+        return swarm_ik.IKProblem(self.robot, self.poses[i])
+
+    def target(self, i: int) -> tuple[FloatArray | None, Any]:
+        """What the tracker solves for waypoint ``i``: ``(the end effector's pose or None,
+        the problem, or None when the pose alone is the problem)``."""
+        if self.poses is None:
+            return None, self.problem(i)
+        if self.plain:
+            return self.poses[i], None
+        return self._ee(self.poses[i]), self.problem(i)
+
+    def target_at(self, pose: FloatArray, i: int) -> tuple[FloatArray | None, Any]:
+        """:meth:`target` of another pose of the path's frame (with waypoint ``i``'s goals)."""
+        if self.plain:
+            return pose, None
+        return self._ee(pose), self.problem_at(pose, i)
+
+    def _ee(self, pose: FloatArray) -> FloatArray | None:
+        return pose if self.frame == self.robot.ee_frame else None
+
+
+def _parse_poses(poses: Any) -> FloatArray:
+    """Waypoint poses as ``(N, 4, 4)``."""
+    from swarm_ik.pose import as_pose
+
+    if isinstance(poses, (str, bytes)):
+        raise InvalidArgumentError(f"poses must be an array (N, 4, 4) or (N, 7), got {poses!r}")
+    try:
+        arr = np.asarray(poses, dtype=float)
+    except (TypeError, ValueError):
+        raise InvalidArgumentError(
+            "poses must be an array of numbers, shape (N, 4, 4) or (N, 7)"
+        ) from None
+    if not (arr.ndim == 3 and arr.shape[1:] == (4, 4)) and not (
+        arr.ndim == 2 and arr.shape[1] == 7
+    ):
+        raise InvalidArgumentError(
+            f"poses must have shape (N, 4, 4) or (N, 7) [x y z qx qy qz qw]; got {arr.shape}"
+        )
+    if arr.shape[0] < 2:
+        raise InvalidArgumentError(f"a path needs at least 2 waypoints, got {arr.shape[0]}")
+    out = np.empty((arr.shape[0], 4, 4))
+    for i, row in enumerate(arr):
+        try:
+            out[i] = as_pose(row)
+        except InvalidTargetError as exc:
+            raise InvalidWaypointError(f"poses[{i}]: {exc}") from None
+    return out
+
+
+# -------------------------------------------------------------------- solving
+def _all_solutions(
+    problem: Any, n: int, seed: int, tol_pos: float, tol_rot: float
+) -> tuple[FloatArray, bool]:
+    """Every distinct solution :func:`swarm_ik.solve_many` finds: ``(q (k, nq), closed
+    form)``.  The one call to ``solve_many`` (its return type is adapted here only)."""
+    import swarm_ik
+
+    found: Any = swarm_ik.solve_many(problem, n=n, seed=seed, tol_pos=tol_pos, tol_rot=tol_rot)
+    results = [r[0] if isinstance(r, list) else r for r in found]  # (a list per branch: windings)
+    qs = np.array([r.q for r in results if r.success], dtype=float).reshape(-1, problem.nq)
+    closed = bool(results) and all(r.solver == "analytic" for r in results)
+    return qs, closed
+
+
+class _Context:
+    """What every step of the search shares: robot, waypoints, bound, tolerances, solvers."""
+
+    def __init__(
+        self, robot: Any, wps: _Waypoints, step: FloatArray, tol_pos: float, tol_rot: float,
+        rng: np.random.Generator, deadline: float | None,
+    ) -> None:  # fmt: skip
+        import swarm_ik
+
+        self.robot = robot
+        self.wps = wps
+        self.step = step
+        self.tol_pos = tol_pos
+        self.tol_rot = tol_rot
+        self.rng = rng
+        self.deadline = deadline
+        self.wrap = np.ascontiguousarray(robot.continuous_mask)
+        self.angular = np.array([k != "prismatic" for k in robot.joint_kinds], dtype=bool)
+        self.lower, self.upper = robot.lower, robot.upper
+        self.ik = (
+            swarm_ik.IKSolver(robot, tol_pos=tol_pos, tol_rot=tol_rot, max_evals=TRACK_EVALS)
+            if wps.poses is not None and wps.frame == robot.ee_frame
+            else None
+        )
+        # extra goals all primary (collisions): the pose solved first, then checked
+        self.pose_first = all(g.is_primary for g in wps.extra)
+        self.redundant_pose = wps.poses is not None and robot.nq > 6
+        # one-dimensional self-motion (7 joints, a pose): covered by samples, all tracked
+        self.cover = wps.poses is not None and robot.nq == 7
+        self.windings = _winding_joints(robot)
+        self.full_branches = _structural_branches(robot)
+        self.timed_out = False
+
+    def seed(self) -> int:
+        return int(self.rng.integers(2**31))
+
+    def out_of_time(self) -> bool:
+        if self.deadline is not None and time.perf_counter() >= self.deadline:
+            self.timed_out = True
+        return self.timed_out
+
+    def track(
+        self, target: tuple[FloatArray | None, Any], q_start: FloatArray
+    ) -> tuple[FloatArray, bool]:
+        """Solve ``target`` (:meth:`_Waypoints.target`) from ``q_start``, preferring the
+        solution nearest to it: ``(q, success)``, success judged with Pinocchio (the solver's
+        Result, or :meth:`IKProblem.verify` when a pose solution is checked against the
+        waypoint's other goals)."""
+        import swarm_ik
+
+        pose, problem = target
+        q_start = np.ascontiguousarray(np.clip(q_start, self.lower, self.upper))
+        if pose is not None and self.ik is not None and (problem is None or self.pose_first):
+            res = self.ik.solve(
+                np.ascontiguousarray(pose, dtype=float), q0=q_start, seed=self.seed()
+            )
+            q = np.array(res.q, dtype=float)
+            if problem is None:
+                return q, bool(res.success)
+            if res.success and _meets(problem, q, self):
+                return q, True
+        res = swarm_ik.solve(
+            problem, q0=q_start, seed=self.seed(), max_evals=TRACK_EVALS,
+            tol_pos=self.tol_pos, tol_rot=self.tol_rot, prefer="nearest",
+        )  # fmt: skip
+        return np.array(res.q, dtype=float), bool(res.success)
+
+    def steps(self, a: FloatArray, b: FloatArray) -> FloatArray:
+        """``|b − a|`` per joint (continuous joints wrapped), broadcasting."""
+        d = np.asarray(b, dtype=float) - np.asarray(a, dtype=float)
+        if self.wrap.any():
+            d[..., self.wrap] = (d[..., self.wrap] + np.pi) % (2 * np.pi) - np.pi
+        return np.abs(d)
+
+    def self_motion(self, i: int, q: FloatArray) -> list[FloatArray]:
+        """Starts pushed from ``q`` along the self-motion of waypoint ``i`` (null space of the
+        frame's Jacobian, half the bound each way; random pushes for goal lists)."""
+        if self.cover:
+            return []  # (covered by walks along the self-motion: _fill)
+        if self.redundant_pose:
+            jac = self.robot.jacobian_pinocchio(q, self.wps.frame)
+            _, _, vt = np.linalg.svd(jac)
+            out = []
+            for v in vt[6 : 6 + 2]:
+                scale = 0.5 / max(float(np.max(np.abs(v) / self.step)), 1e-12)
+                out += [q + scale * v, q - scale * v]
+            return out
+        if self.wps.goal_lists is not None:
+            push = self.rng.uniform(-0.5, 0.5, size=(2, q.shape[0])) * self.step
+            return [q + p for p in push]
+        return []
+
+
+def _winding_joints(robot: Any) -> NDArray[np.bool_]:
+    """Revolute (not continuous) joints whose range holds more than one copy of an angle."""
+    kinds = np.array([k == "revolute" for k in robot.joint_kinds])
+    return kinds & (robot.upper - robot.lower >= 2 * np.pi - 1e-9)
+
+
+def _with_windings(qs: FloatArray, lower: FloatArray, upper: FloatArray, joints: Any) -> FloatArray:
+    """Every in-limit 2π copy of each row of ``qs`` (``(m, nq)``, within the limits) on the
+    ``joints`` given."""
+    out = qs
+    for j in np.flatnonzero(joints):
+        turns = int(math.ceil((upper[j] - lower[j]) / (2 * np.pi)))
+        parts = [out]
+        for k in [*range(-turns, 0), *range(1, turns + 1)]:
+            c = out.copy()
+            c[:, j] += 2 * np.pi * k
+            keep = (c[:, j] >= lower[j] - 1e-9) & (c[:, j] <= upper[j] + 1e-9)
+            c[:, j] = np.clip(c[:, j], lower[j], upper[j])
+            parts.append(c[keep])
+        out = np.vstack(parts)
+    return out
+
+
+def _structural_branches(robot: Any) -> int | None:
+    """:data:`FULL_BRANCHES` for a 6R chain with three consecutive parallel axes or a
+    spherical wrist (first or last three axes through one point), else None (no bound
+    known: closed-form sets are then not certified complete)."""
+    if robot.nq != 6 or any(k != "revolute" for k in robot.joint_kinds) or robot.mimic:
+        return None
+    q = robot.mid_q()
+    jac = robot.jacobian_pinocchio(q)
+    p_ee = robot.fk_pinocchio(q)[:3, 3]
+    axes, points = [], []
+    for j in range(6):
+        w, v = jac[3:, j], jac[:3, j]
+        nw = float(w @ w)
+        if nw < 1e-12:
+            return None
+        axes.append(w / math.sqrt(nw))
+        points.append(p_ee - np.cross(v, w) / nw)  # v = w × (p_ee − p) on the axis line
+    for j in range(4):
+        if all(np.linalg.norm(np.cross(axes[j], axes[k])) < 1e-9 for k in (j + 1, j + 2)):
+            return FULL_BRANCHES
+    for k in (0, 3):
+        if _through_one_point(points[k : k + 3], axes[k : k + 3]):
+            return FULL_BRANCHES
+    return None
+
+
+def _through_one_point(points: Sequence[FloatArray], axes: Sequence[FloatArray]) -> bool:
+    a = np.zeros((3, 3))
+    b = np.zeros(3)
+    projs = []
+    for p, h in zip(points, axes, strict=True):
+        proj = np.eye(3) - np.outer(h, h)
+        projs.append((proj, p))
+        a += proj
+        b += proj @ p
+    if np.linalg.matrix_rank(a) < 3:
+        return False
+    x = np.linalg.solve(a, b)
+    return all(float(np.linalg.norm(proj @ (x - p))) < 1e-7 for proj, p in projs)
+
+
+# -------------------------------------------------------------------- the graph
+@numba.njit(cache=True)
+def _relax(
+    qa: FloatArray, ra: NDArray[np.int64], ta: FloatArray, qb: FloatArray, step: FloatArray,
+    wrap: NDArray[np.bool_], forbid: NDArray[np.bool_], rb: NDArray[np.int64], tb: FloatArray,
+    parent: NDArray[np.int64],
+) -> None:  # pragma: no cover - compiled  # fmt: skip
+    """One layer of the dynamic programme: for each row ``b`` of ``qb`` the best predecessor
+    ``a`` of ``qa`` by (jumps ``ra[a] + [step a→b beyond the bound]``, travel ``ta[a] +
+    Σ_j |Δq_j| / step_j``), lexicographically; ``forbid[a, b]`` (when shaped ``(ka, kb)``)
+    makes a step a jump."""
+    ka = qa.shape[0]
+    n = qa.shape[1]
+    has_forbid = forbid.shape[0] == ka and forbid.shape[1] == qb.shape[0]
+    two_pi = 2.0 * math.pi
+    for b in range(qb.shape[0]):
+        best_r = 1 << 40
+        best_t = math.inf
+        best_a = -1
+        for a in range(ka):
+            r = ra[a]
+            if has_forbid and forbid[a, b]:
+                r += 1
+            if r > best_r:
+                continue
+            jumped = r > ra[a]
+            t = ta[a]
+            worse = False
+            for j in range(n):  # (stops as soon as the step cannot be the best)
+                d = qb[b, j] - qa[a, j]
+                if wrap[j]:
+                    d = (d + math.pi) % two_pi - math.pi
+                d = abs(d)
+                if not jumped and d > step[j] * (1.0 + 1e-9):
+                    jumped = True
+                    r += 1
+                    if r > best_r:
+                        worse = True
+                        break
+                t += d / step[j]
+                if r == best_r and t >= best_t:
+                    worse = True
+                    break
+            if worse:
+                continue
+            if r < best_r or t < best_t:
+                best_r, best_t, best_a = r, t, a
+        rb[b] = best_r
+        tb[b] = best_t
+        parent[b] = best_a
+
+
+def _relax_layer(
+    qa: FloatArray,
+    ra: Any,
+    ta: Any,
+    qb: FloatArray,
+    step: FloatArray,
+    wrap: Any,
+    forbid: Any = None,
+) -> tuple[NDArray[np.int64], FloatArray, NDArray[np.int64]]:
+    kb = qb.shape[0]
+    rb = np.empty(kb, dtype=np.int64)
+    tb = np.empty(kb)
+    parent = np.empty(kb, dtype=np.int64)
+    fb = np.zeros((0, 0), dtype=np.bool_) if forbid is None else forbid
+    _relax(
+        np.ascontiguousarray(qa), np.ascontiguousarray(ra, dtype=np.int64),
+        np.ascontiguousarray(ta, dtype=float), np.ascontiguousarray(qb), step, wrap, fb, rb, tb,
+        parent,
+    )  # fmt: skip
+    return rb, tb, parent
+
+
+@dataclass
+class _Graph:
+    """Candidates per waypoint: ``layers[i] (k_i, nq)``, which meet the waypoint
+    (``valid[i]``), whether the set is certified complete (``certified[i]``)."""
+
+    layers: list[FloatArray]
+    valid: list[NDArray[np.bool_]]
+    certified: list[bool]
+    closed: list[bool]
+    unreachable: list[int]
+    repaired: int = 0
+
+    @property
+    def exhaustive(self) -> bool:
+        return all(self.certified)
+
+
+def _merge(base: FloatArray, new: Any, ctx: _Context, tol: float = DUPLICATE) -> FloatArray:
+    """``base`` (distinct rows) and the rows of ``new`` that are no near-duplicate (closer
+    than ``tol``: largest ``|Δq_j| / max_joint_step_j``) of a row kept before them."""
+    nq = base.shape[1]
+    rows = np.ascontiguousarray(np.asarray(new, dtype=float).reshape(-1, nq))
+    if rows.shape[0] == 0:
+        return base
+    idx = np.empty(rows.shape[0], dtype=np.int64)
+    c = _fresh_rows(np.ascontiguousarray(base), rows, ctx.step, ctx.wrap, float(tol), idx)
+    return np.vstack([base, rows[idx[:c]]]) if c else base
+
+
+@numba.njit(cache=True)
+def _fresh_rows(
+    kept: FloatArray, rows: FloatArray, step: FloatArray, wrap: NDArray[np.bool_], tol: float,
+    out: NDArray[np.int64],
+) -> int:  # pragma: no cover - compiled  # fmt: skip
+    """Indices (into ``out``) of the rows of ``rows`` at least ``tol`` (largest ``|Δq_j| /
+    step_j``, continuous joints wrapped) from every row of ``kept`` and every row taken
+    before them; returns how many."""
+    c = 0
+    n = rows.shape[1]
+    two_pi = 2.0 * math.pi
+    for s in range(rows.shape[0]):
+        fresh = True
+        for r in range(kept.shape[0] + c):
+            far = False
+            for j in range(n):
+                other = kept[r, j] if r < kept.shape[0] else rows[out[r - kept.shape[0]], j]
+                d = rows[s, j] - other
+                if wrap[j]:
+                    d = (d + math.pi) % two_pi - math.pi
+                if abs(d) >= tol * step[j]:
+                    far = True
+                    break
+            if not far:
+                fresh = False
+                break
+        if fresh:
+            out[c] = s
+            c += 1
+    return c
+
+
+def _pick(qs: FloatArray, r: Any, t: Any, k: int, ctx: _Context) -> FloatArray:
+    """Up to ``k`` rows of ``qs`` by (``r``, ``t``), at least :data:`DIVERSE` apart while
+    there is choice."""
+    order = np.lexsort((t, r))
+    if k >= qs.shape[0]:  # all of them: best first
+        return qs[order]
+    chosen: list[int] = []
+    for i in order:
+        if len(chosen) >= k:
+            break
+        if (
+            chosen
+            and float(np.min(np.max(ctx.steps(qs[chosen], qs[i]) / ctx.step, axis=1))) < DIVERSE
+        ):
+            continue
+        chosen.append(int(i))
+    for i in order:  # fill up with the rest
+        if len(chosen) >= k:
+            break
+        if int(i) not in chosen:
+            chosen.append(int(i))
+    return qs[chosen]
+
+
+def _closed_form(ctx: _Context, i: int) -> tuple[FloatArray, bool, bool] | None:
+    """Waypoint ``i``'s closed-form set with every in-limit 2π copy: ``(q, closed form used,
+    certified complete)``; None when the waypoint has no end-effector pose.
+
+    Certified: the arm's branch count is bounded (:func:`_structural_branches`), eaik could
+    be asked for the least-squares solutions ``solve_many`` leaves out (those that meet the
+    tolerances, a pair merging at a singularity, are added as candidates), and no candidate
+    is near a singularity (smallest Jacobian singular value ≥ :data:`SINGULAR_SIGMA`: no
+    continuum of solutions, no pair about to merge)."""
+    pose_problem = ctx.wps.pose_only(i)
+    if pose_problem is None:
+        return None
+    qs, closed = _all_solutions(pose_problem, CLOSED_FORM_N, ctx.seed(), ctx.tol_pos, ctx.tol_rot)
+    if not closed:
+        return qs, False, False
+    assert ctx.wps.poses is not None
+    near = _least_squares_solutions(ctx.robot, ctx.wps.poses[i])
+    certified = ctx.full_branches is not None and near is not None
+    if near is not None and near.shape[0]:  # exact enough: solutions too
+        folded = [f for f in (_fold(q, ctx) for q in near) if f is not None]
+        keep = [q for q in folded if _meets(pose_problem, q, ctx)]
+        if keep:
+            qs = _merge(qs, keep, ctx)
+    if certified:
+        assert ctx.full_branches is not None
+        certified = 0 < qs.shape[0] <= ctx.full_branches
+    if certified:  # no candidate near a singularity (a continuum, or a pair merging)
+        for q in qs:
+            sigma = np.linalg.svd(ctx.robot.jacobian_pinocchio(q), compute_uv=False)
+            if float(sigma[-1]) < SINGULAR_SIGMA:
+                certified = False
+                break
+    if not ctx.wps.plain and qs.shape[0]:  # the other goals (collisions, …) filter the set
+        problem = ctx.wps.problem(i)
+        qs = qs[[k for k in range(qs.shape[0]) if _meets(problem, qs[k], ctx)]]
+    return _with_windings(qs, ctx.lower, ctx.upper, ctx.windings), True, certified
+
+
+def _least_squares_solutions(robot: Any, pose: FloatArray) -> FloatArray | None:
+    """eaik's least-squares solutions of ``pose``, ``(m, nq)`` (``solve_many`` keeps only the
+    exact ones; one that meets the tolerances is an exact solution eaik classed as least
+    squares: two branches merging at a singularity).  None when eaik cannot be asked (then
+    no waypoint is certified complete)."""
+    try:
+        from swarm_ik.solvers import analytic
+
+        chain = analytic.analytic_chain(robot)
+        if not chain.supported:
+            return None
+        sol = chain.solver.calculate_IK(np.ascontiguousarray(pose, dtype=float))
+        qs = np.asarray(sol.Q, dtype=float).reshape(-1, robot.nq)
+        ls = np.asarray(sol.is_LS, dtype=bool).reshape(-1)
+    except (ImportError, AttributeError, RuntimeError, TypeError, ValueError):
+        return None
+    return qs[ls]
+
+
+def _fold(q: FloatArray, ctx: _Context) -> FloatArray | None:
+    """The 2π copy of ``q`` within the limits nearest to mid-range on each revolute joint
+    (None when some joint has none)."""
+    out = np.array(q, dtype=float)
+    mid = 0.5 * (ctx.lower + ctx.upper)
+    for j, kind in enumerate(ctx.robot.joint_kinds):
+        if kind == "prismatic":
+            continue
+        lo, hi = ctx.lower[j] - 1e-9, ctx.upper[j] + 1e-9
+        k_lo = math.ceil((lo - out[j]) / (2 * np.pi))
+        k_hi = math.floor((hi - out[j]) / (2 * np.pi))
+        if k_lo > k_hi:
+            return None
+        k = min(max(round((mid[j] - out[j]) / (2 * np.pi)), k_lo), k_hi)
+        out[j] = float(np.clip(out[j] + 2 * np.pi * k, ctx.lower[j], ctx.upper[j]))
+    if not np.all((out >= ctx.lower) & (out <= ctx.upper)):
+        return None
+    return out
+
+
+def _meets(problem: Any, q: FloatArray, ctx: _Context) -> bool:
+    errs = problem.verify(q, ctx.tol_pos, ctx.tol_rot)
+    return bool(all(e.met for e in errs) and problem.within_bounds(q))
+
+
+def _spread(ctx: _Context, i: int) -> FloatArray:
+    """Waypoint ``i``'s own spread of solutions (numerical ``solve_many``)."""
+    qs, _ = _all_solutions(ctx.wps.problem(i), SEEDS, ctx.seed(), ctx.tol_pos, ctx.tol_rot)
+    return qs
+
+
+def _tracked(
+    ctx: _Context, i: int, parents: FloatArray
+) -> tuple[list[FloatArray], list[FloatArray]]:
+    """Waypoint ``i`` solved from each parent, and the self-motion samples around each
+    solution: ``(solutions, failed attempts)``."""
+    if ctx.cover:
+        qs, found = _track_batch(ctx, i, parents)
+        return list(qs[found]), list(qs[~found])
+    target = ctx.wps.target(i)
+    good: list[FloatArray] = []
+    bad: list[FloatArray] = []
+    for p in parents:
+        q, ok = ctx.track(target, p)
+        if not ok:
+            bad.append(q)
+            continue
+        good.append(q)
+        for s in ctx.self_motion(i, q):
+            qs, oks = ctx.track(target, s)
+            if oks:
+                good.append(qs)
+    return good, bad
+
+
+def _null(ctx: _Context, qs: FloatArray) -> FloatArray:
+    """The self-motion direction (null space of the frame's Jacobian) at each row of ``qs``
+    ``(k, 7)``, unit rows ``(k, 7)``."""
+    _, jac = ctx.robot.fk_jacobian(np.ascontiguousarray(qs, dtype=float), ctx.wps.frame)
+    return np.asarray(np.linalg.svd(np.asarray(jac).reshape(-1, 6, qs.shape[1]))[2][:, -1, :])
+
+
+def _track_batch(ctx: _Context, i: int, starts: Any) -> tuple[FloatArray, NDArray[np.bool_]]:
+    """Waypoint ``i`` solved from each row of ``starts`` ``(k, nq)``, the start the only one
+    (so the answer is the solution it polishes into): one compiled call of
+    :func:`swarm_ik.solve_batch` for an end-effector pose (then checked against the waypoint's
+    other goals, if any, with :meth:`IKProblem.verify`), else one solve per start."""
+    import swarm_ik
+
+    nq = ctx.robot.nq
+    starts = np.clip(np.asarray(starts, dtype=float).reshape(-1, nq), ctx.lower, ctx.upper)
+    pose, problem = ctx.wps.target(i)
+    if starts.shape[0] == 0:
+        return starts, np.zeros(0, dtype=bool)
+    if pose is not None and (problem is None or ctx.pose_first):
+        res = swarm_ik.solve_batch(
+            ctx.robot, np.repeat(np.asarray(pose)[None], starts.shape[0], axis=0),
+            q0=np.ascontiguousarray(starts), seed=ctx.seed(), tol_pos=ctx.tol_pos,
+            tol_rot=ctx.tol_rot, max_starts=1,
+        )  # fmt: skip
+        qs = np.array(res.q, dtype=float)
+        ok = np.array(res.success, dtype=bool)
+        if problem is not None:
+            ok = np.array(
+                [bool(o) and _meets(problem, q, ctx) for q, o in zip(qs, ok, strict=True)]
+            )
+        return qs, ok
+    out = [ctx.track((pose, problem), q) for q in starts]
+    return np.array([q for q, _ in out]), np.array([o for _, o in out], dtype=bool)
+
+
+def _fill(ctx: _Context, i: int, layer: FloatArray) -> FloatArray:
+    """``layer`` (samples of waypoint ``i``'s self-motion) with the gaps filled and the ends
+    extended: each sample with no neighbour within ``COVER_GAP · COVER_STEP`` on one side
+    along the self-motion walks that way, one sample every :data:`COVER_STEP` (pushed along
+    the null direction, polished back onto the waypoint), until the walk fails, stops moving
+    (a joint limit), or reaches a covered point; at most :data:`MAX_COVER` samples in all.
+    The walks advance together (one :func:`_track_batch` per step)."""
+    if layer.shape[0] == 0 or layer.shape[0] >= MAX_COVER or ctx.out_of_time():
+        return layer
+    nulls = _null(ctx, layer)
+    d = layer[None, :, :] - layer[:, None, :]  # d[a, b] = layer[b] − layer[a]
+    if ctx.wrap.any():
+        d[..., ctx.wrap] = (d[..., ctx.wrap] + np.pi) % (2 * np.pi) - np.pi
+    d /= ctx.step
+    reach = np.max(np.abs(d), axis=2)
+    along = np.einsum("abj,aj->ab", d, nulls / ctx.step)
+    near = (reach > 0) & (reach <= COVER_GAP * COVER_STEP)
+    walkers: list[tuple[FloatArray, FloatArray]] = []
+    for sign in (1.0, -1.0):
+        lonely = ~np.any(near & (sign * along > 0), axis=1)
+        walkers += [(layer[a], sign * nulls[a]) for a in np.flatnonzero(lonely)]
+    out = layer
+    for _ in range(MAX_WALK):
+        if not walkers or out.shape[0] >= MAX_COVER or ctx.out_of_time():
+            break
+        scales = [COVER_STEP / max(float(np.max(np.abs(n) / ctx.step)), 1e-12) for _, n in walkers]
+        starts = np.array([q + c * n for (q, n), c in zip(walkers, scales, strict=True)])
+        qn, ok = _track_batch(ctx, i, starts)
+        moved_on: list[tuple[FloatArray, FloatArray]] = []
+        for (q, _), x, good in zip(walkers, qn, ok, strict=True):
+            if not good or out.shape[0] >= MAX_COVER:
+                continue
+            if float(np.max(ctx.steps(q, x) / ctx.step)) < 0.3 * COVER_STEP:
+                continue  # stuck (a joint limit)
+            if float(np.min(np.max(ctx.steps(out, x) / ctx.step, axis=1))) < 0.5 * COVER_STEP:
+                continue  # reached covered ground
+            out = np.vstack([out, x[None]])
+            moved_on.append((q, x))
+        walkers = []
+        if moved_on:
+            ns = _null(ctx, np.array([x for _, x in moved_on]))
+            for (q, x), n in zip(moved_on, ns, strict=True):
+                walkers.append((x, n if float(n @ (x - q)) >= 0 else -n))
+    return out
+
+
+def _build(ctx: _Context, start: FloatArray | None) -> _Graph:
+    """Candidates of every waypoint: closed form where it applies, the spread of waypoint 0,
+    tracking from the previous waypoint's best candidates, a waypoint's own spread where
+    every tracked candidate jumps, then, if the path still jumps, a backward pass."""
+    n, nq = ctx.wps.n, ctx.robot.nq
+    step, wrap = ctx.step, ctx.wrap
+    graph = _Graph([], [], [], [], [])
+    values: list[tuple[Any, Any] | None] = []
+
+    def value(i: int) -> tuple[Any, Any]:
+        """The forward values (jumps, travel) of layer ``i``'s candidates, made on demand (a
+        path of certified layers needs none before the search)."""
+        k = i
+        while k > 0 and values[k - 1] is None:
+            k -= 1
+        for m in range(k, i + 1):
+            if values[m] is not None:
+                continue
+            layer = graph.layers[m]
+            if m > 0:
+                ra, ta = values[m - 1]  # type: ignore[misc]
+                values[m] = _relax_layer(graph.layers[m - 1], ra, ta, layer, step, wrap)[:2]
+            elif start is None:
+                values[m] = (np.zeros(layer.shape[0], dtype=np.int64), _tie_break(layer, ctx))
+            else:
+                z_r, z_t = np.zeros(1, dtype=np.int64), np.zeros(1)
+                values[m] = _relax_layer(start[None], z_r, z_t, layer, step, wrap)[:2]
+        got = values[i]
+        assert got is not None
+        return got
+
+    closed_ok = True  # until a waypoint shows that the closed form does not apply
+    merge_tol = COVER_MERGE if ctx.cover else DUPLICATE
+    for i in range(n):
+        qb = np.empty((0, nq))
+        cert = used_closed = spread_done = False
+        if closed_ok and not ctx.out_of_time():
+            cf = _closed_form(ctx, i)
+            if cf is None:
+                closed_ok = False
+            elif cf[1]:
+                qb, used_closed, cert = cf[0], True, cf[2]
+            elif cf[0].shape[0]:  # numerical: no closed form for this arm
+                closed_ok = False
+                if ctx.wps.plain:  # (the pose problem is the waypoint's problem)
+                    qb, spread_done = _merge(qb, cf[0], ctx), True
+        if i == 0:
+            if start is not None:
+                q, ok = ctx.track(ctx.wps.target(0), start)
+                if ok:
+                    qb = _merge(qb, q, ctx)
+            if not used_closed and not spread_done and not ctx.out_of_time():
+                qb, spread_done = _merge(qb, _spread(ctx, 0), ctx), True
+            if ctx.cover:
+                qb = _fill(ctx, 0, qb)
+        prev_q: FloatArray | None
+        if i == 0:
+            prev_q = None if start is None else start[None]
+            ra0, ta0 = np.zeros(1, dtype=np.int64), np.zeros(1)
+        else:
+            prev_q = graph.layers[i - 1]
+            ra0, ta0 = value(i - 1) if not cert else (np.empty(0, dtype=np.int64), np.empty(0))
+        bad: list[FloatArray] = []
+        if i > 0 and not cert:
+            qa, ok_rows = graph.layers[i - 1], graph.valid[i - 1]
+            beam = MAX_COVER if ctx.cover else BEAM
+            if ok_rows.any():
+                par = _pick(qa[ok_rows], ra0[ok_rows], ta0[ok_rows], beam, ctx)
+            else:
+                par = _pick(qa, ra0, ta0, 1, ctx)
+            good, bad = _tracked(ctx, i, par)
+            qb = _merge(qb, good, ctx, merge_tol)
+            if ctx.cover:
+                qb = _fill(ctx, i, qb)
+        if not used_closed and not spread_done and not ctx.out_of_time():
+            need = qb.shape[0] == 0
+            if not need and prev_q is not None:
+                rb, _, _ = _relax_layer(prev_q, ra0, ta0, qb, step, wrap)
+                need = int(rb.min()) > int(ra0.min())  # every candidate jumps
+            if need:
+                graph.repaired += 1
+                fresh = _merge(np.empty((0, nq)), _spread(ctx, i), ctx)
+                if ctx.cover:
+                    fresh = _fill(ctx, i, fresh)
+                qb = _merge(qb, fresh, ctx, merge_tol)
+        ok_b = np.ones(qb.shape[0], dtype=bool)
+        if qb.shape[0] == 0:  # nothing meets the waypoint: the best attempts stand in
+            stand = bad or _stand_in(ctx, i, graph.layers, start)
+            qb = np.array(stand[:BEAM]).reshape(-1, nq)
+            ok_b = np.zeros(qb.shape[0], dtype=bool)
+        graph.layers.append(qb)
+        graph.valid.append(ok_b)
+        graph.certified.append(cert)
+        graph.closed.append(used_closed)
+        values.append(None)
+    if not graph.exhaustive and int(value(n - 1)[0].min()) > 0 and not ctx.out_of_time():
+        _backward(ctx, graph)
+    graph.unreachable = [i for i in range(n) if not graph.valid[i].any()]
+    return graph
+
+
+def _stand_in(
+    ctx: _Context, i: int, layers: list[FloatArray], start: FloatArray | None
+) -> list[FloatArray]:
+    """A stand-in for a waypoint with no solution: the best attempt from the previous
+    waypoint's first candidate (or ``q0``, or mid-range)."""
+    ref = layers[i - 1][0] if i > 0 else (start if start is not None else ctx.robot.mid_q())
+    q, _ = ctx.track(ctx.wps.target(i), ref)
+    return [q]
+
+
+def _backward(ctx: _Context, graph: _Graph) -> None:
+    """Track backwards from the last waypoint (its own spread added), adding candidates."""
+    n = ctx.wps.n
+    step, wrap = ctx.step, ctx.wrap
+    if graph.valid[-1].any() and not graph.closed[-1]:
+        last = _merge(graph.layers[-1][graph.valid[-1]], _spread(ctx, n - 1), ctx)
+        graph.layers[-1] = last
+        graph.valid[-1] = np.ones(last.shape[0], dtype=bool)
+    last = graph.layers[-1]
+    rb, tb = np.zeros(last.shape[0], dtype=np.int64), np.zeros(last.shape[0])
+    for i in range(n - 2, -1, -1):
+        if ctx.out_of_time():
+            break
+        qa, ok = graph.layers[i + 1], graph.valid[i + 1]
+        if not graph.certified[i] and ok.any():
+            good, _ = _tracked(ctx, i, _pick(qa[ok], rb[ok], tb[ok], BEAM, ctx))
+            if good:
+                base = graph.layers[i][graph.valid[i]]
+                merged = _merge(base, good, ctx)
+                graph.layers[i] = merged
+                graph.valid[i] = np.ones(merged.shape[0], dtype=bool)
+        rb, tb, _ = _relax_layer(qa, rb, tb, graph.layers[i], step, wrap)
+
+
+@dataclass
+class _Choice:
+    """The dynamic programme's path: candidate index per waypoint, its jumps and travel."""
+
+    index: list[int]
+    reconfigs: int
+    travel: float
+
+
+Rejected = dict[int, list[tuple[FloatArray, FloatArray, float]]]
+"""Steps the densify check found to jump between waypoints: waypoint ``i`` → ``[(qa, qb,
+size)]``, configurations of waypoints ``i − 1`` and ``i`` modulo 2π (:func:`_canon`: every
+2π copy of the step is the same motion, and fails alike), size the largest joint travel."""
+
+
+def _canon(qs: FloatArray, ctx: _Context) -> FloatArray:
+    """Rows of ``qs`` with every revolute joint wrapped into ``[-π, π)``."""
+    out = np.array(qs, dtype=float)
+    out[..., ctx.angular] = (out[..., ctx.angular] + np.pi) % (2 * np.pi) - np.pi
+    return out
+
+
+def _same(rows: FloatArray, q: FloatArray) -> NDArray[np.bool_]:
+    """Rows equal to ``q`` modulo 2π (both canonical)."""
+    d = np.abs(rows - q)
+    d = np.minimum(d, 2 * np.pi - d)
+    return np.asarray(np.all(d < 1e-9, axis=-1))
+
+
+def _rejected_size(
+    rejected: Rejected, i: int, qa: FloatArray, qb: FloatArray, ctx: _Context
+) -> float | None:
+    """The size recorded when the step ``qa → qb`` into waypoint ``i`` failed the densify
+    check, else None."""
+    ca, cb = _canon(qa, ctx), _canon(qb, ctx)
+    for ra, rb, size in rejected.get(i, []):
+        if _same(ra, ca) and _same(rb, cb):
+            return size
+    return None
+
+
+def _tie_break(layer: FloatArray, ctx: _Context) -> FloatArray:
+    """Start values of the first waypoint's candidates without ``q0``: :data:`TIE_BREAK` times
+    their distance to mid-range (in bounds), so that of paths equal but for a 2π turn of a
+    joint the one nearer mid-range is taken, whatever the round-off."""
+    mid = 0.5 * (ctx.lower + ctx.upper)
+    return np.asarray(TIE_BREAK * np.sum(np.abs(layer - mid) / ctx.step, axis=1))
+
+
+def _search(graph: _Graph, start: FloatArray | None, ctx: _Context, rejected: Rejected) -> _Choice:
+    """The path minimising (jumps, travel) through the layers."""
+    step, wrap = ctx.step, ctx.wrap
+    n = len(graph.layers)
+    parents: list[NDArray[np.int64]] = []
+    first = graph.layers[0]
+    k0 = first.shape[0]
+    if start is not None:
+        forbid0 = _forbid(rejected, 0, start[None], first, ctx)
+        zero_r, zero_t = np.zeros(1, dtype=np.int64), np.zeros(1)
+        r, t, par = _relax_layer(start[None], zero_r, zero_t, first, step, wrap, forbid0)
+    else:
+        r, par = np.zeros(k0, dtype=np.int64), np.zeros(k0, dtype=np.int64)
+        t = _tie_break(first, ctx)
+    parents.append(par)
+    for i in range(1, n):
+        qa, qb = graph.layers[i - 1], graph.layers[i]
+        forbid = _forbid(rejected, i, qa, qb, ctx)
+        r, t, par = _relax_layer(qa, r, t, qb, step, wrap, forbid)
+        parents.append(par)
+    best = int(np.lexsort((t, r))[0])
+    idx = [best]
+    for i in range(n - 1, 0, -1):
+        idx.append(int(parents[i][idx[-1]]))
+    idx.reverse()
+    return _Choice(idx, int(r[best]), float(t[best]))
+
+
+def _forbid(rejected: Rejected, i: int, qa: FloatArray, qb: FloatArray, ctx: _Context) -> Any:
+    """The ``(ka, kb)`` mask of the steps from ``qa``'s rows into ``qb``'s (waypoint ``i``)
+    that failed the densify check, or None."""
+    entries = rejected.get(i)
+    if not entries:
+        return None
+    ca, cb = _canon(qa, ctx), _canon(qb, ctx)
+    m = np.zeros((qa.shape[0], qb.shape[0]), dtype=np.bool_)
+    for ra, rb, _ in entries:
+        m[np.ix_(_same(ca, ra), _same(cb, rb))] = True
+    return m
+
+
+def _densify(
+    ctx: _Context, graph: _Graph, start: FloatArray | None, choice: _Choice, k: int,
+    rejected: Rejected,
+) -> tuple[_Choice, FloatArray, bool]:  # fmt: skip
+    """Check the chosen steps through ``k`` interpolated poses each, searching again without
+    the failing ones until the chosen path passes (at most :data:`DENSIFY_ROUNDS` rounds; the
+    last choice is checked in any case, its failing steps then reported as jumps).
+
+    Returns:
+        ``(the choice, the dense path ((N − 1)(k + 1) + 1, nq), whether the rounds
+        sufficed)``; ``rejected`` gains the failing steps.
+    """
+    checked: dict[tuple[int, int, int], tuple[bool, FloatArray, float]] = {}
+
+    def check(choice: _Choice) -> tuple[FloatArray, bool]:
+        dense = [graph.layers[0][choice.index[0]][None]]
+        failed = False
+        for i in range(1, ctx.wps.n):
+            a, b = choice.index[i - 1], choice.index[i]
+            qa, qb = graph.layers[i - 1][a], graph.layers[i][b]
+            key = (i, a, b)
+            if key not in checked:
+                checked[key] = _check_step_dense(ctx, i, qa, qb, k)
+            ok, chain, size = checked[key]
+            within = float(np.max(ctx.steps(qa, qb) / ctx.step)) <= 1.0 + _STEP_SLACK
+            if not ok and within and _rejected_size(rejected, i, qa, qb, ctx) is None:
+                rejected.setdefault(i, []).append((_canon(qa, ctx), _canon(qb, ctx), size))
+                failed = True
+            dense.append(chain)
+        return np.vstack(dense), failed
+
+    for _ in range(DENSIFY_ROUNDS):
+        dense, failed = check(choice)
+        if not failed:
+            return choice, dense, True
+        choice = _search(graph, start, ctx, rejected)
+    dense, failed = check(choice)
+    return choice, dense, not failed
+
+
+def _check_step_dense(
+    ctx: _Context, i: int, qa: FloatArray, qb: FloatArray, k: int
+) -> tuple[bool, FloatArray, float]:
+    """Track from ``qa`` through ``k`` poses between waypoints ``i − 1`` and ``i`` and on to
+    ``qb``: the step passes when every interpolated pose is met and each joint's travel along
+    the chain (the sum of its changes, so that a joint going out and back counts) stays
+    within the bound.
+
+    Returns:
+        ``(passes, the chain ((k + 1), nq) ending with qb, the largest joint travel along
+        it [rad / m])``.
+    """
+    assert ctx.wps.poses is not None
+    pa, pb = ctx.wps.poses[i - 1], ctx.wps.poses[i]
+    chain = []
+    q = qa
+    met_all = True
+    for s in range(1, k + 1):
+        pose = interpolate_pose(pa, pb, s / (k + 1))
+        qn, met = ctx.track(ctx.wps.target_at(pose, i), q)
+        met_all = met_all and met
+        chain.append(qn)
+        q = qn
+    chain.append(qb)
+    links = np.vstack([qa[None], np.array(chain)])
+    travel = ctx.steps(links[:-1], links[1:]).sum(axis=0)
+    ok = met_all and bool(np.all(travel <= ctx.step * (1 + _STEP_SLACK)))
+    return ok, np.array(chain), float(travel.max())
+
+
+# -------------------------------------------------------------------- the result
+def _finish(
+    ctx: _Context, graph: _Graph, start: FloatArray | None, choice: _Choice, proof: bool,
+    dense: FloatArray | None, densify_ok: bool, rejected: Rejected, t_start: float, k: int,
+) -> PathResult:  # fmt: skip
+    """The path checked with Pinocchio (each waypoint's problem), its steps and reason."""
+    wps, step = ctx.wps, ctx.step
+    n = wps.n
+    q = np.array([graph.layers[i][choice.index[i]] for i in range(n)])
+    dp = np.zeros(n)
+    dr = np.zeros(n)
+    reached = np.zeros(n, dtype=bool)
+    for i in range(n):  # the independent check (Pinocchio, coal)
+        problem = wps.problem(i)
+        errs = problem.verify(q[i], ctx.tol_pos, ctx.tol_rot)
+        dp[i] = max(
+            (e.position_error for e in errs if not math.isnan(e.position_error)), default=0.0
+        )
+        dr[i] = max(
+            (e.rotation_error for e in errs if not math.isnan(e.rotation_error)), default=0.0
+        )
+        reached[i] = all(e.met for e in errs) and problem.within_bounds(q[i])
+    prev = np.vstack([start[None], q]) if start is not None else q
+    d = ctx.steps(prev[:-1], prev[1:])
+    off = 0 if start is not None else 1  # the waypoint each step arrives at
+    ratio = d / step
+    jumps: list[tuple[int, float]] = []
+    for s in range(d.shape[0]):
+        i = s + off
+        if float(ratio[s].max()) > 1.0 + _STEP_SLACK:
+            jumps.append((i, float(d[s].max())))
+        elif i > 0 and rejected.get(i):
+            size = _rejected_size(rejected, i, prev[s], prev[s + 1], ctx)
+            if size is not None:
+                jumps.append((i, size))
+    max_ratio = float(ratio.max()) if ratio.size else 0.0
+    max_step = float(d.max()) if d.size else 0.0
+    reason = _reason(
+        ctx, graph, start, q, reached, jumps, proof, densify_ok, max_step, max_ratio, k
+    )
+    for arr in (q, dp, dr, reached):
+        arr.flags.writeable = False
+    if dense is not None:
+        dense.flags.writeable = False
+    return PathResult(
+        q=q,
+        success=bool(reached.all()),
+        jump_free=not jumps,
+        reconfigurations=tuple(jumps),
+        max_step=max_step,
+        max_step_ratio=max_ratio,
+        position_errors=dp,
+        rotation_errors=dr,
+        reached=reached,
+        reason=reason,
+        time_s=time.perf_counter() - t_start,
+        exhaustive=graph.exhaustive,
+        n_candidates=np.array([layer.shape[0] for layer in graph.layers], dtype=np.int64),
+        travel=float(d.sum()),
+        q_dense=dense,
+    )
+
+
+def _reason(
+    ctx: _Context, graph: _Graph, start: FloatArray | None, q: FloatArray, reached: Any,
+    jumps: list[tuple[int, float]], proof: bool, densify_ok: bool, max_step: float,
+    max_ratio: float, k: int,
+) -> str:  # fmt: skip
+    """One line: what the path is and why it is (not) a success."""
+    parts: list[str] = []
+    missed = [int(i) for i in np.flatnonzero(~np.asarray(reached))]
+    if missed:
+        where = ", ".join(str(i) for i in missed[:10]) + (" …" if len(missed) > 10 else "")
+        beyond = [i for i in missed if _beyond_reach(ctx, i)]
+        why = "no IK solution found"
+        if beyond:
+            why += f"; beyond the frame's reach: {beyond[:10]}"
+        elif any(graph.closed) and ctx.wps.pose_only(missed[0]) is not None:
+            why += " (closed form: none meets it within the joint limits)"
+        plural = "s" if len(missed) > 1 else ""
+        parts.append(f"waypoint{plural} {where} unreachable: {why}")
+    if jumps:
+        listed = ", ".join(f"{i} ({s:.3g})" for i, s in jumps[:10])
+        listed += " …" if len(jumps) > 10 else ""
+        plural = "s" if len(jumps) > 1 else ""
+        msg = f"{len(jumps)} jump{plural} beyond max_joint_step, at waypoint (size) {listed}"
+        if start is not None and jumps[0][0] == 0:
+            layer0 = graph.layers[0][graph.valid[0]] if graph.valid[0].any() else graph.layers[0]
+            nearest = float(np.min(np.max(ctx.steps(layer0, start) / ctx.step, axis=-1)))
+            msg += (
+                "; no IK solution of waypoint 0 lies within max_joint_step of q0 (the nearest "
+                f"is {nearest:.3g} times the bound away)"
+            )
+        if missed:
+            msg += "; next to an unreachable waypoint the configuration is the best attempt"
+        elif proof:
+            origin = " from q0" if start is not None else ""
+            msg += (
+                "; exhaustive: every waypoint's closed-form set is complete, so this proves "
+                f"that no jump-free path exists{origin} through these waypoints"
+            )
+        else:
+            msg += "; not exhaustive (numerical candidate sets): the fewest jumps found"
+        if k and not densify_ok:
+            msg += f"; densify checks stopped after {DENSIFY_ROUNDS} rounds"
+        parts.append(msg)
+    if ctx.timed_out:
+        parts.append("time_limit reached: the later waypoints were only tracked")
+    if not parts:
+        checked = f", {k} interpolated poses per step checked" if k else ""
+        return (
+            f"jump-free: all {q.shape[0]} waypoints reached, largest step {max_step:.3g} "
+            f"({max_ratio:.2f} of the bound){checked}"
+        )
+    return "; ".join(parts)
+
+
+def _beyond_reach(ctx: _Context, i: int) -> bool:
+    """Whether waypoint ``i``'s pose lies beyond the frame's reach (no solution can exist)."""
+    if ctx.wps.poses is None:
+        return False
+    radius = ctx.robot.reach_radius(ctx.wps.frame)
+    return float(np.linalg.norm(ctx.wps.poses[i][:3, 3])) > radius * (1 + 1e-9)
+
+
+__all__ = [
+    "DEFAULT_MAX_JOINT_STEP",
+    "InvalidWaypointError",
+    "PathResult",
+    "interpolate_pose",
+    "solve_path",
+]

@@ -1,0 +1,276 @@
+"""solve_path: jump-free joint paths through Cartesian waypoints (swarm_ik.path)."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+from conftest import robot as get
+
+import swarm_ik
+from swarm_ik import path as sp
+from swarm_ik.errors import InvalidArgumentError, InvalidTargetError, UnknownNameError
+from swarm_ik.path import PathResult, solve_path
+
+STEP = sp.DEFAULT_MAX_JOINT_STEP
+
+
+def smooth_q(robot, seed: int, n: int = 40, step: float = 0.1) -> np.ndarray:
+    """A smooth joint trajectory ``(n, nq)`` inside the limits (min-jerk blend between two
+    configurations plus a bump), each joint moving at most ``step`` between samples."""
+    rng = np.random.default_rng(seed)
+    lo, hi = robot.lower + 0.3, robot.upper - 0.3
+    a = rng.uniform(lo, hi)
+    d = rng.uniform(-1, 1, robot.nq)
+    d *= step * (n - 1) / 2.0 / np.abs(d).max()
+    b = np.clip(a + d, lo, hi)
+    t = np.linspace(0.0, 1.0, n)[:, None]
+    bump = 0.25 * step * (n - 1) / np.pi * np.sin(np.pi * t) * rng.uniform(-1, 1, robot.nq)
+    q = a + (3 * t**2 - 2 * t**3) * (b - a) + bump
+    assert np.abs(np.diff(q, axis=0)).max() <= step
+    assert np.all((q >= robot.lower) & (q <= robot.upper))
+    return q
+
+
+def pose_errors(robot, pose, q) -> tuple[float, float]:
+    """Position [m] and angular [rad] errors of ``q`` for ``pose``, from Pinocchio's FK
+    (``IKProblem.verify``, the check every swarm_ik result is judged by)."""
+    (err,) = swarm_ik.IKProblem(robot, pose).verify(q)
+    return float(err.position_error), float(err.rotation_error)
+
+
+def check_path(robot, poses, res: PathResult, step=STEP) -> None:
+    """The result's claims, checked independently: Pinocchio's FK at every waypoint, the joint
+    steps, the limits."""
+    assert res.q.shape == (poses.shape[0], robot.nq)
+    for i, q in enumerate(res.q):
+        assert robot.within_limits(q)
+        dp, dr = pose_errors(robot, poses[i], q)
+        assert dp <= 1e-5 and dr <= 1e-5, (i, dp, dr)
+        assert res.position_errors[i] == pytest.approx(dp, abs=1e-12)
+    steps = np.abs(np.diff(res.q, axis=0))
+    assert np.all(steps <= step * (1 + 1e-9))
+    assert res.max_step == pytest.approx(steps.max())
+
+
+# ---------------------------------------------------------------------------- paths
+@pytest.mark.parametrize("seed", [0, 1])
+def test_ur5_smooth_path_is_jump_free_and_exhaustive(seed):
+    robot = get("ur5")
+    q = smooth_q(robot, seed)
+    poses = robot.fk(q)
+    res = solve_path(robot, poses, seed=seed)
+    assert res.success and res.jump_free, res.reason
+    assert res.reconfigurations == ()
+    assert res.reason.startswith("jump-free")
+    check_path(robot, poses, res)
+    assert res.n_candidates is not None and res.n_candidates.min() >= 1
+
+
+def test_panda_smooth_path_is_jump_free():
+    robot = get("panda")
+    q = smooth_q(robot, 3)
+    poses = robot.fk(q)
+    res = solve_path(robot, poses)
+    assert res.success and res.jump_free, res.reason
+    assert not res.exhaustive  # a redundant arm: numerical candidate sets
+    check_path(robot, poses, res)
+
+
+def test_seven_numbers_per_pose_give_the_same_path():
+    from scipy.spatial.transform import Rotation
+
+    robot = get("ur5")
+    poses = robot.fk(smooth_q(robot, 4, n=12))
+    rows = np.hstack([poses[:, :3, 3], Rotation.from_matrix(poses[:, :3, :3]).as_quat()])
+    a = solve_path(robot, poses)
+    b = solve_path(robot, rows)
+    assert a.jump_free and b.jump_free
+    np.testing.assert_allclose(a.q, b.q, atol=1e-9)
+
+
+def test_singular_waypoints_do_not_give_a_wrong_proof():
+    # the elbow folded on its limit (q3 = π): a pair of branches merges there, which eaik
+    # classes as least squares; a path exists and must be found (no claim of impossibility)
+    robot = get("ur5")
+    a = np.array([-5.8, 2.0, 2.8, 5.3, -2.1, 3.7])
+    b = np.array([-6.0, 1.8, np.pi, 5.5, -1.9, 3.6])
+    c = np.array([-6.2, 1.6, np.pi, 5.7, -1.7, 3.6])
+    q = np.vstack([np.linspace(a, b, 10), np.linspace(b, c, 11)[1:]])
+    res = solve_path(robot, robot.fk(q))
+    assert res.success and res.jump_free, res.reason
+    assert not res.exhaustive
+
+
+def test_unreachable_waypoint_fails_at_its_index():
+    robot = get("ur5")
+    poses = robot.fk(smooth_q(robot, 5, n=16))
+    poses[7, :3, 3] = [3.0, 0.0, 0.5]  # 3 m away: beyond the UR5's reach
+    res = solve_path(robot, poses)
+    assert not res.success
+    assert not res.reached[7] and res.reached[np.arange(16) != 7].all()
+    assert "waypoint 7 unreachable" in res.reason
+    assert res.position_errors[7] > 1.0
+
+
+def test_path_whose_solutions_all_jump_reports_index_and_size():
+    robot = get("ur5")
+    poses = robot.fk(smooth_q(robot, 6, n=20))
+    poses[10:] = robot.fk(smooth_q(robot, 99, n=10))  # the second half elsewhere
+    res = solve_path(robot, poses)
+    assert res.success and not res.jump_free
+    assert len(res.reconfigurations) == 1
+    index, size = res.reconfigurations[0]
+    assert index == 10
+    assert size > STEP
+    assert size == pytest.approx(np.abs(res.q[10] - res.q[9]).max())
+    assert res.exhaustive
+    assert "proves that no jump-free path exists" in res.reason
+    steps = np.abs(np.diff(res.q, axis=0)).max(axis=1)
+    assert np.all(np.delete(steps, 9) <= STEP)  # the rest of the path is jump-free
+
+
+def test_q0_is_honoured():
+    robot = get("ur5")
+    q = smooth_q(robot, 7, n=15)
+    poses = robot.fk(q)
+    near = q[0] + 0.05
+    res = solve_path(robot, poses, q0=near)
+    assert res.jump_free, res.reason
+    assert np.abs(res.q[0] - near).max() <= STEP  # starts within the bound of q0
+    np.testing.assert_allclose(res.q[0], q[0], atol=1e-6)  # at the solution nearest q0
+    far = np.clip(q[0] + 1.0, robot.lower, robot.upper)
+    res = solve_path(robot, poses, q0=far)
+    assert not res.jump_free
+    assert res.reconfigurations[0][0] == 0
+    assert "within max_joint_step of q0" in res.reason
+
+
+def test_same_seed_same_path():
+    robot = get("panda")
+    poses = robot.fk(smooth_q(robot, 8, n=15))
+    a = solve_path(robot, poses, seed=3)
+    b = solve_path(robot, poses, seed=3)
+    np.testing.assert_array_equal(a.q, b.q)
+    assert a.reconfigurations == b.reconfigurations and a.reason == b.reason
+
+
+def test_goal_lists_per_waypoint():
+    from swarm_ik.goals import Axis, Position
+
+    robot = get("panda")
+    poses = robot.fk(smooth_q(robot, 9, n=10))
+    frame = robot.ee_frame
+    goals = [[Position(frame, T[:3, 3]), Axis(frame, [0, 0, 1], T[:3, 2])] for T in poses]
+    res = solve_path(robot, None, goals=goals)
+    assert res.success and res.jump_free, res.reason
+    for T, q in zip(poses, res.q, strict=True):
+        reached = robot.fk_pinocchio(q)
+        assert np.linalg.norm(reached[:3, 3] - T[:3, 3]) <= 1e-5
+        assert np.arccos(np.clip(reached[:3, 2] @ T[:3, 2], -1, 1)) <= 1e-5
+
+
+def test_scene_shortcut_keeps_closed_form_sets():
+    from swarm_ik.scene import Scene, Sphere
+
+    robot = get("ur5")
+    poses = robot.fk(smooth_q(robot, 10, n=8))
+    res = solve_path(robot, poses, scene=Scene([Sphere(0.05, [2.0, 2.0, 2.0])]))
+    assert res.success and res.jump_free, res.reason
+    assert res.exhaustive  # the complete set filtered by the collision check stays complete
+
+
+def test_densify_checks_between_waypoints(monkeypatch):
+    robot = get("ur5")
+    q = smooth_q(robot, 11, n=10)
+    poses = robot.fk(q)
+    res = solve_path(robot, poses, densify=3)
+    assert res.jump_free, res.reason
+    assert res.q_dense is not None and res.q_dense.shape == (9 * 4 + 1, robot.nq)
+    np.testing.assert_array_equal(res.q_dense[::4], res.q)
+    travel = np.abs(np.diff(res.q_dense, axis=0)).reshape(9, 4, -1).sum(axis=1)
+    assert np.all(travel <= STEP * (1 + 1e-9))
+    # a step whose tracked chain fails counts as a jump: every step into waypoint 5 fails
+    real = sp._check_step_dense
+
+    def failing(ctx, i, qa, qb, k):
+        ok, chain, size = real(ctx, i, qa, qb, k)
+        return (False, chain, 9.0) if i == 5 else (ok, chain, size)
+
+    monkeypatch.setattr(sp, "_check_step_dense", failing)
+    res = solve_path(robot, poses, densify=3)
+    assert not res.jump_free and res.success
+    assert res.reconfigurations == ((5, 9.0),)
+    assert not np.abs(np.diff(res.q, axis=0)).max() > STEP  # at the waypoints: no jump
+
+
+def test_interpolate_pose_ends_and_middle():
+    robot = get("ur5")
+    a, b = robot.fk(smooth_q(robot, 12, n=2))
+    np.testing.assert_allclose(sp.interpolate_pose(a, b, 0.0), a, atol=1e-12)
+    np.testing.assert_allclose(sp.interpolate_pose(a, b, 1.0), b, atol=1e-12)
+    m = sp.interpolate_pose(a, b, 0.5)
+    np.testing.assert_allclose(m[:3, 3], 0.5 * (a[:3, 3] + b[:3, 3]))
+    np.testing.assert_allclose(m[:3, :3].T @ m[:3, :3], np.eye(3), atol=1e-12)
+
+
+# ---------------------------------------------------------------------------- bad input
+def _poses(n=3):
+    robot = get("ur5")
+    return robot.fk(smooth_q(robot, 13, n=max(n, 2)))[:n]
+
+
+BAD = [
+    ("poses shape", lambda p: dict(poses=p[:, :3, :3]), "shape"),
+    ("poses 6 numbers", lambda p: dict(poses=np.zeros((3, 6))), "shape"),
+    ("one waypoint", lambda p: dict(poses=p[:1]), "at least 2 waypoints"),
+    ("no poses", lambda p: dict(poses=None), "give poses"),
+    ("strings", lambda p: dict(poses="abc"), "poses"),
+    ("step zero", lambda p: dict(poses=p, max_joint_step=0.0), "max_joint_step"),
+    ("step negative", lambda p: dict(poses=p, max_joint_step=-0.1), "max_joint_step"),
+    ("step nan", lambda p: dict(poses=p, max_joint_step=float("nan")), "max_joint_step"),
+    ("step length", lambda p: dict(poses=p, max_joint_step=[0.1] * 5), "max_joint_step"),
+    ("step text", lambda p: dict(poses=p, max_joint_step="0.2"), "max_joint_step"),
+    ("q0 length", lambda p: dict(poses=p, q0=np.zeros(5)), "q0"),
+    ("q0 nan", lambda p: dict(poses=p, q0=[0, 0, np.nan, 0, 0, 0]), "q0"),
+    ("q0 outside", lambda p: dict(poses=p, q0=[0, 0, 4.0, 0, 0, 0]), "outside the joint limits"),
+    ("densify negative", lambda p: dict(poses=p, densify=-1), "densify"),
+    ("densify float", lambda p: dict(poses=p, densify=1.5), "densify"),
+    ("time limit", lambda p: dict(poses=p, time_limit=0), "time_limit"),
+    ("seed", lambda p: dict(poses=p, seed=-1), "seed"),
+    ("tolerance", lambda p: dict(poses=p, tol_pos=0), "tol_pos"),
+    ("flat goals without poses", lambda p: dict(poses=None, goals=[]), "at least 2"),
+    ("goal list item", lambda p: dict(poses=None, goals=[["x"], ["y"]]), "goal"),
+    ("extra goals", lambda p: dict(poses=p, goals=["x"]), "goal"),
+]
+
+
+@pytest.mark.parametrize("label, kwargs, words", BAD, ids=[b[0] for b in BAD])
+def test_bad_input_is_refused_with_one_line(label, kwargs, words):
+    robot = get("ur5")
+    args = kwargs(_poses())
+    with pytest.raises(InvalidArgumentError) as info:
+        solve_path(robot, **args)
+    message = str(info.value)
+    assert words in message and "\n" not in message
+
+
+def test_bad_poses_are_refused_as_targets_too():
+    robot = get("ur5")
+    poses = _poses()
+    bad = poses.copy()
+    bad[1, 0, 0] = np.nan
+    with pytest.raises(InvalidTargetError, match=r"poses\[1\]"):
+        solve_path(robot, bad)
+    skew = poses.copy()
+    skew[2, :3, :3] *= 1.1  # not a rotation
+    with pytest.raises(InvalidArgumentError, match=r"poses\[2\]"):
+        solve_path(robot, skew)
+    with pytest.raises(InvalidArgumentError, match="densify needs poses"):
+        from swarm_ik.goals import Position
+
+        goals = [[Position(robot.ee_frame, T[:3, 3])] for T in poses]
+        solve_path(robot, None, goals=goals, densify=2)
+    with pytest.raises(InvalidArgumentError, match="RobotModel"):
+        solve_path("ur5", poses)
+    with pytest.raises(UnknownNameError):
+        solve_path(robot, poses, frame="no_such_frame")
