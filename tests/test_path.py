@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+import json
+
 import numpy as np
 import pytest
 from conftest import robot as get
@@ -274,3 +276,37 @@ def test_bad_poses_are_refused_as_targets_too():
         solve_path("ur5", poses)
     with pytest.raises(UnknownNameError):
         solve_path(robot, poses, frame="no_such_frame")
+
+
+# ---------------------------------------------------------------------------- command line
+def _cli(argv):
+    from swarm_ik.cli import Parser
+    from swarm_ik.cli import path as cli_path
+
+    parser = Parser(prog="swarm-ik")
+    cli_path.add_parser(parser.add_subparsers(dest="command"))
+    return cli_path.run(parser.parse_args(["path", *argv]))
+
+
+def test_cli_writes_the_path_and_exits_by_outcome(tmp_path, capsys):
+    from scipy.spatial.transform import Rotation
+
+    robot = get("ur5")
+    poses = robot.fk(smooth_q(robot, 14, n=8))
+    rows = np.hstack([poses[:, :3, 3], Rotation.from_matrix(poses[:, :3, :3]).as_quat()])
+    src = tmp_path / "poses.csv"
+    np.savetxt(src, rows, delimiter=",", header="x,y,z,qx,qy,qz,qw", comments="")
+    out = tmp_path / "q.csv"
+    assert _cli(["--robot", "ur5", "--poses", str(src), "--out", str(out)]) == 0
+    q = np.loadtxt(out, delimiter=",", skiprows=1)
+    np.testing.assert_allclose(q, solve_path(robot, poses).q, atol=1e-9)
+    assert "jump-free" in capsys.readouterr().out
+    jumpy = poses.copy()
+    jumpy[4:] = robot.fk(smooth_q(robot, 15, n=4))
+    np.save(tmp_path / "jumpy.npy", jumpy)
+    rc = _cli(["--robot", "ur5", "--poses", str(tmp_path / "jumpy.npy"), "--json"])
+    assert rc == 1
+    report = json.loads(capsys.readouterr().out)
+    assert report["reconfigurations"][0][0] == 4 and not report["jump_free"]
+    with pytest.raises(InvalidArgumentError, match="--out"):
+        _cli(["--robot", "ur5", "--poses", str(src), "--out", str(tmp_path / "q.txt")])

@@ -1,0 +1,194 @@
+"""``swarm-ik path``: a jump-free joint path through Cartesian waypoints
+(:func:`swarm_ik.path.solve_path`).
+
+``swarm-ik path --robot ur5 --poses poses.csv --out q.csv`` reads the waypoints (``.npz`` /
+``.npy``: an ``(N, 4, 4)`` or ``(N, 7)`` array; ``.csv``: ``x,y,z,qx,qy,qz,qw`` or 16 matrix
+columns, as ``swarm-ik batch --targets``), solves them with ``max_joint_step`` (``--max-step``:
+one value, or one per joint), prints one line per jump and the reason, and writes the joint
+path (``--out``: ``.csv`` with a header of joint names, or ``.npy``); ``--html FILE`` writes a
+page stepping through the path (needs ``[viz]``).
+
+Exit codes: 0 every waypoint reached and no jump, 1 not (the path found is still written and
+the reason printed), 2 bad input (``--out`` and ``--html`` are checked before any work), 130
+interrupted.
+
+Not yet in :data:`swarm_ik.cli.COMMANDS`: wiring it is ``"path": path`` there (and the import).
+:func:`run_cli` is :func:`run`.
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+from pathlib import Path
+from typing import Any
+
+from swarm_ik.cli._args import (
+    EXIT_NOT_REACHED,
+    EXIT_OK,
+    add_robot,
+    add_tolerances,
+    check_input_file,
+    check_output_file,
+)
+
+
+def add_parser(subparsers: Any) -> argparse.ArgumentParser:
+    """Add ``path`` to the ``swarm-ik`` sub-parsers."""
+    p: argparse.ArgumentParser = subparsers.add_parser(
+        "path",
+        help="a jump-free joint path through Cartesian waypoints",
+        description="Solve a path of end-effector poses so that no joint moves more than "
+        "--max-step between consecutive waypoints (every IK branch considered; on 6R arms "
+        "with a closed form a path with jumps proves that none without exists).  Exit 0 when "
+        "every waypoint is reached without a jump, 1 otherwise (the path found is written and "
+        "the reason printed).",
+    )
+    add_robot(p)
+    p.add_argument(
+        "--poses",
+        type=Path,
+        required=True,
+        metavar="FILE",
+        help="waypoints: .npz/.npy ((N,4,4) or (N,7) array) or .csv (x,y,z,qx,qy,qz,qw or 16 "
+        "matrix columns), N >= 2",
+    )
+    p.add_argument(
+        "--max-step",
+        nargs="+",
+        type=float,
+        default=[0.2],
+        metavar="STEP",
+        help="largest joint change between consecutive waypoints [rad, or m for prismatic "
+        "joints]: one value, or one per joint (default 0.2)",
+    )
+    p.add_argument(
+        "--q0", nargs="+", type=float, default=None, help="current joint values (one per joint)"
+    )
+    p.add_argument(
+        "--scene",
+        default=None,
+        metavar="FILE",
+        help="scene JSON of obstacles: every waypoint collision-free (self and scene)",
+    )
+    p.add_argument(
+        "--densify",
+        type=int,
+        default=0,
+        metavar="K",
+        help="check each step through K interpolated poses (default 0)",
+    )
+    p.add_argument("--seed", type=int, default=0, help="seed (default 0)")
+    p.add_argument("--time-limit", type=float, default=None, help="seconds for the search")
+    add_tolerances(p)
+    p.add_argument(
+        "--out", type=Path, default=None, metavar="FILE", help="joint path: .csv or .npy"
+    )
+    p.add_argument(
+        "--html",
+        type=Path,
+        default=None,
+        metavar="FILE",
+        help="write a page stepping through the path (.html; needs [viz])",
+    )
+    p.add_argument("--json", action="store_true", help="print one JSON object")
+    return p
+
+
+def run(args: argparse.Namespace) -> int:
+    """``swarm-ik path``; returns the exit code."""
+    import numpy as np
+
+    import swarm_ik
+    from swarm_ik.cli import _viewer
+    from swarm_ik.path import solve_path
+
+    if args.out is not None:
+        check_output_file(args.out, "--out", (".csv", ".npy"))  # before any work
+    if args.html is not None:
+        _viewer.check_viewer(args, live=False)
+    check_input_file(args.poses, "--poses", None)
+    robot = swarm_ik.load_robot(args.robot, ee_frame=args.frame)
+    if args.html is not None:
+        _viewer.check_meshes(robot, "--html")
+    poses = _read_poses(args.poses)
+    step = args.max_step[0] if len(args.max_step) == 1 else args.max_step
+    scene = None if args.scene is None else swarm_ik.Scene.from_json(args.scene)
+    res = solve_path(
+        robot, poses, max_joint_step=step, q0=args.q0, scene=scene, seed=args.seed,
+        densify=args.densify, time_limit=args.time_limit, tol_pos=args.tol_pos,
+        tol_rot=args.tol_rot,
+    )  # fmt: skip
+    if args.out is not None:
+        _write(args.out, robot, res.q)
+    if args.json:
+        print(json.dumps(_as_dict(robot, res, args.out)))
+    else:
+        print(
+            f"robot {robot.name} ({robot.nq} joints), {res.q.shape[0]} waypoints from "
+            f"{args.poses}: {'reached' if res.success else 'NOT all reached'}, "
+            f"{'jump-free' if res.jump_free else 'with jumps'}, largest step "
+            f"{res.max_step:.4g}, {res.time_s * 1e3:.1f} ms"
+        )
+        for i, size in res.reconfigurations:
+            print(f"  jump into waypoint {i}: {size:.4g}")
+        print(res.reason)
+        if args.out is not None:
+            print(f"wrote {args.out}")
+    if args.html is not None:
+        from swarm_ik import viz
+
+        scene_v = viz.show_configurations(
+            robot, list(res.q), target=poses[0] if np.ndim(poses) == 3 else None,
+            lines=[f"{robot.name}: {res.q.shape[0]} waypoints", res.reason[:80]],
+            layout="steps", hold_s=0.1,
+        )  # fmt: skip
+        _viewer.present(scene_v, args, live=False)
+    return EXIT_OK if res.success and res.jump_free else EXIT_NOT_REACHED
+
+
+run_cli = run
+"""The handler (``run``, under the name the path issue asked for)."""
+
+
+def _read_poses(path: Path) -> Any:
+    """The waypoints of ``--poses``, read as ``swarm-ik batch --targets`` reads its file
+    (``read_targets_file``: in :mod:`swarm_ik.batch`, formerly :mod:`swarm_ik._validate`)."""
+    import importlib
+
+    for module in ("swarm_ik.batch", "swarm_ik._validate"):
+        reader = getattr(importlib.import_module(module), "read_targets_file", None)
+        if reader is not None:
+            return reader(path)
+    from swarm_ik.batch import read_targets
+
+    return read_targets(path)
+
+
+def _write(path: Path, robot: Any, q: Any) -> None:
+    """The joint path as ``.npy`` or ``.csv`` (a header of joint names)."""
+    import numpy as np
+
+    if path.suffix.lower() == ".npy":
+        np.save(path, q)
+    else:
+        np.savetxt(path, q, delimiter=",", header=",".join(robot.joint_names), comments="")
+
+
+def _as_dict(robot: Any, res: Any, out: Path | None) -> dict[str, Any]:
+    """The JSON report."""
+    return {
+        "robot": robot.name,
+        "joint_names": list(robot.joint_names),
+        "success": res.success,
+        "jump_free": res.jump_free,
+        "reconfigurations": [[i, s] for i, s in res.reconfigurations],
+        "max_step": res.max_step,
+        "exhaustive": res.exhaustive,
+        "reason": res.reason,
+        "time_s": res.time_s,
+        "position_errors": [float(v) for v in res.position_errors],
+        "rotation_errors": [float(v) for v in res.rotation_errors],
+        "q": [[float(v) for v in row] for row in res.q],
+        "out": None if out is None else str(out),
+    }
