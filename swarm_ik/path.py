@@ -602,18 +602,15 @@ def _winding_joints(robot: Any) -> NDArray[np.bool_]:
 
 def _with_windings(qs: FloatArray, lower: FloatArray, upper: FloatArray, joints: Any) -> FloatArray:
     """Every in-limit 2π copy of each row of ``qs`` (``(m, nq)``, within the limits) on the
-    ``joints`` given."""
+    ``joints`` given (each row's copies together, in increasing order)."""
     out = qs
     for j in np.flatnonzero(joints):
         turns = int(math.ceil((upper[j] - lower[j]) / (2 * np.pi)))
-        parts = [out]
-        for k in [*range(-turns, 0), *range(1, turns + 1)]:
-            c = out.copy()
-            c[:, j] += 2 * np.pi * k
-            keep = (c[:, j] >= lower[j] - 1e-9) & (c[:, j] <= upper[j] + 1e-9)
-            c[:, j] = np.clip(c[:, j], lower[j], upper[j])
-            parts.append(c[keep])
-        out = np.vstack(parts)
+        vals = out[:, j, None] + 2 * np.pi * np.arange(-turns, turns + 1)
+        keep = (vals >= lower[j] - 1e-9) & (vals <= upper[j] + 1e-9)
+        rows, cols = np.nonzero(keep)
+        out = out[rows]
+        out[:, j] = np.clip(vals[rows, cols], lower[j], upper[j])
     return out
 
 
