@@ -1071,6 +1071,7 @@ def _build(ctx: _Context, start: FloatArray | None) -> _Graph:
             prev_q = graph.layers[i - 1]
             ra0, ta0 = value(i - 1) if not cert else (np.empty(0, dtype=np.int64), np.empty(0))
         bad: list[FloatArray] = []
+        par = np.empty((0, nq))
         if i > 0 and not cert:
             qa, ok_rows = graph.layers[i - 1], graph.valid[i - 1]
             beam = MAX_COVER if ctx.cover else BEAM
@@ -1094,9 +1095,10 @@ def _build(ctx: _Context, start: FloatArray | None) -> _Graph:
                     fresh = _fill(ctx, i, fresh)
                 qb = _merge(qb, fresh, ctx, merge_tol)
         ok_b = np.ones(qb.shape[0], dtype=bool)
-        if qb.shape[0] == 0:  # nothing meets the waypoint: the best attempts stand in
-            stand = bad or _stand_in(ctx, i, graph.layers, start)
-            qb = np.array(stand[:BEAM]).reshape(-1, nq)
+        if qb.shape[0] == 0:  # nothing meets the waypoint: the best attempts stand in, and
+            # the configurations they started from (staying put adds no jump)
+            stand = bad[:BEAM] + list(par[:BEAM]) or _stand_in(ctx, i, graph.layers, start)
+            qb = np.array(stand).reshape(-1, nq)
             ok_b = np.zeros(qb.shape[0], dtype=bool)
         graph.layers.append(qb)
         graph.valid.append(ok_b)
