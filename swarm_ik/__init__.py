@@ -38,7 +38,7 @@ _LAZY = {
     "robot_names": "swarm_ik.robot",
     "Scene": "swarm_ik.scene",
 }
-_SUBMODULES = ("goals", "solvers")
+_SUBMODULES = ("goals", "problem", "solvers")
 
 
 def __getattr__(name: str) -> Any:

@@ -16,16 +16,14 @@ would raise deep inside.  They are meant to be called at the door of the public 
 from __future__ import annotations
 
 import os
-import pickle
 import reprlib
-import zipfile
 from pathlib import Path
 from typing import Any
 
 import numpy as np
 
 from swarm_ik._types import FloatArray
-from swarm_ik.errors import InvalidArgumentError, InvalidTargetError, SwarmIKError
+from swarm_ik.errors import InvalidArgumentError, InvalidTargetError
 
 
 def float_array(value: Any, what: str = "targets", *, target: bool = True) -> FloatArray:
@@ -108,36 +106,6 @@ def check_output_path(
     if not os.access(parent, os.W_OK) or (p.exists() and not os.access(p, os.W_OK)):
         raise InvalidArgumentError(f"{what} {str(p)!r}: not writable (permission denied)")
     return p
-
-
-def read_targets_file(path: str | os.PathLike[str]) -> FloatArray:
-    """:func:`swarm_ik.batch.read_targets`, with unreadable files turned into one message.
-
-    Raises:
-        InvalidArgumentError: a corrupt ``.npz``/``.npy`` (not a zip, truncated, an object
-            array that would need pickle), an unreadable file.
-        InvalidTargetError: a row is not a valid pose.
-    """
-    from swarm_ik.batch import read_targets
-
-    try:
-        return read_targets(Path(path))
-    except SwarmIKError:
-        raise
-    except (
-        ValueError,
-        TypeError,
-        OSError,
-        EOFError,
-        zipfile.BadZipFile,
-        pickle.UnpicklingError,
-        UnicodeDecodeError,
-        KeyError,
-    ) as exc:
-        reason = " ".join(str(exc).split()) or type(exc).__name__
-        if "allow_pickle" in reason:
-            reason = "an object array of Python objects, not numbers"
-        raise InvalidArgumentError(f"{path}: cannot read targets ({reason})") from None
 
 
 MAX_GRID_CELLS = 10_000_000

@@ -34,9 +34,12 @@ import csv
 import functools
 import logging
 import math
+import os
+import pickle
 import signal
 import time
 import warnings
+import zipfile
 from collections.abc import Iterator
 from dataclasses import dataclass
 from pathlib import Path
@@ -46,7 +49,8 @@ import numba
 import numpy as np
 
 from swarm_ik._types import BoolArray, FloatArray, IntArray
-from swarm_ik.errors import InvalidArgumentError, InvalidTargetError
+from swarm_ik.errors import InvalidArgumentError, InvalidTargetError, SwarmIKError
+from swarm_ik.goals import Pose, Position, kernel_slot, kernels
 from swarm_ik.kernels import lie, lm
 from swarm_ik.kernels.fk import TreeArrays
 from swarm_ik.kernels.lm import CONVERGED, NOT_RUN
@@ -78,12 +82,12 @@ def target_uniforms(seed: int, index: int, n: int) -> FloatArray:  # pragma: no 
 
 @numba.njit(cache=True)
 def _solve_targets(
-    t_rot: FloatArray,
-    t_pos: FloatArray,
+    t_par: FloatArray,
     q_seed: FloatArray,
     index: IntArray,
     tree: TreeArrays,
     goals: lm.GoalTable,
+    ks: lm.GoalKernels,
     bounds: lm.Bounds,
     cfg: lm.LMSettings,
     tol_pos: float,
@@ -97,13 +101,12 @@ def _solve_targets(
     """Polish every target from its seed, then from random restarts, until one converges.
 
     Args:
-        t_rot: Target rotations, shape ``(N, 3, 3)``.
-        t_pos: Target positions [m], shape ``(N, 3)``.
+        t_par: Each target as the parameter block of the table's first goal, ``(N, P)``.
         q_seed: First start of each target, shape ``(N, nq)``, inside the bounds.
         index: Index of each target in the whole batch (keys its random stream), ``(N,)``.
         tree: The robot's kinematic tree.
-        goals: A one-goal table (``POSE`` or ``POSITION`` on the first frame) whose
-            parameters are overwritten with each target.
+        goals: The goal table; its first goal's parameter block is overwritten with each
+            target's row of ``t_par``.
         bounds: Joint bounds; ``cfg``: LM settings (:data:`swarm_ik.kernels.lm.DEFAULT_LM`).
         tol_pos, tol_rot: Tolerances the polish stops at [m], [rad].
         max_starts: Most starts per target (the seed included).
@@ -112,7 +115,7 @@ def _solve_targets(
         out_evals: FK + Jacobian evaluations per target, ``(N,)``.
         out_starts: Starts polished per target, ``(N,)``.
     """
-    n_targets = t_rot.shape[0]
+    n_targets = t_par.shape[0]
     n = bounds.lower.shape[0]
     block = min(_RESTART_BLOCK, max(max_starts - 1, 1))
     starts = np.empty((block, n))
@@ -121,13 +124,11 @@ def _solve_targets(
     s_lo = np.empty(n)
     s_hi = np.empty(n)
     scale = 2.0**-53
-    par = goals.par[0]
+    par = goals.par[goals.p0[0] : goals.p0[1]]
     work = lm.make_work(tree, goals, goals.rows_primary)
     for i in range(n_targets):
-        for a in range(3):
-            for c in range(3):
-                par[3 * a + c] = t_rot[i, a, c]
-            par[9 + a] = t_pos[i, a]
+        for c in range(par.shape[0]):
+            par[c] = t_par[i, c]
         key = _splitmix64(seed_key ^ np.uint64(index[i]))
         for j in range(n):
             starts[0, j] = q_seed[i, j]
@@ -140,7 +141,7 @@ def _solve_targets(
         converged = False
         while True:
             used = lm.lm_run(
-                starts[:k], tree, goals, bounds, cfg, tol_pos, tol_rot, k * cfg.max_iters,
+                starts[:k], tree, goals, ks, bounds, cfg, tol_pos, tol_rot, k * cfg.max_iters,
                 True, pq[:k], pdp[:k], pdr[:k], pst[:k], pev[:k], work,
             )  # fmt: skip
             evals += used
@@ -549,17 +550,19 @@ def solve_chunk(
     evals = np.zeros(n, dtype=np.int64)
     starts = np.zeros(n, dtype=np.int64)
     if n:
-        code = lm.POSITION if settings.position_only else lm.POSE
+        goal = Position if settings.position_only else Pose
+        t_par = np.ascontiguousarray(goal.params(targets), dtype=float)
         goals = lm.goal_table(
-            [code], [0], [1.0], [True], [np.zeros(lm.N_PAR)], [np.zeros(nq)], [np.zeros(nq)], nq
-        )
+            [kernel_slot(goal.kernel)], [1.0], [True], [t_par[0].copy()],
+            [np.zeros(1, dtype=np.int64)], [3 if settings.position_only else 6],
+        )  # fmt: skip
         _solve_targets(
-            np.ascontiguousarray(targets[:, :3, :3]),
-            np.ascontiguousarray(targets[:, :3, 3]),
+            t_par,
             np.ascontiguousarray(q_seed, dtype=float),
             np.arange(start, start + n, dtype=np.int64),
             bc.tree,
             goals,
+            kernels(),
             bc.bounds,
             settings.lm_settings(),
             settings.tol_pos * settings.tol_margin,
@@ -822,3 +825,31 @@ def write_targets(path: str | Path, targets: Any) -> Path:
             ".csv, .npz"
         )
     return p
+
+
+def read_targets_file(path: str | os.PathLike[str]) -> FloatArray:
+    """:func:`swarm_ik.batch.read_targets`, with unreadable files turned into one message.
+
+    Raises:
+        InvalidArgumentError: a corrupt ``.npz``/``.npy`` (not a zip, truncated, an object
+            array that would need pickle), an unreadable file.
+        InvalidTargetError: a row is not a valid pose.
+    """
+    try:
+        return read_targets(Path(path))
+    except SwarmIKError:
+        raise
+    except (
+        ValueError,
+        TypeError,
+        OSError,
+        EOFError,
+        zipfile.BadZipFile,
+        pickle.UnpicklingError,
+        UnicodeDecodeError,
+        KeyError,
+    ) as exc:
+        reason = " ".join(str(exc).split()) or type(exc).__name__
+        if "allow_pickle" in reason:
+            reason = "an object array of Python objects, not numbers"
+        raise InvalidArgumentError(f"{path}: cannot read targets ({reason})") from None

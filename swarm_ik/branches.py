@@ -39,6 +39,7 @@ from numpy.typing import NDArray
 
 from swarm_ik._types import BoolArray, FloatArray
 from swarm_ik.errors import InvalidArgumentError
+from swarm_ik.problem import largest_errors
 
 if TYPE_CHECKING:
     from swarm_ik.problem import IKProblem
@@ -201,9 +202,7 @@ def pose_errors(problem: IKProblem, qs: Any) -> tuple[FloatArray, FloatArray]:
     qs = np.asarray(qs, dtype=float).reshape(-1, problem.nq)
     goal = problem.goals[0] if len(problem.goals) == 1 else None
     if not isinstance(goal, (Pose, Position)) or not goal.primary:
-        from swarm_ik.api import verify
-
-        errs = np.array([verify(problem, q) for q in qs]).reshape(-1, 2)
+        errs = np.array([largest_errors(problem.verify(q)) for q in qs]).reshape(-1, 2)
         return errs[:, 0].copy(), errs[:, 1].copy()
     m = problem.robot.fk_pinocchio_many(qs, goal.frame)
     return pose_errors_of(m, goal)

@@ -42,7 +42,8 @@ import numpy as np
 import pinocchio as pin
 
 from swarm_ik._types import FloatArray
-from swarm_ik.errors import RobotFileNotFoundError, RobotModelError, SwarmIKError
+from swarm_ik.errors import RobotFileNotFoundError, RobotModelError
+from swarm_ik.paths import cache_dir, package_dirs
 from swarm_ik.scene import Scene, as_scene
 
 SAMPLES = 2000
@@ -53,45 +54,6 @@ ALWAYS_FRACTION = 0.95
 """A pair colliding in at least this fraction of the samples is disabled ('always')."""
 
 _RULE_VERSION = 1
-
-
-def cache_dir() -> Path:
-    """Folder of swarm_ik's caches (sampled collision pairs, fitted spheres).
-
-    ``$SWARM_IK_CACHE_DIR``, else ``$XDG_CACHE_HOME/swarm_ik``, else ``~/.cache/swarm_ik``;
-    created on first use.
-    """
-    env = os.environ.get("SWARM_IK_CACHE_DIR")
-    if env:
-        d = Path(env)
-    else:
-        base = os.environ.get("XDG_CACHE_HOME") or str(Path.home() / ".cache")
-        d = Path(base) / "swarm_ik"
-    d.mkdir(parents=True, exist_ok=True)
-    return d
-
-
-def package_dirs(urdf_path: str | os.PathLike[str]) -> list[str]:
-    """Folders searched for ``package://`` meshes: the URDF's folder and its two parents (a
-    ``<pkg>/urdf/robot.urdf`` layout), the ``example-robot-data`` folders when installed,
-    and ``$ROS_PACKAGE_PATH`` (the resolver of :mod:`swarm_ik.viz`)."""
-    dirs: list[Path] = []
-    here = Path(urdf_path).resolve().parent
-    dirs += [here, here.parent, here.parent.parent]
-    try:
-        from swarm_ik.robot import example_robot_data_dir
-
-        erd = example_robot_data_dir()
-        dirs += [erd, erd.parent, erd.parent.parent]
-    except SwarmIKError:
-        pass
-    dirs += [Path(p) for p in os.environ.get("ROS_PACKAGE_PATH", "").split(os.pathsep) if p]
-    out: list[str] = []
-    for d in dirs:
-        s = str(d)
-        if s not in out and d.is_dir():
-            out.append(s)
-    return out
 
 
 # ------------------------------------------------------------------------------ SRDF

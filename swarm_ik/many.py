@@ -37,7 +37,7 @@ import numpy as np
 import pinocchio as pin
 from numpy.typing import NDArray
 
-from swarm_ik.api import prepare_q0
+from swarm_ik.api import Route, prepare_q0, warm_up
 from swarm_ik.branches import (
     BRANCH_TOL,
     ROUNDOFF_TOL,
@@ -385,7 +385,7 @@ def solve_many(
         use_analytic = not analytic.support(problem)
 
     if not use_analytic:
-        problem.robot.warm_up()  # compiled kernels loaded before the clock starts
+        warm_up(Route(problem))  # compiled kernels loaded before the clock starts
         _warm_up()
     t0 = time.perf_counter()
     if use_analytic:

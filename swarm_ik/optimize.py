@@ -34,8 +34,9 @@ class OptimizeResult:
     history: FloatArray
 
 
-def make_rng(seed: int | np.random.Generator | None) -> np.random.Generator:
-    """A Generator from a seed (non-negative int), an existing Generator, or None (seed 0).
+def check_seed(seed: Any) -> int | np.random.Generator:
+    """A seed as the solvers take it: an integer in ``[0, 2**63)`` or a Generator (None is
+    seed 0).
 
     Raises:
         InvalidArgumentError: the seed is negative, too large, or not an integer.
@@ -43,12 +44,22 @@ def make_rng(seed: int | np.random.Generator | None) -> np.random.Generator:
     if isinstance(seed, np.random.Generator):
         return seed
     if seed is None:
-        seed = 0
+        return 0
     if isinstance(seed, bool) or not isinstance(seed, (int, np.integer)):
         raise InvalidArgumentError(f"seed must be a non-negative integer, got {seed!r}")
     if seed < 0 or seed >= 2**63:
         raise InvalidArgumentError(f"seed must be in [0, 2**63), got {seed}")
-    return np.random.default_rng(int(seed))
+    return int(seed)
+
+
+def make_rng(seed: int | np.random.Generator | None) -> np.random.Generator:
+    """A Generator from a seed (non-negative int), an existing Generator, or None (seed 0).
+
+    Raises:
+        InvalidArgumentError: the seed is negative, too large, or not an integer.
+    """
+    s = check_seed(seed)
+    return s if isinstance(s, np.random.Generator) else np.random.default_rng(s)
 
 
 def check_budget(max_evals: int | None, time_limit: float | None) -> None:

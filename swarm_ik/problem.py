@@ -25,7 +25,7 @@ from numpy.typing import NDArray
 from swarm_ik._types import FloatArray
 from swarm_ik.errors import InvalidArgumentError, InvalidTargetError, unknown
 from swarm_ik.fitness import FITNESS, get_fitness
-from swarm_ik.goals import AvoidCollisions, Goal, Pose, Position
+from swarm_ik.goals import AvoidCollisions, Goal, Pose, Position, State, kernel_slot, kernels
 from swarm_ik.kernels import lm
 from swarm_ik.pose import ORTH_TOL, as_pose, is_finite_nonneg
 from swarm_ik.robot import RobotModel
@@ -103,6 +103,16 @@ def largest_errors(goal_errors: Sequence[GoalError]) -> tuple[float, float]:
     return float(dp), float(dr)
 
 
+def _valid_q(q: Any, nq: int) -> bool:
+    """Whether ``q`` is already a finite float64 vector of length ``nq`` (no copy needed)."""
+    return (
+        type(q) is np.ndarray
+        and q.dtype == np.float64
+        and q.shape == (nq,)
+        and bool(np.isfinite(q).all())
+    )
+
+
 def judge(
     errors: FloatArray, primary: Sequence[bool] | NDArray[Any], tol_pos: float, tol_rot: float
 ) -> NDArray[np.bool_]:
@@ -133,19 +143,7 @@ REPLACEABLE = frozenset(("fitness", "is_success", "residual_jacobian", "cost"))
 trace); a problem with one replaced runs the general Python path of the solvers."""
 
 _W_ROT, _LAM, _MU, _ORTH_TOL = 1.0, 10.0, 1.0, ORTH_TOL
-"""The defaults of :class:`IKProblem`'s options (a call that leaves them all out, the common
-one, takes its fast path: they are compared by identity)."""
-
-
-def _plain_problem(robot: RobotModel) -> dict[str, Any]:
-    """The attributes that every ``IKProblem(robot, T)`` (options left at their defaults) of
-    ``robot`` shares — all but its target, its goal and its two caches — from one made by the
-    general path (with the target FK(mid-range)); the constructor copies the mutable ones."""
-    ref = IKProblem.__new__(IKProblem)
-    mid = robot.fk_pinocchio(robot.mid_q())  # (Pinocchio's FK: no FK kernel to load)
-    ref._make(robot, mid, None, "se3", _W_ROT, _LAM, _MU, _ORTH_TOL, None, None)
-    own = ("target", "goals", "_encoded", "_table_cache")
-    return {k: v for k, v in vars(ref).items() if k not in own}
+"""The defaults of :class:`IKProblem`'s options."""
 
 
 class IKProblem:
@@ -178,7 +176,6 @@ class IKProblem:
 
     target: FloatArray | None
     goals: tuple[Goal, ...]
-    _encoded: dict[int, Any]
     _table_cache: dict[Any, lm.GoalTable]
 
     def __init__(
@@ -199,30 +196,6 @@ class IKProblem:
             raise InvalidArgumentError(
                 f"robot must be a RobotModel (see swarm_ik.load_robot), got {type(robot).__name__}"
             )
-        if (  # IKProblem(robot, T), every option at its default (left out): the common call
-            goals is None
-            and target is not None
-            and fitness == "se3"
-            and lower is None
-            and upper is None
-            and w_rot is _W_ROT
-            and lam is _LAM
-            and mu is _MU
-            and orth_tol is _ORTH_TOL
-        ):
-            plain = robot._cache.get("plain_problem")
-            if plain is None:  # what every such problem of this robot shares, made once
-                plain = robot._cache["plain_problem"] = _plain_problem(robot)
-            pose = as_pose(target)
-            self.__dict__.update(plain)
-            self.lower = plain["lower"].copy()  # (each problem its own)
-            self.upper = plain["upper"].copy()
-            self._weights = dict(plain["_weights"])
-            self.target = pose
-            self.goals = (Pose.checked(robot.ee_frame, pose),)
-            self._encoded = {}
-            self._table_cache = {}
-            return
         self._make(robot, target, goals, fitness, w_rot, lam, mu, orth_tol, lower, upper)
 
     def _make(
@@ -329,13 +302,24 @@ class IKProblem:
         self.tree = robot.tree
         """The kinematic tree the kernels evaluate: the robot's goal frames (first, in order)
         and any frames the goals add (collision bodies)."""
-        avoid = [] if goals is None else [gl for gl in terms if isinstance(gl, AvoidCollisions)]
+        avoid = [gl for gl in terms if isinstance(gl, AvoidCollisions)]
         if len(avoid) > 1:
             raise InvalidArgumentError("at most one AvoidCollisions goal per problem")
-        self._encoded = {}
-        if avoid:
-            self.tree, row = avoid[0].encode_cached(robot)
-            self._encoded[id(avoid[0])] = row
+        self.compiled_goals = tuple(gl for gl in terms if gl.compiled)
+        """The goals with a compiled kernel, in order (the goal table's entries)."""
+        self.python_goals = tuple(gl for gl in terms if not gl.compiled)
+        """The goals written in Python (``residual(state)``/``jacobian(state)``)."""
+        extra = [e for gl in self.compiled_goals if (e := gl.extra_frames(robot)) is not None]
+        if len(extra) > 1:
+            raise InvalidArgumentError("at most one goal per problem may add frames")
+        if extra:  # the frames a goal adds (collision bodies) after the goal frames
+            fj, fr, fp = robot.canonical_frames(*extra[0])
+            t = robot.tree
+            self.tree = t.with_frames(
+                np.concatenate([t.frame_joint, fj]),
+                np.concatenate([t.frame_rot, fr]),
+                np.concatenate([t.frame_pos, fp]),
+            )
         # angular errors in the se3 cost: w_rot (m/rad); position errors: 1
         self._table_cache = {}
         if narrowed:
@@ -358,6 +342,13 @@ class IKProblem:
         if not (target is not None and goals is None):  # (the target's Pose is valid as made)
             self.table(None)  # validate every goal against the robot now
 
+    def __getstate__(self) -> dict[str, Any]:
+        """Pickled without its goal tables: their kernel slots are this process's (the
+        receiving process encodes the goals again)."""
+        state = dict(self.__dict__)
+        state["_table_cache"] = {}
+        return state
+
     # ------------------------------------------------------------------ goals
     @property
     def nq(self) -> int:
@@ -370,22 +361,19 @@ class IKProblem:
         return bool(np.any(~self.primary))
 
     def table(self, q0: FloatArray | None) -> lm.GoalTable:
-        """The compiled goal table (``q0`` fills :class:`~swarm_ik.goals.MinimalDisplacement`)."""
+        """The compiled goal table of the compiled goals (``q0`` fills
+        :class:`~swarm_ik.goals.MinimalDisplacement`)."""
         key = None if q0 is None else np.asarray(q0, dtype=float).tobytes()
         tab = self._table_cache.get(key)
         if tab is None:
-            rows = [self._encoded.get(id(gl)) or gl.encode(self.robot, q0) for gl in self.goals]
+            enc = [gl.encode(self.robot, q0) for gl in self.compiled_goals]
             tab = lm.goal_table(
-                [r.code for r in rows],
-                [r.frame for r in rows],
-                [r.weight for r in rows],
-                [r.primary for r in rows],
-                [r.par for r in rows],
-                [r.jref for r in rows],
-                [r.jw for r in rows],
-                self.nq,
-                rows=[lm.rows_of(r.code, self.nq) if r.rows is None else r.rows for r in rows],
-                col=next((r.col for r in rows if r.col is not None), None),
+                [kernel_slot(type(gl).kernel) for gl in self.compiled_goals],
+                [gl.weight for gl in self.compiled_goals],
+                [gl.is_primary for gl in self.compiled_goals],
+                [e.par for e in enc],
+                [e.ipar for e in enc],
+                [e.rows for e in enc],
             )
             if len(self._table_cache) > 64:
                 self._table_cache.clear()
@@ -403,6 +391,7 @@ class IKProblem:
             new.goals = (Position(self.robot.ee_frame, new.target[:3, 3]),)
         else:
             new.goals = (Pose.checked(self.robot.ee_frame, new.target),)
+        new.compiled_goals = new.goals
         new._table_cache = {}
         return new
 
@@ -413,21 +402,40 @@ class IKProblem:
         return cls(robot, robot.fk(robot.check_q(q)), fitness=fitness, **kwargs)
 
     # --------------------------------------------------------------- hot path
+    def _errors_and_cost2(
+        self, q_batch: FloatArray, q0: FloatArray | None
+    ) -> tuple[FloatArray, FloatArray]:
+        """Errors of every goal ``(pop, ng, 2)`` and the secondary cost ``(pop,)``: the
+        compiled goals through the kernels, Python goals on Pinocchio's state."""
+        q2 = np.ascontiguousarray(np.atleast_2d(q_batch), dtype=float)
+        pop = q2.shape[0]
+        err = np.empty((pop, len(self.goals), 2))
+        cost2 = np.zeros(pop)
+        compiled = [i for i, gl in enumerate(self.goals) if gl.compiled]
+        if compiled:
+            e_c = np.empty((pop, len(compiled), 2))
+            lm.errors_batch(q2, self.tree, self.table(q0), kernels(), self.bounds, e_c, cost2)
+            err[:, compiled] = e_c
+        if self.python_goals:
+            for k in range(pop):
+                state = State(self.robot, q2[k], q0)
+                for i, gl in enumerate(self.goals):
+                    if gl.compiled:
+                        continue
+                    err[k, i] = gl.errors(state)
+                    if not gl.is_primary:
+                        r = gl.weight * np.asarray(gl.residual(state), dtype=float)
+                        cost2[k] += float(r @ r)
+        return err, cost2
+
     def goal_errors(self, q_batch: FloatArray, q0: FloatArray | None = None) -> FloatArray:
         """Errors of every goal, ``(pop, nq) -> (pop, ng, 2)`` ``[m, rad]`` (compiled FK)."""
-        q2 = np.ascontiguousarray(np.atleast_2d(q_batch), dtype=float)
-        err = np.empty((q2.shape[0], len(self.goals), 2))
-        cost2 = np.empty(q2.shape[0])
-        lm.errors_batch(q2, self.tree, self.table(q0), self.bounds, err, cost2)
-        return err
+        return self._errors_and_cost2(q_batch, q0)[0]
 
     def cost(self, q_batch: FloatArray, q0: FloatArray | None = None) -> FloatArray:
         """The ``"se3"`` scalar cost ``(pop, nq) -> (pop,)``: Σ over primary goals of
         position error + ``w_rot``·angular error, plus ``SECONDARY_WEIGHT``·½‖r₂‖²."""
-        q2 = np.ascontiguousarray(np.atleast_2d(q_batch), dtype=float)
-        err = np.empty((q2.shape[0], len(self.goals), 2))
-        cost2 = np.empty(q2.shape[0])
-        lm.errors_batch(q2, self.tree, self.table(q0), self.bounds, err, cost2)
+        err, cost2 = self._errors_and_cost2(q_batch, q0)
         e = np.where(np.isnan(err), 0.0, err)[:, self.primary]
         return e[..., 0].sum(-1) + self.w_rot * e[..., 1].sum(-1) + SECONDARY_WEIGHT * 0.5 * cost2
 
@@ -461,21 +469,37 @@ class IKProblem:
         Returns:
             ``fitness (pop,)``; ``err (pop, rows)`` with ``r(q + δ) ≈ r − J δ`` (for a pose:
             ``[p* − p; log(R* Rᵀ)]`` in world axes); ``jac (pop, rows, nq)``, so that
-            ``q + pinv(jac) @ err`` is the Gauss–Newton step.
+            ``q + pinv(jac) @ err`` is the Gauss–Newton step.  The compiled goals' rows come
+            first, then the Python goals' (``−∂r/∂q`` of their ``jacobian``).
         """
         q2 = np.ascontiguousarray(np.atleast_2d(q_batch), dtype=float)
         tab = self.table(None)
         pop, m = q2.shape[0], tab.rows_primary
         res = np.empty((pop, m))
         jac = np.empty((pop, m, self.nq))
-        err = np.empty((pop, len(self.goals), 2))
-        lm.residuals_batch(q2, self.tree, tab, self.bounds, True, res, jac, err)
+        err = np.empty((pop, len(self.compiled_goals), 2))
+        if self.compiled_goals:
+            lm.residuals_batch(q2, self.tree, tab, kernels(), self.bounds, True, res, jac, err)
+        py = [gl for gl in self.python_goals if gl.is_primary]
+        if py:
+            extra_r, extra_j = [], []
+            for k in range(pop):
+                state = State(self.robot, q2[k])
+                rk = [gl.weight * np.atleast_1d(np.asarray(gl.residual(state), float)) for gl in py]
+                jk = [
+                    -gl.weight * np.asarray(gl.jacobian(state), float).reshape(-1, self.nq)
+                    for gl in py
+                ]
+                extra_r.append(np.concatenate(rk))
+                extra_j.append(np.concatenate(jk))
+            res = np.concatenate([res, np.array(extra_r)], axis=1)
+            jac = np.concatenate([jac, np.array(extra_j)], axis=1)
         return self.fitness(q2), res, jac
 
     def within_bounds(self, q: FloatArray, tol: float = 1e-12) -> bool:
         """Whether ``q`` lies within the problem's bounds (± ``tol``)."""
         q = np.asarray(q, dtype=float)
-        return bool(np.all(q >= self.lower - tol) and np.all(q <= self.upper + tol))
+        return bool(((q >= self.lower - tol) & (q <= self.upper + tol)).all())
 
     @property
     def collision_goal(self) -> Any:
@@ -531,13 +555,13 @@ class IKProblem:
     ) -> tuple[GoalError, ...]:
         """Errors of every primary goal at ``q`` computed with Pinocchio's own FK (and coal
         for collisions), not the compiled kernels, judged against the tolerances."""
-        qv = self.robot.check_q(q, "q")
-        poses = self.robot.fk_pinocchio_all(qv)
+        qv = q if _valid_q(q, self.nq) else self.robot.check_q(q, "q")
+        state = State(self.robot, qv, q0)
         out = []
         for gl, prim in zip(self.goals, self.primary, strict=True):
             if not prim:
                 continue
-            dp, dr, met, details = gl.check(poses, qv, self.robot, tol_pos, tol_rot, q0)
+            dp, dr, met, details = gl.met(state, tol_pos, tol_rot)
             out.append(GoalError(gl.describe(), float(dp), float(dr), met, details))
         return tuple(out)
 

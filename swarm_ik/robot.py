@@ -11,12 +11,10 @@ from __future__ import annotations
 import math
 import os
 import reprlib
-import sys
 import threading
 import warnings
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass, field
-from importlib import resources
 from pathlib import Path
 from typing import Any, NamedTuple
 
@@ -25,9 +23,10 @@ import pinocchio as pin
 from numpy.typing import NDArray
 
 from swarm_ik import urdf
-from swarm_ik._types import FloatArray, IntArray
+from swarm_ik._types import FloatArray
 from swarm_ik.errors import InvalidArgumentError, RobotFileNotFoundError, RobotModelError, unknown
 from swarm_ik.kernels.fk import CONTINUOUS, KIND_NAMES, PRISMATIC, REVOLUTE, TreeArrays
+from swarm_ik.paths import bundled_robot_dir, example_robot_data_dir
 
 BUNDLED: dict[str, tuple[str, str]] = {
     "yumi_left": ("yumi_left.urdf", "yumi_tool"),
@@ -54,34 +53,6 @@ EXAMPLE_ROBOTS: dict[str, tuple[str, str | tuple[str, ...]]] = {
 """Arms of the ``example-robot-data`` package: name -> (URDF path under its ``robots/``
 folder, default end-effector frame).  Joints off the root → end-effector chain (grippers)
 are locked at their neutral value."""
-
-
-def bundled_robot_dir() -> Path:
-    """Folder holding the bundled URDFs (``robots/`` of the repository, installed as
-    ``swarm_ik.robots``)."""
-    return Path(str(resources.files("swarm_ik.robots")))
-
-
-def example_robot_data_dir() -> Path:
-    """The ``robots`` folder of the installed ``example-robot-data`` package.
-
-    ``$EXAMPLE_ROBOT_DATA_DIR`` overrides the search.
-
-    Raises:
-        RobotFileNotFoundError: the package is not installed.
-    """
-    env = os.environ.get("EXAMPLE_ROBOT_DATA_DIR")
-    candidates = [Path(env)] if env else []
-    for entry in sys.path:
-        candidates.append(Path(entry) / "cmeel.prefix" / "share" / "example-robot-data" / "robots")
-    candidates.append(Path(sys.prefix) / "share" / "example-robot-data" / "robots")
-    for c in candidates:
-        if c.is_dir():
-            return c
-    raise RobotFileNotFoundError(
-        "the example-robot-data package was not found; install it with "
-        "`pip install example-robot-data` or set EXAMPLE_ROBOT_DATA_DIR"
-    )
 
 
 def robot_names() -> dict[str, list[str]]:
@@ -408,15 +379,6 @@ class RobotModel:
             ee_frame_reason=frame_reason,
         )
 
-    def warm_up(self) -> None:
-        """Compile or load the compiled kernels now (not inside a timed solve)."""
-        from swarm_ik.kernels import lm
-
-        lm.warm_up(
-            self.tree,
-            lm.Bounds(self.lower, self.upper, self.continuous_mask, self.prismatic_mask),
-        )
-
     # ------------------------------------------------------------- properties
     @property
     def nq(self) -> int:
@@ -538,19 +500,6 @@ class RobotModel:
             return q.copy() if copy else q
         return np.array(_converted(self._to_pinocchio_plan(), self.model.nq, q.tolist()))
 
-    def pinocchio_plan_arrays(self) -> tuple[IntArray, FloatArray, int]:
-        """The conversion of :meth:`to_pinocchio` as arrays for compiled code: per Pinocchio
-        joint ``(index in q, index in Pinocchio's configuration, continuous)`` ``(k, 3)``,
-        ``(multiplier, offset)`` ``(k, 2)`` and the length of the configuration; no rows and
-        length 0 where the configuration is ``q`` itself
-        (:func:`swarm_ik.kernels.search.pinocchio_config` computes it)."""
-        same = self._pinocchio_q_is_q()
-        plan = () if same else self._to_pinocchio_plan()
-        index = np.array([(qi, at, c) for qi, _, _, at, c in plan], dtype=np.int64)
-        affine = np.array([(m, o) for _, m, o, _, _ in plan], dtype=float)
-        nq_pin = 0 if same else int(self.model.nq)
-        return index.reshape(len(plan), 3), affine.reshape(len(plan), 2), nq_pin
-
     def _to_pinocchio_plan(self) -> tuple[tuple[int, float, float, int, bool], ...]:
         """Per Pinocchio joint: (driver's index in ``q``, multiplier, offset, index in
         Pinocchio's configuration, continuous), made once."""
@@ -667,10 +616,16 @@ class RobotModel:
         pin.computeJointJacobians(self.model, data, self.to_pinocchio(q))
         pin.updateFramePlacements(self.model, data)
         jac = pin.getFrameJacobian(self.model, data, fid, pin.ReferenceFrame.LOCAL_WORLD_ALIGNED)
-        jac = np.array(jac).reshape(6, self.model.nv)  # eigenpy gives (6,) when nv == 1
+        return self.velocity_to_q(np.array(jac).reshape(6, self.model.nv))
+
+    def velocity_to_q(self, jac: FloatArray) -> FloatArray:
+        """A Jacobian ``(m, model.nv)`` over Pinocchio's velocity as one over ``q``
+        ``(m, nq)``: a mimic follower's column summed into its driver's (times its
+        multiplier)."""
+        jac = np.asarray(jac, dtype=float)
         if self.model.nv == self.nq and not self.mimic:
             return jac
-        out = np.zeros((6, self.nq))
+        out = np.zeros((jac.shape[0], self.nq))
         for j in range(1, self.model.njoints):
             iv = self.model.joints[j].idx_v
             out[:, self.tree.q_index[j - 1]] += self.tree.multiplier[j - 1] * jac[:, iv]
@@ -755,7 +710,6 @@ def load_robot(
     ee_frame: str | Sequence[str] | None = None,
     *,
     srdf: str | os.PathLike[str] | bool | None = None,
-    warm_up: bool = True,
 ) -> RobotModel:
     """Load a robot by bundled name, ``example-robot-data`` name, or URDF path.
 
@@ -768,10 +722,6 @@ def load_robot(
             robots, the tip of the deepest chain for a file.
         srdf: SRDF whose ``disable_collisions`` pairs the collision goal skips (default: the
             one next to the URDF, if any; ``False``: none).
-        warm_up: Load the compiled kernels now (:meth:`RobotModel.warm_up`).  ``False``
-            leaves each to the first call that needs it (``solve``, ``solve_many`` and
-            ``IKSolver`` load theirs before their clock starts): a one-shot command loads only
-            what it uses.
 
     Returns:
         The robot, reduced to the joints between the root and its goal frame(s).
@@ -792,6 +742,4 @@ def load_robot(
         if srdf is not False and (srdf is True or not Path(srdf).is_file()):
             raise RobotFileNotFoundError(f"SRDF file not found: {str(srdf)!r}")
         object.__setattr__(robot, "srdf", srdf)
-    if warm_up:
-        robot.warm_up()
     return robot

@@ -519,7 +519,7 @@ class Scene:
             path: The file.
             mesh_dir: Where the triangle meshes written inline in a MoveIt ``.scene`` are
                 stored as OBJ files (named by their content's hash; default: the ``scene_meshes``
-                folder of :func:`swarm_ik.collision.cache_dir`).
+                folder of :func:`swarm_ik.paths.cache_dir`).
 
         Raises:
             SceneFileNotFoundError: the file, or a mesh it names, does not exist.
@@ -1131,7 +1131,7 @@ def _write_obj(vertices: FloatArray, triangles: Any, mesh_dir: Path | None) -> P
     lines += [f"f {a + 1} {b + 1} {c + 1}" for a, b, c in triangles]
     text = "\n".join(lines) + "\n"
     if mesh_dir is None:
-        from swarm_ik.collision import cache_dir
+        from swarm_ik.paths import cache_dir
 
         mesh_dir = cache_dir() / "scene_meshes"
     mesh_dir.mkdir(parents=True, exist_ok=True)
@@ -1294,8 +1294,8 @@ def _from_urdf(p: Path) -> list[Shape]:
     import coal
     import pinocchio as pin
 
-    from swarm_ik.collision import package_dirs
     from swarm_ik.errors import RobotModelError
+    from swarm_ik.paths import package_dirs
     from swarm_ik.urdf import captured_stderr, load_urdf
 
     try:

@@ -401,7 +401,7 @@ def test_mesh_look_up_follows_pinocchio(tmp_path: Path) -> None:
     urdf.write_text(MESHES_URDF.replace("nowhere_pkg", "pkg"))
     missing, total = _viewer.missing_meshes(urdf, [str(tmp_path / "urdf"), str(tmp_path)])
     assert (missing, total) == (["meshes/c.stl"], 2)
-    panda = swarm_ik.load_robot("panda", warm_up=False)
+    panda = swarm_ik.load_robot("panda")
     from swarm_ik import viz
 
     assert _viewer.missing_meshes(panda.urdf_path, viz.package_dirs(panda))[0] == []
@@ -473,7 +473,8 @@ def test_real_sigint_during_a_solve_is_one_line_and_130(tmp_path: Path) -> None:
     proc.send_signal(signal.SIGINT)
     out, err = proc.communicate(timeout=120)
     assert proc.returncode == 130, err
-    assert err.strip() == "swarm-ik: interrupted" and "Traceback" not in err
+    # (a line saying the kernels are being prepared may come first, on a slow start)
+    assert err.strip().splitlines()[-1] == "swarm-ik: interrupted" and "Traceback" not in err
 
 
 # ------------------------------------------------------------------------------ 8: xacro

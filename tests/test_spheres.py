@@ -9,8 +9,9 @@ import pinocchio as pin
 import pytest
 from conftest import scene_near_robot
 
+from swarm_ik import spheres as S
 from swarm_ik.collision import RobotCollision
-from swarm_ik.kernels import spheres as S
+from swarm_ik.kernels import spheres as K
 from swarm_ik.scene import Mesh
 
 _SM: dict[str, S.SphereModel] = {}
@@ -134,7 +135,7 @@ def test_obstacle_sdf_matches_coal(shape) -> None:
     from swarm_ik.scene import coal_object
 
     obj = coal_object(shape)
-    kinds = {"sphere": S.SPHERE, "box": S.BOX, "capsule": S.CAPSULE, "cylinder": S.CYLINDER}
+    kinds = {"sphere": K.SPHERE, "box": K.BOX, "capsule": K.CAPSULE, "cylinder": K.CYLINDER}
     pose = np.array(shape.pose)
     if shape.kind == "sphere":
         dims = np.array([shape.radius, 0.0, 0.0])
@@ -147,7 +148,7 @@ def test_obstacle_sdf_matches_coal(shape) -> None:
     lo, hi = pose[:3, 3] - 0.8, pose[:3, 3] + 0.8
     inside = 0
     for p in np.vstack([rng.uniform(lo, hi, (150, 3)), pose[:3, 3] + rng.normal(0, 0.03, (50, 3))]):
-        d, gx, gy, gz = S.obstacle_sdf(kinds[shape.kind], pose[:3, :3], pose[:3, 3], dims, p)
+        d, gx, gy, gz = K.obstacle_sdf(kinds[shape.kind], pose[:3, :3], pose[:3, 3], dims, p)
         req = coal.DistanceRequest()
         req.enable_signed_distance = True
         ref = (
@@ -166,8 +167,8 @@ def test_obstacle_sdf_matches_coal(shape) -> None:
         h = 1e-7
         fd = [
             (
-                S.obstacle_sdf(kinds[shape.kind], pose[:3, :3], pose[:3, 3], dims, p + h * e)[0]
-                - S.obstacle_sdf(kinds[shape.kind], pose[:3, :3], pose[:3, 3], dims, p - h * e)[0]
+                K.obstacle_sdf(kinds[shape.kind], pose[:3, :3], pose[:3, 3], dims, p + h * e)[0]
+                - K.obstacle_sdf(kinds[shape.kind], pose[:3, :3], pose[:3, 3], dims, p - h * e)[0]
             )
             / (2 * h)
             for e in np.eye(3)

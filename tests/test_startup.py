@@ -44,52 +44,28 @@ def test_solve_path_imports_no_optional_heavy_dependency() -> None:
 
 
 @pytest.mark.parametrize(
-    ("warm", "call"),
+    "call",
     [
-        ("True", "swarm_ik.solve(swarm_ik.IKProblem(r, T), time_limit=0.005)"),
-        ("False", "swarm_ik.solve(swarm_ik.IKProblem(r, T), time_limit=0.005)"),
-        ("False", "swarm_ik.IKSolver(r, time_limit=0.005).solve(T)"),
-        ("False", "swarm_ik.solve(swarm_ik.IKProblem(r, T), time_limit=0.005, seed=rng)"),
-        (
-            "False",
-            "swarm_ik.solve_many(swarm_ik.IKProblem(r, T), n=2, time_limit=0.05, "
-            "method='numerical')[0]",
-        ),
+        "swarm_ik.solve(swarm_ik.IKProblem(r, T), time_limit=0.005)",
+        "swarm_ik.IKSolver(r, time_limit=0.005).solve(T)",
+        "swarm_ik.solve(swarm_ik.IKProblem(r, T), time_limit=0.005, seed=rng)",
+        "swarm_ik.solve_many(swarm_ik.IKProblem(r, T), n=2, time_limit=0.05, "
+        "method='numerical')[0]",
     ],
 )
-def test_first_solve_of_a_fresh_process_meets_its_budget(warm: str, call: str) -> None:
-    """Kernels are loaded before the clock starts: by load_robot, or (warm_up=False, as the
-    CLI does) by the first solve / IKSolver / solve_many itself."""
+def test_first_solve_of_a_fresh_process_is_not_charged_the_compile(call: str) -> None:
+    """The kernels are loaded (or compiled) before a solve's clock starts: the first solve of
+    a fresh process succeeds within a few milliseconds' limit."""
     code = (
         "import numpy as np, swarm_ik\n"
-        f"r = swarm_ik.load_robot('panda', warm_up={warm})\n"
+        "r = swarm_ik.load_robot('panda')\n"
         "rng = np.random.default_rng(1)\n"
         "T = r.fk(np.array([0.1, -0.5, 0.3, -2.0, 0.2, 1.5, 0.4]))\n"
         f"res = {call}\n"
-        "print(res.success, res.time_s)\n"
+        "print(res.success, res.reason)\n"
     )
-    ok, t = _run(code).split()
-    assert ok == "True", t
-    assert float(t) < (0.05 if "solve_many" in call else 0.005)
-
-
-def test_console_script_start_up_keeps_scipy_importable() -> None:
-    """The console script hides scipy.linalg from numba's one BLAS probe, then puts it back;
-    its solve is the same, and the collector is off only for its own process."""
-    code = (
-        "import gc, json, sys\n"
-        "sys.argv = ['swarm-ik', 'solve', '--robot', 'panda', '--json', '--from-q',"
-        " '0.1', '-0.5', '0.3', '-2.0', '0.2', '1.5', '0.4']\n"
-        "from swarm_ik import cli\n"
-        "import contextlib, io\n"
-        "buf = io.StringIO()\n"
-        "with contextlib.redirect_stdout(buf):\n"
-        "    rc = cli.main()\n"
-        "hidden = 'scipy.linalg' in sys.modules\n"
-        "import scipy.linalg.cython_blas\n"
-        "print(json.dumps([rc, json.loads(buf.getvalue())['success'], hidden, gc.isenabled()]))\n"
-    )
-    assert json.loads(_run(code)) == [0, True, False, False]
+    ok, reason = _run(code).split()
+    assert ok == "True", reason
 
 
 def test_main_with_argv_leaves_the_collector_alone() -> None:

@@ -65,6 +65,7 @@ import numpy as np
 
 from swarm_ik.bench import common
 from swarm_ik.errors import InvalidArgumentError
+from swarm_ik.problem import largest_errors
 
 HELP = "collision-free IK: table, shelf and cubby scenes; ours with the goal vs rejection"
 COMMAND = "collision"
@@ -251,7 +252,7 @@ def judge(robot: Any, scene: Any, target: np.ndarray, q: np.ndarray | None) -> d
             success=False, pose_ok=False, collision_free=False, within_limits=False,
             position_error=math.inf, rotation_error=math.inf, clearance=math.nan,
         )  # fmt: skip
-    dp, dr = swarm_ik.verify(swarm_ik.IKProblem(robot, target), q)
+    dp, dr = largest_errors(swarm_ik.verify(swarm_ik.IKProblem(robot, target), q))
     within = robot.within_limits(q, tol=1e-12)
     rep = robot.collision_model().check(np.clip(q, robot.lower, robot.upper), scene)
     pose_ok = bool(dp <= TOL and dr <= TOL)
@@ -340,7 +341,7 @@ class Rejection:
             q = np.asarray(ans.q, dtype=float)
             if not self.robot.within_limits(q, tol=1e-12):
                 continue
-            dp, dr = self._sik.verify(plain, q)
+            dp, dr = largest_errors(self._sik.verify(plain, q))
             if not (dp <= TOL and dr <= TOL):
                 continue
             q_last = q

@@ -36,6 +36,7 @@ import numpy as np
 from swarm_ik.bench import common, peers, plans, runner
 from swarm_ik.bench.plans import IKPlan, IKTask
 from swarm_ik.errors import InvalidArgumentError
+from swarm_ik.problem import largest_errors
 
 FIELDS = (
     "key",
@@ -99,7 +100,7 @@ def check(robot: Any, target: np.ndarray, q: np.ndarray | None) -> tuple[float, 
 
     if q is None or not np.all(np.isfinite(q)):
         return math.inf, math.inf, False
-    dp, dr = swarm_ik.verify(swarm_ik.IKProblem(robot, target), q)
+    dp, dr = largest_errors(swarm_ik.verify(swarm_ik.IKProblem(robot, target), q))
     return float(dp), float(dr), robot.within_limits(q, tol=1e-12)
 
 

@@ -96,6 +96,7 @@ def _analytic_costs(problem: Any, ref: np.ndarray, n: int) -> dict[str, float]:
     """µs per call of the analytic path's parts and wholes on one target."""
     import swarm_ik
     from swarm_ik.branches import pose_errors
+    from swarm_ik.goals import kernels
     from swarm_ik.kernels import lm
     from swarm_ik.solvers import analytic
 
@@ -107,7 +108,7 @@ def _analytic_costs(problem: Any, ref: np.ndarray, n: int) -> dict[str, float]:
         "eaik_us": _per_call_us(lambda: chain.solver.calculate_IK(problem.target), 20),
         "pinocchio_check_us": _per_call_us(lambda: pose_errors(problem, ref), 20),
         "kernel_check_us": _per_call_us(
-            lambda: lm.errors_batch(ref, problem.tree, tab, problem.bounds, err, c2), 20
+            lambda: lm.errors_batch(ref, problem.tree, tab, kernels(), problem.bounds, err, c2), 20
         ),
         "solve_all_us": _per_call_us(lambda: analytic.solve_all(problem), 20),
         "solve_many_analytic_us": _per_call_us(

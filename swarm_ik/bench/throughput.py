@@ -189,7 +189,9 @@ def loop_tracik(
     ok = np.zeros(len(targets), dtype=bool)
     for i, (t, q) in enumerate(zip(targets, answers, strict=True)):
         if q is not None and robot.within_limits(q, tol=1e-12):
-            dp, dr = swarm_ik.verify(swarm_ik.IKProblem(robot, t), q)
+            dp, dr = swarm_ik.problem.largest_errors(
+                swarm_ik.verify(swarm_ik.IKProblem(robot, t), q)
+            )
             ok[i] = dp <= tol and dr <= tol
     return elapsed, ok
 

@@ -23,7 +23,6 @@ from __future__ import annotations
 
 import argparse
 import gc
-import importlib
 import json
 import os
 import re
@@ -217,19 +216,6 @@ def _own_process() -> None:
     """Start-up tuning for the console script only (never for :func:`main` called with
     ``argv``, in someone else's process).
 
-    The collector is off until the command is known (:data:`SHORT_COMMANDS` keep it off), and
-    numba's array-maths module is imported with ``scipy.linalg.cython_blas`` hidden: numba
-    imports scipy.linalg (≈ 0.13 s) at that point only to learn whether ``np.convolve`` and
-    ``np.correlate`` may call BLAS (without it they use numba's own loop).  No swarm_ik kernel
-    calls BLAS, and scipy stays importable: only this one import sees it hidden.
+    The collector is off until the command is known (:data:`SHORT_COMMANDS` keep it off).
     """
     gc.disable()
-    blas = "scipy.linalg.cython_blas"
-    if "numba.np.arraymath" in sys.modules or "scipy.linalg" in sys.modules:
-        return
-    sys.modules[blas] = None  # type: ignore[assignment]  # `import` of it now fails at once
-    try:
-        importlib.import_module("numba.np.arraymath")
-    finally:
-        if sys.modules.get(blas, 0) is None:
-            del sys.modules[blas]

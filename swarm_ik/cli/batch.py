@@ -102,7 +102,7 @@ def run(args: argparse.Namespace) -> int:
     import numpy as np
 
     import swarm_ik
-    from swarm_ik._validate import read_targets_file
+    from swarm_ik.batch import read_targets_file
     from swarm_ik.errors import InvalidArgumentError
 
     check_output_file(args.out, "--out", (".csv", ".npz"))  # before any work

@@ -129,11 +129,11 @@ def _as_result(problem: Any, q: Any) -> Any:
     """A :class:`~swarm_ik.result.Result` describing a given configuration (no solve)."""
     import numpy as np
 
-    from swarm_ik.api import verify
+    from swarm_ik.problem import largest_errors
     from swarm_ik.result import Result
 
     q = np.asarray(q, dtype=float)
-    dp, dr = verify(problem, q)
+    dp, dr = largest_errors(problem.verify(q))
     within = problem.robot.within_limits(q)
     return Result(
         q=q,

@@ -165,7 +165,7 @@ def run(args: argparse.Namespace) -> int:
         check_goals_file(args.goals)
     pose = None if args.pose is None else pose_target(args.pose, args.position_only)
     frames = None if not args.frame else (args.frame[0] if len(args.frame) == 1 else args.frame)
-    robot = swarm_ik.load_robot(args.robot, ee_frame=frames, srdf=args.srdf, warm_up=False)
+    robot = swarm_ik.load_robot(args.robot, ee_frame=frames, srdf=args.srdf)
     if drawing:
         _viewer.check_meshes(robot, "--html" if args.html else "--show")
     goals = None

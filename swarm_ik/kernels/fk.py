@@ -21,7 +21,6 @@ import numba
 import numpy as np
 
 from swarm_ik._types import FloatArray, IntArray
-from swarm_ik.kernels import hot
 
 REVOLUTE = 0
 PRISMATIC = 1
@@ -214,7 +213,7 @@ def fk_scratch(tree: TreeArrays) -> FKScratch:
     )
 
 
-@hot
+@numba.njit(cache=True)
 def fk_one(
     q: FloatArray, t: TreeArrays, s: FKScratch, want_jac: bool
 ) -> None:  # pragma: no cover - compiled

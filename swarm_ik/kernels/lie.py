@@ -13,13 +13,13 @@ from __future__ import annotations
 
 import math
 
+import numba
 import numpy as np
 
 from swarm_ik._types import FloatArray
-from swarm_ik.kernels import leaf
 
 
-@leaf
+@numba.njit(cache=True)
 def angle_nb(m: FloatArray) -> float:  # pragma: no cover - compiled
     """Rotation angle θ ∈ [0, π] of the rotation matrix ``m`` (3, 3), accurate near 0 and π
     (``atan2`` of the skew and trace parts)."""
@@ -30,7 +30,7 @@ def angle_nb(m: FloatArray) -> float:  # pragma: no cover - compiled
     return math.atan2(math.sqrt(s0 * s0 + s1 * s1 + s2 * s2), c)
 
 
-@leaf
+@numba.njit(cache=True)
 def log3_nb(m: FloatArray, out: FloatArray) -> float:  # pragma: no cover - compiled
     """Rotation vector of ``m`` (3, 3) into ``out`` (3,); returns the angle θ.
 
@@ -79,7 +79,7 @@ def log3_nb(m: FloatArray, out: FloatArray) -> float:  # pragma: no cover - comp
     return theta
 
 
-@leaf
+@numba.njit(cache=True)
 def jr_inv_nb(phi: FloatArray, theta: float, out: FloatArray) -> None:  # pragma: no cover
     """``Jr⁻¹(φ)`` (3, 3) into ``out`` for the rotation vector ``φ`` of angle ``θ``.
 
@@ -116,6 +116,17 @@ def angle(rot: FloatArray) -> FloatArray:
     )
     c = r[..., 0, 0] + r[..., 1, 1] + r[..., 2, 2] - 1.0
     return np.arctan2(np.linalg.norm(s, axis=-1), c)
+
+
+def angle_between(r_a: FloatArray, r_b: FloatArray) -> float:
+    """Rotation angle θ ∈ [0, π] of ``r_aᵀ r_b`` for two rotations ``(3, 3)`` (one pair: the
+    scalar twin of :func:`angle`, for the per-answer check)."""
+    m = (np.asarray(r_a).T @ np.asarray(r_b)).tolist()
+    s0 = m[2][1] - m[1][2]
+    s1 = m[0][2] - m[2][0]
+    s2 = m[1][0] - m[0][1]
+    c = m[0][0] + m[1][1] + m[2][2] - 1.0
+    return math.atan2(math.sqrt(s0 * s0 + s1 * s1 + s2 * s2), c)
 
 
 def log3(rot: FloatArray) -> FloatArray:

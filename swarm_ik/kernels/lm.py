@@ -1,58 +1,47 @@
-"""The one Levenberg–Marquardt kernel: stacked goal residuals, joint limits, secondary goals.
+"""The one Levenberg–Marquardt kernel over the stacked residual of any set of goals.
 
-Every solve path (``solve``, ``IKSolver``, ``solve_many``, ``solve_batch``, the benchmarks)
-polishes with :func:`lm_polish`.  Its inputs are small typed structures:
+Every compiled solve (``solve``, ``IKSolver``, ``solve_many``, ``solve_batch``) polishes with
+:func:`lm_run`.  Its inputs are small typed structures:
 
 * the tree (:class:`swarm_ik.kernels.fk.TreeArrays`): FK and Jacobian of every goal frame;
-* the goal table (:class:`GoalTable`): one row per goal (residual code, frame, weight,
-  primary flag, 12 parameters, a joint reference and weights for joint-space goals);
+* the goal table (:class:`GoalTable`): per goal its kernel slot, weight, primary flag, rows
+  and its own parameter block (floats ``par`` and integers ``ipar``), plus the typed list of
+  goal kernels;
 * the bounds (:class:`Bounds`) and the settings (:class:`LMSettings`, one set of defaults:
   :data:`DEFAULT_LM`).
 
-Residual codes (``r(q + δ) ≈ r(q) − J δ``; ``J_v``, ``J_ω`` the LOCAL_WORLD_ALIGNED frame
-Jacobian, ``u = R a``):
+**The goal protocol.**  A compiled goal is a function of :data:`GOAL_SIGNATURE`::
 
-==============  ======  ==================================  ====================================
-code            rows    residual ``r / w``                  step Jacobian ``J / w``
-==============  ======  ==================================  ====================================
-``POSE``        6       ``[p* − p; log(R* Rᵀ)]``            ``[J_v; Jr⁻¹(φ) J_ω]``
-``POSITION``    3       ``p* − p``                          ``J_v``
-``ORIENTATION`` 3       ``log(R* Rᵀ)``                      ``Jr⁻¹(φ) J_ω``
-``AXIS``        3       ``d − u``                           ``J_ω × u`` (column-wise)
-``LOOK_AT``     3       ``(t − p)/‖t − p‖ − u``             ``J_ω × u + (I − ddᵀ) J_v / ‖t − p‖``
-``JOINT``       nq      ``w_j (q_ref − q)`` (wrapped)       ``diag(w_j)``
-==============  ======  ==================================  ====================================
+    rows(par, ipar, q, f_pos, f_rot, f_jac, want_jac, res, jac, err, work) -> None
 
-Errors judged against the tolerances: ``‖p* − p‖`` [m] and the angle [rad] (rotation angle of
-``R*ᵀR``, angle between ``u`` and ``d``), ``max |q_ref − q|`` over the weighted joints (metres
-for prismatic joints, radians otherwise).
+reading its parameter block ``par (P,)`` / ``ipar (I,)`` (what the goal encoded: a target, a
+frame index…), the joint vector ``q (nq,)`` and the FK of every frame of the tree (positions
+``f_pos (nf, 3)`` [m], rotations ``f_rot (nf, 3, 3)``, LOCAL_WORLD_ALIGNED Jacobians
+``f_jac (nf, 6, nq)``, linear rows first), and writing its unweighted residual rows
+``res (m,)`` with ``r(q + δ) ≈ r(q) − J δ`` (for a pose ``[p* − p; log(R* Rᵀ)]``), their step
+Jacobian ``jac (m, nq)`` when ``want_jac``, and its errors ``err (2,)`` = ``[position m,
+angle rad]`` (NaN where it has none) that the tolerances judge.  ``work (WORK_SIZE,)`` is
+scratch.  The kernel knows nothing of the goal's name: :mod:`swarm_ik.goals` registers each
+kernel once and the table names it by its slot in the list (:func:`kernel_list`).
+
+Errors judged against the tolerances: position ``‖p* − p‖`` [m] and angles [rad].
 """
 
 from __future__ import annotations
 
 import math
+from collections.abc import Sequence
 from typing import Any, NamedTuple
 
 import numba
 import numpy as np
+from numba import types
+from numba.experimental import structref
+from numba.typed import List
 
 from swarm_ik._types import BoolArray, FloatArray, IntArray
-from swarm_ik.kernels import hot, leaf
+from swarm_ik.errors import InvalidArgumentError
 from swarm_ik.kernels.fk import FKScratch, TreeArrays, fk_one
-from swarm_ik.kernels.lie import jr_inv_nb, log3_nb
-from swarm_ik.kernels.spheres import SphereArrays, penetration
-
-# residual codes
-POSE = 0
-POSITION = 1
-ORIENTATION = 2
-AXIS = 3
-LOOK_AT = 4
-JOINT = 5
-COLLISION = 6
-N_PAR = 12
-"""Parameters per goal row: a rotation (9, row-major) and a point (3), or two 3-vectors."""
-CODE_NAMES = ("pose", "position", "orientation", "axis", "look-at", "joint", "collision")
 
 # status of a polished start
 NOT_RUN = 0
@@ -66,6 +55,63 @@ ITER_CAP = 3
 BUDGET = 4
 """The evaluation budget of the call ran out during this start (it may be resumed)."""
 
+WORK_SIZE = 32
+"""Length of the scratch vector every goal kernel gets (``work``)."""
+
+GOAL_SIGNATURE = types.void(
+    types.float64[::1],  # par: the goal's float parameters
+    types.int64[::1],  # ipar: the goal's integer parameters (frame indices…)
+    types.float64[::1],  # q (nq,)
+    types.float64[:, ::1],  # f_pos (nf, 3)
+    types.float64[:, :, ::1],  # f_rot (nf, 3, 3)
+    types.float64[:, :, ::1],  # f_jac (nf, 6, nq)
+    types.boolean,  # want_jac
+    types.float64[::1],  # res (m,)
+    types.float64[:, ::1],  # jac (m, nq)
+    types.float64[::1],  # err (2,)
+    types.float64[::1],  # work (WORK_SIZE,)
+)
+"""The signature of every compiled goal kernel (see the module docstring): compile one with
+``numba.njit(GOAL_SIGNATURE, cache=True)``."""
+
+GOAL_KERNEL = types.FunctionType(GOAL_SIGNATURE)
+"""The numba type of a goal kernel as the table holds it (a first-class function)."""
+
+
+@structref.register
+class GoalKernelsType(types.StructRef):
+    """The numba type of :class:`GoalKernels`."""
+
+    def preprocess_fields(self, fields: Any) -> Any:
+        return tuple((name, types.unliteral(typ)) for name, typ in fields)
+
+
+class GoalKernels(structref.StructRefProxy):  # type: ignore[misc]
+    """The registered goal kernels: ``fns``, a typed list of functions of
+    :data:`GOAL_SIGNATURE` (slot ``i`` of a :class:`GoalTable` is ``fns[i]``).
+
+    Held in a ``StructRef`` (numba's public ``numba.experimental.structref``) and passed to
+    the kernels as an argument of its own: numba types it from the Python object at once,
+    where a typed list of functions among the arguments sends the whole call through numba's
+    slow argument typing (≈ 0.6 ms for thirty arrays)."""
+
+
+structref.define_proxy(GoalKernels, GoalKernelsType, ["fns"])
+
+
+@numba.njit(cache=True)
+def _goal_kernels(fns: Any) -> Any:  # pragma: no cover - compiled
+    return GoalKernels(fns)
+
+
+def kernel_list(kernels: Sequence[Any]) -> GoalKernels:
+    """The :class:`GoalKernels` of ``kernels`` (slot ``i`` is ``kernels[i]``), each compiled
+    with :data:`GOAL_SIGNATURE`."""
+    out = List.empty_list(GOAL_KERNEL)
+    for k in kernels:
+        out.append(k)
+    return _goal_kernels(out)  # type: ignore[no-any-return]
+
 
 class LMSettings(NamedTuple):
     """Settings of the Levenberg–Marquardt polish (the one set of defaults: :data:`DEFAULT_LM`),
@@ -75,9 +121,7 @@ class LMSettings(NamedTuple):
     UR10 and Baxter (2000 targets each, 300 evaluations): 30 / 1e-2 / 1 rad / 1e-2 beat
     60 / 1e-3 / 0.5 rad / 1e-3 by 0.2–0.6 points of success at fewer evaluations; then
     ``lam0 = 0.3``, ``stall_rel = 0.05`` (a stronger first damping, an earlier verdict on a
-    local minimum) cut the mean evaluations per target by 15–22 % (1000 FK-sampled targets
-    per robot: Panda 27.3 → 23.3, UR10 28.2 → 21.9) and the failures at 300 evaluations on
-    Panda from 12 to 4 and on Baxter from 19 to 12 (UR10: 3 → 4).
+    local minimum) cut the mean evaluations per target by 15–22 %.
     """
 
     max_iters: int = 30
@@ -101,7 +145,6 @@ class LMSettings(NamedTuple):
         Raises:
             InvalidArgumentError: a value is not finite or out of range (named).
         """
-        from swarm_ik.errors import InvalidArgumentError
 
         def num(name: str, v: object, lo: float, hi: float, lo_open: bool = True) -> float:
             try:
@@ -149,304 +192,148 @@ class Bounds(NamedTuple):
     linear: BoolArray
 
 
-class CollisionArrays(NamedTuple):
-    """The sphere model of an ``AvoidCollisions`` goal for the kernel (empty without one).
-
-    Attributes:
-        body0: Index of the first body frame in the tree's frames (the collision bodies are
-            frames ``body0 … body0 + nb − 1``).
-        nb: Number of bodies.
-        model: The arrays of :func:`swarm_ik.kernels.spheres.penetration`.
-        margin: Wanted clearance [m].
-        scratch: Work array ``(ns, 6)``.
-        pair: Work array ``(max_rows, 2)``.
-    """
-
-    body0: int
-    nb: int
-    model: SphereArrays
-    margin: float
-    scratch: FloatArray
-    pair: IntArray
-
-
-_NO_COLLISION: list[CollisionArrays] = []
-
-
-def no_collision() -> CollisionArrays:
-    """The empty :class:`CollisionArrays` of a problem without a collision goal (one shared,
-    read-only instance)."""
-    if _NO_COLLISION:
-        return _NO_COLLISION[0]
-    i1 = np.zeros(0, dtype=np.int64)
-    empty = SphereArrays(
-        i1, np.zeros((0, 3)), np.zeros(0), np.zeros(1, dtype=np.int64), np.zeros((0, 3)),
-        np.zeros(0), np.zeros((0, 2), dtype=np.int64), i1, i1, np.zeros((0, 3, 3)),
-        np.zeros((0, 3)), np.zeros((0, 3)),
-    )  # fmt: skip
-    _NO_COLLISION.append(
-        CollisionArrays(0, 0, empty, 0.0, np.zeros((0, 6)), np.zeros((0, 2), dtype=np.int64))
-    )
-    return _NO_COLLISION[0]
-
-
 class GoalTable(NamedTuple):
-    """The goals of a problem as arrays (one row per goal), built by :func:`goal_table`.
+    """The goals of a problem as arrays (one entry per goal), built by :func:`goal_table`.
 
     Attributes:
-        code: Residual code per goal, shape ``(ng,)``.
-        frame: Goal frame index in the tree's frames (``-1`` for joint goals), ``(ng,)``.
+        kind: Slot of each goal's kernel in ``kernels``, shape ``(ng,)``.
         weight: Residual weight, ``(ng,)``.
         primary: Primary (True) or secondary, ``(ng,)``.
-        par: Parameters, ``(ng, N_PAR)`` (see the module table).
-        jref: Joint references, ``(ng, nq)`` (joint goals).
-        jw: Per-joint weights, ``(ng, nq)`` (joint goals; 0 = joint not included).
         row0: First row of each goal in its stack (primary or secondary), ``(ng,)``.
         nrows: Rows of each goal, ``(ng,)``.
+        p0: Goal ``i``'s float parameters are ``par[p0[i]:p0[i + 1]]``, ``(ng + 1,)``.
+        par: Every goal's float parameters, concatenated.
+        i0: Goal ``i``'s integer parameters are ``ipar[i0[i]:i0[i + 1]]``, ``(ng + 1,)``.
+        ipar: Every goal's integer parameters, concatenated.
         rows_primary: Rows of the primary stack.
         rows_secondary: Rows of the secondary stack.
-        col: The sphere model of the (at most one) ``COLLISION`` goal.
     """
 
-    code: IntArray
-    frame: IntArray
+    kind: IntArray
     weight: FloatArray
     primary: BoolArray
-    par: FloatArray
-    jref: FloatArray
-    jw: FloatArray
     row0: IntArray
     nrows: IntArray
+    p0: IntArray
+    par: FloatArray
+    i0: IntArray
+    ipar: IntArray
     rows_primary: int
     rows_secondary: int
-    col: CollisionArrays
-
-
-def rows_of(code: int, nq: int) -> int:
-    """Residual rows of a goal with residual ``code`` on a robot with ``nq`` joints."""
-    return nq if code == JOINT else (6 if code == POSE else 3)
 
 
 def goal_table(
-    code: list[int],
-    frame: list[int],
-    weight: list[float],
-    primary: list[bool],
-    par: list[FloatArray],
-    jref: list[FloatArray],
-    jw: list[FloatArray],
-    nq: int,
-    rows: list[int] | None = None,
-    col: CollisionArrays | None = None,
+    kind: Sequence[int],
+    weight: Sequence[float],
+    primary: Sequence[bool],
+    par: Sequence[FloatArray],
+    ipar: Sequence[IntArray],
+    nrows: Sequence[int],
 ) -> GoalTable:
-    """Stack goal rows into a :class:`GoalTable` (rows numbered per stack; ``rows`` gives
-    each goal's row count where :func:`rows_of` does not, e.g. a collision goal's cap)."""
+    """Stack goals into a :class:`GoalTable` (rows numbered per stack).
+
+    Args:
+        kind: Kernel slot per goal.
+        weight, primary: Per goal.
+        par, ipar: Each goal's parameter blocks (1-D float and integer arrays).
+        nrows: Residual rows per goal.
+    """
     row0 = []
     n_p = n_s = 0
-    counts = [rows_of(c, nq) for c in code] if rows is None else list(rows)
-    for p, r in zip(primary, counts, strict=True):
+    for p, r in zip(primary, nrows, strict=True):
         if p:
             row0.append(n_p)
             n_p += r
         else:
             row0.append(n_s)
             n_s += r
-    ng = len(code)
+    ng = len(kind)
+    p_len = [int(np.size(x)) for x in par]
+    i_len = [int(np.size(x)) for x in ipar]
+    cat_f = np.concatenate([np.ravel(x) for x in par]) if ng else np.zeros(0)
+    cat_i = np.concatenate([np.ravel(x) for x in ipar]) if ng else np.zeros(0)
     return GoalTable(
-        code=np.array(code, dtype=np.int64).reshape(ng),
-        frame=np.array(frame, dtype=np.int64).reshape(ng),
+        kind=np.array(kind, dtype=np.int64).reshape(ng),
         weight=np.array(weight, dtype=float).reshape(ng),
         primary=np.array(primary, dtype=np.bool_).reshape(ng),
-        par=np.array(par, dtype=float).reshape(ng, N_PAR),
-        jref=np.array(jref, dtype=float).reshape(ng, nq),
-        jw=np.array(jw, dtype=float).reshape(ng, nq),
         row0=np.array(row0, dtype=np.int64).reshape(ng),
-        nrows=np.array(counts, dtype=np.int64).reshape(ng),
+        nrows=np.array(nrows, dtype=np.int64).reshape(ng),
+        p0=np.concatenate([[0], np.cumsum(p_len)]).astype(np.int64),
+        par=np.ascontiguousarray(cat_f, dtype=float),
+        i0=np.concatenate([[0], np.cumsum(i_len)]).astype(np.int64),
+        ipar=np.ascontiguousarray(cat_i, dtype=np.int64),
         rows_primary=int(n_p),
         rows_secondary=int(n_s),
-        col=no_collision() if col is None else col,
     )
 
 
 # --------------------------------------------------------------------------- residuals
-@hot
+@numba.njit(cache=True)
 def goal_rows(
     q: FloatArray,
     s: FKScratch,
     g: GoalTable,
-    bd: Bounds,
+    ks: GoalKernels,
     primary: bool,
     want_jac: bool,
     res: FloatArray,
     jac: FloatArray,
     err: FloatArray,
-    m3: FloatArray,
-    v3: FloatArray,
+    work: FloatArray,
 ) -> float:  # pragma: no cover - compiled
-    """Residual rows (and Jacobian) of the primary or the secondary goals at ``q``, after
-    :func:`swarm_ik.kernels.fk.fk_one` filled ``s``.
+    """Weighted residual rows (and Jacobian) of the primary or the secondary goals at ``q``,
+    after :func:`swarm_ik.kernels.fk.fk_one` filled ``s``: each goal's kernel, then its
+    weight.
 
     Args:
         q: Joint vector, ``(nq,)``.
         s: FK buffers of ``q`` (frame poses, and Jacobians when ``want_jac``).
         g: The goal table.
-        bd: The bounds (continuous and prismatic masks).
+        ks: The goal kernels.
         primary: Which stack.
         want_jac: Whether to fill ``jac``.
         res: Residual out, ``(rows,)`` of the stack.
         jac: Step Jacobian out, ``(rows, nq)``.
         err: Errors out per goal, ``(ng, 2)``: ``[position m, angle rad]`` (NaN where none);
             only the goals of the stack are written.
-        m3, v3: Scratch ``(3, 3)`` and ``(3,)``.
+        work: Scratch, ``(WORK_SIZE,)``.
 
     Returns:
         The squared norm of the stack's residual.
     """
     nq = q.shape[0]
-    cost = 0.0
-    nan = np.nan
-    for i in range(g.code.shape[0]):
+    for i in range(g.kind.shape[0]):
         if g.primary[i] != primary:
             continue
-        c = g.code[i]
-        w = g.weight[i]
         r0 = g.row0[i]
-        f = g.frame[i]
-        par = g.par[i]
-        if c == POSE or c == POSITION:
-            dx = par[9] - s.f_pos[f, 0]
-            dy = par[10] - s.f_pos[f, 1]
-            dz = par[11] - s.f_pos[f, 2]
-            res[r0] = w * dx
-            res[r0 + 1] = w * dy
-            res[r0 + 2] = w * dz
-            err[i, 0] = math.sqrt(dx * dx + dy * dy + dz * dz)
-            err[i, 1] = nan
-            if want_jac:
-                for a in range(3):
-                    for j in range(nq):
-                        jac[r0 + a, j] = w * s.f_jac[f, a, j]
-        if c == POSE or c == ORIENTATION:
-            rr = r0 + 3 if c == POSE else r0
-            # M = R* Rᵀ
-            for a in range(3):
-                for b in range(3):
-                    m3[a, b] = (
-                        par[3 * a] * s.f_rot[f, b, 0]
-                        + par[3 * a + 1] * s.f_rot[f, b, 1]
-                        + par[3 * a + 2] * s.f_rot[f, b, 2]
-                    )
-            theta = log3_nb(m3, v3)
-            for a in range(3):
-                res[rr + a] = w * v3[a]
-            if c == ORIENTATION:
-                err[i, 0] = nan
-            err[i, 1] = theta
-            if want_jac:
-                jr_inv_nb(v3, theta, m3)
-                for a in range(3):
-                    ma0, ma1, ma2 = m3[a, 0], m3[a, 1], m3[a, 2]  # (not reloaded per column)
-                    for j in range(nq):
-                        jac[rr + a, j] = w * (
-                            ma0 * s.f_jac[f, 3, j] + ma1 * s.f_jac[f, 4, j] + ma2 * s.f_jac[f, 5, j]
-                        )
-        elif c == AXIS or c == LOOK_AT:
-            ux = s.f_rot[f, 0, 0] * par[0] + s.f_rot[f, 0, 1] * par[1] + s.f_rot[f, 0, 2] * par[2]
-            uy = s.f_rot[f, 1, 0] * par[0] + s.f_rot[f, 1, 1] * par[1] + s.f_rot[f, 1, 2] * par[2]
-            uz = s.f_rot[f, 2, 0] * par[0] + s.f_rot[f, 2, 1] * par[1] + s.f_rot[f, 2, 2] * par[2]
-            dist = 1.0
-            if c == AXIS:
-                dx, dy, dz = par[3], par[4], par[5]
-            else:
-                ex = par[3] - s.f_pos[f, 0]
-                ey = par[4] - s.f_pos[f, 1]
-                ez = par[5] - s.f_pos[f, 2]
-                dist = max(math.sqrt(ex * ex + ey * ey + ez * ez), 1e-9)
-                dx, dy, dz = ex / dist, ey / dist, ez / dist
-            res[r0] = w * (dx - ux)
-            res[r0 + 1] = w * (dy - uy)
-            res[r0 + 2] = w * (dz - uz)
-            cx = uy * dz - uz * dy
-            cy = uz * dx - ux * dz
-            cz = ux * dy - uy * dx
-            err[i, 0] = nan
-            err[i, 1] = math.atan2(
-                math.sqrt(cx * cx + cy * cy + cz * cz), ux * dx + uy * dy + uz * dz
-            )
-            if want_jac:
-                for j in range(nq):
-                    wx, wy, wz = s.f_jac[f, 3, j], s.f_jac[f, 4, j], s.f_jac[f, 5, j]
-                    jx = wy * uz - wz * uy
-                    jy = wz * ux - wx * uz
-                    jz = wx * uy - wy * ux
-                    if c == LOOK_AT:
-                        vx, vy, vz = s.f_jac[f, 0, j], s.f_jac[f, 1, j], s.f_jac[f, 2, j]
-                        dv = dx * vx + dy * vy + dz * vz
-                        jx += (vx - dx * dv) / dist
-                        jy += (vy - dy * dv) / dist
-                        jz += (vz - dz * dv) / dist
-                    jac[r0, j] = w * jx
-                    jac[r0 + 1, j] = w * jy
-                    jac[r0 + 2, j] = w * jz
-        elif c == JOINT:
-            e_lin = nan
-            e_ang = nan
-            for j in range(nq):
-                d = g.jref[i, j] - q[j]
-                if bd.wrap[j]:
-                    d = (d + math.pi) % (2.0 * math.pi) - math.pi
-                wj = w * g.jw[i, j]
-                res[r0 + j] = wj * d
-                if g.jw[i, j] > 0.0:
-                    ad = abs(d)
-                    if bd.linear[j]:
-                        if math.isnan(e_lin) or ad > e_lin:
-                            e_lin = ad
-                    elif math.isnan(e_ang) or ad > e_ang:
-                        e_ang = ad
+        r1 = r0 + g.nrows[i]
+        fn = ks.fns[g.kind[i]]  # type: ignore[attr-defined]
+        fn(
+            g.par[g.p0[i] : g.p0[i + 1]], g.ipar[g.i0[i] : g.i0[i + 1]], q, s.f_pos, s.f_rot,
+            s.f_jac, want_jac, res[r0:r1], jac[r0:r1], err[i], work,
+        )  # fmt: skip
+        w = g.weight[i]
+        if w != 1.0:
+            for a in range(r0, r1):
+                res[a] *= w
                 if want_jac:
-                    for k in range(nq):
-                        jac[r0 + j, k] = 0.0
-                    jac[r0 + j, j] = wj
-            err[i, 0] = e_lin
-            err[i, 1] = e_ang
-        elif c == COLLISION:
-            cl = g.col
-            nr = g.nrows[i]
-            b0 = cl.body0
-            b1 = b0 + cl.nb
-            used, _, _ = penetration(
-                s.f_rot[b0:b1], s.f_pos[b0:b1], s.f_jac[b0:b1], cl.model, cl.margin, cl.scratch,
-                True, res[r0 : r0 + nr], jac[r0 : r0 + nr], cl.pair[:nr],
-            )  # fmt: skip
-            worst = 0.0
-            for a in range(nr):
-                if a < used:
-                    if res[r0 + a] > worst:
-                        worst = res[r0 + a]
-                    res[r0 + a] = -w * res[r0 + a]  # r = −penetration: r(q+δ) ≈ r − Jδ
                     for j in range(nq):
-                        jac[r0 + a, j] = w * jac[r0 + a, j]
-                else:
-                    res[r0 + a] = 0.0
-                    for j in range(nq):
-                        jac[r0 + a, j] = 0.0
-            err[i, 0] = worst
-            err[i, 1] = nan
+                        jac[a, j] *= w
     n_rows = g.rows_primary if primary else g.rows_secondary
+    cost = 0.0
     for a in range(n_rows):
         cost += res[a] * res[a]
     return cost
 
 
-@hot
+@numba.njit(cache=True)
 def within_tolerance(
     err: FloatArray, g: GoalTable, tol_pos: float, tol_rot: float
 ) -> bool:  # pragma: no cover - compiled
     """The one success judge (compiled twin of :func:`swarm_ik.problem.judge`): every
     primary goal's position error ≤ ``tol_pos`` [m] and angular error ≤ ``tol_rot`` [rad]
     (NaN entries: the goal has no such error)."""
-    for i in range(g.code.shape[0]):
+    for i in range(g.kind.shape[0]):
         if g.primary[i]:
             if err[i, 0] > tol_pos or err[i, 1] > tol_rot:
                 return False
@@ -454,12 +341,12 @@ def within_tolerance(
     return True
 
 
-@leaf
+@numba.njit(cache=True)
 def max_errors(err: FloatArray, g: GoalTable) -> tuple[float, float]:  # pragma: no cover
     """Largest primary position error [m] and angular error [rad] (0 where none)."""
     dp = 0.0
     dr = 0.0
-    for i in range(g.code.shape[0]):
+    for i in range(g.kind.shape[0]):
         if g.primary[i]:
             if err[i, 0] > dp:
                 dp = err[i, 0]
@@ -479,8 +366,7 @@ class Work(NamedTuple):
     jac_t: FloatArray
     err: FloatArray
     err_t: FloatArray
-    m3: FloatArray
-    v3: FloatArray
+    work: FloatArray
     a_mat: FloatArray
     grad: FloatArray
     delta: FloatArray
@@ -498,7 +384,7 @@ def make_work(t: TreeArrays, g: GoalTable, rows: int) -> Work:  # pragma: no cov
     nq = t.nq
     nj = t.kind.shape[0]
     nf = t.frame_joint.shape[0]
-    ng = g.code.shape[0]
+    ng = g.kind.shape[0]
     m = max(rows, 1)
     return Work(
         FKScratch(
@@ -514,8 +400,7 @@ def make_work(t: TreeArrays, g: GoalTable, rows: int) -> Work:  # pragma: no cov
         np.zeros((m, nq)),
         np.full((ng, 2), np.nan),
         np.full((ng, 2), np.nan),
-        np.empty((3, 3)),
-        np.empty(3),
+        np.zeros(WORK_SIZE),
         np.empty((nq, nq)),
         np.empty(nq),
         np.empty(nq),
@@ -528,7 +413,7 @@ def make_work(t: TreeArrays, g: GoalTable, rows: int) -> Work:  # pragma: no cov
     )
 
 
-@leaf
+@numba.njit(cache=True)
 def reset_work(w: Work) -> None:  # pragma: no cover - compiled
     """Set the buffers of ``w`` that :func:`make_work` initialises back to those values (the
     residuals and Jacobians to 0, the errors to NaN), so that a reused scratch behaves as a
@@ -541,7 +426,7 @@ def reset_work(w: Work) -> None:  # pragma: no cover - compiled
     w.err_t[:] = np.nan
 
 
-@leaf
+@numba.njit(cache=True)
 def gram(jac: FloatArray, m: int, n: int, out: FloatArray) -> float:  # pragma: no cover
     """``out[:n, :n] = JᵀJ`` of ``J = jac[:m, :n]`` (both triangles); returns its trace."""
     trace = 0.0
@@ -566,7 +451,7 @@ def polish_outputs(
     return np.empty((k, n)), np.empty(k), np.empty(k), np.empty(k, dtype=i64), np.empty(k, i64)
 
 
-@leaf
+@numba.njit(cache=True)
 def _chol_factor(a: FloatArray, n: int) -> bool:  # pragma: no cover - compiled
     """Cholesky factor ``L`` of the SPD ``a[:n, :n]`` in place, below the diagonal, with
     ``1 / L[j, j]`` on the diagonal (one division per column instead of one per entry, in
@@ -588,7 +473,7 @@ def _chol_factor(a: FloatArray, n: int) -> bool:  # pragma: no cover - compiled
     return True
 
 
-@leaf
+@numba.njit(cache=True)
 def _chol_back(a: FloatArray, b: FloatArray, n: int, x: FloatArray) -> None:  # pragma: no cover
     """Solve ``L Lᵀ x = b`` with the factor of :func:`_chol_factor`."""
     for i in range(n):
@@ -603,7 +488,7 @@ def _chol_back(a: FloatArray, b: FloatArray, n: int, x: FloatArray) -> None:  # 
         x[i] = s * a[i, i]
 
 
-@leaf
+@numba.njit(cache=True)
 def into_bounds(v: float, j: int, b: Bounds) -> float:  # pragma: no cover - compiled
     """Value ``v`` of joint ``j`` wrapped into ``[-π, π)`` if continuous, then clipped to
     the bounds (the compiled twin of :meth:`swarm_ik.solvers.base.Evaluator.clip`)."""
@@ -616,7 +501,7 @@ def into_bounds(v: float, j: int, b: Bounds) -> float:  # pragma: no cover - com
     return v
 
 
-@leaf
+@numba.njit(cache=True)
 def _step_into_bounds(
     q: FloatArray, delta: FloatArray, scale: float, b: Bounds, out: FloatArray
 ) -> None:  # pragma: no cover - compiled
@@ -625,11 +510,12 @@ def _step_into_bounds(
         out[j] = into_bounds(q[j] + scale * delta[j], j, b)
 
 
-@hot
+@numba.njit(cache=True)
 def evaluate(
     q: FloatArray,
     t: TreeArrays,
     g: GoalTable,
+    ks: GoalKernels,
     b: Bounds,
     w: Work,
     want_jac: bool,
@@ -639,15 +525,16 @@ def evaluate(
     norm.  ``trial`` writes into the ``*_t`` buffers of ``w``."""
     fk_one(q, t, w.fk, want_jac)
     if trial:
-        return goal_rows(q, w.fk, g, b, True, want_jac, w.res_t, w.jac_t, w.err_t, w.m3, w.v3)
-    return goal_rows(q, w.fk, g, b, True, want_jac, w.res, w.jac, w.err, w.m3, w.v3)
+        return goal_rows(q, w.fk, g, ks, True, want_jac, w.res_t, w.jac_t, w.err_t, w.work)
+    return goal_rows(q, w.fk, g, ks, True, want_jac, w.res, w.jac, w.err, w.work)
 
 
-@hot
+@numba.njit(cache=True)
 def lm_run(
     starts: FloatArray,
     t: TreeArrays,
     g: GoalTable,
+    ks: GoalKernels,
     b: Bounds,
     cfg: LMSettings,
     tol_pos: float,
@@ -673,7 +560,7 @@ def lm_run(
 
     Args:
         starts: Starting joint vectors, ``(k, nq)``, inside the bounds.
-        t, g, b, cfg: Tree, goals, bounds, settings.
+        t, g, ks, b, cfg: Tree, goal table, goal kernels, bounds, settings.
         tol_pos: Position tolerance the polish stops at [m].
         tol_rot: Angular tolerance the polish stops at [rad].
         max_evals: Most FK + Jacobian evaluations in this call.
@@ -710,7 +597,7 @@ def lm_run(
         while True:
             # the one evaluation site (the start, then each trial): one inlined copy of the
             # FK and the goal rows in this kernel
-            cost_t = evaluate(q_t, t, g, b, w, True, True)
+            cost_t = evaluate(q_t, t, g, ks, b, w, True, True)
             used += 1
             ev_s += 1
             if ev_s == 1 or cost_t < cost:  # the start, or an accepted step
@@ -807,18 +694,37 @@ def lm_run(
 
 
 @numba.njit(cache=True)
-def lm_polish(*a: Any) -> int:  # type: ignore[no-untyped-def]  # pragma: no cover - compiled
-    """:func:`lm_run` with scratch of its own, for callers that polish once: the arguments of
-    :func:`lm_run` but the last (``starts, t, g, b, cfg, tol_pos, tol_rot, max_evals,
-    stop_first, out_q, out_dp, out_dr, out_status, out_evals``)."""
-    return lm_run(*a, make_work(a[1], a[2], a[2].rows_primary))
+def lm_polish(
+    starts: FloatArray,
+    t: TreeArrays,
+    g: GoalTable,
+    ks: GoalKernels,
+    b: Bounds,
+    cfg: LMSettings,
+    tol_pos: float,
+    tol_rot: float,
+    max_evals: int,
+    stop_first: bool,
+    out_q: FloatArray,
+    out_dp: FloatArray,
+    out_dr: FloatArray,
+    out_status: IntArray,
+    out_evals: IntArray,
+) -> int:  # pragma: no cover - compiled
+    """:func:`lm_run` with scratch of its own, for callers that polish once (its arguments
+    but the last)."""
+    return lm_run(
+        starts, t, g, ks, b, cfg, tol_pos, tol_rot, max_evals, stop_first, out_q, out_dp,
+        out_dr, out_status, out_evals, make_work(t, g, g.rows_primary),
+    )  # fmt: skip
 
 
-@leaf
+@numba.njit(cache=True)
 def secondary_cost(
     q: FloatArray,
     t: TreeArrays,
     g: GoalTable,
+    ks: GoalKernels,
     b: Bounds,
     w: Work,
     res2: FloatArray,
@@ -826,7 +732,7 @@ def secondary_cost(
     err2: FloatArray,
 ) -> float:  # pragma: no cover - compiled
     """Squared norm of the secondary stack at ``q`` (FK buffers of ``w`` must hold ``q``)."""
-    return goal_rows(q, w.fk, g, b, False, True, res2, jac2, err2, w.m3, w.v3)
+    return goal_rows(q, w.fk, g, ks, False, True, res2, jac2, err2, w.work)
 
 
 @numba.njit(cache=True)
@@ -834,6 +740,7 @@ def secondary_descent(
     q_in: FloatArray,
     t: TreeArrays,
     g: GoalTable,
+    ks: GoalKernels,
     b: Bounds,
     tol_pos: float,
     tol_rot: float,
@@ -852,7 +759,7 @@ def secondary_descent(
 
     Args:
         q_in: A point meeting the primary goals, ``(nq,)``.
-        t, g, b: Tree, goals, bounds.
+        t, g, ks, b: Tree, goal table, goal kernels, bounds.
         tol_pos, tol_rot: Tolerances the primary goals must keep [m], [rad].
         max_evals: Most FK + Jacobian evaluations.
         out_q: The result, ``(nq,)`` (``q_in`` when no step was kept).
@@ -868,7 +775,7 @@ def secondary_descent(
     jac2 = np.zeros((max(m2, 1), n))
     res2_t = np.zeros(max(m2, 1))
     jac2_t = np.zeros((max(m2, 1), n))
-    err2 = np.full((g.code.shape[0], 2), np.nan)
+    err2 = np.full((g.kind.shape[0], 2), np.nan)
     a1 = np.empty((n, n))
     proj = np.empty((n, n))
     bmat = np.empty((max(m2, 1), n))
@@ -884,8 +791,8 @@ def secondary_descent(
         out_q[j] = q[j]
     if max_evals < 1 or m2 == 0:
         return 0
-    evaluate(q, t, g, b, w, True, False)
-    cost2 = secondary_cost(q, t, g, b, w, res2, jac2, err2)
+    evaluate(q, t, g, ks, b, w, True, False)
+    cost2 = secondary_cost(q, t, g, ks, b, w, res2, jac2, err2)
     used = 1
     if not within_tolerance(w.err, g, tol_pos, tol_rot):
         return used
@@ -942,10 +849,10 @@ def secondary_descent(
                 s_d += proj[i, k] * z[k]
             delta[i] = s_d
         _step_into_bounds(q, delta, 1.0, b, q_t)
-        evaluate(q_t, t, g, b, w, True, True)
+        evaluate(q_t, t, g, ks, b, w, True, True)
         used += 1
         ok_primary = within_tolerance(w.err_t, g, tol_pos, tol_rot)
-        cost2_t = secondary_cost(q_t, t, g, b, w, res2_t, jac2_t, err2)
+        cost2_t = secondary_cost(q_t, t, g, ks, b, w, res2_t, jac2_t, err2)
         if ok_primary and cost2_t < cost2:
             rel = (cost2 - cost2_t) / cost2
             for j in range(n):
@@ -969,7 +876,7 @@ def secondary_descent(
 
 
 @numba.njit(cache=True)
-def errors_batch(q: FloatArray, t: TreeArrays, g: GoalTable, b: Bounds,
+def errors_batch(q: FloatArray, t: TreeArrays, g: GoalTable, ks: GoalKernels, b: Bounds,
                  out_err: FloatArray, out_cost2: FloatArray) -> None:  # fmt: skip
     """Errors of every goal ``(pop, ng, 2)`` and the secondary cost ``(pop,)`` of each row of
     ``q`` ``(pop, nq)`` (no Jacobians)."""
@@ -977,11 +884,11 @@ def errors_batch(q: FloatArray, t: TreeArrays, g: GoalTable, b: Bounds,
     w = make_work(t, g, m)
     for k in range(q.shape[0]):
         fk_one(q[k], t, w.fk, False)
-        goal_rows(q[k], w.fk, g, b, True, False, w.res, w.jac, w.err, w.m3, w.v3)
+        goal_rows(q[k], w.fk, g, ks, True, False, w.res, w.jac, w.err, w.work)
         c2 = 0.0
         if g.rows_secondary > 0:
-            c2 = goal_rows(q[k], w.fk, g, b, False, False, w.res, w.jac, w.err, w.m3, w.v3)
-        for i in range(g.code.shape[0]):
+            c2 = goal_rows(q[k], w.fk, g, ks, False, False, w.res, w.jac, w.err, w.work)
+        for i in range(g.kind.shape[0]):
             out_err[k, i, 0] = w.err[i, 0]
             out_err[k, i, 1] = w.err[i, 1]
         out_cost2[k] = c2
@@ -992,6 +899,7 @@ def residuals_batch(
     q: FloatArray,
     t: TreeArrays,
     g: GoalTable,
+    ks: GoalKernels,
     b: Bounds,
     primary: bool,
     out_res: FloatArray,
@@ -1004,35 +912,4 @@ def residuals_batch(
     w = make_work(t, g, m)
     for k in range(q.shape[0]):
         fk_one(q[k], t, w.fk, True)
-        goal_rows(q[k], w.fk, g, b, primary, True, out_res[k], out_jac[k], out_err[k], w.m3, w.v3)
-
-
-_WARM: set[tuple[int, int]] = set()
-
-
-def warm_up(t: TreeArrays, b: Bounds) -> None:
-    """Compile (or load from numba's cache) every LM kernel for this tree's types, outside any
-    timed solve: called when a robot is loaded and when an :class:`swarm_ik.IKSolver` is made.
-    Idempotent per process (the kernels' types do not depend on the robot)."""
-    key = (t.nq > 0, t.nf)
-    if key in _WARM:
-        return
-    nq = t.nq
-    rows = [np.zeros(N_PAR), np.zeros(N_PAR)]
-    rows[0][[0, 4, 8]] = 1.0
-    g = goal_table([POSE, JOINT], [0, -1], [1.0, 1.0], [True, False], rows,
-                   [np.zeros(nq), np.zeros(nq)], [np.zeros(nq), np.ones(nq)], nq)  # fmt: skip
-    q = np.ascontiguousarray(0.5 * (b.lower + b.upper))[None]
-    out_q = np.empty((1, nq))
-    f1, f2 = np.empty(1), np.empty(1)
-    st, ev = np.empty(1, dtype=np.int64), np.empty(1, dtype=np.int64)
-    lm_polish(q, t, g, b, DEFAULT_LM, 1e-5, 1e-5, 3, True, out_q, f1, f2, st, ev)
-    secondary_descent(q[0], t, g, b, 1.0, 1.0, 2, np.empty(nq))
-    err = np.empty((1, 2, 2))
-    errors_batch(q, t, g, b, err, f1)
-    residuals_batch(q, t, g, b, True, np.empty((1, 6)), np.empty((1, 6, nq)), err)
-    from swarm_ik.kernels import search  # the compiled swarm search (kernels/search.py)
-
-    search.warm_up(t, goal_table([POSE], [0], [1.0], [True], rows[:1], [np.zeros(nq)],
-                                 [np.zeros(nq)], nq), b)  # fmt: skip
-    _WARM.add(key)
+        goal_rows(q[k], w.fk, g, ks, primary, True, out_res[k], out_jac[k], out_err[k], w.work)

@@ -98,8 +98,13 @@ class Evaluator:
         f_target: float | None = None,
         tolerance: tuple[float, float] | None = None,
         on_improvement: Callable[[FloatArray, float], Any] | None = None,
+        key: Any = None,
     ) -> None:
         self.objective = objective
+        self.key = key
+        """The random-stream key of a compiled search when the solve's seed fixed it (an
+        integer seed: :func:`swarm_ik.kernels.search.key_of_seed`), else None (a solver draws
+        one from its Generator)."""
         self.on_improvement = on_improvement
         self.tolerance = tolerance
         self.lower = np.asarray(lower, dtype=float)

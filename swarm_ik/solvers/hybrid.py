@@ -32,18 +32,19 @@ in well under a millisecond; the whole search loop is compiled too
 from __future__ import annotations
 
 import time
-from typing import Any, NamedTuple
+from typing import NamedTuple
 
 import numpy as np
 from numpy.typing import NDArray
 
-from swarm_ik._types import IntArray
 from swarm_ik.errors import InvalidArgumentError, unknown
+from swarm_ik.goals import kernels
 from swarm_ik.kernels import lm, search
 from swarm_ik.kernels.lm import BUDGET, CONVERGED, ITER_CAP, LOCAL_MIN, NOT_RUN, LMSettings
 from swarm_ik.problem import REPLACEABLE, IKProblem
 from swarm_ik.solvers.base import Evaluator, FloatArray, register
 from swarm_ik.solvers.gwo import gwo_move
+from swarm_ik.solvers.python_lm import PolishOutcome, PythonPolisher
 
 __all__ = [
     "BUDGET",
@@ -66,26 +67,6 @@ PREFER = ("best", "nearest")
 
 
 # --------------------------------------------------------------------------- python side
-class PolishOutcome(NamedTuple):
-    """What one call of the compiled polish returns.
-
-    Attributes:
-        q: Polished points, shape ``(k, nq)`` (the start where not run).
-        position_error: Largest primary position error [m], ``(k,)`` (``inf`` where not run).
-        rotation_error: Largest primary angular error [rad], ``(k,)`` (``inf`` where not run).
-        status: ``NOT_RUN``, ``CONVERGED``, ``LOCAL_MIN``, ``ITER_CAP`` or ``BUDGET``, ``(k,)``.
-        evals: Evaluations per start, ``(k,)``.
-        used: Evaluations of the call in total.
-    """
-
-    q: FloatArray
-    position_error: FloatArray
-    rotation_error: FloatArray
-    status: IntArray
-    evals: IntArray
-    used: int
-
-
 class Polisher(NamedTuple):
     """The compiled LM kernel (:func:`swarm_ik.kernels.lm.lm_polish`) bound to one problem.
 
@@ -95,6 +76,7 @@ class Polisher(NamedTuple):
 
     tree: lm.TreeArrays
     table: lm.GoalTable
+    kernels: lm.GoalKernels
     bounds: lm.Bounds
     cfg: LMSettings
     kernel_tol_pos: float
@@ -135,9 +117,15 @@ class Polisher(NamedTuple):
             b.wrap if wrap is None else np.ascontiguousarray(wrap, dtype=np.bool_),
             b.linear,
         )
+        if problem.python_goals:  # goals written in Python: the numpy polish
+            return PythonPolisher(  # type: ignore[return-value]
+                problem, bounds, cfg, float(tol_pos) * cfg.tol_margin,
+                float(tol_rot) * cfg.tol_margin,
+            )  # fmt: skip
         return cls(
             problem.tree,
             problem.table(q0),
+            kernels(),
             bounds,
             cfg,
             float(tol_pos) * cfg.tol_margin,
@@ -160,7 +148,7 @@ class Polisher(NamedTuple):
         status = np.empty(k, dtype=np.int64)
         evals = np.empty(k, dtype=np.int64)
         used = lm.lm_polish(
-            starts, self.tree, self.table, self.bounds, self.cfg, self.kernel_tol_pos,
+            starts, self.tree, self.table, self.kernels, self.bounds, self.cfg, self.kernel_tol_pos,
             self.kernel_tol_rot, int(max_evals), bool(stop_first), out_q, dp, dr, status, evals,
         )  # fmt: skip
         return PolishOutcome(out_q, dp, dr, status, evals, int(used))
@@ -170,7 +158,7 @@ class Polisher(NamedTuple):
         (:func:`swarm_ik.kernels.lm.secondary_descent`); returns ``(q', evaluations)``."""
         out = np.empty(q.shape[0])
         used = lm.secondary_descent(
-            np.ascontiguousarray(q, dtype=float), self.tree, self.table, self.bounds,
+            np.ascontiguousarray(q, dtype=float), self.tree, self.table, self.kernels, self.bounds,
             self.kernel_tol_pos, self.kernel_tol_rot, int(max_evals), out,
         )  # fmt: skip
         return out, int(used)
@@ -178,21 +166,24 @@ class Polisher(NamedTuple):
     def with_posture(self, q_ref: FloatArray) -> Polisher:
         """The same kernel with a secondary posture goal at ``q_ref`` added (``prefer=
         "nearest"``: slide along the self-motion towards ``q0``)."""
+        from swarm_ik.goals.base import kernel_slot
+        from swarm_ik.goals.joint import encode_joint, joint_kernel
+
         t = self.table
         nq = q_ref.shape[0]
+        enc = encode_joint(
+            np.asarray(q_ref, dtype=float), np.ones(nq), self.bounds.wrap, self.bounds.linear
+        )
+        ng = t.kind.shape[0]
         tab = lm.goal_table(
-            [*t.code.tolist(), lm.JOINT],
-            [*t.frame.tolist(), -1],
+            [*t.kind.tolist(), kernel_slot(joint_kernel)],
             [*t.weight.tolist(), 1.0],
             [*t.primary.tolist(), False],
-            [*t.par, np.zeros(lm.N_PAR)],
-            [*t.jref, np.asarray(q_ref, dtype=float)],
-            [*t.jw, np.ones(nq)],
-            nq,
-            rows=[*t.nrows.tolist(), nq],
-            col=t.col,
+            [t.par[t.p0[i] : t.p0[i + 1]] for i in range(ng)] + [enc.par],
+            [t.ipar[t.i0[i] : t.i0[i + 1]] for i in range(ng)] + [enc.ipar],
+            [*t.nrows.tolist(), nq],
         )
-        return self._replace(table=tab)
+        return self._replace(table=tab, kernels=kernels())
 
     def toward(self, q: FloatArray, q_ref: FloatArray, max_evals: int) -> tuple[FloatArray, int]:
         """Move the solution ``q`` along its self-motion towards ``q_ref``."""
@@ -205,17 +196,19 @@ class Polisher(NamedTuple):
         m = self.table.rows_primary
         res = np.empty((1, m))
         jac = np.empty((1, m, q2.shape[1]))
-        err = np.empty((1, self.table.code.shape[0], 2))
-        lm.residuals_batch(q2, self.tree, self.table, self.bounds, True, res, jac, err)
+        err = np.empty((1, self.table.kind.shape[0], 2))
+        lm.residuals_batch(
+            q2, self.tree, self.table, self.kernels, self.bounds, True, res, jac, err
+        )
         e = np.where(np.isnan(err[0][self.table.primary]), 0.0, err[0][self.table.primary])
         return res[0], jac[0], float(e[:, 0].max()), float(e[:, 1].max())
 
     def secondary_cost(self, q_batch: FloatArray) -> FloatArray:
         """Squared norm of the secondary stack for each row of ``q_batch`` ``(k, nq)``."""
         q2 = np.ascontiguousarray(np.atleast_2d(q_batch), dtype=float)
-        err = np.empty((q2.shape[0], self.table.code.shape[0], 2))
+        err = np.empty((q2.shape[0], self.table.kind.shape[0], 2))
         c2 = np.empty(q2.shape[0])
-        lm.errors_batch(q2, self.tree, self.table, self.bounds, err, c2)
+        lm.errors_batch(q2, self.tree, self.table, self.kernels, self.bounds, err, c2)
         return c2
 
 
@@ -250,17 +243,7 @@ class SearchOutcome(NamedTuple):
     history: FloatArray
 
 
-def search_key(seed: int | np.random.Generator) -> np.uint64:
-    """The random-stream key of a compiled search (:func:`swarm_ik.kernels.search.stream_key`)
-    from a seed or a Generator: the first draw of ``numpy.random.default_rng(seed)``, computed
-    without making the Generator for an integer seed (:func:`swarm_ik.kernels.search.seed_key`)."""
-    if isinstance(seed, np.random.Generator):
-        return search.stream_key(seed)
-    return np.uint64(search.seed_key(int(seed)))
-
-
 def compiled_search(
-    static: list[Any],
     pol: Polisher,
     seed_q: FloatArray,
     key: np.uint64,
@@ -282,10 +265,9 @@ def compiled_search(
     (:func:`swarm_ik.kernels.search.swarm_search`).
 
     Args:
-        static: ``search.flat_args(pol.tree, pol.table, pol.bounds, pol.cfg)`` (built once).
         pol: The polisher (kernel tolerances).
         seed_q: First start, ``(nq,)``, inside the bounds.
-        key: Random stream key (:func:`search_key`).
+        key: Random stream key (:func:`swarm_ik.kernels.search.stream_key`).
         pop_size, n_swarm, iterations: As :func:`run`.
         stop: Stop at the first point within ``tol_pos``/``tol_rot``.
         tol_pos, tol_rot: Success tolerances [m], [rad].
@@ -297,8 +279,9 @@ def compiled_search(
         t0: Start of the solve, ``time.perf_counter()`` [s].
     """
     out_q = np.empty(seed_q.shape[0])
-    used, f, dp, dr, stopped, hist = search.swarm_search_flat(
-        *static, seed_q, pol.kernel_tol_pos, pol.kernel_tol_rot,
+    used, f, dp, dr, stopped, hist = search.search(
+        pol.tree, pol.table, pol.kernels, pol.bounds, pol.cfg, seed_q, pol.kernel_tol_pos,
+        pol.kernel_tol_rot,
         float(tol_pos) if stop else -1.0, float(tol_rot) if stop else -1.0, float(w_rot),
         int(pop_size), int(n_swarm), int(iterations), max_evals is None and time_limit is None,
         int(min(remaining, 2**62)), -1 if max_evals is None else int(max_evals),
@@ -310,12 +293,13 @@ def compiled_search(
 
 def compiled_ok(problem: IKProblem, prefer: str) -> bool:
     """Whether :func:`run` can hand its whole loop to the compiled search: ``prefer="best"``,
-    one primary goal with the ``"se3"`` fitness, no secondary goal, and no method of the
-    problem replaced on the instance (e.g. wrapped to record a trace)."""
+    every goal compiled and primary (a secondary goal needs the null-space descent after the
+    search), the ``"se3"`` fitness, and no method of the problem replaced on the instance
+    (e.g. wrapped to record a trace)."""
     return (
         prefer == "best"
-        and len(problem.goals) == 1
-        and bool(problem.primary[0])  # (one goal: no secondary one)
+        and not problem.python_goals
+        and bool(np.all(problem.primary))
         and problem.fitness_name == "se3"
         and type(problem).fitness is IKProblem.fitness
         and type(problem).is_success is IKProblem.is_success
@@ -323,7 +307,7 @@ def compiled_ok(problem: IKProblem, prefer: str) -> bool:
     )
 
 
-def _check_params(
+def check_params(
     pop_size: int,
     iterations: int,
     swarm_fraction: float,
@@ -346,15 +330,20 @@ def _check_params(
         raise unknown("prefer mode", prefer, PREFER)
 
 
-def _default_seed(problem: IKProblem, ev: Evaluator) -> FloatArray:
+def default_seed(
+    problem: IKProblem, lower: FloatArray | None = None, upper: FloatArray | None = None
+) -> FloatArray:
     """The first start without ``q0``: the reference of the first Posture goal (clipped into
     the bounds) when there is one, else the middle of the ranges (TRAC-IK's seed)."""
     from swarm_ik.goals import Posture
 
+    lo = problem.lower if lower is None else lower
+    hi = problem.upper if upper is None else upper
     for gl in problem.goals:
         if isinstance(gl, Posture):
-            return ev.clip(problem.robot.check_q(gl.q_ref, "Posture.q_ref")[None])[0]
-    return 0.5 * (ev.lower + ev.upper)
+            ref = problem.robot.wrap(problem.robot.check_q(gl.q_ref, "Posture.q_ref"))
+            return np.clip(ref, lo, hi)
+    return 0.5 * (lo + hi)
 
 
 def propose(
@@ -488,7 +477,7 @@ def run(
     problem = ev.problem
     if problem is None:
         raise InvalidArgumentError("solver 'swarm' needs an IK problem (it uses the Jacobian)")
-    _check_params(
+    check_params(
         pop_size, iterations, swarm_fraction, max_iters, prefer, nearest_starts, tol_margin
     )
     tol_pos, tol_rot = ev.tolerance if ev.tolerance is not None else (1e-5, 1e-5)
@@ -517,15 +506,16 @@ def run(
             return dp + w_rot * dr
         return np.asarray(problem.fitness(q), dtype=float)
 
-    seed = ev.q0.copy() if ev.q0 is not None else _default_seed(problem, ev)
+    seed = ev.q0.copy() if ev.q0 is not None else default_seed(problem, ev.lower, ev.upper)
     if (
         compiled_ok(problem, prefer)
         and ev.f_target is None
         and (not ev.stops_on_success or ev.tolerance is not None)
     ):  # the whole loop in one compiled call (kernels/search.py)
         res = compiled_search(
-            search.flat_args(pol.tree, pol.table, pol.bounds, pol.cfg), pol,
-            np.ascontiguousarray(seed, dtype=float), search.stream_key(rng),
+            pol,
+            np.ascontiguousarray(seed, dtype=float),
+            search.stream_key(rng) if ev.key is None else ev.key,
             stop=ev.stops_on_success, tol_pos=tol_pos, tol_rot=tol_rot, w_rot=w_rot,
             pop_size=pop_size, n_swarm=int(round(swarm_fraction * pop_size)),
             iterations=iterations, max_evals=ev.max_evals, remaining=ev.remaining,

@@ -11,7 +11,7 @@ from typing import Any
 import numpy as np
 import pinocchio as pin
 
-from swarm_ik import collision
+from swarm_ik import paths
 from swarm_ik._types import FloatArray
 from swarm_ik.errors import RobotModelError
 from swarm_ik.robot import RobotModel
@@ -22,9 +22,9 @@ def package_dirs(robot: RobotModel) -> list[str]:
 
     The URDF's folder and its two parents (a ``<pkg>/urdf/robot.urdf`` layout), the
     ``example-robot-data`` folders when that package is installed, and ``$ROS_PACKAGE_PATH``
-    (the same search as the collision geometry, :func:`swarm_ik.collision.package_dirs`).
+    (the same search as the collision geometry, :func:`swarm_ik.paths.package_dirs`).
     """
-    return collision.package_dirs(robot.urdf_path)
+    return paths.package_dirs(robot.urdf_path)
 
 
 def visual_model(robot: RobotModel) -> Any:

@@ -1,0 +1,331 @@
+"""The goal protocol: a goal is a residual with its Jacobian, a weight and a priority.
+
+A goal is a frozen dataclass deriving from :class:`Goal`, written one way or the other:
+
+* **Compiled**: the class names a numba kernel of
+  :data:`swarm_ik.kernels.lm.GOAL_SIGNATURE` in its ``kernel`` class attribute and encodes
+  itself with :meth:`Goal.encode` as its own parameter block (floats, integers) and its row
+  count.  The kernel is registered once (:func:`kernel_slot`); the LM kernel calls it through
+  its slot and never learns the goal's name.  Built-in goals also give :meth:`Goal.residual`
+  and :meth:`Goal.jacobian` in numpy: the reference the kernel is tested against.
+* **Python**: the class defines :meth:`Goal.residual` ``(state) -> (m,)`` and
+  :meth:`Goal.jacobian` ``(state) -> (m, nq)`` (the derivative of the residual with respect
+  to ``q``) on a :class:`State` computed by Pinocchio.  Such a goal mixes with compiled ones in
+  one problem (the solve then runs the Python path of the solvers: slower, still exact), and
+  is judged by the norm of its residual against its ``tolerance`` (default: the solve's
+  position tolerance).
+
+Both are judged by :meth:`Goal.errors` on a Pinocchio :class:`State` (the independent check
+of every answer).  A Python goal, after pink's ``Task`` (``compute_error``,
+``compute_jacobian``)::
+
+    @dataclass(frozen=True)
+    class OnPlane(Goal):
+        frame: str
+        normal: tuple = (0.0, 0.0, 1.0)
+        height: float = 0.0
+
+        def residual(self, state):
+            return np.array([np.dot(self.normal, state.pose(self.frame)[:3, 3]) - self.height])
+
+        def jacobian(self, state):
+            return np.asarray(self.normal) @ state.jacobian(self.frame)[:3]
+"""
+
+from __future__ import annotations
+
+import reprlib
+from dataclasses import dataclass, field
+from typing import TYPE_CHECKING, Any, ClassVar, NamedTuple
+
+import numpy as np
+from numpy.typing import NDArray
+
+from swarm_ik.errors import InvalidArgumentError, UnknownNameError
+from swarm_ik.kernels.lm import GOAL_SIGNATURE, kernel_list
+
+if TYPE_CHECKING:
+    from swarm_ik.robot import RobotModel
+
+FloatArray = NDArray[np.float64]
+IntArray = NDArray[np.int64]
+
+
+# --------------------------------------------------------------------------- kernels
+_KERNELS: list[Any] = []
+_SLOTS: dict[int, int] = {}
+_LIST: list[Any] = []
+
+
+def kernel_slot(kernel: Any) -> int:
+    """The slot of a compiled goal kernel in the list the LM kernel calls it through,
+    registering it on first use: it is compiled then (or loaded from numba's cache) for
+    :data:`swarm_ik.kernels.lm.GOAL_SIGNATURE`, so only the kernels of goals in use compile.
+
+    Args:
+        kernel: A ``numba.njit`` function of the goal protocol's arguments.
+
+    Raises:
+        InvalidArgumentError: ``kernel`` is not a numba function, or cannot be compiled for
+            that signature.
+    """
+    slot = _SLOTS.get(id(kernel))
+    if slot is None:
+        if not callable(getattr(kernel, "compile", None)):
+            raise InvalidArgumentError(
+                "a compiled goal's kernel must be a numba.njit function of the arguments of "
+                f"swarm_ik.kernels.lm.GOAL_SIGNATURE, got {reprlib.repr(kernel)}"
+            )
+        try:
+            if not any(tuple(sig) == GOAL_SIGNATURE.args for sig in kernel.signatures):
+                kernel.compile(GOAL_SIGNATURE)
+        except Exception as exc:  # numba's typing errors have no public base class
+            first = str(exc).strip().splitlines()[0] if str(exc).strip() else type(exc).__name__
+            raise InvalidArgumentError(
+                f"goal kernel {getattr(kernel, '__name__', kernel)!r} does not compile for "
+                f"swarm_ik.kernels.lm.GOAL_SIGNATURE: {first}"
+            ) from None
+        slot = len(_KERNELS)
+        _KERNELS.append(kernel)
+        _SLOTS[id(kernel)] = slot
+        _LIST.clear()
+    return slot
+
+
+def kernels() -> Any:
+    """The typed list of every registered goal kernel (made again after a registration)."""
+    if not _LIST:
+        _LIST.append(kernel_list(_KERNELS))
+    return _LIST[0]
+
+
+# --------------------------------------------------------------------------- state
+class State:
+    """What a Python goal sees: the joint vector and Pinocchio's kinematics at it.
+
+    Read it while the goal is evaluated (it reuses the robot's Pinocchio ``Data`` of the
+    calling thread).
+
+    Attributes:
+        robot: The robot.
+        q: Joint vector ``(nq,)`` (rad / m).
+        q0: The solve's start ``(nq,)``, or None.
+    """
+
+    def __init__(self, robot: RobotModel, q: Any, q0: Any = None) -> None:
+        import pinocchio as pin
+
+        self.robot = robot
+        self.q = np.asarray(q, dtype=float)
+        self.q0 = None if q0 is None else np.asarray(q0, dtype=float)
+        self._pin = pin
+        self._q_pin = robot.to_pinocchio(self.q)
+        self._data = robot._data()  # (one Data per thread, reused)
+        pin.framesForwardKinematics(robot.model, self._data, self._q_pin)
+        self._jacobians = False
+
+    def frame_id(self, frame: str) -> int:
+        """Pinocchio's id of a frame of the robot's (reduced) model.
+
+        Raises:
+            UnknownNameError: no such frame (the frames listed).
+        """
+        ids = self.robot._cache.setdefault("frame_id", {})
+        fid = ids.get(frame) if isinstance(frame, str) else None
+        if fid is None:
+            model = self.robot.model
+            if not isinstance(frame, str) or not model.existFrame(frame):
+                names = [f.name for f in model.frames]
+                raise UnknownNameError(
+                    f"unknown frame {frame!r}; frames of this robot: {', '.join(names)}"
+                )
+            fid = ids[frame] = int(model.getFrameId(frame))
+        return int(fid)
+
+    def pose(self, frame: str) -> FloatArray:
+        """World pose of ``frame``, ``(4, 4)`` [m]."""
+        return np.array(self._data.oMf[self.frame_id(frame)].homogeneous)
+
+    def jacobian(self, frame: str) -> FloatArray:
+        """LOCAL_WORLD_ALIGNED Jacobian of ``frame`` ``(6, nq)``: linear rows [m/rad] first,
+        then angular; columns in the order of ``q`` (mimic columns summed into their
+        drivers')."""
+        pin, robot = self._pin, self.robot
+        if not self._jacobians:
+            pin.computeJointJacobians(robot.model, self._data, self._q_pin)
+            self._jacobians = True
+        jac = pin.getFrameJacobian(
+            robot.model, self._data, self.frame_id(frame), pin.ReferenceFrame.LOCAL_WORLD_ALIGNED
+        )
+        return robot.velocity_to_q(np.array(jac).reshape(6, robot.model.nv))
+
+
+# --------------------------------------------------------------------------- goals
+class Encoded(NamedTuple):
+    """A compiled goal as the table holds it.
+
+    Attributes:
+        par: Float parameters, ``(P,)``.
+        ipar: Integer parameters (frame indices…), ``(I,)``.
+        rows: Residual rows.
+    """
+
+    par: FloatArray
+    ipar: IntArray
+    rows: int
+
+
+def weight_value(value: Any, what: str = "weight") -> float:
+    """A positive finite number, or :class:`InvalidArgumentError` naming ``what``."""
+    if isinstance(value, (bool, str)):
+        raise InvalidArgumentError(f"{what} must be a positive number, got {value!r}")
+    try:
+        w = float(value)
+    except (TypeError, ValueError):
+        raise InvalidArgumentError(f"{what} must be a positive number, got {value!r}") from None
+    if not (np.isfinite(w) and w > 0.0):
+        raise InvalidArgumentError(f"{what} must be a positive finite number, got {value!r}")
+    return w
+
+
+def vec3(value: Any, what: str, *, unit: bool = False) -> FloatArray:
+    """3 finite numbers as a float array (normalised when ``unit``), or
+    :class:`InvalidArgumentError` naming ``what``."""
+    if isinstance(value, (str, bytes)):
+        raise InvalidArgumentError(f"{what} must be 3 numbers, got {value!r}")
+    try:
+        arr = np.array(value, dtype=float)
+    except (TypeError, ValueError):
+        raise InvalidArgumentError(f"{what} must be 3 numbers, got {reprlib.repr(value)}") from None
+    if arr.shape != (3,):
+        raise InvalidArgumentError(f"{what} must be 3 numbers, got shape {arr.shape}")
+    if not np.all(np.isfinite(arr)):
+        raise InvalidArgumentError(f"{what} must be finite, got {arr.tolist()}")
+    if unit:
+        scale = np.max(np.abs(arr))
+        if scale == 0.0:
+            raise InvalidArgumentError(f"{what} must not be the zero vector")
+        arr = arr / scale
+        arr = arr / np.linalg.norm(arr)
+    return arr
+
+
+@dataclass(frozen=True)
+class Goal:
+    """Base of every goal (see the module docstring for the protocol).
+
+    Attributes:
+        weight: Weight of the goal's residual rows (dimensionless; a Pose's rotation rows are
+            in radians, its position rows in metres); keyword-only, positive.
+        primary: Must be met to tolerance (True) or optimised after the primary goals in
+            their null space (False); keyword-only (default True, False for the joint-space
+            preferences).
+    """
+
+    weight: float = field(default=1.0, kw_only=True)
+    primary: bool = field(default=True, kw_only=True)
+    kernel: ClassVar[Any] = None
+    """The compiled residual kernel (None: a Python goal)."""
+    units: ClassVar[tuple[str, ...]] = ()
+    """Fields that are directions: 3 finite numbers, not zero, stored normalised."""
+    vectors: ClassVar[tuple[str, ...]] = ()
+    """Fields that are points or vectors: 3 finite numbers, stored as a float array."""
+
+    def __post_init__(self) -> None:
+        name = type(self).__name__
+        for label in self.units:
+            object.__setattr__(
+                self, label, vec3(getattr(self, label), f"{name}.{label}", unit=True)
+            )
+        for label in self.vectors:
+            object.__setattr__(self, label, vec3(getattr(self, label), f"{name}.{label}"))
+        object.__setattr__(self, "weight", weight_value(self.weight, f"{name}.weight"))
+        if not isinstance(self.primary, (bool, np.bool_)):
+            raise InvalidArgumentError(
+                f"{name}.primary must be true or false, got {self.primary!r}"
+            )
+        object.__setattr__(self, "primary", bool(self.primary))
+
+    @property
+    def compiled(self) -> bool:
+        """Whether the goal has a compiled kernel."""
+        return type(self).kernel is not None
+
+    @property
+    def is_primary(self) -> bool:
+        """The goal's ``primary`` field."""
+        return bool(self.primary)
+
+    def frame_name(self) -> str | None:
+        """The goal frame (None for goals without one)."""
+        return getattr(self, "frame", None)
+
+    def describe(self) -> str:
+        """Short label for reports, e.g. ``Pose(left_gripper)``."""
+        f = self.frame_name()
+        return f"{type(self).__name__}({f})" if f else type(self).__name__
+
+    # ------------------------------------------------------------- compiled goals
+    def encode(self, robot: RobotModel, q0: FloatArray | None) -> Encoded:
+        """The goal's parameter block for its kernel (compiled goals)."""
+        raise NotImplementedError(f"{type(self).__name__} is not a compiled goal")
+
+    def extra_frames(self, robot: RobotModel) -> tuple[Any, Any, Any] | None:
+        """Frames the goal needs beyond the robot's goal frames (appended to the problem's
+        tree): ``(joint ids of robot.model, rotations, translations)``, or None."""
+        return None
+
+    # ------------------------------------------------------------- every goal
+    def residual(self, state: State) -> FloatArray:
+        """The unweighted residual ``(m,)`` at ``state`` (zero when the goal is met)."""
+        raise NotImplementedError(f"{type(self).__name__} defines no residual(state)")
+
+    def jacobian(self, state: State) -> FloatArray:
+        """``∂residual/∂q`` ``(m, nq)`` at ``state``."""
+        raise NotImplementedError(f"{type(self).__name__} defines no jacobian(state)")
+
+    def errors(self, state: State) -> tuple[float, float]:
+        """``(position error [m], angular error [rad])`` at ``state`` (NaN where none) that
+        the tolerances judge; by default the norm of the residual as a position error."""
+        return float(np.linalg.norm(self.residual(state))), float("nan")
+
+    def met(self, state: State, tol_pos: float, tol_rot: float) -> tuple[float, float, bool, Any]:
+        """The independent check at ``state``: ``(position error, angular error, met,
+        details)``; a Python goal's own ``tolerance`` attribute, when it has one, replaces
+        ``tol_pos``."""
+        dp, dr = self.errors(state)
+        if not self.compiled and getattr(self, "tolerance", None) is not None:
+            tol_pos = float(self.tolerance)  # type: ignore[attr-defined]
+        met = not (dp > tol_pos) and not (dr > tol_rot)
+        if np.isnan(dp) and np.isnan(dr):
+            met = False  # nothing measured: never a vacuous success
+        return float(dp), float(dr), bool(met), None
+
+    def rows(self, robot: RobotModel, state: State | None = None) -> int:
+        """Number of residual rows (a Python goal: the length of its residual)."""
+        if self.compiled:
+            return self.encode(robot, None).rows
+        if state is None:
+            state = State(robot, robot.mid_q())
+        return int(np.size(self.residual(state)))
+
+
+def frame_index(goal: Goal, robot: RobotModel) -> int:
+    """Index of the goal's frame among the robot's goal frames (the tree's frames).
+
+    Raises:
+        UnknownNameError: not a goal frame of the robot (they are listed).
+    """
+    frame = goal.frame_name()
+    if frame not in robot.frames:
+        raise UnknownNameError(
+            f"{goal.describe()}: {frame!r} is not a goal frame of this robot; goal frames: "
+            f"{', '.join(robot.frames)} (load the robot with every goal frame: "
+            "load_robot(name, ee_frame=[...]))"
+        )
+    return robot.frames.index(frame)
+
+
+def skew(v: FloatArray) -> FloatArray:
+    """``[v]×`` (3, 3)."""
+    return np.array([[0.0, -v[2], v[1]], [v[2], 0.0, -v[0]], [-v[1], v[0], 0.0]])

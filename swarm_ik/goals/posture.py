@@ -1,0 +1,43 @@
+"""``Posture``: joints near a reference posture."""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+from typing import TYPE_CHECKING, Any
+
+import numpy as np
+
+from swarm_ik.errors import InvalidArgumentError
+from swarm_ik.goals.base import FloatArray
+from swarm_ik.goals.joint import JointGoal
+
+if TYPE_CHECKING:
+    from swarm_ik.robot import RobotModel
+
+
+@dataclass(frozen=True)
+class Posture(JointGoal):
+    """Joints near a reference posture: ``r = w_j·(q_ref − q)`` (continuous joints wrapped).
+
+    Secondary by default (optimised in the null space of the primary goals).
+
+    Args:
+        q_ref: Reference joint vector ``(nq,)`` (rad / m).
+        joint_weights: Optional per-joint weights ``(nq,)`` (default all 1; keyword-only).
+        weight, primary: As :class:`~swarm_ik.goals.Goal` (keyword-only; ``primary`` default
+            False).
+    """
+
+    q_ref: Any
+    joint_weights: Any = field(default=None, kw_only=True)
+
+    def reference(self, robot: RobotModel, q0: FloatArray | None) -> tuple[FloatArray, FloatArray]:
+        ref = robot.check_q(self.q_ref, "Posture.q_ref")
+        jw = (
+            np.ones(robot.nq)
+            if self.joint_weights is None
+            else robot.check_q(self.joint_weights, "Posture.joint_weights")
+        )
+        if np.any(jw < 0):
+            raise InvalidArgumentError("Posture.joint_weights must be non-negative")
+        return ref, jw

@@ -1,0 +1,196 @@
+"""The Levenberg–Marquardt polish in numpy, for problems with goals written in Python.
+
+:class:`PythonPolisher` has the interface of :class:`swarm_ik.solvers.hybrid.Polisher` and
+the rules of :func:`swarm_ik.kernels.lm.lm_run` (the damped normal equations over the free
+joints, joints at a limit whose step points outwards frozen, steps clipped to ``max_step``,
+accept/reject with the damping ×0.1/×10, a local minimum after ``stall_iters`` steps that
+lower the cost by less than ``stall_rel``), on the problem's stacked residual
+(:meth:`swarm_ik.problem.IKProblem.residual_jacobian`: compiled goals through the kernels,
+Python goals on Pinocchio's state).  Slower than the compiled polish, equally exact: success
+is judged by the same errors (:meth:`IKProblem.goal_errors`).
+"""
+
+from __future__ import annotations
+
+from typing import Any, NamedTuple
+
+import numpy as np
+
+from swarm_ik._types import FloatArray, IntArray
+from swarm_ik.kernels import lm
+from swarm_ik.kernels.lm import BUDGET, CONVERGED, ITER_CAP, LOCAL_MIN, NOT_RUN, LMSettings
+from swarm_ik.problem import IKProblem
+
+
+class PolishOutcome(NamedTuple):
+    """What one call of a polish returns (the compiled one and this one).
+
+    Attributes:
+        q: Polished points, shape ``(k, nq)`` (the start where not run).
+        position_error: Largest primary position error [m], ``(k,)`` (``inf`` where not run).
+        rotation_error: Largest primary angular error [rad], ``(k,)`` (``inf`` where not run).
+        status: ``NOT_RUN``, ``CONVERGED``, ``LOCAL_MIN``, ``ITER_CAP`` or ``BUDGET``, ``(k,)``.
+        evals: Evaluations per start, ``(k,)``.
+        used: Evaluations of the call in total.
+    """
+
+    q: FloatArray
+    position_error: FloatArray
+    rotation_error: FloatArray
+    status: IntArray
+    evals: IntArray
+    used: int
+
+
+class PythonPolisher(NamedTuple):
+    """The LM polish of a problem with Python goals (see the module docstring).
+
+    Attributes:
+        problem: The problem.
+        bounds: Search bounds.
+        cfg: LM settings.
+        kernel_tol_pos: Position tolerance the polish stops at [m].
+        kernel_tol_rot: Angular tolerance the polish stops at [rad].
+    """
+
+    problem: IKProblem
+    bounds: lm.Bounds
+    cfg: LMSettings
+    kernel_tol_pos: float
+    kernel_tol_rot: float
+
+    @property
+    def wrap(self) -> Any:
+        """Continuous-joint mask, ``(nq,)``."""
+        return self.bounds.wrap
+
+    def _within(self, err: FloatArray) -> bool:
+        """Every primary goal within the polish tolerances (a Python goal's own
+        ``tolerance`` scaled by the same margin)."""
+        margin = self.kernel_tol_pos / max(self.cfg.tol_margin, 1e-300)
+        for gl, e, prim in zip(self.problem.goals, err, self.problem.primary, strict=True):
+            if not prim:
+                continue
+            tp = self.kernel_tol_pos
+            own = None if gl.compiled else getattr(gl, "tolerance", None)
+            if own is not None:
+                tp = float(own) * self.kernel_tol_pos / margin
+            if e[0] > tp or e[1] > self.kernel_tol_rot or (np.isnan(e[0]) and np.isnan(e[1])):
+                return False
+        return True
+
+    def _errors(self, q: FloatArray) -> tuple[FloatArray, float, float]:
+        err = self.problem.goal_errors(q[None])[0]
+        e = np.where(np.isnan(err), 0.0, err)[self.problem.primary]
+        return err, float(e[:, 0].max(initial=0.0)), float(e[:, 1].max(initial=0.0))
+
+    def _into_bounds(self, q: FloatArray) -> FloatArray:
+        q = q.copy()
+        w = self.bounds.wrap
+        q[w] = (q[w] + np.pi) % (2 * np.pi) - np.pi
+        return np.clip(q, self.bounds.lower, self.bounds.upper)
+
+    def _rj(self, q: FloatArray) -> tuple[FloatArray, FloatArray]:
+        _f, r, j = self.problem.residual_jacobian(q[None])
+        return r[0], j[0]
+
+    def polish(self, starts: FloatArray, max_evals: int, stop_first: bool = True) -> Any:
+        """Polish ``starts`` ``(k, nq)`` with at most ``max_evals`` evaluations (the
+        :class:`swarm_ik.solvers.hybrid.PolishOutcome` of the compiled polish)."""
+        starts = np.atleast_2d(np.asarray(starts, dtype=float))
+        k, n = starts.shape
+        out_q = starts.copy()
+        dp = np.full(k, np.inf)
+        dr = np.full(k, np.inf)
+        status = np.full(k, NOT_RUN, dtype=np.int64)
+        evals = np.zeros(k, dtype=np.int64)
+        cfg, b = self.cfg, self.bounds
+        used = 0
+        for s in range(k):
+            if used >= max_evals:
+                break
+            q = starts[s].copy()
+            r, jac = self._rj(q)
+            err, e_p, e_r = self._errors(q)
+            cost = float(r @ r)
+            used += 1
+            ev = 1
+            lam, stall, st = cfg.lam0, 0, ITER_CAP
+            while True:
+                if self._within(err):
+                    st = CONVERGED
+                    break
+                if ev >= cfg.max_iters:
+                    st = ITER_CAP
+                    break
+                if used >= max_evals:
+                    st = BUDGET
+                    break
+                a = jac.T @ jac
+                g = jac.T @ r
+                scale = np.trace(a) / n + 1e-300
+                free = ~(~b.wrap & (((q <= b.lower) & (g < 0.0)) | ((q >= b.upper) & (g > 0.0))))
+                if not free.any():
+                    st = LOCAL_MIN
+                    break
+                af = a[np.ix_(free, free)] + lam * scale * np.eye(int(free.sum()))
+                try:
+                    step = np.linalg.solve(af, g[free])
+                except np.linalg.LinAlgError:
+                    lam *= 10.0
+                    if lam > 1e12:
+                        st = LOCAL_MIN
+                        break
+                    continue
+                delta = np.zeros(n)
+                delta[free] = step
+                big = float(np.abs(delta).max())
+                if big > cfg.max_step:
+                    delta *= cfg.max_step / big
+                q_t = self._into_bounds(q + delta)
+                r_t, jac_t = self._rj(q_t)
+                used += 1
+                ev += 1
+                cost_t = float(r_t @ r_t)
+                if cost_t < cost:
+                    stall = stall + 1 if cost_t > cost * (1.0 - cfg.stall_rel) else 0
+                    lam = max(lam * 0.1, 1e-12)
+                    q, r, jac, cost = q_t, r_t, jac_t, cost_t
+                    err, e_p, e_r = self._errors(q)
+                    if stall >= cfg.stall_iters and not self._within(err):
+                        st = LOCAL_MIN
+                        break
+                else:
+                    lam = max(lam * 10.0, 1e-12)
+                    stall += 1
+                    if lam > 1e8 or stall >= cfg.stall_iters:
+                        st = LOCAL_MIN
+                        break
+            out_q[s], dp[s], dr[s], status[s], evals[s] = q, e_p, e_r, st, ev
+            if stop_first and st == CONVERGED:
+                break
+        return PolishOutcome(out_q, dp, dr, status, evals, int(used))
+
+    def secondary(self, q: FloatArray, max_evals: int) -> tuple[FloatArray, int]:
+        """No null-space descent for problems with Python goals: ``q`` unchanged."""
+        return np.asarray(q, dtype=float), 0
+
+    def with_posture(self, q_ref: FloatArray) -> PythonPolisher:
+        """The same polisher (``prefer="nearest"`` keeps the nearest converged start)."""
+        return self
+
+    def toward(self, q: FloatArray, q_ref: FloatArray, max_evals: int) -> tuple[FloatArray, int]:
+        """No self-motion slide for problems with Python goals: ``q`` unchanged."""
+        return np.asarray(q, dtype=float), 0
+
+    def residual(self, q: FloatArray) -> tuple[FloatArray, FloatArray, float, float]:
+        """Stacked primary residual, its step Jacobian, largest position [m] and angular
+        [rad] errors."""
+        q = np.asarray(q, dtype=float)
+        r, jac = self._rj(q)
+        _err, e_p, e_r = self._errors(q)
+        return r, jac, e_p, e_r
+
+    def secondary_cost(self, q_batch: FloatArray) -> FloatArray:
+        """Squared norm of the secondary stack for each row of ``q_batch`` ``(k, nq)``."""
+        return np.asarray(self.problem._errors_and_cost2(q_batch, None)[1])

@@ -1,0 +1,181 @@
+"""The goal protocol: a goal written in Python (residual + jacobian on Pinocchio's state) mixes
+with compiled goals; compiled kernels are registered once by slot; undefined residuals are
+never met."""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numba
+import numpy as np
+import pytest
+from conftest import robot
+
+import swarm_ik
+from swarm_ik import goals as G
+from swarm_ik.errors import InvalidArgumentError, UnknownNameError
+from swarm_ik.kernels.lm import GOAL_SIGNATURE
+
+
+@dataclass(frozen=True)
+class OnPlane(G.Goal):
+    """The frame origin on the plane n·p = h."""
+
+    frame: str
+    normal: tuple = (0.0, 0.0, 1.0)
+    height: float = 0.0
+
+    def residual(self, state):
+        return np.array([np.dot(self.normal, state.pose(self.frame)[:3, 3]) - self.height])
+
+    def jacobian(self, state):
+        return np.asarray(self.normal)[None] @ state.jacobian(self.frame)[:3]
+
+
+@dataclass(frozen=True)
+class DistanceBetween(G.Goal):
+    """Two frames a given distance apart (a goal on two frames, metres)."""
+
+    frame_a: str
+    frame_b: str
+    distance: float
+    tolerance: float = 1e-6
+
+    def residual(self, state):
+        d = state.pose(self.frame_a)[:3, 3] - state.pose(self.frame_b)[:3, 3]
+        return np.array([np.linalg.norm(d) - self.distance])
+
+    def jacobian(self, state):
+        d = state.pose(self.frame_a)[:3, 3] - state.pose(self.frame_b)[:3, 3]
+        u = d / np.linalg.norm(d)
+        jd = state.jacobian(self.frame_a)[:3] - state.jacobian(self.frame_b)[:3]
+        return u[None] @ jd
+
+
+def _fd_check(goal: G.Goal, r: swarm_ik.RobotModel, q: np.ndarray) -> None:
+    h = 1e-6
+    jac = goal.jacobian(G.State(r, q))
+    for j in range(r.nq):
+        e = np.zeros(r.nq)
+        e[j] = h
+        num = (goal.residual(G.State(r, q + e)) - goal.residual(G.State(r, q - e))) / (2 * h)
+        np.testing.assert_allclose(num, jac[:, j], atol=1e-7)
+
+
+def test_python_goal_jacobians_match_central_differences() -> None:
+    r = robot("panda")
+    q = r.random_q(np.random.default_rng(0))
+    _fd_check(OnPlane("panda_hand_tcp", height=0.3), r, q)
+    _fd_check(DistanceBetween("panda_hand_tcp", "panda_link0", 0.5), r, q)
+
+
+def test_builtin_goals_give_their_numpy_residual_through_the_same_protocol() -> None:
+    r = robot("panda")
+    rng = np.random.default_rng(1)
+    q_t, q = r.random_q(rng), r.random_q(rng)
+    pose = r.fk(q_t)
+    for goal in (
+        G.Pose(r.ee_frame, pose),
+        G.Position(r.ee_frame, pose[:3, 3]),
+        G.Axis(r.ee_frame, [0, 0, 1], pose[:3, 2]),
+        G.Posture(r.random_q(rng), primary=True),
+    ):
+        _fd_check(goal, r, q)
+
+
+def test_python_goal_mixed_with_compiled_goals_is_met_and_checked_by_pinocchio() -> None:
+    r = robot("panda")
+    rng = np.random.default_rng(2)
+    for k in range(3):
+        p = r.fk(r.random_q(rng))[:3, 3]
+        goals = [OnPlane("panda_hand_tcp", height=float(p[2])), G.Position("panda_hand_tcp", p)]
+        res = swarm_ik.solve(swarm_ik.IKProblem(r, goals=goals), seed=k, time_limit=5.0)
+        assert res.success, res
+        reached = r.fk_pinocchio(res.q)[:3, 3]
+        assert abs(reached[2] - p[2]) < 1e-5 and np.linalg.norm(reached - p) < 1e-5
+
+
+def test_python_goal_alone_and_its_own_tolerance() -> None:
+    r = robot("panda")
+    q_a = r.random_q(np.random.default_rng(3))
+    d = float(np.linalg.norm(r.fk(q_a)[:3, 3] - r.fk_pinocchio(q_a, None)[:3, 3]) + 0.45)
+    goal = DistanceBetween("panda_hand_tcp", "panda_link0", d)
+    res = swarm_ik.solve(swarm_ik.IKProblem(r, goals=[goal]), seed=0, time_limit=5.0)
+    assert res.success
+    (err,) = res.goal_errors
+    assert err.met and err.position_error <= 1e-6
+
+
+def test_python_goals_with_paper_solvers_use_the_same_judge() -> None:
+    r = robot("panda")
+    p = r.fk(r.random_q(np.random.default_rng(4)))[:3, 3]
+    prob = swarm_ik.IKProblem(r, goals=[OnPlane("panda_hand_tcp", height=float(p[2]))])
+    res = swarm_ik.solve(prob, "gwo", seed=0, max_evals=400, tol_pos=1e-3)
+    check = prob.verify(res.q, tol_pos=1e-3)
+    assert res.success == (all(e.met for e in check) and res.within_limits)
+
+
+def test_unknown_frame_of_a_python_goal_is_named_with_the_frames() -> None:
+    r = robot("panda")
+    prob = swarm_ik.IKProblem(r, goals=[OnPlane("no_such_frame")])
+    with pytest.raises(UnknownNameError, match="no_such_frame.*panda_link0"):
+        swarm_ik.solve(prob, max_evals=10)
+
+
+def test_a_compiled_kernel_of_another_signature_is_refused() -> None:
+    @numba.njit(cache=False)
+    def bad(par):  # pragma: no cover - never called
+        return par
+
+    with pytest.raises(InvalidArgumentError, match="GOAL_SIGNATURE"):
+        G.kernel_slot(bad)
+
+
+def test_a_compiled_goal_written_outside_the_package_runs_through_its_slot() -> None:
+    """A compiled goal of one's own: its kernel registered on first use, the LM kernel
+    calling it by slot; checked against the same goal's numpy residual."""
+
+    @numba.njit(GOAL_SIGNATURE)
+    def height_kernel(par, ipar, q, f_pos, f_rot, f_jac, want_jac, res, jac, err, work):
+        f = ipar[0]
+        res[0] = par[0] - f_pos[f, 2]
+        if want_jac:
+            for j in range(q.shape[0]):
+                jac[0, j] = f_jac[f, 2, j]
+        err[0] = abs(res[0])
+        err[1] = np.nan
+
+    @dataclass(frozen=True)
+    class Height(G.Goal):
+        frame: str
+        z: float
+        kernel = height_kernel
+
+        def encode(self, robot, q0):
+            frame = np.array([robot.frames.index(self.frame)], dtype=np.int64)
+            return G.Encoded(np.array([self.z]), frame, 1)
+
+        def residual(self, state):
+            return np.array([self.z - state.pose(self.frame)[2, 3]])
+
+        def jacobian(self, state):
+            return -state.jacobian(self.frame)[2:3]
+
+    r = robot("panda")
+    z = float(r.fk(r.random_q(np.random.default_rng(5)))[2, 3])
+    goal = Height("panda_hand_tcp", z)
+    assert goal.compiled
+    res = swarm_ik.solve(swarm_ik.IKProblem(r, goals=[goal]), seed=0, time_limit=2.0)
+    assert res.success
+    assert abs(r.fk_pinocchio(res.q)[2, 3] - z) < 1e-5
+
+
+def test_look_at_a_point_at_the_frame_origin_is_never_met() -> None:
+    r = robot("panda")
+    q = r.mid_q()
+    origin = r.fk(q)[:3, 3]
+    goal = G.LookAt(r.ee_frame, [0, 0, 1], origin)
+    prob = swarm_ik.IKProblem(r, goals=[goal])
+    (err,) = prob.verify(q)
+    assert not err.met
+    assert not np.all(swarm_ik.problem.judge(prob.goal_errors(q)[0], [True], 1e-5, 1e-5))
