@@ -10,8 +10,9 @@ such jumps (each one reported with its waypoint and size).
 1. *Candidates per waypoint.*
 
    * every IK branch from :func:`swarm_ik.solve_many`; where the closed form applies (eaik,
-     6R arms such as UR5/UR10) every in-limit 2π copy of each branch too, and the exact
-     solutions eaik classes as least squares (a pair of branches merging at a singularity);
+     6R arms such as UR5/UR10) every in-limit 2π copy of each branch too, and the solutions
+     found by polishing eaik's least-squares points (at a singular pose a pair of branches
+     merging, or a whole continuum of solutions, comes back as one such point);
    * where the set is not known complete: solutions *tracked* from the previous waypoint's
      best candidates (each solved starting from that candidate, so the local polish lands on
      the nearest solution);
@@ -37,9 +38,10 @@ such jumps (each one reported with its waypoint and size).
 :meth:`swarm_ik.IKProblem.verify` (Pinocchio's FK, coal for collisions), never from the
 solver.  ``jump_free`` is measured on the returned ``q``.  When every waypoint's candidate
 set is *certified complete* (closed form on a 6R arm with three parallel axes or a spherical
-wrist, so at most 8 branches; eaik's least-squares solutions checked; no candidate with a
-Jacobian singular value below :data:`SINGULAR_SIGMA`, where a continuum of solutions or a
-pair about to merge could hide one) the dynamic programme is exhaustive: a path with jumps
+wrist, so at most 8 branches; no solution found by polishing eaik's least-squares points
+that is not a known branch; no candidate with a Jacobian singular value below
+:data:`SINGULAR_SIGMA`, where a continuum of solutions or a pair about to merge could hide
+one) the dynamic programme is exhaustive: a path with jumps
 then proves that no jump-free sequence of IK solutions through these waypoints exists (the
 ``reason`` says so, and ``exhaustive`` is True).  Otherwise the verdict is the best found.
 
@@ -57,7 +59,7 @@ from __future__ import annotations
 import math
 import time
 from collections.abc import Sequence
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from typing import Any
 
 import numba
@@ -84,13 +86,16 @@ spherical wrist: a closed-form set with this many is complete."""
 SINGULAR_SIGMA = 1e-4
 """A candidate whose smallest Jacobian singular value is below this is near a singularity
 (where a continuum of solutions may exist): its waypoint's set is then not certified."""
+NEAR_SINGULAR = 1e-3
+"""A closed-form candidate whose smallest Jacobian singular value is below this has the curve
+of solutions through it sampled (:func:`_fill`), as a 7-joint arm's self-motion."""
 DUPLICATE = 1e-3
 """Two candidates closer than this (largest ``|Δq_j| / max_joint_step_j``) are one."""
 DIVERSE = 0.25
 """Tracked parents are picked at least this far apart (same measure) while there is choice."""
 TIE_BREAK = 1e-6
 """Weight of the first configuration's distance to mid-range in the travel (ties only)."""
-COVER_STEP = 0.3
+COVER_STEP = 0.4
 """Spacing of the self-motion samples of a 7-joint arm (largest ``|Δq_j| / max_joint_step_j``):
 a path within ``1 − 2·COVER_STEP/2`` of the bound keeps a neighbour within the bound."""
 COVER_MERGE = 0.1
@@ -98,7 +103,7 @@ COVER_MERGE = 0.1
 COVER_GAP = 2.0
 """A sample with no neighbour within ``COVER_GAP · COVER_STEP`` along the self-motion on one
 side walks that way (a gap opened, or the end of the covered stretch)."""
-MAX_COVER = 160
+MAX_COVER = 200
 """Most samples of one waypoint's self-motion (those of the previous waypoint tracked, then
 the walks)."""
 MAX_WALK = 200
@@ -157,7 +162,7 @@ class PathResult:
     reason: str
     time_s: float
     exhaustive: bool = False
-    n_candidates: NDArray[np.int64] | None = None
+    n_candidates: NDArray[np.int64] = field(default_factory=lambda: np.zeros(0, dtype=np.int64))
     travel: float = 0.0
     q_dense: FloatArray | None = None
 
@@ -517,7 +522,8 @@ class _Context:
         self.tol_rot = tol_rot
         self.rng = rng
         self.deadline = deadline
-        self.wrap = np.ascontiguousarray(robot.continuous_mask)
+        self.true_wrap = np.ascontiguousarray(robot.continuous_mask)
+        self.wrap = self.true_wrap  # the search's metric (set below for a 7-joint arm)
         self.angular = np.array([k != "prismatic" for k in robot.joint_kinds], dtype=bool)
         self.lower, self.upper = robot.lower, robot.upper
         self.ik = (
@@ -531,6 +537,8 @@ class _Context:
         # one-dimensional self-motion (7 joints, a pose): covered by samples, all tracked
         self.cover = wps.poses is not None and robot.nq == 7
         self.windings = _winding_joints(robot)
+        if self.cover:  # samples modulo 2π on the wide joints; the path unwound at the end
+            self.wrap = np.ascontiguousarray(self.true_wrap | self.windings)
         self.full_branches = _structural_branches(robot)
         self.timed_out = False
 
@@ -568,11 +576,14 @@ class _Context:
         )  # fmt: skip
         return np.array(res.q, dtype=float), bool(res.success)
 
-    def steps(self, a: FloatArray, b: FloatArray) -> FloatArray:
-        """``|b − a|`` per joint (continuous joints wrapped), broadcasting."""
+    def steps(self, a: FloatArray, b: FloatArray, true: bool = False) -> FloatArray:
+        """``|b − a|`` per joint, broadcasting: continuous joints wrapped, and, in the search's
+        metric (``true`` False) on a 7-joint arm, the joints with a range of 2π or more too
+        (its samples are kept modulo 2π there, :func:`_unwind`)."""
+        wrap = self.true_wrap if true else self.wrap
         d = np.asarray(b, dtype=float) - np.asarray(a, dtype=float)
-        if self.wrap.any():
-            d[..., self.wrap] = (d[..., self.wrap] + np.pi) % (2 * np.pi) - np.pi
+        if wrap.any():
+            d[..., wrap] = (d[..., wrap] + np.pi) % (2 * np.pi) - np.pi
         return np.abs(d)
 
     def self_motion(self, i: int, q: FloatArray) -> list[FloatArray]:
@@ -818,11 +829,15 @@ def _closed_form(ctx: _Context, i: int) -> tuple[FloatArray, bool, bool] | None:
     """Waypoint ``i``'s closed-form set with every in-limit 2π copy: ``(q, closed form used,
     certified complete)``; None when the waypoint has no end-effector pose.
 
+    eaik's least-squares solutions (``solve_many`` keeps only the exact ones) are probed:
+    each is polished (its own start only); a solution it leads to that is no known branch
+    (modulo 2π) was missed — at a singular pose a whole continuum of solutions (e.g. a UR
+    wrist at ``q5 = 0``) comes back as one least-squares point — and joins the candidates.
+
     Certified: the arm's branch count is bounded (:func:`_structural_branches`), eaik could
-    be asked for the least-squares solutions ``solve_many`` leaves out (those that meet the
-    tolerances, a pair merging at a singularity, are added as candidates), and no candidate
-    is near a singularity (smallest Jacobian singular value ≥ :data:`SINGULAR_SIGMA`: no
-    continuum of solutions, no pair about to merge)."""
+    be asked for its least-squares solutions, none of them led to a missed solution, and no
+    candidate is near a singularity (smallest Jacobian singular value ≥
+    :data:`SINGULAR_SIGMA`: no continuum of solutions, no pair about to merge)."""
     pose_problem = ctx.wps.pose_only(i)
     if pose_problem is None:
         return None
@@ -832,11 +847,11 @@ def _closed_form(ctx: _Context, i: int) -> tuple[FloatArray, bool, bool] | None:
     assert ctx.wps.poses is not None
     near = _least_squares_solutions(ctx.robot, ctx.wps.poses[i])
     certified = ctx.full_branches is not None and near is not None
-    if near is not None and near.shape[0]:  # exact enough: solutions too
-        folded = [f for f in (_fold(q, ctx) for q in near) if f is not None]
-        keep = [q for q in folded if _meets(pose_problem, q, ctx)]
-        if keep:
-            qs = _merge(qs, keep, ctx)
+    if near is not None and near.shape[0]:
+        missed = _missed_solutions(ctx, ctx.wps.poses[i], qs, near)
+        if missed.shape[0]:
+            certified = False
+            qs = _merge(qs, missed, ctx)
     if certified:
         assert ctx.full_branches is not None
         certified = 0 < qs.shape[0] <= ctx.full_branches
@@ -850,6 +865,40 @@ def _closed_form(ctx: _Context, i: int) -> tuple[FloatArray, bool, bool] | None:
         problem = ctx.wps.problem(i)
         qs = qs[[k for k in range(qs.shape[0]) if _meets(problem, qs[k], ctx)]]
     return _with_windings(qs, ctx.lower, ctx.upper, ctx.windings), True, certified
+
+
+def _missed_solutions(
+    ctx: _Context, pose: FloatArray, known: FloatArray, near: FloatArray
+) -> FloatArray:
+    """Solutions of ``pose`` next to eaik's least-squares points ``near`` that are no branch
+    of ``known`` (modulo 2π, 1e-4 rad): each point polished from itself alone (one
+    :func:`swarm_ik.solve_batch` call), judged by its check, brought within the limits."""
+    import swarm_ik
+
+    starts = np.clip(near, ctx.lower, ctx.upper)
+    res = swarm_ik.solve_batch(
+        ctx.robot, np.repeat(np.asarray(pose)[None], starts.shape[0], axis=0),
+        q0=np.ascontiguousarray(starts), seed=ctx.seed(), tol_pos=ctx.tol_pos,
+        tol_rot=ctx.tol_rot, max_starts=1,
+    )  # fmt: skip
+    found = np.asarray(res.q, dtype=float)[np.asarray(res.success, dtype=bool)]
+    known_c = _canon(known, ctx)
+    out: list[FloatArray] = []
+    for q in found:
+        c = _canon(q, ctx)
+        if known_c.shape[0] and bool(np.any(_close(known_c, c, 1e-4))):
+            continue
+        if out and bool(np.any(_close(_canon(np.array(out), ctx), c, 1e-4))):
+            continue
+        out.append(q)
+    return np.array(out).reshape(-1, known.shape[1])
+
+
+def _close(rows: FloatArray, q: FloatArray, tol: float) -> NDArray[np.bool_]:
+    """Rows within ``tol`` of ``q`` on every joint, both canonical (:func:`_canon`)."""
+    d = np.abs(rows - q)
+    d = np.minimum(d, 2 * np.pi - d)
+    return np.asarray(np.all(d < tol, axis=-1))
 
 
 def _least_squares_solutions(robot: Any, pose: FloatArray) -> FloatArray | None:
@@ -869,26 +918,6 @@ def _least_squares_solutions(robot: Any, pose: FloatArray) -> FloatArray | None:
     except (ImportError, AttributeError, RuntimeError, TypeError, ValueError):
         return None
     return qs[ls]
-
-
-def _fold(q: FloatArray, ctx: _Context) -> FloatArray | None:
-    """The 2π copy of ``q`` within the limits nearest to mid-range on each revolute joint
-    (None when some joint has none)."""
-    out = np.array(q, dtype=float)
-    mid = 0.5 * (ctx.lower + ctx.upper)
-    for j, kind in enumerate(ctx.robot.joint_kinds):
-        if kind == "prismatic":
-            continue
-        lo, hi = ctx.lower[j] - 1e-9, ctx.upper[j] + 1e-9
-        k_lo = math.ceil((lo - out[j]) / (2 * np.pi))
-        k_hi = math.floor((hi - out[j]) / (2 * np.pi))
-        if k_lo > k_hi:
-            return None
-        k = min(max(round((mid[j] - out[j]) / (2 * np.pi)), k_lo), k_hi)
-        out[j] = float(np.clip(out[j] + 2 * np.pi * k, ctx.lower[j], ctx.upper[j]))
-    if not np.all((out >= ctx.lower) & (out <= ctx.upper)):
-        return None
-    return out
 
 
 def _meets(problem: Any, q: FloatArray, ctx: _Context) -> bool:
@@ -926,9 +955,16 @@ def _tracked(
     return good, bad
 
 
+def _singular(ctx: _Context, qs: FloatArray) -> NDArray[np.bool_]:
+    """Rows of ``qs`` whose frame Jacobian has a singular value below :data:`NEAR_SINGULAR`."""
+    _, jac = ctx.robot.fk_jacobian(np.ascontiguousarray(qs, dtype=float), ctx.wps.frame)
+    sigma = np.linalg.svd(np.asarray(jac).reshape(-1, 6, qs.shape[1]), compute_uv=False)
+    return np.asarray(sigma[:, -1] < NEAR_SINGULAR)
+
+
 def _null(ctx: _Context, qs: FloatArray) -> FloatArray:
-    """The self-motion direction (null space of the frame's Jacobian) at each row of ``qs``
-    ``(k, 7)``, unit rows ``(k, 7)``."""
+    """The self-motion direction (the last right singular vector of the frame's Jacobian) at
+    each row of ``qs`` ``(k, nq)``, unit rows ``(k, nq)``."""
     _, jac = ctx.robot.fk_jacobian(np.ascontiguousarray(qs, dtype=float), ctx.wps.frame)
     return np.asarray(np.linalg.svd(np.asarray(jac).reshape(-1, 6, qs.shape[1]))[2][:, -1, :])
 
@@ -980,9 +1016,15 @@ def _fill(ctx: _Context, i: int, layer: FloatArray) -> FloatArray:
     along = np.einsum("abj,aj->ab", d, nulls / ctx.step)
     near = (reach > 0) & (reach <= COVER_GAP * COVER_STEP)
     walkers: list[tuple[FloatArray, FloatArray]] = []
+    gaps: list[float] = []
     for sign in (1.0, -1.0):
-        lonely = ~np.any(near & (sign * along > 0), axis=1)
+        ahead = (reach > 0) & (sign * along > 0)
+        lonely = ~np.any(near & ahead, axis=1)
+        gap = np.where(ahead, reach, np.inf).min(axis=1)
         walkers += [(layer[a], sign * nulls[a]) for a in np.flatnonzero(lonely)]
+        gaps += [float(gap[a]) for a in np.flatnonzero(lonely)]
+    order = np.argsort(gaps, kind="stable")  # gaps between samples first, open ends last
+    walkers = [walkers[w] for w in order]
     out = layer
     for _ in range(MAX_WALK):
         if not walkers or out.shape[0] >= MAX_COVER or ctx.out_of_time():
@@ -1083,6 +1125,12 @@ def _build(ctx: _Context, start: FloatArray | None) -> _Graph:
             qb = _merge(qb, good, ctx, merge_tol)
             if ctx.cover:
                 qb = _fill(ctx, i, qb)
+        if used_closed and not cert and qb.shape[0] and not ctx.out_of_time():
+            # at or near a singular pose: sample the curve of solutions through the singular
+            # candidates (a continuum, e.g. q4 + q6 fixed at a UR wrist singularity)
+            sing = qb[_singular(ctx, qb)]
+            if sing.shape[0]:
+                qb = _merge(qb, _fill(ctx, i, sing)[sing.shape[0] :], ctx, COVER_MERGE)
         if not used_closed and not spread_done and not ctx.out_of_time():
             need = qb.shape[0] == 0
             if not need and prev_q is not None:
@@ -1169,9 +1217,7 @@ def _canon(qs: FloatArray, ctx: _Context) -> FloatArray:
 
 def _same(rows: FloatArray, q: FloatArray) -> NDArray[np.bool_]:
     """Rows equal to ``q`` modulo 2π (both canonical)."""
-    d = np.abs(rows - q)
-    d = np.minimum(d, 2 * np.pi - d)
-    return np.asarray(np.all(d < 1e-9, axis=-1))
+    return _close(rows, q, 1e-9)
 
 
 def _rejected_size(
@@ -1314,6 +1360,12 @@ def _finish(
     wps, step = ctx.wps, ctx.step
     n = wps.n
     q = np.array([graph.layers[i][choice.index[i]] for i in range(n)])
+    if not np.array_equal(ctx.wrap, ctx.true_wrap):  # samples modulo 2π: unwound
+        if dense is not None:
+            dense = _unwind(dense, start, ctx)
+            q = dense[:: k + 1].copy()
+        else:
+            q = _unwind(q, start, ctx)
     dp = np.zeros(n)
     dr = np.zeros(n)
     reached = np.zeros(n, dtype=bool)
@@ -1328,7 +1380,7 @@ def _finish(
         )
         reached[i] = all(e.met for e in errs) and problem.within_bounds(q[i])
     prev = np.vstack([start[None], q]) if start is not None else q
-    d = ctx.steps(prev[:-1], prev[1:])
+    d = ctx.steps(prev[:-1], prev[1:], true=True)
     off = 0 if start is not None else 1  # the waypoint each step arrives at
     ratio = d / step
     jumps: list[tuple[int, float]] = []
@@ -1366,6 +1418,35 @@ def _finish(
         travel=float(d.sum()),
         q_dense=dense,
     )
+
+
+def _unwind(rows: FloatArray, start: FloatArray | None, ctx: _Context) -> FloatArray:
+    """The path ``rows`` ``(m, nq)``, found modulo 2π on the wide joints, made continuous:
+    each such joint unwrapped (from ``q0`` when given) and shifted by the whole turns that
+    keep it within its limits, nearest mid-range; where no shift fits, turned back by 2π
+    where it leaves them (a jump, then measured and reported as such)."""
+    out = np.array(rows, dtype=float)
+    two_pi = 2 * np.pi
+    for j in np.flatnonzero(ctx.wrap & ~ctx.true_wrap):
+        lo, hi = float(ctx.lower[j]), float(ctx.upper[j])
+        seq = out[:, j] if start is None else np.concatenate([[start[j]], out[:, j]])
+        u = np.unwrap(seq)
+        if start is None:
+            k_lo = math.ceil((lo - 1e-9 - float(u.min())) / two_pi)
+            k_hi = math.floor((hi + 1e-9 - float(u.max())) / two_pi)
+            if k_lo <= k_hi:
+                mid = 0.5 * (lo + hi)
+                k = min(
+                    range(k_lo, k_hi + 1), key=lambda m: abs(float(u.mean()) + two_pi * m - mid)
+                )
+                u = u + two_pi * k
+        for t in range(u.shape[0]):  # (only where no shift fits)
+            while u[t] > hi + 1e-9:
+                u[t:] -= two_pi
+            while u[t] < lo - 1e-9:
+                u[t:] += two_pi
+        out[:, j] = np.clip(u[u.shape[0] - out.shape[0] :], lo, hi)
+    return out
 
 
 def _reason(
