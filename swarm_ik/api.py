@@ -263,19 +263,26 @@ class Route:
                 **{k: kw[k] for k in _LM_KEYS},
             )  # fmt: skip
             self._bound_goals = problem.compiled_goals
+            self.state = hybrid.search_state(self.pol, kw["pop_size"])
+            self._n_swarm = int(round(kw["swarm_fraction"] * kw["pop_size"]))
 
     def _search(
         self, q_start: np.ndarray, key: np.uint64, max_evals: int | None, time_limit: float | None
-    ) -> hybrid.SearchOutcome:
-        kw = self.kwargs
-        return hybrid.compiled_search(
-            self.pol, q_start, key, stop=True, tol_pos=self.tol_pos,
-            tol_rot=self.tol_rot, w_rot=0.0 if self.problem.position_only else self.problem.w_rot,
-            pop_size=kw["pop_size"], n_swarm=int(round(kw["swarm_fraction"] * kw["pop_size"])),
-            iterations=kw["iterations"], max_evals=max_evals,
-            remaining=2**62 if max_evals is None else max_evals, evals_before=0,
-            time_limit=time_limit, t0=time.perf_counter(),
+    ) -> tuple[int, float, float, float, bool, np.ndarray, np.ndarray]:
+        """The compiled search from ``q_start``: ``(evaluations, fitness, position error,
+        angular error, stopped, history, q)``."""
+        kw, pol = self.kwargs, self.pol
+        out_q = np.empty(q_start.shape[0])
+        used, f, dp, dr, stopped, hist = search.search(
+            self.state, q_start, pol.kernel_tol_pos, pol.kernel_tol_rot, self.tol_pos,
+            self.tol_rot, 0.0 if self.problem.position_only else self.problem.w_rot,
+            kw["pop_size"], self._n_swarm, kw["iterations"],
+            max_evals is None and time_limit is None,
+            2**62 if max_evals is None else max_evals, -1 if max_evals is None else max_evals, 0,
+            search.NO_LIMIT if time_limit is None else time_limit, time.perf_counter(), key,
+            out_q,
         )  # fmt: skip
+        return used, f, dp, dr, stopped, hist, out_q
 
     def _rebind(self, problem: IKProblem, q_start: np.ndarray | None) -> None:
         """Write the parameter blocks of ``problem``'s goals that differ from the bound ones
@@ -334,15 +341,11 @@ class Route:
             self._rebind(problem, q_start)
             seed_q = q_start if q_start is not None else hybrid.default_seed(problem)
             t0 = time.perf_counter()
-            out = self._search(
-                np.ascontiguousarray(seed_q, dtype=float),
-                key,
-                self.max_evals,
-                self.time_limit,
+            n_evals, fit, _dp, _dr, _stop, history, q = self._search(
+                np.ascontiguousarray(seed_q, dtype=float), key, self.max_evals, self.time_limit
             )
             elapsed = time.perf_counter() - t0
-            q, fit, n_evals, history = out.q, out.fitness, out.used, out.history
-            if not np.isfinite(fit):
+            if not np.isfinite(fit) or len(problem.goals) > 1:  # (the problem's own sum)
                 fit = float(problem.fitness(q[None])[0])
         else:
             tol_pos, tol_rot = self.tol_pos, self.tol_rot
@@ -378,15 +381,14 @@ class Route:
         """The one judge: the answer's errors from Pinocchio, its limits, why it ended."""
         goal_errors = problem.verify(q, self.tol_pos, self.tol_rot, q0=q_start)
         within = problem.within_bounds(q)
-        success = bool(within and all(e.met for e in goal_errors))
-        dp = max(
-            (e.position_error for e in goal_errors if e.position_error == e.position_error),
-            default=0.0,
-        )
-        dr = max(
-            (e.rotation_error for e in goal_errors if e.rotation_error == e.rotation_error),
-            default=0.0,
-        )
+        success = within
+        dp = dr = 0.0
+        for e in goal_errors:
+            success = success and e.met
+            if e.position_error > dp:  # (NaN: no such error)
+                dp = e.position_error
+            if e.rotation_error > dr:
+                dr = e.rotation_error
         return Result(
             q=q,
             fitness=float(fitness),

@@ -54,19 +54,6 @@ class GoalError:
     met: bool
     details: Any = None
 
-    @classmethod
-    def of(cls, goal: str, position_error: float, rotation_error: float, met: bool) -> GoalError:
-        """A GoalError without details, without the frozen dataclass's field-by-field
-        ``__init__`` (the per-call path of :class:`swarm_ik.IKSolver`, as
-        :meth:`swarm_ik.result.Result.of`)."""
-        e = object.__new__(cls)
-        object.__setattr__(
-            e, "__dict__",
-            {"goal": goal, "position_error": position_error, "rotation_error": rotation_error,
-             "met": met, "details": None},
-        )  # fmt: skip
-        return e
-
     def to_dict(self) -> dict[str, Any]:
         """JSON-ready dict (NaN as None)."""
 

@@ -76,3 +76,16 @@ def test_main_with_argv_leaves_the_collector_alone() -> None:
     assert gc.isenabled()
     assert cli.main(["robots"]) == 0
     assert gc.isenabled()
+
+
+def test_warmup_command_prepares_every_solve_path() -> None:
+    out = subprocess.run(
+        [sys.executable, "-m", "swarm_ik.cli", "warmup"],
+        capture_output=True,
+        text=True,
+        timeout=900,
+    )
+    assert out.returncode == 0, out.stderr
+    assert out.stdout.startswith("kernels ready")
+    for step in ("compiled search", "secondary goal", "batch", "solve_many"):
+        assert step in out.stderr, out.stderr

@@ -31,7 +31,7 @@ import warnings
 from collections.abc import Sequence
 from typing import Any, NoReturn
 
-from swarm_ik.cli import batch, bench, reach, robots, show, solve
+from swarm_ik.cli import batch, bench, path, reach, robots, show, solve, warmup
 from swarm_ik.cli._args import (
     EXIT_BAD_INPUT,
     EXIT_INTERNAL,
@@ -60,7 +60,9 @@ __all__ = [
 
 COMMANDS = {
     "robots": robots,
+    "warmup": warmup,
     "solve": solve,
+    "path": path,
     "show": show,
     "batch": batch,
     "reach": reach,

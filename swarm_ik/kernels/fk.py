@@ -213,7 +213,7 @@ def fk_scratch(tree: TreeArrays) -> FKScratch:
     )
 
 
-@numba.njit(cache=True)
+@numba.njit(cache=True, inline="always")
 def fk_one(
     q: FloatArray, t: TreeArrays, s: FKScratch, want_jac: bool
 ) -> None:  # pragma: no cover - compiled
@@ -225,30 +225,35 @@ def fk_one(
         s: Output buffers: ``s.f_rot``, ``s.f_pos`` and, when ``want_jac``, ``s.f_jac``.
         want_jac: Whether to fill ``s.f_jac``.
     """
-    nj = t.kind.shape[0]
+    kind, parent, q_index, mult, offset = t.kind, t.parent, t.q_index, t.multiplier, t.offset
+    rot_p, pos_p, frame_joint, frame_rot, frame_pos = (
+        t.rot_p, t.pos_p, t.frame_joint, t.frame_rot, t.frame_pos
+    )  # fmt: skip
+    f_rot, f_pos, f_jac = s.f_rot, s.f_pos, s.f_jac
+    nj = kind.shape[0]
     jr = s.j_rot
     jp = s.j_pos
     for j in range(nj):
-        par = t.parent[j]
+        par = parent[j]
         for a in range(3):
             if par < 0:
-                jp[j, a] = t.pos_p[j, a]
+                jp[j, a] = pos_p[j, a]
                 for b in range(3):
-                    jr[j, a, b] = t.rot_p[j, a, b]
+                    jr[j, a, b] = rot_p[j, a, b]
             else:
                 jp[j, a] = jp[par, a] + (
-                    jr[par, a, 0] * t.pos_p[j, 0]
-                    + jr[par, a, 1] * t.pos_p[j, 1]
-                    + jr[par, a, 2] * t.pos_p[j, 2]
+                    jr[par, a, 0] * pos_p[j, 0]
+                    + jr[par, a, 1] * pos_p[j, 1]
+                    + jr[par, a, 2] * pos_p[j, 2]
                 )
                 for b in range(3):
                     jr[j, a, b] = (
-                        jr[par, a, 0] * t.rot_p[j, 0, b]
-                        + jr[par, a, 1] * t.rot_p[j, 1, b]
-                        + jr[par, a, 2] * t.rot_p[j, 2, b]
+                        jr[par, a, 0] * rot_p[j, 0, b]
+                        + jr[par, a, 1] * rot_p[j, 1, b]
+                        + jr[par, a, 2] * rot_p[j, 2, b]
                     )
-        v = t.multiplier[j] * q[t.q_index[j]] + t.offset[j]
-        if t.kind[j] == PRISMATIC:
+        v = mult[j] * q[q_index[j]] + offset[j]
+        if kind[j] == PRISMATIC:
             for a in range(3):
                 jp[j, a] += v * jr[j, a, 2]
         else:  # rotation about z: rot <- rot @ Rz(v)
@@ -259,52 +264,52 @@ def fk_one(
                 r1 = jr[j, a, 1]
                 jr[j, a, 0] = c * r0 + sn * r1
                 jr[j, a, 1] = c * r1 - sn * r0
-    nf = t.frame_joint.shape[0]
-    nq = s.f_jac.shape[2]
+    nf = frame_joint.shape[0]
+    nq = f_jac.shape[2]
     for f in range(nf):
-        j = t.frame_joint[f]
+        j = frame_joint[f]
         for a in range(3):
             if j < 0:
-                s.f_pos[f, a] = t.frame_pos[f, a]
+                f_pos[f, a] = frame_pos[f, a]
                 for b in range(3):
-                    s.f_rot[f, a, b] = t.frame_rot[f, a, b]
+                    f_rot[f, a, b] = frame_rot[f, a, b]
             else:
-                s.f_pos[f, a] = jp[j, a] + (
-                    jr[j, a, 0] * t.frame_pos[f, 0]
-                    + jr[j, a, 1] * t.frame_pos[f, 1]
-                    + jr[j, a, 2] * t.frame_pos[f, 2]
+                f_pos[f, a] = jp[j, a] + (
+                    jr[j, a, 0] * frame_pos[f, 0]
+                    + jr[j, a, 1] * frame_pos[f, 1]
+                    + jr[j, a, 2] * frame_pos[f, 2]
                 )
                 for b in range(3):
-                    s.f_rot[f, a, b] = (
-                        jr[j, a, 0] * t.frame_rot[f, 0, b]
-                        + jr[j, a, 1] * t.frame_rot[f, 1, b]
-                        + jr[j, a, 2] * t.frame_rot[f, 2, b]
+                    f_rot[f, a, b] = (
+                        jr[j, a, 0] * frame_rot[f, 0, b]
+                        + jr[j, a, 1] * frame_rot[f, 1, b]
+                        + jr[j, a, 2] * frame_rot[f, 2, b]
                     )
         if want_jac:
             for a in range(6):
                 for i in range(nq):
-                    s.f_jac[f, a, i] = 0.0
-            px, py, pz = s.f_pos[f, 0], s.f_pos[f, 1], s.f_pos[f, 2]
+                    f_jac[f, a, i] = 0.0
+            px, py, pz = f_pos[f, 0], f_pos[f, 1], f_pos[f, 2]
             k = j
             while k >= 0:  # every joint supporting the frame
                 wx, wy, wz = jr[k, 0, 2], jr[k, 1, 2], jr[k, 2, 2]
-                m = t.multiplier[k]
-                col = t.q_index[k]
-                if t.kind[k] == PRISMATIC:
-                    s.f_jac[f, 0, col] += m * wx
-                    s.f_jac[f, 1, col] += m * wy
-                    s.f_jac[f, 2, col] += m * wz
+                m = mult[k]
+                col = q_index[k]
+                if kind[k] == PRISMATIC:
+                    f_jac[f, 0, col] += m * wx
+                    f_jac[f, 1, col] += m * wy
+                    f_jac[f, 2, col] += m * wz
                 else:
                     dx = px - jp[k, 0]
                     dy = py - jp[k, 1]
                     dz = pz - jp[k, 2]
-                    s.f_jac[f, 0, col] += m * (wy * dz - wz * dy)
-                    s.f_jac[f, 1, col] += m * (wz * dx - wx * dz)
-                    s.f_jac[f, 2, col] += m * (wx * dy - wy * dx)
-                    s.f_jac[f, 3, col] += m * wx
-                    s.f_jac[f, 4, col] += m * wy
-                    s.f_jac[f, 5, col] += m * wz
-                k = t.parent[k]
+                    f_jac[f, 0, col] += m * (wy * dz - wz * dy)
+                    f_jac[f, 1, col] += m * (wz * dx - wx * dz)
+                    f_jac[f, 2, col] += m * (wx * dy - wy * dx)
+                    f_jac[f, 3, col] += m * wx
+                    f_jac[f, 4, col] += m * wy
+                    f_jac[f, 5, col] += m * wz
+                k = parent[k]
 
 
 @numba.njit(cache=True)

@@ -30,7 +30,7 @@ def angle_nb(m: FloatArray) -> float:  # pragma: no cover - compiled
     return math.atan2(math.sqrt(s0 * s0 + s1 * s1 + s2 * s2), c)
 
 
-@numba.njit(cache=True)
+@numba.njit(cache=True, inline="always")
 def log3_nb(m: FloatArray, out: FloatArray) -> float:  # pragma: no cover - compiled
     """Rotation vector of ``m`` (3, 3) into ``out`` (3,); returns the angle θ.
 
@@ -79,7 +79,7 @@ def log3_nb(m: FloatArray, out: FloatArray) -> float:  # pragma: no cover - comp
     return theta
 
 
-@numba.njit(cache=True)
+@numba.njit(cache=True, inline="always")
 def jr_inv_nb(phi: FloatArray, theta: float, out: FloatArray) -> None:  # pragma: no cover
     """``Jr⁻¹(φ)`` (3, 3) into ``out`` for the rotation vector ``φ`` of angle ``θ``.
 

@@ -268,7 +268,7 @@ def goal_table(
 
 
 # --------------------------------------------------------------------------- residuals
-@numba.njit(cache=True)
+@numba.njit(cache=True, inline="always")
 def goal_rows(
     q: FloatArray,
     s: FKScratch,
@@ -302,17 +302,21 @@ def goal_rows(
         The squared norm of the stack's residual.
     """
     nq = q.shape[0]
-    for i in range(g.kind.shape[0]):
-        if g.primary[i] != primary:
+    kind, prim, row0, nrows, weight = g.kind, g.primary, g.row0, g.nrows, g.weight
+    p0, par, i0, ipar = g.p0, g.par, g.i0, g.ipar
+    f_pos, f_rot, f_jac = s.f_pos, s.f_rot, s.f_jac
+    fns = ks.fns  # type: ignore[attr-defined]
+    for i in range(kind.shape[0]):
+        if prim[i] != primary:
             continue
-        r0 = g.row0[i]
-        r1 = r0 + g.nrows[i]
-        fn = ks.fns[g.kind[i]]  # type: ignore[attr-defined]
+        r0 = row0[i]
+        r1 = r0 + nrows[i]
+        fn = fns[kind[i]]
         fn(
-            g.par[g.p0[i] : g.p0[i + 1]], g.ipar[g.i0[i] : g.i0[i + 1]], q, s.f_pos, s.f_rot,
-            s.f_jac, want_jac, res[r0:r1], jac[r0:r1], err[i], work,
+            par[p0[i] : p0[i + 1]], ipar[i0[i] : i0[i + 1]], q, f_pos, f_rot, f_jac, want_jac,
+            res[r0:r1], jac[r0:r1], err[i], work,
         )  # fmt: skip
-        w = g.weight[i]
+        w = weight[i]
         if w != 1.0:
             for a in range(r0, r1):
                 res[a] *= w
@@ -326,28 +330,30 @@ def goal_rows(
     return cost
 
 
-@numba.njit(cache=True)
+@numba.njit(cache=True, inline="always")
 def within_tolerance(
     err: FloatArray, g: GoalTable, tol_pos: float, tol_rot: float
 ) -> bool:  # pragma: no cover - compiled
     """The one success judge (compiled twin of :func:`swarm_ik.problem.judge`): every
     primary goal's position error ≤ ``tol_pos`` [m] and angular error ≤ ``tol_rot`` [rad]
     (NaN entries: the goal has no such error)."""
-    for i in range(g.kind.shape[0]):
-        if g.primary[i]:
+    prim = g.primary
+    for i in range(prim.shape[0]):
+        if prim[i]:
             if err[i, 0] > tol_pos or err[i, 1] > tol_rot:
                 return False
             # NaN compares False above: only a goal's own errors count
     return True
 
 
-@numba.njit(cache=True)
+@numba.njit(cache=True, inline="always")
 def max_errors(err: FloatArray, g: GoalTable) -> tuple[float, float]:  # pragma: no cover
     """Largest primary position error [m] and angular error [rad] (0 where none)."""
     dp = 0.0
     dr = 0.0
-    for i in range(g.kind.shape[0]):
-        if g.primary[i]:
+    prim = g.primary
+    for i in range(prim.shape[0]):
+        if prim[i]:
             if err[i, 0] > dp:
                 dp = err[i, 0]
             if err[i, 1] > dr:
@@ -426,7 +432,7 @@ def reset_work(w: Work) -> None:  # pragma: no cover - compiled
     w.err_t[:] = np.nan
 
 
-@numba.njit(cache=True)
+@numba.njit(cache=True, inline="always")
 def gram(jac: FloatArray, m: int, n: int, out: FloatArray) -> float:  # pragma: no cover
     """``out[:n, :n] = JᵀJ`` of ``J = jac[:m, :n]`` (both triangles); returns its trace."""
     trace = 0.0
@@ -451,7 +457,7 @@ def polish_outputs(
     return np.empty((k, n)), np.empty(k), np.empty(k), np.empty(k, dtype=i64), np.empty(k, i64)
 
 
-@numba.njit(cache=True)
+@numba.njit(cache=True, inline="always")
 def _chol_factor(a: FloatArray, n: int) -> bool:  # pragma: no cover - compiled
     """Cholesky factor ``L`` of the SPD ``a[:n, :n]`` in place, below the diagonal, with
     ``1 / L[j, j]`` on the diagonal (one division per column instead of one per entry, in
@@ -473,7 +479,7 @@ def _chol_factor(a: FloatArray, n: int) -> bool:  # pragma: no cover - compiled
     return True
 
 
-@numba.njit(cache=True)
+@numba.njit(cache=True, inline="always")
 def _chol_back(a: FloatArray, b: FloatArray, n: int, x: FloatArray) -> None:  # pragma: no cover
     """Solve ``L Lᵀ x = b`` with the factor of :func:`_chol_factor`."""
     for i in range(n):
@@ -488,7 +494,7 @@ def _chol_back(a: FloatArray, b: FloatArray, n: int, x: FloatArray) -> None:  # 
         x[i] = s * a[i, i]
 
 
-@numba.njit(cache=True)
+@numba.njit(cache=True, inline="always")
 def into_bounds(v: float, j: int, b: Bounds) -> float:  # pragma: no cover - compiled
     """Value ``v`` of joint ``j`` wrapped into ``[-π, π)`` if continuous, then clipped to
     the bounds (the compiled twin of :meth:`swarm_ik.solvers.base.Evaluator.clip`)."""
@@ -501,7 +507,7 @@ def into_bounds(v: float, j: int, b: Bounds) -> float:  # pragma: no cover - com
     return v
 
 
-@numba.njit(cache=True)
+@numba.njit(cache=True, inline="always")
 def _step_into_bounds(
     q: FloatArray, delta: FloatArray, scale: float, b: Bounds, out: FloatArray
 ) -> None:  # pragma: no cover - compiled
@@ -510,7 +516,7 @@ def _step_into_bounds(
         out[j] = into_bounds(q[j] + scale * delta[j], j, b)
 
 
-@numba.njit(cache=True)
+@numba.njit(cache=True, inline="always")
 def evaluate(
     q: FloatArray,
     t: TreeArrays,
@@ -576,6 +582,8 @@ def lm_run(
     m = g.rows_primary
     a_mat, grad, delta, q, q_t = w.a_mat, w.grad, w.delta, w.q, w.q_t
     idx, a_red, b_red, x_red = w.idx, w.a_red, w.b_red, w.x_red
+    res, jac, res_t, jac_t, err, err_t = w.res, w.jac, w.res_t, w.jac_t, w.err, w.err_t
+    wrap, lower, upper = b.wrap, b.lower, b.upper
     used = 0
     for s in range(k_starts):
         out_status[s] = NOT_RUN
@@ -610,14 +618,14 @@ def lm_run(
                 for j in range(n):
                     q[j] = q_t[j]
                 for a in range(m):
-                    w.res[a] = w.res_t[a]
+                    res[a] = res_t[a]
                     for j in range(n):
-                        w.jac[a, j] = w.jac_t[a, j]
-                for i in range(w.err.shape[0]):
-                    w.err[i, 0] = w.err_t[i, 0]
-                    w.err[i, 1] = w.err_t[i, 1]
+                        jac[a, j] = jac_t[a, j]
+                for i in range(err.shape[0]):
+                    err[i, 0] = err_t[i, 0]
+                    err[i, 1] = err_t[i, 1]
                 cost = cost_t
-                if stall >= cfg.stall_iters and not within_tolerance(w.err, g, tol_pos, tol_rot):
+                if stall >= cfg.stall_iters and not within_tolerance(err, g, tol_pos, tol_rot):
                     status = LOCAL_MIN
                     break
             else:
@@ -626,7 +634,7 @@ def lm_run(
                 if lam > 1e8 or stall >= cfg.stall_iters:
                     status = LOCAL_MIN
                     break
-            if within_tolerance(w.err, g, tol_pos, tol_rot):
+            if within_tolerance(err, g, tol_pos, tol_rot):
                 status = CONVERGED
                 break
             if ev_s >= cfg.max_iters:
@@ -639,17 +647,17 @@ def lm_run(
                 status = LOCAL_MIN
                 break
             # normal equations A = JᵀJ, g = Jᵀr
-            trace = gram(w.jac, m, n, a_mat)
+            trace = gram(jac, m, n, a_mat)
             for i in range(n):
                 s_g = 0.0
                 for a in range(m):
-                    s_g += w.jac[a, i] * w.res[a]
+                    s_g += jac[a, i] * res[a]
                 grad[i] = s_g
             scale = trace / n + 1e-300
             nfree = 0
             for j in range(n):
-                at_lo = (not b.wrap[j]) and q[j] <= b.lower[j] and grad[j] < 0.0
-                at_hi = (not b.wrap[j]) and q[j] >= b.upper[j] and grad[j] > 0.0
+                at_lo = (not wrap[j]) and q[j] <= lower[j] and grad[j] < 0.0
+                at_hi = (not wrap[j]) and q[j] >= upper[j] and grad[j] > 0.0
                 if not (at_lo or at_hi):
                     idx[nfree] = j
                     nfree += 1
@@ -681,7 +689,7 @@ def lm_run(
             if big > cfg.max_step:
                 shrink = cfg.max_step / big
             _step_into_bounds(q, delta, shrink, b, q_t)
-        dp, dr = max_errors(w.err, g)
+        dp, dr = max_errors(err, g)
         for j in range(n):
             out_q[s, j] = q[j]
         out_dp[s] = dp

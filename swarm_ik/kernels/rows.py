@@ -26,7 +26,7 @@ from swarm_ik._types import FloatArray
 from swarm_ik.kernels.lie import jr_inv_nb, log3_nb
 
 
-@numba.njit(cache=True)
+@numba.njit(cache=True, inline="always")
 def position_rows(
     point: FloatArray,
     f: int,
@@ -50,7 +50,7 @@ def position_rows(
     return math.sqrt(dx * dx + dy * dy + dz * dz)
 
 
-@numba.njit(cache=True)
+@numba.njit(cache=True, inline="always")
 def rotation_rows(
     rot: FloatArray,
     f: int,
@@ -84,7 +84,7 @@ def rotation_rows(
     return theta
 
 
-@numba.njit(cache=True)
+@numba.njit(cache=True, inline="always")
 def direction_rows(
     axis: FloatArray,
     target: FloatArray,

@@ -21,18 +21,19 @@ The clock: numba has none; :func:`now` reads ``time.perf_counter`` in ``numba.ob
 case.  Entering Python there also lets a Ctrl-C raise ``KeyboardInterrupt`` out of the
 compiled call (within 16 polish calls: a few milliseconds).
 
-Called from Python as :func:`search` (fixed arguments: numba types an argument list with
-``*args`` in Python whenever one of them, here the goal kernels, has no fast type
-fingerprint, ≈ 0.5 ms a call).
+Called from Python as :func:`search` on a :class:`SearchState` made once (one argument
+numba types at once; the structures one by one are typed in Python on every call).
 """
 
 from __future__ import annotations
 
 import time
-from typing import NamedTuple
+from typing import Any, NamedTuple
 
 import numba
 import numpy as np
+from numba import types
+from numba.experimental import structref
 
 from swarm_ik._types import FloatArray, IntArray
 from swarm_ik.kernels import lm
@@ -444,13 +445,39 @@ def swarm_search(
     return used, ev_f, ev_dp, ev_dr, stopped, hist[:n_hist].copy()
 
 
+@structref.register
+class SearchStateType(types.StructRef):
+    """The numba type of :class:`SearchState`."""
+
+    def preprocess_fields(self, fields: Any) -> Any:
+        return tuple((name, types.unliteral(typ)) for name, typ in fields)
+
+
+class SearchState(structref.StructRefProxy):  # type: ignore[misc]
+    """What :func:`search` needs besides a start and a key, made once
+    (:func:`new_search_state`): the tree, the goal table, the goal kernels, the bounds, the LM
+    settings and the scratch (:class:`SearchWork`).  One object (numba's public
+    ``numba.experimental.structref``) that numba types at once, where the structures given one
+    by one are typed in Python on every call; the goal table's arrays are shared, so a new
+    target written into its parameters is what the next call reads."""
+
+
+structref.define_proxy(
+    SearchState, SearchStateType, ["tree", "table", "kernels", "bounds", "cfg", "work"]
+)
+
+
+@numba.njit(cache=True)
+def new_search_state(
+    t: TreeArrays, g: GoalTable, ks: GoalKernels, b: Bounds, cfg: LMSettings, pop_size: int
+) -> Any:  # pragma: no cover - compiled
+    """A :class:`SearchState` for ``pop_size`` starts per generation."""
+    return SearchState(t, g, ks, b, cfg, make_search_work(t, g, pop_size))
+
+
 @numba.njit(cache=True)
 def search(
-    t: TreeArrays,
-    g: GoalTable,
-    ks: GoalKernels,
-    b: Bounds,
-    cfg: LMSettings,
+    s: Any,
     seed_q: FloatArray,
     kernel_tol_pos: float,
     kernel_tol_rot: float,
@@ -469,12 +496,13 @@ def search(
     key: np.uint64,
     out_q: FloatArray,
 ) -> tuple[int, float, float, float, bool, FloatArray]:  # pragma: no cover - compiled
-    """:func:`swarm_search` with its scratch made here: the entry called from Python (the
-    arguments of :func:`swarm_search` but the last)."""
+    """:func:`swarm_search` on a :class:`SearchState` ``s`` (made for ``pop_size``): the
+    entry called from Python (the arguments of :func:`swarm_search` after ``cfg``, but the
+    scratch)."""
     return swarm_search(
-        t, g, ks, b, cfg, seed_q, kernel_tol_pos, kernel_tol_rot, tol_pos, tol_rot, w_rot,
-        pop_size, n_swarm, iterations, unlimited, max_evals, budget_total, evals_before,
-        time_limit, t0, key, out_q, make_search_work(t, g, pop_size),
+        s.tree, s.table, s.kernels, s.bounds, s.cfg, seed_q, kernel_tol_pos, kernel_tol_rot,
+        tol_pos, tol_rot, w_rot, pop_size, n_swarm, iterations, unlimited, max_evals,
+        budget_total, evals_before, time_limit, t0, key, out_q, s.work,
     )  # fmt: skip
 
 

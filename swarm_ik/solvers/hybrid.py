@@ -32,7 +32,7 @@ in well under a millisecond; the whole search loop is compiled too
 from __future__ import annotations
 
 import time
-from typing import NamedTuple
+from typing import Any, NamedTuple
 
 import numpy as np
 from numpy.typing import NDArray
@@ -243,6 +243,14 @@ class SearchOutcome(NamedTuple):
     history: FloatArray
 
 
+def search_state(pol: Polisher, pop_size: int) -> Any:
+    """The :class:`swarm_ik.kernels.search.SearchState` of ``pol`` for ``pop_size`` starts
+    per generation (its goal table shared)."""
+    return search.new_search_state(
+        pol.tree, pol.table, pol.kernels, pol.bounds, pol.cfg, int(pop_size)
+    )
+
+
 def compiled_search(
     pol: Polisher,
     seed_q: FloatArray,
@@ -260,6 +268,7 @@ def compiled_search(
     evals_before: int,
     time_limit: float | None,
     t0: float,
+    state: Any = None,
 ) -> SearchOutcome:
     """Run the whole search of :func:`run` in one compiled call
     (:func:`swarm_ik.kernels.search.swarm_search`).
@@ -277,11 +286,13 @@ def compiled_search(
         evals_before: Evaluations counted before (for the ``a`` schedule).
         time_limit: Seconds since ``t0`` (``None``: none).
         t0: Start of the solve, ``time.perf_counter()`` [s].
+        state: The polisher's :class:`swarm_ik.kernels.search.SearchState` for ``pop_size``
+            (:func:`search_state`; made here when None).
     """
     out_q = np.empty(seed_q.shape[0])
+    st = search_state(pol, pop_size) if state is None else state
     used, f, dp, dr, stopped, hist = search.search(
-        pol.tree, pol.table, pol.kernels, pol.bounds, pol.cfg, seed_q, pol.kernel_tol_pos,
-        pol.kernel_tol_rot,
+        st, seed_q, pol.kernel_tol_pos, pol.kernel_tol_rot,
         float(tol_pos) if stop else -1.0, float(tol_rot) if stop else -1.0, float(w_rot),
         int(pop_size), int(n_swarm), int(iterations), max_evals is None and time_limit is None,
         int(min(remaining, 2**62)), -1 if max_evals is None else int(max_evals),
