@@ -103,6 +103,19 @@ def test_singular_waypoints_do_not_give_a_wrong_proof():
     assert not res.exhaustive
 
 
+def test_wrist_singular_path_is_found_and_not_called_impossible():
+    # q5 = 0 all along: a continuum of solutions (q4 + q6 fixed) that eaik returns as one
+    # least-squares point; the path moves q4 and q6 apart along it
+    robot = get("ur5")
+    a = np.array([0.3, -1.2, 1.4, -1.0, 0.0, 0.5])
+    b = np.array([0.6, -1.0, 1.2, -0.2, 0.0, -0.5])
+    poses = robot.fk(np.linspace(a, b, 20))
+    res = solve_path(robot, poses)
+    assert res.success and res.jump_free, res.reason
+    assert not res.exhaustive
+    check_path(robot, poses, res)
+
+
 def test_unreachable_waypoint_fails_at_its_index():
     robot = get("ur5")
     poses = robot.fk(smooth_q(robot, 5, n=16))
