@@ -1145,9 +1145,13 @@ def _build(ctx: _Context, start: FloatArray | None) -> _Graph:
         ok_b = np.ones(qb.shape[0], dtype=bool)
         if qb.shape[0] == 0:  # nothing meets the waypoint: the best attempts stand in, and
             # the configurations they started from (staying put adds no jump)
-            stand = bad[:BEAM] + list(par[:BEAM]) or _stand_in(ctx, i, graph.layers, start)
-            qb = np.array(stand).reshape(-1, nq)
-            ok_b = np.zeros(qb.shape[0], dtype=bool)
+            stand = bad[:BEAM] + list(par[:BEAM])
+            if stand:
+                qb = np.array(stand).reshape(-1, nq)
+                ok_b = np.zeros(qb.shape[0], dtype=bool)
+            else:  # (the first waypoint, or out of time): one solve stands in, valid if met
+                q, met = _stand_in(ctx, i, graph.layers, start)
+                qb, ok_b = q[None], np.array([met])
         graph.layers.append(qb)
         graph.valid.append(ok_b)
         graph.certified.append(cert)
@@ -1161,12 +1165,11 @@ def _build(ctx: _Context, start: FloatArray | None) -> _Graph:
 
 def _stand_in(
     ctx: _Context, i: int, layers: list[FloatArray], start: FloatArray | None
-) -> list[FloatArray]:
-    """A stand-in for a waypoint with no solution: the best attempt from the previous
-    waypoint's first candidate (or ``q0``, or mid-range)."""
+) -> tuple[FloatArray, bool]:
+    """Waypoint ``i`` solved from the previous waypoint's first candidate (or ``q0``, or
+    mid-range): ``(q, met)``."""
     ref = layers[i - 1][0] if i > 0 else (start if start is not None else ctx.robot.mid_q())
-    q, _ = ctx.track(ctx.wps.target(i), ref)
-    return [q]
+    return ctx.track(ctx.wps.target(i), ref)
 
 
 def _backward(ctx: _Context, graph: _Graph) -> None:

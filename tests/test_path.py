@@ -160,6 +160,14 @@ def test_q0_is_honoured():
     assert "within max_joint_step of q0" in res.reason
 
 
+def test_time_limit_reached_still_gives_a_path():
+    robot = get("panda")
+    q = smooth_q(robot, 16, n=12)
+    res = solve_path(robot, robot.fk(q), time_limit=1e-6)
+    assert "time_limit reached" in res.reason
+    assert res.q.shape == (12, robot.nq) and res.reached.all()  # tracked: every waypoint met
+
+
 def test_same_seed_same_path():
     robot = get("panda")
     poses = robot.fk(smooth_q(robot, 8, n=15))
