@@ -69,7 +69,8 @@ def add_parser(subparsers: Any) -> argparse.ArgumentParser:
         "--scene",
         default=None,
         metavar="FILE",
-        help="scene JSON of obstacles: every waypoint collision-free (self and scene)",
+        help="obstacles (JSON, cuRobo .yml, MoveIt .scene or URDF; docs/scenes.md): every "
+        "waypoint collision-free (self and scene)",
     )
     p.add_argument(
         "--densify",
@@ -113,7 +114,7 @@ def run(args: argparse.Namespace) -> int:
         _viewer.check_meshes(robot, "--html")
     poses = _read_poses(args.poses)
     step = args.max_step[0] if len(args.max_step) == 1 else args.max_step
-    scene = None if args.scene is None else swarm_ik.Scene.from_json(args.scene)
+    scene = None if args.scene is None else swarm_ik.Scene.load(args.scene)
     res = solve_path(
         robot, poses, max_joint_step=step, q0=args.q0, scene=scene, seed=args.seed,
         densify=args.densify, time_limit=args.time_limit, tol_pos=args.tol_pos,

@@ -102,7 +102,8 @@ def add_parser(subparsers: Any) -> argparse.ArgumentParser:
         "--scene",
         default=None,
         metavar="FILE",
-        help="scene JSON of obstacles: the answer must be collision-free (self and scene)",
+        help="obstacles the answer must be clear of (and of itself): swarm_ik JSON, cuRobo "
+        "world YAML (.yml), MoveIt .scene or a URDF of fixed obstacles (docs/scenes.md)",
     )
     p.add_argument(
         "--no-self-collision",
@@ -184,7 +185,7 @@ def run(args: argparse.Namespace) -> int:
         target = np.asarray(pose, dtype=float)
     if args.scene is not None:
         avoid = swarm_ik.goals.AvoidCollisions(
-            swarm_ik.Scene.from_json(args.scene), self_collision=not args.no_self_collision
+            swarm_ik.Scene.load(args.scene), self_collision=not args.no_self_collision
         )
         goals = [*(goals or []), avoid]
     problem = swarm_ik.IKProblem(
