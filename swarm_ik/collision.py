@@ -27,6 +27,7 @@ against every obstacle of a :class:`~swarm_ik.scene.Scene`.
 
 from __future__ import annotations
 
+import contextlib
 import hashlib
 import json
 import os
@@ -506,10 +507,10 @@ def _sampled_rule(
     )
     path = cache_dir() / f"pairs-{h.hexdigest()[:20]}.json"
     if use_cache and path.is_file():
-        try:
+        try:  # a damaged file (unreadable, not UTF-8, not JSON, another shape) is a miss
             data = json.loads(path.read_text())
             return [tuple(p) for p in data["never"]], [tuple(p) for p in data["always"]]  # type: ignore[misc]
-        except (json.JSONDecodeError, KeyError, TypeError):
+        except (OSError, ValueError, KeyError, TypeError):
             pass
     gm = pin.GeometryModel()
     for g in geom.geometryObjects:
@@ -532,8 +533,12 @@ def _sampled_rule(
             counts[key] += 1
     never = sorted(k for k, c in counts.items() if c == 0)
     always = sorted(k for k, c in counts.items() if c >= ALWAYS_FRACTION * samples)
-    if use_cache:
+    if use_cache:  # a failed write (a full disk, a folder turned read-only) is skipped
         tmp = path.with_suffix(f".tmp{os.getpid()}")
-        tmp.write_text(json.dumps({"never": never, "always": always, "samples": samples}))
-        tmp.replace(path)
+        try:
+            tmp.write_text(json.dumps({"never": never, "always": always, "samples": samples}))
+            tmp.replace(path)
+        except OSError:
+            with contextlib.suppress(OSError):
+                tmp.unlink()
     return never, always

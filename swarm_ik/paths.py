@@ -5,6 +5,7 @@ nothing of swarm_ik but its errors: every layer may use it.)"""
 from __future__ import annotations
 
 import os
+import stat
 import sys
 import tempfile
 from importlib import resources
@@ -41,33 +42,89 @@ def example_robot_data_dir() -> Path:
     )
 
 
-def cache_dir() -> Path:
-    """Folder of swarm_ik's caches (sampled collision pairs, fitted spheres).
-
-    ``$SWARM_IK_CACHE_DIR``, else ``$XDG_CACHE_HOME/swarm_ik``, else ``~/.cache/swarm_ik``;
-    created on first use.  Where that folder cannot be created or written (a read-only home,
-    the variable naming a file), a folder in the system's temporary directory instead: a
-    cache never stops a solve.
-    """
+def configured_cache_dir() -> Path | None:
+    """The cache folder asked for: ``$SWARM_IK_CACHE_DIR``, else ``$XDG_CACHE_HOME/swarm_ik``,
+    else ``~/.cache/swarm_ik``; ``None`` when there is no home folder to put it in.  Neither
+    created nor checked (:func:`cache_dir` does both)."""
     env = os.environ.get("SWARM_IK_CACHE_DIR")
     if env:
-        d = Path(env)
-    else:
-        base = os.environ.get("XDG_CACHE_HOME") or str(Path.home() / ".cache")
-        d = Path(base) / "swarm_ik"
+        return Path(env)
+    base = os.environ.get("XDG_CACHE_HOME")
+    if not base:
+        try:
+            base = str(Path.home() / ".cache")
+        except (RuntimeError, KeyError):  # no $HOME and no password entry
+            return None
+    return Path(base) / "swarm_ik"
+
+
+def writable_dir(folder: str | os.PathLike[str]) -> bool:
+    """Whether ``folder`` is, or can be made, a folder this process can create files in.
+
+    numba's own test of a cache folder: the folder is created, then a temporary file in it
+    (permission bits alone would say yes to root on a read-only mount).
+    """
     try:
-        d.mkdir(parents=True, exist_ok=True)
-        if os.access(d, os.W_OK):
-            return d
+        os.makedirs(folder, exist_ok=True)
+        tempfile.TemporaryFile(dir=folder).close()
+    except OSError:
+        return False
+    return True
+
+
+_PRIVATE_DIR: Path | None = None
+"""This process's own temporary cache folder, once :func:`_temporary_cache_dir` made one."""
+
+
+def _temporary_cache_dir() -> Path | None:
+    """``<temp>/swarm_ik-cache-<uid>`` (made private to the user), or a fresh folder of this
+    process when that one is not ours (owned by another user, a link): cached compiled code
+    and pickles are loaded from it, so a folder someone else planted is never used."""
+    global _PRIVATE_DIR
+    try:
+        tmp = Path(tempfile.gettempdir())
+        if hasattr(os, "getuid"):
+            shared = tmp / f"swarm_ik-cache-{os.getuid()}"
+            try:
+                shared.mkdir(mode=0o700)
+            except FileExistsError:
+                pass
+            st = shared.lstat()
+            if stat.S_ISDIR(st.st_mode) and st.st_uid == os.getuid():
+                if st.st_mode & 0o077:  # ours, made under a lax umask: made private
+                    shared.chmod(0o700)
+                if writable_dir(shared):
+                    return shared
+        elif writable_dir(tmp / "swarm_ik-cache"):
+            return tmp / "swarm_ik-cache"
     except OSError:
         pass
-    # an unwritable (or not a folder) cache location: a private folder of this process
-    fallback = (
-        Path(tempfile.gettempdir())
-        / f"swarm_ik-cache-{os.getuid() if hasattr(os, 'getuid') else 0}"
-    )
-    fallback.mkdir(parents=True, exist_ok=True)
-    return fallback
+    if _PRIVATE_DIR is None:
+        try:
+            _PRIVATE_DIR = Path(tempfile.mkdtemp(prefix="swarm_ik-cache-"))
+        except OSError:  # no temporary folder can be written either
+            return None
+    return _PRIVATE_DIR
+
+
+def cache_dir() -> Path:
+    """Folder of swarm_ik's caches (sampled collision pairs, fitted spheres, and numba's
+    compiled kernels when the package's own folder cannot hold them).
+
+    :func:`configured_cache_dir`, created on first use.  Where that folder cannot be created
+    or written (a read-only home, the variable naming a file), a folder in the system's
+    temporary directory instead (``<temp>/swarm_ik-cache-<uid>``, private to the user): a
+    cache never stops a solve.  Never raises; only when not even the temporary directory can
+    be written is the returned folder unwritable, and the callers skip a failed cache write.
+    """
+    d = configured_cache_dir()
+    if d is not None and writable_dir(d):
+        return d
+    fallback = _temporary_cache_dir()
+    if fallback is not None:
+        return fallback
+    # nothing on disk can be written: a name the callers' writes fail in, and skip
+    return d if d is not None else Path("swarm_ik-cache")
 
 
 def package_dirs(urdf_path: str | os.PathLike[str]) -> list[str]:

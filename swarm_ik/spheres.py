@@ -37,6 +37,7 @@ as ``J_c = J_v − [R c_local]× J_ω``.
 
 from __future__ import annotations
 
+import contextlib
 import hashlib
 import json
 import math
@@ -248,22 +249,34 @@ def fit_bodies(
         h.update(_geometry_key(g))
     path = cache_dir() / f"spheres-{h.hexdigest()[:20]}.npz"
     if use_cache and path.is_file():
+        # a damaged or foreign file (truncated: BadZipFile, EOFError; not an .npz: an array
+        # without a context manager) is a cache miss, fitted again and overwritten
         try:
             with np.load(path) as z:
                 body, centres, radii = z["body"], z["centres"], z["radii"]
-            return [(centres[body == k], radii[body == k]) for k in range(len(geometries))]
-        except (OSError, KeyError, ValueError):
+            fits = [(centres[body == k], radii[body == k]) for k in range(len(geometries))]
+            if (
+                centres.shape == (len(body), 3)
+                and radii.shape == body.shape
+                and all(len(r) for _, r in fits)
+            ):
+                return fits
+        except Exception:
             pass
     fits = [fit_spheres(g, tolerance) for g in geometries]
-    if use_cache:
+    if use_cache:  # a failed write (a full disk, a folder turned read-only) is skipped
         tmp = path.with_name(path.stem + f".tmp{id(fits)}.npz")
-        np.savez(
-            tmp,
-            body=np.concatenate([np.full(len(r), k) for k, (_, r) in enumerate(fits)]),
-            centres=np.vstack([c for c, _ in fits]),
-            radii=np.concatenate([r for _, r in fits]),
-        )
-        tmp.replace(path)
+        try:
+            np.savez(
+                tmp,
+                body=np.concatenate([np.full(len(r), k) for k, (_, r) in enumerate(fits)]),
+                centres=np.vstack([c for c, _ in fits]),
+                radii=np.concatenate([r for _, r in fits]),
+            )
+            tmp.replace(path)
+        except OSError:
+            with contextlib.suppress(OSError):
+                tmp.unlink()
     return fits
 
 

@@ -9,4 +9,191 @@ residual kernels with :mod:`swarm_ik.goals`, which hands them to these kernels a
 of functions of one signature (:data:`swarm_ik.kernels.lm.GOAL_SIGNATURE`).
 
 Each compiled function has a numpy twin or a Pinocchio reference it is tested against.
+
+Where numba keeps the compiled kernels is settled here, on import, so a module defining a
+``cache=True`` kernel imports this package before its first one (``tests/test_install.py``
+checks each): :func:`settle_numba_cache` gives numba a writable folder when the package's own
+``__pycache__`` folders cannot be written (a read-only install), and
+:func:`drop_damaged_cache_files` removes truncated cache files, which numba would otherwise
+fail to load on every run.  docs/robustness.md, "Real installs".
 """
+
+from __future__ import annotations
+
+import hashlib
+import os
+import sys
+from collections.abc import Iterable
+from typing import IO
+
+from swarm_ik import paths
+
+KERNEL_PACKAGES = ("", "goals", "kernels", "solvers")
+"""The sub-packages of swarm_ik (``""``: the package itself) whose modules define
+``cache=True`` kernels (``tests/test_install.py`` checks the list)."""
+
+_PACKAGE = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
+
+
+def source_dirs() -> list[str]:
+    """The folders of the modules defining swarm_ik's cached kernels, as numba names them
+    (absolute, links not resolved)."""
+    return [os.path.join(_PACKAGE, p) if p else _PACKAGE for p in KERNEL_PACKAGES]
+
+
+def _notice(message: str) -> None:
+    """One line on stderr: a cache problem worked around, never an error."""
+    print(f"swarm_ik: {message}", file=sys.stderr, flush=True)
+
+
+def settle_numba_cache() -> str | None:
+    """Make sure numba has a writable folder for swarm_ik's compiled kernels.
+
+    numba writes them next to each module (``__pycache__``), else into
+    ``$NUMBA_CACHE_DIR``, else into the user's cache folder, and refuses to define a
+    ``cache=True`` function where none can be written (``cannot cache function …: no locator
+    available``).  When ``$NUMBA_CACHE_DIR`` is not a writable folder and the package's
+    ``__pycache__`` folders cannot be written, ``NUMBA_CACHE_DIR`` is set to
+    ``cache_dir() / "numba"`` (:func:`swarm_ik.paths.cache_dir`, which falls back to a
+    private temporary folder), and to ``numba.config.CACHE_DIR`` when numba is already
+    imported (numba reads its variables once, on import).  One line on stderr says so when
+    that folder is a temporary one or replaces the user's ``$NUMBA_CACHE_DIR``.
+
+    Returns:
+        The folder numba caches swarm_ik's kernels under (``$NUMBA_CACHE_DIR``, given or
+        set), or ``None`` for the ``__pycache__`` folders next to the modules.
+    """
+    given = os.environ.get("NUMBA_CACHE_DIR")
+    if given and paths.writable_dir(given):
+        return given
+    if all(paths.writable_dir(os.path.join(d, "__pycache__")) for d in source_dirs()):
+        return None  # numba's default, next to the sources
+    asked = paths.configured_cache_dir()
+    folder = paths.cache_dir() / "numba"
+    if not paths.writable_dir(folder):
+        _notice(
+            "no folder can be written for numba's compiled kernels (the package's, "
+            f"{asked}, the temporary directory); set NUMBA_CACHE_DIR to a writable folder"
+        )
+        return None
+    if given:
+        _notice(
+            f"NUMBA_CACHE_DIR {given!r} cannot be written; numba's compiled kernels are "
+            f"cached in {folder}"
+        )
+    elif asked is None or folder.parent != asked:
+        _notice(
+            f"neither the package's folder nor {asked} can be written; numba's compiled "
+            f"kernels are cached in {folder} (set SWARM_IK_CACHE_DIR to keep them elsewhere)"
+        )
+    os.environ["NUMBA_CACHE_DIR"] = str(folder)
+    # numba imported before this package has read its variables already: its documented
+    # mirror of them, ``numba.config.<NAME>`` for ``NUMBA_<NAME>``, takes the same value
+    config = getattr(sys.modules.get("numba"), "config", None)
+    if config is not None:
+        config.CACHE_DIR = str(folder)
+    return str(folder)
+
+
+def cache_folders(numba_cache_dir: str | None) -> list[str]:
+    """The folders numba keeps swarm_ik's kernels in: the ``__pycache__`` next to each
+    module, or, under ``numba_cache_dir``, the one numba names for each module folder
+    (``<folder name>_<SHA-1 of its path>``)."""
+    if numba_cache_dir is None:
+        return [os.path.join(d, "__pycache__") for d in source_dirs()]
+    return [
+        os.path.join(
+            numba_cache_dir, f"{os.path.basename(d)}_{hashlib.sha1(d.encode()).hexdigest()}"
+        )
+        for d in source_dirs()
+    ]
+
+
+_PROTO, _STOP = 0x80, 0x2E
+_SIZED = {0x95: 8, 0x8E: 8, 0x96: 8, 0x8D: 8, 0x42: 4, 0x58: 4, 0x43: 1, 0x8C: 1, 0x94: 0}
+"""Opcodes followed by a little-endian length of that many bytes, then that many bytes: a
+frame (protocol 4+), and what a pickler writes outside frames: large bytes and strings
+(``BINBYTES8``, ``BYTEARRAY8``, ``BINUNICODE8``, ``BINBYTES``, ``BINUNICODE``,
+``SHORT_BINBYTES``, ``SHORT_BINUNICODE``) and the ``MEMOIZE`` after them (no argument)."""
+
+
+def _whole_pickles(f: IO[bytes], size: int, count: int) -> bool:
+    """Whether the file ``f`` of ``size`` bytes is ``count`` whole pickles end to end (numba's
+    ``.nbi``: two, the version and the index; its ``.nbc``: one), walked frame by frame
+    without unpickling anything: a truncated file ends inside a frame or a length, lacks the
+    final ``STOP``, or holds fewer pickles."""
+    f.seek(max(size - 1, 0))
+    if f.read(1) != bytes([_STOP]):
+        return False
+    pos = found = 0
+    while pos < size:
+        f.seek(pos)
+        head = f.read(9)
+        if not head:  # shorter than it was a moment ago
+            return False
+        op = head[0]
+        if op == _PROTO:
+            pos += 2
+            found += 1
+        elif op in _SIZED:
+            width = _SIZED[op]
+            if len(head) < 1 + width:
+                return False
+            pos += 1 + width + int.from_bytes(head[1 : 1 + width], "little")
+        else:  # any other opcode outside a frame (protocols before 4): read it the slow way
+            import pickletools
+
+            f.seek(pos)
+            try:
+                next(pickletools.genops(f))
+            except (ValueError, StopIteration):
+                return False
+            pos = f.tell()
+    return pos == size and found == count
+
+
+def drop_damaged_cache_files(folders: Iterable[str]) -> list[str]:
+    """Remove the numba cache files (``.nbi`` index, ``.nbc`` data) in ``folders`` that are
+    not whole pickles: numba fails to load a truncated one (``UnpicklingError``,
+    ``EOFError``) on every call, and never rewrites it; without it, the kernel is compiled
+    again on first use and saved anew.  A file that cannot be read or removed is left.
+
+    Returns:
+        The paths removed.
+    """
+    removed = []
+    for folder in folders:
+        try:
+            names = sorted(os.listdir(folder))
+        except OSError:
+            continue
+        for name in names:
+            if not name.endswith((".nbi", ".nbc")):
+                continue
+            path = os.path.join(folder, name)
+            try:
+                with open(path, "rb") as f:
+                    size = os.fstat(f.fileno()).st_size
+                    if _whole_pickles(f, size, 2 if name.endswith(".nbi") else 1):
+                        continue
+                os.remove(path)
+            except OSError:
+                continue
+            removed.append(path)
+    return removed
+
+
+def _settle() -> None:
+    """Settle the cache folder, then drop the damaged files in it (one line on stderr)."""
+    removed = drop_damaged_cache_files(cache_folders(settle_numba_cache()))
+    if removed:
+        names = ", ".join(os.path.basename(p) for p in removed[:3])
+        more = f" and {len(removed) - 3} more" if len(removed) > 3 else ""
+        _notice(
+            f"removed {len(removed)} damaged numba cache file(s) ({names}{more}) under "
+            f"{os.path.commonpath([os.path.dirname(p) for p in removed])}; their kernels are "
+            "compiled again on first use"
+        )
+
+
+_settle()
