@@ -9,6 +9,9 @@ True
 
 from typing import TYPE_CHECKING, Any
 
+# numba's cache folder is settled before any swarm_ik module imports numba (a read-only
+# install, a damaged cache file: swarm_ik.kernels); this loads neither numba nor numpy
+import swarm_ik.kernels  # noqa: F401  # isort: skip
 from swarm_ik.errors import (
     InvalidArgumentError,
     InvalidTargetError,

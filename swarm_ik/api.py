@@ -273,7 +273,7 @@ class Route:
         angular error, stopped, history, q)``."""
         kw, pol = self.kwargs, self.pol
         out_q = np.empty(q_start.shape[0])
-        used, f, dp, dr, stopped, hist = search.search(
+        used, f, dp, dr, stopped, hist = search.swarm_search(
             self.state, q_start, pol.kernel_tol_pos, pol.kernel_tol_rot, self.tol_pos,
             self.tol_rot, 0.0 if self.problem.position_only else self.problem.w_rot,
             kw["pop_size"], self._n_swarm, kw["iterations"],

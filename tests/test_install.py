@@ -102,20 +102,7 @@ def late_kernels() -> dict[str, str]:
 
 @pytest.mark.parametrize(
     "module",
-    [
-        pytest.param(
-            m,
-            marks=pytest.mark.xfail(
-                reason="swarm_ik/path.py imports numba and defines its kernels without "
-                "importing swarm_ik.kernels first: `from swarm_ik.path import solve_path` (and "
-                "`swarm-ik path`) in a read-only install still fail with numba's 'no locator "
-                "available'; fix: `import swarm_ik.kernels  # noqa: F401` above `import numba`"
-            ),
-        )
-        if m == "swarm_ik.path"
-        else m
-        for m in _cached_kernel_modules()
-    ],
+    _cached_kernel_modules(),
 )
 def test_cached_kernels_are_defined_after_the_cache_folder_is_settled(
     late_kernels: dict[str, str], module: str

@@ -16,20 +16,7 @@ A goal is a frozen dataclass deriving from :class:`Goal`, written one way or the
   position tolerance).
 
 Both are judged by :meth:`Goal.errors` on a Pinocchio :class:`State` (the independent check
-of every answer).  A Python goal, after pink's ``Task`` (``compute_error``,
-``compute_jacobian``)::
-
-    @dataclass(frozen=True)
-    class OnPlane(Goal):
-        frame: str
-        normal: tuple = (0.0, 0.0, 1.0)
-        height: float = 0.0
-
-        def residual(self, state):
-            return np.array([np.dot(self.normal, state.pose(self.frame)[:3, 3]) - self.height])
-
-        def jacobian(self, state):
-            return np.asarray(self.normal) @ state.jacobian(self.frame)[:3]
+of every answer).  ``docs/goals.md`` writes a Python goal step by step.
 """
 
 from __future__ import annotations

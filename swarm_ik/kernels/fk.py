@@ -214,6 +214,35 @@ def fk_scratch(tree: TreeArrays) -> FKScratch:
 
 
 @numba.njit(cache=True, inline="always")
+def place(
+    j_rot: FloatArray,
+    j_pos: FloatArray,
+    j: int,
+    rot: FloatArray,
+    pos: FloatArray,
+    out_rot: FloatArray,
+    out_pos: FloatArray,
+) -> None:  # pragma: no cover - compiled
+    """World placement of a frame given in joint ``j``'s frame (``j < 0``: the root):
+    ``out_rot = R_j rot`` (3, 3), ``out_pos = p_j + R_j pos`` (3,)."""
+    for a in range(3):
+        if j < 0:
+            out_pos[a] = pos[a]
+            for b in range(3):
+                out_rot[a, b] = rot[a, b]
+        else:
+            out_pos[a] = j_pos[j, a] + (
+                j_rot[j, a, 0] * pos[0] + j_rot[j, a, 1] * pos[1] + j_rot[j, a, 2] * pos[2]
+            )
+            for b in range(3):
+                out_rot[a, b] = (
+                    j_rot[j, a, 0] * rot[0, b]
+                    + j_rot[j, a, 1] * rot[1, b]
+                    + j_rot[j, a, 2] * rot[2, b]
+                )
+
+
+@numba.njit(cache=True, inline="always")
 def fk_one(
     q: FloatArray, t: TreeArrays, s: FKScratch, want_jac: bool
 ) -> None:  # pragma: no cover - compiled
@@ -234,24 +263,7 @@ def fk_one(
     jr = s.j_rot
     jp = s.j_pos
     for j in range(nj):
-        par = parent[j]
-        for a in range(3):
-            if par < 0:
-                jp[j, a] = pos_p[j, a]
-                for b in range(3):
-                    jr[j, a, b] = rot_p[j, a, b]
-            else:
-                jp[j, a] = jp[par, a] + (
-                    jr[par, a, 0] * pos_p[j, 0]
-                    + jr[par, a, 1] * pos_p[j, 1]
-                    + jr[par, a, 2] * pos_p[j, 2]
-                )
-                for b in range(3):
-                    jr[j, a, b] = (
-                        jr[par, a, 0] * rot_p[j, 0, b]
-                        + jr[par, a, 1] * rot_p[j, 1, b]
-                        + jr[par, a, 2] * rot_p[j, 2, b]
-                    )
+        place(jr, jp, parent[j], rot_p[j], pos_p[j], jr[j], jp[j])
         v = mult[j] * q[q_index[j]] + offset[j]
         if kind[j] == PRISMATIC:
             for a in range(3):
@@ -268,23 +280,7 @@ def fk_one(
     nq = f_jac.shape[2]
     for f in range(nf):
         j = frame_joint[f]
-        for a in range(3):
-            if j < 0:
-                f_pos[f, a] = frame_pos[f, a]
-                for b in range(3):
-                    f_rot[f, a, b] = frame_rot[f, a, b]
-            else:
-                f_pos[f, a] = jp[j, a] + (
-                    jr[j, a, 0] * frame_pos[f, 0]
-                    + jr[j, a, 1] * frame_pos[f, 1]
-                    + jr[j, a, 2] * frame_pos[f, 2]
-                )
-                for b in range(3):
-                    f_rot[f, a, b] = (
-                        jr[j, a, 0] * frame_rot[f, 0, b]
-                        + jr[j, a, 1] * frame_rot[f, 1, b]
-                        + jr[j, a, 2] * frame_rot[f, 2, b]
-                    )
+        place(jr, jp, j, frame_rot[f], frame_pos[f], f_rot[f], f_pos[f])
         if want_jac:
             for a in range(6):
                 for i in range(nq):

@@ -517,6 +517,25 @@ def _step_into_bounds(
 
 
 @numba.njit(cache=True, inline="always")
+def damping(
+    accepted: bool, cost_t: float, cost: float, lam: float, stall: int, cfg: LMSettings
+) -> tuple[float, int, bool]:  # pragma: no cover - compiled
+    """The damping and stall rule after a trial step of cost ``cost_t`` from ``cost``:
+    accepted, the damping falls ×0.1 and a step that lowered the cost by less than
+    ``stall_rel`` counts as a stall (else the count restarts); rejected, the damping grows
+    ×10 and the step counts as a stall.  Returns ``(λ, stalls, stuck)``; ``stuck`` (a
+    rejected step with λ > 1e8 or ``stall_iters`` stalls in a row) ends the start at a local
+    minimum.  The one rule of :func:`lm_run` and its numpy twin
+    (:class:`swarm_ik.solvers.python_lm.PythonPolisher`)."""
+    if accepted:
+        stall = stall + 1 if cost_t > cost * (1.0 - cfg.stall_rel) else 0
+        return max(lam * 0.1, 1e-12), stall, False
+    lam = max(lam * 10.0, 1e-12)
+    stall += 1
+    return lam, stall, lam > 1e8 or stall >= cfg.stall_iters
+
+
+@numba.njit(cache=True, inline="always")
 def evaluate(
     q: FloatArray,
     t: TreeArrays,
@@ -610,11 +629,7 @@ def lm_run(
             ev_s += 1
             if ev_s == 1 or cost_t < cost:  # the start, or an accepted step
                 if ev_s > 1:
-                    if cost_t > cost * (1.0 - cfg.stall_rel):
-                        stall += 1
-                    else:
-                        stall = 0
-                    lam = max(lam * 0.1, 1e-12)
+                    lam, stall, _ = damping(True, cost_t, cost, lam, stall, cfg)
                 for j in range(n):
                     q[j] = q_t[j]
                 for a in range(m):
@@ -629,9 +644,8 @@ def lm_run(
                     status = LOCAL_MIN
                     break
             else:
-                lam = max(lam * 10.0, 1e-12)
-                stall += 1
-                if lam > 1e8 or stall >= cfg.stall_iters:
+                lam, stall, stuck = damping(False, cost_t, cost, lam, stall, cfg)
+                if stuck:
                     status = LOCAL_MIN
                     break
             if within_tolerance(err, g, tol_pos, tol_rot):
@@ -702,48 +716,6 @@ def lm_run(
 
 
 @numba.njit(cache=True)
-def lm_polish(
-    starts: FloatArray,
-    t: TreeArrays,
-    g: GoalTable,
-    ks: GoalKernels,
-    b: Bounds,
-    cfg: LMSettings,
-    tol_pos: float,
-    tol_rot: float,
-    max_evals: int,
-    stop_first: bool,
-    out_q: FloatArray,
-    out_dp: FloatArray,
-    out_dr: FloatArray,
-    out_status: IntArray,
-    out_evals: IntArray,
-) -> int:  # pragma: no cover - compiled
-    """:func:`lm_run` with scratch of its own, for callers that polish once (its arguments
-    but the last)."""
-    return lm_run(
-        starts, t, g, ks, b, cfg, tol_pos, tol_rot, max_evals, stop_first, out_q, out_dp,
-        out_dr, out_status, out_evals, make_work(t, g, g.rows_primary),
-    )  # fmt: skip
-
-
-@numba.njit(cache=True)
-def secondary_cost(
-    q: FloatArray,
-    t: TreeArrays,
-    g: GoalTable,
-    ks: GoalKernels,
-    b: Bounds,
-    w: Work,
-    res2: FloatArray,
-    jac2: FloatArray,
-    err2: FloatArray,
-) -> float:  # pragma: no cover - compiled
-    """Squared norm of the secondary stack at ``q`` (FK buffers of ``w`` must hold ``q``)."""
-    return goal_rows(q, w.fk, g, ks, False, True, res2, jac2, err2, w.work)
-
-
-@numba.njit(cache=True)
 def secondary_descent(
     q_in: FloatArray,
     t: TreeArrays,
@@ -800,7 +772,7 @@ def secondary_descent(
     if max_evals < 1 or m2 == 0:
         return 0
     evaluate(q, t, g, ks, b, w, True, False)
-    cost2 = secondary_cost(q, t, g, ks, b, w, res2, jac2, err2)
+    cost2 = goal_rows(q, w.fk, g, ks, False, True, res2, jac2, err2, w.work)
     used = 1
     if not within_tolerance(w.err, g, tol_pos, tol_rot):
         return used
@@ -860,7 +832,7 @@ def secondary_descent(
         evaluate(q_t, t, g, ks, b, w, True, True)
         used += 1
         ok_primary = within_tolerance(w.err_t, g, tol_pos, tol_rot)
-        cost2_t = secondary_cost(q_t, t, g, ks, b, w, res2_t, jac2_t, err2)
+        cost2_t = goal_rows(q_t, w.fk, g, ks, False, True, res2_t, jac2_t, err2, w.work)
         if ok_primary and cost2_t < cost2:
             rel = (cost2 - cost2_t) / cost2
             for j in range(n):

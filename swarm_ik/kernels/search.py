@@ -21,7 +21,7 @@ The clock: numba has none; :func:`now` reads ``time.perf_counter`` in ``numba.ob
 case.  Entering Python there also lets a Ctrl-C raise ``KeyboardInterrupt`` out of the
 compiled call (within 16 polish calls: a few milliseconds).
 
-Called from Python as :func:`search` on a :class:`SearchState` made once (one argument
+Called from Python on a :class:`SearchState` made once (one argument
 numba types at once; the structures one by one are typed in Python on every call).
 """
 
@@ -222,11 +222,7 @@ def grown(hist: FloatArray, n: int) -> FloatArray:  # pragma: no cover - compile
 
 @numba.njit(cache=True)
 def swarm_search(
-    t: TreeArrays,
-    g: GoalTable,
-    ks: GoalKernels,
-    b: Bounds,
-    cfg: LMSettings,
+    s: Any,
     seed_q: FloatArray,
     kernel_tol_pos: float,
     kernel_tol_rot: float,
@@ -244,13 +240,12 @@ def swarm_search(
     t0: float,
     key: np.uint64,
     out_q: FloatArray,
-    sw: SearchWork,
 ) -> tuple[int, float, float, float, bool, FloatArray]:  # pragma: no cover - compiled
     """The memetic search of the ``swarm`` solver (see the module docstring).
 
     Args:
-        t, g, ks, b, cfg: Tree, goal table (no secondary goal), goal kernels, bounds, LM
-            settings.
+        s: The :class:`SearchState` (tree, goal table without secondary goals, goal kernels,
+            bounds, LM settings, scratch made for ``pop_size``).
         seed_q: The first start, ``(nq,)``, inside the bounds.
         kernel_tol_pos, kernel_tol_rot: Tolerances the polish stops at [m], [rad].
         tol_pos, tol_rot: Tolerances of the stop test (``IKProblem.is_success``) [m], [rad].
@@ -265,13 +260,13 @@ def swarm_search(
         t0: Start of the solve on the clock of :func:`now` [s].
         key: Random stream key (:func:`key_of_seed`, :func:`stream_key`).
         out_q: The answer (lowest fitness seen), ``(nq,)``.
-        sw: Scratch (:func:`make_search_work` for ``pop_size``).
 
     Returns:
         ``(evaluations, fitness, dp, dr, stopped, history)``: evaluations used, the answer's
         fitness, its position [m] and angular [rad] errors, whether the stop test ended the
         run, and the best fitness after each generation (the last entry: the answer's).
     """
+    t, g, ks, b, cfg, sw = s.tree, s.table, s.kernels, s.bounds, s.cfg, s.work
     n = seed_q.shape[0]
     m = pop_size
     rows = max(m, 1)
@@ -473,37 +468,6 @@ def new_search_state(
 ) -> Any:  # pragma: no cover - compiled
     """A :class:`SearchState` for ``pop_size`` starts per generation."""
     return SearchState(t, g, ks, b, cfg, make_search_work(t, g, pop_size))
-
-
-@numba.njit(cache=True)
-def search(
-    s: Any,
-    seed_q: FloatArray,
-    kernel_tol_pos: float,
-    kernel_tol_rot: float,
-    tol_pos: float,
-    tol_rot: float,
-    w_rot: float,
-    pop_size: int,
-    n_swarm: int,
-    iterations: int,
-    unlimited: bool,
-    max_evals: int,
-    budget_total: int,
-    evals_before: int,
-    time_limit: float,
-    t0: float,
-    key: np.uint64,
-    out_q: FloatArray,
-) -> tuple[int, float, float, float, bool, FloatArray]:  # pragma: no cover - compiled
-    """:func:`swarm_search` on a :class:`SearchState` ``s`` (made for ``pop_size``): the
-    entry called from Python (the arguments of :func:`swarm_search` after ``cfg``, but the
-    scratch)."""
-    return swarm_search(
-        s.tree, s.table, s.kernels, s.bounds, s.cfg, seed_q, kernel_tol_pos, kernel_tol_rot,
-        tol_pos, tol_rot, w_rot, pop_size, n_swarm, iterations, unlimited, max_evals,
-        budget_total, evals_before, time_limit, t0, key, out_q, s.work,
-    )  # fmt: skip
 
 
 def typed_settings(cfg: LMSettings) -> LMSettings:

@@ -5,7 +5,7 @@ finds the basin, a Jacobian method finishes.  This module turns that into a solv
 exact (it stops at the tolerance, down to 1e-10), stays inside the joint limits, and is fast
 enough to compare with TRAC-IK:
 
-* **The polish** (:func:`swarm_ik.kernels.lm.lm_polish`) is one numba-compiled function: for
+* **The polish** (:func:`swarm_ik.kernels.lm.lm_run`) is one numba-compiled function: for
   a batch of starts ``(k, nq)`` it runs a bounded Levenberg–Marquardt iteration on the stacked
   residual of the problem's primary goals (for a pose ``r(q) = [p* − p(q); log(R* R(q)ᵀ)]`` in
   world axes) with the exact residual Jacobian (for a pose ``[J_v; J_r⁻¹(φ) J_ω]``) built from
@@ -68,7 +68,8 @@ PREFER = ("best", "nearest")
 
 # --------------------------------------------------------------------------- python side
 class Polisher(NamedTuple):
-    """The compiled LM kernel (:func:`swarm_ik.kernels.lm.lm_polish`) bound to one problem.
+    """The compiled LM kernel (:func:`swarm_ik.kernels.lm.lm_run`) bound to one problem, with
+    its scratch (made once).
 
     Build with :meth:`from_problem`.  ``kernel_tol_*`` are the tolerances the kernel stops at
     (``tol_margin`` × the success tolerances, so that Pinocchio's check passes with margin).
@@ -81,6 +82,8 @@ class Polisher(NamedTuple):
     cfg: LMSettings
     kernel_tol_pos: float
     kernel_tol_rot: float
+    work: Any
+    """The scratch of :func:`swarm_ik.kernels.lm.lm_run` (``lm.Work``, for ``table``)."""
 
     @classmethod
     def from_problem(
@@ -122,14 +125,16 @@ class Polisher(NamedTuple):
                 problem, bounds, cfg, float(tol_pos) * cfg.tol_margin,
                 float(tol_rot) * cfg.tol_margin,
             )  # fmt: skip
+        table = problem.table(q0)
         return cls(
             problem.tree,
-            problem.table(q0),
+            table,
             kernels(),
             bounds,
             cfg,
             float(tol_pos) * cfg.tol_margin,
             float(tol_rot) * cfg.tol_margin,
+            lm.make_work(problem.tree, table, table.rows_primary),
         )
 
     @property
@@ -147,9 +152,10 @@ class Polisher(NamedTuple):
         dr = np.empty(k)
         status = np.empty(k, dtype=np.int64)
         evals = np.empty(k, dtype=np.int64)
-        used = lm.lm_polish(
+        used = lm.lm_run(
             starts, self.tree, self.table, self.kernels, self.bounds, self.cfg, self.kernel_tol_pos,
             self.kernel_tol_rot, int(max_evals), bool(stop_first), out_q, dp, dr, status, evals,
+            self.work,
         )  # fmt: skip
         return PolishOutcome(out_q, dp, dr, status, evals, int(used))
 
@@ -183,7 +189,8 @@ class Polisher(NamedTuple):
             [t.ipar[t.i0[i] : t.i0[i + 1]] for i in range(ng)] + [enc.ipar],
             [*t.nrows.tolist(), nq],
         )
-        return self._replace(table=tab, kernels=kernels())
+        work = lm.make_work(self.tree, tab, tab.rows_primary)
+        return self._replace(table=tab, kernels=kernels(), work=work)
 
     def toward(self, q: FloatArray, q_ref: FloatArray, max_evals: int) -> tuple[FloatArray, int]:
         """Move the solution ``q`` along its self-motion towards ``q_ref``."""
@@ -291,7 +298,7 @@ def compiled_search(
     """
     out_q = np.empty(seed_q.shape[0])
     st = search_state(pol, pop_size) if state is None else state
-    used, f, dp, dr, stopped, hist = search.search(
+    used, f, dp, dr, stopped, hist = search.swarm_search(
         st, seed_q, pol.kernel_tol_pos, pol.kernel_tol_rot,
         float(tol_pos) if stop else -1.0, float(tol_rot) if stop else -1.0, float(w_rot),
         int(pop_size), int(n_swarm), int(iterations), max_evals is None and time_limit is None,

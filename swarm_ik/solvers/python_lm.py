@@ -152,20 +152,17 @@ class PythonPolisher(NamedTuple):
                 used += 1
                 ev += 1
                 cost_t = float(r_t @ r_t)
-                if cost_t < cost:
-                    stall = stall + 1 if cost_t > cost * (1.0 - cfg.stall_rel) else 0
-                    lam = max(lam * 0.1, 1e-12)
+                accepted = cost_t < cost
+                lam, stall, stuck = lm.damping(accepted, cost_t, cost, lam, stall, cfg)
+                if accepted:
                     q, r, jac, cost = q_t, r_t, jac_t, cost_t
                     err, e_p, e_r = self._errors(q)
                     if stall >= cfg.stall_iters and not self._within(err):
                         st = LOCAL_MIN
                         break
-                else:
-                    lam = max(lam * 10.0, 1e-12)
-                    stall += 1
-                    if lam > 1e8 or stall >= cfg.stall_iters:
-                        st = LOCAL_MIN
-                        break
+                elif stuck:
+                    st = LOCAL_MIN
+                    break
             out_q[s], dp[s], dr[s], status[s], evals[s] = q, e_p, e_r, st, ev
             if stop_first and st == CONVERGED:
                 break
