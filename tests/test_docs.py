@@ -1,10 +1,11 @@
-"""Every snippet in README.md and docs/*.md runs as written (the project's rule).
+"""Every snippet in README.md, docs/*.md and robots/README.md runs as written (the project's
+rule).
 
-What runs, each in a fresh process whose working directory is an empty temporary folder laid
-out like the clone's root (a symbolic link to each of its top-level entries, ``.venv`` to the
-environment running the tests), so that a path such as ``robots/yumi_left.urdf`` or
-``.venv/bin/swarm-ik`` means what it means to a reader at the root of a clone, while every
-file a snippet writes lands in the temporary folder:
+What runs, each in a fresh process whose working directory is a temporary folder laid out like
+the clone's root (a symbolic link to each of its top-level entries but the package and hidden
+ones, ``.venv`` to the environment running the tests), so that a path such as
+``robots/yumi_left.urdf`` or ``.venv/bin/swarm-ik`` means what it means to a reader at the root
+of a clone, while every file a snippet writes lands in the temporary folder:
 
 * every fenced ``python`` block, as a script;
 * every command of a ``bash``, ``sh`` or ``console`` block that starts with ``swarm-ik`` or
@@ -82,10 +83,14 @@ class Snippet:
         return f"{self.page}:{self.line}"
 
 
-def blocks(page: Path) -> list[Block]:
+def _pages() -> list[tuple[str, str]]:
+    """``(path relative to the clone's root, text)`` of every page."""
+    return [(p.relative_to(ROOT).as_posix(), p.read_text(encoding="utf-8")) for p in PAGES]
+
+
+def blocks(rel: str, text: str) -> list[Block]:
     """The fenced blocks of a Markdown page, with the marker on the line before each fence."""
-    rel = page.relative_to(ROOT).as_posix()
-    lines = page.read_text(encoding="utf-8").splitlines()
+    lines = text.splitlines()
     found: list[Block] = []
     i = 0
     while i < len(lines):
@@ -140,10 +145,11 @@ def commands(block: Block) -> list[tuple[int, str]]:
     return out
 
 
-def snippets() -> list[Snippet]:
+def snippets(pages: list[tuple[str, str]]) -> list[Snippet]:
+    """The snippets to run, in page order; the same snippet twice runs once."""
     found: list[Snippet] = []
-    for page in PAGES:
-        for block in blocks(page):
+    for rel, text in pages:
+        for block in blocks(rel, text):
             skip = None
             if block.marker and block.marker[0] == "snippet":
                 m = _SKIP.match(block.marker[1])
@@ -154,8 +160,6 @@ def snippets() -> list[Snippet]:
             elif block.lang in SHELL:
                 for line, command in commands(block):
                     found.append(Snippet(block.page, line, "command", command, skip))
-    # the same snippet on several pages or lines runs once; two commands of one line get ids
-    # of their own
     unique: dict[tuple[str, str], Snippet] = {}
     for s in found:
         unique.setdefault((s.kind, s.text), s)
@@ -163,6 +167,7 @@ def snippets() -> list[Snippet]:
 
 
 def _ids(found: list[Snippet]) -> list[str]:
+    """Test ids ``page:line`` (two commands of one line: ``page:line#2`` for the second)."""
     seen: dict[str, int] = {}
     ids = []
     for s in found:
@@ -171,11 +176,11 @@ def _ids(found: list[Snippet]) -> list[str]:
     return ids
 
 
-def files() -> dict[str, str]:
+def files(pages: list[tuple[str, str]]) -> dict[str, str]:
     """The blocks marked ``<!-- file: NAME -->``: NAME -> content."""
     out: dict[str, str] = {}
-    for page in PAGES:
-        for block in blocks(page):
+    for rel, text in pages:
+        for block in blocks(rel, text):
             if block.marker and block.marker[0] == "file":
                 name = block.marker[1]
                 where = f"{block.page}:{block.line - 1}"
@@ -185,7 +190,7 @@ def files() -> dict[str, str]:
     return out
 
 
-SNIPPETS = snippets()
+SNIPPETS = snippets(_pages())
 
 
 def _workdir(tmp: Path) -> None:
@@ -194,7 +199,7 @@ def _workdir(tmp: Path) -> None:
         if not entry.name.startswith(".") and entry.name not in NOT_LINKED:
             (tmp / entry.name).symlink_to(entry)
     (tmp / ".venv").symlink_to(Path(sys.prefix))
-    for name, text in files().items():
+    for name, text in files(_pages()).items():
         (tmp / name).write_text(text, encoding="utf-8")
 
 
@@ -213,15 +218,58 @@ def test_pages_have_snippets() -> None:
 
 def test_markers_precede_fences() -> None:
     """A marker that is not right before a fence would be silently ignored: refuse it."""
-    for page in PAGES:
-        lines = page.read_text(encoding="utf-8").splitlines()
+    for rel, text in _pages():
+        lines = text.splitlines()
         for i, line in enumerate(lines):
             if _MARKER.match(line):
-                where = f"{page.relative_to(ROOT).as_posix()}:{i + 1}"
                 assert i + 1 < len(lines) and _FENCE.match(lines[i + 1]), (
-                    f"{where}: a snippet marker must be the line right before a fence"
+                    f"{rel}:{i + 1}: a snippet marker must be the line right before a fence"
                 )
-    files()  # names valid and unique
+    files(_pages())  # names valid and unique
+
+
+def test_parser() -> None:
+    """What is taken from a page: python blocks, swarm-ik commands (continuations joined,
+    ``&&`` split, console prompts), the markers; nothing else."""
+    page = "\n".join(
+        [
+            "# t",
+            "```python",
+            "print(1)",
+            "```",
+            "<!-- snippet: skip (a viewer that stays open) -->",
+            "```bash",
+            "swarm-ik show --robot panda --show-wait inf",
+            "```",
+            "<!-- file: a.json -->",
+            "```json",
+            "[1]",
+            "```",
+            "```bash",
+            "pip install -e . && .venv/bin/swarm-ik solve --robot panda \\",
+            "    --pose 0.4 0 0.5 1 0 0 0  # a comment",
+            "python -m swarm_ik.cli robots",
+            "python -m pytest -q",
+            "```",
+            "```console",
+            "$ swarm-ik robots",
+            "swarm-ik robots is output here",
+            "```",
+            "  ```python",
+            "  x = 1",
+            "  ```",
+        ]
+    )
+    found = snippets([("p.md", page)])
+    assert [(s.line, s.kind, s.text, s.skip) for s in found] == [
+        (3, "python", "print(1)\n", None),
+        (7, "command", "swarm-ik show --robot panda --show-wait inf", "a viewer that stays open"),
+        (14, "command", ".venv/bin/swarm-ik solve --robot panda --pose 0.4 0 0.5 1 0 0 0", None),
+        (16, "command", "python -m swarm_ik.cli robots", None),
+        (20, "command", "swarm-ik robots", None),
+        (24, "python", "x = 1\n", None),
+    ]
+    assert files([("p.md", page)]) == {"a.json": "[1]\n"}
 
 
 @pytest.mark.parametrize("snippet", SNIPPETS, ids=_ids(SNIPPETS))
