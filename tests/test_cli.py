@@ -63,7 +63,9 @@ def _run(*argv: str, timeout: float = 300, **kwargs: Any) -> subprocess.Complete
 
 # ------------------------------------------------------------------------ the package
 def test_every_sub_command_is_a_module_with_add_parser_and_run() -> None:
-    assert list(cli.COMMANDS) == ["robots", "solve", "show", "batch", "reach", "bench"]
+    assert {"robots", "warmup", "solve", "path", "show", "batch", "reach", "bench"} <= set(
+        cli.COMMANDS
+    )
     for name, module in cli.COMMANDS.items():
         assert module.__name__ == f"swarm_ik.cli.{name}"
         assert callable(module.add_parser) and callable(module.run)

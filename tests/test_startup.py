@@ -89,3 +89,22 @@ def test_warmup_command_prepares_every_solve_path() -> None:
     assert out.stdout.startswith("kernels ready")
     for step in ("compiled search", "secondary goal", "batch", "solve_many"):
         assert step in out.stderr, out.stderr
+
+
+def test_installed_numba_is_within_the_bounded_range_of_pyproject() -> None:
+    """numba is bounded above and below in pyproject.toml (a release that changes its
+    internals must not arrive unseen); CI installs the newest release in the range."""
+    import re
+    from pathlib import Path
+
+    tomllib = pytest.importorskip("tomllib")  # (Python >= 3.11)
+
+    import numba
+    from packaging.specifiers import SpecifierSet
+
+    deps = tomllib.loads((Path(__file__).parent.parent / "pyproject.toml").read_text())
+    (spec,) = [d for d in deps["project"]["dependencies"] if re.match(r"numba\b", d)]
+    specifier = SpecifierSet(spec[len("numba") :])
+    assert any(s.operator in ("<", "<=") for s in specifier), spec
+    assert any(s.operator in (">", ">=") for s in specifier), spec
+    assert numba.__version__ in specifier, (numba.__version__, spec)
