@@ -938,6 +938,11 @@ def _tracked(
     solution: ``(solutions, failed attempts)``."""
     if ctx.cover:
         qs, found = _track_batch(ctx, i, parents)
+        if not found.any():  # e.g. joints pinned at their limits: the full solver, nearest
+            retried = [ctx.track(ctx.wps.target(i), p) for p in parents[:BEAM]]
+            good_r = [q for q, ok in retried if ok]
+            if good_r:
+                return good_r, list(qs)
         return list(qs[found]), list(qs[~found])
     target = ctx.wps.target(i)
     good: list[FloatArray] = []
