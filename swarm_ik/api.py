@@ -162,7 +162,12 @@ _NOTICE_AFTER = 1.0
 def warm_up(route: Route) -> None:
     """Load the route's compiled kernels (numba's cache, or a compile on the first run)
     before any clock starts; a line on stderr says so when it takes longer than a second."""
-    key = (route.compiled, route.problem.nq > 0)
+    key = (
+        route.compiled,
+        route.solver,
+        route.problem.has_secondary,
+        bool(route.problem.python_goals),
+    )
     if key in _COMPILED:
         return
     timer = threading.Timer(
@@ -181,9 +186,14 @@ def warm_up(route: Route) -> None:
         q = np.ascontiguousarray(problem.robot.mid_q()).clip(problem.lower, problem.upper)
         if route.compiled:  # the one compiled call of the route
             route._search(q, np.uint64(1), 1, 60.0)  # (with a clock: its first read is slow)
-        else:  # what the solvers' loops call
+        else:  # the solver's own loop, once, on a small budget (what it calls compiles)
             problem.goal_errors(q)
             problem.residual_jacobian(q)
+            ev = base.Evaluator(
+                problem.fitness, problem.lower, problem.upper, max_evals=200, problem=problem,
+                tolerance=(route.tol_pos, route.tol_rot),
+            )  # fmt: skip
+            route.spec.run(ev, make_rng(0), **route.kwargs)
     finally:
         timer.cancel()
     _COMPILED.add(key)

@@ -433,6 +433,16 @@ def reset_work(w: Work) -> None:  # pragma: no cover - compiled
 
 
 @numba.njit(cache=True, inline="always")
+def jt_r(jac: FloatArray, res: FloatArray, m: int, n: int, out: FloatArray) -> None:
+    """``out[:n] = Jᵀr`` of ``J = jac[:m, :n]`` and ``r = res[:m]``."""  # pragma: no cover
+    for i in range(n):
+        s = 0.0
+        for a in range(m):
+            s += jac[a, i] * res[a]
+        out[i] = s
+
+
+@numba.njit(cache=True, inline="always")
 def gram(jac: FloatArray, m: int, n: int, out: FloatArray) -> float:  # pragma: no cover
     """``out[:n, :n] = JᵀJ`` of ``J = jac[:m, :n]`` (both triangles); returns its trace."""
     trace = 0.0
@@ -662,11 +672,7 @@ def lm_run(
                 break
             # normal equations A = JᵀJ, g = Jᵀr
             trace = gram(jac, m, n, a_mat)
-            for i in range(n):
-                s_g = 0.0
-                for a in range(m):
-                    s_g += jac[a, i] * res[a]
-                grad[i] = s_g
+            jt_r(jac, res, m, n, grad)
             scale = trace / n + 1e-300
             nfree = 0
             for j in range(n):
@@ -796,11 +802,7 @@ def secondary_descent(
             for i in range(n):
                 proj[i, j] = (1.0 if i == j else 0.0) - x[i]  # N = I − J1⁺J1
         # primary correction x = A1⁻¹ J1ᵀ r1
-        for i in range(n):
-            s_g = 0.0
-            for a in range(m1):
-                s_g += w.jac[a, i] * w.res[a]
-            col[i] = s_g
+        jt_r(w.jac, w.res, m1, n, col)
         _chol_back(a1, col, n, x)
         # B = J2 N; (BᵀB + μ tr I) z = Bᵀ r2
         for a in range(m2):
@@ -810,11 +812,7 @@ def secondary_descent(
                     s_b += jac2[a, k] * proj[k, j]
                 bmat[a, j] = s_b
         tr2 = gram(bmat, m2, n, a2)
-        for i in range(n):
-            s_r = 0.0
-            for a in range(m2):
-                s_r += bmat[a, i] * res2[a]
-            rhs[i] = s_r
+        jt_r(bmat, res2, m2, n, rhs)
         if tr2 <= 1e-300:
             break  # the secondary goals cannot move in the null space
         for i in range(n):
