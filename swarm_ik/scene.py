@@ -852,17 +852,38 @@ def _parse_json(text: str, p: Path) -> Any:
     def any_int(digits: str) -> int | float:
         return int(digits) if len(digits) <= 300 else float(digits)  # Python caps int() digits
 
-    try:
-        data = json.loads(
+    return _parsed_tree(
+        p,
+        "JSON",
+        5,
+        (ValueError,),  # JSONDecodeError among them
+        lambda: json.loads(
             text, parse_constant=no_constants, object_pairs_hook=no_duplicates, parse_int=any_int
-        )
+        ),
+    )
+
+
+def _parsed_tree(
+    p: Path,
+    kind: str,
+    levels: int,
+    errors: tuple[type[Exception], ...],
+    parse: Callable[[], Any],
+) -> Any:
+    """What ``parse()`` reads from scene file ``p``, checked by :func:`_check_tree`: the
+    parser's own ``errors`` become one line "not a {kind} file", a nesting too deep for
+    Python's recursion one line naming :data:`MAX_DEPTH` (a scene of this kind needs about
+    ``levels``); an :class:`InvalidArgumentError` raised while parsing passes unchanged.
+    """
+    try:
+        data = parse()
     except InvalidArgumentError:
         raise
-    except ValueError as exc:  # JSONDecodeError among them
-        raise InvalidArgumentError(f"{p}: not a JSON file ({_one_line(exc)})") from None
+    except errors as exc:
+        raise InvalidArgumentError(f"{p}: not a {kind} file ({_one_line(exc)})") from None
     except RecursionError:
         raise InvalidArgumentError(
-            f"{p}: nested more than {MAX_DEPTH} levels deep (a scene needs about 5)"
+            f"{p}: nested more than {MAX_DEPTH} levels deep (a scene needs about {levels})"
         ) from None
     _check_tree(data, str(p))
     return data
@@ -927,17 +948,14 @@ def _yaml_loader() -> Any:
 
 def _parse_yaml(text: str, p: Path) -> Any:
     yaml = _yaml()
-    try:
-        data = yaml.load(text, Loader=_yaml_loader())  # a SafeLoader subclass
-    except (yaml.YAMLError, ValueError, TypeError, OverflowError) as exc:
+    return _parsed_tree(
+        p,
+        "YAML",
+        4,
         # ValueError: a too-long integer, a date such as 2001-13-45 (the constructors raise it)
-        raise InvalidArgumentError(f"{p}: not a YAML file ({_one_line(exc)})") from None
-    except RecursionError:
-        raise InvalidArgumentError(
-            f"{p}: nested more than {MAX_DEPTH} levels deep (a scene needs about 4)"
-        ) from None
-    _check_tree(data, str(p))
-    return data
+        (yaml.YAMLError, ValueError, TypeError, OverflowError),
+        lambda: yaml.load(text, Loader=_yaml_loader()),  # a SafeLoader subclass
+    )
 
 
 def _curobo_pose(value: Any) -> FloatArray:
