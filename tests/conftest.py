@@ -1,8 +1,10 @@
 """Shared fixtures and helpers: robots are loaded once per session (loading parses URDFs);
-small URDFs are written as text with ``urdf_text`` / ``urdf_joint``."""
+small URDFs are written as text with ``urdf_text`` / ``urdf_joint``; the command line is run
+with ``cli_json`` and kept from loading robots with ``no_robot_loading``."""
 
 from __future__ import annotations
 
+import json
 import os
 
 import numpy as np
@@ -104,3 +106,31 @@ def scene_near_robot() -> Scene:
 def rng() -> np.random.Generator:
     """A fresh seeded generator."""
     return np.random.default_rng(12345)
+
+
+# ----------------------------------------------------------------------- the command line
+FROM_Q = ["--from-q", "0.1", "-0.5", "0.2", "0.3", "-0.2", "0.4", "0.1"]
+"""``swarm-ik solve``'s target as the forward kinematics of a yumi_left configuration."""
+
+
+def never(*args: object, **kwargs: object) -> None:
+    """Put in place of a function that a command must not reach: it checks its input first."""
+    raise AssertionError("the work started before the input was checked")
+
+
+@pytest.fixture()
+def no_robot_loading(monkeypatch: pytest.MonkeyPatch) -> None:
+    """``swarm_ik.load_robot`` replaced by :func:`never`: the command under test must refuse
+    its input before it loads a robot."""
+    monkeypatch.setattr(swarm_ik, "load_robot", never)
+
+
+def cli_json(capsys: pytest.CaptureFixture[str], *argv: str, code: int = 0) -> dict:
+    """``swarm-ik ARGV --json`` run in this process: its exit code checked (``code``) and its
+    JSON report returned."""
+    from swarm_ik.cli import main
+
+    rc = main([*argv, "--json"])
+    out = json.loads(capsys.readouterr().out)
+    assert rc == code, out
+    return out

@@ -18,15 +18,13 @@ from pathlib import Path
 from typing import Any
 
 import pytest
+from conftest import FROM_Q, cli_json, never
 
 import swarm_ik
 from swarm_ik import cli
 from swarm_ik.cli import _args, _viewer
 from swarm_ik.cli import bench as bench_cli
 from swarm_ik.cli import reach as reach_cli
-
-FROM_Q = ["--from-q", "0.1", "-0.5", "0.2", "0.3", "-0.2", "0.4", "0.1"]
-"""A reachable target of yumi_left."""
 
 ARGS = {
     "robots": ["robots"],
@@ -37,10 +35,6 @@ ARGS = {
     "bench": ["bench", "ik", "--quick", "--out", "{tmp}/b"],
 }
 """A valid command line of every sub-command."""
-
-
-def _never(*args: object, **kwargs: object) -> None:
-    raise AssertionError("the work started before the input was checked")
 
 
 def _err_line(capsys: pytest.CaptureFixture[str]) -> str:
@@ -133,10 +127,10 @@ def test_every_help_renders(
 
 # -------------------------------------------------------------------- 2: --goals files
 @pytest.mark.parametrize("kind", ["fifo", "device", "folder", "too large"])
+@pytest.mark.usefixtures("no_robot_loading")
 def test_goals_that_is_not_a_small_regular_file_exits_2(
     kind: str,
     tmp_path: Path,
-    monkeypatch: pytest.MonkeyPatch,
     capsys: pytest.CaptureFixture[str],
 ) -> None:
     if kind == "fifo":
@@ -158,7 +152,6 @@ def test_goals_that_is_not_a_small_regular_file_exits_2(
         with open(path, "wb") as fh:  # sparse: nothing written
             fh.truncate(_args.MAX_GOALS_BYTES + 1)
         expect = "over the limit of 16 MiB"
-    monkeypatch.setattr(swarm_ik, "load_robot", _never)
     t0 = time.perf_counter()
     assert cli.main(["solve", "--robot", "panda", "--goals", str(path)]) == 2
     assert time.perf_counter() - t0 < 5.0  # refused, never opened
@@ -166,12 +159,12 @@ def test_goals_that_is_not_a_small_regular_file_exits_2(
     assert "--goals" in line and expect in line
 
 
+@pytest.mark.usefixtures("no_robot_loading")
 def test_goals_nested_too_deep_exits_2_with_one_line(
-    tmp_path: Path, monkeypatch: pytest.MonkeyPatch, capsys: pytest.CaptureFixture[str]
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
 ) -> None:
     path = tmp_path / "deep.json"
     path.write_text("[" * 100_000 + "]" * 100_000)
-    monkeypatch.setattr(swarm_ik, "load_robot", _never)
     assert cli.main(["solve", "--robot", "panda", "--goals", str(path)]) == 2
     line = _err_line(capsys)
     assert "nested 100000 levels deep, over the limit of 100" in line
@@ -239,8 +232,7 @@ def test_position_only_takes_a_position_and_reports_no_rotation_error(
     capsys: pytest.CaptureFixture[str],
 ) -> None:
     pose = ["--pose", "0.4", "0.1", "0.4"]
-    assert cli.main(["solve", "--robot", "panda", "--position-only", *pose, "--json"]) == 0
-    out = json.loads(capsys.readouterr().out)
+    out = cli_json(capsys, "solve", "--robot", "panda", "--position-only", *pose)
     assert out["success"] and out["rotation_error"] is None
     assert out["goal_errors"][0]["rotation_error"] is None
     assert cli.main(["solve", "--robot", "panda", "--position-only", *pose]) == 0
@@ -261,13 +253,12 @@ def test_position_only_takes_a_position_and_reports_no_rotation_error(
         (["--position-only", "--pose", "0.4", "0.1"], "or 3 (X Y Z) with --position-only"),
     ],
 )
+@pytest.mark.usefixtures("no_robot_loading")
 def test_pose_of_the_wrong_length_is_one_usage_line(
     argv: list[str],
     message: str,
-    monkeypatch: pytest.MonkeyPatch,
     capsys: pytest.CaptureFixture[str],
 ) -> None:
-    monkeypatch.setattr(swarm_ik, "load_robot", _never)
     assert cli.main(["solve", "--robot", "panda", *argv]) == 2
     line = _err_line(capsys)
     assert message in line and "swarm-ik solve --help" in line
@@ -284,14 +275,13 @@ def test_pose_of_the_wrong_length_is_one_usage_line(
         (["0", "0", "0", "1", "1", "0"], "not on z"),
     ],
 )
+@pytest.mark.usefixtures("no_robot_loading")
 def test_reach_refuses_non_finite_or_inverted_bounds_before_loading(
     bounds: list[str],
     message: str,
     tmp_path: Path,
-    monkeypatch: pytest.MonkeyPatch,
     capsys: pytest.CaptureFixture[str],
 ) -> None:
-    monkeypatch.setattr(swarm_ik, "load_robot", _never)
     argv = ["reach", "--robot", "yumi_left", "--out", str(tmp_path / "m.npz"), "--bounds"]
     assert cli.main([*argv, *bounds]) == 2
     line = _err_line(capsys)
@@ -330,6 +320,7 @@ def read_only_dir(tmp_path: Path) -> Path:
         ("bench", "--out", "bench-out"),
     ],
 )
+@pytest.mark.usefixtures("no_robot_loading")
 def test_outputs_in_a_read_only_folder_exit_2_before_any_work(
     command: str,
     option: str,
@@ -341,7 +332,6 @@ def test_outputs_in_a_read_only_folder_exit_2_before_any_work(
 ) -> None:
     if command in ("solve", "show"):
         pytest.importorskip("meshcat")
-    monkeypatch.setattr(swarm_ik, "load_robot", _never)
     monkeypatch.chdir(tmp_path)
     argv = [a.format(tmp=tmp_path) for a in ARGS[command]]
     if option in argv:
@@ -349,7 +339,7 @@ def test_outputs_in_a_read_only_folder_exit_2_before_any_work(
     if command == "bench":
         import swarm_ik.bench.ik as bench_ik
 
-        monkeypatch.setattr(bench_ik, "run", _never)
+        monkeypatch.setattr(bench_ik, "run", never)
     assert cli.main([*argv, option, str(read_only_dir / name)]) == 2
     line = _err_line(capsys)
     assert option in line and "cannot write in folder" in line
@@ -383,8 +373,8 @@ def test_meshes_not_found_are_named_in_one_line_before_solving(
     pytest.importorskip("meshcat")
     urdf = tmp_path / "arm.urdf"
     urdf.write_text(MESHES_URDF)
-    monkeypatch.setattr(swarm_ik, "solve", _never)
-    monkeypatch.setattr(swarm_ik, "solve_many", _never)
+    monkeypatch.setattr(swarm_ik, "solve", never)
+    monkeypatch.setattr(swarm_ik, "solve_many", never)
     argv = [command, "--robot", str(urdf), "--html", str(tmp_path / "a.html")]
     argv += ["--from-q", "0.1", "0.2"] + (["--position-only"] if command == "solve" else [])
     assert cli.main(argv) == 2
@@ -481,15 +471,14 @@ def test_real_sigint_during_a_solve_is_one_line_and_130(tmp_path: Path) -> None:
 
 # ------------------------------------------------------------------------------ 8: xacro
 @pytest.mark.parametrize("command", ["solve", "show", "batch", "reach"])
+@pytest.mark.usefixtures("no_robot_loading")
 def test_xacro_robot_is_refused_before_loading(
     command: str,
     tmp_path: Path,
-    monkeypatch: pytest.MonkeyPatch,
     capsys: pytest.CaptureFixture[str],
 ) -> None:
     xacro = tmp_path / "arm.urdf.xacro"
     xacro.write_text('<robot xmlns:xacro="http://www.ros.org/wiki/xacro" name="arm"/>')
-    monkeypatch.setattr(swarm_ik, "load_robot", _never)
     argv = [a.format(tmp=tmp_path) for a in ARGS[command]]
     argv[argv.index("yumi_left")] = str(xacro)
     assert cli.main(argv) == 2

@@ -14,8 +14,8 @@ from pathlib import Path
 
 import numpy as np
 import pytest
+from conftest import FROM_Q, cli_json, urdf_joint, urdf_text
 from conftest import URDF_LIMIT as LIMIT
-from conftest import urdf_joint, urdf_text
 
 import swarm_ik
 from swarm_ik import IKProblem, errors
@@ -777,24 +777,9 @@ def test_quaternion_of_any_finite_norm_is_normalised_exactly(scale: float) -> No
 def test_cli_pose_with_huge_quaternion_points_the_tool_down(
     capsys: pytest.CaptureFixture[str],
 ) -> None:
-    rc = main(
-        [
-            "solve",
-            "--robot",
-            "panda",
-            "--pose",
-            "0.4",
-            "0.1",
-            "0.5",
-            "1e200",
-            "0",
-            "0",
-            "0",
-            "--json",
-        ]
-    )
-    out = json.loads(capsys.readouterr().out)
-    assert rc == 0 and out["success"]
+    target = ["--pose", "0.4", "0.1", "0.5", "1e200", "0", "0", "0"]
+    out = cli_json(capsys, "solve", "--robot", "panda", *target)
+    assert out["success"]
     pose = swarm_ik.load_robot("panda").fk(np.array(out["q"]))
     np.testing.assert_allclose(pose[:3, 2], [0, 0, -1], atol=1e-4)  # z axis down, not up
 
@@ -814,30 +799,11 @@ def test_population_larger_than_the_cap_is_refused_before_allocating(problem: IK
 
 
 # ---------------------------------------------------------- items 11, 12, 14: the CLI
-FROM_Q = ["--from-q", "0.1", "-0.5", "0.2", "0.3", "-0.2", "0.4", "0.1"]
-
-
 def test_cli_reads_negative_numbers_in_exponent_notation(
     capsys: pytest.CaptureFixture[str],
 ) -> None:
-    rc = main(
-        [
-            "solve",
-            "--robot",
-            "yumi_left",
-            "--json",
-            "--from-q",
-            "-1e-3",
-            "-.5",
-            "2E-1",
-            "0.3",
-            "-2.5e-1",
-            "0.4",
-            "-1e0",
-        ]
-    )
-    out = json.loads(capsys.readouterr().out)
-    assert rc == 0 and out["success"]
+    q = ["-1e-3", "-.5", "2E-1", "0.3", "-2.5e-1", "0.4", "-1e0"]
+    assert cli_json(capsys, "solve", "--robot", "yumi_left", "--from-q", *q)["success"]
 
 
 @pytest.mark.parametrize(
@@ -897,10 +863,6 @@ def test_cli_unexpected_error_exits_3_with_one_line(
         main(["solve", "--robot", "yumi_left", *FROM_Q])
 
 
-def _never(*args: object, **kwargs: object) -> None:
-    raise AssertionError("computed before checking the output path")
-
-
 @pytest.mark.parametrize(
     ("command", "option", "make", "message"),
     [
@@ -913,16 +875,15 @@ def _never(*args: object, **kwargs: object) -> None:
         ("solve", "--html", lambda d: d, "is a folder"),
     ],
 )
+@pytest.mark.usefixtures("no_robot_loading")
 def test_cli_output_paths_are_checked_before_computing(
     command: str,
     option: str,
     make: object,
     message: str,
     tmp_path: Path,
-    monkeypatch: pytest.MonkeyPatch,
     capsys: pytest.CaptureFixture[str],
 ) -> None:
-    monkeypatch.setattr(swarm_ik, "load_robot", _never)
     path = make(tmp_path)  # type: ignore[operator]
     extra = {"batch": ["--random", "3"], "reach": [], "solve": FROM_Q}[command]
     rc = main([command, "--robot", "yumi_left", *extra, option, str(path)])
