@@ -259,6 +259,7 @@ class Route:
         self.tol_pos, self.tol_rot = float(tol_pos), float(tol_rot)
         self.stop_on_success = bool(stop_on_success)
         self.prefer = prefer
+        self._lock = threading.Lock()
         self.compiled = (
             solver == "swarm" and self.stop_on_success and hybrid.compiled_ok(problem, prefer)
         )
@@ -348,13 +349,17 @@ class Route:
         if self.compiled and on_improvement is None:
             if key is None:
                 key = search.stream_key(seed)  # type: ignore[arg-type]
-            self._rebind(problem, q_start)
             seed_q = q_start if q_start is not None else hybrid.default_seed(problem)
-            t0 = time.perf_counter()
-            n_evals, fit, _dp, _dr, _stop, history, q = self._search(
-                np.ascontiguousarray(seed_q, dtype=float), key, self.max_evals, self.time_limit
-            )
-            elapsed = time.perf_counter() - t0
+            with self._lock:  # (the bound table and scratch serve one run at a time)
+                self._rebind(problem, q_start)
+                t0 = time.perf_counter()
+                n_evals, fit, _dp, _dr, _stop, history, q = self._search(
+                    np.ascontiguousarray(seed_q, dtype=float),
+                    key,
+                    self.max_evals,
+                    self.time_limit,
+                )
+                elapsed = time.perf_counter() - t0
             if not np.isfinite(fit) or len(problem.goals) > 1:  # (the problem's own sum)
                 fit = float(problem.fitness(q[None])[0])
         else:
@@ -470,11 +475,40 @@ def solve(
     """
     if prefer == "nearest" and q0 is None:
         raise InvalidArgumentError("prefer='nearest' needs a starting point q0")
-    route = Route(
-        problem, solver, max_evals=max_evals, time_limit=time_limit, tol_pos=tol_pos,
-        tol_rot=tol_rot, stop_on_success=stop_on_success, prefer=prefer, params=params,
+    if not isinstance(problem, IKProblem):
+        raise InvalidArgumentError(f"problem must be an IKProblem, got {type(problem).__name__}")
+    settings = dict(
+        max_evals=max_evals, time_limit=time_limit, tol_pos=tol_pos, tol_rot=tol_rot,
+        stop_on_success=stop_on_success, prefer=prefer, params=params,
     )  # fmt: skip
+    key = _route_key(problem, solver, settings)
+    routes = problem.robot._cache.setdefault("routes", {})
+    route = None if key is None else routes.get(key)
+    if route is None:
+        route = Route(problem, solver, **settings)  # type: ignore[arg-type]
+        if key is not None:
+            if len(routes) >= 64:
+                routes.clear()
+            routes[key] = route
     return route.run(problem, q0, seed, on_improvement)
+
+
+def _route_key(problem: IKProblem, solver: str, settings: dict[str, Any]) -> Any:
+    """What a route bound to another problem must share with ``problem`` to run it (the
+    solver, every setting, the goal types, frames, weights and priorities, the bounds and the
+    tree), or None when a setting cannot be a key (then a route is made for this call)."""
+    goals = tuple((type(g), g.frame_name(), g.weight, g.primary) for g in problem.goals)
+    key = (
+        solver, tuple(sorted((k, v) for k, v in settings.items() if k != "params")),
+        tuple(sorted(settings["params"].items())), goals, problem.fitness_name, problem.w_rot,
+        problem.position_only, problem.lower.tobytes(), problem.upper.tobytes(),
+        id(problem.tree), problem.python_goals == (),
+    )  # fmt: skip
+    try:
+        hash(key)
+    except TypeError:  # a setting given as a list, say: no shared route
+        return None
+    return key
 
 
 def _rebuild_ik_solver(robot: Any, solver: str, kwargs: dict[str, Any]) -> IKSolver:
