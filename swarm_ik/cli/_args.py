@@ -44,6 +44,11 @@ SCHEDULER_HELP = (
     "scheduler address tcp://host:port"
 )
 
+SCENE_FORMATS = (
+    "swarm_ik JSON, cuRobo world YAML (.yml), MoveIt .scene or a URDF of fixed obstacles "
+    "(docs/scenes.md)"
+)
+
 MAX_GOALS_BYTES = 16 * 2**20
 """Largest ``--goals`` file read [bytes] (16 MiB); larger files are refused unread."""
 MAX_JSON_DEPTH = 100
@@ -51,6 +56,15 @@ MAX_JSON_DEPTH = 100
 
 
 # ------------------------------------------------------------------------------ options
+def add_command(subparsers: Any, name: str, help: str, description: str) -> argparse.ArgumentParser:
+    """Add sub-command ``name`` to ``swarm-ik``'s sub-parsers (``help``: its line in
+    ``swarm-ik --help``; ``description``: the head of ``swarm-ik NAME --help``)."""
+    parser: argparse.ArgumentParser = subparsers.add_parser(
+        name, help=help, description=description
+    )
+    return parser
+
+
 class _PoseAction(argparse.Action):
     """``--pose`` taking 7 numbers, or 3 (a position) where ``--position-only`` is offered."""
 
@@ -154,6 +168,19 @@ def add_scheduler(parser: Any, default: str = "none") -> None:
     """``--scheduler`` (for any command that distributes work with Dask)."""
     parser.add_argument(
         "--scheduler", default=default, metavar="local|none|tcp://HOST:PORT", help=SCHEDULER_HELP
+    )
+
+
+def add_q0(parser: Any, help: str) -> None:
+    """``--q0 Q [Q ...]``: joint values, one per joint (``help`` says what they are for)."""
+    parser.add_argument("--q0", nargs="+", type=float, default=None, help=help)
+
+
+def add_scene(parser: Any, help: str) -> None:
+    """``--scene FILE``: obstacles in any format :meth:`swarm_ik.scene.Scene.load` reads,
+    named in the help after ``help`` (what the command keeps clear of them)."""
+    parser.add_argument(
+        "--scene", default=None, metavar="FILE", help=f"{help}; formats: {SCENE_FORMATS}"
     )
 
 

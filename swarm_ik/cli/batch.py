@@ -29,6 +29,8 @@ from swarm_ik.cli._args import (
     EXIT_INTERRUPTED,
     EXIT_NOT_REACHED,
     EXIT_OK,
+    add_command,
+    add_q0,
     add_robot,
     add_scheduler,
     add_tolerances,
@@ -39,7 +41,8 @@ from swarm_ik.cli._args import (
 
 def add_parser(subparsers: Any) -> argparse.ArgumentParser:
     """Add ``batch`` to the ``swarm-ik`` sub-parsers."""
-    b: argparse.ArgumentParser = subparsers.add_parser(
+    b = add_command(
+        subparsers,
         "batch",
         help="solve many targets at once (vectorised, optionally on Dask)",
         description="Solve many target poses of one robot with the compiled "
@@ -70,13 +73,7 @@ def add_parser(subparsers: Any) -> argparse.ArgumentParser:
         help="result file: .npz (q, errors, success, ...) or .csv; its folder must exist and "
         "be writable (checked before solving)",
     )
-    b.add_argument(
-        "--q0",
-        nargs="+",
-        type=float,
-        default=None,
-        help="first start for every target (one value per joint); default mid-range",
-    )
+    add_q0(b, "first start for every target (one value per joint); default mid-range")
     b.add_argument("--position-only", action="store_true", help="ignore the target orientation")
     b.add_argument("--chunk-size", type=int, default=None, help="targets per task")
     b.add_argument(

@@ -19,6 +19,7 @@ from typing import Any
 from swarm_ik.cli import _viewer
 from swarm_ik.cli._args import (
     EXIT_OK,
+    add_command,
     add_robot,
     add_scheduler,
     add_tolerances,
@@ -33,7 +34,8 @@ building the parser imports no numerics; a test keeps the two equal)."""
 
 def add_parser(subparsers: Any) -> argparse.ArgumentParser:
     """Add ``reach`` to the ``swarm-ik`` sub-parsers."""
-    p: argparse.ArgumentParser = subparsers.add_parser(
+    p = add_command(
+        subparsers,
         "reach",
         help="reachability map on a voxel grid (npz + PNG slices + HTML point cloud)",
         description="Reachability index per voxel: the fraction of K orientations solved at "

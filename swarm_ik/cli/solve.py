@@ -15,8 +15,11 @@ from swarm_ik.cli import _viewer
 from swarm_ik.cli._args import (
     EXIT_NOT_REACHED,
     EXIT_OK,
+    add_command,
     add_pose,
+    add_q0,
     add_robot,
+    add_scene,
     add_tolerances,
     check_goals_file,
     pose_target,
@@ -44,7 +47,8 @@ def add_parser(subparsers: Any) -> argparse.ArgumentParser:
     from swarm_ik import solvers
     from swarm_ik.api import DEFAULT_SOLVER
 
-    p: argparse.ArgumentParser = subparsers.add_parser(
+    p = add_command(
+        subparsers,
         "solve",
         help="solve one IK target (a pose, FK of joint values, or a goals file)",
         description="Solve one IK target of a robot and print the joint values; exit 0 when "
@@ -95,16 +99,8 @@ def add_parser(subparsers: Any) -> argparse.ArgumentParser:
     p.add_argument("--max-evals", type=int, default=None, help="most fitness evaluations")
     p.add_argument("--time-limit", type=float, default=None, help="seconds")
     add_tolerances(p)
-    p.add_argument(
-        "--q0", nargs="+", type=float, default=None, help="starting joint values (one per joint)"
-    )
-    p.add_argument(
-        "--scene",
-        default=None,
-        metavar="FILE",
-        help="obstacles the answer must be clear of (and of itself): swarm_ik JSON, cuRobo "
-        "world YAML (.yml), MoveIt .scene or a URDF of fixed obstacles (docs/scenes.md)",
-    )
+    add_q0(p, "starting joint values (one per joint)")
+    add_scene(p, "obstacles the answer must be clear of (and of itself)")
     p.add_argument(
         "--no-self-collision",
         action="store_true",
