@@ -56,15 +56,6 @@ MAX_JSON_DEPTH = 100
 
 
 # ------------------------------------------------------------------------------ options
-def add_command(subparsers: Any, name: str, help: str, description: str) -> argparse.ArgumentParser:
-    """Add sub-command ``name`` to ``swarm-ik``'s sub-parsers (``help``: its line in
-    ``swarm-ik --help``; ``description``: the head of ``swarm-ik NAME --help``)."""
-    parser: argparse.ArgumentParser = subparsers.add_parser(
-        name, help=help, description=description
-    )
-    return parser
-
-
 class _PoseAction(argparse.Action):
     """``--pose`` taking 7 numbers, or 3 (a position) where ``--position-only`` is offered."""
 

@@ -29,7 +29,6 @@ from swarm_ik.cli._args import (
     EXIT_INTERRUPTED,
     EXIT_NOT_REACHED,
     EXIT_OK,
-    add_command,
     add_q0,
     add_robot,
     add_scheduler,
@@ -41,8 +40,7 @@ from swarm_ik.cli._args import (
 
 def add_parser(subparsers: Any) -> argparse.ArgumentParser:
     """Add ``batch`` to the ``swarm-ik`` sub-parsers."""
-    b = add_command(
-        subparsers,
+    b: argparse.ArgumentParser = subparsers.add_parser(
         "batch",
         help="solve many targets at once (vectorised, optionally on Dask)",
         description="Solve many target poses of one robot with the compiled "

@@ -13,7 +13,7 @@ import importlib
 from pathlib import Path
 from typing import Any
 
-from swarm_ik.cli._args import UsageError, add_command, check_output_folder
+from swarm_ik.cli._args import UsageError, check_output_folder
 
 BENCHMARKS = {
     "paper": "swarm_ik.bench.paper",
@@ -39,8 +39,7 @@ MEASURES = {
 def add_parser(subparsers: Any, *, with_options: bool = True) -> argparse.ArgumentParser:
     """Add ``bench`` and its benchmarks to the ``swarm-ik`` sub-parsers; ``with_options``
     imports each benchmark module to add its options (only when ``bench`` is the command)."""
-    b = add_command(
-        subparsers,
+    b: argparse.ArgumentParser = subparsers.add_parser(
         "bench",
         help="benchmarks: " + ", ".join(BENCHMARKS),
         description="Benchmarks; each writes CSV files and a report under --out (a folder, "

@@ -19,7 +19,6 @@ from typing import Any
 from swarm_ik.cli import _viewer
 from swarm_ik.cli._args import (
     EXIT_OK,
-    add_command,
     add_robot,
     add_scheduler,
     add_tolerances,
@@ -34,8 +33,7 @@ building the parser imports no numerics; a test keeps the two equal)."""
 
 def add_parser(subparsers: Any) -> argparse.ArgumentParser:
     """Add ``reach`` to the ``swarm-ik`` sub-parsers."""
-    p = add_command(
-        subparsers,
+    p: argparse.ArgumentParser = subparsers.add_parser(
         "reach",
         help="reachability map on a voxel grid (npz + PNG slices + HTML point cloud)",
         description="Reachability index per voxel: the fraction of K orientations solved at "

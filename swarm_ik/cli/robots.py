@@ -5,13 +5,10 @@ from __future__ import annotations
 import argparse
 from typing import Any
 
-from swarm_ik.cli._args import add_command
-
 
 def add_parser(subparsers: Any) -> argparse.ArgumentParser:
     """Add ``robots`` to the ``swarm-ik`` sub-parsers."""
-    return add_command(
-        subparsers,
+    return subparsers.add_parser(  # type: ignore[no-any-return]
         "robots",
         help="list the robots loadable by name",
         description="List the robots that --robot takes by name: the bundled ones (robots/) "

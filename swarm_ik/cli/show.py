@@ -8,13 +8,12 @@ import argparse
 from typing import Any
 
 from swarm_ik.cli import _viewer
-from swarm_ik.cli._args import EXIT_NOT_REACHED, EXIT_OK, add_command, add_pose, add_robot
+from swarm_ik.cli._args import EXIT_NOT_REACHED, EXIT_OK, add_pose, add_robot
 
 
 def add_parser(subparsers: Any) -> argparse.ArgumentParser:
     """Add ``show`` to the ``swarm-ik`` sub-parsers."""
-    p = add_command(
-        subparsers,
+    p: argparse.ArgumentParser = subparsers.add_parser(
         "show",
         help="look at a robot configuration, or at several solutions of a target, in meshcat "
         "(live, or exported to a self-contained HTML file)",

@@ -15,7 +15,6 @@ from swarm_ik.cli import _viewer
 from swarm_ik.cli._args import (
     EXIT_NOT_REACHED,
     EXIT_OK,
-    add_command,
     add_pose,
     add_q0,
     add_robot,
@@ -47,8 +46,7 @@ def add_parser(subparsers: Any) -> argparse.ArgumentParser:
     from swarm_ik import solvers
     from swarm_ik.api import DEFAULT_SOLVER
 
-    p = add_command(
-        subparsers,
+    p: argparse.ArgumentParser = subparsers.add_parser(
         "solve",
         help="solve one IK target (a pose, FK of joint values, or a goals file)",
         description="Solve one IK target of a robot and print the joint values; exit 0 when "

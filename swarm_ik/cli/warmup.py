@@ -7,13 +7,10 @@ import sys
 import time
 from typing import Any
 
-from swarm_ik.cli._args import add_command
-
 
 def add_parser(subparsers: Any) -> argparse.ArgumentParser:
     """Add ``warmup`` to the ``swarm-ik`` sub-parsers."""
-    p = add_command(
-        subparsers,
+    p = subparsers.add_parser(
         "warmup",
         help="compile the kernels now (a container image, a CI cache)",
         description="Compile (or load from numba's cache) the kernels of every solve path — "
@@ -26,7 +23,7 @@ def add_parser(subparsers: Any) -> argparse.ArgumentParser:
         default="yumi_left",
         help="robot to warm up with (default: the bundled yumi_left; any robot will do)",
     )
-    return p
+    return p  # type: ignore[no-any-return]
 
 
 def run(args: argparse.Namespace) -> int:
