@@ -383,12 +383,48 @@ def summarize(rows: list[dict[str, Any]], args: argparse.Namespace, load: str) -
                 f"{_median(rr, 'greedy_ms')} | {_median(rr, 'tracik_ms')} | "
                 f"{_median(rr, 'rtb_ms')} | {_median(rr, 'ref_ms')} |"
             )
+    lines += ["", *_targets(rows)]
     pooled = []
     for arm in arms:
         rr = [r for r in rows if r["arm"] == arm]
         pooled.append(f"{arm} {_median(rr, 'ours_ms')} ms ({_median(rr, 'ours_cpu_ms')} ms CPU)")
     lines += ["", "Median per path over all kinds: " + ", ".join(pooled) + "."]
     return "\n".join(lines) + "\n"
+
+
+def _targets(rows: list[dict[str, Any]]) -> list[str]:
+    """The issue's targets against the rows: 6R arms (a jump-free path whenever the
+    exhaustive reference finds one, no wrong claim, ≤ 200 ms median per 40-waypoint path) and
+    redundant arms (every FK-of-trajectory path jump-free, ≤ 1 s per 40 waypoints)."""
+    six = [r for r in rows if r["ref_exists"] != ""]
+    red = [r for r in rows if r["ref_exists"] == ""]
+    out = ["## Against the targets", ""]
+    if six:
+        exists = [r for r in six if int(r["ref_exists"])]
+        found = sum(int(int(r["ours_success"]) and int(r["ours_jump_free"])) for r in exists)
+        unverified = sum(1 - int(r["ours_verified"]) for r in six)
+        bad_proof = sum(
+            1
+            for r in six
+            if int(r["ours_claims_proof"])
+            and (r["kind"] == "joint" or int(r["ref_exists"]) or not int(r["proof_rechecked"] or 0))
+        )
+        out.append(
+            f"* 6R arms ({len(six)} paths): jump-free whenever the reference finds a path: "
+            f"{found}/{len(exists)}; wrong claims: {unverified + bad_proof}; median "
+            f"{_median(six, 'ours_ms')} ms per path ({_median(six, 'ours_cpu_ms')} ms CPU), "
+            f"p90 {_p90(six, 'ours_ms')} ms."
+        )
+    if red:
+        fk = [r for r in red if r["kind"] == "joint"]
+        ok = sum(int(int(r["ours_success"]) and int(r["ours_jump_free"])) for r in fk)
+        out.append(
+            f"* Redundant arms ({len(red)} paths): FK-of-trajectory paths jump-free: "
+            f"{ok}/{len(fk)}; median {_median(fk, 'ours_ms')} ms per path on them "
+            f"({_median(fk, 'ours_cpu_ms')} ms CPU), {_median(red, 'ours_ms')} ms over all "
+            f"kinds (p90 {_p90(red, 'ours_ms')} ms)."
+        )
+    return out
 
 
 def run(args: argparse.Namespace) -> int:
