@@ -16,11 +16,13 @@ if TYPE_CHECKING:
 
 
 @numba.njit(cache=True)
-def axis_kernel(par, ipar, q, f_pos, f_rot, f_jac, want_jac, res, jac, err, work):  # type: ignore[no-untyped-def]  # pragma: no cover
-    """Rows ``d − R a`` of frame ``ipar[0]``; ``par = [a (3), d (3)]`` (unit vectors)."""
+def frame_axis_kernel(par, ipar, q, f_pos, f_rot, f_jac, want_jac, res, jac, err, work):  # type: ignore[no-untyped-def]  # pragma: no cover
+    """Rows ``d − R a`` of frame ``ipar[0]``; ``par = [a (3), t (3)]``, ``a`` a unit vector,
+    ``d = t`` (a unit direction: :class:`Axis`) or, where ``ipar[1]`` is 1, the unit vector
+    from the frame origin to the point ``t`` (:class:`~swarm_ik.goals.LookAt`)."""
     err[0] = np.nan
     err[1] = direction_rows(
-        par[0:3], par[3:6], False, ipar[0], f_pos, f_rot, f_jac, want_jac, res, jac
+        par[0:3], par[3:6], ipar[1] != 0, ipar[0], f_pos, f_rot, f_jac, want_jac, res, jac
     )
 
 
@@ -39,7 +41,13 @@ class FrameAxis(Goal):
 
     frame: str
     axis: Any
+    kernel: ClassVar[Any] = frame_axis_kernel
     units: ClassVar[tuple[str, ...]] = ("axis",)
+
+    def _encode(self, robot: RobotModel, target: FloatArray, at_point: bool) -> Encoded:
+        """``par = [axis, target]``, ``ipar = [frame, at_point]`` (:func:`frame_axis_kernel`)."""
+        ipar = np.array([frame_index(self, robot), int(at_point)], dtype=np.int64)
+        return Encoded(np.concatenate([self.axis, target]), ipar, 3)
 
 
 @dataclass(frozen=True)
@@ -57,12 +65,10 @@ class Axis(FrameAxis):
     """
 
     direction: Any
-    kernel: ClassVar[Any] = axis_kernel
     units: ClassVar[tuple[str, ...]] = ("axis", "direction")
 
     def encode(self, robot: RobotModel, q0: FloatArray | None) -> Encoded:
-        ipar = np.array([frame_index(self, robot)], dtype=np.int64)
-        return Encoded(np.concatenate([self.axis, self.direction]), ipar, 3)
+        return self._encode(robot, self.direction, at_point=False)
 
     def residual(self, state: State) -> FloatArray:
         return np.asarray(self.direction - state.pose(self.frame)[:3, :3] @ self.axis)

@@ -5,24 +5,13 @@ from __future__ import annotations
 from dataclasses import dataclass
 from typing import TYPE_CHECKING, Any, ClassVar
 
-import numba
 import numpy as np
 
 from swarm_ik.goals.axis import FrameAxis, angle_between
-from swarm_ik.goals.base import Encoded, FloatArray, State, frame_index, skew
-from swarm_ik.kernels.rows import direction_rows
+from swarm_ik.goals.base import Encoded, FloatArray, State, skew
 
 if TYPE_CHECKING:
     from swarm_ik.robot import RobotModel
-
-
-@numba.njit(cache=True)
-def look_at_kernel(par, ipar, q, f_pos, f_rot, f_jac, want_jac, res, jac, err, work):  # type: ignore[no-untyped-def]  # pragma: no cover
-    """Rows ``(t − p)/‖t − p‖ − R a`` of frame ``ipar[0]``; ``par = [a (3), t (3)]``."""
-    err[0] = np.nan
-    err[1] = direction_rows(
-        par[0:3], par[3:6], True, ipar[0], f_pos, f_rot, f_jac, want_jac, res, jac
-    )
 
 
 @dataclass(frozen=True)
@@ -39,12 +28,10 @@ class LookAt(FrameAxis):
     """
 
     point: Any
-    kernel: ClassVar[Any] = look_at_kernel
     vectors: ClassVar[tuple[str, ...]] = ("point",)
 
     def encode(self, robot: RobotModel, q0: FloatArray | None) -> Encoded:
-        ipar = np.array([frame_index(self, robot)], dtype=np.int64)
-        return Encoded(np.concatenate([self.axis, self.point]), ipar, 3)
+        return self._encode(robot, self.point, at_point=True)
 
     def _parts(self, state: State) -> tuple[FloatArray, FloatArray, float]:
         pose = state.pose(self.frame)
