@@ -629,21 +629,13 @@ def test_cli_turns_every_error_into_one_line_and_exit_code_2(
 
 # =================================================================== issue 16: any input
 # ---------------------------------------------------------- item 8: every solver parameter
-def _float_params() -> list[tuple[str, str]]:
+def _params(kind: str) -> list[tuple[str, str]]:
+    """(solver, parameter) for every parameter of that constraint kind ("float", "int")."""
     return [
         (name, key)
         for name in SOLVERS
         for key, con in base.get(name).constraints.items()
-        if con.kind == "float"
-    ]
-
-
-def _int_params() -> list[tuple[str, str]]:
-    return [
-        (name, key)
-        for name in SOLVERS
-        for key, con in base.get(name).constraints.items()
-        if con.kind == "int"
+        if con.kind == kind
     ]
 
 
@@ -657,7 +649,7 @@ def test_every_numeric_parameter_of_every_solver_has_a_constraint() -> None:
                 assert ok, (name, key, default)  # the defaults satisfy their constraints
 
 
-@pytest.mark.parametrize(("name", "key"), _float_params())
+@pytest.mark.parametrize(("name", "key"), _params("float"))
 @pytest.mark.parametrize("value", [float("nan"), float("inf"), -float("inf"), "a", True, None])
 def test_float_parameter_refuses_nan_inf_strings_and_booleans(
     name: str, key: str, value: object
@@ -668,7 +660,7 @@ def test_float_parameter_refuses_nan_inf_strings_and_booleans(
         base.get(name).resolve({key: value})
 
 
-@pytest.mark.parametrize(("name", "key"), _float_params())
+@pytest.mark.parametrize(("name", "key"), _params("float"))
 def test_float_parameter_refuses_values_just_outside_its_range(name: str, key: str) -> None:
     con = base.get(name).constraints[key]
     outside = []
@@ -686,7 +678,7 @@ def test_float_parameter_refuses_values_just_outside_its_range(name: str, key: s
     assert isinstance(base.get(name).resolve({key: default})[key], float)
 
 
-@pytest.mark.parametrize(("name", "key"), _int_params())
+@pytest.mark.parametrize(("name", "key"), _params("int"))
 @pytest.mark.parametrize("value", [1.5, "3", True, float("nan")])
 def test_integer_parameter_refuses_non_integers(name: str, key: str, value: object) -> None:
     with pytest.raises(errors.InvalidArgumentError, match=rf"{key}"):
