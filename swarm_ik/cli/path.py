@@ -12,8 +12,7 @@ Exit codes: 0 every waypoint reached and no jump, 1 not (the path found is still
 the reason printed), 2 bad input (``--out`` and ``--html`` are checked before any work), 130
 interrupted.
 
-Not yet in :data:`swarm_ik.cli.COMMANDS`: wiring it is ``"path": path`` there (and the import).
-:func:`run_cli` is :func:`run`.
+:func:`run_cli` is :func:`run` (the name the path issue asked for).
 """
 
 from __future__ import annotations
