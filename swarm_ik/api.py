@@ -186,14 +186,17 @@ def warm_up(route: Route) -> None:
         q = np.ascontiguousarray(problem.robot.mid_q()).clip(problem.lower, problem.upper)
         if route.compiled:  # the one compiled call of the route
             route._search(q, np.uint64(1), 1, 60.0)  # (with a clock: its first read is slow)
-        else:  # the solver's own loop, once, on a small budget (what it calls compiles)
-            problem.goal_errors(q)
-            problem.residual_jacobian(q)
-            ev = base.Evaluator(
-                problem.fitness, problem.lower, problem.upper, max_evals=200, problem=problem,
-                tolerance=(route.tol_pos, route.tol_rot),
-            )  # fmt: skip
-            route.spec.run(ev, make_rng(0), **route.kwargs)
+        else:  # what the solvers' loops call, on a plain problem of the same goals (the
+            # methods of a subclass or of the instance are the caller's: not run here)
+            plain = IKProblem(problem.robot, goals=list(problem.goals))
+            plain.goal_errors(q)
+            plain.residual_jacobian(q)
+            if route.solver == "swarm":  # its loop: the compiled polish, null-space descent…
+                ev = base.Evaluator(
+                    plain.fitness, plain.lower, plain.upper, max_evals=200, problem=plain,
+                    tolerance=(route.tol_pos, route.tol_rot),
+                )  # fmt: skip
+                route.spec.run(ev, make_rng(0), **route.kwargs)
     finally:
         timer.cancel()
     _COMPILED.add(key)
