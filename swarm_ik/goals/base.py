@@ -25,6 +25,7 @@ import reprlib
 from dataclasses import dataclass, field
 from typing import TYPE_CHECKING, Any, ClassVar, NamedTuple
 
+import numba
 import numpy as np
 from numpy.typing import NDArray
 
@@ -58,14 +59,16 @@ def kernel_slot(kernel: Any) -> int:
     """
     slot = _SLOTS.get(id(kernel))
     if slot is None:
-        if not callable(getattr(kernel, "compile", None)):
+        if not callable(getattr(kernel, "py_func", None)):
             raise InvalidArgumentError(
                 "a compiled goal's kernel must be a numba.njit function of the arguments of "
                 f"swarm_ik.kernels.lm.GOAL_SIGNATURE, got {reprlib.repr(kernel)}"
             )
         try:
-            if not any(tuple(sig) == GOAL_SIGNATURE.args for sig in kernel.signatures):
-                kernel.compile(GOAL_SIGNATURE)
+            # the kernel of exactly this signature (compiled now, or loaded from numba's
+            # cache): typed as a first-class function, so the list of kernels built from it is
+            # one cached type whatever the kernels are
+            typed = numba.njit(GOAL_SIGNATURE, cache=True)(kernel.py_func)
         except Exception as exc:  # numba's typing errors have no public base class
             first = str(exc).strip().splitlines()[0] if str(exc).strip() else type(exc).__name__
             raise InvalidArgumentError(
@@ -73,7 +76,7 @@ def kernel_slot(kernel: Any) -> int:
                 f"swarm_ik.kernels.lm.GOAL_SIGNATURE: {first}"
             ) from None
         slot = len(_KERNELS)
-        _KERNELS.append(kernel)
+        _KERNELS.append(typed)
         _SLOTS[id(kernel)] = slot
         _LIST.clear()
     return slot

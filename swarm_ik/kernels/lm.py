@@ -101,16 +101,18 @@ structref.define_proxy(GoalKernels, GoalKernelsType, ["fns"])
 
 @numba.njit(cache=True)
 def _goal_kernels(fns: Any) -> Any:  # pragma: no cover - compiled
-    return GoalKernels(fns)
+    """The :class:`GoalKernels` of a tuple of goal kernels, its list built in compiled code
+    (cached: the list's own methods would compile again in every process)."""
+    out = List.empty_list(GOAL_KERNEL)
+    for i in range(len(fns)):
+        out.append(fns[i])
+    return GoalKernels(out)
 
 
 def kernel_list(kernels: Sequence[Any]) -> GoalKernels:
-    """The :class:`GoalKernels` of ``kernels`` (slot ``i`` is ``kernels[i]``), each compiled
-    with :data:`GOAL_SIGNATURE`."""
-    out = List.empty_list(GOAL_KERNEL)
-    for k in kernels:
-        out.append(k)
-    return _goal_kernels(out)  # type: ignore[no-any-return]
+    """The :class:`GoalKernels` of ``kernels`` (slot ``i`` is ``kernels[i]``, at least one),
+    each compiled with :data:`GOAL_SIGNATURE`."""
+    return _goal_kernels(tuple(kernels))  # type: ignore[no-any-return]
 
 
 class LMSettings(NamedTuple):
