@@ -485,3 +485,20 @@ def test_xacro_robot_is_refused_before_loading(
     line = _err_line(capsys)
     assert "xacro files must be expanded first" in line
     assert "`xacro arm.urdf.xacro > arm.urdf`" in line
+
+
+def test_output_pipe_closed_by_the_reader_is_141_without_a_traceback() -> None:
+    """``swarm-ik robots | head -1``: the reader goes away after one line."""
+    proc = subprocess.Popen(
+        [sys.executable, "-m", "swarm_ik.cli", "robots"],
+        stdout=subprocess.PIPE,
+        stderr=subprocess.PIPE,
+        text=True,
+        env={**os.environ, "PYTHONUNBUFFERED": "1"},
+    )
+    assert proc.stdout is not None and proc.stderr is not None
+    proc.stdout.readline()
+    proc.stdout.close()  # as head does
+    err = proc.stderr.read()
+    assert proc.wait(timeout=120) == 141, err
+    assert "Traceback" not in err

@@ -10,7 +10,8 @@ into an exit code and one line:
   ``{"error": …, "exit_code": 2, …}`` on stdout instead);
 * 3 an unexpected error inside swarm_ik (one line; set ``SWARM_IK_DEBUG=1`` to see the
   traceback);
-* 130 interrupted (Ctrl-C, at any point of the command).
+* 130 interrupted (Ctrl-C, at any point of the command);
+* 141 the reader of the output went away (``swarm-ik … | head``), without a traceback.
 
 Numbers may be negative in any notation (``--from-q -1e-3 0.5 -2``): the parser does not take
 ``-1e-3`` for an option.  Usage errors are one line too, naming the sub-command's ``--help``.
@@ -34,6 +35,7 @@ from typing import Any, NoReturn
 from swarm_ik.cli import batch, bench, path, reach, robots, show, solve, warmup
 from swarm_ik.cli._args import (
     EXIT_BAD_INPUT,
+    EXIT_BROKEN_PIPE,
     EXIT_INTERNAL,
     EXIT_INTERRUPTED,
     EXIT_NOT_REACHED,
@@ -116,7 +118,8 @@ class Parser(argparse.ArgumentParser):
 EPILOG = (
     "exit codes: 0 success, 1 target not reached (the best found is printed), 2 bad input "
     "(one line on stderr), 3 internal error (one line; SWARM_IK_DEBUG=1 shows the "
-    "traceback), 130 interrupted (Ctrl-C).  `swarm-ik COMMAND --help` describes a command."
+    "traceback), 130 interrupted (Ctrl-C), 141 output pipe closed.  `swarm-ik COMMAND "
+    "--help` describes a command."
 )
 
 
@@ -185,6 +188,10 @@ def main(argv: Sequence[str] | None = None) -> int:
         return _fail(str(exc), EXIT_BAD_INPUT, as_json, type(exc).__name__)
     except KeyboardInterrupt:
         return _interrupted(as_json)
+    except BrokenPipeError:  # the reader went away (`swarm-ik … | head`): no traceback
+        devnull = os.open(os.devnull, os.O_WRONLY)
+        os.dup2(devnull, sys.stdout.fileno())  # (so that the exit's flush fails quietly)
+        return EXIT_BROKEN_PIPE
     except Exception as exc:
         if os.environ.get("SWARM_IK_DEBUG"):
             raise
