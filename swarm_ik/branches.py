@@ -426,3 +426,21 @@ def covering_radius(selected: Any, pool: Any, periodic: BoolArray) -> float:
         return float("inf")
     d = branch_distance(pool[:, None, :], sel[None, :, :], periodic)
     return float(np.max(np.min(d, axis=1)))
+
+
+def through_one_point(points: Any, axes: Any, tol: float = 1e-9) -> bool:
+    """Whether the lines ``points[i] + t·axes[i]`` (unit axes, 3-vectors) meet in one point,
+    each passing within ``tol`` [m] of the least-squares meeting point (a spherical wrist;
+    used by :mod:`swarm_ik.many` and :mod:`swarm_ik.path` for their branch bounds)."""
+    a = np.zeros((3, 3))
+    b = np.zeros(3)
+    projs = []
+    for p, h in zip(points, axes, strict=True):
+        proj = np.eye(3) - np.outer(h, h)
+        projs.append((proj, p))
+        a += proj
+        b += proj @ p
+    if np.linalg.matrix_rank(a) < 3:
+        return False  # parallel lines: no single point
+    x = np.linalg.solve(a, b)
+    return all(np.linalg.norm(proj @ (x - p)) < tol for proj, p in projs)

@@ -48,6 +48,7 @@ from swarm_ik.branches import (
     pose_errors,
     revolute_mask,
     spread_select,
+    through_one_point,
 )
 from swarm_ik.branches import (
     windings as _windings,
@@ -86,22 +87,6 @@ FloatArray = np.ndarray
 
 
 # ------------------------------------------------------------------------ branch hops
-def _through_one_point(points: FloatArray, axes: FloatArray, tol: float = 1e-9) -> bool:
-    """Whether the lines ``points[i] + t·axes[i]`` (unit axes) meet in one point."""
-    a = np.zeros((3, 3))
-    b = np.zeros(3)
-    projs = []
-    for p, h in zip(points, axes, strict=True):
-        proj = np.eye(3) - np.outer(h, h)
-        projs.append((proj, p))
-        a += proj
-        b += proj @ p
-    if np.linalg.matrix_rank(a) < 3:
-        return False  # parallel lines: no single point
-    x = np.linalg.solve(a, b)
-    return all(np.linalg.norm(proj @ (x - p)) < tol for proj, p in projs)
-
-
 @numba.njit(cache=True)
 def _mirror_angles(
     h: FloatArray, a: FloatArray, b: FloatArray, c: FloatArray
@@ -162,7 +147,7 @@ class _Hops:
         self._bound: int | None = None
         if n == 6 and self.revolute.all():
             origins = np.array([self.data.oMi[j + 1].translation for j in range(n)])
-            spherical = any(_through_one_point(origins[k : k + 3], axes[k : k + 3]) for k in (0, 3))
+            spherical = any(through_one_point(origins[k : k + 3], axes[k : k + 3]) for k in (0, 3))
             self._bound = 8 if (self.parallel or spherical) else 16
         self._flips()
 

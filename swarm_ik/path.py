@@ -645,25 +645,12 @@ def _structural_branches(robot: Any) -> int | None:
     for j in range(4):
         if all(np.linalg.norm(np.cross(axes[j], axes[k])) < 1e-9 for k in (j + 1, j + 2)):
             return FULL_BRANCHES
+    from swarm_ik.branches import through_one_point
+
     for k in (0, 3):
-        if _through_one_point(points[k : k + 3], axes[k : k + 3]):
+        if through_one_point(points[k : k + 3], axes[k : k + 3], tol=1e-7):
             return FULL_BRANCHES
     return None
-
-
-def _through_one_point(points: Sequence[FloatArray], axes: Sequence[FloatArray]) -> bool:
-    a = np.zeros((3, 3))
-    b = np.zeros(3)
-    projs = []
-    for p, h in zip(points, axes, strict=True):
-        proj = np.eye(3) - np.outer(h, h)
-        projs.append((proj, p))
-        a += proj
-        b += proj @ p
-    if np.linalg.matrix_rank(a) < 3:
-        return False
-    x = np.linalg.solve(a, b)
-    return all(float(np.linalg.norm(proj @ (x - p))) < 1e-7 for proj, p in projs)
 
 
 # -------------------------------------------------------------------- the graph

@@ -10,6 +10,7 @@ from conftest import robot as get
 
 import swarm_ik
 from swarm_ik import path as sp
+from swarm_ik.bench.path import smooth_joint_path
 from swarm_ik.errors import InvalidArgumentError, InvalidTargetError, UnknownNameError
 from swarm_ik.path import PathResult, solve_path
 
@@ -17,17 +18,9 @@ STEP = sp.DEFAULT_MAX_JOINT_STEP
 
 
 def smooth_q(robot, seed: int, n: int = 40, step: float = 0.1) -> np.ndarray:
-    """A smooth joint trajectory ``(n, nq)`` inside the limits (min-jerk blend between two
-    configurations plus a bump), each joint moving at most ``step`` between samples."""
-    rng = np.random.default_rng(seed)
-    lo, hi = robot.lower + 0.3, robot.upper - 0.3
-    a = rng.uniform(lo, hi)
-    d = rng.uniform(-1, 1, robot.nq)
-    d *= step * (n - 1) / 2.0 / np.abs(d).max()
-    b = np.clip(a + d, lo, hi)
-    t = np.linspace(0.0, 1.0, n)[:, None]
-    bump = 0.25 * step * (n - 1) / np.pi * np.sin(np.pi * t) * rng.uniform(-1, 1, robot.nq)
-    q = a + (3 * t**2 - 2 * t**3) * (b - a) + bump
+    """A smooth joint trajectory ``(n, nq)`` inside the limits (the benchmark's generator,
+    0.3 inside the limits), each joint moving at most ``step`` between samples."""
+    q = smooth_joint_path(robot, np.random.default_rng(seed), n, step, margin=0.3)
     assert np.abs(np.diff(q, axis=0)).max() <= step
     assert np.all((q >= robot.lower) & (q <= robot.upper))
     return q

@@ -78,11 +78,13 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
 
 
 # ------------------------------------------------------------------------------ paths
-def smooth_joint_path(robot: Any, rng: np.random.Generator, n: int, step: float = 0.1) -> Any:
+def smooth_joint_path(
+    robot: Any, rng: np.random.Generator, n: int, step: float = 0.1, margin: float = 0.05
+) -> Any:
     """A smooth joint trajectory ``(n, nq)`` within the limits: a min-jerk blend from one
-    random configuration towards another plus a half-sine bump, each joint moving at most
-    ``step`` between samples."""
-    lo, hi = robot.lower + 0.05, robot.upper - 0.05
+    random configuration (at least ``margin`` inside the limits) towards another plus a
+    half-sine bump, each joint moving at most ``step`` between samples."""
+    lo, hi = robot.lower + margin, robot.upper - margin
     a = rng.uniform(lo, hi)
     d = rng.uniform(-1, 1, robot.nq)
     d *= step * (n - 1) / 2.0 / np.abs(d).max()
