@@ -282,21 +282,16 @@ class Route:
 
     def _search(
         self, q_start: np.ndarray, key: np.uint64, max_evals: int | None, time_limit: float | None
-    ) -> tuple[int, float, float, float, bool, np.ndarray, np.ndarray]:
-        """The compiled search from ``q_start``: ``(evaluations, fitness, position error,
-        angular error, stopped, history, q)``."""
-        kw, pol = self.kwargs, self.pol
-        out_q = np.empty(q_start.shape[0])
-        used, f, dp, dr, stopped, hist = search.swarm_search(
-            self.state, q_start, pol.kernel_tol_pos, pol.kernel_tol_rot, self.tol_pos,
-            self.tol_rot, 0.0 if self.problem.position_only else self.problem.w_rot,
-            kw["pop_size"], self._n_swarm, kw["iterations"],
-            max_evals is None and time_limit is None,
-            2**62 if max_evals is None else max_evals, -1 if max_evals is None else max_evals, 0,
-            search.NO_LIMIT if time_limit is None else time_limit, time.perf_counter(), key,
-            out_q,
+    ) -> hybrid.SearchOutcome:
+        """The compiled search from ``q_start`` on the route's state."""
+        kw = self.kwargs
+        return hybrid.compiled_search(
+            self.pol, q_start, key, pop_size=kw["pop_size"], n_swarm=self._n_swarm,
+            iterations=kw["iterations"], stop=True, tol_pos=self.tol_pos, tol_rot=self.tol_rot,
+            w_rot=0.0 if self.problem.position_only else self.problem.w_rot,
+            max_evals=max_evals, remaining=2**62 if max_evals is None else max_evals,
+            evals_before=0, time_limit=time_limit, t0=time.perf_counter(), state=self.state,
         )  # fmt: skip
-        return used, f, dp, dr, stopped, hist, out_q
 
     def _rebind(self, problem: IKProblem, q_start: np.ndarray | None) -> None:
         """Write the parameter blocks of ``problem``'s goals that differ from the bound ones
@@ -356,13 +351,14 @@ class Route:
             with self._lock:  # (the bound table and scratch serve one run at a time)
                 self._rebind(problem, q_start)
                 t0 = time.perf_counter()
-                n_evals, fit, _dp, _dr, _stop, history, q = self._search(
+                out = self._search(
                     np.ascontiguousarray(seed_q, dtype=float),
                     key,
                     self.max_evals,
                     self.time_limit,
                 )
                 elapsed = time.perf_counter() - t0
+            q, fit, n_evals, history = out.q, out.fitness, out.used, out.history
             if not np.isfinite(fit) or len(problem.goals) > 1:  # (the problem's own sum)
                 fit = float(problem.fitness(q[None])[0])
         else:

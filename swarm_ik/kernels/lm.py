@@ -553,7 +553,6 @@ def evaluate(
     t: TreeArrays,
     g: GoalTable,
     ks: GoalKernels,
-    b: Bounds,
     w: Work,
     want_jac: bool,
     trial: bool,
@@ -636,7 +635,7 @@ def lm_run(
         while True:
             # the one evaluation site (the start, then each trial): one inlined copy of the
             # FK and the goal rows in this kernel
-            cost_t = evaluate(q_t, t, g, ks, b, w, True, True)
+            cost_t = evaluate(q_t, t, g, ks, w, True, True)
             used += 1
             ev_s += 1
             if ev_s == 1 or cost_t < cost:  # the start, or an accepted step
@@ -779,7 +778,7 @@ def secondary_descent(
         out_q[j] = q[j]
     if max_evals < 1 or m2 == 0:
         return 0
-    evaluate(q, t, g, ks, b, w, True, False)
+    evaluate(q, t, g, ks, w, True, False)
     cost2 = goal_rows(q, w.fk, g, ks, False, True, res2, jac2, err2, w.work)
     used = 1
     if not within_tolerance(w.err, g, tol_pos, tol_rot):
@@ -829,7 +828,7 @@ def secondary_descent(
                 s_d += proj[i, k] * z[k]
             delta[i] = s_d
         _step_into_bounds(q, delta, 1.0, b, q_t)
-        evaluate(q_t, t, g, ks, b, w, True, True)
+        evaluate(q_t, t, g, ks, w, True, True)
         used += 1
         ok_primary = within_tolerance(w.err_t, g, tol_pos, tol_rot)
         cost2_t = goal_rows(q_t, w.fk, g, ks, False, True, res2_t, jac2_t, err2, w.work)
