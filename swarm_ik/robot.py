@@ -13,7 +13,7 @@ import os
 import reprlib
 import threading
 import warnings
-from collections.abc import Callable, Sequence
+from collections.abc import Callable, Mapping, Sequence
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any, NamedTuple
@@ -25,7 +25,8 @@ from numpy.typing import NDArray
 from swarm_ik import urdf
 from swarm_ik._types import FloatArray
 from swarm_ik.errors import InvalidArgumentError, RobotFileNotFoundError, RobotModelError, unknown
-from swarm_ik.kernels.fk import CONTINUOUS, KIND_NAMES, PRISMATIC, REVOLUTE, TreeArrays
+from swarm_ik.kernels import lie
+from swarm_ik.kernels.fk import BALL, CONTINUOUS, KIND_NAMES, PRISMATIC, REVOLUTE, TreeArrays
 from swarm_ik.paths import bundled_robot_dir, example_robot_data_dir
 
 BUNDLED: dict[str, tuple[str, str]] = {
@@ -98,19 +99,112 @@ class _Reduction(NamedTuple):
     followers: dict[str, tuple[str, float, float]]
 
 
+FREE_FLYER_ENTRIES = ("root_joint.x", "root_joint.y", "root_joint.z",
+                      "root_joint.rx", "root_joint.ry", "root_joint.rz")  # fmt: skip
+"""Names of the joint-vector entries of a floating base (Pinocchio's ``root_joint``): the
+base position [m] in the world, then its orientation as a rotation vector [rad]
+(``R = exp([r]×)``, no gimbal lock)."""
+
+
+def _base_box(value: Any) -> FloatArray:
+    """Half-widths [m] of a floating base's box around the origin: one positive number or
+    three."""
+    try:
+        box = np.broadcast_to(np.asarray(value, dtype=float), (3,)).copy()
+    except (TypeError, ValueError):
+        raise InvalidArgumentError(
+            f"base_box must be a positive number or 3 of them [m], got {value!r}"
+        ) from None
+    if isinstance(value, (bool, str)) or not np.all(np.isfinite(box) & (box > 0.0)):
+        raise InvalidArgumentError(
+            f"base_box must be a positive number or 3 of them [m], got {value!r}"
+        )
+    return box
+
+
+def _tree_joint(jid: int, shift: int) -> int:
+    """The kernels' tree index of Pinocchio joint ``jid`` (``-1``: the world), with ``shift``
+    tree joints before Pinocchio's joint 1 (3 for a free flyer's x, y, z, whose rotation is
+    then tree joint 3)."""
+    return -1 if jid == 0 else jid - 1 + shift
+
+
+def _locked_values(
+    p: Path, full: Any, locked: Any, mimic: dict[str, tuple[str, float, float]]
+) -> dict[int, float]:
+    """The joints to hold (``{joint id: value}``) from ``locked``: a dict name -> value (rad
+    or m) or a list of names (held at their neutral value).  A locked mimic driver holds its
+    followers too.
+
+    Raises:
+        UnknownNameError: a name is not a one-DoF joint of the URDF (the joints listed).
+        InvalidArgumentError: a value is not a finite number within the joint's limits.
+    """
+    if locked is None:
+        return {}
+    if isinstance(locked, str):
+        locked = [locked]
+    if isinstance(locked, dict):
+        items = list(locked.items())
+    else:
+        try:
+            items = [(name, None) for name in locked]
+        except TypeError:
+            raise InvalidArgumentError(
+                f"locked must be a dict joint -> value or a list of joint names, got {locked!r}"
+            ) from None
+    names = [full.names[j] for j in range(1, full.njoints) if full.joints[j].nv == 1]
+    out: dict[int, float] = {}
+    for name, value in items:
+        if not isinstance(name, str) or name not in names:
+            raise unknown("joint to lock", name, names)
+        jid = int(full.getJointId(name))
+        jm = full.joints[jid]
+        if value is None:
+            v = 0.0 if jm.nq == 2 else float(pin.neutral(full)[jm.idx_q])
+        else:
+            try:
+                v = float(value)
+            except (TypeError, ValueError):
+                v = float("nan")
+            if isinstance(value, (bool, str)) or not math.isfinite(v):
+                raise InvalidArgumentError(
+                    f"locked joint {name!r}: the value must be a finite number, got {value!r}"
+                )
+            if jm.nq == 1:
+                lo = float(full.lowerPositionLimit[jm.idx_q])
+                hi = float(full.upperPositionLimit[jm.idx_q])
+                if not (lo - 1e-9 <= v <= hi + 1e-9):
+                    raise InvalidArgumentError(
+                        f"locked joint {name!r}: {v:g} is outside its limits [{lo:g}, {hi:g}]"
+                    )
+        out[jid] = v
+    for follower, (driver, a, b) in mimic.items():
+        d = int(full.getJointId(driver))
+        if d in out and full.existJointName(follower):
+            out[int(full.getJointId(follower))] = a * out[d] + b
+    return out
+
+
 def _reduce(
     p: Path,
     full: Any,
     frames: list[str],
     mimic: dict[str, tuple[str, float, float]],
+    held: dict[int, float] | None = None,
+    base_box: FloatArray | None = None,
 ) -> _Reduction:
     """Reduce ``full`` to the union of the root → frame paths of ``frames`` (a chain or a
     tree) and read the kinematic arrays off it.
 
     A mimic follower on a path is kept and driven by its driver (which is then solved even if
-    it is on no path); its range narrows the driver's.  Every other joint is locked at its
-    neutral value.
+    it is on no path); its range narrows the driver's.  The joints of ``held`` (id -> value)
+    are locked at their values even on a path; every other joint off the paths at its
+    neutral value.  A free-flyer root joint (``full`` built with one) becomes four tree joints:
+    three prismatic ones along the world axes, bounded by ``± base_box`` [m], and a
+    ``BALL`` (its rotation vector bounded by ``±π``).
     """
+    held = held or {}
     keep: set[int] = set()
     where = f"chain to {frames[0]!r}" if len(frames) == 1 else f"paths to {frames}"
     fids = [_frame_id(full, f) for f in frames]
@@ -120,6 +214,7 @@ def _reduce(
         if not path_ids:
             raise RobotModelError(f"{p}: no movable joint between the root and frame {f!r}")
         keep.update(path_ids)
+    keep -= set(held)
     jid = {full.names[j]: j for j in range(1, full.njoints)}
     for j in sorted(keep):
         name = full.names[j]
@@ -139,8 +234,16 @@ def _reduce(
                     f"{p}: joint {name!r} on the {where} mimics joint {driver!r}, which is not "
                     f"on the {where}; a mimic joint is supported where its driver is solved too"
                 )
+    if not keep:
+        raise RobotModelError(f"{p}: every joint on the {where} is locked: nothing to solve")
     locked = [j for j in range(1, full.njoints) if j not in keep]
     q_ref = pin.neutral(full)
+    for j, v in held.items():
+        jm = full.joints[j]
+        if jm.nq == 2:
+            q_ref[jm.idx_q : jm.idx_q + 2] = (math.cos(v), math.sin(v))
+        else:
+            q_ref[jm.idx_q] = v
     try:
         reduced = pin.buildReducedModel(full, locked, q_ref) if locked else full.copy()
     except Exception as exc:
@@ -152,9 +255,25 @@ def _reduce(
     upper: list[float] = []
     joint_kind: dict[str, int] = {}
     joint_range: dict[str, tuple[float, float]] = {}
+    floating = reduced.njoints > 1 and reduced.joints[1].shortname() == "JointModelFreeFlyer"
+    shift = 3 if floating else 0  # tree joints before Pinocchio's joint 2
     for j in range(1, reduced.njoints):
         jm = reduced.joints[j]
         jname = reduced.names[j]
+        if floating and j == 1:  # x, y, z along the world axes, then the rotation
+            placement = reduced.jointPlacements[1]
+            box = np.full(3, 1.0) if base_box is None else np.asarray(base_box, dtype=float)
+            for k in range(4):
+                kinds.append(PRISMATIC if k < 3 else BALL)
+                axes.append(np.eye(3)[k] if k < 3 else np.array([0.0, 0.0, 1.0]))
+                rot_p.append(np.array(placement.rotation) if k == 0 else np.eye(3))
+                pos_p.append(np.array(placement.translation) if k == 0 else np.zeros(3))
+                parent.append(k - 1)
+            for k, entry in enumerate(FREE_FLYER_ENTRIES):
+                names.append(entry)
+                lower.append(-box[k] if k < 3 else -np.pi)
+                upper.append(box[k] if k < 3 else np.pi)
+            continue
         try:
             kind, axis = _joint_kind_axis(jm)
         except RobotModelError as exc:
@@ -167,7 +286,7 @@ def _reduce(
         placement = reduced.jointPlacements[j]
         rot_p.append(np.array(placement.rotation))
         pos_p.append(np.array(placement.translation))
-        parent.append(int(reduced.parents[j]) - 1)
+        parent.append(_tree_joint(int(reduced.parents[j]), shift))
         if kind == CONTINUOUS:
             lo, hi = -np.pi, np.pi
         else:
@@ -179,16 +298,18 @@ def _reduce(
         joint_range[jname] = (lo, hi)
     # joint vector: one entry per non-follower joint, in the reduced model's order
     q_of: dict[str, int] = {}
-    for j in range(1, reduced.njoints):
+    for j in range(2 if floating else 1, reduced.njoints):
         jname = reduced.names[j]
         if jname not in mimic:
             q_of[jname] = len(names)
             names.append(jname)
             lower.append(joint_range[jname][0])
             upper.append(joint_range[jname][1])
-    q_index, mult, offs = [], [], []
+    q_index: list[int] = [0, 1, 2, 3] if floating else []
+    mult: list[float] = [1.0] * len(q_index)
+    offs: list[float] = [0.0] * len(q_index)
     followers: dict[str, tuple[str, float, float]] = {}
-    for j in range(1, reduced.njoints):
+    for j in range(2 if floating else 1, reduced.njoints):
         jname = reduced.names[j]
         if jname in mimic:
             driver, a, b = mimic[jname]
@@ -216,7 +337,7 @@ def _reduce(
             mult.append(1.0)
             offs.append(0.0)
     rfids = [_frame_id(reduced, f) for f in frames]
-    f_joint = [int(reduced.frames[i].parentJoint) - 1 for i in rfids]
+    f_joint = [_tree_joint(int(reduced.frames[i].parentJoint), shift) for i in rfids]
     f_rot = [np.array(reduced.frames[i].placement.rotation) for i in rfids]
     f_pos = [np.array(reduced.frames[i].placement.translation) for i in rfids]
     tree = TreeArrays.canonical(
@@ -239,7 +360,14 @@ def _reduce(
         np.asarray(q_ref, dtype=float),
         rfids,
         names,
-        [kinds[reduced.getJointId(n) - 1] for n in names],
+        [
+            BALL
+            if n in FREE_FLYER_ENTRIES[3:]
+            else PRISMATIC
+            if n in FREE_FLYER_ENTRIES
+            else kinds[reduced.getJointId(n) - 1 + shift]
+            for n in names
+        ],  # fmt: skip
         tree,
         np.array(lower),
         np.array(upper),
@@ -255,6 +383,13 @@ def _converted(
     joints become (cos, sin).  Scalar maths: a few joints, in every solve's check."""
     out = [0.0] * nq_pin
     for qi, mult, offset, at, continuous in plan:
+        if qi < 0:  # a free flyer: position, then the quaternion (x, y, z, w) of exp([r]x)
+            out[0:3] = qv[0:3]
+            rx, ry, rz = qv[3], qv[4], qv[5]
+            half = 0.5 * math.sqrt(rx * rx + ry * ry + rz * rz)
+            k = 0.5 - half * half / 12.0 if half < 1e-4 else math.sin(half) / (2.0 * half)
+            out[3:7] = [k * rx, k * ry, k * rz, math.cos(half)]
+            continue
         v = mult * qv[qi] + offset
         if continuous:
             out[at] = math.cos(v)
@@ -271,7 +406,9 @@ class RobotModel:
 
     Build it with :func:`load_robot` or :meth:`from_urdf`.  With one goal frame the model is
     the serial chain root → frame; with several it is the union of the root → frame paths (a
-    tree: Baxter's two arms, a humanoid's hands), every other joint locked.
+    tree: Baxter's two arms, a humanoid's hands), every other joint locked.  With a floating
+    base the root is a free flyer whose six entries come first in ``q``
+    (:data:`FREE_FLYER_ENTRIES`: position, then rotation vector).
 
     Attributes:
         name: Robot name (from the URDF).
@@ -283,7 +420,8 @@ class RobotModel:
         locked_joints: Names of the URDF joints locked.
         q_locked: Full-model configuration used for the locked joints.
         joint_names: Names of the solved joints, shape ``(nq,)``.
-        joint_kinds: ``"revolute"``, ``"prismatic"`` or ``"continuous"`` per joint.
+        joint_kinds: ``"revolute"``, ``"prismatic"``, ``"continuous"`` per entry of ``q``
+            (``"ball"``: the three rotation-vector entries of a floating base).
         lower: Lower limits (rad or m), shape ``(nq,)``; ``-π`` for continuous joints.
         upper: Upper limits (rad or m), shape ``(nq,)``; ``+π`` for continuous joints.
         tree: The arrays behind the batched FK and Jacobian of every goal frame.
@@ -294,6 +432,9 @@ class RobotModel:
             frame", or the rule used for a file).
         srdf: SRDF of the self-collision pairs to disable (``None``: found next to the URDF,
             as example-robot-data ships them; ``False``: none, pairs chosen by sampling).
+        floating_base: Whether the root is a free flyer (``full_model`` is then built with
+            ``pinocchio.JointModelFreeFlyer()``).
+        held: Joints locked by request, name -> value (rad or m).
     """
 
     name: str
@@ -313,6 +454,8 @@ class RobotModel:
     mimic: dict[str, tuple[str, float, float]] = field(default_factory=dict)
     ee_frame_reason: str = "given"
     srdf: Any = None
+    floating_base: bool = False
+    held: dict[str, float] = field(default_factory=dict)
     _local: threading.local = field(default_factory=threading.local, repr=False)
     _cache: dict[Any, Any] = field(default_factory=dict, repr=False)
 
@@ -324,6 +467,9 @@ class RobotModel:
         ee_frame: str | Sequence[str] | None = None,
         *,
         frame_reason: str = "given",
+        floating_base: bool = False,
+        locked: Mapping[str, float] | Sequence[str] | None = None,
+        base_box: Any = 1.0,
     ) -> RobotModel:
         """Load a URDF and reduce it to the joints between the root and the goal frame(s).
 
@@ -332,6 +478,7 @@ class RobotModel:
             ee_frame: Goal frame (a link or fixed-joint name) or a list of them.  Default:
                 the last link attached to the deepest joint of the model.
             frame_reason: How ``ee_frame`` was chosen (stored as ``ee_frame_reason``).
+            floating_base, locked, base_box: See :func:`load_robot`.
 
         Raises:
             RobotFileNotFoundError: the file does not exist.
@@ -341,7 +488,13 @@ class RobotModel:
         p = Path(path)
         if not p.is_file():
             raise RobotFileNotFoundError(f"URDF file not found: {str(p)!r}")
-        full, info = urdf.load_urdf(p)  # decoded, checked, joints renamed, stderr captured
+        if not isinstance(floating_base, (bool, np.bool_)):
+            raise InvalidArgumentError(
+                f"floating_base must be true or false, got {floating_base!r}"
+            )
+        box = _base_box(base_box)
+        # decoded, checked, joints renamed, stderr captured
+        full, info = urdf.load_urdf(p, floating_base=bool(floating_base))
         body_frames = [f.name for f in full.frames if f.type == pin.FrameType.BODY]
         all_frames = [f.name for f in full.frames if f.name != "universe"]
         if ee_frame is None:
@@ -359,7 +512,8 @@ class RobotModel:
         if dup:
             raise InvalidArgumentError(f"frame(s) {dup} given more than once")
         mimic = {k: (m.driver, m.multiplier, m.offset) for k, m in info.mimic.items()}
-        red = _reduce(p, full, frames, mimic)
+        held = _locked_values(p, full, locked, mimic)
+        red = _reduce(p, full, frames, mimic, held, box)
         return cls(
             name=full.name or p.stem,
             urdf_path=p.resolve(),
@@ -377,6 +531,8 @@ class RobotModel:
             frame_ids=tuple(red.frame_ids),
             mimic=red.followers,
             ee_frame_reason=frame_reason,
+            floating_base=bool(floating_base),
+            held={full.names[j]: v for j, v in held.items()},
         )
 
     # ------------------------------------------------------------- properties
@@ -425,20 +581,24 @@ class RobotModel:
 
         Returns:
             ``(frame_joint (k,), frame_rot (k, 3, 3), frame_pos (k, 3))`` for
-            :meth:`swarm_ik.kernels.fk.TreeArrays.with_frames` (joint index ``id − 1``, the
-            placement turned into the canonical joint frame whose axis is z).
+            :meth:`swarm_ik.kernels.fk.TreeArrays.with_frames` (joint index ``id − 1``, plus
+            three after a free flyer; the placement turned into the canonical joint frame
+            whose axis is z).
         """
         from swarm_ik.kernels.fk import rotation_z_to
 
         ids = np.asarray(joint_ids, dtype=np.int64).reshape(-1)
         out_r = np.empty((ids.size, 3, 3))
         out_p = np.empty((ids.size, 3))
+        shift = 3 if self.floating_base else 0
         for k, j in enumerate(ids):
             jm = self.model.joints[int(j)]
-            b = np.eye(3) if j == 0 else rotation_z_to(_joint_kind_axis(jm)[1])
+            plain = j == 0 or (shift and j == 1)  # the world, or a free flyer's BALL (axis z)
+            b = np.eye(3) if plain else rotation_z_to(_joint_kind_axis(jm)[1])
             out_r[k] = b.T @ np.asarray(rots[k], dtype=float)
             out_p[k] = b.T @ np.asarray(poss[k], dtype=float)
-        return ids - 1, out_r, out_p
+        tree_ids = np.array([_tree_joint(int(j), shift) for j in ids], dtype=np.int64)
+        return tree_ids, out_r, out_p
 
     def collision_model(self) -> Any:
         """The robot's collision geometry and self-collision pairs
@@ -489,7 +649,7 @@ class RobotModel:
     def _pinocchio_q_is_q(self) -> bool:
         """Whether Pinocchio's configuration of :attr:`model` is ``q`` itself (no continuous
         joint in (cos, sin), no mimic follower)."""
-        return self.model.nq == self.nq and not self.mimic
+        return self.model.nq == self.nq and not self.mimic and not self.floating_base
 
     def to_pinocchio(self, q: FloatArray, copy: bool = True) -> FloatArray:
         """Pinocchio configuration of :attr:`model` for ``q`` (continuous → cos, sin; mimic
@@ -505,11 +665,13 @@ class RobotModel:
         Pinocchio's configuration, continuous), made once."""
         plan = self._cache.get("to_pinocchio")
         if plan is None:
-            t = self.tree
-            plan = self._cache["to_pinocchio"] = tuple(
-                (int(t.q_index[j - 1]), float(t.multiplier[j - 1]), float(t.offset[j - 1]),
-                 int(self.model.joints[j].idx_q), self.model.joints[j].nq == 2)
-                for j in range(1, self.model.njoints)
+            t, shift, model = self.tree, 3 if self.floating_base else 0, self.model
+            head = ((-1, 1.0, 0.0, 0, False),) if shift else ()  # the free flyer
+            plan = self._cache["to_pinocchio"] = head + tuple(
+                (int(t.q_index[j - 1 + shift]), float(t.multiplier[j - 1 + shift]),
+                 float(t.offset[j - 1 + shift]), int(model.joints[j].idx_q),
+                 model.joints[j].nq == 2)
+                for j in range(2 if shift else 1, model.njoints)
             )  # fmt: skip
         return plan  # type: ignore[no-any-return]
 
@@ -517,11 +679,15 @@ class RobotModel:
         """Inverse of :meth:`to_pinocchio`: one value per solved joint."""
         q_pin = np.asarray(q_pin, dtype=float)
         out = np.empty(self.nq)
-        for j in range(1, self.model.njoints):
+        shift = 3 if self.floating_base else 0
+        if shift:
+            out[0:3] = q_pin[0:3]
+            out[3:6] = lie.log3(pin.Quaternion(np.asarray(q_pin[3:7])).toRotationMatrix())
+        for j in range(2 if shift else 1, self.model.njoints):
             if self.model.names[j] in self.mimic:
                 continue
             jm = self.model.joints[j]
-            qi = int(self.tree.q_index[j - 1])
+            qi = int(self.tree.q_index[j - 1 + shift])
             if jm.nq == 2:
                 out[qi] = np.arctan2(q_pin[jm.idx_q + 1], q_pin[jm.idx_q])
             else:
@@ -616,20 +782,63 @@ class RobotModel:
         pin.computeJointJacobians(self.model, data, self.to_pinocchio(q))
         pin.updateFramePlacements(self.model, data)
         jac = pin.getFrameJacobian(self.model, data, fid, pin.ReferenceFrame.LOCAL_WORLD_ALIGNED)
-        return self.velocity_to_q(np.array(jac).reshape(6, self.model.nv))
+        return self.velocity_to_q(np.array(jac).reshape(6, self.model.nv), q)
 
-    def velocity_to_q(self, jac: FloatArray) -> FloatArray:
+    def velocity_to_q(self, jac: FloatArray, q: FloatArray | None = None) -> FloatArray:
         """A Jacobian ``(m, model.nv)`` over Pinocchio's velocity as one over ``q``
         ``(m, nq)``: a mimic follower's column summed into its driver's (times its
-        multiplier)."""
+        multiplier); a free flyer's local velocity ``(v, ω)`` as the derivative over its
+        world position ``p`` (``v = Rᵀ ṗ``) and rotation vector ``r`` (``ω = Jr(r) ṙ``), which
+        needs ``q``."""
         jac = np.asarray(jac, dtype=float)
-        if self.model.nv == self.nq and not self.mimic:
+        if self.model.nv == self.nq and not self.mimic and not self.floating_base:
             return jac
         out = np.zeros((jac.shape[0], self.nq))
-        for j in range(1, self.model.njoints):
+        shift = 3 if self.floating_base else 0
+        if shift:
+            if q is None:
+                raise InvalidArgumentError("velocity_to_q needs q for a floating base")
+            r = np.asarray(q, dtype=float)[3:6]
+            out[:, 0:3] = jac[:, 0:3] @ lie.exp3(r).T
+            out[:, 3:6] = jac[:, 3:6] @ lie.jr(r)
+        for j in range(2 if shift else 1, self.model.njoints):
             iv = self.model.joints[j].idx_v
-            out[:, self.tree.q_index[j - 1]] += self.tree.multiplier[j - 1] * jac[:, iv]
+            t = j - 1 + shift
+            out[:, self.tree.q_index[t]] += self.tree.multiplier[t] * jac[:, iv]
         return out
+
+    def full_configuration(self, q: Any) -> FloatArray:
+        """Configuration of :attr:`full_model` (the whole URDF, with its free flyer
+        ``[x y z qx qy qz qw, joints…]`` when floating) for the solved joints at ``q``, the
+        locked and off-path joints at their held values: anyone can check an answer with
+        Pinocchio alone.
+
+        Args:
+            q: Joint vector (rad / m), shape ``(nq,)``.
+
+        Returns:
+            Pinocchio configuration of the full model, shape ``(full_model.nq,)``.
+        """
+        q_red = self.to_pinocchio(self.check_q(q))
+        out = np.array(self.q_locked, dtype=float, copy=True)
+        full = self.full_model
+        for j in range(1, self.model.njoints):
+            jr = self.model.joints[j]
+            jf = full.joints[full.getJointId(self.model.names[j])]
+            out[jf.idx_q : jf.idx_q + jf.nq] = q_red[jr.idx_q : jr.idx_q + jr.nq]
+        return out
+
+    def from_full_configuration(self, q_full: Any) -> FloatArray:
+        """The joint vector ``(nq,)`` of a configuration of :attr:`full_model` (the inverse of
+        :meth:`full_configuration` on the solved joints)."""
+        q_full = np.asarray(q_full, dtype=float).reshape(self.full_model.nq)
+        q_red = np.empty(self.model.nq)
+        full = self.full_model
+        for j in range(1, self.model.njoints):
+            jr = self.model.joints[j]
+            jf = full.joints[full.getJointId(self.model.names[j])]
+            q_red[jr.idx_q : jr.idx_q + jr.nq] = q_full[jf.idx_q : jf.idx_q + jf.nq]
+        return self.from_pinocchio(q_red)
 
     # ----------------------------------------------------------------- limits
     def within_limits(self, q: FloatArray, tol: float = 1e-9) -> bool:
@@ -646,12 +855,25 @@ class RobotModel:
         return q
 
     def random_q(self, rng: np.random.Generator, n: int | None = None) -> FloatArray:
-        """Joint vector(s) drawn uniformly within the limits: ``(nq,)`` or ``(n, nq)``."""
+        """Joint vector(s) drawn uniformly within the limits: ``(nq,)`` or ``(n, nq)``; a
+        floating base's orientation uniform over the rotations (a uniform unit quaternion,
+        as a rotation vector of norm ≤ π)."""
         size = self.nq if n is None else (n, self.nq)
-        return rng.uniform(self.lower, self.upper, size=size)
+        out = rng.uniform(self.lower, self.upper, size=size)
+        if self.floating_base:
+            quat = rng.standard_normal(size=(1 if n is None else n, 4))
+            quat /= np.linalg.norm(quat, axis=1, keepdims=True)
+            quat[quat[:, 3] < 0] *= -1.0  # w >= 0: angle <= π
+            vec = np.linalg.norm(quat[:, :3], axis=1)
+            angle = 2.0 * np.arctan2(vec, quat[:, 3])
+            scale = np.where(vec > 1e-12, angle / np.where(vec > 1e-12, vec, 1.0), 2.0)
+            rot = quat[:, :3] * scale[:, None]
+            out[..., 3:6] = rot[0] if n is None else rot
+        return out
 
     def mid_q(self) -> FloatArray:
-        """The middle of the joint ranges, shape ``(nq,)`` (TRAC-IK's benchmark seed)."""
+        """The middle of the joint ranges, shape ``(nq,)`` (TRAC-IK's benchmark seed; a
+        floating base at the centre of its box, not turned)."""
         return 0.5 * (self.lower + self.upper)
 
     def check_q(self, q: Any, what: str = "q") -> FloatArray:
@@ -710,6 +932,9 @@ def load_robot(
     ee_frame: str | Sequence[str] | None = None,
     *,
     srdf: str | os.PathLike[str] | bool | None = None,
+    floating_base: bool = False,
+    locked: Mapping[str, float] | Sequence[str] | None = None,
+    base_box: Any = 1.0,
 ) -> RobotModel:
     """Load a robot by bundled name, ``example-robot-data`` name, or URDF path.
 
@@ -722,6 +947,21 @@ def load_robot(
             robots, the tip of the deepest chain for a file.
         srdf: SRDF whose ``disable_collisions`` pairs the collision goal skips (default: the
             one next to the URDF, if any; ``False``: none).
+        floating_base: Give the root link a free flyer (a humanoid, a mobile base): six more
+            entries at the head of ``q`` (:data:`FREE_FLYER_ENTRIES`), the position bounded
+            by ``base_box`` around the origin, the orientation free (a rotation vector, no
+            gimbal lock).
+        locked: Joints held out of the problem even on a goal path: a dict name -> value
+            (rad or m, within the joint's limits) or a list of names (held at their neutral
+            value).  The answer keeps them exactly there; mimic followers of a locked joint
+            follow it.
+        base_box: Half-widths [m] of the floating base's box (one number or three).
+
+    Raises:
+        UnknownNameError: a locked joint is not a one-DoF joint of the URDF (they are
+            listed).
+        InvalidArgumentError: a locked value outside its limits or not finite, a bad
+            ``base_box``.
 
     Returns:
         The robot, reduced to the joints between the root and its goal frame(s).
@@ -737,7 +977,10 @@ def load_robot(
         frames, reason = default_frame, "the robot's usual tool frame"
     with warnings.catch_warnings():
         warnings.simplefilter("ignore")
-        robot = RobotModel.from_urdf(path, frames, frame_reason=reason)
+        robot = RobotModel.from_urdf(
+            path, frames, frame_reason=reason, floating_base=floating_base, locked=locked,
+            base_box=base_box,
+        )  # fmt: skip
     if srdf is not None:
         if srdf is not False and (srdf is True or not Path(srdf).is_file()):
             raise RobotFileNotFoundError(f"SRDF file not found: {str(srdf)!r}")

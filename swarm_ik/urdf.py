@@ -380,12 +380,16 @@ def captured_stderr() -> Iterator[list[str]]:
                 lines.extend(line.strip() for line in text.splitlines() if line.strip())
 
 
-def build_model(xml: str, where: str = "URDF") -> tuple[Any, tuple[str, ...]]:
+def build_model(
+    xml: str, where: str = "URDF", floating_base: bool = False
+) -> tuple[Any, tuple[str, ...]]:
     """``pinocchio.buildModelFromXML(xml)`` with urdfdom's stderr captured.
 
     Args:
         xml: URDF text.
         where: Name for messages (the path).
+        floating_base: Root the model on a free flyer (``pinocchio.JointModelFreeFlyer()``,
+            named ``root_joint``).
 
     Returns:
         ``(model, messages)``: the full Pinocchio model (mimic joints as independent joints)
@@ -398,7 +402,10 @@ def build_model(xml: str, where: str = "URDF") -> tuple[Any, tuple[str, ...]]:
     model = None
     with captured_stderr() as lines:
         try:
-            model = pin.buildModelFromXML(xml)
+            if floating_base:
+                model = pin.buildModelFromXML(xml, pin.JointModelFreeFlyer())
+            else:
+                model = pin.buildModelFromXML(xml)
         except Exception as exc:  # Pinocchio raises plain ValueError/RuntimeError
             error = str(exc).strip() or type(exc).__name__
     messages = tuple(lines)
@@ -449,11 +456,12 @@ class UrdfInfo:
         return {k: m.driver for k, m in self.mimic.items()}
 
 
-def load_urdf(path: str | os.PathLike[str]) -> tuple[Any, UrdfInfo]:
+def load_urdf(path: str | os.PathLike[str], floating_base: bool = False) -> tuple[Any, UrdfInfo]:
     """Read, check, repair (in memory) and build a URDF file.
 
     Args:
         path: The URDF file (must exist).
+        floating_base: Root the model on a free flyer (see :func:`build_model`).
 
     Returns:
         ``(full Pinocchio model, UrdfInfo)``.
@@ -480,7 +488,7 @@ def load_urdf(path: str | os.PathLike[str]) -> tuple[Any, UrdfInfo]:
         child = joint.find("child")
         if child is not None:
             child_link[str(joint.get("name"))] = str(child.get("link"))
-    model, messages = build_model(xml, where)
+    model, messages = build_model(xml, where, floating_base)
     return model, UrdfInfo(p, xml, mimic_model, renamed, child_link, messages)
 
 

@@ -147,7 +147,7 @@ class State:
         jac = pin.getFrameJacobian(
             robot.model, self._data, self.frame_id(frame), pin.ReferenceFrame.LOCAL_WORLD_ALIGNED
         )
-        return robot.velocity_to_q(np.array(jac).reshape(6, robot.model.nv))
+        return robot.velocity_to_q(np.array(jac).reshape(6, robot.model.nv), self.q)
 
 
 # --------------------------------------------------------------------------- goals

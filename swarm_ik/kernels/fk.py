@@ -21,11 +21,16 @@ import numba
 import numpy as np
 
 from swarm_ik._types import FloatArray, IntArray
+from swarm_ik.kernels.lie import exp3_nb, jr_nb
 
 REVOLUTE = 0
 PRISMATIC = 1
 CONTINUOUS = 2
-KIND_NAMES = ("revolute", "prismatic", "continuous")
+BALL = 3
+"""A rotation of three joint-vector entries ``r = q[i:i+3]`` (a rotation vector: the joint
+turns by ``exp([r]×)``), the orientation of a floating base; no gimbal lock (``exp`` is
+regular for ``‖r‖ < 2π``, and the bounds keep ``|r_k| ≤ π``)."""
+KIND_NAMES = ("revolute", "prismatic", "continuous", "ball")
 
 
 def rotation_z_to(axis: FloatArray) -> FloatArray:
@@ -48,9 +53,11 @@ class TreeArrays(NamedTuple):
     vector; ``nj >= nq`` the number of joints in the tree (mimic followers included).
 
     Attributes:
-        kind: Joint kind codes (``REVOLUTE``, ``PRISMATIC``, ``CONTINUOUS``), shape ``(nj,)``.
+        kind: Joint kind codes (``REVOLUTE``, ``PRISMATIC``, ``CONTINUOUS``, ``BALL``), shape
+            ``(nj,)``.
         parent: Parent joint index, ``-1`` for a joint on the root, shape ``(nj,)``.
-        q_index: Entry of the joint vector driving each joint, shape ``(nj,)``.
+        q_index: Entry of the joint vector driving each joint (a ``BALL``: the first of its
+            three), shape ``(nj,)``.
         multiplier: Joint value = ``multiplier·q[q_index] + offset``, shape ``(nj,)``.
         offset: See ``multiplier`` (rad or m), shape ``(nj,)``.
         rot_p: Rotation of each joint's placement in its parent joint frame, ``(nj, 3, 3)``.
@@ -193,6 +200,7 @@ class FKScratch(NamedTuple):
         f_rot: World rotation of each frame, ``(nf, 3, 3)``.
         f_pos: World position of each frame [m], ``(nf, 3)``.
         f_jac: LOCAL_WORLD_ALIGNED Jacobian of each frame, ``(nf, 6, nq)``.
+        ball: Scratch of a ``BALL`` joint's rotation, ``(3, 3)``.
     """
 
     j_rot: FloatArray
@@ -200,6 +208,7 @@ class FKScratch(NamedTuple):
     f_rot: FloatArray
     f_pos: FloatArray
     f_jac: FloatArray
+    ball: FloatArray
 
 
 def fk_scratch(tree: TreeArrays) -> FKScratch:
@@ -210,6 +219,7 @@ def fk_scratch(tree: TreeArrays) -> FKScratch:
         np.empty((tree.nf, 3, 3)),
         np.empty((tree.nf, 3)),
         np.empty((tree.nf, 6, tree.nq)),
+        np.empty((3, 3)),
     )
 
 
@@ -264,6 +274,15 @@ def fk_one(
     jp = s.j_pos
     for j in range(nj):
         place(jr, jp, parent[j], rot_p[j], pos_p[j], jr[j], jp[j])
+        if kind[j] == BALL:  # rot <- rot @ exp([r]x)
+            i = q_index[j]
+            m3 = s.ball
+            exp3_nb(q[i], q[i + 1], q[i + 2], m3)
+            for a in range(3):
+                r0, r1, r2 = jr[j, a, 0], jr[j, a, 1], jr[j, a, 2]
+                for b in range(3):
+                    jr[j, a, b] = r0 * m3[0, b] + r1 * m3[1, b] + r2 * m3[2, b]
+            continue
         v = mult[j] * q[q_index[j]] + offset[j]
         if kind[j] == PRISMATIC:
             for a in range(3):
@@ -291,7 +310,31 @@ def fk_one(
                 wx, wy, wz = jr[k, 0, 2], jr[k, 1, 2], jr[k, 2, 2]
                 m = mult[k]
                 col = q_index[k]
-                if kind[k] == PRISMATIC:
+                if kind[k] == BALL:
+                    # world angular velocity R·Jr(r)·ṙ: three columns, each an axis through
+                    # the joint origin
+                    m3 = s.ball
+                    jr_nb(q[col], q[col + 1], q[col + 2], m3)
+                    dx = px - jp[k, 0]
+                    dy = py - jp[k, 1]
+                    dz = pz - jp[k, 2]
+                    for c in range(3):
+                        wx = (
+                            jr[k, 0, 0] * m3[0, c] + jr[k, 0, 1] * m3[1, c] + jr[k, 0, 2] * m3[2, c]
+                        )
+                        wy = (
+                            jr[k, 1, 0] * m3[0, c] + jr[k, 1, 1] * m3[1, c] + jr[k, 1, 2] * m3[2, c]
+                        )
+                        wz = (
+                            jr[k, 2, 0] * m3[0, c] + jr[k, 2, 1] * m3[1, c] + jr[k, 2, 2] * m3[2, c]
+                        )
+                        f_jac[f, 0, col + c] += wy * dz - wz * dy
+                        f_jac[f, 1, col + c] += wz * dx - wx * dz
+                        f_jac[f, 2, col + c] += wx * dy - wy * dx
+                        f_jac[f, 3, col + c] += wx
+                        f_jac[f, 4, col + c] += wy
+                        f_jac[f, 5, col + c] += wz
+                elif kind[k] == PRISMATIC:
                     f_jac[f, 0, col] += m * wx
                     f_jac[f, 1, col] += m * wy
                     f_jac[f, 2, col] += m * wz
@@ -324,6 +367,7 @@ def fk_batch(
         np.empty((nf, 3, 3)),
         np.empty((nf, 3)),
         np.empty((nf, 6, nq)),
+        np.empty((3, 3)),
     )
     for k in range(pop):
         fk_one(q[k], t, s, want_jac)

@@ -1,4 +1,4 @@
-"""Rotation helpers in one place: ``log3``, the rotation angle and ``Jr⁻¹``.
+"""Rotation helpers in one place: ``exp3``, ``log3``, the rotation angle, ``Jr`` and ``Jr⁻¹``.
 
 Each has a compiled twin (``*_nb``, numba, one rotation, no allocation) for the kernels and a
 numpy version for Python code; ``tests/test_lie.py`` checks them against each other and
@@ -105,6 +105,52 @@ def jr_inv_nb(phi: FloatArray, theta: float, out: FloatArray) -> None:  # pragma
     out[2, 2] = 1.0 + k * (pz * pz - n2)
 
 
+@numba.njit(cache=True, inline="always")
+def exp3_coeffs(rx: float, ry: float, rz: float) -> tuple[float, float, float]:  # pragma: no cover
+    """``(sin θ/θ, (1 − cos θ)/θ², (θ − sin θ)/θ³)`` of the rotation vector ``(rx, ry, rz)``
+    (θ its norm), by their Taylor series near 0: the coefficients of ``exp`` and of the right
+    Jacobian ``Jr`` of SO(3) ([LIE] eqs. 77 and 143)."""
+    t2 = rx * rx + ry * ry + rz * rz
+    if t2 < 1e-8:
+        return 1.0 - t2 / 6.0, 0.5 - t2 / 24.0, 1.0 / 6.0 - t2 / 120.0
+    t = math.sqrt(t2)
+    s = math.sin(t)
+    return s / t, (1.0 - math.cos(t)) / t2, (t - s) / (t2 * t)
+
+
+@numba.njit(cache=True, inline="always")
+def exp3_nb(rx: float, ry: float, rz: float, out: FloatArray) -> None:  # pragma: no cover
+    """``out = exp([r]×) = I + a[r]× + b[r]×²`` (3, 3) of the rotation vector ``r``."""
+    a, b, _ = exp3_coeffs(rx, ry, rz)
+    xx, yy, zz = rx * rx, ry * ry, rz * rz
+    out[0, 0] = 1.0 - b * (yy + zz)
+    out[1, 1] = 1.0 - b * (xx + zz)
+    out[2, 2] = 1.0 - b * (xx + yy)
+    out[0, 1] = -a * rz + b * rx * ry
+    out[1, 0] = a * rz + b * rx * ry
+    out[0, 2] = a * ry + b * rx * rz
+    out[2, 0] = -a * ry + b * rx * rz
+    out[1, 2] = -a * rx + b * ry * rz
+    out[2, 1] = a * rx + b * ry * rz
+
+
+@numba.njit(cache=True, inline="always")
+def jr_nb(rx: float, ry: float, rz: float, out: FloatArray) -> None:  # pragma: no cover
+    """``out = Jr(r) = I − b[r]× + c[r]×²`` (3, 3), the right Jacobian of SO(3): the body
+    angular velocity of ``exp([r]×)`` is ``Jr(r)·ṙ`` ([LIE] eq. 143)."""
+    _, b, c = exp3_coeffs(rx, ry, rz)
+    xx, yy, zz = rx * rx, ry * ry, rz * rz
+    out[0, 0] = 1.0 - c * (yy + zz)
+    out[1, 1] = 1.0 - c * (xx + zz)
+    out[2, 2] = 1.0 - c * (xx + yy)
+    out[0, 1] = b * rz + c * rx * ry
+    out[1, 0] = -b * rz + c * rx * ry
+    out[0, 2] = -b * ry + c * rx * rz
+    out[2, 0] = b * ry + c * rx * rz
+    out[1, 2] = b * rx + c * ry * rz
+    out[2, 1] = -b * rx + c * ry * rz
+
+
 # --------------------------------------------------------------------------- numpy twins
 def angle(rot: FloatArray) -> FloatArray:
     """Rotation angles θ ∈ [0, π] of rotations ``(..., 3, 3)`` → ``(...)``, accurate near 0
@@ -172,3 +218,19 @@ def jr_inv(phi: FloatArray) -> FloatArray:
         k = 1.0 / theta**2 - (1.0 + np.cos(theta)) / (2.0 * theta * np.sin(theta))
     sk = np.array([[0.0, -p[2], p[1]], [p[2], 0.0, -p[0]], [-p[1], p[0], 0.0]])
     return np.eye(3) + 0.5 * sk + k * (sk @ sk)
+
+
+def exp3(phi: FloatArray) -> FloatArray:
+    """``exp([φ]×)`` (3, 3) of one rotation vector ``φ`` (3,) (twin of :func:`exp3_nb`)."""
+    p = np.asarray(phi, dtype=float).reshape(3)
+    out = np.empty((3, 3))
+    exp3_nb(float(p[0]), float(p[1]), float(p[2]), out)
+    return out
+
+
+def jr(phi: FloatArray) -> FloatArray:
+    """The right Jacobian ``Jr(φ)`` (3, 3) of SO(3) (twin of :func:`jr_nb`)."""
+    p = np.asarray(phi, dtype=float).reshape(3)
+    out = np.empty((3, 3))
+    jr_nb(float(p[0]), float(p[1]), float(p[2]), out)
+    return out

@@ -401,6 +401,7 @@ def make_work(t: TreeArrays, g: GoalTable, rows: int) -> Work:  # pragma: no cov
             np.empty((nf, 3, 3)),
             np.empty((nf, 3)),
             np.empty((nf, 6, nq)),
+            np.empty((3, 3)),
         ),
         np.zeros(m),
         np.zeros((m, nq)),

@@ -48,22 +48,8 @@ def visual_model(robot: RobotModel) -> Any:
 
 
 def full_configuration(robot: RobotModel, q: Any) -> FloatArray:
-    """Configuration of ``robot.full_model`` with the chain at ``q`` and the other joints at
-    ``robot.q_locked``.
-
-    Args:
-        q: Chain joint vector (rad / m), shape ``(nq,)``.
-
-    Returns:
-        Pinocchio configuration of the full model, shape ``(full_model.nq,)``.
-    """
-    q_red = robot.to_pinocchio(robot.check_q(q))
-    out = np.array(robot.q_locked, dtype=float, copy=True)
-    for j in range(1, robot.model.njoints):
-        jr = robot.model.joints[j]
-        jf = robot.full_model.joints[robot.full_model.getJointId(robot.model.names[j])]
-        out[jf.idx_q : jf.idx_q + jf.nq] = q_red[jr.idx_q : jr.idx_q + jr.nq]
-    return out
+    """Configuration of ``robot.full_model`` for ``q``: :meth:`RobotModel.full_configuration`."""
+    return robot.full_configuration(q)
 
 
 def reach_length(robot: RobotModel) -> float:
