@@ -26,6 +26,7 @@ from swarm_ik._types import FloatArray
 from swarm_ik.errors import InvalidArgumentError, InvalidTargetError, unknown
 from swarm_ik.fitness import FITNESS, get_fitness
 from swarm_ik.goals import AvoidCollisions, Goal, Pose, Position, State, kernel_slot, kernels
+from swarm_ik.goals import base as goals_base
 from swarm_ik.kernels import lm
 from swarm_ik.pose import ORTH_TOL, as_pose, is_finite_nonneg
 from swarm_ik.robot import RobotModel
@@ -296,16 +297,24 @@ class IKProblem:
         """The goals with a compiled kernel, in order (the goal table's entries)."""
         self.python_goals = tuple(gl for gl in terms if not gl.compiled)
         """The goals written in Python (``residual(state)``/``jacobian(state)``)."""
-        extra = [e for gl in self.compiled_goals if (e := gl.extra_frames(robot)) is not None]
-        if len(extra) > 1:
-            raise InvalidArgumentError("at most one goal per problem may add frames")
-        if extra:  # the frames a goal adds (collision bodies) after the goal frames
-            fj, fr, fp = robot.canonical_frames(*extra[0])
-            t = robot.tree
+        self._frame0: dict[int, int] = {}
+        """Index of the first frame each frame-adding goal owns (by position in
+        ``compiled_goals``)."""
+        t = robot.tree
+        joints, rots, poss = [t.frame_joint], [t.frame_rot], [t.frame_pos]
+        for i, gl in enumerate(self.compiled_goals):
+            extra = gl.extra_frames(robot)
+            if extra is None:
+                continue
+            # the frames a goal adds (collision bodies, centres of mass) after the others
+            self._frame0[i] = sum(len(j) for j in joints)
+            fj, fr, fp = robot.canonical_frames(*extra)
+            joints.append(fj)
+            rots.append(fr)
+            poss.append(fp)
+        if self._frame0:
             self.tree = t.with_frames(
-                np.concatenate([t.frame_joint, fj]),
-                np.concatenate([t.frame_rot, fr]),
-                np.concatenate([t.frame_pos, fp]),
+                np.concatenate(joints), np.concatenate(rots), np.concatenate(poss)
             )
         # angular errors in the se3 cost: w_rot (m/rad); position errors: 1
         self._table_cache = {}
@@ -353,7 +362,7 @@ class IKProblem:
         key = None if q0 is None else np.asarray(q0, dtype=float).tobytes()
         tab = self._table_cache.get(key)
         if tab is None:
-            enc = [gl.encode(self.robot, q0) for gl in self.compiled_goals]
+            enc = [self.encode(i, q0) for i in range(len(self.compiled_goals))]
             tab = lm.goal_table(
                 [kernel_slot(type(gl).kernel) for gl in self.compiled_goals],
                 [gl.weight for gl in self.compiled_goals],
@@ -366,6 +375,14 @@ class IKProblem:
                 self._table_cache.clear()
             self._table_cache[key] = tab
         return tab
+
+    def encode(self, i: int, q0: FloatArray | None) -> goals_base.Encoded:
+        """The parameter block of compiled goal ``i`` (a goal that adds frames is told where
+        its frames start: ``encode(robot, q0, frame0)``)."""
+        gl = self.compiled_goals[i]
+        if i in self._frame0:
+            return gl.encode(self.robot, q0, frame0=self._frame0[i])  # type: ignore[call-arg]
+        return gl.encode(self.robot, q0)
 
     def with_target(self, target: Any) -> IKProblem:
         """The same single-pose problem with another target (validated), sharing everything

@@ -39,6 +39,7 @@ from swarm_ik.goals.avoid_collisions import AvoidCollisions
 from swarm_ik.goals.axis import Axis
 from swarm_ik.goals.base import Encoded, Goal, State, kernel_slot, kernels
 from swarm_ik.goals.center_joints import CenterJoints
+from swarm_ik.goals.center_of_mass import CenterOfMass
 from swarm_ik.goals.joint import JointGoal
 from swarm_ik.goals.joint_value import JointValue
 from swarm_ik.goals.look_at import LookAt
@@ -71,7 +72,7 @@ def register_goal(cls: G) -> G:
 
 
 for _cls in (Pose, Position, Orientation, Axis, LookAt, Posture, CenterJoints,
-             MinimalDisplacement, JointValue, AvoidCollisions):  # fmt: skip
+             MinimalDisplacement, JointValue, AvoidCollisions, CenterOfMass):  # fmt: skip
     register_goal(_cls)
 
 MAX_GOALS_FILE = 16 * 2**20
@@ -179,6 +180,7 @@ __all__ = [
     "AvoidCollisions",
     "Axis",
     "CenterJoints",
+    "CenterOfMass",
     "Encoded",
     "Goal",
     "JointGoal",

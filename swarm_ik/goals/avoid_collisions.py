@@ -214,11 +214,15 @@ class AvoidCollisions(Goal):
         sm = self.spheres(robot)
         return sm.body_joint, sm.body_frame_rot, sm.body_frame_pos
 
-    def encode(self, robot: RobotModel, q0: FloatArray | None) -> Encoded:
-        """The sphere model as the goal's parameter block; its bodies are the frames after
-        the robot's goal frames (:meth:`extra_frames`, appended by the problem)."""
+    def encode(
+        self, robot: RobotModel, q0: FloatArray | None, frame0: int | None = None
+    ) -> Encoded:
+        """The sphere model as the goal's parameter block; its bodies are the frames from
+        ``frame0`` on (default: right after the robot's goal frames; :meth:`extra_frames`,
+        appended by the problem)."""
         sm = self.spheres(robot)
-        return pack(sm.arrays, len(robot.frames), float(self.margin), self.max_rows)
+        body0 = len(robot.frames) if frame0 is None else frame0
+        return pack(sm.arrays, body0, float(self.margin), self.max_rows)
 
     def met(self, state: State, tol_pos: float, tol_rot: float) -> tuple[float, float, bool, Any]:
         """The exact check with coal: met only without contact closer than ``margin``."""

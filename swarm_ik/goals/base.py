@@ -262,7 +262,9 @@ class Goal:
 
     def extra_frames(self, robot: RobotModel) -> tuple[Any, Any, Any] | None:
         """Frames the goal needs beyond the robot's goal frames (appended to the problem's
-        tree): ``(joint ids of robot.model, rotations, translations)``, or None."""
+        tree): ``(joint ids of robot.model, rotations, translations)``, or None.  A goal that
+        adds frames takes a third argument ``frame0`` in :meth:`encode`: the index of its
+        first frame in the tree."""
         return None
 
     # ------------------------------------------------------------- every goal

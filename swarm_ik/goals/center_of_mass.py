@@ -1,0 +1,317 @@
+"""``CenterOfMass``: the whole robot's centre of mass at a point, or over a support polygon."""
+
+from __future__ import annotations
+
+import math
+import reprlib
+from dataclasses import dataclass, field
+from typing import TYPE_CHECKING, Any, ClassVar
+
+import numba
+import numpy as np
+import pinocchio as pin
+
+from swarm_ik.errors import InvalidArgumentError
+from swarm_ik.goals.base import Encoded, FloatArray, Goal, State, vec3
+
+if TYPE_CHECKING:
+    from swarm_ik.robot import RobotModel
+
+AXES = {"x": 0, "y": 1, "z": 2}
+
+
+@numba.njit(cache=True, inline="always")
+def _polygon_distance(
+    cx: float, cy: float, vx: FloatArray, vy: FloatArray
+) -> tuple[float, float, float]:  # pragma: no cover - compiled
+    """Signed distance [m] of the point ``(cx, cy)`` to a simple polygon (vertices ``vx``,
+    ``vy``, ``(k,)``): negative inside; and the unit gradient ``(gx, gy)`` of that distance
+    (pointing away from the polygon outside, towards the nearest edge inside)."""
+    k = vx.shape[0]
+    best = np.inf
+    bx = 0.0
+    by = 0.0
+    inside = False
+    for e in range(k):
+        ax, ay = vx[e], vy[e]
+        ex, ey = vx[(e + 1) % k] - ax, vy[(e + 1) % k] - ay
+        t = ((cx - ax) * ex + (cy - ay) * ey) / (ex * ex + ey * ey)
+        t = min(1.0, max(0.0, t))
+        px, py = ax + t * ex, ay + t * ey
+        d2 = (cx - px) * (cx - px) + (cy - py) * (cy - py)
+        if d2 < best:
+            best, bx, by = d2, px, py
+        if (ay > cy) != (ay + ey > cy):  # crossing number (even-odd rule)
+            if cx < ax + (cy - ay) * ex / ey:
+                inside = not inside
+    d = math.sqrt(best)
+    if d < 1e-12:
+        return 0.0, 0.0, 0.0
+    gx, gy = (cx - bx) / d, (cy - by) / d
+    if inside:
+        return -d, -gx, -gy
+    return d, gx, gy
+
+
+@numba.njit(cache=True)
+def center_of_mass_kernel(par, ipar, q, f_pos, f_rot, f_jac, want_jac, res, jac, err, work):  # type: ignore[no-untyped-def]  # pragma: no cover
+    """Rows of the centre of mass ``c = Σ_b μ_b p_b`` (``μ_b = m_b / M``, ``p_b`` the world
+    position of body ``b``'s centre of mass, a frame of the tree); Jacobian ``Σ_b μ_b J_v,b``.
+
+    ``ipar = [nb, frame0, n_axes, has_support, axis ids…]``; ``par = [μ (nb), point (3),
+    margin, vertices x (k), vertices y (k)]``.  Rows: ``p*_a − c_a`` for each axis, then, with a
+    support polygon, ``−max(0, d + margin)`` (``d`` the signed distance of ``(c_x, c_y)`` to
+    the polygon, negative inside) with Jacobian ``∇d · J_c,xy`` while active.
+    """
+    nb, f0, na, has_support = ipar[0], ipar[1], ipar[2], ipar[3]
+    mu = par[0:nb]
+    nq = q.shape[0]
+    c = work[0:3]
+    for a in range(3):
+        s = 0.0
+        for b in range(nb):
+            s += mu[b] * f_pos[f0 + b, a]
+        c[a] = s
+    e2 = 0.0
+    for r in range(na):
+        a = ipar[4 + r]
+        d = par[nb + a] - c[a]
+        res[r] = d
+        e2 += d * d
+        if want_jac:
+            for j in range(nq):
+                s = 0.0
+                for b in range(nb):
+                    s += mu[b] * f_jac[f0 + b, a, j]
+                jac[r, j] = s
+    if has_support == 1:
+        margin = par[nb + 3]
+        k = (par.shape[0] - nb - 4) // 2
+        vx = par[nb + 4 : nb + 4 + k]
+        vy = par[nb + 4 + k : nb + 4 + 2 * k]
+        d, gx, gy = _polygon_distance(c[0], c[1], vx, vy)
+        out = max(0.0, d + margin)
+        res[na] = -out
+        e2 += out * out
+        if want_jac:
+            for j in range(nq):
+                s = 0.0
+                if out > 0.0:
+                    for b in range(nb):
+                        s += mu[b] * (gx * f_jac[f0 + b, 0, j] + gy * f_jac[f0 + b, 1, j])
+                jac[na, j] = s
+    err[0] = math.sqrt(e2)
+    err[1] = np.nan
+
+
+def _segments_cross(p1: FloatArray, p2: FloatArray, p3: FloatArray, p4: FloatArray) -> bool:
+    """Whether the closed segments p1p2 and p3p4 (2-D) intersect."""
+
+    def orient(a: FloatArray, b: FloatArray, c: FloatArray) -> float:
+        return float((b[0] - a[0]) * (c[1] - a[1]) - (b[1] - a[1]) * (c[0] - a[0]))
+
+    def on(a: FloatArray, b: FloatArray, c: FloatArray) -> bool:
+        return bool(min(a[0], b[0]) <= c[0] <= max(a[0], b[0]) and
+                    min(a[1], b[1]) <= c[1] <= max(a[1], b[1]))  # fmt: skip
+
+    d1, d2 = orient(p3, p4, p1), orient(p3, p4, p2)
+    d3, d4 = orient(p1, p2, p3), orient(p1, p2, p4)
+    if ((d1 > 0) != (d2 > 0)) and ((d3 > 0) != (d4 > 0)) and d1 and d2 and d3 and d4:
+        return True
+    return (
+        (d1 == 0 and on(p3, p4, p1))
+        or (d2 == 0 and on(p3, p4, p2))
+        or (d3 == 0 and on(p1, p2, p3))
+        or (d4 == 0 and on(p1, p2, p4))
+    )
+
+
+def support_polygon(value: Any) -> FloatArray:
+    """A support polygon as ``(k, 2)`` world (x, y) vertices [m], validated: at least 3
+    finite vertices, no repeated vertex, not self-intersecting, non-zero area.
+
+    Raises:
+        InvalidArgumentError: naming what is wrong.
+    """
+    try:
+        poly = np.array(value, dtype=float)
+    except (TypeError, ValueError):
+        raise InvalidArgumentError(
+            f"CenterOfMass.support must be (x, y) vertices, got {reprlib.repr(value)}"
+        ) from None
+    if poly.ndim != 2 or poly.shape[1] != 2 or poly.shape[0] < 3:
+        raise InvalidArgumentError(
+            f"CenterOfMass.support must be at least 3 (x, y) vertices, got shape {poly.shape}"
+        )
+    if not np.all(np.isfinite(poly)):
+        raise InvalidArgumentError("CenterOfMass.support vertices must be finite")
+    k = poly.shape[0]
+    for i in range(k):
+        for j in range(i + 1, k):
+            if np.array_equal(poly[i], poly[j]):
+                raise InvalidArgumentError(
+                    f"CenterOfMass.support repeats vertex {poly[i].tolist()}"
+                )
+    area = 0.5 * float(
+        np.sum(poly[:, 0] * np.roll(poly[:, 1], -1) - np.roll(poly[:, 0], -1) * poly[:, 1])
+    )
+    if abs(area) < 1e-12:
+        raise InvalidArgumentError("CenterOfMass.support has zero area")
+    for i in range(k):
+        for j in range(i + 1, k):
+            if j == i + 1 or (i == 0 and j == k - 1):
+                continue  # adjacent edges share a vertex
+            if _segments_cross(poly[i], poly[(i + 1) % k], poly[j], poly[(j + 1) % k]):
+                raise InvalidArgumentError(
+                    f"CenterOfMass.support is self-intersecting (edges {i} and {j})"
+                )
+    return poly
+
+
+def mass_frames(robot: RobotModel) -> tuple[Any, FloatArray, FloatArray, FloatArray]:
+    """The bodies of ``robot.model`` with mass, as frames at their centres of mass:
+    ``(joint ids (nb,), rotations (nb, 3, 3), centres in the joint frames (nb, 3) [m],
+    mass fractions m_b / M (nb,))``.  Locked and off-path links are merged into the body of
+    the joint that carries them (Pinocchio's reduced model), so ``Σ μ_b p_b`` is the whole
+    URDF's centre of mass as ``pinocchio.centerOfMass`` gives it: of the links that joints
+    move (on a fixed base, the links fixed to the world are left out)."""
+    cached = robot._cache.get("mass_frames")
+    if cached is None:
+        model = robot.model
+        # (from joint 1: links fixed to the world are left out, as pinocchio.centerOfMass
+        # leaves them out; a floating base carries every link)
+        ids = [j for j in range(1, model.njoints) if model.inertias[j].mass > 0.0]
+        if not ids:
+            raise InvalidArgumentError(f"{robot.name}: the URDF gives no link masses")
+        mass = np.array([model.inertias[j].mass for j in ids])
+        lever = np.array([np.asarray(model.inertias[j].lever) for j in ids]).reshape(-1, 3)
+        rots = np.repeat(np.eye(3)[None], len(ids), axis=0)
+        cached = robot._cache["mass_frames"] = (np.array(ids), rots, lever, mass / mass.sum())
+    return cached  # type: ignore[no-any-return]
+
+
+@dataclass(frozen=True)
+class CenterOfMass(Goal):
+    """The whole robot's centre of mass ``c = Σ m_b p_b / M`` (masses and centres from the
+    URDF's inertials; as ``pinocchio.centerOfMass``, without links fixed to the world) at a
+    point on the given axes, and/or its ground projection inside a support polygon.
+
+    * ``point``: rows ``r_a = p*_a − c_a`` for each axis of ``axes`` (metres).
+    * ``support``: one inequality row ``r = −max(0, d + margin)``, ``d`` the signed distance
+      [m] of ``(c_x, c_y)`` to the polygon (negative inside): met anywhere at least
+      ``margin`` inside it.
+
+    The Jacobian is ``J_c = Σ_b (m_b / M) J_v,b`` over the bodies' centres (each body a frame
+    of the kernels' tree), checked against ``pinocchio.jacobianCenterOfMass``.
+
+    Args:
+        point: World point [m] (3 numbers), or None.
+        support: Support polygon: ``(k, 2)`` world (x, y) vertices [m], ``k >= 3``, simple
+            (not self-intersecting), either orientation; or None.
+        axes: Axes of ``point`` that count, any of ``"x"``, ``"y"``, ``"z"`` (default
+            ``"xy"``: the ground projection).
+        margin: Wanted distance inside the polygon [m], ``>= 0`` (keyword-only).
+        weight, primary: As :class:`~swarm_ik.goals.Goal` (keyword-only).
+    """
+
+    point: Any = None
+    support: Any = None
+    axes: str = "xy"
+    margin: float = field(default=0.0, kw_only=True)
+    kernel: ClassVar[Any] = center_of_mass_kernel
+
+    def __post_init__(self) -> None:
+        if self.point is None and self.support is None:
+            raise InvalidArgumentError("CenterOfMass needs a point, a support polygon or both")
+        if self.point is not None:
+            object.__setattr__(self, "point", vec3(self.point, "CenterOfMass.point"))
+        if self.support is not None:
+            object.__setattr__(self, "support", support_polygon(self.support))
+        if (
+            not isinstance(self.axes, str)
+            or not self.axes
+            or any(a not in AXES for a in self.axes)
+            or len(set(self.axes)) != len(self.axes)
+        ):
+            raise InvalidArgumentError(
+                f"CenterOfMass.axes must be distinct letters of 'xyz', got {self.axes!r}"
+            )
+        try:
+            m = float(self.margin)
+        except (TypeError, ValueError):
+            m = float("nan")
+        if isinstance(self.margin, (bool, str)) or not (math.isfinite(m) and m >= 0.0):
+            raise InvalidArgumentError(f"CenterOfMass.margin must be >= 0 [m], got {self.margin!r}")
+        object.__setattr__(self, "margin", m)
+        super().__post_init__()
+
+    def describe(self) -> str:
+        return "CenterOfMass"
+
+    def _axis_ids(self) -> list[int]:
+        return [AXES[a] for a in self.axes] if self.point is not None else []
+
+    # ------------------------------------------------------------- compiled form
+    def extra_frames(self, robot: RobotModel) -> tuple[Any, Any, Any] | None:
+        ids, rots, lever, _ = mass_frames(robot)
+        return ids, rots, lever
+
+    def encode(
+        self, robot: RobotModel, q0: FloatArray | None, frame0: int | None = None
+    ) -> Encoded:
+        """The parameter block; the bodies' frames start at ``frame0`` (default: right after
+        the robot's goal frames)."""
+        ids, _, _, mu = mass_frames(robot)
+        axis_ids = self._axis_ids()
+        has_support = self.support is not None
+        ipar = np.array(
+            [len(ids), len(robot.frames) if frame0 is None else frame0, len(axis_ids),
+             int(has_support), *axis_ids],
+            dtype=np.int64,
+        )  # fmt: skip
+        point = np.zeros(3) if self.point is None else self.point
+        poly = np.zeros((0, 2)) if self.support is None else self.support
+        par = np.concatenate([mu, point, [self.margin], poly[:, 0], poly[:, 1]]).astype(float)
+        return Encoded(par, ipar, len(axis_ids) + int(has_support))
+
+    # ------------------------------------------------------------- numpy reference
+    def _com(self, state: State) -> tuple[FloatArray, FloatArray]:
+        robot = state.robot
+        model = robot.model
+        data = model.createData()
+        q_pin = robot.to_pinocchio(state.q)
+        c = np.array(pin.centerOfMass(model, data, q_pin))
+        jac = np.array(pin.jacobianCenterOfMass(model, data, q_pin)).reshape(3, model.nv)
+        return c, robot.velocity_to_q(jac, state.q)
+
+    def _support_row(self, c: FloatArray) -> tuple[float, FloatArray]:
+        poly = np.ascontiguousarray(self.support, dtype=float)
+        d, gx, gy = _polygon_distance(
+            float(c[0]), float(c[1]), poly[:, 0].copy(), poly[:, 1].copy()
+        )
+        return max(0.0, d + self.margin), np.array([gx, gy])
+
+    def residual(self, state: State) -> FloatArray:
+        c, _ = self._com(state)
+        rows = [self.point[a] - c[a] for a in self._axis_ids()]
+        if self.support is not None:
+            rows.append(-self._support_row(c)[0])
+        return np.array(rows, dtype=float)
+
+    def jacobian(self, state: State) -> FloatArray:
+        """``∂r/∂q`` (the derivative of :meth:`residual`: minus the step Jacobian)."""
+        c, jc = self._com(state)
+        rows = [-jc[a] for a in self._axis_ids()]
+        if self.support is not None:
+            out, g = self._support_row(c)
+            rows.append(-(g @ jc[:2]) if out > 0.0 else np.zeros(jc.shape[1]))
+        return np.array(rows, dtype=float).reshape(len(rows), -1)
+
+    def errors(self, state: State) -> tuple[float, float]:
+        return float(np.linalg.norm(self.residual(state))), float("nan")
+
+    def center(self, robot: RobotModel, q: Any) -> FloatArray:
+        """The centre of mass [m] at ``q`` through ``pinocchio.centerOfMass`` on the whole
+        URDF model (:meth:`RobotModel.full_configuration`), shape ``(3,)``."""
+        full = robot.full_model
+        return np.array(pin.centerOfMass(full, full.createData(), robot.full_configuration(q)))
