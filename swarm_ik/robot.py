@@ -157,7 +157,7 @@ def _locked_values(
     out: dict[int, float] = {}
     for name, value in items:
         if not isinstance(name, str) or name not in names:
-            raise unknown("joint to lock", name, names)
+            raise unknown("joint", name, names)
         jid = int(full.getJointId(name))
         jm = full.joints[jid]
         if value is None:
@@ -952,9 +952,9 @@ def load_robot(
             by ``base_box`` around the origin, the orientation free (a rotation vector, no
             gimbal lock).
         locked: Joints held out of the problem even on a goal path: a dict name -> value
-            (rad or m, within the joint's limits) or a list of names (held at their neutral
-            value).  The answer keeps them exactly there; mimic followers of a locked joint
-            follow it.
+            (rad or m, within the joint's limits; None: its neutral value) or a list of
+            names (held at their neutral value).  The answer keeps them exactly there; mimic
+            followers of a locked joint follow it.
         base_box: Half-widths [m] of the floating base's box (one number or three).
 
     Raises:

@@ -165,7 +165,7 @@ def test_locked_list_holds_the_neutral_value() -> None:
 @pytest.mark.parametrize(
     ("kwargs", "error", "words"),
     [
-        ({"locked": {"no_such_joint": 0.0}}, UnknownNameError, "panda_joint1"),
+        ({"locked": {"no_such_joint": 0.0}}, UnknownNameError, "unknown joint .*panda_joint1"),
         ({"locked": {"panda_joint4": 0.5}}, InvalidArgumentError, "outside its limits"),
         ({"locked": {"panda_joint4": float("nan")}}, InvalidArgumentError, "finite"),
         ({"locked": {"panda_joint4": "a"}}, InvalidArgumentError, "finite"),

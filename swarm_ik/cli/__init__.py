@@ -181,6 +181,9 @@ def main(argv: Sequence[str] | None = None) -> int:
             # Dask's start-up chatter (dashboard port taken, sockets) is not the user's concern
             warnings.filterwarnings("ignore", module=r"distributed(\.|$)")
             warnings.filterwarnings("ignore", category=ResourceWarning)
+            # numba's note that first-class functions (the goal kernels' table) are
+            # experimental: a design choice of the package, not the user's concern
+            warnings.filterwarnings("ignore", message="First-class function type feature")
             return _dispatch(args)
     except UsageError as exc:
         return _fail(str(exc), EXIT_BAD_INPUT, as_json, "UsageError")

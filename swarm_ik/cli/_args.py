@@ -141,10 +141,67 @@ def robot_argument(text: str) -> str:
 
 def add_robot(parser: Any, *, frame: bool = True) -> None:
     """``--robot NAME`` (required) and, with ``frame``, ``--frame NAME`` (one end-effector
-    frame; ``swarm-ik solve`` defines its own, repeatable)."""
+    frame; ``swarm-ik solve`` defines its own, repeatable); ``--floating-base``,
+    ``--base-box`` and ``--lock JOINT[=VALUE]`` (:func:`robot_kwargs`)."""
     parser.add_argument("--robot", required=True, type=robot_argument, help=ROBOT_HELP)
     if frame:
         parser.add_argument("--frame", default=None, help=FRAME_HELP)
+    parser.add_argument(
+        "--floating-base",
+        action="store_true",
+        help="give the root link a free flyer (a humanoid, a mobile base): six more joint "
+        "values first (base x y z [m], rotation vector rx ry rz [rad])",
+    )
+    parser.add_argument(
+        "--base-box",
+        type=float,
+        nargs="+",
+        default=[1.0],
+        metavar="M",
+        help="with --floating-base: half-widths [m] of the base's box around the origin, one "
+        "number or three (default 1)",
+    )
+    parser.add_argument(
+        "--lock",
+        action="append",
+        default=[],
+        type=lock_argument,
+        metavar="JOINT[=VALUE]",
+        help="hold a joint at VALUE (rad or m; default its neutral value) even on a goal "
+        "path; repeatable",
+    )
+
+
+def lock_argument(text: str) -> tuple[str, float | None]:
+    """``--lock``'s type: ``JOINT=VALUE`` or ``JOINT`` → ``(name, value or None)``."""
+    name, sep, raw = text.partition("=")
+    if not name.strip():
+        raise argparse.ArgumentTypeError(f"expected JOINT or JOINT=VALUE, got {text!r}")
+    if not sep:
+        return name.strip(), None
+    try:
+        return name.strip(), float(raw)
+    except ValueError:
+        raise argparse.ArgumentTypeError(
+            f"expected JOINT=VALUE with a number (rad or m), got {text!r}"
+        ) from None
+
+
+def robot_kwargs(args: argparse.Namespace) -> dict[str, Any]:
+    """``load_robot`` keywords of :func:`add_robot`'s options."""
+    box = args.base_box
+    if len(box) not in (1, 3):
+        raise InvalidArgumentError(f"--base-box takes one number or three, got {len(box)}")
+    if box != [1.0] and not args.floating_base:
+        raise InvalidArgumentError("--base-box needs --floating-base")
+    out: dict[str, Any] = {"floating_base": bool(args.floating_base), "base_box": box}
+    if args.lock:
+        names = [name for name, _ in args.lock]
+        dup = sorted({n for n in names if names.count(n) > 1})
+        if dup:
+            raise InvalidArgumentError(f"--lock: joint(s) {dup} given more than once")
+        out["locked"] = dict(args.lock)  # (None: the joint's neutral value)
+    return out
 
 
 def add_tolerances(parser: Any) -> None:

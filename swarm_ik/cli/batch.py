@@ -35,6 +35,7 @@ from swarm_ik.cli._args import (
     add_tolerances,
     check_input_file,
     check_output_file,
+    robot_kwargs,
 )
 
 
@@ -105,7 +106,7 @@ def run(args: argparse.Namespace) -> int:
         raise InvalidArgumentError(f"--random must be a positive count, got {args.random}")
     if args.targets is not None:
         check_input_file(args.targets, "--targets", None)
-    robot = swarm_ik.load_robot(args.robot, ee_frame=args.frame)
+    robot = swarm_ik.load_robot(args.robot, ee_frame=args.frame, **robot_kwargs(args))
     if args.targets is not None:
         targets = read_targets_file(args.targets)
         source = str(args.targets)

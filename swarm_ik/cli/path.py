@@ -29,6 +29,7 @@ from swarm_ik.cli._args import (
     add_tolerances,
     check_input_file,
     check_output_file,
+    robot_kwargs,
 )
 
 
@@ -108,7 +109,7 @@ def run(args: argparse.Namespace) -> int:
     if args.html is not None:
         _viewer.check_viewer(args, live=False)
     check_input_file(args.poses, "--poses", None)
-    robot = swarm_ik.load_robot(args.robot, ee_frame=args.frame)
+    robot = swarm_ik.load_robot(args.robot, ee_frame=args.frame, **robot_kwargs(args))
     if args.html is not None:
         _viewer.check_meshes(robot, "--html")
     poses = _read_poses(args.poses)

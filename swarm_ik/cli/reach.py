@@ -23,6 +23,7 @@ from swarm_ik.cli._args import (
     add_scheduler,
     add_tolerances,
     check_output_file,
+    robot_kwargs,
 )
 from swarm_ik.errors import InvalidArgumentError
 
@@ -164,7 +165,7 @@ def run(args: argparse.Namespace) -> int:
             )
         elif args.html is not None:
             raise InvalidArgumentError('--html needs meshcat: pip install "swarm_ik[viz]"')
-    robot = swarm_ik.load_robot(args.robot, ee_frame=args.frame)
+    robot = swarm_ik.load_robot(args.robot, ee_frame=args.frame, **robot_kwargs(args))
     if html is not None:
         _viewer.check_meshes(robot, "reach --html (--no-html skips the page)")
     # the grid's size is checked before anything is allocated; default_bounds with the same

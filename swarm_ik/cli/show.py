@@ -8,7 +8,7 @@ import argparse
 from typing import Any
 
 from swarm_ik.cli import _viewer
-from swarm_ik.cli._args import EXIT_NOT_REACHED, EXIT_OK, add_pose, add_robot
+from swarm_ik.cli._args import EXIT_NOT_REACHED, EXIT_OK, add_pose, add_robot, robot_kwargs
 
 
 def add_parser(subparsers: Any) -> argparse.ArgumentParser:
@@ -82,7 +82,7 @@ def run(args: argparse.Namespace) -> int:
 
     live = bool(args.show or not args.html)
     _viewer.check_viewer(args, live=live)
-    robot = swarm_ik.load_robot(args.robot, ee_frame=args.frame)
+    robot = swarm_ik.load_robot(args.robot, ee_frame=args.frame, **robot_kwargs(args))
     _viewer.check_meshes(robot, "show")
     target = None
     if args.from_q is not None:

@@ -22,6 +22,7 @@ from swarm_ik.cli._args import (
     add_tolerances,
     check_goals_file,
     pose_target,
+    robot_kwargs,
     solve_kwargs,
 )
 from swarm_ik.errors import InvalidArgumentError
@@ -160,7 +161,7 @@ def run(args: argparse.Namespace) -> int:
         check_goals_file(args.goals)
     pose = None if args.pose is None else pose_target(args.pose, args.position_only)
     frames = None if not args.frame else (args.frame[0] if len(args.frame) == 1 else args.frame)
-    robot = swarm_ik.load_robot(args.robot, ee_frame=frames, srdf=args.srdf)
+    robot = swarm_ik.load_robot(args.robot, ee_frame=frames, srdf=args.srdf, **robot_kwargs(args))
     if drawing:
         _viewer.check_meshes(robot, "--html" if args.html else "--show")
     goals = None
@@ -205,6 +206,9 @@ def _print_json(args: argparse.Namespace, robot: Any, res: Any) -> None:
         joint_names=list(robot.joint_names),
         ee_frame=robot.ee_frame,
         frames=list(robot.frames),
+        # the whole URDF's Pinocchio configuration (free flyer first when floating; locked
+        # and off-path joints at their values): checkable with Pinocchio alone
+        full_configuration=robot.full_configuration(res.q).tolist(),
     )
     print(json.dumps(d))
 

@@ -30,6 +30,7 @@ Errors judged against the tolerances: position ``‖p* − p‖`` [m] and angles
 from __future__ import annotations
 
 import math
+import warnings
 from collections.abc import Sequence
 from typing import Any, NamedTuple
 
@@ -73,6 +74,10 @@ GOAL_SIGNATURE = types.void(
 )
 """The signature of every compiled goal kernel (see the module docstring): compile one with
 ``numba.njit(GOAL_SIGNATURE, cache=True)``."""
+
+# numba warns that first-class function types (the goal kernels' table below) are an
+# experimental feature each time it compiles with one; the table is this package's design
+warnings.filterwarnings("ignore", message="First-class function type feature is experimental")
 
 GOAL_KERNEL = types.FunctionType(GOAL_SIGNATURE)
 """The numba type of a goal kernel as the table holds it (a first-class function)."""
