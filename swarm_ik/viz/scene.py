@@ -305,6 +305,53 @@ class Scene:
         t[:3, 3] = np.asarray(position, dtype=float)
         node.set_transform(t)
 
+    def add_point(
+        self,
+        name: str,
+        position: Any,
+        *,
+        radius: float = 0.03,
+        rgba: Sequence[float] = (1, 0, 0, 1),
+    ) -> None:
+        """A ball at a point (e.g. a centre of mass).
+
+        Args:
+            name: Node name inside the scene.
+            position: Its centre [m], shape ``(3,)``.
+            radius: Its radius [m].
+            rgba: Its colour and opacity in ``[0, 1]``.
+        """
+        import meshcat.geometry as mg
+
+        mat = mg.MeshLambertMaterial(
+            color=rgb_int(rgba), opacity=float(rgba[3]), transparent=float(rgba[3]) < 1.0
+        )
+        node = self.node(name)
+        node["shape"].set_object(mg.Sphere(radius), mat)
+        node.set_transform(translation(position))
+
+    def add_polygon(
+        self, name: str, vertices: Any, *, z: float = 0.0, color: int = 0x20A020
+    ) -> None:
+        """A closed polygon outline on the plane at height ``z`` (e.g. a support polygon).
+
+        Args:
+            name: Node name inside the scene.
+            vertices: Its (x, y) vertices [m], shape ``(k, 2)``.
+            z: Height of the plane [m].
+            color: Line colour ``0xRRGGBB``.
+        """
+        import meshcat.geometry as mg
+
+        xy = np.asarray(vertices, dtype=float).reshape(-1, 2)
+        segs = []
+        for a, b in zip(xy, np.roll(xy, -1, axis=0), strict=True):
+            segs += [[a[0], a[1], z], [b[0], b[1], z]]
+        verts = np.asarray(segs, dtype=np.float32).T
+        self.node(name).set_object(
+            mg.LineSegments(mg.PointsGeometry(verts), mg.LineBasicMaterial(color=color))
+        )
+
     def add_floor(self, center_xy: Any, half_size: float) -> None:
         """A grid on the plane z = 0 (the robot's base), replacing meshcat's default grid.
 
