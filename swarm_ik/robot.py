@@ -591,10 +591,14 @@ class RobotModel:
         out_r = np.empty((ids.size, 3, 3))
         out_p = np.empty((ids.size, 3))
         shift = 3 if self.floating_base else 0
+        bases = self._cache.get("bases")
+        if bases is None:  # each joint's rotation taking z onto its axis, made once
+            bases = np.repeat(np.eye(3)[None], self.model.njoints, axis=0)
+            for j in range(1 + (shift > 0), self.model.njoints):  # (world, free flyer: I)
+                bases[j] = rotation_z_to(_joint_kind_axis(self.model.joints[j])[1])
+            self._cache["bases"] = bases
         for k, j in enumerate(ids):
-            jm = self.model.joints[int(j)]
-            plain = j == 0 or (shift and j == 1)  # the world, or a free flyer's BALL (axis z)
-            b = np.eye(3) if plain else rotation_z_to(_joint_kind_axis(jm)[1])
+            b = bases[int(j)]
             out_r[k] = b.T @ np.asarray(rots[k], dtype=float)
             out_p[k] = b.T @ np.asarray(poss[k], dtype=float)
         tree_ids = np.array([_tree_joint(int(j), shift) for j in ids], dtype=np.int64)

@@ -275,14 +275,17 @@ class CenterOfMass(Goal):
         return Encoded(par, ipar, len(axis_ids) + int(has_support))
 
     # ------------------------------------------------------------- numpy reference
-    def _com(self, state: State) -> tuple[FloatArray, FloatArray]:
+    def _com(self, state: State, jacobian: bool = True) -> tuple[FloatArray, FloatArray | None]:
+        """The centre of mass (3,) and, with ``jacobian``, its Jacobian (3, nq) through
+        Pinocchio on the robot's (reduced) model."""
         robot = state.robot
         model = robot.model
-        data = model.createData()
+        data = robot._data()  # (one Data per thread, reused)
         q_pin = robot.to_pinocchio(state.q)
-        c = np.array(pin.centerOfMass(model, data, q_pin))
+        if not jacobian:
+            return np.array(pin.centerOfMass(model, data, q_pin)), None
         jac = np.array(pin.jacobianCenterOfMass(model, data, q_pin)).reshape(3, model.nv)
-        return c, robot.velocity_to_q(jac, state.q)
+        return np.array(data.com[0]), robot.velocity_to_q(jac, state.q)
 
     def _support_row(self, c: FloatArray) -> tuple[float, FloatArray]:
         poly = np.ascontiguousarray(self.support, dtype=float)
@@ -292,7 +295,7 @@ class CenterOfMass(Goal):
         return max(0.0, d + self.margin), np.array([gx, gy])
 
     def residual(self, state: State) -> FloatArray:
-        c, _ = self._com(state)
+        c, _ = self._com(state, jacobian=False)
         rows = [self.point[a] - c[a] for a in self._axis_ids()]
         if self.support is not None:
             rows.append(-self._support_row(c)[0])
@@ -301,6 +304,7 @@ class CenterOfMass(Goal):
     def jacobian(self, state: State) -> FloatArray:
         """``∂r/∂q`` (the derivative of :meth:`residual`: minus the step Jacobian)."""
         c, jc = self._com(state)
+        assert jc is not None
         rows = [-jc[a] for a in self._axis_ids()]
         if self.support is not None:
             out, g = self._support_row(c)
