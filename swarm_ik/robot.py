@@ -594,8 +594,8 @@ class RobotModel:
         bases = self._cache.get("bases")
         if bases is None:  # each joint's rotation taking z onto its axis, made once
             bases = np.repeat(np.eye(3)[None], self.model.njoints, axis=0)
-            for j in range(1 + (shift > 0), self.model.njoints):  # (world, free flyer: I)
-                bases[j] = rotation_z_to(_joint_kind_axis(self.model.joints[j])[1])
+            for jid in range(1 + (shift > 0), self.model.njoints):  # (world, free flyer: I)
+                bases[jid] = rotation_z_to(_joint_kind_axis(self.model.joints[jid])[1])
             self._cache["bases"] = bases
         for k, j in enumerate(ids):
             b = bases[int(j)]

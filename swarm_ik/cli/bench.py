@@ -22,6 +22,7 @@ BENCHMARKS = {
     "goals": "swarm_ik.bench.goals",
     "many": "swarm_ik.bench.many",
     "collision": "swarm_ik.bench.collision",
+    "wholebody": "swarm_ik.bench.wholebody",
 }
 """Benchmark name -> its module."""
 
@@ -32,6 +33,7 @@ MEASURES = {
     "goals": "success on goal sets beyond one pose (two arms, axis, look-at)",
     "many": "distinct IK branches found, against eaik's analytic solutions",
     "collision": "collision-free IK success and time in seeded obstacle scenes",
+    "wholebody": "Talos standing with both hands to poses, against placo and pink",
 }
 """Benchmark name -> what it measures (one line of ``swarm-ik bench --help``)."""
 
