@@ -604,6 +604,31 @@ class RobotModel:
         tree_ids = np.array([_tree_joint(int(j), shift) for j in ids], dtype=np.int64)
         return tree_ids, out_r, out_p
 
+    def mass_frames(self) -> tuple[NDArray[np.int64], FloatArray, FloatArray, FloatArray]:
+        """The bodies of :attr:`model` with mass, as frames at their centres of mass:
+        ``(joint ids (nb,), rotations (nb, 3, 3), centres in the joint frames (nb, 3) [m],
+        mass fractions m_b / M (nb,))``, from the URDF's inertials.  Locked and off-path links
+        are merged into the body of the joint that carries them (Pinocchio's reduced model),
+        so ``Σ μ_b p_b`` is the whole URDF's centre of mass as ``pinocchio.centerOfMass``
+        gives it: of the links that joints move (on a fixed base, the links fixed to the world
+        are left out; a floating base carries every link).
+
+        Raises:
+            RobotModelError: the URDF gives no link masses.
+        """
+        cached = self._cache.get("mass_frames")
+        if cached is None:
+            model = self.model
+            ids = [j for j in range(1, model.njoints) if model.inertias[j].mass > 0.0]
+            if not ids:
+                raise RobotModelError(f"{self.urdf_path}: the URDF gives no link masses")
+            mass = np.array([model.inertias[j].mass for j in ids])
+            lever = np.array([np.asarray(model.inertias[j].lever) for j in ids]).reshape(-1, 3)
+            rots = np.repeat(np.eye(3)[None], len(ids), axis=0)
+            cached = (np.array(ids, dtype=np.int64), rots, lever, mass / mass.sum())
+            self._cache["mass_frames"] = cached
+        return cached  # type: ignore[no-any-return]
+
     def collision_model(self) -> Any:
         """The robot's collision geometry and self-collision pairs
         (:class:`swarm_ik.collision.RobotCollision`; built once, with :attr:`srdf`)."""

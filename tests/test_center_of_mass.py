@@ -167,3 +167,18 @@ def test_json_round_trip() -> None:
 def test_bad_input_refused(kwargs: dict, words: str) -> None:
     with pytest.raises(InvalidArgumentError, match=words):
         CenterOfMass(**kwargs)
+
+
+def test_urdf_without_masses_is_refused(tmp_path) -> None:  # type: ignore[no-untyped-def]
+    links = "".join(f'<link name="l{i}"/>' for i in range(3))
+    joints = "".join(
+        f'<joint name="j{i}" type="revolute"><parent link="l{i}"/><child link="l{i + 1}"/>'
+        f'<origin xyz="0 0 0.3"/><axis xyz="0 1 0"/>'
+        f'<limit lower="-2" upper="2" effort="1" velocity="1"/></joint>'
+        for i in range(2)
+    )
+    path = tmp_path / "massless.urdf"
+    path.write_text(f'<robot name="massless">{links}{joints}</robot>')
+    robot = swarm_ik.load_robot(path, "l2")
+    with pytest.raises(swarm_ik.errors.RobotModelError, match="no link masses"):
+        swarm_ik.IKProblem(robot, goals=[CenterOfMass(point=[0, 0, 0.3])])

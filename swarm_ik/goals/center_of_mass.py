@@ -168,28 +168,6 @@ def support_polygon(value: Any) -> FloatArray:
     return poly
 
 
-def mass_frames(robot: RobotModel) -> tuple[Any, FloatArray, FloatArray, FloatArray]:
-    """The bodies of ``robot.model`` with mass, as frames at their centres of mass:
-    ``(joint ids (nb,), rotations (nb, 3, 3), centres in the joint frames (nb, 3) [m],
-    mass fractions m_b / M (nb,))``.  Locked and off-path links are merged into the body of
-    the joint that carries them (Pinocchio's reduced model), so ``Σ μ_b p_b`` is the whole
-    URDF's centre of mass as ``pinocchio.centerOfMass`` gives it: of the links that joints
-    move (on a fixed base, the links fixed to the world are left out)."""
-    cached = robot._cache.get("mass_frames")
-    if cached is None:
-        model = robot.model
-        # (from joint 1: links fixed to the world are left out, as pinocchio.centerOfMass
-        # leaves them out; a floating base carries every link)
-        ids = [j for j in range(1, model.njoints) if model.inertias[j].mass > 0.0]
-        if not ids:
-            raise InvalidArgumentError(f"{robot.name}: the URDF gives no link masses")
-        mass = np.array([model.inertias[j].mass for j in ids])
-        lever = np.array([np.asarray(model.inertias[j].lever) for j in ids]).reshape(-1, 3)
-        rots = np.repeat(np.eye(3)[None], len(ids), axis=0)
-        cached = robot._cache["mass_frames"] = (np.array(ids), rots, lever, mass / mass.sum())
-    return cached  # type: ignore[no-any-return]
-
-
 @dataclass(frozen=True)
 class CenterOfMass(Goal):
     """The whole robot's centre of mass ``c = Σ m_b p_b / M`` (masses and centres from the
@@ -253,7 +231,7 @@ class CenterOfMass(Goal):
 
     # ------------------------------------------------------------- compiled form
     def extra_frames(self, robot: RobotModel) -> tuple[Any, Any, Any] | None:
-        ids, rots, lever, _ = mass_frames(robot)
+        ids, rots, lever, _ = robot.mass_frames()
         return ids, rots, lever
 
     def encode(
@@ -261,7 +239,7 @@ class CenterOfMass(Goal):
     ) -> Encoded:
         """The parameter block; the bodies' frames start at ``frame0`` (default: right after
         the robot's goal frames)."""
-        ids, _, _, mu = mass_frames(robot)
+        ids, _, _, mu = robot.mass_frames()
         axis_ids = self._axis_ids()
         has_support = self.support is not None
         ipar = np.array(
