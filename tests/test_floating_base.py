@@ -184,3 +184,26 @@ def test_every_joint_locked_is_refused() -> None:
     names = [f"panda_joint{i}" for i in range(1, 8)]
     with pytest.raises(swarm_ik.errors.RobotModelError, match="nothing to solve"):
         swarm_ik.load_robot("panda", locked=names)
+
+
+def test_locked_joint_held_on_every_solve_path() -> None:
+    """IKSolver, a paper solver, solve_many, solve_batch and solve_path: the locked joint is
+    out of q, and every answer's whole-URDF configuration holds it at its value."""
+    from swarm_ik.path import solve_path
+
+    robot = swarm_ik.load_robot("panda", locked={"panda_joint4": -1.2})
+    model = robot.full_model
+    j4 = model.joints[model.getJointId("panda_joint4")].idx_q
+    rng = np.random.default_rng(13)
+    qs = robot.random_q(rng, 4)
+    targets = robot.fk(qs)
+    answers = [swarm_ik.IKSolver(robot).solve(targets[0], seed=0).q]
+    answers.append(swarm_ik.solve(swarm_ik.IKProblem(robot, targets[1]), "pso", seed=0).q)
+    answers += [r.q for r in swarm_ik.solve_many(swarm_ik.IKProblem(robot, targets[2]), 4)]
+    answers += list(swarm_ik.solve_batch(robot, targets, seed=0).q)
+    line = np.array([targets[3]] * 2)
+    line[1, 2, 3] += 0.01
+    answers += list(solve_path(robot, line, q0=qs[3]).q)
+    for q in answers:
+        assert q.shape == (6,)
+        assert robot.full_configuration(q)[j4] == -1.2
