@@ -51,14 +51,36 @@ EXAMPLE_ROBOTS: dict[str, tuple[str, str | tuple[str, ...]]] = {
         ("gripper_left_base_link", "gripper_right_base_link"),
     ),
 }
-"""Arms of the ``example-robot-data`` package: name -> (URDF path under its ``robots/``
-folder, default end-effector frame).  Joints off the root → end-effector chain (grippers)
-are locked at their neutral value."""
+"""Robots of the ``example-robot-data`` package with a curated default: name -> (URDF path
+under its ``robots/`` folder, default end-effector frame(s)).  Joints off the root →
+end-effector chain (grippers) are locked at their neutral value.  Every other URDF of the
+package loads by its file name too (:func:`example_robot_files`), with the default frame
+rule of a file."""
+
+
+def example_robot_files() -> dict[str, str]:
+    """Every URDF of the installed example-robot-data by name: the file's stem with hyphens
+    as underscores (``tiago``, ``romeo``, ``solo12``, ``b1_z1``), the first in path order where
+    two files share a stem; name -> path under its ``robots/`` folder.  Empty when the
+    package is not installed."""
+    try:
+        root = example_robot_data_dir()
+    except RobotFileNotFoundError:
+        return {}
+    out: dict[str, str] = {}
+    for p in sorted(root.rglob("*.urdf")):
+        out.setdefault(p.stem.replace("-", "_"), p.relative_to(root).as_posix())
+    return out
 
 
 def robot_names() -> dict[str, list[str]]:
-    """Robots loadable by name: ``{"bundled": [...], "example-robot-data": [...]}``."""
-    return {"bundled": sorted(BUNDLED), "example-robot-data": sorted(EXAMPLE_ROBOTS)}
+    """Robots loadable by name: ``{"bundled": [...], "example-robot-data": [...]}`` (the
+    curated :data:`EXAMPLE_ROBOTS`, with their usual tool frames, and every other URDF of the
+    package, :func:`example_robot_files`)."""
+    return {
+        "bundled": sorted(BUNDLED),
+        "example-robot-data": sorted(set(EXAMPLE_ROBOTS) | set(example_robot_files())),
+    }
 
 
 def _joint_kind_axis(jmodel: Any) -> tuple[int, FloatArray]:
@@ -953,7 +975,10 @@ def resolve_robot_path(
     p = Path(s)
     if p.suffix.lower() in (".urdf", ".xml") or p.exists() or os.sep in s:
         return p, None
-    raise unknown("robot", s, [*BUNDLED, *EXAMPLE_ROBOTS])
+    files = example_robot_files()
+    if s in files:
+        return example_robot_data_dir() / files[s], None
+    raise unknown("robot", s, [*BUNDLED, *EXAMPLE_ROBOTS, *files])
 
 
 def load_robot(

@@ -19,7 +19,7 @@ def add_parser(subparsers: Any) -> argparse.ArgumentParser:
 
 def run(args: argparse.Namespace) -> int:
     """Print the robot names; returns 0."""
-    from swarm_ik.robot import BUNDLED, EXAMPLE_ROBOTS
+    from swarm_ik.robot import BUNDLED, EXAMPLE_ROBOTS, example_robot_files
 
     print("bundled (robots/):")
     for name, (fname, frame) in sorted(BUNDLED.items()):
@@ -28,4 +28,10 @@ def run(args: argparse.Namespace) -> int:
     for name, (rel, frames) in sorted(EXAMPLE_ROBOTS.items()):
         shown = frames if isinstance(frames, str) else ", ".join(frames)
         print(f"  {name:28s} {rel}  (goal frames: {shown})")
+    others = {k: v for k, v in example_robot_files().items() if k not in EXAMPLE_ROBOTS}
+    if others:
+        print("example-robot-data, any other file by name (goal frame: the tip of the deepest")
+        print("chain unless --frame; legged robots and humanoids: add --floating-base):")
+        for name, rel in sorted(others.items()):
+            print(f"  {name:28s} {rel}")
     return 0
