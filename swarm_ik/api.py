@@ -58,6 +58,18 @@ def verify(
     return problem.verify(q, tol_pos, tol_rot)
 
 
+def _slack(goal: Any) -> tuple[float, float]:
+    """How far a bounded goal's region reaches from its point [m] and rotation [rad]: a
+    ``Pose.tolerance`` box's half-diagonal and the norm of its rotation bounds (at most π), a
+    ``Position.radius``; ``(0, 0)`` for an exact goal."""
+    tol = getattr(goal, "tolerance", None) if isinstance(goal, Pose) else None
+    if tol is not None:
+        t = np.asarray(tol, dtype=float)
+        return float(np.linalg.norm(t[:3])), min(float(np.linalg.norm(t[3:])), float(np.pi))
+    radius = getattr(goal, "radius", None) if isinstance(goal, Position) else None
+    return (0.0 if radius is None else float(radius)), 0.0
+
+
 def unreachable_goal(problem: IKProblem) -> str | None:
     """A primary goal point beyond its frame's reach (:meth:`RobotModel.reach_radius`), or
     inside an obstacle of a collision goal, if any: no joint vector can meet it.  Returns its
@@ -72,8 +84,12 @@ def unreachable_goal(problem: IKProblem) -> str | None:
             point = gl.point
         else:
             continue
-        if float(np.linalg.norm(point)) > problem.robot.reach_radius(gl.frame) * (1 + 1e-9):
+        slack = _slack(gl)[0]  # (a bounded goal's region reaches this much nearer)
+        far = float(np.linalg.norm(point)) - slack
+        if far > problem.robot.reach_radius(gl.frame) * (1 + 1e-9):
             return gl.describe()
+        if slack > 0.0:
+            continue  # (a region, not a point: it may reach out of an obstacle)
         for av in avoid:  # a goal point inside an obstacle: the robot would be in contact
             inside = av.obstacle_containing(point)
             if inside is not None:
@@ -100,14 +116,15 @@ def conflicting_goals(problem: IKProblem, tol_pos: float, tol_rot: float) -> str
     for items in points.values():
         for i, (a, pa) in enumerate(items):
             for b, pb in items[i + 1 :]:
-                if float(np.linalg.norm(pa - pb)) > 2 * tol_pos:
+                slack = _slack(a)[0] + _slack(b)[0]
+                if float(np.linalg.norm(pa - pb)) > 2 * tol_pos + slack:
                     return f"{a.describe()} and {b.describe()}"
     from swarm_ik.kernels.lie import angle
 
     for items in rots.values():
         for i, (a, ra) in enumerate(items):
             for b, rb in items[i + 1 :]:
-                if float(angle(ra.T @ rb)) > 2 * tol_rot:
+                if float(angle(ra.T @ rb)) > 2 * tol_rot + _slack(a)[1] + _slack(b)[1]:
                     return f"{a.describe()} and {b.describe()}"
     return None
 
@@ -304,7 +321,7 @@ class Route:
         for i, (gl, old) in enumerate(zip(goals, bound, strict=True)):
             if gl is old and not getattr(gl, "uses_start", False):
                 continue
-            if type(gl) is not type(old):
+            if type(gl) is not type(old) or _form(gl) != _form(old):
                 raise InvalidArgumentError(
                     "a route runs problems of the goal types it was made for"
                 )
@@ -492,11 +509,17 @@ def solve(
     return route.run(problem, q0, seed, on_improvement)
 
 
+def _form(goal: Any) -> tuple[bool, bool]:
+    """Which form of its type a goal is (a bounded ``Pose`` or ``Position`` encodes other rows
+    and flags than an exact one): part of a route's key, as a route rebinds only the floats."""
+    return getattr(goal, "tolerance", None) is None, getattr(goal, "radius", None) is None
+
+
 def _route_key(problem: IKProblem, solver: str, settings: dict[str, Any]) -> Any:
     """What a route bound to another problem must share with ``problem`` to run it (the
     solver, every setting, the goal types, frames, weights and priorities, the bounds and the
     tree), or None when a setting cannot be a key (then a route is made for this call)."""
-    goals = tuple((type(g), g.frame_name(), g.weight, g.primary) for g in problem.goals)
+    goals = tuple((type(g), g.frame_name(), g.weight, g.primary, _form(g)) for g in problem.goals)
     key = (
         solver, tuple(sorted((k, v) for k, v in settings.items() if k != "params")),
         tuple(sorted(settings["params"].items())), goals, problem.fitness_name, problem.w_rot,

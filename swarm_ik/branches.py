@@ -215,6 +215,8 @@ def pose_errors_of(m: FloatArray, goal: Any) -> tuple[FloatArray, FloatArray]:
     operations per row), so that a :class:`Result`'s errors equal :func:`swarm_ik.verify`'s.
     """
     k = m.shape[0]
+    if getattr(goal, "tolerance", None) is not None or getattr(goal, "radius", None) is not None:
+        return goal.pose_errors(m)  # type: ignore[no-any-return]  # (the bounded forms' own)
     if not hasattr(goal, "target"):  # a Position goal
         d = m[:, :3, 3] - goal.point
         return np.array([math.sqrt(x.dot(x)) for x in d]), np.zeros(k)

@@ -265,7 +265,7 @@ def test_weight_and_primary_are_keyword_only_fields_of_every_goal() -> None:
         with pytest.raises(TypeError):
             positional_weight()  # type: ignore[misc]
     assert list(G.goal_to_dict(G.Pose(f, pose))) == [
-        "type", "frame", "target", "weight", "primary", "orth_tol",
+        "type", "frame", "target", "weight", "primary", "orth_tol", "tolerance",
     ]  # fmt: skip
     axis = G.Axis(f, [0, 0, 2], [0, 0, -1], weight=2.0, primary=False)
     assert (axis.weight, axis.primary) == (2.0, False)

@@ -1,5 +1,6 @@
 """Compiled residual rows shared by the goal kernels of :mod:`swarm_ik.goals`: a frame origin
-at a point, a frame at an orientation, a frame axis along a direction.
+at a point, a frame at an orientation, a frame axis along a direction, and the bounded forms (a
+frame within a box and rotation bounds of its target, an origin within a ball).
 
 Each writes unweighted rows ``r`` with ``r(q + δ) ≈ r − J δ`` and their step Jacobian ``J``
 from the FK buffers of :func:`swarm_ik.kernels.fk.fk_one` (``J_v``, ``J_ω``: the
@@ -12,7 +13,24 @@ position        3     ``p* − p``                      ``J_v``
 rotation        3     ``log(R* Rᵀ)``                  ``Jr⁻¹(φ) J_ω`` ([LIE] eq. 144)
 direction       3     ``d − u``, ``u = R a``          ``J_ω × u`` (+ ``(I − ddᵀ) J_v / L`` when
                                                       ``d`` points at a point at distance ``L``)
+box position    3     ``dz(e, t)``,                   ``R*ᵀ J_v`` (every row)
+                      ``e = R*ᵀ(p − p*)``
+box rotation    3     ``dz(φ, t)``,                   ``Jr⁻¹(φ) Rᵀ J_ω`` (zero on a free axis,
+                      ``φ = log(R*ᵀ R)``              ``t = π``)
+ball            3     ``−max(0, ‖d‖ − ρ)·u``,         ``[(1 − ρ/‖d‖)(I − uuᵀ) + uuᵀ] J_v``
+                      ``d = p − p*``, ``u = d/‖d‖``   outside, ``uuᵀ J_v`` inside
 ==============  ====  ==============================  ========================================
+
+``dz(e, t) = −sign(e)·max(0, |e| − t)`` (per row) is a dead zone: zero within the bounds,
+continuous at them; the errors of the bounded rows are the norms of the parts beyond the
+bounds.  Their step Jacobian is kept inside the bounds (the derivative of the offset, not of
+the zero residual, as TRAC-IK's bounds keep the Jacobian): a row at rest then holds its offset
+to first order, where a zero row would let the goal's other rows push it out again, and the
+Jacobian is continuous at the bounds.  Measured on Panda, UR5 and xArm7 (100–200 random
+targets, one random start each, the LM alone): with zero rows inside, a box of 1 cm / 0.05 rad
+converged from 2.4–3.4× fewer starts than the exact pose (1.4× for 5 cm / 0.3 rad), and the
+one-row ball ``−max(0, ‖d‖ − ρ)`` from 2–3× fewer than the exact point; in the form above both
+converge from as many starts as the exact goals, or more.
 """
 
 from __future__ import annotations
@@ -140,3 +158,141 @@ def direction_rows(
     cy = uz * dx - ux * dz
     cz = ux * dy - uy * dx
     return math.atan2(math.sqrt(cx * cx + cy * cy + cz * cz), ux * dx + uy * dy + uz * dz)
+
+
+@numba.njit(cache=True, inline="always")
+def dead_zone(e: float, t: float) -> float:  # pragma: no cover - compiled
+    """``−sign(e)·max(0, |e| − t)``: zero for ``|e| ≤ t``, ``−e ± t`` beyond (continuous)."""
+    if e > t:
+        return t - e
+    if e < -t:
+        return -t - e
+    return 0.0
+
+
+@numba.njit(cache=True, inline="always")
+def box_position_rows(
+    rot: FloatArray,
+    point: FloatArray,
+    half: FloatArray,
+    f: int,
+    f_pos: FloatArray,
+    f_jac: FloatArray,
+    want_jac: bool,
+    res: FloatArray,
+    jac: FloatArray,
+) -> float:  # pragma: no cover - compiled
+    """Rows of frame ``f``'s origin in a box of the target frame: ``e = R*ᵀ(p − p*)``
+    (``rot``: ``R*`` row-major (9,), ``point``: ``p*`` (3,)), row ``i`` the dead zone
+    ``dz(e_i, half_i)``, step Jacobian ``R*ᵀ J_v`` on every row (inside the box too: a row at
+    rest holds its offset to first order, so the other rows' steps do not push it out).
+    Returns the norm of the rows: the distance beyond the box [m]."""
+    dx = f_pos[f, 0] - point[0]
+    dy = f_pos[f, 1] - point[1]
+    dz = f_pos[f, 2] - point[2]
+    out = 0.0
+    for i in range(3):
+        c0, c1, c2 = rot[i], rot[3 + i], rot[6 + i]
+        r = dead_zone(c0 * dx + c1 * dy + c2 * dz, half[i])
+        res[i] = r
+        out += r * r
+        if want_jac:
+            for j in range(jac.shape[1]):
+                jac[i, j] = c0 * f_jac[f, 0, j] + c1 * f_jac[f, 1, j] + c2 * f_jac[f, 2, j]
+    return math.sqrt(out)
+
+
+@numba.njit(cache=True, inline="always")
+def box_rotation_rows(
+    rot: FloatArray,
+    bounds: FloatArray,
+    f: int,
+    f_rot: FloatArray,
+    f_jac: FloatArray,
+    want_jac: bool,
+    res: FloatArray,
+    jac: FloatArray,
+    work: FloatArray,
+) -> float:  # pragma: no cover - compiled
+    """Rows of frame ``f``'s rotation in bounds of the target frame: ``φ = log(R*ᵀ R)``
+    (``rot``: ``R*`` row-major (9,)), row ``i`` the dead zone ``dz(φ_i, bounds_i)``, step
+    Jacobian ``Jr⁻¹(φ) Rᵀ J_ω`` on every row whose bound is below π (inside the bounds too, as
+    :func:`box_position_rows`), zero on a free axis (bound π: ``|φ_i| <= π`` always).
+    Returns the norm of the rows: the angle beyond the bounds [rad].  ``work``: scratch of at
+    least 21 entries."""
+    m3 = work[0:9].reshape((3, 3))
+    v3 = work[9:12]
+    for a in range(3):
+        for b in range(3):
+            m3[a, b] = (
+                rot[a] * f_rot[f, 0, b] + rot[3 + a] * f_rot[f, 1, b] + rot[6 + a] * f_rot[f, 2, b]
+            )
+    theta = log3_nb(m3, v3)
+    out = 0.0
+    for i in range(3):
+        r = dead_zone(v3[i], bounds[i])
+        res[i] = r
+        out += r * r
+    if want_jac:
+        jr_inv_nb(v3, theta, m3)
+        a3 = work[12:21].reshape((3, 3))  # Jr⁻¹(φ) Rᵀ
+        for a in range(3):
+            for b in range(3):
+                a3[a, b] = (
+                    m3[a, 0] * f_rot[f, b, 0]
+                    + m3[a, 1] * f_rot[f, b, 1]
+                    + m3[a, 2] * f_rot[f, b, 2]
+                )
+        for i in range(3):
+            if bounds[i] >= math.pi:
+                for j in range(jac.shape[1]):
+                    jac[i, j] = 0.0
+            else:
+                c0, c1, c2 = a3[i, 0], a3[i, 1], a3[i, 2]
+                for j in range(jac.shape[1]):
+                    jac[i, j] = c0 * f_jac[f, 3, j] + c1 * f_jac[f, 4, j] + c2 * f_jac[f, 5, j]
+    return math.sqrt(out)
+
+
+@numba.njit(cache=True, inline="always")
+def ball_rows(
+    point: FloatArray,
+    radius: float,
+    f: int,
+    f_pos: FloatArray,
+    f_jac: FloatArray,
+    want_jac: bool,
+    res: FloatArray,
+    jac: FloatArray,
+) -> float:  # pragma: no cover - compiled
+    """Rows ``−max(0, ‖d‖ − ρ)·u`` of frame ``f``'s origin and the ball of radius ``ρ`` about
+    ``point`` (``d = p − p*``, ``u = d/‖d‖``): the offset from the origin to the ball's nearest
+    point, zero inside.  Step Jacobian ``[(1 − ρ/‖d‖)(I − uuᵀ) + uuᵀ] J_v`` outside, ``uuᵀ J_v``
+    inside (continuous at the sphere; zero at ``d ≈ 0``).  ``ρ = 0`` gives the rows of
+    :func:`position_rows`.  Returns the distance beyond the ball [m]."""
+    dx = f_pos[f, 0] - point[0]
+    dy = f_pos[f, 1] - point[1]
+    dz = f_pos[f, 2] - point[2]
+    d = math.sqrt(dx * dx + dy * dy + dz * dz)
+    out = max(d - radius, 0.0)
+    ux, uy, uz = 0.0, 0.0, 0.0
+    if d > 1e-12:
+        ux, uy, uz = dx / d, dy / d, dz / d
+    res[0] = -out * ux
+    res[1] = -out * uy
+    res[2] = -out * uz
+    if want_jac:
+        s = 0.0  # 1 − ρ/‖d‖ outside, 0 inside (1 for ρ = 0: the point's rows at d = 0 too)
+        if out > 0.0:
+            s = out / d
+        elif radius == 0.0:
+            s = 1.0
+        # M = s·I + (1 − s)·uuᵀ
+        m00, m11, m22 = s + (1.0 - s) * ux * ux, s + (1.0 - s) * uy * uy, s + (1.0 - s) * uz * uz
+        m01, m02, m12 = (1.0 - s) * ux * uy, (1.0 - s) * ux * uz, (1.0 - s) * uy * uz
+        for j in range(jac.shape[1]):
+            vx, vy, vz = f_jac[f, 0, j], f_jac[f, 1, j], f_jac[f, 2, j]
+            jac[0, j] = m00 * vx + m01 * vy + m02 * vz
+            jac[1, j] = m01 * vx + m11 * vy + m12 * vz
+            jac[2, j] = m02 * vx + m12 * vy + m22 * vz
+    return out
