@@ -70,6 +70,12 @@ def _slack(goal: Any) -> tuple[float, float]:
     return (0.0 if radius is None else float(radius)), 0.0
 
 
+UNREACHABLE_BUDGET = (0.05, 3000)
+"""``(seconds, evaluations)`` a solve spends at most on a problem :func:`unreachable_goal`
+proves unreachable, whatever budget it was given: the best point found is still returned
+(``reason="unreachable"``), and ``time_limit=1e9`` on a target beyond reach returns at once."""
+
+
 def unreachable_goal(problem: IKProblem) -> str | None:
     """A primary goal point beyond its frame's reach (:meth:`RobotModel.reach_radius`), or
     inside an obstacle of a collision goal, if any: no joint vector can meet it.  Returns its
@@ -358,6 +364,13 @@ class Route:
         q_start = prepare_q0(problem, q0)
         warm_up(self)
         seed_val = None if isinstance(seed, np.random.Generator) else (0 if seed is None else seed)
+        max_evals, time_limit = self.max_evals, self.time_limit
+        cap_s, cap_evals = UNREACHABLE_BUDGET
+        if ((time_limit or 0.0) > cap_s or (max_evals or 0) > cap_evals) and unreachable_goal(
+            problem
+        ) is not None:  # proven unreachable: a large budget would buy nothing
+            time_limit = cap_s if time_limit is None else min(time_limit, cap_s)
+            max_evals = cap_evals if max_evals is None else min(max_evals, cap_evals)
         # an integer seed keys the compiled search itself (one SplitMix64 step); a Generator
         # gives its first draw
         key = None if seed_val is None else search.key_of_seed(seed_val)
@@ -369,10 +382,7 @@ class Route:
                 self._rebind(problem, q_start)
                 t0 = time.perf_counter()
                 out = self._search(
-                    np.ascontiguousarray(seed_q, dtype=float),
-                    key,
-                    self.max_evals,
-                    self.time_limit,
+                    np.ascontiguousarray(seed_q, dtype=float), key, max_evals, time_limit
                 )
                 elapsed = time.perf_counter() - t0
             q, fit, n_evals, history = out.q, out.fitness, out.used, out.history
@@ -385,8 +395,8 @@ class Route:
                 return problem.is_success(q, tol_pos, tol_rot)
 
             ev = base.Evaluator(
-                problem.fitness, problem.lower, problem.upper, max_evals=self.max_evals,
-                time_limit=self.time_limit, problem=problem, q0=q_start,
+                problem.fitness, problem.lower, problem.upper, max_evals=max_evals,
+                time_limit=time_limit, problem=problem, q0=q_start,
                 stop=stop if self.stop_on_success else None, tolerance=(tol_pos, tol_rot),
                 on_improvement=on_improvement, key=key,
             )  # fmt: skip

@@ -244,8 +244,11 @@ class IKProblem:
             self.target = None if first is None else first.target
         if not isinstance(fitness, str) or fitness not in FITNESS:
             raise unknown("fitness", fitness, FITNESS)
-        self.single_pose = len(terms) == 1 and isinstance(terms[0], (Pose, Position))
-        if fitness != "se3" and not (len(terms) == 1 and isinstance(terms[0], Pose)):
+        exact = getattr(terms[0], "tolerance", None) is None and (
+            getattr(terms[0], "radius", None) is None
+        )  # (a bounded Pose or Position is no single-pose target: its bounds must count)
+        self.single_pose = len(terms) == 1 and isinstance(terms[0], (Pose, Position)) and exact
+        if fitness != "se3" and not (len(terms) == 1 and isinstance(terms[0], Pose) and exact):
             raise InvalidArgumentError(
                 f"fitness {fitness!r} is a paper's single-pose form; goal sets use 'se3'"
             )

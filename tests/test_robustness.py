@@ -1106,3 +1106,23 @@ def test_problem_refuses_bad_fitness_weights(kwargs: dict, name: str) -> None:
         errors.InvalidArgumentError, match=rf"^{name} must be a finite non-negative"
     ):
         IKProblem(robot, robot.fk(robot.mid_q()), **kwargs)
+
+
+@pytest.mark.parametrize("solver", ["swarm", "pso"])
+def test_target_beyond_reach_returns_at_once_whatever_the_budget(solver: str) -> None:
+    """A target proven out of reach costs at most api.UNREACHABLE_BUDGET, not time_limit."""
+    from swarm_ik.api import UNREACHABLE_BUDGET
+
+    robot = swarm_ik.load_robot("panda")
+    target = np.eye(4)
+    target[:3, 3] = [5.0, 0.0, 0.3]
+    problem = IKProblem(robot, target)
+    swarm_ik.solve(problem, solver, time_limit=0.01)  # (compiled before the clock)
+    t0 = time.perf_counter()
+    res = swarm_ik.solve(problem, solver, time_limit=1e9, max_evals=10**12)
+    assert time.perf_counter() - t0 < 10 * UNREACHABLE_BUDGET[0] + 1.0
+    assert not res.success and res.reason == "unreachable"
+    t0 = time.perf_counter()
+    res = swarm_ik.IKSolver(robot, time_limit=1e9).solve(target)
+    assert time.perf_counter() - t0 < 10 * UNREACHABLE_BUDGET[0] + 1.0
+    assert res.reason == "unreachable"
