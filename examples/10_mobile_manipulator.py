@@ -1,0 +1,103 @@
+"""A mobile manipulator: TIAGo's tool to a pose 1.9 m away, out of its arm's reach, by driving
+its base there.
+
+TIAGo (``tiago_no_hand.urdf`` of example-robot-data, loaded by its name: a wheeled base, a
+prismatic torso lift, a 7-joint arm) is loaded twice.  With its base fixed to the world (8
+joints: the lift and the arm) the target is out of reach: the solve fails and returns the
+closest pose it found.  With ``floating_base=True`` (six more entries at the head of ``q``:
+the base position, then its rotation vector) and ``base_footprint`` as a second goal frame, a
+:class:`swarm_ik.goals.Pose` with per-axis bounds keeps the base on the floor (x and y free
+within the base box, z = 0, upright, any heading: ``tolerance=(B, B, 0, 0, 0, π)``) and the
+solve succeeds, the base driven towards the target.  The torso lift is left free (the solver
+may raise the arm).  The answer is drawn in meshcat with the fixed-base attempt ghosted
+(``--html FILE`` writes a self-contained page instead of serving it; needs
+``pip install swarm_ik[viz]``; without the extra the viewer is skipped with a note).
+
+Run: ``python examples/10_mobile_manipulator.py [--html FILE]``.
+"""
+
+from __future__ import annotations
+
+import argparse
+import os
+import tempfile
+from pathlib import Path
+
+import numpy as np
+
+import swarm_ik
+from swarm_ik.goals import Pose
+
+QUICK = os.environ.get("SWARM_IK_QUICK") == "1"
+ROBOT = "tiago_no_hand"  # example-robot-data's tiago_description/robots/tiago_no_hand.urdf
+TOOL, BASE = "arm_tool_link", "base_footprint"  # base_footprint: the root link, on the floor
+BOX = 3.0
+"""Half-width [m] of the square the base may drive in (``base_box``)."""
+
+
+def main() -> None:
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--html", type=Path, default=None, help="write the scene to FILE")
+    args = parser.parse_args()
+    # a shelf 1.8 m ahead, 0.6 m to the left, 0.75 m high; the tool's x axis (its approach
+    # direction) pointing forward, level
+    target = np.eye(4)
+    target[:3, 3] = [1.8, 0.6, 0.75]
+    budget = 0.05 if QUICK else 0.5
+
+    arm = swarm_ik.load_robot(ROBOT, TOOL)
+    print(f"fixed base: {arm.nq} joints {list(arm.joint_names)}")
+    fixed = swarm_ik.solve(swarm_ik.IKProblem(arm, target), seed=0, time_limit=budget)
+    print(f"  success={fixed.success} ({fixed.reason}) in {1e3 * fixed.time_s:.1f} ms: the "
+          f"closest pose found is {fixed.position_error:.2f} m from the target")  # fmt: skip
+
+    robot = swarm_ik.load_robot(ROBOT, [TOOL, BASE], floating_base=True, base_box=BOX)
+    print(f"floating base: {robot.nq} entries in q, the base's 6 then the same {arm.nq} joints")
+    on_floor = Pose(BASE, np.eye(4), tolerance=(BOX, BOX, 0.0, 0.0, 0.0, np.pi))
+    problem = swarm_ik.IKProblem(robot, goals=[Pose(TOOL, target), on_floor])
+    result = swarm_ik.solve(problem, seed=0, time_limit=budget)
+    print(f"  success={result.success} ({result.reason}) in {1e3 * result.time_s:.2f} ms")
+    for e in result.goal_errors:
+        print(f"    {e.goal}: {e.position_error:.1e} m, {e.rotation_error:.1e} rad")
+    base = robot.fk(result.q, BASE)
+    heading = np.degrees(np.arctan2(base[1, 0], base[0, 0]))
+    print(f"  base driven to x = {base[0, 3]:.2f} m, y = {base[1, 3]:.2f} m (z = "
+          f"{base[2, 3]:.1e} m, tilt {np.degrees(np.arccos(min(1.0, base[2, 2]))):.1e} deg), "
+          f"heading {heading:.0f} deg; torso lift {result.q[6]:.3f} m")  # fmt: skip
+    # the fixed-base attempt, as the mobile robot standing at the origin
+    q_fixed = np.concatenate([np.zeros(6), fixed.q])
+    draw(robot, result.q, q_fixed, target, args.html)
+
+
+def draw(robot: swarm_ik.RobotModel, q: np.ndarray, q_fixed: np.ndarray, target: np.ndarray,
+         html: Path | None) -> None:  # fmt: skip
+    """The robot at ``q``, the fixed-base attempt ghosted, a triad at the target and one at
+    the tool, seen from the side: served live, or written to ``html``."""
+    try:
+        from swarm_ik import viz
+
+        scene = viz.Scene()
+    except swarm_ik.SwarmIKError as exc:
+        print(f"viewer skipped: {exc}")
+        return
+    scene.add_robot(robot, q, name="robot")
+    scene.add_robot(robot, q_fixed, name="ghost", color=viz.GHOST_COLOR)
+    scene.add_triad("target", target, length=0.15, sphere=(1.0, 0.85, 0.1, 0.45))
+    scene.add_triad("reached", robot.fk(q, TOOL), length=0.1)
+    view = np.array([0.1, -1.0, 0.35])
+    lines = ["TIAGo: the base drives, the arm reaches", "ghost: base fixed (out of reach)"]
+    scene.add_label("label", lines, position=[0.9, 0.0, 1.75], height=0.25, facing=view)
+    base = robot.fk(q, BASE)[:3, 3]
+    scene.frame_camera([[-0.4, -0.4, 0.0], [0.4, 0.4, 1.9], base, target[:3, 3]], direction=view)
+    if html is None and QUICK:
+        with tempfile.TemporaryDirectory() as tmp:
+            path = scene.save_html(Path(tmp) / "tiago.html")
+            print(f"wrote a {path.stat().st_size / 1e6:.1f} MB page (quick run: deleted)")
+    elif html is not None:
+        print(f"wrote {scene.save_html(html)}")
+    else:
+        print(f"meshcat viewer at {scene.url}")
+
+
+if __name__ == "__main__":
+    main()
