@@ -6,7 +6,12 @@ bounded Levenberg–Marquardt polish of the default solver (:func:`swarm_ik.kern
 pose residual in world axes, exact residual Jacobian, active-set joint limits, adaptive
 damping with accept/reject, stall detection), first from the seed (``q0``, else the middle of
 the joint ranges), then from random restarts until one start converges or ``max_starts``
-starts are spent.  No Python code runs per target.
+starts are spent.  No Python code runs per target (with ``goals``, the goals' own check of
+each converged answer runs in Python: coal for collisions).
+
+``goals=[...]`` applies any compiled goals of :mod:`swarm_ik.goals` to every target (the
+table of ``IKProblem(robot, goals=[Pose(ee, target), *goals])``, the target's block rewritten
+per target): collisions (``AvoidCollisions``), axes, centre of mass, secondary postures…
 
 Randomness does not depend on how the targets are split into chunks: the restart points of
 target ``i`` come from a SplitMix64 stream (Steele, Lea & Flood, "Fast splittable
@@ -17,7 +22,8 @@ are solved in one call, in chunks, or on any number of Dask workers
 
 Success is judged afterwards, independently of the kernel: the batched forward kinematics of
 the answers against the targets, ``‖Δp‖ ≤ tol_pos`` and geodesic angle ``≤ tol_rot``, and the
-answer within the joint limits.
+answer within the joint limits; with goals, also every primary goal met by the check of
+:meth:`swarm_ik.IKProblem.verify`, on the targets the kernel converged on.
 
 >>> import numpy as np, swarm_ik
 >>> robot = swarm_ik.load_robot("yumi_left")
@@ -31,7 +37,9 @@ from __future__ import annotations
 
 import contextlib
 import csv
+import dataclasses
 import functools
+import hashlib
 import logging
 import math
 import os
@@ -50,13 +58,15 @@ import numpy as np
 
 from swarm_ik._types import BoolArray, FloatArray, IntArray
 from swarm_ik.errors import InvalidArgumentError, InvalidTargetError, SwarmIKError
-from swarm_ik.goals import Pose, Position, kernel_slot, kernels
+from swarm_ik.goals import AvoidCollisions, Goal, Pose, Position, State, kernel_slot, kernels
 from swarm_ik.kernels import lie, lm
 from swarm_ik.kernels.fk import TreeArrays
 from swarm_ik.kernels.lm import CONVERGED, NOT_RUN
 from swarm_ik.kernels.search import sampling_window, splitmix64
 from swarm_ik.pose import make_pose, matrix_to_quat
+from swarm_ik.problem import IKProblem
 from swarm_ik.robot import RobotModel
+from swarm_ik.scene import Scene
 
 POSE_COLUMNS = ("x", "y", "z", "qx", "qy", "qz", "qw")
 """Columns of a target table: position [m] and quaternion ``(x, y, z, w)``."""
@@ -80,9 +90,23 @@ def target_uniforms(seed: int, index: int, n: int) -> FloatArray:  # pragma: no 
     return out
 
 
+NO_DEADLINE = -1.0
+"""``deadline`` of :func:`_solve_targets` when there is no time limit."""
+
+
+@numba.njit(cache=True)
+def _wall_clock() -> float:  # pragma: no cover - compiled
+    """Seconds since the epoch (``time.time``, in ``numba.objmode``): the clock of a
+    ``time_limit``, comparable between the processes of one machine (Dask workers)."""
+    with numba.objmode(t="float64"):
+        t = time.time()
+    return t
+
+
 @numba.njit(cache=True)
 def _solve_targets(
     t_par: FloatArray,
+    cols: IntArray,
     q_seed: FloatArray,
     index: IntArray,
     tree: TreeArrays,
@@ -94,26 +118,39 @@ def _solve_targets(
     tol_rot: float,
     max_starts: int,
     seed: int,
+    secondary_evals: int,
+    deadline: float,
     out_q: FloatArray,
     out_evals: IntArray,
     out_starts: IntArray,
+    out_conv: BoolArray,
 ) -> None:  # pragma: no cover - compiled
     """Polish every target from its seed, then from random restarts, until one converges.
 
     Args:
-        t_par: Each target as the parameter block of the table's first goal, ``(N, P)``.
+        t_par: Each target's parameters, ``(N, P)``: written into the table's floats at
+            ``cols`` before the target is solved (its own goal's block, and the blocks of goals
+            encoded from its start).
+        cols: Where each column of ``t_par`` goes in ``goals.par``, ``(P,)``.
         q_seed: First start of each target, shape ``(N, nq)``, inside the bounds.
         index: Index of each target in the whole batch (keys its random stream), ``(N,)``.
-        tree: The robot's kinematic tree.
-        goals: The goal table; its first goal's parameter block is overwritten with each
-            target's row of ``t_par``.
+        tree: The kinematic tree (the goal frames, then the frames goals add).
+        goals: The goal table (its floats are overwritten at ``cols``).
+        ks: The goal kernels.
         bounds: Joint bounds; ``cfg``: LM settings (:data:`swarm_ik.kernels.lm.DEFAULT_LM`).
         tol_pos, tol_rot: Tolerances the polish stops at [m], [rad].
         max_starts: Most starts per target (the seed included).
         seed: Seed of the restart streams, ``0 <= seed < 2**63``.
-        out_q: Best point per target, shape ``(N, nq)``.
+        secondary_evals: Evaluations of the null-space descent of the secondary goals after a
+            target converged (:func:`swarm_ik.kernels.lm.secondary_descent`; none without
+            secondary goals).
+        deadline: :func:`_wall_clock` time after which no target and no restart block starts
+            (:data:`NO_DEADLINE`: none).
+        out_q: Best point per target, shape ``(N, nq)`` (the seed for a target not started).
         out_evals: FK + Jacobian evaluations per target, ``(N,)``.
-        out_starts: Starts polished per target, ``(N,)``.
+        out_starts: Starts polished per target, ``(N,)`` (0: not started before the deadline).
+        out_conv: Whether a start converged (every primary goal within the tolerances of the
+            polish), ``(N,)``.
     """
     n_targets = t_par.shape[0]
     n = bounds.lower.shape[0]
@@ -123,12 +160,25 @@ def _solve_targets(
     seed_key = _splitmix64(np.uint64(seed))
     s_lo = np.empty(n)
     s_hi = np.empty(n)
+    q_in = np.empty(n)
+    q_sec = np.empty(n)
     scale = 2.0**-53
-    par = goals.par[goals.p0[0] : goals.p0[1]]
+    par = goals.par
+    timed = deadline != NO_DEADLINE
+    late = False
     work = lm.make_work(tree, goals, goals.rows_primary)
     for i in range(n_targets):
-        for c in range(par.shape[0]):
-            par[c] = t_par[i, c]
+        if timed and not late:
+            late = _wall_clock() > deadline
+        if late:  # out of time: not started
+            for j in range(n):
+                out_q[i, j] = q_seed[i, j]
+            out_evals[i] = 0
+            out_starts[i] = 0
+            out_conv[i] = False
+            continue
+        for c in range(cols.shape[0]):
+            par[cols[c]] = t_par[i, c]
         key = _splitmix64(seed_key ^ np.uint64(index[i]))
         for j in range(n):
             starts[0, j] = q_seed[i, j]
@@ -159,14 +209,27 @@ def _solve_targets(
                     break
             if converged or done >= max_starts:
                 break
+            if timed:
+                late = _wall_clock() > deadline
+                if late:
+                    break
             k = min(block, max_starts - done)
             for s in range(k):
                 for j in range(n):
                     counter += np.uint64(1)
                     u = float(_splitmix64(key + counter) >> np.uint64(11)) * scale
                     starts[s, j] = min(s_lo[j] + u * (s_hi[j] - s_lo[j]), s_hi[j])
+        if converged and goals.rows_secondary > 0 and secondary_evals > 0:
+            for j in range(n):
+                q_in[j] = out_q[i, j]
+            evals += lm.secondary_descent(
+                q_in, tree, goals, ks, bounds, tol_pos, tol_rot, secondary_evals, q_sec
+            )
+            for j in range(n):
+                out_q[i, j] = q_sec[j]
         out_evals[i] = evals
         out_starts[i] = done
+        out_conv[i] = converged
 
 
 # --------------------------------------------------------------------------- data
@@ -193,6 +256,8 @@ class BatchSettings:
         stall_iters: …this many times in a row ends a start (local minimum).
         tol_margin: The kernel stops at this fraction of the tolerances, so the independent
             check passes with margin.
+        deadline: Wall-clock time (``time.time()``, seconds since the epoch) after which no
+            target starts (``solve_batch``'s ``time_limit``); None: no limit.
     """
 
     tol_pos: float = 1e-5
@@ -206,6 +271,7 @@ class BatchSettings:
     stall_rel: float = lm.DEFAULT_LM.stall_rel
     stall_iters: int = lm.DEFAULT_LM.stall_iters
     tol_margin: float = lm.DEFAULT_LM.tol_margin
+    deadline: float | None = None
 
     def __post_init__(self) -> None:
         for label in ("tol_pos", "tol_rot"):
@@ -221,6 +287,13 @@ class BatchSettings:
             raise InvalidArgumentError(f"seed must be an integer in [0, 2**63), got {s!r}")
         if not 0.0 < self.tol_margin <= 1.0:
             raise InvalidArgumentError(f"tol_margin must be in (0, 1], got {self.tol_margin!r}")
+        d = self.deadline
+        if d is not None:
+            ok = isinstance(d, (int, float)) and not isinstance(d, bool)
+            if not (ok and math.isfinite(d) and d > 0):
+                raise InvalidArgumentError(
+                    f"deadline must be a positive time.time() value, got {d!r}"
+                )
         self.lm_settings()  # validates lam0, max_step, stall_rel
 
     def lm_settings(self) -> lm.LMSettings:
@@ -231,19 +304,203 @@ class BatchSettings:
         ).checked()  # fmt: skip
 
 
+SECONDARY_EVALS = 200
+"""Evaluations of the null-space descent of the secondary goals per solved target (as the
+default solver spends after its search)."""
+
+_ROBOTS: dict[str, RobotModel] = {}
+"""Robots received by this process (a Dask worker), by the fingerprint of their pickle: a
+worker keeps one robot per fingerprint, and with it the sphere models and the collision model
+cached on it, from chunk to chunk and call to call."""
+_MAX_ROBOTS = 4
+
+
+class BatchGoals:
+    """The goals of a batch besides each target's own: one :class:`~swarm_ik.problem.IKProblem`
+    ``(robot, goals=[Pose(ee, target), *goals])`` (``Position`` when position-only) whose
+    tree, goal table and bounds the kernel runs, its first goal's parameters rewritten for each
+    target (with a primary collision goal, the same problem without it for the first pass:
+    :attr:`free_problem`).
+
+    Picklable (it travels to Dask workers): it is sent as the robot and the goals, and the
+    receiving process builds the problem again (the goal table's kernel slots are per process),
+    reusing a robot it already received (with the sphere and collision models cached on it).
+
+    Args:
+        robot: The robot (loaded with every goal frame).
+        goals: Compiled goals (:mod:`swarm_ik.goals`), applied to every target.
+        position_only: The targets' goal is a ``Position`` (else a ``Pose``).
+        first: A valid pose for the template's target, ``(4, 4)`` (rewritten per target).
+
+    Raises:
+        InvalidArgumentError: not a list of goals, a goal written in Python, or what
+            :class:`~swarm_ik.problem.IKProblem` refuses (a frame the robot was not loaded
+            with is named with the frames it has).
+    """
+
+    def __init__(
+        self, robot: RobotModel, goals: Any, position_only: bool, first: FloatArray
+    ) -> None:
+        if isinstance(goals, Goal) or not isinstance(goals, (list, tuple)):
+            raise InvalidArgumentError(
+                f"goals must be a list of goal terms (swarm_ik.goals), got {goals!r:.80}"
+            )
+        self.robot = robot
+        self.goals: tuple[Goal, ...] = tuple(goals)
+        self.position_only = bool(position_only)
+        self._first = np.asarray(first, dtype=float)
+        self._fingerprint: str | None = None
+        self._free: IKProblem | None = None
+        self._problem: IKProblem | None = self._build(robot)
+        py = self._problem.python_goals
+        if py:
+            raise InvalidArgumentError(
+                f"solve_batch runs compiled goals only (one compiled loop over the targets); "
+                f"{py[0].describe()} is a goal written in Python: solve such problems with "
+                "swarm_ik.solve or swarm_ik.solve_many"
+            )
+
+    def _build(self, robot: RobotModel) -> IKProblem:
+        ee = robot.ee_frame
+        own: Goal = (
+            Position(ee, self._first[:3, 3])
+            if self.position_only
+            else Pose.checked(ee, self._first)
+        )
+        return IKProblem(robot, goals=[own, *self.goals])
+
+    @property
+    def problem(self) -> IKProblem:
+        """The problem of the first target (built again where this object was unpickled)."""
+        if self._problem is None:
+            robot = _ROBOTS.get(self._fingerprint or "")
+            if robot is None:
+                robot = self.robot
+                if len(_ROBOTS) >= _MAX_ROBOTS:
+                    _ROBOTS.clear()
+                _ROBOTS[self._fingerprint or ""] = robot
+            self._problem = self._build(robot)
+        return self._problem
+
+    @property
+    def primary(self) -> tuple[Goal, ...]:
+        """The primary goals among :attr:`goals` (those the judge checks)."""
+        return tuple(g for g in self.goals if g.is_primary)
+
+    @property
+    def labels(self) -> tuple[str, ...]:
+        """Labels of :attr:`primary` (``Goal.describe()``)."""
+        return tuple(g.describe() for g in self.primary)
+
+    def fingerprint(self) -> str:
+        """SHA-1 of the robot's pickle (which robot a worker may reuse)."""
+        if self._fingerprint is None:
+            self._fingerprint = hashlib.sha1(pickle.dumps(self.robot)).hexdigest()
+        return self._fingerprint
+
+    def __getstate__(self) -> dict[str, Any]:
+        """The robot and the goals (scenes without their coal objects, which do not pickle);
+        the problem is built again where it is unpickled."""
+        goals = tuple(
+            dataclasses.replace(g, scene=Scene(g.scene.obstacles))
+            if isinstance(g, AvoidCollisions)
+            else g
+            for g in self.goals
+        )
+        return {
+            "robot": self.robot, "goals": goals, "position_only": self.position_only,
+            "_first": self._first, "_fingerprint": self.fingerprint(), "_problem": None,
+            "_free": None,
+        }  # fmt: skip
+
+    def __setstate__(self, state: dict[str, Any]) -> None:
+        self.__dict__.update(state)
+
+    def __dask_tokenize__(self) -> str:
+        """A deterministic Dask token: the content that is sent."""
+        return hashlib.sha1(pickle.dumps(self.__getstate__())).hexdigest()
+
+    @property
+    def collision(self) -> AvoidCollisions | None:
+        """The primary ``AvoidCollisions`` goal, if any."""
+        return next((g for g in self.primary if isinstance(g, AvoidCollisions)), None)
+
+    @property
+    def free_problem(self) -> IKProblem:
+        """:attr:`problem` without its collision goal (the first pass of a batch with one)."""
+        if self._free is None:  # (never None: the target's own goal is primary)
+            self._free = self.problem.without_collisions() or self.problem
+        return self._free
+
+    def target_params(
+        self, problem: IKProblem, targets: FloatArray, q_seed: FloatArray
+    ) -> tuple[FloatArray, IntArray]:
+        """What the kernel writes into ``problem``'s goal table (:attr:`problem` or
+        :attr:`free_problem`) for each target: ``(t_par (n, P), cols (P,))``, the target's own
+        goal block, then the blocks of goals encoded from the start (``MinimalDisplacement``),
+        each target's from its own ``q_seed`` row."""
+        tab = problem.table(None)
+        own = Position if self.position_only else Pose
+        blocks = [np.asarray(own.params(targets), dtype=float).reshape(len(targets), -1)]
+        cols = [np.arange(tab.p0[0], tab.p0[1], dtype=np.int64)]
+        for k, gl in enumerate(problem.compiled_goals):
+            if k and getattr(gl, "uses_start", False):
+                blocks.append(np.array([problem.encode(k, q).par for q in q_seed], dtype=float))
+                cols.append(np.arange(tab.p0[k], tab.p0[k + 1], dtype=np.int64))
+        return (
+            np.ascontiguousarray(np.concatenate(blocks, axis=1).reshape(len(targets), -1)),
+            np.concatenate(cols),
+        )
+
+    def in_contact(self, q: FloatArray) -> bool:
+        """Coal's exact test of the collision goal at ``q``
+        (:meth:`swarm_ik.collision.RobotCollision.collides`: the verdict of the ``check`` that
+        ``AvoidCollisions.met`` runs, without computing the clearance)."""
+        gl = self.collision
+        if gl is None:
+            return False
+        rc = self.problem.robot.collision_model()
+        return bool(rc.collides(q, gl.scene, gl.margin, bool(gl.self_collision)))
+
+    def judge(
+        self,
+        q: FloatArray,
+        q0: FloatArray,
+        tol_pos: float,
+        tol_rot: float,
+        known_free: bool = False,
+    ) -> list[bool]:
+        """Whether each of :attr:`primary` is met at ``q`` by the independent check of
+        :meth:`IKProblem.verify` (``Goal.met`` on Pinocchio's state; the collision goal by
+        :meth:`in_contact`, skipped when ``known_free``: already found free at this ``q``)."""
+        state: State | None = None
+        out = []
+        for gl in self.primary:
+            if isinstance(gl, AvoidCollisions):
+                out.append(known_free or not self.in_contact(q))
+                continue
+            if state is None:
+                state = State(self.problem.robot, q, q0)
+            out.append(bool(gl.met(state, tol_pos, tol_rot)[2]))
+        return out
+
+
 @dataclass(frozen=True)
 class BatchChain:
     """What a worker needs of a robot: the tree arrays and the bounds (plain arrays, so
-    shipping it to a Dask worker needs neither the URDF nor Pinocchio).
+    shipping it to a Dask worker needs neither the URDF nor Pinocchio), and the batch's goals
+    when it has any (then the robot travels with them).
 
     Attributes:
         tree: The kinematic tree (:class:`swarm_ik.kernels.fk.TreeArrays`); targets are for
             its first frame.
         bounds: Limits, continuous and prismatic joints (:class:`swarm_ik.kernels.lm.Bounds`).
+        goals: The goals applied to every target besides its own (None: the target alone).
     """
 
     tree: TreeArrays
     bounds: lm.Bounds
+    goals: BatchGoals | None = None
 
     @classmethod
     def from_robot(cls, robot: RobotModel) -> BatchChain:
@@ -287,10 +544,12 @@ class ChunkResult(_Rows):
             :class:`BatchResult`, for the chunk's targets.
         start: Index of the chunk's first target in the batch.
         time_s: Seconds the worker spent on the chunk.
+        goals_met: As :class:`BatchResult` (None without goals).
     """
 
     start: int
     time_s: float
+    goals_met: BoolArray | None = None
 
 
 @dataclass(frozen=True)
@@ -312,6 +571,12 @@ class BatchResult(_Rows):
         joint_names: Joint names, ``(nq,)``.
         interrupted: Ctrl-C stopped the call (``keep_on_interrupt``): the rows are the
             chunks finished before it, the first targets in order.
+        goal_labels: Labels of the primary goals given in ``goals`` (``Goal.describe()``),
+            ``(k,)``; empty without goals.
+        goals_met: Whether each of those goals is met at ``q`` by the independent check
+            (``AvoidCollisions``: coal finds no contact), ``(N, k)``; checked only for targets
+            whose own pose is within tolerance and on which the kernel converged (the other
+            rows are False).  None when ``solve_batch`` had no ``goals``.
     """
 
     time_s: float
@@ -320,6 +585,8 @@ class BatchResult(_Rows):
     settings: BatchSettings
     joint_names: tuple[str, ...] = ()
     interrupted: bool = False
+    goal_labels: tuple[str, ...] = ()
+    goals_met: BoolArray | None = None
 
     @classmethod
     def from_chunks(
@@ -330,11 +597,22 @@ class BatchResult(_Rows):
         time_s: float,
         setup_s: float,
         interrupted: bool = False,
+        goal_labels: tuple[str, ...] | None = None,
     ) -> BatchResult:
-        """The chunks' answers joined in order (none: empty arrays)."""
+        """The chunks' answers joined in order (none: empty arrays); ``goal_labels``: those
+        of the batch's primary goals (None: a batch without goals)."""
 
         def cat(attr: str, empty: Any) -> Any:
             return np.concatenate([getattr(p, attr) for p in parts]) if parts else empty
+
+        met = None
+        if goal_labels is not None:
+            k = len(goal_labels)
+            met = (
+                np.concatenate([p.goals_met for p in parts])  # type: ignore[misc]
+                if parts
+                else np.zeros((0, k), dtype=bool)
+            )
 
         return cls(
             q=cat("q", np.empty((0, robot.nq))),
@@ -349,6 +627,8 @@ class BatchResult(_Rows):
             settings=settings,
             joint_names=tuple(robot.joint_names),
             interrupted=interrupted,
+            goal_labels=tuple(goal_labels or ()),
+            goals_met=met,
         )
 
     @property
@@ -371,8 +651,10 @@ class BatchResult(_Rows):
 
         The ``.npz`` holds ``q``, ``position_error``, ``rotation_error``, ``success``,
         ``n_evals``, ``n_starts``, ``joint_names``, ``tol_pos``, ``tol_rot``, ``seed`` (and
-        ``targets`` ``(N, 4, 4)`` when given).  The ``.csv`` has a header ``index, <joint
-        names>, position_error, rotation_error, success, n_evals`` and one row per target.
+        ``targets`` ``(N, 4, 4)`` when given; ``goal_labels`` and ``goals_met`` after a batch
+        with goals).  The ``.csv`` has a header ``index, <joint names>, position_error,
+        rotation_error, success, n_evals`` (then one ``met:<goal label>`` column per primary
+        goal of a batch with goals) and one row per target.
 
         Raises:
             InvalidArgumentError: the suffix is neither ``.npz`` nor ``.csv``.
@@ -394,13 +676,18 @@ class BatchResult(_Rows):
             }
             if targets is not None:
                 arrays["targets"] = np.asarray(targets, dtype=float)
+            if self.goals_met is not None:
+                arrays["goal_labels"] = np.array(self.goal_labels, dtype=str)
+                arrays["goals_met"] = self.goals_met
             np.savez_compressed(p, **arrays)
         elif suffix == ".csv":
             names = self.joint_names or tuple(f"q{j}" for j in range(self.q.shape[1]))
             with p.open("w", newline="") as fh:
                 w = csv.writer(fh)
+                met = self.goals_met
                 w.writerow(
                     ["index", *names, "position_error", "rotation_error", "success", "n_evals"]
+                    + [f"met:{label}" for label in self.goal_labels if met is not None]
                 )
                 for i in range(self.n):
                     w.writerow(
@@ -412,6 +699,7 @@ class BatchResult(_Rows):
                             int(self.success[i]),
                             int(self.n_evals[i]),
                         ]
+                        + ([] if met is None else [int(v) for v in met[i]])
                     )
         else:
             raise InvalidArgumentError(
@@ -524,6 +812,60 @@ def pose_errors(
 
 
 # --------------------------------------------------------------------------- chunks
+def _polish_targets(
+    tree: TreeArrays,
+    goals: lm.GoalTable,
+    bounds: lm.Bounds,
+    t_par: FloatArray,
+    cols: IntArray,
+    q_seed: FloatArray,
+    index: IntArray,
+    settings: BatchSettings,
+) -> tuple[FloatArray, IntArray, IntArray, BoolArray]:
+    """:func:`_solve_targets` on ``n`` targets: ``(q (n, nq), evaluations, starts,
+    converged)``."""
+    n, nq = q_seed.shape
+    q = np.empty((n, nq))
+    evals = np.zeros(n, dtype=np.int64)
+    starts = np.zeros(n, dtype=np.int64)
+    conv = np.zeros(n, dtype=np.bool_)
+    if n:
+        _solve_targets(
+            t_par, cols, np.ascontiguousarray(q_seed, dtype=float), index, tree, goals,
+            kernels(), bounds, settings.lm_settings(), settings.tol_pos * settings.tol_margin,
+            settings.tol_rot * settings.tol_margin, int(settings.max_starts),
+            int(settings.seed), SECONDARY_EVALS,
+            NO_DEADLINE if settings.deadline is None else float(settings.deadline),
+            q, evals, starts, conv,
+        )  # fmt: skip
+    return q, evals, starts, conv
+
+
+def _polish_problem(
+    bg: BatchGoals,
+    problem: IKProblem,
+    targets: FloatArray,
+    q_first: FloatArray,
+    q_seed: FloatArray,
+    index: IntArray,
+    settings: BatchSettings,
+) -> tuple[FloatArray, IntArray, IntArray, BoolArray]:
+    """:func:`_polish_targets` from ``q_first`` on ``problem``'s tree, goal table (a copy of
+    its floats: the kernel rewrites them per target) and bounds; ``q_seed``: the targets' own
+    starts (what goals such as ``MinimalDisplacement`` are encoded from)."""
+    tab = problem.table(None)
+    if not len(targets):
+        return _polish_targets(
+            problem.tree, tab, problem.bounds, np.zeros((0, 0)), np.zeros(0, dtype=np.int64),
+            q_first, index, settings,
+        )  # fmt: skip
+    t_par, cols = bg.target_params(problem, targets, q_seed)
+    return _polish_targets(
+        problem.tree, tab._replace(par=tab.par.copy()), problem.bounds, t_par, cols, q_first,
+        index, settings,
+    )  # fmt: skip
+
+
 def solve_chunk(
     bc: BatchChain,
     settings: BatchSettings,
@@ -533,54 +875,78 @@ def solve_chunk(
 ) -> ChunkResult:
     """Solve one contiguous chunk of targets (the unit of work shipped to a Dask worker).
 
+    With a collision goal the targets go through two passes: first the problem without it
+    (the polish of the pose and the other goals, as the plain batch), the converged answers
+    then tested by coal; only those in contact go through the second pass, the kernel with
+    the collision goal's sphere rows, from where the first pass left them (restarts as
+    usual).  Each target's answer still depends only on its seed, index, target and start.
+
     Args:
-        bc: The robot's chain and limits.
+        bc: The robot's chain and limits (and the batch's goals).
         settings: Solver settings (seed, tolerances, restarts).
         start: Index of the chunk's first target in the whole batch (keys the random streams).
         targets: Valid poses, shape ``(n, 4, 4)``.
         q_seed: First start per target, shape ``(n, nq)``, inside the limits.
 
     Returns:
-        The chunk's answers, errors (checked with the batched FK) and counters.
+        The chunk's answers, errors (checked with the batched FK; the goals' own check for
+        the targets the kernel converged on) and counters.
     """
     t0 = time.perf_counter()
     n = targets.shape[0]
-    nq = bc.nq
-    q = np.empty((n, nq))
-    evals = np.zeros(n, dtype=np.int64)
-    starts = np.zeros(n, dtype=np.int64)
-    if n:
+    q_seed = np.ascontiguousarray(q_seed, dtype=float)
+    index = np.arange(start, start + n, dtype=np.int64)
+    bg = bc.goals
+    free = np.zeros(n, dtype=bool)  # found free of contact by coal already
+    if bg is None:  # the target's goal alone, on the tree of the first frame
         goal = Position if settings.position_only else Pose
         t_par = np.ascontiguousarray(goal.params(targets), dtype=float)
-        goals = lm.goal_table(
-            [kernel_slot(goal.kernel)], [1.0], [True], [t_par[0].copy()],
+        table = lm.goal_table(
+            [kernel_slot(goal.kernel)], [1.0], [True],
+            [t_par[0].copy() if n else np.zeros(t_par.shape[1])],
             [np.zeros(1, dtype=np.int64)], [3 if settings.position_only else 6],
         )  # fmt: skip
-        _solve_targets(
-            t_par,
-            np.ascontiguousarray(q_seed, dtype=float),
-            np.arange(start, start + n, dtype=np.int64),
-            bc.tree,
-            goals,
-            kernels(),
-            bc.bounds,
-            settings.lm_settings(),
-            settings.tol_pos * settings.tol_margin,
-            settings.tol_rot * settings.tol_margin,
-            int(settings.max_starts),
-            int(settings.seed),
-            q,
-            evals,
-            starts,
+        cols = np.arange(t_par.shape[1], dtype=np.int64)
+        q, evals, starts, conv = _polish_targets(
+            bc.tree, table, bc.bounds, t_par, cols, q_seed, index, settings
         )
+    elif bg.collision is None:
+        q, evals, starts, conv = _polish_problem(
+            bg, bg.problem, targets, q_seed, q_seed, index, settings
+        )
+    else:  # first pass without the collision goal; coal; the sphere rows where in contact
+        q, evals, starts, conv = _polish_problem(
+            bg, bg.free_problem, targets, q_seed, q_seed, index, settings
+        )
+        for i in np.flatnonzero(conv).tolist():
+            free[i] = not bg.in_contact(q[i])
+        redo = np.flatnonzero(conv & ~free)
+        if redo.size:
+            q2, ev2, st2, conv2 = _polish_problem(
+                bg, bg.problem, targets[redo], q[redo], q_seed[redo], index[redo], settings
+            )
+            q[redo], conv[redo] = q2, conv2
+            evals[redo] += ev2
+            starts[redo] += st2
     dp, dr = pose_errors(bc.tree, q, targets)
     within = np.all((q >= bc.bounds.lower - 1e-12) & (q <= bc.bounds.upper + 1e-12), axis=1)
     ok = within & (dp <= settings.tol_pos)
     if not settings.position_only:
         ok &= dr <= settings.tol_rot
+    met = None
+    if bg is not None:
+        k = len(bg.primary)
+        met = np.zeros((n, k), dtype=bool)
+        if k:  # the goals' own check, where the kernel converged (unconverged targets fail)
+            ok &= conv
+            for i in np.flatnonzero(ok).tolist():
+                met[i] = bg.judge(
+                    q[i], q_seed[i], settings.tol_pos, settings.tol_rot, bool(free[i])
+                )
+                ok[i] = bool(met[i].all())
     return ChunkResult(
         q=q, position_error=dp, rotation_error=dr, success=ok, n_evals=evals, n_starts=starts,
-        start=start, time_s=time.perf_counter() - t0,
+        start=start, time_s=time.perf_counter() - t0, goals_met=met,
     )  # fmt: skip
 
 
@@ -605,8 +971,10 @@ def solve_batch(
     tol_pos: float = 1e-5,
     tol_rot: float = 1e-5,
     position_only: bool = False,
+    goals: Any = None,
     max_starts: int = 128,
     max_iters: int = BATCH_MAX_ITERS,
+    time_limit: float | None = None,
     scheduler: Any = None,
     chunk_size: int | None = None,
     progress: bool = False,
@@ -619,6 +987,17 @@ def solve_batch(
     on ``(seed, its index, its target, its q0)``: neither the chunk size nor the number of
     workers changes any bit of the result.
 
+    ``goals`` adds goals of :mod:`swarm_ik.goals` to every target, in the compiled kernel: the
+    problem of each target is ``IKProblem(robot, goals=[Pose(ee, target), *goals])``
+    (``Position`` when ``position_only``), e.g. ``AvoidCollisions(scene)``, ``Axis``,
+    ``CenterOfMass`` or a secondary ``Posture`` (lowered in the null space of the primary
+    goals once a target is solved).  A target then succeeds when its pose is within
+    tolerance, the kernel converged on every primary goal, and each primary goal of ``goals``
+    passes the independent check of :meth:`IKProblem.verify` (:attr:`BatchResult.goals_met`;
+    ``AvoidCollisions``: coal finds no contact).  With a collision goal each target is first
+    solved without it; only answers that coal finds in contact are polished again with the
+    goal's sphere rows, from where they are (see :func:`solve_chunk`).
+
     Args:
         robot: The robot.
         targets: Target poses, shape ``(N, 4, 4)`` [m], or rows ``x y z qx qy qz qw``,
@@ -630,9 +1009,16 @@ def solve_batch(
         tol_pos: Position tolerance of success [m].
         tol_rot: Rotation tolerance of success [rad].
         position_only: Ignore the target orientation.
+        goals: Goals applied to every target besides its pose (compiled goals only; goal
+            frames other than the first need the robot loaded with them).  None or empty: the
+            pose alone (the plain batch).
         max_starts: Most starts per target (the seed start included); unreachable targets
             cost this many polishes.
         max_iters: Most FK + Jacobian evaluations per start.
+        time_limit: Seconds for the whole call: no target (nor restart block) starts after
+            them, and the targets not reached are reported unsolved (``n_starts`` 0, ``q`` their
+            seed); those reached are the answers of a call without the limit, except the one
+            cut in its restarts.  Which targets are reached depends on the machine's speed.
         scheduler: ``None`` (in this process, no Dask), ``"local"`` (an embedded
             ``dask.distributed.LocalCluster``, one single-threaded worker process per core),
             a scheduler address such as ``"tcp://127.0.0.1:8786"``, or a
@@ -648,7 +1034,9 @@ def solve_batch(
 
     Raises:
         InvalidTargetError: a target is not a valid pose (the first bad one named).
-        InvalidArgumentError: bad ``q0``, settings, ``chunk_size`` or ``scheduler``.
+        InvalidArgumentError: bad ``q0``, settings, ``chunk_size``, ``scheduler`` or
+            ``time_limit``; bad ``goals``, or a goal written in Python.
+        UnknownNameError: a goal frame the robot was not loaded with.
     """
     from swarm_ik import distributed
 
@@ -659,6 +1047,9 @@ def solve_batch(
     from swarm_ik._validate import float_array, positive_float
 
     t0 = time.perf_counter()
+    deadline = None
+    if time_limit is not None:
+        deadline = time.time() + positive_float(time_limit, "time_limit")
     targets = float_array(targets, "targets")
     settings = BatchSettings(
         tol_pos=positive_float(tol_pos, "tol_pos"),
@@ -667,10 +1058,17 @@ def solve_batch(
         max_starts=max_starts,
         max_iters=max_iters,
         seed=seed,
+        deadline=deadline,
     )
     poses = check_targets(targets)
     n = poses.shape[0]
     bc = BatchChain.from_robot(robot)
+    labels = None
+    if goals is not None and (not isinstance(goals, (list, tuple)) or len(goals)):
+        first = poses[0] if n else robot.fk(robot.mid_q())
+        bgoals = BatchGoals(robot, goals, settings.position_only, first)
+        bc = dataclasses.replace(bc, goals=bgoals)
+        labels = bgoals.labels
     seeds = _seed_starts(bc, q0, n)
     if chunk_size is not None and (
         isinstance(chunk_size, bool)
@@ -710,7 +1108,7 @@ def solve_batch(
             finally:
                 bar.close()
     return BatchResult.from_chunks(
-        parts, robot, settings, time.perf_counter() - t0, setup_s, interrupted
+        parts, robot, settings, time.perf_counter() - t0, setup_s, interrupted, labels
     )
 
 

@@ -19,6 +19,16 @@ Methods (one CSV row per robot, method and N):
 * ``loop-tracik``: ``[pytracik.ik(T) for T in targets]`` (TRAC-IK, Speed mode, 5 ms timeout,
   ε = tol) for ``N ≤ --loop-max``, when ``pytracik`` is installed.
 
+With ``--boxes K [K ...]``, for each ``K`` a scene of ``K`` random boxes around the arm
+(:func:`box_scene`) and ``N`` targets that are the FK of joint vectors the exact check finds
+collision-free (self and scene), then:
+
+* ``boxesK-plain``: ``solve_batch`` without a collision goal on those targets, its answers
+  judged afterwards with coal too (success = the pose and no contact; the check not timed);
+* ``boxesK-avoid-1proc``: ``solve_batch(..., goals=[AvoidCollisions(scene)])`` in this
+  process (the exact check of its answers inside the call, timed);
+* ``boxesK-avoid-dask``: the same on ``--scheduler`` (when one is given).
+
 Writes under ``--out`` (default ``./bench-throughput``): ``throughput.csv`` (the experiment),
 then ``throughput.md`` (from the CSV and ``templates/throughput.md``) and ``throughput.png``
 (log-log time vs N), plus ``profile.csv`` (where the time of one batch goes).  Only the public
@@ -40,6 +50,7 @@ from swarm_ik import distributed, solve_batch
 from swarm_ik.batch import BatchChain, BatchResult, check_targets, pose_errors
 from swarm_ik.bench import common, plans
 from swarm_ik.robot import RobotModel
+from swarm_ik.scene import Box, Scene
 
 DEFAULT_ROBOTS = plans.THROUGHPUT_ROBOTS
 DEFAULT_SIZES = plans.THROUGHPUT_SIZES
@@ -110,6 +121,16 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     )
     parser.add_argument("--no-tracik", action="store_true", help="skip TRAC-IK")
     parser.add_argument(
+        "--boxes",
+        nargs="+",
+        type=int,
+        default=[],
+        metavar="K",
+        help="also time solve_batch with goals=[AvoidCollisions(scene)] on a scene of K random "
+        "boxes around the arm, on FK targets of collision-free joint vectors (rows boxesK-*; "
+        "default: none)",
+    )
+    parser.add_argument(
         "--quick",
         action="store_true",
         help="small sizes (a smoke test); never writes into a full run's folder",
@@ -120,6 +141,52 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
 def make_targets(robot: RobotModel, n: int, seed: int) -> np.ndarray:
     """FK of ``n`` joint vectors drawn uniformly within the limits, ``(n, 4, 4)``."""
     return common.fk_targets(robot, n, [seed, n])
+
+
+def box_scene(robot: RobotModel, k: int, seed: int) -> Scene:
+    """``k`` axis-aligned boxes (sides 4–15 cm) around the arm: centres drawn uniformly in the
+    upper half-ball of 0.8 × the reach of the first goal frame, at least 25 cm from the base's
+    vertical axis (the base and its first links stay free)."""
+    rng = np.random.default_rng([int(seed), int(k), 11])
+    radius = 0.8 * robot.reach_radius()
+    boxes: list[Box] = []
+    while len(boxes) < k:
+        c = rng.uniform([-radius, -radius, 0.0], [radius, radius, radius])
+        if np.linalg.norm(c) > radius or np.linalg.norm(c[:2]) < 0.25:
+            continue
+        sx, sy, sz = rng.uniform(0.04, 0.15, 3).tolist()
+        boxes.append(Box((sx, sy, sz), tuple(c.tolist()), name=f"box{len(boxes)}"))  # type: ignore[arg-type]
+    return Scene(boxes)
+
+
+def collision_free_targets(
+    robot: RobotModel, scene: Scene, n: int, seed: int, max_draws: int = 2_000_000
+) -> tuple[np.ndarray, np.ndarray]:
+    """FK of ``n`` joint vectors drawn uniformly within the limits that coal finds free of
+    contact (self and ``scene``): ``(q (n, nq), targets (n, 4, 4))``.
+
+    Raises:
+        InvalidArgumentError: fewer than ``n`` found in ``max_draws`` draws.
+    """
+    from swarm_ik.errors import InvalidArgumentError
+
+    rng = np.random.default_rng([int(seed), len(scene), 12])
+    rc = robot.collision_model()
+    found: list[np.ndarray] = []
+    drawn = 0
+    while len(found) < n:
+        if drawn >= max_draws:
+            raise InvalidArgumentError(
+                f"{robot.name}: only {len(found)} collision-free joint vectors in {drawn} draws"
+            )
+        for q in robot.random_q(rng, 1024):
+            if not rc.collides(q, scene):
+                found.append(q)
+                if len(found) == n:
+                    break
+        drawn += 1024
+    qs = np.array(found).reshape(n, robot.nq)
+    return qs, np.asarray(robot.fk(qs), dtype=float).reshape(n, 4, 4)
 
 
 def _row(
@@ -272,14 +339,23 @@ def run_experiment(
     with_tracik: bool,
     out: Path,
     repeat: int = 3,
+    boxes: Sequence[int] = (),
 ) -> tuple[Path, Path]:
     """Run every method on every robot and size; write ``throughput.csv`` and
     ``profile.csv``; returns their paths.  Batch measurements are repeated ``repeat`` times
-    and the fastest kept (the machine may be shared; the answers are identical each time)."""
+    and the fastest kept (the machine may be shared; the answers are identical each time).
+    ``boxes``: scene sizes of the collision-free rows (:func:`box_scene`; none by default)."""
 
-    def fastest(**kwargs: Any) -> Any:
+    def fastest(on: np.ndarray | None = None, **kwargs: Any) -> Any:
         runs = [
-            solve_batch(robot, targets, seed=seed, tol_pos=tol, tol_rot=tol, **kwargs)
+            solve_batch(
+                robot,
+                targets if on is None else on,
+                seed=seed,
+                tol_pos=tol,
+                tol_rot=tol,
+                **kwargs,
+            )  # fmt: skip
             for _ in range(max(1, repeat))
         ]
         return min(runs, key=lambda r: r.time_s)
@@ -350,6 +426,27 @@ def run_experiment(
                     trac = loop_tracik(robot, targets, tol) if with_tracik else None
                     if trac is not None:
                         record("loop-tracik", *trac, f"success {trac[1].mean():.4f}")
+                for k in boxes:
+                    scene = box_scene(robot, k, seed)
+                    _q, free = collision_free_targets(robot, scene, n, seed)
+                    avoid = [swarm_ik.goals.AvoidCollisions(scene)]
+                    solve_batch(robot, free[:8], goals=avoid)  # (the sphere model, untimed)
+                    res = fastest(on=free)
+                    rc = robot.collision_model()
+                    ok = res.success & np.array([not rc.collides(q, scene) for q in res.q])
+                    record_batch(f"boxes{k}-plain", res, f"success {ok.mean():.4f} (coal)")
+                    rows[-1].update(success_rate=f"{ok.mean():.6f}", n_success=int(ok.sum()))
+                    res = fastest(on=free, goals=avoid)
+                    record_batch(f"boxes{k}-avoid-1proc", res, f"success {res.success_rate:.4f}")
+                    if use_dask:
+                        solve_batch(robot, free[: 8 * workers], goals=avoid, scheduler=client,
+                                    chunk_size=8)  # fmt: skip
+                        res_d = fastest(on=free, goals=avoid, scheduler=client)
+                        if not np.array_equal(res_d.q, res.q):  # pragma: no cover - a bug
+                            raise RuntimeError("Dask and in-process results differ")
+                        record_batch(
+                            f"boxes{k}-avoid-dask", res_d, f"({workers} workers)", workers, setup_s
+                        )
             prof += profile_batch(robot, min(max(sizes), 10_000), seed, tol)
     csv_path = common.write_csv(out / "throughput.csv", FIELDS, rows)
     prof_path = common.write_csv(out / "profile.csv", PROFILE_FIELDS, prof)
@@ -362,6 +459,21 @@ METHOD_LABELS = {
     "loop-solve": "loop over solve()",
     "loop-tracik": "loop over TRAC-IK",
 }
+
+
+def method_label(method: str) -> str:
+    """Label of a method in the report and the plot (``boxesK-*`` rows included)."""
+    if method in METHOD_LABELS:
+        return METHOD_LABELS[method]
+    head, _, rest = method.partition("-")
+    if head.startswith("boxes") and head[5:].isdigit():
+        k = head[5:]
+        return {
+            "plain": f"solve_batch, {k} boxes, no collision goal (judged with coal)",
+            "avoid-1proc": f"solve_batch + AvoidCollisions, {k} boxes, 1 process",
+            "avoid-dask": f"solve_batch + AvoidCollisions, {k} boxes, on Dask",
+        }.get(rest, method)
+    return method
 
 
 def plot(csv_path: Path, png_path: Path) -> Path:
@@ -380,7 +492,9 @@ def plot(csv_path: Path, png_path: Path) -> Path:
     for col, robot in enumerate(robots):
         top, bottom = axs[0][col], axs[1][col]
         mine = [r for r in rows if r["robot"] == robot]
-        for method, label in METHOD_LABELS.items():
+        methods = [*METHOD_LABELS, *dict.fromkeys(r["method"] for r in mine)]
+        for method in dict.fromkeys(methods):
+            label = method_label(method)
             pts = sorted(
                 (int(r["n"]), float(r["time_s"]), r["workers"])
                 for r in mine
@@ -389,7 +503,7 @@ def plot(csv_path: Path, png_path: Path) -> Path:
             if not pts:
                 continue
             n, t, w = zip(*pts, strict=True)
-            if method == "batch-dask":
+            if method.endswith("dask"):
                 label += f" ({w[0]} workers)"
             top.loglog(n, t, "o-", label=label)
             bottom.semilogx(n, np.array(n) / np.array(t), "o-", label=label)
@@ -413,12 +527,12 @@ def report(csv_path: Path, prof_path: Path, md_path: Path, png_name: str, schedu
     table = []
     for r in rows:
         table.append(
-            f"| {r['robot']} | {METHOD_LABELS.get(r['method'], r['method'])} | {int(r['n']):,} | "
+            f"| {r['robot']} | {method_label(r['method'])} | {int(r['n']):,} | "
             f"{r['workers']} | {float(r['time_s']):.3f} | {float(r['poses_per_s']):,.0f} | "
             f"{100 * float(r['success_rate']):.2f} % | {r['mean_evals'] or '–'} | "
             f"{r['mean_starts'] or '–'} |"
         )
-    setups = sorted({r["setup_s"] for r in rows if r["method"] == "batch-dask"})
+    setups = sorted({r["setup_s"] for r in rows if r["method"].endswith("dask")})
     profile = [
         f"| {r['robot']} | {int(r['n']):,} | {r['part']} | {float(r['seconds']):.4f} "
         f"| {100 * float(r['share']):.1f} % | {r['note']} |"
@@ -435,6 +549,14 @@ def report(csv_path: Path, prof_path: Path, md_path: Path, png_name: str, schedu
             dask_setup=(
                 f"Dask start-up (not in the times above): {', '.join(setups)} s.\n"
                 if setups
+                else ""
+            )
+            + (
+                "\nRows with boxes: a scene of K random boxes around the arm "
+                "(`box_scene`), targets the FK of joint vectors free of contact (coal); "
+                "`AvoidCollisions` rows judge every answer with coal inside the timed call, "
+                "the rows without the goal are judged with coal afterwards (not timed).\n"
+                if any(r["method"].startswith("boxes") for r in rows)
                 else ""
             ),
             profile="\n".join(profile),
@@ -465,6 +587,7 @@ def run(args: argparse.Namespace) -> int:
         not args.no_tracik,
         out,
         args.repeat,
+        args.boxes,
     )
     png = plot(csv_path, out / "throughput.png")
     md = report(csv_path, prof_path, out / "throughput.md", png.name, str(args.scheduler))

@@ -1,0 +1,203 @@
+"""solve_batch with goals: AvoidCollisions (sphere rows in the kernel, coal's exact check as the
+judge), secondary goals in the null space, position-only targets, determinism across chunks
+and Dask workers, Python goals refused, the time limit."""
+
+from __future__ import annotations
+
+import pickle
+from dataclasses import dataclass
+
+import numpy as np
+import pytest
+from conftest import robot
+
+import swarm_ik
+from swarm_ik import goals as G
+from swarm_ik.batch import BatchChain, BatchGoals, BatchSettings, solve_batch, solve_chunk
+from swarm_ik.errors import InvalidArgumentError, UnknownNameError
+from swarm_ik.scene import Box, Scene
+
+SCENE = Scene(
+    [
+        Box([0.6, 0.6, 0.04], [0.55, 0.0, -0.02], name="table"),
+        Box([0.08, 0.08, 0.5], [0.45, 0.25, 0.25], name="post_left"),
+        Box([0.08, 0.08, 0.5], [0.45, -0.25, 0.25], name="post_right"),
+        Box([0.3, 0.1, 0.1], [0.0, 0.45, 0.6], name="bar"),
+    ]
+)
+
+
+@pytest.fixture(scope="module")
+def panda():
+    return robot("panda")
+
+
+@pytest.fixture(scope="module")
+def free_targets(panda):
+    """FK of 40 random joint vectors that coal finds collision-free (self and scene)."""
+    rc = panda.collision_model()
+    qs = [q for q in panda.random_q(np.random.default_rng(3), 400) if not rc.collides(q, SCENE)]
+    q = np.array(qs[:40])
+    assert len(q) == 40
+    return panda.fk(q)
+
+
+@pytest.fixture(scope="module")
+def avoid_result(panda, free_targets):
+    return solve_batch(panda, free_targets, seed=0, goals=[G.AvoidCollisions(SCENE)])
+
+
+def test_every_success_is_collision_free_and_agrees_with_solve(panda, free_targets, avoid_result):
+    res = avoid_result
+    rc = panda.collision_model()
+    assert res.goal_labels == ("AvoidCollisions",)
+    assert res.goals_met.shape == (40, 1)
+    np.testing.assert_array_equal(res.goals_met[:, 0], res.success)  # (the pose is met)
+    assert res.success_rate >= 0.9
+    for q in res.q[res.success]:
+        assert rc.check(q, SCENE).collision_free  # never a colliding success
+    # the single-query route on the same targets: the same verdict on (at least) 90 % of them
+    av = G.AvoidCollisions(SCENE)
+    single = np.array(
+        [
+            swarm_ik.solve(swarm_ik.IKProblem(panda, t, goals=[av]), seed=i).success
+            for i, t in enumerate(free_targets)
+        ]
+    )
+    assert single.mean() >= 0.9
+    assert (single == res.success).mean() >= 0.9
+
+
+def test_the_goal_changes_answers_that_plain_ik_puts_in_contact(panda, free_targets, avoid_result):
+    plain = solve_batch(panda, free_targets, seed=0)
+    rc = panda.collision_model()
+    hit = [i for i, q in enumerate(plain.q) if plain.success[i] and rc.collides(q, SCENE)]
+    assert hit  # the plain answers of some targets touch the scene…
+    assert avoid_result.success[hit].mean() >= 0.8  # …the answers with the goal do not
+    # where the plain answer is free, it is the answer (the first pass runs without the goal)
+    free = np.setdiff1d(np.flatnonzero(plain.success), hit)
+    np.testing.assert_array_equal(avoid_result.q[free], plain.q[free])
+
+
+def test_determinism_across_chunks_and_pickled_workers(panda, free_targets, avoid_result):
+    goals = [G.AvoidCollisions(SCENE)]
+    again = solve_batch(panda, free_targets, seed=0, goals=goals, chunk_size=7)
+    for field in ("q", "success", "n_evals", "n_starts", "goals_met"):
+        np.testing.assert_array_equal(getattr(again, field), getattr(avoid_result, field))
+    # what a Dask worker receives: the chain and its goals pickled (the problem built again)
+    bc = BatchChain.from_robot(panda)
+    bc = BatchChain(bc.tree, bc.bounds, BatchGoals(panda, goals, False, free_targets[0]))
+    shipped = pickle.loads(pickle.dumps(bc))
+    seeds = np.tile(panda.mid_q(), (15, 1))
+    part = solve_chunk(shipped, BatchSettings(seed=0), 20, free_targets[20:35], seeds)
+    np.testing.assert_array_equal(part.q, avoid_result.q[20:35])
+    np.testing.assert_array_equal(part.goals_met, avoid_result.goals_met[20:35])
+
+
+def test_local_dask_cluster_gives_identical_answers(panda, free_targets):
+    pytest.importorskip("distributed")
+    from swarm_ik import distributed
+
+    goals = [G.AvoidCollisions(SCENE), G.Posture(panda.mid_q())]
+    ref = solve_batch(panda, free_targets[:24], seed=2, goals=goals)
+    with distributed.connect("local", n_workers=2) as client:
+        res = solve_batch(panda, free_targets[:24], seed=2, goals=goals, scheduler=client,
+                          chunk_size=6)  # fmt: skip
+    np.testing.assert_array_equal(res.q, ref.q)
+    np.testing.assert_array_equal(res.goals_met, ref.goals_met)
+
+
+def test_secondary_posture_is_lowered_without_costing_the_pose(panda, free_targets):
+    q_ref = panda.mid_q()
+    plain = solve_batch(panda, free_targets, seed=1)
+    post = solve_batch(panda, free_targets, seed=1, goals=[G.Posture(q_ref)])
+    assert post.goal_labels == () and post.goals_met.shape == (40, 0)  # (secondary: not judged)
+    np.testing.assert_array_equal(post.success, plain.success)
+    ok = post.success
+    d_plain = np.linalg.norm(plain.q[ok] - q_ref, axis=1)
+    d_post = np.linalg.norm(post.q[ok] - q_ref, axis=1)
+    assert np.all(d_post <= d_plain + 1e-9)  # the descent never moves away (from the same point)
+    assert np.mean(d_post < d_plain - 1e-3) >= 0.8  # and moves most answers towards q_ref
+    assert np.all(post.n_evals >= plain.n_evals)
+
+
+def test_minimal_displacement_uses_each_targets_own_start(panda):
+    rng = np.random.default_rng(6)
+    q_true = panda.random_q(rng, 12)
+    q0 = np.clip(q_true + rng.normal(0, 0.3, q_true.shape), panda.lower, panda.upper)
+    targets = panda.fk(q_true)
+    plain = solve_batch(panda, targets, q0=q0, seed=0)
+    near = solve_batch(panda, targets, q0=q0, seed=0, goals=[G.MinimalDisplacement()])
+    ok = plain.success & near.success
+    assert ok.mean() >= 0.9
+    d_plain = np.linalg.norm(plain.q - q0, axis=1)[ok]
+    d_near = np.linalg.norm(near.q - q0, axis=1)[ok]
+    assert np.all(d_near <= d_plain + 1e-9) and np.mean(d_near < d_plain - 1e-4) >= 0.5
+
+
+def test_goals_on_other_frames_of_a_robot_loaded_with_them(panda, free_targets):
+    two = swarm_ik.load_robot("panda", ee_frame=["panda_hand_tcp", "panda_link4"])
+    elbow_up = G.Position("panda_link4", [0.0, 0.0, 1.2], primary=False)
+    res = solve_batch(two, free_targets[:10], seed=0, goals=[elbow_up])
+    assert res.success.all()
+    base = solve_batch(two, free_targets[:10], seed=0)
+
+    def dist(q):
+        return np.linalg.norm(two.fk(q, "panda_link4")[:, :3, 3] - [0.0, 0.0, 1.2], axis=1)
+
+    assert np.all(dist(res.q) <= dist(base.q) + 1e-9)  # the secondary goal only lowers it
+
+
+def test_position_only_with_goals(panda):
+    down = G.Axis(panda.ee_frame, axis=[0, 0, 1], direction=[0, 0, -1])
+    rng = np.random.default_rng(4)
+    targets = np.tile(np.eye(4), (20, 1, 1))
+    targets[:, :3, 3] = rng.uniform([0.3, -0.3, 0.15], [0.6, 0.3, 0.5], (20, 3))
+    res = solve_batch(panda, targets, position_only=True, goals=[down, G.AvoidCollisions(SCENE)])
+    assert res.goal_labels == ("Axis(panda_hand_tcp)", "AvoidCollisions")
+    assert res.success_rate >= 0.8
+    poses = panda.fk(res.q[res.success])
+    assert np.all(res.position_error[res.success] <= 1e-5)
+    np.testing.assert_allclose(poses[:, :3, 2] @ [0, 0, -1], 1.0, atol=1e-9)
+    assert res.goals_met[res.success].all()
+
+
+def test_refused_goals(panda, free_targets):
+    @dataclass(frozen=True)
+    class Height(G.Goal):  # a goal written in Python
+        def residual(self, state):
+            return np.array([state.pose(panda.ee_frame)[2, 3] - 0.3])
+
+        def jacobian(self, state):
+            return state.jacobian(panda.ee_frame)[2:3]
+
+    with pytest.raises(InvalidArgumentError, match="compiled goals only.*Height"):
+        solve_batch(panda, free_targets[:3], goals=[Height()])
+    with pytest.raises(UnknownNameError, match="not a goal frame of this robot"):
+        solve_batch(panda, free_targets[:3], goals=[G.Position("panda_link4", [0.3, 0, 0.3])])
+    with pytest.raises(InvalidArgumentError, match="list of goal terms"):
+        solve_batch(panda, free_targets[:3], goals=G.AvoidCollisions(SCENE))
+    with pytest.raises(InvalidArgumentError, match="time_limit"):
+        solve_batch(panda, free_targets[:3], time_limit=0)
+
+
+def test_result_files_hold_the_goal_checks(tmp_path, avoid_result):
+    npz = np.load(avoid_result.save(tmp_path / "r.npz"))
+    np.testing.assert_array_equal(npz["goals_met"], avoid_result.goals_met)
+    assert npz["goal_labels"].tolist() == ["AvoidCollisions"]
+    rows = avoid_result.save(tmp_path / "r.csv").read_text().splitlines()
+    assert rows[0].endswith("n_evals,met:AvoidCollisions")
+    assert len(rows) == 1 + avoid_result.n
+
+
+def test_time_limit_reports_targets_not_reached_as_unsolved(panda):
+    targets = panda.fk(panda.random_q(np.random.default_rng(5), 3000))
+    full = solve_batch(panda, targets, seed=0)
+    cut = solve_batch(panda, targets, seed=0, time_limit=0.01)
+    reached = cut.n_starts > 0
+    assert not reached.all()  # 3000 targets take longer than 10 ms
+    assert not cut.success[~reached].any()
+    np.testing.assert_array_equal(cut.q[~reached], np.tile(panda.mid_q(), ((~reached).sum(), 1)))
+    done = np.flatnonzero(reached)[:-1]  # (the last one reached may be cut in its restarts)
+    np.testing.assert_array_equal(cut.q[done], full.q[done])
+    assert cut.settings.deadline is not None
