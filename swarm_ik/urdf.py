@@ -33,6 +33,7 @@ import sys
 import tempfile
 import threading
 import xml.etree.ElementTree as ET
+from collections import Counter
 from collections.abc import Iterator
 from contextlib import contextmanager
 from dataclasses import dataclass, field
@@ -188,6 +189,11 @@ def _mimic_of(where: str, name: str, el: ET.Element) -> MimicJoint:
                 f"{where}: joint {name!r}: <mimic {attr}={raw!r}> must be a finite number"
             )
         vals.append(v)
+    if vals[0] == 0.0:
+        raise RobotModelError(
+            f"{where}: joint {name!r}: <mimic multiplier=0> would hold it still at its offset "
+            "whatever its driver does; make it a fixed joint (or give a non-zero multiplier)"
+        )
     return MimicJoint(name, str(el.get("joint")), vals[0], vals[1])
 
 
@@ -206,6 +212,13 @@ def parse_urdf_xml(text: str, where: str = "URDF") -> ET.Element:
             f"{where}: not a URDF (root element is <{root.tag}>, expected <robot>)"
         )
     return root
+
+
+MAX_LINKS = 10_000
+"""Most links of a URDF read (a humanoid has about 100)."""
+MAX_DEPTH = 1000
+"""Most links on one root-to-leaf chain (Pinocchio's recursive URDF parser crashes the
+process on chains of a few thousand)."""
 
 
 def check_urdf_xml(root: ET.Element, where: str = "URDF") -> dict[str, MimicJoint]:
@@ -231,9 +244,15 @@ def check_urdf_xml(root: ET.Element, where: str = "URDF") -> dict[str, MimicJoin
             f"{where}: the URDF is empty: {label} defines no <link>"
             + (f" (and {len(joint_list)} joint(s))" if joint_list else "")
         )
+    if len(link_list) > MAX_LINKS:
+        raise RobotModelError(
+            f"{where}: {len(link_list)} links; at most {MAX_LINKS} are read (swarm_ik.urdf."
+            "MAX_LINKS: Pinocchio's loading time grows faster than the link count)"
+        )
     links = set(link_list)
     for label, names in (("link", link_list), ("joint", joint_list)):
-        dup = sorted({str(n) for n in names if names.count(n) > 1})
+        counts = Counter(names)
+        dup = sorted({str(n) for n, k in counts.items() if k > 1})
         if dup:
             raise RobotModelError(f"{where}: {label} name(s) {dup} defined more than once")
     children: set[str] = set()
@@ -298,6 +317,26 @@ def check_urdf_xml(root: ET.Element, where: str = "URDF") -> dict[str, MimicJoin
             f"{where}: a URDF needs exactly one root link, found "
             f"{sorted(map(str, roots)) or 'none'} (a loop or a disconnected link)"
         )
+    parent_of = {}
+    for joint in root.findall("joint"):
+        p_el, c_el = joint.find("parent"), joint.find("child")
+        assert p_el is not None and c_el is not None  # (checked above)
+        parent_of[str(c_el.get("link"))] = str(p_el.get("link"))
+    depth: dict[str, int] = {str(next(iter(roots))): 0}
+    for link in map(str, links):  # depth of every link, each walked once
+        path = []
+        while link not in depth:
+            path.append(link)
+            link = parent_of[link]
+        d = depth[link]
+        for up in reversed(path):
+            d += 1
+            depth[up] = d
+        if d > MAX_DEPTH:
+            raise RobotModelError(
+                f"{where}: a chain of {d} links from the root; at most {MAX_DEPTH} are read "
+                "(swarm_ik.urdf.MAX_DEPTH: deeper trees overflow the stack of the URDF parser)"
+            )
     return mimic
 
 

@@ -307,3 +307,47 @@ def test_sampling_bounds_narrows_only_huge_ranges_around_the_seed() -> None:
 def test_sampling_bounds_refuses_bad_input(kwargs: dict, message: str) -> None:
     with pytest.raises(InvalidArgumentError, match=message):
         sampling_bounds([-1.0, -1.0], [1.0, 1.0], **kwargs)
+
+
+def _fixed_chain(n: int, wide: bool) -> str:
+    links = "".join(f'<link name="l{i}"/>' for i in range(n + 2))
+    joints = (
+        '<joint name="j" type="revolute"><parent link="l0"/><child link="l1"/>'
+        '<axis xyz="0 0 1"/><limit lower="-2" upper="2" effort="1" velocity="1"/></joint>'
+    )
+    joints += "".join(
+        f'<joint name="f{i}" type="fixed"><parent link="l{1 if wide else i + 1}"/>'
+        f'<child link="l{i + 2}"/></joint>'
+        for i in range(n)
+    )
+    return f'<robot name="big">{links}{joints}</robot>'
+
+
+@pytest.mark.parametrize(
+    ("n", "wide", "words"),
+    [(140_000, True, "at most 10000 are read"), (5000, False, "a chain of")],
+)
+def test_huge_or_deep_urdf_refused_at_once(n: int, wide: bool, words: str, tmp_path: Path) -> None:
+    """140k fixed links (quadratic checks once took minutes) and a 5000-deep chain (which
+    crashes Pinocchio's parser) are refused in about a second, naming the limit."""
+    import time
+
+    path = tmp_path / "big.urdf"
+    path.write_text(_fixed_chain(n, wide))
+    t0 = time.perf_counter()
+    with pytest.raises(RobotModelError, match=words):
+        swarm_ik.load_robot(path)
+    assert time.perf_counter() - t0 < 20.0
+
+
+def test_mimic_multiplier_zero_refused(tmp_path: Path) -> None:
+    text = _fixed_chain(0, False).replace(
+        "</robot>",
+        '<link name="m"/><joint name="jm" type="revolute"><parent link="l1"/>'
+        '<child link="m"/><axis xyz="0 1 0"/><limit lower="-1" upper="1" effort="1" '
+        'velocity="1"/><mimic joint="j" multiplier="0" offset="0.1"/></joint></robot>',
+    )
+    path = tmp_path / "mimic0.urdf"
+    path.write_text(text)
+    with pytest.raises(RobotModelError, match="multiplier=0"):
+        swarm_ik.load_robot(path, "m")
