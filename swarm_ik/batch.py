@@ -35,11 +35,13 @@ True
 
 from __future__ import annotations
 
+import array
 import contextlib
 import csv
 import dataclasses
 import functools
 import hashlib
+import itertools
 import logging
 import math
 import os
@@ -282,6 +284,11 @@ class BatchSettings:
             v = getattr(self, label)
             if isinstance(v, bool) or not isinstance(v, (int, np.integer)) or v < lo:
                 raise InvalidArgumentError(f"{label} must be an integer >= {lo}, got {v!r}")
+        if self.max_starts > MAX_STARTS:
+            raise InvalidArgumentError(
+                f"max_starts must be at most {MAX_STARTS} (swarm_ik.batch.MAX_STARTS; "
+                f"time_limit bounds the whole call), got {self.max_starts!r}"
+            )
         s = self.seed
         if isinstance(s, bool) or not isinstance(s, (int, np.integer)) or not 0 <= s < 2**63:
             raise InvalidArgumentError(f"seed must be an integer in [0, 2**63), got {s!r}")
@@ -716,6 +723,13 @@ class BatchResult(_Rows):
 
 
 # --------------------------------------------------------------------------- checks
+MAX_TARGETS = 10_000_000
+"""Most targets of one :func:`solve_batch` call or targets file (a 4x4 pose is 128 bytes:
+1.3 GB of poses, about as much again for the answers); split larger sets into calls."""
+MAX_STARTS = 10_000
+"""Largest ``max_starts`` (about 0.5 s of starts per target on a 7-joint arm)."""
+
+
 def check_targets(targets: Any, orth_tol: float = 1e-6) -> FloatArray:
     """Validate a batch of target poses.
 
@@ -731,7 +745,14 @@ def check_targets(targets: Any, orth_tol: float = 1e-6) -> FloatArray:
         InvalidTargetError: wrong shape, NaN/inf, bad bottom row or a non-rotation block; the
             message names the first bad target.
     """
+    if np.iscomplexobj(targets):
+        raise InvalidTargetError("targets must be real numbers, got complex values")
     arr = np.asarray(targets, dtype=float)
+    if arr.ndim >= 1 and arr.shape[0] > MAX_TARGETS:
+        raise InvalidTargetError(
+            f"{arr.shape[0]} targets; at most {MAX_TARGETS} per call "
+            "(swarm_ik.batch.MAX_TARGETS): split them"
+        )
     if arr.ndim == 2 and arr.shape[1] == 7:
         if not np.all(np.isfinite(arr)):
             bad = int(np.flatnonzero(~np.isfinite(arr).all(axis=1))[0])
@@ -1149,9 +1170,9 @@ def read_targets(path: str | Path) -> FloatArray:
         raise InvalidArgumentError(f"targets file not found: {str(p)!r}")
     suffix = p.suffix.lower()
     if suffix in (".npz", ".npy"):
+        if suffix == ".npy":  # (mapped: its shape is checked before it is read)
+            return check_targets(np.load(p, allow_pickle=False, mmap_mode="r"))
         data = np.load(p, allow_pickle=False)
-        if suffix == ".npy":
-            return check_targets(data)
         keys = list(data.keys())
         for k in ("targets", "poses"):
             if k in keys:
@@ -1163,28 +1184,26 @@ def read_targets(path: str | Path) -> FloatArray:
         )
     if suffix == ".csv":
         with p.open(newline="") as fh:
-            rows = [r for r in csv.reader(fh) if r and not r[0].lstrip().startswith("#")]
-        if not rows:
-            return np.empty((0, 4, 4))
-        header = [h.strip().lower() for h in rows[0]]
-        cols: list[int] | None = None
-        try:
-            [float(v) for v in rows[0]]
-            body = rows
-        except ValueError:
-            body = rows[1:]
-            if all(c in header for c in POSE_COLUMNS):
-                cols = [header.index(c) for c in POSE_COLUMNS]
-            elif len(header) != 16:
-                missing = [c for c in POSE_COLUMNS if c not in header]
-                raise InvalidArgumentError(
-                    f"{p}: header lacks column(s) {', '.join(missing)}; expected "
-                    f"{', '.join(POSE_COLUMNS)} (or 16 matrix entries)"
-                ) from None
-        try:
-            table = np.array([[float(v) for v in r] for r in body], dtype=float)
-        except ValueError as exc:
-            raise InvalidArgumentError(f"{p}: non-numeric value ({exc})") from None
+            rows = (r for r in csv.reader(fh) if r and not r[0].lstrip().startswith("#"))
+            first = next(rows, None)
+            if first is None:
+                return np.empty((0, 4, 4))
+            header = [h.strip().lower() for h in first]
+            cols: list[int] | None = None
+            try:
+                [float(v) for v in first]
+                body: Any = itertools.chain([first], rows)
+            except ValueError:  # a header
+                body = rows
+                if all(c in header for c in POSE_COLUMNS):
+                    cols = [header.index(c) for c in POSE_COLUMNS]
+                elif len(header) != 16:
+                    missing = [c for c in POSE_COLUMNS if c not in header]
+                    raise InvalidArgumentError(
+                        f"{p}: header lacks column(s) {', '.join(missing)}; expected "
+                        f"{', '.join(POSE_COLUMNS)} (or 16 matrix entries)"
+                    ) from None
+            table = _read_rows(p, body, len(first))
         if table.size == 0:
             return np.empty((0, 4, 4))
         if cols is not None:
@@ -1201,6 +1220,32 @@ def read_targets(path: str | Path) -> FloatArray:
         f"cannot read targets from {str(p)!r}: unknown suffix {p.suffix!r}; valid suffixes: "
         ".csv, .npy, .npz"
     )
+
+
+def _read_rows(p: Path, rows: Any, width: int) -> FloatArray:
+    """The numeric CSV ``rows`` as a ``(n, width)`` array, converted as they are read (8 bytes
+    a number, not a list of strings), at most :data:`MAX_TARGETS` of them.
+
+    Raises:
+        InvalidArgumentError: a non-numeric value, a row of another width, too many rows.
+    """
+    values = array.array("d")
+    n = 0
+    for r in rows:
+        if len(r) != width:
+            raise InvalidArgumentError(
+                f"{p}: row {n + 1} has {len(r)} columns, the first row {width}"
+            )
+        n += 1
+        if n > MAX_TARGETS:
+            raise InvalidArgumentError(
+                f"{p}: more than {MAX_TARGETS} rows (swarm_ik.batch.MAX_TARGETS): split the file"
+            )
+        try:
+            values.extend(float(v) for v in r)
+        except ValueError as exc:
+            raise InvalidArgumentError(f"{p}: non-numeric value ({exc})") from None
+    return np.frombuffer(values, dtype=float).reshape(n, width) if n else np.empty((0, width))
 
 
 def write_targets(path: str | Path, targets: Any) -> Path:

@@ -569,6 +569,8 @@ def test_unreachable_and_degenerate_targets_give_an_honest_result(
     for case, (prob, reachable) in _degenerate_cases(yumi, planar).items():
         with warnings.catch_warnings():
             warnings.simplefilter("error")  # no RuntimeWarning (0/0, overflow...) either
+            # (numba's note on first-class functions, when this test happens to compile them)
+            warnings.filterwarnings("ignore", message="First-class function type feature")
             res = swarm_ik.solve(prob, name, seed=1, max_evals=300)
         where = f"{name} on {case}: {res}"
         assert isinstance(res, swarm_ik.Result), where
@@ -1126,3 +1128,38 @@ def test_target_beyond_reach_returns_at_once_whatever_the_budget(solver: str) ->
     res = swarm_ik.IKSolver(robot, time_limit=1e9).solve(target)
     assert time.perf_counter() - t0 < 10 * UNREACHABLE_BUDGET[0] + 1.0
     assert res.reason == "unreachable"
+
+
+def test_batch_limits_named_before_any_work(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    """--random 10**12 (out of memory before), max_starts=10**9 (hours per unreachable
+    target), complex targets (imaginary part dropped before) and too many CSV rows."""
+    from swarm_ik import batch
+
+    rc = main(
+        ["batch", "--robot", "panda", "--random", str(10**12), "--out", str(tmp_path / "o.npz")]
+    )
+    assert rc == 2 and "MAX_TARGETS" in capsys.readouterr().err
+    robot = swarm_ik.load_robot("panda")
+    with pytest.raises(errors.InvalidArgumentError, match="max_starts must be at most"):
+        swarm_ik.solve_batch(robot, np.eye(4)[None], max_starts=10**9)
+    with pytest.raises(errors.InvalidTargetError, match="complex"):
+        swarm_ik.solve_batch(robot, np.zeros((2, 7), dtype=complex))
+    np.save(tmp_path / "c.npy", np.zeros((2, 7), dtype=complex) + 1j)
+    with pytest.raises(errors.InvalidTargetError, match="complex"):
+        batch.read_targets_file(tmp_path / "c.npy")
+    csv_path = tmp_path / "t.csv"
+    csv_path.write_text("0.4,0,0.4,0,0,0,1\n" * 4)
+    assert batch.read_targets_file(csv_path).shape == (4, 4, 4)
+    csv_path.write_text("0.4,0,0.4,0,0,0,1\n0.4,0,0.4,0,0,0\n")
+    with pytest.raises(errors.InvalidArgumentError, match="row 2 has 6 columns"):
+        batch.read_targets_file(csv_path)
+    original = batch.MAX_TARGETS
+    try:
+        batch.MAX_TARGETS = 3
+        csv_path.write_text("0.4,0,0.4,0,0,0,1\n" * 4)
+        with pytest.raises(errors.InvalidArgumentError, match="more than 3 rows"):
+            batch.read_targets_file(csv_path)
+    finally:
+        batch.MAX_TARGETS = original

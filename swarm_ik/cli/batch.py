@@ -102,8 +102,13 @@ def run(args: argparse.Namespace) -> int:
     from swarm_ik.errors import InvalidArgumentError
 
     check_output_file(args.out, "--out", (".csv", ".npz"))  # before any work
-    if args.random is not None and args.random < 1:
-        raise InvalidArgumentError(f"--random must be a positive count, got {args.random}")
+    from swarm_ik.batch import MAX_TARGETS
+
+    if args.random is not None and not 1 <= args.random <= MAX_TARGETS:
+        raise InvalidArgumentError(
+            f"--random must be a count from 1 to {MAX_TARGETS} (swarm_ik.batch.MAX_TARGETS), "
+            f"got {args.random}"
+        )
     if args.targets is not None:
         check_input_file(args.targets, "--targets", None)
     robot = swarm_ik.load_robot(args.robot, ee_frame=args.frame, **robot_kwargs(args))
