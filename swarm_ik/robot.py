@@ -284,7 +284,7 @@ def _reduce(
         jname = reduced.names[j]
         if floating and j == 1:  # x, y, z along the world axes, then the rotation
             placement = reduced.jointPlacements[1]
-            box = np.full(3, 1.0) if base_box is None else np.asarray(base_box, dtype=float)
+            box = np.full(3, 2.0) if base_box is None else np.asarray(base_box, dtype=float)
             for k in range(4):
                 kinds.append(PRISMATIC if k < 3 else BALL)
                 axes.append(np.eye(3)[k] if k < 3 else np.array([0.0, 0.0, 1.0]))
@@ -491,7 +491,7 @@ class RobotModel:
         frame_reason: str = "given",
         floating_base: bool = False,
         locked: Mapping[str, float] | Sequence[str] | None = None,
-        base_box: Any = 1.0,
+        base_box: Any = 2.0,
     ) -> RobotModel:
         """Load a URDF and reduce it to the joints between the root and the goal frame(s).
 
@@ -661,15 +661,17 @@ class RobotModel:
             rc = self._cache["collision"] = RobotCollision.from_robot(self, srdf=self.srdf)
         return rc
 
-    def reach_radius(self, frame: str | None = None) -> float:
+    def reach_radius(self, frame: str | None = None, *, base: bool = True) -> float:
         """An upper bound [m] on the distance from the world origin that ``frame`` can reach:
         the sum of the joint offsets along its path, the prismatic strokes and the frame
-        offset."""
+        offset; ``base=False`` leaves out a floating base's box (the reach from the base: a
+        length scale of the robot itself)."""
         t = self.tree
         f = self.frame_index(frame)
         total = float(np.linalg.norm(t.frame_pos[f]))
         j = int(t.frame_joint[f])
-        while j >= 0:
+        stop = 3 if (self.floating_base and not base) else -1  # (tree joints 0-3: the base)
+        while j > stop:
             total += float(np.linalg.norm(t.pos_p[j]))
             if t.kind[j] == PRISMATIC:
                 qi = int(t.q_index[j])
@@ -988,7 +990,7 @@ def load_robot(
     srdf: str | os.PathLike[str] | bool | None = None,
     floating_base: bool = False,
     locked: Mapping[str, float] | Sequence[str] | None = None,
-    base_box: Any = 1.0,
+    base_box: Any = 2.0,
 ) -> RobotModel:
     """Load a robot by bundled name, ``example-robot-data`` name, or URDF path.
 
@@ -1009,7 +1011,8 @@ def load_robot(
             (rad or m, within the joint's limits; None: its neutral value) or a list of
             names (held at their neutral value).  The answer keeps them exactly there; mimic
             followers of a locked joint follow it.
-        base_box: Half-widths [m] of the floating base's box (one number or three).
+        base_box: Half-widths [m] of the floating base's box around the origin (one number or
+            three; default 2: a standing humanoid's pelvis, a base driving a few metres).
 
     Raises:
         UnknownNameError: a locked joint is not a one-DoF joint of the URDF (they are

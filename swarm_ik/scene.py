@@ -34,6 +34,7 @@ Files (:meth:`Scene.load` / :meth:`Scene.save`, the layouts in ``docs/scenes.md`
 
 from __future__ import annotations
 
+import collections
 import functools
 import hashlib
 import json
@@ -467,12 +468,18 @@ class Scene:
                     + ", ".join(c.__name__ for c in SHAPES.values())
                 )
             names.append(o.name if o.name else f"{o.kind}{i}")
-        dup = sorted({n for n in names if names.count(n) > 1})
+        dup = sorted(n for n, k in collections.Counter(names).items() if k > 1)
         if dup:
             raise InvalidArgumentError(f"scene: obstacle name(s) {dup} used more than once")
         self._obstacles: tuple[Shape, ...] = items
         self._names: tuple[str, ...] = tuple(names)
         self._coal: list[tuple[str, Any]] | None = None
+
+    def __getstate__(self) -> dict[str, Any]:
+        """Pickled without its coal objects (they cannot be pickled; made again on use)."""
+        state = dict(self.__dict__)
+        state["_coal"] = None
+        return state
 
     @property
     def obstacles(self) -> tuple[Shape, ...]:

@@ -42,7 +42,7 @@ def test_floating_base_adds_six_entries_first(talos: swarm_ik.RobotModel) -> Non
     assert "torso_1_joint" not in talos.joint_names
     assert talos.full_model.joints[1].shortname() == "JointModelFreeFlyer"
     np.testing.assert_allclose(talos.lower[3:6], -np.pi)
-    np.testing.assert_allclose(talos.upper[:3], 1.0)
+    np.testing.assert_allclose(talos.upper[:3], 2.0)
 
 
 @pytest.mark.parametrize("floating", [False, True])

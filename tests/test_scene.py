@@ -146,3 +146,22 @@ def test_coal_objects_match_the_shapes(stl) -> None:
     assert dist("mesh4", (0.3, 0.3, 0.6)) == pytest.approx(0.5 - 0.025, abs=1e-6)
     lo, hi = scene.bounds()
     assert lo[2] == pytest.approx(-0.021, abs=1e-6) and hi[2] >= 0.6
+
+
+def test_scene_pickles_after_use() -> None:
+    """A scene used in a check holds coal objects; it still pickles (they are made again)."""
+    import pickle
+
+    import numpy as np
+
+    import swarm_ik
+    from swarm_ik.scene import Box
+
+    robot = swarm_ik.load_robot("panda")
+    pose = np.eye(4)
+    pose[:3, 3] = [0.6, 0.0, 0.2]
+    scene = swarm_ik.Scene([Box(size=(0.2, 0.2, 0.2), pose=pose)])
+    before = robot.collision_model().check(robot.mid_q(), scene, 0.0, False).collision_free
+    again = pickle.loads(pickle.dumps(scene))
+    assert again.names == scene.names
+    assert robot.collision_model().check(robot.mid_q(), again, 0.0, False).collision_free == before

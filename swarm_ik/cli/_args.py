@@ -156,10 +156,10 @@ def add_robot(parser: Any, *, frame: bool = True) -> None:
         "--base-box",
         type=float,
         nargs="+",
-        default=[1.0],
+        default=None,
         metavar="M",
         help="with --floating-base: half-widths [m] of the base's box around the origin, one "
-        "number or three (default 1)",
+        "number or three (default 2)",
     )
     parser.add_argument(
         "--lock",
@@ -190,11 +190,13 @@ def lock_argument(text: str) -> tuple[str, float | None]:
 def robot_kwargs(args: argparse.Namespace) -> dict[str, Any]:
     """``load_robot`` keywords of :func:`add_robot`'s options."""
     box = args.base_box
-    if len(box) not in (1, 3):
-        raise InvalidArgumentError(f"--base-box takes one number or three, got {len(box)}")
-    if box != [1.0] and not args.floating_base:
-        raise InvalidArgumentError("--base-box needs --floating-base")
-    out: dict[str, Any] = {"floating_base": bool(args.floating_base), "base_box": box}
+    out: dict[str, Any] = {"floating_base": bool(args.floating_base)}
+    if box is not None:
+        if not args.floating_base:
+            raise InvalidArgumentError("--base-box needs --floating-base")
+        if len(box) not in (1, 3):
+            raise InvalidArgumentError(f"--base-box takes one number or three, got {len(box)}")
+        out["base_box"] = box
     if args.lock:
         names = [name for name, _ in args.lock]
         dup = sorted({n for n in names if names.count(n) > 1})

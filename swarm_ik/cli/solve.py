@@ -215,7 +215,10 @@ def _print_json(args: argparse.Namespace, robot: Any, res: Any) -> None:
 
 def _print_text(args: argparse.Namespace, robot: Any, res: Any) -> None:
     status = "reached" if res.success else "NOT reached (best found below)"
-    print(f"robot {robot.name} ({robot.nq} joints), frame {robot.ee_frame}, solver {res.solver}")
+    joints = (
+        f"{robot.nq - 6} joints + floating base" if robot.floating_base else f"{robot.nq} joints"
+    )
+    print(f"robot {robot.name} ({joints}), frame {robot.ee_frame}, solver {res.solver}")
     print(f"target {status}")
     for name, kind, v in zip(robot.joint_names, robot.joint_kinds, res.q, strict=True):
         unit = "m" if kind == "prismatic" else "rad"

@@ -54,7 +54,7 @@ def full_configuration(robot: RobotModel, q: Any) -> FloatArray:
 
 def reach_length(robot: RobotModel) -> float:
     """A length scale of the robot [m]: the sum of its joint offsets (at least 0.2)."""
-    return max(0.2, robot.reach_radius())
+    return max(0.2, robot.reach_radius(base=False))
 
 
 def rgb_int(rgb: Any) -> int:
