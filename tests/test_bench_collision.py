@@ -51,7 +51,23 @@ def test_scenes_are_seeded_and_shaped_as_described() -> None:
         C.make_scene("kitchen", 0)
 
 
-@pytest.mark.parametrize("scene", ["shelf", "cubby"])
+def test_clutter_scenes_are_seeded_nested_and_leave_the_base_free() -> None:
+    scenes = {k: C.make_scene(f"clutter{k}", 0).scene for k in C.CLUTTER_COUNTS}
+    for k, sc in scenes.items():
+        assert len(sc) == k and all(o.kind == "box" for o in sc)
+        assert sc == C.make_scene(f"clutter{k}", 0).scene != C.make_scene(f"clutter{k}", 1).scene
+    assert list(scenes[60])[:20] == list(scenes[20])  # nested: more boxes only add obstacles
+    for o in scenes[60]:
+        c = np.array(o.pose)[:3, 3]
+        half = 0.5 * float(np.linalg.norm(o.size))
+        assert np.hypot(c[0], c[1]) - half >= C.CLUTTER_BASE_CLEAR  # the base column is free
+    narrow = C.make_scene("shelf-narrow", 0)
+    assert narrow.inside is not None and len(narrow.scene) == 8
+    gaps = np.diff(sorted(np.array(o.pose)[2, 3] for o in narrow.scene if "board" in o.name))
+    assert np.all((gaps >= 0.18) & (gaps <= 0.22))  # narrower than the shelf's 0.28-0.34 m
+
+
+@pytest.mark.parametrize("scene", ["shelf", "cubby", "shelf-narrow", "clutter60"])
 def test_targets_are_collision_free_fk_of_in_limit_q(scene: str) -> None:
     r = robot("ur5")
     bs = C.make_scene(scene, 0)
@@ -187,3 +203,41 @@ def test_diagnosis_finds_the_generating_branch_collision_free() -> None:
     assert got["exact_free_branch"] == 1.0
     assert 0.0 <= got["sphere_free_branch"] <= got["exact_free_branch"]
     assert all(0.0 <= v <= 1.0 for v in got.values())
+
+
+def test_quick_clutter_run_with_the_ablation(tmp_path) -> None:
+    """One clutter scene, a few targets, the main solvers and the ablation's variants: rows
+    judged by the benchmark, the memory seeding after the first solved target, a summary
+    section from the CSV."""
+    parser = argparse.ArgumentParser()
+    C.add_arguments(parser)
+    out = tmp_path / "bc"
+    argv = ["--n", "3", "--robots", "ur5", "--scenes", "clutter20", "--solvers", "ours+goal",
+            "--ablation", "--out", str(out)]  # fmt: skip
+    args = parser.parse_args(argv)
+    assert C.run(args) == 0
+    rows = common.read_csv(out / "ablation.csv")
+    names = [v.name for v in C.ABLATION_VARIANTS]
+    assert len(rows) == 3 * len(names) and {r["variant"] for r in rows} == set(names)
+    scene = C.make_scene("clutter20", 0).scene
+    assert Scene.from_json(out / "scenes" / "clutter20.json") == scene
+    for r in rows:
+        assert not (r["claimed"] == "1" and r["collision_free"] == "0")
+        if r["variant"] in ("uniform", "default"):
+            assert r["seeded"] == "0"
+        if r["target_id"] == "0":
+            assert r["seeded"] == "0"  # the memory starts empty
+    solved_first = {r["variant"] for r in rows if r["target_id"] == "0" and r["claimed"] == "1"}
+    for r in rows:
+        if r["target_id"] == "1" and r["variant"] in solved_first and "memory" in r["variant"]:
+            assert r["seeded"] == "1"
+    assert json.loads((out / "run.json").read_text())["ablation_budget_ms"] == 50.0
+    summary = (out / "summary.md").read_text()
+    assert summary == C.write_report(out)
+    assert "## Ablation of the default search" in summary
+    assert "| ur5 | clutter20 | uniform | 3 |" in summary
+
+
+def test_hard_scene_group_expands() -> None:
+    assert C._names("hard", C.SCENES, "scenes", {"hard": C.HARD_SCENES}) == list(C.HARD_SCENES)
+    assert C._names("table,hard,table", C.SCENES, "scenes", {"hard": C.HARD_SCENES})[0] == "table"

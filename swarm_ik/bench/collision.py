@@ -7,7 +7,20 @@ seeded by ``--seed`` and the scene's index, the same geometry for every robot):
   boxes and three spheres resting on it at random places, sizes and yaws;
 * ``shelf``: a shelf unit in front of the robot: four horizontal boards and two side panels;
 * ``cubby``: a five-walled box (floor, ceiling, two sides, back) open towards the robot
-  (towards ``-x``), inner size 0.30 x 0.36 x 0.30 m; targets inside it.
+  (towards ``-x``), inner size 0.30 x 0.36 x 0.30 m; targets inside it;
+* ``shelf-narrow``: five boards 0.18–0.22 m apart (0.16–0.20 m clear), 0.60 m wide and
+  0.30 m deep, two side panels and a back panel; targets inside the slots, so the hand enters
+  between boards (the ``shelf`` above is not narrow: 0.28–0.34 m between boards, and its
+  targets need not lie in it);
+* ``clutter10``, ``clutter20``, ``clutter40``, ``clutter60``: N boxes (edges 0.05–0.15 m,
+  random orientations) with centres uniform in the annulus 0.25–0.80 m from the base axis,
+  heights 0–0.90 m, none reaching into the column of radius 0.25 m around the base axis (the
+  base and shoulder stay free); the scenes are nested (``clutterN`` is the first N boxes of
+  one seeded stream, so more boxes only add obstacles).
+
+``--scenes`` defaults to ``table,shelf,cubby``; ``hard`` stands for
+:data:`HARD_SCENES` (``cubby``, ``shelf-narrow`` and the four clutter scenes) and ``all`` for
+every scene.
 
 Targets: FK of joint vectors drawn uniformly within the limits that the exact check
 (:meth:`swarm_ik.collision.RobotCollision.check`, coal on the URDF's collision geometry, self
@@ -46,17 +59,34 @@ Unreachable: for every obstacle-bearing scene, targets placed inside obstacles (
 of each box, board or wall, with random orientations) must come back with
 ``reason == "unreachable"``.
 
+Ablation of the default search (``--ablation``): the ``swarm`` solver on the same collision
+problems (``IKProblem(robot, T, goals=[AvoidCollisions(scene)])``) at its own time limit
+(``--ablation-budget-ms``, default 50 ms), in :data:`ABLATION_VARIANTS`:
+
+* ``uniform``: ``swarm_fraction=0``: every start after the seed is a uniform random restart;
+* ``default``: the default (``swarm_fraction=0.5``: half of each generation after the first
+  is grey-wolf proposals from the archive of local minima);
+* ``memory``: the default, with ``q0`` = the answer of the nearest earlier target of the same
+  scene that this variant solved (nearest by ``|Δp| + 0.1 m/rad · angle`` between the targets;
+  the first target of a scene has none and starts from the middle of the ranges);
+* ``uniform+memory``: both changes.
+
+Per target the variants run in a seeded random order with the same integer seed (paired:
+``uniform`` and ``default`` share generation 0 and differ only in the later proposals) and
+are judged as above.  Writes ``ablation.csv``; the summary gets a section.
+
 Writes under ``--out`` (default ``./bench-collision``): ``collision.csv`` (one row per
 target and solver), ``batch.csv``, ``unreachable.csv``, ``overhead.csv``, ``scenes/<scene>.json``,
-``summary.md`` (from the CSVs) and ``run.json``.
+``ablation.csv`` (with ``--ablation``), ``summary.md`` (from the CSVs) and ``run.json``.
 """
 
 from __future__ import annotations
 
 import argparse
+import functools
 import math
 import time
-from collections.abc import Callable, Sequence
+from collections.abc import Callable, Mapping, Sequence
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
@@ -67,10 +97,23 @@ from swarm_ik.bench import common
 from swarm_ik.errors import InvalidArgumentError
 from swarm_ik.problem import largest_errors
 
-HELP = "collision-free IK: table, shelf and cubby scenes; ours with the goal vs rejection"
+HELP = (
+    "collision-free IK: table, shelf, cubby, narrow shelf and clutter scenes; ours with the "
+    "goal vs rejection; ablation of the default search"
+)
 COMMAND = "collision"
 ROBOTS = ("panda", "ur5")
-SCENES = ("table", "shelf", "cubby")
+CLUTTER_COUNTS = (10, 20, 40, 60)
+"""Box counts of the clutter scenes (``clutter10`` …)."""
+SCENES = (
+    "table", "shelf", "cubby", "shelf-narrow", *(f"clutter{k}" for k in CLUTTER_COUNTS),
+)  # fmt: skip
+"""Every scene, in report order (new scenes are appended: a scene's index keys its random
+stream, so the earlier scenes and their targets stay as they were)."""
+DEFAULT_SCENES = ("table", "shelf", "cubby")
+"""Scenes of a run without ``--scenes``."""
+HARD_SCENES = ("cubby", "shelf-narrow", *(f"clutter{k}" for k in CLUTTER_COUNTS))
+"""``--scenes hard``: where the hand enters between boards, and the clutter."""
 SOLVERS = (
     "ours+goal", "ours-reject", "analytic-branches", "rtb-lm-reject", "tracik-reject",
     "dls-reject",
@@ -106,10 +149,10 @@ class BenchScene:
     """A scene of the benchmark.
 
     Attributes:
-        name: ``table``, ``shelf`` or ``cubby``.
+        name: One of :data:`SCENES`.
         scene: The obstacles (:class:`swarm_ik.scene.Scene`).
-        inside: For the cubby, the inner box ``(lower (3,), upper (3,))`` [m] the tool frame
-            of a target must lie in; ``None`` otherwise.
+        inside: For the cubby and the narrow shelf, the inner box ``(lower (3,), upper (3,))``
+            [m] the tool frame of a target must lie in; ``None`` otherwise.
     """
 
     name: str
@@ -177,22 +220,98 @@ def cubby_scene(rng: np.random.Generator) -> BenchScene:
     return BenchScene("cubby", Scene(items), (lower, upper))
 
 
+def narrow_shelf_scene(rng: np.random.Generator) -> BenchScene:
+    """A narrow shelf: five boards 0.18–0.22 m apart, 0.60 m wide, 0.30 m deep, two side
+    panels and a back; targets inside the slots (between the lowest and the highest board)."""
+    from swarm_ik.scene import Box, Scene
+
+    depth, width, t = 0.30, 0.60, 0.02
+    x0 = rng.uniform(0.40, 0.48)  # front edge
+    y0 = rng.uniform(-0.10, 0.10)
+    z_first = rng.uniform(0.05, 0.15)
+    gap = rng.uniform(0.18, 0.22)  # board to board (clear height gap - t)
+    xc = x0 + depth / 2
+    heights = [z_first + k * gap for k in range(5)]
+    items = [
+        Box((depth, width, t), _yaw_pose((xc, y0, z)), name=f"board{k}")
+        for k, z in enumerate(heights)
+    ]
+    top = heights[-1] + t / 2
+    for side, sgn in (("left", 1.0), ("right", -1.0)):
+        yc = y0 + sgn * (width / 2 + t / 2)
+        items.append(Box((depth, t, top), _yaw_pose((xc, yc, top / 2)), name=f"side_{side}"))
+    items.append(Box((t, width + 2 * t, top), _yaw_pose((x0 + depth + t / 2, y0, top / 2)),
+                     name="back"))  # fmt: skip
+    lower = np.array([x0, y0 - width / 2, heights[0] + t / 2])
+    upper = np.array([x0 + depth, y0 + width / 2, heights[-1] - t / 2])
+    return BenchScene("shelf-narrow", Scene(items), (lower, upper))
+
+
+CLUTTER_BASE_CLEAR = 0.25
+"""Radius [m] of the column around the base axis (z) that no clutter box reaches into."""
+CLUTTER_OUTER = 0.80
+"""Largest distance [m] of a clutter box's centre from the base axis."""
+CLUTTER_HEIGHT = (0.0, 0.90)
+"""Range [m] of a clutter box's centre height."""
+CLUTTER_EDGE = (0.05, 0.15)
+"""Range [m] of a clutter box's edge lengths."""
+
+
+def clutter_scene(rng: np.random.Generator, n: int) -> BenchScene:
+    """``n`` boxes around the arm: edges from :data:`CLUTTER_EDGE`, uniformly random
+    orientations, centres uniform (by area) in the annulus from the base axis out to
+    :data:`CLUTTER_OUTER` and in height over :data:`CLUTTER_HEIGHT`; a box whose bounding
+    sphere reaches into the column of radius :data:`CLUTTER_BASE_CLEAR` around the base axis
+    is drawn again (the base and shoulder stay free).  The k-th box does not depend on ``n``
+    (the scenes are nested)."""
+    from scipy.spatial.transform import Rotation
+
+    from swarm_ik.scene import Box, Scene
+
+    items: list[Any] = []
+    r0, r1 = CLUTTER_BASE_CLEAR, CLUTTER_OUTER
+    while len(items) < n:
+        size = rng.uniform(*CLUTTER_EDGE, 3)
+        r = math.sqrt(rng.uniform(r0**2, r1**2))
+        phi = rng.uniform(-math.pi, math.pi)
+        z = rng.uniform(*CLUTTER_HEIGHT)
+        quat = rng.standard_normal(4)
+        if r - 0.5 * float(np.linalg.norm(size)) < r0:
+            continue  # (every draw above is made whether kept or not: nested scenes)
+        pose = np.eye(4)
+        pose[:3, :3] = Rotation.from_quat(quat / np.linalg.norm(quat)).as_matrix()
+        pose[:3, 3] = (r * math.cos(phi), r * math.sin(phi), z)
+        items.append(Box(tuple(size), tuple(map(tuple, pose)), name=f"box{len(items)}"))
+    return BenchScene(f"clutter{n}", Scene(items))
+
+
 SCENE_BUILDERS: dict[str, Callable[[np.random.Generator], BenchScene]] = {
     "table": table_scene,
     "shelf": shelf_scene,
     "cubby": cubby_scene,
+    "shelf-narrow": narrow_shelf_scene,
+    **{f"clutter{k}": functools.partial(clutter_scene, n=k) for k in CLUTTER_COUNTS},
 }
+
+CLUTTER_KEY = 100
+"""Random-stream key of every clutter scene (one stream: ``clutterN`` = its first N boxes)."""
+
+
+def scene_key(name: str) -> int:
+    """The key of scene ``name``'s random stream: its index in :data:`SCENES`, or
+    :data:`CLUTTER_KEY` for every clutter scene."""
+    return CLUTTER_KEY if name.startswith("clutter") else SCENES.index(name)
 
 
 def make_scene(name: str, seed: int) -> BenchScene:
-    """Scene ``name`` drawn with ``default_rng([seed, index of the scene])``.
+    """Scene ``name`` drawn with ``default_rng([seed, scene_key(name)])``.
 
     Raises:
         InvalidArgumentError: unknown name.
     """
     if name not in SCENE_BUILDERS:
         raise InvalidArgumentError(f"unknown scene {name!r}; valid: {', '.join(SCENES)}")
-    return SCENE_BUILDERS[name](np.random.default_rng([int(seed), SCENES.index(name)]))
+    return SCENE_BUILDERS[name](np.random.default_rng([int(seed), scene_key(name)]))
 
 
 # ----------------------------------------------------------------------------- targets
@@ -201,7 +320,8 @@ def collision_free_targets(
     max_draws: int = 2_000_000,
 ) -> tuple[np.ndarray, np.ndarray]:  # fmt: skip
     """Reachable collision-free targets: FK of random in-limit ``q`` that the exact check
-    finds collision-free (self and scene); for the cubby, the tool frame inside it.
+    finds collision-free (self and scene); for the cubby and the narrow shelf, the tool frame
+    inside it.
 
     Args:
         robot: The robot.
@@ -575,6 +695,122 @@ def overhead(
     ]
 
 
+ABLATION_FIELDS = (
+    "robot", "scene", "target_id", "variant", "success", "claimed", "pose_ok", "collision_free",
+    "time_ms", "own_ms", "n_evals", "seeded", "seed_gap", "reason",
+)  # fmt: skip
+"""Columns of ``ablation.csv`` (``seeded``: ``q0`` came from the memory; ``seed_gap``: the
+distance ``|Δp| + 0.1·angle`` [m] from the target to the remembered one, NaN when unseeded)."""
+
+
+@dataclass(frozen=True)
+class Variant:
+    """A variant of the default search in the ablation.
+
+    Attributes:
+        name: CSV name.
+        swarm_fraction: The ``swarm`` solver's share of grey-wolf proposals per generation.
+        memory: Seed each query (``q0``) with the answer of the nearest earlier solved target
+            of the same scene.
+    """
+
+    name: str
+    swarm_fraction: float
+    memory: bool
+
+
+ABLATION_VARIANTS = (
+    Variant("uniform", 0.0, False),
+    Variant("default", 0.5, False),
+    Variant("memory", 0.5, True),
+    Variant("uniform+memory", 0.0, True),
+)
+"""The variants of ``--ablation`` (``default``: the ``swarm`` solver's defaults)."""
+
+MEMORY_ROT_WEIGHT = 0.1
+"""Weight [m/rad] of the angle in the distance between targets that picks the remembered
+answer (``|Δp| + 0.1·angle``: a radian counts as 10 cm)."""
+
+
+class SearchVariant:
+    """The ``swarm`` solver with ``AvoidCollisions(scene)`` in the problem, one variant of
+    :data:`ABLATION_VARIANTS`; with ``memory``, the answers it found (claimed successes, which
+    the solver judges with Pinocchio and coal) are kept with their targets and the nearest one
+    seeds the next query."""
+
+    def __init__(self, robot: Any, scene: Any, budget_s: float, variant: Variant) -> None:
+        import swarm_ik
+        from swarm_ik import goals as G
+
+        self._sik = swarm_ik
+        self.robot, self.budget_s, self.variant = robot, budget_s, variant
+        self.name = variant.name
+        self.goal = G.AvoidCollisions(scene)
+        self.mem_p: list[np.ndarray] = []
+        self.mem_r: list[np.ndarray] = []
+        self.mem_q: list[np.ndarray] = []
+
+    def recall(self, target: np.ndarray) -> tuple[np.ndarray | None, float]:
+        """The remembered answer whose target is nearest to ``target``, and the distance."""
+        if not self.mem_q:
+            return None, math.nan
+        dp = np.linalg.norm(np.asarray(self.mem_p) - target[:3, 3], axis=1)
+        rel = np.einsum("kji,jl->kil", np.asarray(self.mem_r), target[:3, :3])  # R_kᵀ R
+        cos = np.clip((np.trace(rel, axis1=1, axis2=2) - 1.0) / 2.0, -1.0, 1.0)
+        d = dp + MEMORY_ROT_WEIGHT * np.arccos(cos)
+        k = int(np.argmin(d))
+        return self.mem_q[k], float(d[k])
+
+    def solve(self, target: np.ndarray, seed: int) -> tuple[Outcome, Any, bool, float]:
+        """One query: ``(outcome, Result, seeded from the memory, seed gap)``."""
+        t0 = time.perf_counter()
+        q0, gap = self.recall(target) if self.variant.memory else (None, math.nan)
+        res = self._sik.solve(
+            self._sik.IKProblem(self.robot, target, goals=[self.goal]), "swarm", seed=seed,
+            time_limit=self.budget_s, q0=q0, tol_pos=TOL, tol_rot=TOL,
+            swarm_fraction=self.variant.swarm_fraction,
+        )  # fmt: skip
+        dt = time.perf_counter() - t0
+        if self.variant.memory and res.success:
+            self.mem_p.append(np.array(target[:3, 3]))
+            self.mem_r.append(np.array(target[:3, :3]))
+            self.mem_q.append(np.array(res.q))
+        out = Outcome(res.q, bool(res.success), dt, 1, 0, str(res.reason or ""), res.time_s)
+        return out, res, q0 is not None, gap
+
+
+def ablation(
+    robot: Any, bench_scene: BenchScene, n: int, budget_s: float, seed: int,
+    variants: Sequence[Variant] = ABLATION_VARIANTS,
+) -> list[dict[str, Any]]:  # fmt: skip
+    """Every variant of the default search on the scene's first ``n`` collision-free targets
+    (the targets of :func:`run_scene`), in order (the memory fills as it goes); per target the
+    variants run in a seeded random order, all with the same integer seed.  One row per
+    target and variant, judged by :func:`judge`."""
+    idx = SCENES.index(bench_scene.name)
+    rng = np.random.default_rng([int(seed), idx, 7])
+    _q, targets = collision_free_targets(robot, bench_scene, n, rng)
+    built = [SearchVariant(robot, bench_scene.scene, budget_s, v) for v in variants]
+    for v in variants:  # warm-up: routes made, kernels loaded (untimed; no memory kept)
+        SearchVariant(robot, bench_scene.scene, budget_s, v).solve(targets[0], 12345)
+    order_rng = np.random.default_rng([int(seed), idx, 19])
+    rows: list[dict[str, Any]] = []
+    for i, target in enumerate(targets):
+        solve_seed = int(order_rng.integers(2**31))
+        for k in order_rng.permutation(len(built)):
+            s = built[int(k)]
+            out, res, seeded, gap = s.solve(target, solve_seed)
+            ver = judge(robot, bench_scene.scene, target, out.q)
+            rows.append(dict(
+                robot=robot.name, scene=bench_scene.name, target_id=i, variant=s.name,
+                success=int(ver["success"]), claimed=int(out.claimed),
+                pose_ok=int(ver["pose_ok"]), collision_free=int(ver["collision_free"]),
+                time_ms=1e3 * out.time_s, own_ms=1e3 * out.own_s, n_evals=int(res.n_evals),
+                seeded=int(seeded), seed_gap=gap, reason=out.reason,
+            ))  # fmt: skip
+    return rows
+
+
 DIAGNOSIS_FIELDS = ("robot", "scene", "tolerance", "budget_ms", "metric", "n", "value")
 DIAGNOSIS_VARIANTS = ((0.02, 1.0), (0.02, 5.0), (0.01, 1.0))
 """``(sphere tolerance [m], budget multiplier)`` settings of ``ours+goal`` tried by
@@ -724,6 +960,54 @@ def summarise(rows: Sequence[dict[str, str]]) -> list[dict[str, Any]]:
     return out
 
 
+def summarise_ablation(rows: Sequence[dict[str, str]]) -> list[dict[str, Any]]:
+    """Per (robot, scene, variant) of ``ablation.csv``, and per (robot, ``all``, variant) over
+    its scenes: N, success, median / p95 time [ms], mean evaluations, share seeded from the
+    memory, and the paired counts against ``default``: targets this variant solved and
+    ``default`` did not, and the reverse; among the targets both solved, those where this
+    variant spent fewer evaluations, and more."""
+    ok = {(r["robot"], r["scene"], r["target_id"], r["variant"]): r["success"] == "1"
+          for r in rows}  # fmt: skip
+    evals = {(r["robot"], r["scene"], r["target_id"], r["variant"]): float(r["n_evals"])
+             for r in rows}  # fmt: skip
+    groups = common.group_rows(rows, "robot", "scene", "variant")
+    pooled: dict[tuple[Any, ...], list[Mapping[str, Any]]] = {}
+    for (robot, _scene, variant), rs in groups.items():
+        pooled.setdefault((robot, "all", variant), []).extend(rs)
+    names = [v.name for v in ABLATION_VARIANTS]
+
+    def order(key: tuple[Any, ...]) -> tuple[Any, ...]:
+        robot, scene, variant = key
+        return (robot, scene == "all", _index(SCENES, scene), _index(names, variant), variant)
+
+    out = []
+    items = [*groups.items(), *pooled.items()]
+    for key, rs in sorted(items, key=lambda kv: order(kv[0])):
+        robot, scene, variant = key
+        t = common.timing(float(r["time_ms"]) for r in rs)
+        gained = lost = fewer = more = 0
+        for r in rs:
+            key_default = (r["robot"], r["scene"], r["target_id"], "default")
+            other = ok.get(key_default)
+            if other is None:
+                continue
+            mine = r["success"] == "1"
+            gained += int(mine and not other)
+            lost += int(other and not mine)
+            if mine and other:
+                fewer += int(float(r["n_evals"]) < evals[key_default])
+                more += int(float(r["n_evals"]) > evals[key_default])
+        out.append(dict(
+            robot=robot, scene=scene, variant=variant, n=len(rs),
+            success=common.success_rate(r["success"] == "1" for r in rs),
+            median_ms=t.median, p95_ms=t.p95,
+            evals=float(np.mean([float(r["n_evals"]) for r in rs])),
+            seeded=float(np.mean([r["seeded"] == "1" for r in rs])),
+            gained=gained, lost=lost, fewer=fewer, more=more,
+        ))  # fmt: skip
+    return out
+
+
 def _union_success(rows: Sequence[dict[str, str]], a: str, b: str) -> dict[tuple[str, str], float]:
     """Per (robot, scene): fraction of targets solved by solver ``a`` or solver ``b``."""
     solved: dict[tuple[str, str, str], bool] = {}
@@ -751,7 +1035,7 @@ def _count(items: Any) -> dict[str, int]:
 def report(
     rows: Sequence[dict[str, str]], batch: Sequence[dict[str, str]],
     unreach: Sequence[dict[str, str]], over: Sequence[dict[str, str]], info: dict[str, Any],
-    diag: Sequence[dict[str, str]] = (),
+    diag: Sequence[dict[str, str]] = (), abl: Sequence[dict[str, str]] = (),
 ) -> str:  # fmt: skip
     """The Markdown summary, from the CSV rows (strings) and the run information."""
     budget = float(info.get("budget_ms", 20.0))
@@ -855,10 +1139,42 @@ def report(
             bud = "" if d["budget_ms"] == "nan" else f"{float(d['budget_ms']):g}"
             lines.append(f"| {d['robot']} | {d['scene']} | {d['metric']} | {tol} | {bud} | "
                          f"{d['n']} | {100 * float(d['value']):.1f} |")  # fmt: skip
+    if abl:
+        lines += _ablation_lines(abl, info)
     notes = info.get("notes")
     if notes:
         lines += ["", "## Notes", "", *notes]
     return "\n".join(lines) + "\n"
+
+
+def _ablation_lines(abl: Sequence[dict[str, str]], info: dict[str, Any]) -> list[str]:
+    """The ablation section of the summary."""
+    lines = [
+        "", f"## Ablation of the default search (`swarm`, time limit "
+        f"{float(info.get('ablation_budget_ms', 50.0)):g} ms)", "",
+        "The `swarm` solver on `IKProblem(robot, T, goals=[AvoidCollisions(scene)])`, judged "
+        "as above. `uniform`: `swarm_fraction=0` (every start after the seed a uniform random "
+        "restart); `default`: `swarm_fraction=0.5` (half of each later generation grey-wolf "
+        "proposals from the archive of local minima); `memory`: the default with `q0` = the "
+        "answer of the nearest earlier target of the scene it solved (`|Δp| + 0.1 m/rad · "
+        "angle`); `uniform+memory`: both. Per target every variant gets the same integer seed "
+        "(paired), in a random order. `+` / `−`: targets this variant solved that `default` did "
+        "not / that `default` solved and this variant did not; `fewer` / `more evals`: among the "
+        "targets both solved, those where this variant spent fewer / more evaluations than "
+        "`default` (the rest: the same). `all`: the scenes pooled.", "",
+        "| robot | scene | variant | N | success % | median ms | p95 ms | mean evals | "
+        "seeded % | + vs default | − vs default | fewer evals | more evals |",
+        "|---|---|---|---|---|---|---|---|---|---|---|---|---|",
+    ]  # fmt: skip
+    for a in summarise_ablation(abl):
+        scene = "**all**" if a["scene"] == "all" else a["scene"]
+        lines.append(
+            f"| {a['robot']} | {scene} | {a['variant']} | {a['n']} | {100 * a['success']:.1f} | "
+            f"{_f(a['median_ms'])} | {_f(a['p95_ms'])} | {a['evals']:.0f} | "
+            f"{100 * a['seeded']:.0f} | {a['gained']} | {a['lost']} | {a['fewer']} | "
+            f"{a['more']} |"
+        )
+    return lines
 
 
 # --------------------------------------------------------------------------------- CLI
@@ -868,7 +1184,11 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("--budget-ms", type=float, default=20.0, help="budget per target [ms]")
     parser.add_argument("--seed", type=int, default=0, help="seed of the scenes and targets")
     parser.add_argument("--robots", default=",".join(ROBOTS), help="comma-separated robots")
-    parser.add_argument("--scenes", default=",".join(SCENES), help="comma-separated scenes")
+    parser.add_argument(
+        "--scenes", default=",".join(DEFAULT_SCENES),
+        help=f"comma-separated scenes of {', '.join(SCENES)}; 'hard' = "
+        f"{','.join(HARD_SCENES)}; 'all' = every scene",
+    )  # fmt: skip
     parser.add_argument("--solvers", default=",".join(SOLVERS), help="comma-separated solvers")
     parser.add_argument("--batch-n", type=int, default=None,
                         help="targets of the batch loop (default --n)")  # fmt: skip
@@ -877,12 +1197,26 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
         help="also diagnose ours+goal on the first N targets of each scene (sphere "
         "tolerances, budgets, closed-form branches; slow the first time: fits spheres)",
     )  # fmt: skip
+    parser.add_argument(
+        "--ablation", action="store_true",
+        help="also run the ablation of the default search (uniform restarts only, default, "
+        "memory of collision-free answers as q0, both) on each scene",
+    )  # fmt: skip
+    parser.add_argument("--ablation-budget-ms", type=float, default=50.0,
+                        help="time limit per target of the ablation [ms]")  # fmt: skip
+    parser.add_argument("--ablation-n", type=int, default=None,
+                        help="targets per scene of the ablation (default --n)")  # fmt: skip
     parser.add_argument("--quick", action="store_true", help="N = 10 (a smoke run)")
     parser.add_argument("--out", default=None, help="output folder (default ./bench-collision)")
 
 
-def _names(text: str, valid: Sequence[str], what: str) -> list[str]:
-    names = [t.strip() for t in str(text).split(",") if t.strip()]
+def _names(text: str, valid: Sequence[str], what: str,
+           groups: dict[str, Sequence[str]] | None = None) -> list[str]:  # fmt: skip
+    names: list[str] = []
+    for t in (t.strip() for t in str(text).split(",")):
+        for name in (groups or {}).get(t, [t] if t else []):
+            if name not in names:
+                names.append(name)
     bad = [t for t in names if t not in valid]
     if bad or not names:
         raise InvalidArgumentError(f"--{what}: unknown {bad or text!r}; valid: {', '.join(valid)}")
@@ -897,7 +1231,7 @@ def write_report(out: Path) -> str:
     text = report(
         common.read_csv(out / "collision.csv"), common.read_csv(out / "batch.csv"),
         common.read_csv(out / "unreachable.csv"), common.read_csv(out / "overhead.csv"), info,
-        common.read_csv(out / "diagnosis.csv"),
+        common.read_csv(out / "diagnosis.csv"), common.read_csv(out / "ablation.csv"),
     )  # fmt: skip
     (out / "summary.md").write_text(text)
     return text
@@ -908,7 +1242,7 @@ def run(args: argparse.Namespace) -> int:
     import os
 
     robots = [r.strip() for r in str(args.robots).split(",") if r.strip()]
-    scenes = _names(args.scenes, SCENES, "scenes")
+    scenes = _names(args.scenes, SCENES, "scenes", {"hard": HARD_SCENES, "all": SCENES})
     solvers = _names(args.solvers, SOLVERS, "solvers")
     n = 10 if args.quick else int(args.n)
     if n < 1:
@@ -918,6 +1252,14 @@ def run(args: argparse.Namespace) -> int:
         raise InvalidArgumentError(f"--budget-ms must be a positive number, got {args.budget_ms}")
     budget = budget_ms / 1e3
     nb = n if args.batch_n is None else int(args.batch_n)
+    abl_ms = float(args.ablation_budget_ms)
+    if not (math.isfinite(abl_ms) and abl_ms > 0):
+        raise InvalidArgumentError(
+            f"--ablation-budget-ms must be a positive number, got {args.ablation_budget_ms}"
+        )
+    na = n if args.ablation_n is None or args.quick else int(args.ablation_n)
+    if na < 1:
+        raise InvalidArgumentError(f"--ablation-n must be a positive integer, got {na}")
     out = common.resolve_out(args.out, COMMAND, args.quick)
     common.single_thread()
     import swarm_ik
@@ -929,6 +1271,7 @@ def run(args: argparse.Namespace) -> int:
     unreach: list[dict[str, Any]] = []
     over: list[dict[str, Any]] = []
     diag: list[dict[str, Any]] = []
+    abl: list[dict[str, Any]] = []
     missing: dict[str, str] = {}
     for rname in robots:
         robot = swarm_ik.load_robot(rname)
@@ -945,6 +1288,8 @@ def run(args: argparse.Namespace) -> int:
             unreach += unreachable(robot, bs, budget, args.seed)
             if args.diagnose:
                 diag += diagnose(robot, bs, int(args.diagnose), budget, args.seed)
+            if args.ablation:
+                abl += ablation(robot, bs, na, abl_ms / 1e3, args.seed)
             print(f"{rname}/{sname}: {len(r)} rows, {time.perf_counter() - t_start:.0f} s",
                   flush=True)  # fmt: skip
     common.write_csv(out / "collision.csv", FIELDS, rows)
@@ -953,12 +1298,15 @@ def run(args: argparse.Namespace) -> int:
     common.write_csv(out / "overhead.csv", OVERHEAD_FIELDS, over)
     if diag:
         common.write_csv(out / "diagnosis.csv", DIAGNOSIS_FIELDS, diag)
+    if abl:
+        common.write_csv(out / "ablation.csv", ABLATION_FIELDS, abl)
+    extra = dict(ablation_n=na, ablation_budget_ms=abl_ms) if abl else {}
     common.write_run_info(
         out, COMMAND, args.quick, n=n, budget_ms=budget_ms, seed=args.seed, robots=robots,
         scenes=scenes, solvers=solvers, missing=missing, load=load,
         load_end=f"{os.getloadavg()[0]:.2f}" if hasattr(os, "getloadavg") else "?",
         wall_s=round(time.perf_counter() - t_start, 1),
-        machine=common.machine_info(("pytracik", "roboticstoolbox-python", "coal")),
+        machine=common.machine_info(("pytracik", "roboticstoolbox-python", "coal")), **extra,
     )  # fmt: skip
     text = write_report(out)
     print(text)
