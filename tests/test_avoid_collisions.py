@@ -117,3 +117,35 @@ def test_target_inside_an_obstacle_is_unreachable() -> None:
 def test_bad_collision_goal_input_is_refused(kwargs: dict, message: str) -> None:
     with pytest.raises(swarm_ik.SwarmIKError, match=message):
         G.AvoidCollisions(**kwargs)
+
+
+def test_collision_goal_tries_the_free_search_first_and_keeps_the_budget() -> None:
+    """A collision problem is first solved without the goal (answers checked exactly by coal);
+    the whole call stays within time_limit and max_evals."""
+    import time
+
+    import numpy as np
+
+    import swarm_ik
+    from swarm_ik.goals import AvoidCollisions
+
+    robot = swarm_ik.load_robot("panda")
+    rng = np.random.default_rng(4)
+    goal = AvoidCollisions(None)  # self-collision only
+    solved = 0
+    for k in range(6):
+        q = robot.random_q(rng)
+        if robot.collision_model().collides(q, goal.scene, 0.0, True):
+            continue
+        problem = swarm_ik.IKProblem(
+            robot, goals=[swarm_ik.goals.Pose(robot.ee_frame, robot.fk(q)), goal]
+        )
+        res = swarm_ik.solve(problem, seed=k, time_limit=0.2)
+        solved += res.success
+        if res.success:
+            assert not robot.collision_model().collides(res.q, goal.scene, 0.0, True)
+        t0 = time.perf_counter()
+        res = swarm_ik.solve(problem, seed=k, max_evals=40)
+        assert res.n_evals <= 40 + 30  # (one polish may finish its step)
+        assert time.perf_counter() - t0 < 5.0
+    assert solved >= 1
