@@ -9,7 +9,7 @@ import numba
 import numpy as np
 
 from swarm_ik.errors import InvalidArgumentError
-from swarm_ik.goals.base import Encoded, FloatArray, Goal, State, weight_value
+from swarm_ik.goals.base import Encoded, FloatArray, Goal, State, non_negative, weight_value
 from swarm_ik.kernels.spheres import SphereArrays, penetration
 
 if TYPE_CHECKING:
@@ -148,15 +148,7 @@ class AvoidCollisions(Goal):
             raise InvalidArgumentError(
                 f"AvoidCollisions.self_collision must be true or false, got {self.self_collision!r}"
             )
-        try:
-            m = float(self.margin)
-        except (TypeError, ValueError):
-            m = float("nan")
-        if isinstance(self.margin, (bool, str)) or not (np.isfinite(m) and m >= 0.0):
-            raise InvalidArgumentError(
-                f"AvoidCollisions.margin must be >= 0 [m], got {self.margin!r}"
-            )
-        object.__setattr__(self, "margin", m)
+        object.__setattr__(self, "margin", non_negative(self.margin, "AvoidCollisions.margin"))
         rows = self.max_rows
         if (
             isinstance(rows, bool)

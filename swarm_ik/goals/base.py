@@ -178,6 +178,18 @@ def weight_value(value: Any, what: str = "weight") -> float:
     return w
 
 
+def non_negative(value: Any, what: str) -> float:
+    """A finite number ``>= 0`` (a margin [m]), or :class:`InvalidArgumentError` naming
+    ``what``."""
+    try:
+        m = float(value)
+    except (TypeError, ValueError):
+        m = float("nan")
+    if isinstance(value, (bool, str)) or not (np.isfinite(m) and m >= 0.0):
+        raise InvalidArgumentError(f"{what} must be >= 0 [m], got {value!r}")
+    return m
+
+
 def vec3(value: Any, what: str, *, unit: bool = False) -> FloatArray:
     """3 finite numbers as a float array (normalised when ``unit``), or
     :class:`InvalidArgumentError` naming ``what``."""

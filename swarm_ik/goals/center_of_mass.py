@@ -12,7 +12,7 @@ import numpy as np
 import pinocchio as pin
 
 from swarm_ik.errors import InvalidArgumentError
-from swarm_ik.goals.base import Encoded, FloatArray, Goal, State, vec3
+from swarm_ik.goals.base import Encoded, FloatArray, Goal, State, non_negative, vec3
 
 if TYPE_CHECKING:
     from swarm_ik.robot import RobotModel
@@ -214,13 +214,7 @@ class CenterOfMass(Goal):
             raise InvalidArgumentError(
                 f"CenterOfMass.axes must be distinct letters of 'xyz', got {self.axes!r}"
             )
-        try:
-            m = float(self.margin)
-        except (TypeError, ValueError):
-            m = float("nan")
-        if isinstance(self.margin, (bool, str)) or not (math.isfinite(m) and m >= 0.0):
-            raise InvalidArgumentError(f"CenterOfMass.margin must be >= 0 [m], got {self.margin!r}")
-        object.__setattr__(self, "margin", m)
+        object.__setattr__(self, "margin", non_negative(self.margin, "CenterOfMass.margin"))
         super().__post_init__()
 
     def describe(self) -> str:
