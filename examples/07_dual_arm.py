@@ -15,7 +15,6 @@ from __future__ import annotations
 
 import argparse
 import os
-import tempfile
 from pathlib import Path
 
 import numpy as np
@@ -58,14 +57,7 @@ def draw(robot: swarm_ik.RobotModel, q: np.ndarray, targets: list[np.ndarray],
         return
     scene = viz.show_pose(robot, q, target=targets[0], lines=["Baxter: both grippers"])
     scene.add_triad("target_right", targets[1], length=0.15)
-    if html is None and QUICK:
-        with tempfile.TemporaryDirectory() as tmp:
-            path = scene.save_html(Path(tmp) / "baxter.html")
-            print(f"wrote a {path.stat().st_size / 1e6:.1f} MB page (quick run: deleted)")
-    elif html is not None:
-        print(f"wrote {scene.save_html(html)}")
-    else:
-        print(f"meshcat viewer at {scene.url}")
+    print(scene.publish(html, "baxter.html", quick=QUICK))
 
 
 if __name__ == "__main__":

@@ -21,7 +21,6 @@ from __future__ import annotations
 
 import argparse
 import os
-import tempfile
 from pathlib import Path
 
 import numpy as np
@@ -140,14 +139,7 @@ def draw(
     ]
     scene.add_label("label", lines, position=[0.1, 0.0, 1.95], height=0.3, facing=view)
     scene.frame_camera([[-0.4, -0.5, 0.0], [0.6, 0.5, 2.15]], direction=view, distance=2.6)
-    if html is None and QUICK:
-        with tempfile.TemporaryDirectory() as tmp:
-            path = scene.save_html(Path(tmp) / "talos.html")
-            print(f"wrote a {path.stat().st_size / 1e6:.1f} MB page (quick run: deleted)")
-    elif html is not None:
-        print(f"wrote {scene.save_html(html)}")
-    else:
-        print(f"meshcat viewer at {scene.url}")
+    print(scene.publish(html, "talos.html", quick=QUICK))
 
 
 if __name__ == "__main__":

@@ -20,7 +20,6 @@ from __future__ import annotations
 
 import argparse
 import os
-import tempfile
 from pathlib import Path
 
 import numpy as np
@@ -89,14 +88,7 @@ def draw(robot: swarm_ik.RobotModel, q: np.ndarray, q_fixed: np.ndarray, target:
     scene.add_label("label", lines, position=[0.9, 0.0, 1.75], height=0.25, facing=view)
     base = robot.fk(q, BASE)[:3, 3]
     scene.frame_camera([[-0.4, -0.4, 0.0], [0.4, 0.4, 1.9], base, target[:3, 3]], direction=view)
-    if html is None and QUICK:
-        with tempfile.TemporaryDirectory() as tmp:
-            path = scene.save_html(Path(tmp) / "tiago.html")
-            print(f"wrote a {path.stat().st_size / 1e6:.1f} MB page (quick run: deleted)")
-    elif html is not None:
-        print(f"wrote {scene.save_html(html)}")
-    else:
-        print(f"meshcat viewer at {scene.url}")
+    print(scene.publish(html, "tiago.html", quick=QUICK))
 
 
 if __name__ == "__main__":

@@ -33,7 +33,7 @@ MEASURES = {
     "goals": "success on goal sets beyond one pose (two arms, axis, look-at)",
     "many": "distinct IK branches found, against eaik's analytic solutions",
     "collision": "collision-free IK success and time in seeded obstacle scenes",
-    "wholebody": "Talos standing with both hands to poses, against placo and pink",
+    "wholebody": "a standing humanoid reaching, against placo and pink",
 }
 """Benchmark name -> what it measures (one line of ``swarm-ik bench --help``)."""
 
@@ -43,7 +43,7 @@ def add_parser(subparsers: Any, *, with_options: bool = True) -> argparse.Argume
     imports each benchmark module to add its options (only when ``bench`` is the command)."""
     b: argparse.ArgumentParser = subparsers.add_parser(
         "bench",
-        help="benchmarks: " + ", ".join(BENCHMARKS),
+        help=", ".join(BENCHMARKS),
         description="Benchmarks; each writes CSV files and a report under --out (a folder, "
         "checked before any work).  `swarm-ik bench NAME --help` lists a benchmark's options.",
     )

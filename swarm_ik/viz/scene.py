@@ -11,6 +11,7 @@ from __future__ import annotations
 import contextlib
 import io
 import os
+import tempfile
 import warnings
 from collections.abc import Sequence
 from pathlib import Path
@@ -447,6 +448,20 @@ class Scene:
         p = check_output_path(path, "HTML file", (".html", ".htm"))
         p.write_text(self.to_html(title), encoding="utf-8")
         return p
+
+    def publish(
+        self, html: str | os.PathLike[str] | None, name: str, *, quick: bool = False
+    ) -> str:
+        """Hand the scene over: written to ``html`` when given; with ``quick`` (a test run)
+        written to a temporary ``name`` and deleted; else served live.  Returns the line to
+        print (the page written, or the viewer's address)."""
+        if html is not None:
+            return f"wrote {self.save_html(html)}"
+        if quick:
+            with tempfile.TemporaryDirectory() as tmp:
+                path = self.save_html(Path(tmp) / name)
+                return f"wrote a {path.stat().st_size / 1e6:.1f} MB page (quick run: deleted)"
+        return f"meshcat viewer at {self.url}"
 
     def close(self) -> None:
         """Stop the meshcat server of this scene, if one was started (it also stops when
