@@ -41,7 +41,11 @@ def float_array(value: Any, what: str = "targets", *, target: bool = True) -> Fl
     cls = InvalidTargetError if target else InvalidArgumentError
     if value is None or isinstance(value, (str, bytes)):
         raise cls(f"{what} must be an array of numbers, got {reprlib.repr(value)}")
-    if np.iscomplexobj(value):  # (numpy would drop the imaginary part with a warning)
+    try:
+        is_complex = np.iscomplexobj(value)
+    except (TypeError, ValueError):  # (ragged nesting: refused below)
+        is_complex = False
+    if is_complex:  # (numpy would drop the imaginary part with a warning)
         raise cls(f"{what} must be real numbers, got complex values")
     try:
         arr = np.asarray(value, dtype=float)

@@ -215,6 +215,7 @@ def _reduce(
     mimic: dict[str, tuple[str, float, float]],
     held: dict[int, float] | None = None,
     base_box: FloatArray | None = None,
+    floating_base: bool = False,
 ) -> _Reduction:
     """Reduce ``full`` to the union of the root → frame paths of ``frames`` (a chain or a
     tree) and read the kinematic arrays off it.
@@ -277,7 +278,11 @@ def _reduce(
     upper: list[float] = []
     joint_kind: dict[str, int] = {}
     joint_range: dict[str, tuple[float, float]] = {}
-    floating = reduced.njoints > 1 and reduced.joints[1].shortname() == "JointModelFreeFlyer"
+    floating = (  # (a URDF's own floating joint stays refused below, as any 6-DoF joint)
+        floating_base
+        and reduced.njoints > 1
+        and reduced.joints[1].shortname() == "JointModelFreeFlyer"
+    )
     shift = 3 if floating else 0  # tree joints before Pinocchio's joint 2
     for j in range(1, reduced.njoints):
         jm = reduced.joints[j]
@@ -535,7 +540,7 @@ class RobotModel:
             raise InvalidArgumentError(f"frame(s) {dup} given more than once")
         mimic = {k: (m.driver, m.multiplier, m.offset) for k, m in info.mimic.items()}
         held = _locked_values(p, full, locked, mimic)
-        red = _reduce(p, full, frames, mimic, held, box)
+        red = _reduce(p, full, frames, mimic, held, box, bool(floating_base))
         return cls(
             name=full.name or p.stem,
             urdf_path=p.resolve(),
