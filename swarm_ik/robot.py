@@ -128,6 +128,11 @@ base position [m] in the world, then its orientation as a rotation vector [rad]
 (``R = exp([r]×)``, no gimbal lock)."""
 
 
+MAX_SOLVED_DOF = 150
+"""Most degrees of freedom of the reduced model (a humanoid has about 40): Pinocchio's
+``Data`` allocates second-order tensors of ``nv³`` numbers (216 MB each at 150 joints)."""
+
+
 def _base_box(value: Any) -> FloatArray:
     """Half-widths [m] of a floating base's box around the origin: one positive number or
     three."""
@@ -259,6 +264,13 @@ def _reduce(
                 )
     if not keep:
         raise RobotModelError(f"{p}: every joint on the {where} is locked: nothing to solve")
+    nv = sum(int(full.joints[j].nv) for j in keep)
+    if nv > MAX_SOLVED_DOF:
+        raise RobotModelError(
+            f"{p}: {nv} degrees of freedom on the {where}; at most {MAX_SOLVED_DOF} are solved "
+            "(swarm_ik.robot.MAX_SOLVED_DOF: Pinocchio's Data holds tensors of nv³ numbers, "
+            "1.7 GB at 300); lock joints (locked=) or choose fewer goal frames"
+        )
     locked = [j for j in range(1, full.njoints) if j not in keep]
     q_ref = pin.neutral(full)
     for j, v in held.items():

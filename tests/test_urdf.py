@@ -351,3 +351,20 @@ def test_mimic_multiplier_zero_refused(tmp_path: Path) -> None:
     path.write_text(text)
     with pytest.raises(RobotModelError, match="multiplier=0"):
         swarm_ik.load_robot(path, "m")
+
+
+def test_too_many_degrees_of_freedom_refused_naming_the_limit(tmp_path: Path) -> None:
+    """Pinocchio's Data for 300 joints takes 1.7 GB (nv³ tensors): refused before it is made."""
+    links = "".join(f'<link name="l{i}"/>' for i in range(301))
+    joints = "".join(
+        f'<joint name="j{i}" type="revolute"><parent link="l{i}"/><child link="l{i + 1}"/>'
+        '<origin xyz="0 0 0.01"/><axis xyz="0 1 0"/>'
+        '<limit lower="-1" upper="1" effort="1" velocity="1"/></joint>'
+        for i in range(300)
+    )
+    path = tmp_path / "j300.urdf"
+    path.write_text(f'<robot name="r">{links}{joints}</robot>')
+    with pytest.raises(RobotModelError, match="at most 150 are solved"):
+        swarm_ik.load_robot(path, "l300")
+    robot = swarm_ik.load_robot(path, "l300", locked=[f"j{i}" for i in range(160)])
+    assert robot.nq == 140
