@@ -153,6 +153,48 @@ class CollisionReport:
     closest_pair: tuple[str, str] | None = None
 
 
+class DeferredReport:
+    """A :class:`CollisionReport` of a configuration found collision-free, its distances
+    computed on first use: the verdict of a solve costs coal's ``collide`` alone (0.2–0.8 ms),
+    the clearance (1–5 ms among tens of obstacles) only when read.
+
+    Attributes:
+        collision_free: True (known from the check that made it).
+    """
+
+    collision_free = True
+
+    def __init__(
+        self, rc: RobotCollision, q: Any, scene: Scene | None, margin: float, self_col: bool
+    ) -> None:
+        self._args = (rc, np.array(q, dtype=float), scene, float(margin), bool(self_col))
+        self._report: CollisionReport | None = None
+
+    def _full(self) -> CollisionReport:
+        if self._report is None:
+            rc, q, scene, margin, self_col = self._args
+            self._report = rc.check(q, scene, margin, self_col)
+        return self._report
+
+    @property
+    def clearance(self) -> float:
+        """As :attr:`CollisionReport.clearance` [m] (computed on first use)."""
+        return self._full().clearance
+
+    @property
+    def pairs_in_contact(self) -> list[tuple[str, str]]:
+        """As :attr:`CollisionReport.pairs_in_contact` (empty: the configuration is free)."""
+        return self._full().pairs_in_contact
+
+    @property
+    def closest_pair(self) -> tuple[str, str] | None:
+        """As :attr:`CollisionReport.closest_pair` (computed on first use)."""
+        return self._full().closest_pair
+
+    def __repr__(self) -> str:
+        return repr(self._full())
+
+
 # ---------------------------------------------------------------------------- geometry
 @dataclass(eq=False)
 class RobotCollision:

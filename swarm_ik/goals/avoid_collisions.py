@@ -217,11 +217,21 @@ class AvoidCollisions(Goal):
         return pack(sm.arrays, body0, float(self.margin), self.max_rows)
 
     def met(self, state: State, tol_pos: float, tol_rot: float) -> tuple[float, float, bool, Any]:
-        """The exact check with coal: met only without contact closer than ``margin``."""
-        robot = state.robot
-        rep = robot.collision_model().check(
-            state.q, self.scene, self.margin, bool(self.self_collision)
-        )
+        """The exact check with coal: met only without contact closer than ``margin``; the
+        details are a :class:`~swarm_ik.collision.CollisionReport` (for a free answer a
+        :class:`~swarm_ik.collision.DeferredReport`, whose clearance is computed when read)."""
+        from swarm_ik.collision import DeferredReport
+
+        rc = state.robot.collision_model()
+        self_col = bool(self.self_collision)
+        if not rc.collides(state.q, self.scene, self.margin, self_col):
+            return (
+                0.0,
+                float("nan"),
+                True,
+                DeferredReport(rc, state.q, self.scene, self.margin, self_col),
+            )
+        rep = rc.check(state.q, self.scene, self.margin, self_col)
         depth = 0.0 if rep.collision_free else max(0.0, self.margin - rep.clearance)
         return depth, float("nan"), bool(rep.collision_free), rep
 
