@@ -351,9 +351,18 @@ class Mesh:
         if _is_number(scale):
             scale = (scale, scale, scale)
         object.__setattr__(self, "scale", _vector("mesh", "scale", scale, positive=True))
+        if not all(MESH_SCALE[0] <= v <= MESH_SCALE[1] for v in self.scale):
+            raise InvalidArgumentError(
+                f"mesh: scale must be in [{MESH_SCALE[0]:g}, {MESH_SCALE[1]:g}] "
+                f"(swarm_ik.scene.MESH_SCALE), got {list(self.scale)}"
+            )
         object.__setattr__(self, "pose", _pose("mesh", self.pose))
         object.__setattr__(self, "name", _name("mesh", self.name))
 
+
+MESH_SCALE = (1e-6, 1e6)
+"""Smallest and largest scale factor of a mesh (a scale of 1e300 overflowed the sphere fit,
+which then never returned)."""
 
 Shape = Sphere | Box | Capsule | Cylinder | Mesh
 SHAPES: dict[str, type] = {c.kind: c for c in (Sphere, Box, Capsule, Cylinder, Mesh)}
@@ -767,7 +776,12 @@ def coal_geometry(shape: Shape) -> Any:
     if isinstance(shape, Cylinder):
         return coal.Cylinder(shape.radius, shape.length)
     loader = coal.MeshLoader()
-    mesh = loader.load(shape.path, np.array(shape.scale))
+    try:
+        mesh = loader.load(shape.path, np.array(shape.scale))
+    except (ValueError, RuntimeError) as exc:  # coal's loader: a corrupt or unknown file
+        said = re.search(r"message:\s*(.*?)(?:\s*Hint:|$)", str(exc), re.S)
+        reason = " ".join((said.group(1) if said else str(exc)).split())[:200]
+        raise InvalidArgumentError(f"mesh {shape.path!r}: coal cannot read it ({reason})") from None
     return mesh
 
 

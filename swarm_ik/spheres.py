@@ -47,6 +47,7 @@ from typing import Any
 import numpy as np
 
 from swarm_ik._types import FloatArray, IntArray
+from swarm_ik.errors import InvalidArgumentError
 from swarm_ik.kernels.spheres import (
     BOX,
     CAPSULE,
@@ -89,6 +90,11 @@ def _winding(points: FloatArray, tris: FloatArray) -> FloatArray:
     return out
 
 
+MAX_FIT_TRIANGLES = 5e6
+"""Most triangles a mesh is subdivided into for its sphere cover (about 1 GB of work arrays;
+a mesh scaled a million times at a 2 cm tolerance needs 10¹⁸)."""
+
+
 def fit_mesh(
     vertices: FloatArray, faces: IntArray, tolerance: float
 ) -> tuple[FloatArray, FloatArray]:
@@ -108,6 +114,17 @@ def fit_mesh(
 
     V = np.asarray(vertices, dtype=float)
     F = np.asarray(faces, dtype=np.int64)
+    tri = V[F]
+    area = 0.5 * float(
+        np.linalg.norm(np.cross(tri[:, 1] - tri[:, 0], tri[:, 2] - tri[:, 0]), axis=1).sum()
+    )
+    pieces = 4.0 * area / (0.5 * tolerance) ** 2  # (triangles of the subdivision, about)
+    if not np.isfinite(pieces) or pieces > MAX_FIT_TRIANGLES:
+        raise InvalidArgumentError(
+            f"a mesh of {area:.3g} m² needs about {pieces:.3g} triangles to be covered by "
+            f"spheres at a tolerance of {tolerance:g} m; at most {MAX_FIT_TRIANGLES:.0e} "
+            "(swarm_ik.spheres.MAX_FIT_TRIANGLES): a coarser tolerance, or a smaller mesh"
+        )
     V2, F2 = trimesh.remesh.subdivide_to_size(V, F, max_edge=0.5 * tolerance, max_iter=30)
     V2 = np.asarray(V2, dtype=float)
     F2 = np.asarray(F2, dtype=np.int64)
@@ -379,7 +396,6 @@ class SphereModel:
         """
         import coal
 
-        from swarm_ik.errors import InvalidArgumentError
         from swarm_ik.scene import Box, Capsule, Cylinder, Mesh, Sphere, as_scene, coal_geometry
 
         tolerance = float(tolerance)

@@ -165,3 +165,32 @@ def test_scene_pickles_after_use() -> None:
     again = pickle.loads(pickle.dumps(scene))
     assert again.names == scene.names
     assert robot.collision_model().check(robot.mid_q(), again, 0.0, False).collision_free == before
+
+
+def test_mesh_edges_refused_with_one_message(tmp_path) -> None:  # type: ignore[no-untyped-def]
+    """A corrupt mesh file (exit 3 before), a scale of 1e300 (the sphere fit never
+    returned) and a mesh too large for its sphere cover are refused naming the problem."""
+    from pathlib import Path
+
+    import numpy as np
+
+    import swarm_ik
+    from swarm_ik.errors import InvalidArgumentError
+    from swarm_ik.goals import AvoidCollisions
+    from swarm_ik.scene import Mesh, Scene
+
+    block = Path(__file__).parent / "data" / "scenes" / "block.obj"
+    bad = tmp_path / "bad.stl"
+    bad.write_text("solid x\n garbage\nendsolid\n")
+    robot = swarm_ik.load_robot("panda")
+    target = robot.fk(robot.mid_q())
+    with pytest.raises(InvalidArgumentError, match="coal cannot read it"):
+        swarm_ik.solve(
+            swarm_ik.IKProblem(robot, target, goals=[AvoidCollisions(Scene([Mesh(str(bad))]))])
+        )
+    for scale in (1e300, 1e-300):
+        with pytest.raises(InvalidArgumentError, match="MESH_SCALE"):
+            Mesh(str(block), scale=scale)
+    huge = Scene([Mesh(str(block), scale=1e6, pose=np.eye(4))])
+    with pytest.raises(InvalidArgumentError, match="MAX_FIT_TRIANGLES"):
+        swarm_ik.IKProblem(robot, target, goals=[AvoidCollisions(huge)])
