@@ -329,7 +329,7 @@ class Route:
         for i, (gl, old) in enumerate(zip(goals, bound, strict=True)):
             if gl is old and not getattr(gl, "uses_start", False):
                 continue
-            if type(gl) is not type(old) or _form(gl) != _form(old):
+            if type(gl) is not type(old) or gl.exact != old.exact:
                 raise InvalidArgumentError(
                     "a route runs problems of the goal types it was made for"
                 )
@@ -450,10 +450,8 @@ class Route:
         rows alone met 72–80 % of the targets, ``docs/results/collision/hard``).
         Returns ``(the answer, evaluations)``, the answer None when no try passes (the search
         with the rows follows)."""
-        free = problem.__dict__.get("_without_collisions")
+        free = problem.without_collisions()
         if free is None:
-            free = problem.__dict__["_without_collisions"] = problem.without_collisions() or problem
-        if free is problem:
             return None, 0
         t0 = time.perf_counter()
         share = None if time_limit is None else 0.5 * time_limit
@@ -607,17 +605,13 @@ def solve(
     return route_for(problem, solver, settings).run(problem, q0, seed, on_improvement)
 
 
-def _form(goal: Any) -> tuple[bool, bool]:
-    """Which form of its type a goal is (a bounded ``Pose`` or ``Position`` encodes other rows
-    and flags than an exact one): part of a route's key, as a route rebinds only the floats."""
-    return getattr(goal, "tolerance", None) is None, getattr(goal, "radius", None) is None
-
-
 def _route_key(problem: IKProblem, solver: str, settings: dict[str, Any]) -> Any:
     """What a route bound to another problem must share with ``problem`` to run it (the
     solver, every setting, the goal types, frames, weights and priorities, the bounds and the
     tree), or None when a setting cannot be a key (then a route is made for this call)."""
-    goals = tuple((type(g), g.frame_name(), g.weight, g.primary, _form(g)) for g in problem.goals)
+    # (a bounded Pose or Position encodes other rows and flags: its form is part of the key,
+    # as a route rebinds only the floats)
+    goals = tuple((type(g), g.frame_name(), g.weight, g.primary, g.exact) for g in problem.goals)
     key = (
         solver, tuple(sorted((k, v) for k, v in settings.items() if k != "params")),
         tuple(sorted(settings["params"].items())), goals, problem.fitness_name, problem.w_rot,

@@ -215,7 +215,7 @@ def pose_errors_of(m: FloatArray, goal: Any) -> tuple[FloatArray, FloatArray]:
     operations per row), so that a :class:`Result`'s errors equal :func:`swarm_ik.verify`'s.
     """
     k = m.shape[0]
-    if getattr(goal, "tolerance", None) is not None or getattr(goal, "radius", None) is not None:
+    if not goal.exact:
         return goal.pose_errors(m)  # type: ignore[no-any-return]  # (the bounded forms' own)
     if not hasattr(goal, "target"):  # a Position goal
         d = m[:, :3, 3] - goal.point

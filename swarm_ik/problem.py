@@ -244,9 +244,7 @@ class IKProblem:
             self.target = None if first is None else first.target
         if not isinstance(fitness, str) or fitness not in FITNESS:
             raise unknown("fitness", fitness, FITNESS)
-        exact = getattr(terms[0], "tolerance", None) is None and (
-            getattr(terms[0], "radius", None) is None
-        )  # (a bounded Pose or Position is no single-pose target: its bounds must count)
+        exact = terms[0].exact  # (a bounded Pose or Position is no single-pose target)
         self.single_pose = len(terms) == 1 and isinstance(terms[0], (Pose, Position)) and exact
         if fitness != "se3" and not (len(terms) == 1 and isinstance(terms[0], Pose) and exact):
             raise InvalidArgumentError(
@@ -296,6 +294,7 @@ class IKProblem:
         avoid = [gl for gl in terms if isinstance(gl, AvoidCollisions)]
         if len(avoid) > 1:
             raise InvalidArgumentError("at most one AvoidCollisions goal per problem")
+        self._collision_goal = avoid[0] if avoid and avoid[0].is_primary else None
         self.compiled_goals = tuple(gl for gl in terms if gl.compiled)
         """The goals with a compiled kernel, in order (the goal table's entries)."""
         self.python_goals = tuple(gl for gl in terms if not gl.compiled)
@@ -321,6 +320,7 @@ class IKProblem:
             )
         # angular errors in the se3 cost: w_rot (m/rad); position errors: 1
         self._table_cache = {}
+        self._free: list[IKProblem | None] = []  # (without_collisions, made once)
         if narrowed:
             self.bounds = lm.Bounds(
                 np.ascontiguousarray(self.lower),
@@ -400,6 +400,7 @@ class IKProblem:
             new.goals = (Pose.checked(self.robot.ee_frame, new.target),)
         new.compiled_goals = new.goals
         new._table_cache = {}
+        new._free = []
         return new
 
     @classmethod
@@ -510,12 +511,9 @@ class IKProblem:
 
     @property
     def collision_goal(self) -> Any:
-        """The primary ``AvoidCollisions`` goal, if any."""
-        from swarm_ik.goals import AvoidCollisions
-
-        return next(
-            (g for g in self.goals if isinstance(g, AvoidCollisions) and g.is_primary), None
-        )
+        """The primary ``AvoidCollisions`` goal, if any (found once, when the problem is
+        made)."""
+        return self._collision_goal
 
     def is_success(self, q: FloatArray, tol_pos: float, tol_rot: float) -> bool:
         """Every primary goal within tolerance (compiled FK) and ``q`` within the bounds; a
@@ -529,14 +527,19 @@ class IKProblem:
 
     def without_collisions(self) -> IKProblem | None:
         """The same problem without its collision goal (None when no other goal is primary):
-        the pose-only polish of the search, whose answers the exact check then judges."""
-        col = self.collision_goal
-        rest = [g for g in self.goals if g is not col]
-        if not any(g.is_primary for g in rest):
-            return None
-        return IKProblem(
-            self.robot, goals=rest, w_rot=self.w_rot, lower=self.lower, upper=self.upper
-        )
+        the pose-only polish of the search, whose answers the exact check then judges (made
+        once per problem)."""
+        if not self._free:
+            col = self.collision_goal
+            rest = [g for g in self.goals if g is not col]
+            self._free.append(
+                IKProblem(
+                    self.robot, goals=rest, w_rot=self.w_rot, lower=self.lower, upper=self.upper
+                )
+                if any(g.is_primary for g in rest)
+                else None
+            )
+        return self._free[0]
 
     def candidate_cost(self, q: FloatArray, tol_pos: float, tol_rot: float) -> float | None:
         """For a problem with a collision goal: when every other primary goal is within

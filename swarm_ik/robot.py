@@ -295,7 +295,7 @@ def _reduce(
         and reduced.njoints > 1
         and reduced.joints[1].shortname() == "JointModelFreeFlyer"
     )
-    shift = 3 if floating else 0  # tree joints before Pinocchio's joint 2
+    shift = 3 if floating else 0  # tree joints before the one of Pinocchio's joint 1
     for j in range(1, reduced.njoints):
         jm = reduced.joints[j]
         jname = reduced.names[j]
@@ -581,6 +581,12 @@ class RobotModel:
         return self.tree.nq
 
     @property
+    def _shift(self) -> int:
+        """Tree joints before the one of Pinocchio's joint 1: a free flyer's x, y, z (3), else
+        0 (the kernels' index of Pinocchio joint ``j >= 1`` is ``j - 1 + _shift``)."""
+        return 3 if self.floating_base else 0
+
+    @property
     def continuous_mask(self) -> NDArray[np.bool_]:
         """True for continuous joints, shape ``(nq,)``."""
         return np.array([k == "continuous" for k in self.joint_kinds], dtype=bool)
@@ -629,7 +635,7 @@ class RobotModel:
         ids = np.asarray(joint_ids, dtype=np.int64).reshape(-1)
         out_r = np.empty((ids.size, 3, 3))
         out_p = np.empty((ids.size, 3))
-        shift = 3 if self.floating_base else 0
+        shift = self._shift
         bases = self._cache.get("bases")
         if bases is None:  # each joint's rotation taking z onto its axis, made once
             bases = np.repeat(np.eye(3)[None], self.model.njoints, axis=0)
@@ -735,7 +741,7 @@ class RobotModel:
         Pinocchio's configuration, continuous), made once."""
         plan = self._cache.get("to_pinocchio")
         if plan is None:
-            t, shift, model = self.tree, 3 if self.floating_base else 0, self.model
+            t, shift, model = self.tree, self._shift, self.model
             head = ((-1, 1.0, 0.0, 0, False),) if shift else ()  # the free flyer
             plan = self._cache["to_pinocchio"] = head + tuple(
                 (int(t.q_index[j - 1 + shift]), float(t.multiplier[j - 1 + shift]),
@@ -749,7 +755,7 @@ class RobotModel:
         """Inverse of :meth:`to_pinocchio`: one value per solved joint."""
         q_pin = np.asarray(q_pin, dtype=float)
         out = np.empty(self.nq)
-        shift = 3 if self.floating_base else 0
+        shift = self._shift
         if shift:
             out[0:3] = q_pin[0:3]
             out[3:6] = lie.log3(pin.Quaternion(np.asarray(q_pin[3:7])).toRotationMatrix())
@@ -864,7 +870,7 @@ class RobotModel:
         if self.model.nv == self.nq and not self.mimic and not self.floating_base:
             return jac
         out = np.zeros((jac.shape[0], self.nq))
-        shift = 3 if self.floating_base else 0
+        shift = self._shift
         if shift:
             if q is None:
                 raise InvalidArgumentError("velocity_to_q needs q for a floating base")

@@ -254,6 +254,13 @@ class Goal:
         return type(self).kernel is not None
 
     @property
+    def exact(self) -> bool:
+        """Whether the goal asks for a point, not a region (a ``Pose`` with a
+        ``tolerance`` or a ``Position`` with a ``radius`` does not: it encodes other rows and
+        flags, is judged against its bounds, and is no single-pose target)."""
+        return True
+
+    @property
     def is_primary(self) -> bool:
         """The goal's ``primary`` field."""
         return bool(self.primary)

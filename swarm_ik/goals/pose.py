@@ -138,6 +138,10 @@ class Pose(Goal):
         t = np.asarray(target, dtype=float)
         return np.concatenate([t[..., :3, :3].reshape(t.shape[:-2] + (9,)), t[..., :3, 3]], -1)
 
+    @property
+    def exact(self) -> bool:
+        return self.tolerance is None
+
     def encode(self, robot: RobotModel, q0: FloatArray | None) -> Encoded:
         f = frame_index(self, robot)
         if self.tolerance is None:

@@ -87,6 +87,10 @@ class Position(Goal):
         """The float parameters of a target pose ``(4, 4)`` (its position) or ``(N, 4, 4)``."""
         return np.asarray(target, dtype=float)[..., :3, 3].copy()
 
+    @property
+    def exact(self) -> bool:
+        return self.radius is None
+
     def encode(self, robot: RobotModel, q0: FloatArray | None) -> Encoded:
         f = frame_index(self, robot)
         if self.radius is None:
