@@ -30,6 +30,7 @@ _LAZY = {
     "verify": "swarm_ik.api",
     "solve_batch": "swarm_ik.batch",
     "solve_many": "swarm_ik.many",
+    "windings_of": "swarm_ik.many",
     "OptimizeResult": "swarm_ik.optimize",
     "minimize": "swarm_ik.optimize",
     "make_pose": "swarm_ik.pose",
@@ -65,7 +66,7 @@ if TYPE_CHECKING:  # for type checkers and IDEs: the names as if imported eagerl
     from swarm_ik import goals, solvers
     from swarm_ik.api import IKSolver, solve, verify
     from swarm_ik.batch import solve_batch
-    from swarm_ik.many import solve_many
+    from swarm_ik.many import solve_many, windings_of
     from swarm_ik.optimize import OptimizeResult, minimize
     from swarm_ik.pose import make_pose, project_to_se3
     from swarm_ik.problem import IKProblem
@@ -99,4 +100,5 @@ __all__ = [
     "goals",
     "solvers",
     "verify",
+    "windings_of",
 ]

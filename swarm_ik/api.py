@@ -288,6 +288,7 @@ class Route:
         self.stop_on_success = bool(stop_on_success)
         self.prefer = prefer
         self._lock = threading.Lock()
+        self._warm = False  # (warm_up ran for this route)
         self.compiled = (
             solver == "swarm" and self.stop_on_success and hybrid.compiled_ok(problem, prefer)
         )
@@ -364,7 +365,9 @@ class Route:
         problem = self.problem if problem is None else problem
         seed = check_seed(seed)
         q_start = prepare_q0(problem, q0)
-        warm_up(self)
+        if not self._warm:
+            warm_up(self)
+            self._warm = True
         seed_val = None if isinstance(seed, np.random.Generator) else (0 if seed is None else seed)
         max_evals, time_limit = self.max_evals, self.time_limit
         cap_s, cap_evals = UNREACHABLE_BUDGET

@@ -22,7 +22,8 @@ Self-collision pairs are the pairs of links with collision geometry, minus
 
 The exact check (:meth:`RobotCollision.check`) runs coal's ``collide`` (with the margin as
 security margin) and ``distance`` on every enabled pair: self pairs and every robot body
-against every obstacle of a :class:`~swarm_ik.scene.Scene`.
+against every obstacle of a :class:`~swarm_ik.scene.Scene` (the obstacles in coal's dynamic
+AABB tree, its broad phase, so thousands of obstacles cost little).
 """
 
 from __future__ import annotations
@@ -423,44 +424,25 @@ class RobotCollision:
 
 
 class _Checker:
-    """Geometry models (exact, and convex hulls for distance bounds), data and pair labels of
-    one (scene, self_collision) set of pairs."""
+    """The exact check of one (scene, self_collision) set of pairs, with per-thread data.
+
+    The robot's self pairs run in a Pinocchio geometry model of the robot's bodies alone
+    (exact, and convex hulls of the meshes for distance bounds).  The obstacles stay coal
+    objects in coal's dynamic AABB tree (its broad phase): building it is ``O(n log n)`` in
+    obstacles (a Pinocchio geometry model holding them grew quadratically: 3,000 obstacles
+    took 40 s), and a verdict asks the tree once per robot body."""
 
     def __init__(self, rc: RobotCollision, scene: Scene, self_collision: bool) -> None:
         import coal
 
+        self._coal = coal
         self.model = rc.robot.model
         self.data = rc.robot.model.createData()
-        gm = pin.GeometryModel()
+        nb = rc.nb
+        gm, hm = pin.GeometryModel(), pin.GeometryModel()
+        is_mesh = []
         for g in rc.geom_model.geometryObjects:
             gm.addGeometryObject(pin.GeometryObject(g))
-        scene_names: list[str] = []
-        for name, obj in scene.coal_objects():
-            tf = obj.getTransform()
-            placement = pin.SE3(np.array(tf.getRotation()), np.array(tf.getTranslation()))
-            gm.addGeometryObject(
-                pin.GeometryObject(f"scene:{name}", 0, 0, placement, obj.collisionGeometry())
-            )
-            scene_names.append(name)
-        # every pair at once from a map (adding pairs one by one is quadratic in Pinocchio:
-        # 3,000 obstacles took 40 s); the pairs come back in row order
-        nb = rc.nb
-        pair_map = np.zeros((gm.ngeoms, gm.ngeoms), dtype=bool)
-        if self_collision:
-            for i, j in rc.self_pairs:
-                pair_map[min(i, j), max(i, j)] = True
-        pair_map[:nb, nb:] = True  # every body against every obstacle
-        gm.setCollisionPairs(pair_map, True)
-        labels: list[tuple[str, str]] = []
-        for cp in gm.collisionPairs:
-            a, b = int(cp.first), int(cp.second)
-            if b < nb:
-                labels.append(_key(rc.body_links[a], rc.body_links[b]))
-            else:
-                labels.append((rc.body_links[a], scene_names[b - nb]))
-        hm = pin.GeometryModel()
-        is_mesh = []
-        for g in gm.geometryObjects:
             h = pin.GeometryObject(g)
             mesh = isinstance(g.geometry, coal.BVHModelBase)
             if mesh:
@@ -468,14 +450,36 @@ class _Checker:
                 h.geometry = g.geometry.convex
             is_mesh.append(mesh)
             hm.addGeometryObject(h)
-        hm.setCollisionPairs(pair_map, True)  # (the same pairs, in the same order)
+        pair_map = np.zeros((nb, nb), dtype=bool)
+        if self_collision:
+            for i, j in rc.self_pairs:
+                pair_map[min(i, j), max(i, j)] = True
+        # every pair at once from a map (one call each is quadratic in Pinocchio); the pairs
+        # come back in row order, the same in both models
+        gm.setCollisionPairs(pair_map, True)
+        hm.setCollisionPairs(pair_map, True)
         self.gm, self.hm = gm, hm
         self.gd, self.hd = pin.GeometryData(gm), pin.GeometryData(hm)
-        self.labels = labels
+        self.labels = [
+            _key(rc.body_links[cp.first], rc.body_links[cp.second]) for cp in gm.collisionPairs
+        ]
         self.exact_by_hull = np.array(
             [not (is_mesh[cp.first] or is_mesh[cp.second]) for cp in gm.collisionPairs], dtype=bool
         )
         self.margin = 0.0
+        # the obstacles: coal objects (fixed in the world) in the broad phase's tree
+        self.body_links = rc.body_links
+        self.bodies = [coal.CollisionObject(g.geometry) for g in gm.geometryObjects]
+        self.obstacles = [obj for _, obj in scene.coal_objects()]
+        self.obstacle_names = [name for name, _ in scene.coal_objects()]
+        self.manager: Any = None
+        if self.obstacles:
+            self.manager = coal.DynamicAABBTreeCollisionManager()
+            scene.boxes()  # (computes each object's box)
+            for obj in self.obstacles:
+                self.manager.registerObject(obj)
+            self.manager.setup()
+        self.obs_lo, self.obs_hi = scene.boxes()
 
     def _set_margin(self, margin: float) -> None:
         if margin != self.margin:
@@ -483,49 +487,118 @@ class _Checker:
                 req.security_margin = margin
             self.margin = margin
 
+    def _place(self, q_pin: FloatArray) -> None:
+        """The bodies at ``q_pin``: Pinocchio's placements and the coal objects'."""
+        pin.forwardKinematics(self.model, self.data, q_pin)
+        pin.updateGeometryPlacements(self.model, self.data, self.gm, self.gd)
+        for obj, placement in zip(self.bodies, self.gd.oMg, strict=True):
+            obj.setTransform(placement)
+            obj.computeAABB()
+
     def collide(self, q_pin: FloatArray, margin: float) -> bool:
         """Whether any pair is in contact (stops at the first)."""
-        if not self.labels:
+        if not self.labels and self.manager is None:
             return False
         self._set_margin(margin)
-        return bool(pin.computeCollisions(self.model, self.data, self.gm, self.gd, q_pin, True))
+        self._place(q_pin)
+        if self.labels and pin.computeCollisions(self.gm, self.gd, True):
+            return True
+        if self.manager is None:
+            return False
+        coal = self._coal
+        for obj in self.bodies:
+            if margin == 0.0:
+                hit = coal.CollisionCallBackDefault()
+                self.manager.collide(obj, hit)
+                if hit.data.result.isCollision():
+                    return True
+            else:  # (the tree's boxes ignore a security margin: its distance instead)
+                near = coal.DistanceCallBackDefault()
+                self.manager.distance(obj, near)
+                if near.data.result.min_distance < margin:
+                    return True
+        return False
+
+    def _gaps(self) -> FloatArray:
+        """Lower bounds of the body–obstacle distances ``(nb, n_obstacles)`` [m]: the gaps
+        between their axis-aligned boxes."""
+        boxes = [obj.getAABB() for obj in self.bodies]
+        lo = np.array([np.array(b.min_) for b in boxes])
+        hi = np.array([np.array(b.max_) for b in boxes])
+        gap = np.maximum(
+            np.maximum(lo[:, None, :] - self.obs_hi[None], self.obs_lo[None] - hi[:, None, :]),
+            0.0,
+        )
+        return np.asarray(np.sqrt((gap * gap).sum(-1)))
+
+    def _obstacle_distance(self, b: int, o: int) -> float:
+        coal = self._coal
+        return float(
+            coal.distance(
+                self.bodies[b], self.obstacles[o], coal.DistanceRequest(), coal.DistanceResult()
+            )
+        )
 
     def run(self, q_pin: FloatArray, margin: float) -> CollisionReport:
         """Check Pinocchio configuration ``q_pin`` of the chain model."""
         gm, gd, hm, hd = self.gm, self.gd, self.hm, self.hd
-        self._set_margin(margin)
-        npairs = len(self.labels)
-        if npairs == 0:
+        coal = self._coal
+        n_self, n_obs = len(self.labels), len(self.obstacles)
+        if n_self == 0 and n_obs == 0:
             return CollisionReport(True, float("inf"), [], None)
-        pin.forwardKinematics(self.model, self.data, q_pin)
-        pin.updateGeometryPlacements(self.model, self.data, gm, gd)
-        pin.computeCollisions(gm, gd, False)
-        hits = [k for k in range(npairs) if gd.collisionResults[k].isCollision()]
-        best, best_k = float("inf"), -1
-        if hits:
-            for k in hits:
+        self._set_margin(margin)
+        self._place(q_pin)
+        if n_self:
+            pin.computeCollisions(gm, gd, False)
+        self_hits = [k for k in range(n_self) if gd.collisionResults[k].isCollision()]
+        gaps = self._gaps() if n_obs else np.zeros((len(self.bodies), 0))
+        obs_hits = []
+        request = coal.CollisionRequest()
+        request.security_margin = margin
+        for b, o in np.argwhere(gaps <= margin).tolist():  # (the narrow phase where boxes meet)
+            if coal.collide(self.bodies[b], self.obstacles[o], request, coal.CollisionResult()):
+                obs_hits.append((b, o))
+        best, best_label = float("inf"), None
+        if self_hits or obs_hits:
+            for k in self_hits:
                 pin.computeDistance(gm, gd, k)
                 d = float(gd.distanceResults[k].min_distance)
                 if d < best:
-                    best, best_k = d, k
+                    best, best_label = d, self.labels[k]
+            for b, o in obs_hits:
+                d = self._obstacle_distance(b, o)
+                if d < best:
+                    best, best_label = d, (self.body_links[b], self.obstacle_names[o])
             if margin == 0.0:
                 best = min(best, 0.0)
-            contact = sorted({self.labels[k] for k in hits})
-            return CollisionReport(False, best, contact, self.labels[best_k])
-        pin.updateGeometryPlacements(self.model, self.data, hm, hd)
-        pin.computeDistances(hm, hd)
-        bound = np.array([hd.distanceResults[k].min_distance for k in range(npairs)])
-        for k in np.argsort(bound):
+            contact = {self.labels[k] for k in self_hits}
+            contact |= {(self.body_links[b], self.obstacle_names[o]) for b, o in obs_hits}
+            return CollisionReport(False, best, sorted(contact), best_label)
+        # the clearance: exact distances in the order of their lower bounds (the convex hulls
+        # of the self pairs, the boxes of the obstacle pairs) until a bound exceeds the best
+        if n_self:
+            pin.updateGeometryPlacements(self.model, self.data, hm, hd)
+            pin.computeDistances(hm, hd)
+        bound = np.concatenate(
+            [[hd.distanceResults[k].min_distance for k in range(n_self)], gaps.ravel()]
+        )
+        for k in np.argsort(bound, kind="stable").tolist():
             if bound[k] >= best:
                 break
-            if self.exact_by_hull[k]:
-                d = float(bound[k])
+            if k < n_self:
+                if self.exact_by_hull[k]:
+                    d = float(bound[k])
+                else:
+                    pin.computeDistance(gm, gd, k)
+                    d = float(gd.distanceResults[k].min_distance)
+                label = self.labels[k]
             else:
-                pin.computeDistance(gm, gd, int(k))
-                d = float(gd.distanceResults[int(k)].min_distance)
+                b, o = divmod(k - n_self, n_obs)
+                d = self._obstacle_distance(b, o)
+                label = (self.body_links[b], self.obstacle_names[o])
             if d < best:
-                best, best_k = d, int(k)
-        return CollisionReport(True, best, [], self.labels[best_k])
+                best, best_label = d, label
+        return CollisionReport(True, best, [], best_label)
 
 
 # ---------------------------------------------------------------------- sampling rule

@@ -6,7 +6,7 @@ one-dimensional self-motion manifolds.  :func:`solve_many` returns
 
 * for a non-redundant chain: each **branch** once (distinct modulo 2π on the periodic joints,
   see :mod:`swarm_ik.branches`), as its in-limit copy nearest to ``q0`` (else to the middle of
-  the ranges); ``windings=True`` adds the other in-limit 2π copies of each branch;
+  the ranges); the other in-limit 2π copies of each branch come from :func:`windings_of`;
 * for a redundant chain (more joints than pose constraints): ``n`` solutions spread over the
   self-motion manifolds by farthest-point selection in joint space.
 
@@ -237,7 +237,6 @@ def solve_many(
     n: int = 16,
     *,
     method: str = "auto",
-    windings: bool = False,
     min_distance: float | None = None,
     q0: Any = None,
     tol_pos: float = 1e-5,
@@ -249,7 +248,7 @@ def solve_many(
     max_starts: int | None = None,
     max_iters: int = 30,
     patience: int = PATIENCE,
-) -> list[Result] | list[list[Result]]:
+) -> list[Result]:
     """Find the distinct IK solutions of a target: every branch once, or a spread for
     redundant arms.
 
@@ -294,9 +293,6 @@ def solve_many(
         method: ``"auto"`` (analytic when eaik is installed and decomposes the chain, else
             numerical), ``"numerical"`` or ``"analytic"`` (refused with the reason when it does
             not apply).
-        windings: Also return the other in-limit 2π copies of each branch: the result is then
-            a list of branches, each a list of :class:`Result` (the representative first, then
-            the copies by distance to the reference).
         min_distance: Optional coarser filter (rad / m, ``> 0``): drop a solution closer than
             this to a kept one.  Default ``None``: branches only.
         q0: Optional reference and first start, shape ``(nq,)`` (clipped into the limits with a
@@ -319,7 +315,8 @@ def solve_many(
         The solutions, nearest to the reference first, each verified with Pinocchio's FK
         (``success`` True).  ``n_evals`` and ``time_s`` are the totals spent when each was found
         (0 evaluations on the analytic path).  ``solver`` is ``"swarm"`` (numerical) or
-        ``"analytic"``.  Empty when nothing was found.  With ``windings=True``, a list of lists.
+        ``"analytic"``.  Empty when nothing was found.  :func:`windings_of` adds each
+        branch's other in-limit 2π copies.
 
     Raises:
         InvalidArgumentError: ``n``, ``min_distance``, ``batch``, ``patience``, a tolerance or
@@ -406,9 +403,39 @@ def solve_many(
             results.append(
                 _result(q_i, dp_i, dr_i, ev_i, t_i, float(fit_all[i]), SOLVER_NAME, seed_label)
             )
-    if not windings:
-        return results
-    return [_with_windings(problem, r, ref) for r in results]
+    return results
+
+
+def windings_of(problem: IKProblem, results: list[Result], q0: Any = None) -> list[list[Result]]:
+    """Each solution with its other in-limit 2π copies (joints whose range exceeds 2π).
+
+    Args:
+        problem: The problem the solutions are of.
+        results: Solutions, e.g. of :func:`solve_many`.
+        q0: The reference the copies are ordered by (default: the middle of the ranges), as
+            given to :func:`solve_many`.
+
+    Returns:
+        Per solution, a list of :class:`Result`: the solution first, then its copies by
+        distance to the reference, each verified with Pinocchio's FK.
+
+    >>> import numpy as np, swarm_ik
+    >>> robot = swarm_ik.load_robot("ur5")
+    >>> problem = swarm_ik.IKProblem.from_q(robot, [0.3, -1.0, 1.2, -0.5, 1.1, 0.2])
+    >>> groups = swarm_ik.windings_of(problem, swarm_ik.solve_many(problem, n=2))
+    >>> len(groups), len(groups[0])  # every copy of a UR5 branch fits its ±2π limits
+    (2, 32)
+    """
+    if not isinstance(problem, IKProblem):
+        raise InvalidArgumentError(f"problem must be an IKProblem, got {type(problem).__name__}")
+    start_q = prepare_q0(problem, q0)
+    ref = start_q if start_q is not None else 0.5 * (problem.lower + problem.upper)
+    out = []
+    for r in results:
+        if not isinstance(r, Result):
+            raise InvalidArgumentError(f"results must be Result objects, got {type(r).__name__}")
+        out.append(_with_windings(problem, r, ref))
+    return out
 
 
 # -------------------------------------------------------------------------- helpers

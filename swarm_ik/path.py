@@ -496,11 +496,10 @@ def _all_solutions(
     problem: Any, n: int, seed: int, tol_pos: float, tol_rot: float
 ) -> tuple[FloatArray, bool]:
     """Every distinct solution :func:`swarm_ik.solve_many` finds: ``(q (k, nq), closed
-    form)``.  The one call to ``solve_many`` (its return type is adapted here only)."""
+    form)``."""
     import swarm_ik
 
-    found: Any = swarm_ik.solve_many(problem, n=n, seed=seed, tol_pos=tol_pos, tol_rot=tol_rot)
-    results = [r[0] if isinstance(r, list) else r for r in found]  # (a list per branch: windings)
+    results = swarm_ik.solve_many(problem, n=n, seed=seed, tol_pos=tol_pos, tol_rot=tol_rot)
     qs = np.array([r.q for r in results if r.success], dtype=float).reshape(-1, problem.nq)
     closed = bool(results) and all(r.solver == "analytic" for r in results)
     return qs, closed

@@ -288,6 +288,8 @@ class IKProblem:
             if goals is None  # the target's goal alone
             else np.array([gl.is_primary for gl in terms], dtype=np.bool_)
         )
+        self.has_secondary = not bool(self.primary.all())
+        """Whether any goal is secondary."""
         self.tree = robot.tree
         """The kinematic tree the kernels evaluate: the robot's goal frames (first, in order)
         and any frames the goals add (collision bodies)."""
@@ -353,11 +355,6 @@ class IKProblem:
     def nq(self) -> int:
         """Number of joints."""
         return self.robot.nq
-
-    @property
-    def has_secondary(self) -> bool:
-        """Whether any goal is secondary."""
-        return bool(np.any(~self.primary))
 
     def table(self, q0: FloatArray | None) -> lm.GoalTable:
         """The compiled goal table of the compiled goals (``q0`` fills

@@ -483,11 +483,14 @@ class Scene:
         self._obstacles: tuple[Shape, ...] = items
         self._names: tuple[str, ...] = tuple(names)
         self._coal: list[tuple[str, Any]] | None = None
+        self._boxes: tuple[FloatArray, FloatArray] | None = None
+        self._hash: int | None = None
 
     def __getstate__(self) -> dict[str, Any]:
         """Pickled without its coal objects (they cannot be pickled; made again on use)."""
         state = dict(self.__dict__)
         state["_coal"] = None
+        state["_hash"] = None  # (a string's hash differs between processes)
         return state
 
     @property
@@ -513,7 +516,9 @@ class Scene:
         return isinstance(other, Scene) and other._obstacles == self._obstacles
 
     def __hash__(self) -> int:
-        return hash(self._obstacles)
+        if self._hash is None:  # (a scene keys caches: thousands of obstacles hashed once)
+            self._hash = hash(self._obstacles)
+        return self._hash
 
     def __repr__(self) -> str:
         return f"Scene({list(self._obstacles)!r})"
@@ -749,18 +754,26 @@ class Scene:
             ]
         return self._coal
 
+    def boxes(self) -> tuple[FloatArray, FloatArray]:
+        """Each obstacle's axis-aligned box (coal's AABB of its world pose): ``(lo, hi)``,
+        each ``(n, 3)`` [m]; computed once per scene."""
+        if self._boxes is None:
+            lo, hi = [], []
+            for _, obj in self.coal_objects():
+                obj.computeAABB()
+                box = obj.getAABB()
+                lo.append(np.array(box.min_))
+                hi.append(np.array(box.max_))
+            self._boxes = (np.array(lo).reshape(-1, 3), np.array(hi).reshape(-1, 3))
+        return self._boxes
+
     def bounds(self) -> FloatArray:
         """Axis-aligned bounds of all obstacles ``[[xmin, ymin, zmin], [xmax, ymax, zmax]]``
         [m] (from coal's AABBs); ``(2, 3)`` of NaN for an empty scene."""
         if not self._obstacles:
             return np.full((2, 3), np.nan)
-        lo, hi = [], []
-        for _, obj in self.coal_objects():
-            obj.computeAABB()
-            box = obj.getAABB()
-            lo.append(np.array(box.min_))
-            hi.append(np.array(box.max_))
-        return np.array([np.min(lo, axis=0), np.max(hi, axis=0)])
+        lo, hi = self.boxes()
+        return np.array([lo.min(axis=0), hi.max(axis=0)])
 
 
 def coal_geometry(shape: Shape) -> Any:

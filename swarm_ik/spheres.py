@@ -418,8 +418,12 @@ class SphereModel:
         pairs = np.array(rc.self_pairs if self_collision else [], dtype=np.int64).reshape(-1, 2)
         spheres = (sph_body, sph_local, sph_radius, body_start, bound_local, bound_radius)
         coarse: list[tuple[str, str]] = []
-        if len(pairs) and coarse_samples > 0:
-            pairs, coarse = _drop_coarse_pairs(rc, pairs, spheres, coarse_samples)
+        if len(pairs) and coarse_samples > 0:  # (the robot's own: made once per robot)
+            memo = rc.__dict__.setdefault("_coarse", {})
+            key = (tolerance, bool(self_collision), int(coarse_samples), use_cache)
+            if key not in memo:
+                memo[key] = _drop_coarse_pairs(rc, pairs, spheres, coarse_samples)
+            pairs, coarse = memo[key]
         kinds, rots, poss, dims, names = [], [], [], [], []
         sc = as_scene(scene)
         for name, o in zip(sc.names, sc.obstacles, strict=True):

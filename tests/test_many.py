@@ -50,8 +50,9 @@ def test_representative_nearest_q0_and_windings():
     q0 = q - 2 * np.pi * np.array([1, 0, 0, 0, 1, 0]) + 1e-3
     sols = swarm_ik.solve_many(problem, method="numerical", q0=q0)
     assert np.allclose(sols[0].q, q - 2 * np.pi * np.array([1, 0, 0, 0, 1, 0]), atol=1e-8)
-    groups = swarm_ik.solve_many(problem, method="numerical", q0=q0, windings=True)
+    groups = swarm_ik.windings_of(problem, sols, q0=q0)
     assert len(groups) == len(sols)
+    assert all(g[0] is r for g, r in zip(groups, sols, strict=True))
     periodic = br.periodic_mask(robot)
     for g in groups:
         assert len(g) == 32  # every copy of a generic UR5 branch fits the ±2π limits
@@ -231,3 +232,12 @@ def test_valley_walk_respects_max_evals(monkeypatch):
         assert all(s.n_evals <= budget for s in sols)
     assert calls and all(used <= room for room, used in calls)
     assert any(used == room for room, used in calls)  # a walk was cut by the budget
+
+
+def test_windings_of_refuses_what_is_not_a_result():
+    robot = swarm_ik.load_robot("ur5")
+    problem = swarm_ik.IKProblem.from_q(robot, [0.3, -1.0, 1.2, -0.5, 1.1, 0.2])
+    with pytest.raises(swarm_ik.InvalidArgumentError, match="Result"):
+        swarm_ik.windings_of(problem, [np.zeros(6)])
+    with pytest.raises(swarm_ik.InvalidArgumentError, match="IKProblem"):
+        swarm_ik.windings_of(robot, [])

@@ -21,7 +21,7 @@ Every path is solved with ``max_joint_step`` 0.2 rad by
 * the same greedy tracking with TRAC-IK and roboticstoolbox ``ik_LM`` seeded with the
   previous answer, when installed (``--no-peers`` skips them);
 * on the 6R arms, the exhaustive reference: every branch of every waypoint with every
-  in-limit 2π copy (``solve_many(..., windings=True)``, eaik) and a separate dynamic
+  in-limit 2π copy (``windings_of(problem, solve_many(...))``, eaik) and a separate dynamic
   programme (numpy) that decides whether a jump-free sequence exists.  Where ``solve_path``
   claims that no jump-free path exists, the claim is checked again with the numerical
   branch sets added (``solve_many(method="numerical")``, independent of eaik).
@@ -165,21 +165,19 @@ def judge(robot: Any, poses: Any, q: Any) -> tuple[bool, bool, float]:
 
 
 def branch_layers(robot: Any, poses: Any, numerical: bool = False) -> list[Any]:
-    """Every solution of every waypoint with every in-limit 2π copy (``solve_many`` with
-    ``windings=True``; ``numerical`` adds the numerical path's branches)."""
+    """Every solution of every waypoint with every in-limit 2π copy (``solve_many`` and
+    ``windings_of``; ``numerical`` adds the numerical path's branches)."""
     import swarm_ik
 
     layers = []
     for pose in poses:
         problem = swarm_ik.IKProblem(robot, pose)
-        found: Any = swarm_ik.solve_many(problem, n=16, windings=True, tol_pos=TOL, tol_rot=TOL)
+        found = swarm_ik.solve_many(problem, n=16, tol_pos=TOL, tol_rot=TOL)
         if numerical:
-            found = list(found) + list(
-                swarm_ik.solve_many(
-                    problem, n=16, windings=True, method="numerical", tol_pos=TOL, tol_rot=TOL
-                )
+            found += swarm_ik.solve_many(
+                problem, n=16, method="numerical", tol_pos=TOL, tol_rot=TOL
             )
-        qs = [r.q for branch in found for r in (branch if isinstance(branch, list) else [branch])]
+        qs = [r.q for branch in swarm_ik.windings_of(problem, found) for r in branch]
         layers.append(np.array(qs, dtype=float).reshape(-1, robot.nq))
     return layers
 

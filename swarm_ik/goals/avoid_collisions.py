@@ -178,13 +178,14 @@ class AvoidCollisions(Goal):
             return None
         import coal
 
-        from swarm_ik.scene import coal_object
-
         p = np.asarray(point, dtype=float)
         probe = coal.CollisionObject(coal.Sphere(1e-9), coal.Transform3s(np.eye(3), p))
-        for name, shape in zip(self.scene.names, self.scene, strict=True):
+        lo, hi = self.scene.boxes()
+        objects = self.scene.coal_objects()
+        for k in np.flatnonzero(np.all((lo <= p) & (p <= hi), axis=1)).tolist():
+            name, obj = objects[k]  # (only an obstacle whose box holds the point can)
             req, res = coal.DistanceRequest(), coal.DistanceResult()
-            if coal.distance(coal_object(shape), probe, req, res) < 0.0:
+            if coal.distance(obj, probe, req, res) < 0.0:
                 return str(name)
         return None
 
@@ -200,6 +201,7 @@ class AvoidCollisions(Goal):
                 self_collision=bool(self.self_collision),
             )  # fmt: skip
             robot._cache[key] = sm
+            self.scene.boxes()  # (the exact check's coal objects, made before any clock)
         return sm
 
     def extra_frames(self, robot: RobotModel) -> tuple[Any, Any, Any] | None:

@@ -21,6 +21,7 @@ of every answer).  ``docs/goals.md`` writes a Python goal step by step.
 
 from __future__ import annotations
 
+import math
 import reprlib
 from dataclasses import dataclass, field
 from typing import TYPE_CHECKING, Any, ClassVar, NamedTuple
@@ -308,7 +309,7 @@ class Goal:
         if not self.compiled and getattr(self, "tolerance", None) is not None:
             tol_pos = float(self.tolerance)  # type: ignore[attr-defined]
         met = not (dp > tol_pos) and not (dr > tol_rot)
-        if np.isnan(dp) and np.isnan(dr):
+        if math.isnan(dp) and math.isnan(dr):
             met = False  # nothing measured: never a vacuous success
         return float(dp), float(dr), bool(met), None
 

@@ -136,7 +136,10 @@ class Pose(Goal):
         """The float parameters of a target ``(4, 4)``, or of targets ``(N, 4, 4)`` as
         ``(N, 12)``: what :func:`swarm_ik.solve_batch` writes per target."""
         t = np.asarray(target, dtype=float)
-        return np.concatenate([t[..., :3, :3].reshape(t.shape[:-2] + (9,)), t[..., :3, 3]], -1)
+        out = np.empty(t.shape[:-2] + (12,))
+        out[..., :9] = t[..., :3, :3].reshape(t.shape[:-2] + (9,))
+        out[..., 9:] = t[..., :3, 3]
+        return out
 
     @property
     def exact(self) -> bool:

@@ -53,7 +53,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from swarm_ik.errors import InvalidArgumentError, unknown
-from swarm_ik.goals import kernels
+from swarm_ik.goals import Posture, kernels
 from swarm_ik.kernels import lm, search
 from swarm_ik.kernels.lm import BUDGET, CONVERGED, ITER_CAP, LOCAL_MIN, NOT_RUN, LMSettings
 from swarm_ik.problem import REPLACEABLE, IKProblem
@@ -368,8 +368,6 @@ def default_seed(
 ) -> FloatArray:
     """The first start without ``q0``: the reference of the first Posture goal (clipped into
     the bounds) when there is one, else the middle of the ranges (TRAC-IK's seed)."""
-    from swarm_ik.goals import Posture
-
     lo = problem.lower if lower is None else lower
     hi = problem.upper if upper is None else upper
     for gl in problem.goals:
