@@ -364,7 +364,7 @@ class IKProblem:
         if tab is None:
             enc = [self.encode(i, q0) for i in range(len(self.compiled_goals))]
             tab = lm.goal_table(
-                [kernel_slot(type(gl).kernel) for gl in self.compiled_goals],
+                [kernel_slot(gl.kernel_of()) for gl in self.compiled_goals],
                 [gl.weight for gl in self.compiled_goals],
                 [gl.is_primary for gl in self.compiled_goals],
                 [e.par for e in enc],

@@ -706,8 +706,12 @@ class RobotModel:
     # ------------------------------------------------------------- kinematics
     def fk(self, q: FloatArray, frame: str | None = None) -> FloatArray:
         """Pose(s) [m] of one goal frame (default the first):
-        ``(nq,) -> (4, 4)`` or ``(pop, nq) -> (pop, 4, 4)``."""
+        ``(nq,) -> (4, 4)`` (Pinocchio's FK, :meth:`fk_pinocchio`: nothing to compile for
+        one pose) or ``(pop, nq) -> (pop, 4, 4)`` (the compiled batch FK)."""
         f = self.frame_index(frame)
+        arr = np.asarray(q)
+        if arr.shape == (self.nq,) and arr.dtype.kind in "fiu":
+            return self.fk_pinocchio(arr.astype(float), frame)
         out = self.tree.fk(q)
         return out[..., f, :, :]
 

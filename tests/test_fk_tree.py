@@ -118,7 +118,7 @@ def test_mimic_follower_on_the_chain_is_driven_by_its_driver(tmp_path) -> None:
     assert robot.lower[0] == pytest.approx(-2.0) and robot.upper[0] == pytest.approx(2.0)
     rng = np.random.default_rng(3)
     for q in robot.random_q(rng, 5):
-        np.testing.assert_allclose(robot.fk(q), robot.fk_pinocchio(q), atol=1e-12)
+        np.testing.assert_allclose(robot.fk(q[None])[0], robot.fk_pinocchio(q), atol=1e-12)
         np.testing.assert_allclose(robot.fk_jacobian(q)[1], robot.jacobian_pinocchio(q), atol=1e-12)
         qp = robot.to_pinocchio(q)
         assert qp[2] == pytest.approx(-0.5 * q[0] + 0.2)

@@ -168,8 +168,10 @@ def test_exact_forms_keep_their_parameter_layout() -> None:
     np.testing.assert_array_equal(enc.par, G.Pose.params(pose))
     checked = G.Pose.checked(r.ee_frame, pose)
     assert checked.tolerance is None and checked.encode(r, None).par.shape == (12,)
-    enc = G.Pose(r.ee_frame, pose, tolerance=BOX).encode(r, None)
-    assert enc.ipar.tolist() == [0, 1] and enc.rows == 6
+    bounded = G.Pose(r.ee_frame, pose, tolerance=BOX)
+    enc = bounded.encode(r, None)
+    assert enc.ipar.tolist() == [0] and enc.rows == 6
+    assert bounded.kernel_of() is not checked.kernel_of()  # (each form its own kernel)
     np.testing.assert_array_equal(enc.par[:12], G.Pose.params(pose))
     np.testing.assert_array_equal(enc.par[12:], BOX)
     enc = G.Position(r.ee_frame, pose[:3, 3]).encode(r, None)

@@ -254,6 +254,12 @@ class Goal:
         """Whether the goal has a compiled kernel."""
         return type(self).kernel is not None
 
+    def kernel_of(self) -> Any:
+        """The compiled kernel of this goal: the class's ``kernel`` (a goal whose form
+        changes its rows, such as a bounded :class:`~swarm_ik.goals.Pose`, may name another
+        per instance, so each form compiles only when used)."""
+        return type(self).kernel
+
     @property
     def exact(self) -> bool:
         """Whether the goal asks for a point, not a region (a ``Pose`` with a

@@ -26,23 +26,26 @@ if TYPE_CHECKING:
 
 @numba.njit(cache=True)
 def pose_kernel(par, ipar, q, f_pos, f_rot, f_jac, want_jac, res, jac, err, work):  # type: ignore[no-untyped-def]  # pragma: no cover
-    """Rows ``[p* − p; log(R* Rᵀ)]`` of frame ``ipar[0]``; ``par = [R* row-major (9), p* (3)]``.
-
-    With a flag ``ipar[1] = 1`` (a :attr:`Pose.tolerance`), ``par[12:18]`` are the bounds and
-    the rows are the dead zones of :func:`~swarm_ik.kernels.rows.box_position_rows` and
-    :func:`~swarm_ik.kernels.rows.box_rotation_rows` (the exact form's code is unchanged).
-    """
+    """Rows ``[p* − p; log(R* Rᵀ)]`` of frame ``ipar[0]``; ``par = [R* row-major (9), p* (3)]``
+    (the exact form)."""
     f = ipar[0]
-    if ipar.shape[0] > 1 and ipar[1] != 0:
-        err[0] = box_position_rows(
-            par[0:9], par[9:12], par[12:15], f, f_pos, f_jac, want_jac, res[0:3], jac[0:3]
-        )
-        err[1] = box_rotation_rows(
-            par[0:9], par[15:18], f, f_rot, f_jac, want_jac, res[3:6], jac[3:6], work
-        )
-        return
     err[0] = position_rows(par[9:12], f, f_pos, f_jac, want_jac, res[0:3], jac[0:3])
     err[1] = rotation_rows(par[0:9], f, f_rot, f_jac, want_jac, res[3:6], jac[3:6], work)
+
+
+@numba.njit(cache=True)
+def pose_bounded_kernel(par, ipar, q, f_pos, f_rot, f_jac, want_jac, res, jac, err, work):  # type: ignore[no-untyped-def]  # pragma: no cover
+    """The dead-zone rows of :func:`~swarm_ik.kernels.rows.box_position_rows` and
+    :func:`~swarm_ik.kernels.rows.box_rotation_rows` of frame ``ipar[0]`` (a
+    :attr:`Pose.tolerance`); ``par = [R* (9), p* (3), position bounds (3), rotation bounds
+    (3)]``.  Its own kernel, so the exact form compiles without it."""
+    f = ipar[0]
+    err[0] = box_position_rows(
+        par[0:9], par[9:12], par[12:15], f, f_pos, f_jac, want_jac, res[0:3], jac[0:3]
+    )
+    err[1] = box_rotation_rows(
+        par[0:9], par[15:18], f, f_rot, f_jac, want_jac, res[3:6], jac[3:6], work
+    )
 
 
 def pose_tolerance(value: Any) -> tuple[float, ...] | None:
@@ -145,12 +148,15 @@ class Pose(Goal):
     def exact(self) -> bool:
         return self.tolerance is None
 
+    def kernel_of(self) -> Any:
+        return pose_kernel if self.tolerance is None else pose_bounded_kernel
+
     def encode(self, robot: RobotModel, q0: FloatArray | None) -> Encoded:
         f = frame_index(self, robot)
         if self.tolerance is None:
             return Encoded(self.params(self.target), np.array([f], dtype=np.int64), 6)
         par = np.concatenate([self.params(self.target), np.asarray(self.tolerance, dtype=float)])
-        return Encoded(par, np.array([f, 1], dtype=np.int64), 6)
+        return Encoded(par, np.array([f], dtype=np.int64), 6)
 
     # ------------------------------------------------------------- the bounded form
     def offsets(self, poses: FloatArray) -> tuple[FloatArray, FloatArray]:

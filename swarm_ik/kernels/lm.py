@@ -641,7 +641,8 @@ def lm_run(
         while True:
             # the one evaluation site (the start, then each trial): one inlined copy of the
             # FK and the goal rows in this kernel
-            cost_t = evaluate(q_t, t, g, ks, w, True, True)
+            fk_one(q_t, t, w.fk, True)
+            cost_t = goal_rows(q_t, w.fk, g, ks, True, True, res_t, jac_t, err_t, w.work)
             used += 1
             ev_s += 1
             if ev_s == 1 or cost_t < cost:  # the start, or an accepted step

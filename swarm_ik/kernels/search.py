@@ -216,7 +216,8 @@ def make_search_work(
 def grown(hist: FloatArray, n: int) -> FloatArray:  # pragma: no cover - compiled
     """A copy of ``hist``'s first ``n`` entries in a buffer twice as long."""
     bigger = np.empty(max(2 * hist.shape[0], n + 1, 1))
-    bigger[:n] = hist[:n]
+    for i in range(n):  # (a loop: a slice assignment compiles numba's broadcasting too)
+        bigger[i] = hist[i]
     return bigger
 
 
