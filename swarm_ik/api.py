@@ -27,7 +27,7 @@ from typing import Any
 import numpy as np
 
 from swarm_ik.errors import InvalidArgumentError, unknown
-from swarm_ik.goals import AvoidCollisions, Orientation, Pose, Position
+from swarm_ik.goals import AvoidCollisions, Orientation, Pose, Position, Posture
 from swarm_ik.kernels import search
 from swarm_ik.optimize import check_budget, check_seed, make_rng
 from swarm_ik.pose import is_finite_nonneg
@@ -289,6 +289,12 @@ class Route:
         self.prefer = prefer
         self._lock = threading.Lock()
         self._warm = False  # (warm_up ran for this route)
+        # the first start without q0 when no Posture goal names one (the middle of the ranges)
+        self._mid = (
+            None
+            if any(isinstance(g, Posture) for g in problem.goals)
+            else (hybrid.default_seed(problem))
+        )
         self.compiled = (
             solver == "swarm" and self.stop_on_success and hybrid.compiled_ok(problem, prefer)
         )
@@ -401,7 +407,11 @@ class Route:
         if self.compiled and on_improvement is None:
             if key is None:
                 key = search.stream_key(seed)  # type: ignore[arg-type]
-            seed_q = q_start if q_start is not None else hybrid.default_seed(problem)
+            seed_q = q_start
+            if seed_q is None:
+                mid, bound = self._mid, self.problem
+                same_box = problem.lower is bound.lower and problem.upper is bound.upper
+                seed_q = mid if mid is not None and same_box else hybrid.default_seed(problem)
             with self._lock:  # (the bound table and scratch serve one run at a time)
                 self._rebind(problem, q_start)
                 t0 = time.perf_counter()

@@ -13,7 +13,6 @@ True
 
 from __future__ import annotations
 
-import copy
 import math
 from collections.abc import Sequence
 from dataclasses import dataclass
@@ -389,7 +388,8 @@ class IKProblem:
         else: the per-call path of :class:`swarm_ik.IKSolver`."""
         if not self.single_pose or self.target is None:
             raise InvalidArgumentError("with_target needs a single-pose problem")
-        new = copy.copy(self)
+        new = object.__new__(type(self))  # (a shallow copy: copy.copy's protocol costs 6 µs)
+        new.__dict__.update(self.__dict__)
         new.target = as_pose(target)
         if isinstance(self.goals[0], Position):
             new.goals = (Position(self.robot.ee_frame, new.target[:3, 3]),)

@@ -135,7 +135,7 @@ class State:
 
     def pose(self, frame: str) -> FloatArray:
         """World pose of ``frame``, ``(4, 4)`` [m]."""
-        return np.array(self._data.oMf[self.frame_id(frame)].homogeneous)
+        return self._data.oMf[self.frame_id(frame)].homogeneous  # type: ignore[no-any-return]  # (a new array)
 
     def jacobian(self, frame: str) -> FloatArray:
         """LOCAL_WORLD_ALIGNED Jacobian of ``frame`` ``(6, nq)``: linear rows [m/rad] first,

@@ -195,12 +195,9 @@ class SearchWork(NamedTuple):
     """The scratch of :func:`swarm_ik.kernels.lm.lm_run`."""
 
 
-@numba.njit(cache=True)
-def make_search_work(
-    t: TreeArrays, g: GoalTable, pop_size: int
-) -> SearchWork:  # pragma: no cover - compiled
+def make_search_work(t: TreeArrays, g: GoalTable, pop_size: int) -> SearchWork:
     """The :class:`SearchWork` of :func:`swarm_search` for ``pop_size`` starts per
-    generation."""
+    generation (numpy's allocations, in Python: nothing to compile)."""
     n = t.nq
     rows = max(pop_size, 1)
     pq, pdp, pdr, pst, pev = lm.polish_outputs(rows, n)
@@ -463,12 +460,20 @@ structref.define_proxy(
 )
 
 
-@numba.njit(cache=True)
 def new_search_state(
     t: TreeArrays, g: GoalTable, ks: GoalKernels, b: Bounds, cfg: LMSettings, pop_size: int
-) -> Any:  # pragma: no cover - compiled
+) -> Any:
     """A :class:`SearchState` for ``pop_size`` starts per generation."""
-    return SearchState(t, g, ks, b, cfg, make_search_work(t, g, pop_size))
+    return _search_state(t, g, ks, b, cfg, make_search_work(t, g, pop_size))
+
+
+@numba.njit(cache=True)
+def _search_state(
+    t: TreeArrays, g: GoalTable, ks: GoalKernels, b: Bounds, cfg: LMSettings, sw: SearchWork
+) -> Any:  # pragma: no cover - compiled
+    """The :class:`SearchState` of its parts (compiled and cached: the proxy's own
+    constructor would compile in every process)."""
+    return SearchState(t, g, ks, b, cfg, sw)
 
 
 def typed_settings(cfg: LMSettings) -> LMSettings:
