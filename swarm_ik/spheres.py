@@ -90,6 +90,11 @@ def _winding(points: FloatArray, tris: FloatArray) -> FloatArray:
     return out
 
 
+WINDING_PAIRS = 2e7
+"""Most point–triangle pairs of the inside test of a fit (about 7 s of numpy): a mesh of more
+than 10,000 triangles gets a coarser grid of interior candidate centres (the surface points
+remain candidates, so the cover stays complete; a 327,680-triangle ball took 250 s)."""
+
 MAX_FIT_TRIANGLES = 5e6
 """Most triangles a mesh is subdivided into for its sphere cover (about 1 GB of work arrays;
 a mesh scaled a million times at a 2 cm tolerance needs 10¹⁸)."""
@@ -132,7 +137,8 @@ def fit_mesh(
     pts = _voxel_subsample(np.vstack([V, V2]), 0.5 * tolerance)  # points the greedy covers
     lo, hi = V.min(axis=0), V.max(axis=0)
     ext = np.maximum(hi - lo, 1e-9)
-    pitch = max(0.5 * tolerance, float(np.prod(ext) / 2000.0) ** (1.0 / 3.0))
+    n_grid = min(2000.0, max(8.0, WINDING_PAIRS / len(F)))  # (interior candidates, about)
+    pitch = max(0.5 * tolerance, float(np.prod(ext) / n_grid) ** (1.0 / 3.0))
     axes = [np.arange(lo[i] + 0.5 * pitch, hi[i], pitch) for i in range(3)]
     grid = np.stack(np.meshgrid(*axes, indexing="ij"), axis=-1).reshape(-1, 3)
     if len(grid):
@@ -396,7 +402,7 @@ class SphereModel:
         """
         import coal
 
-        from swarm_ik.scene import Box, Capsule, Cylinder, Mesh, Sphere, as_scene, coal_geometry
+        from swarm_ik.scene import Box, Capsule, Cylinder, Mesh, Sphere, as_scene
 
         tolerance = float(tolerance)
         if not (np.isfinite(tolerance) and tolerance > 0.0):
@@ -426,7 +432,7 @@ class SphereModel:
             pairs, coarse = memo[key]
         kinds, rots, poss, dims, names = [], [], [], [], []
         sc = as_scene(scene)
-        for name, o in zip(sc.names, sc.obstacles, strict=True):
+        for k, (name, o) in enumerate(zip(sc.names, sc.obstacles, strict=True)):
             pose = np.array(o.pose, dtype=float)
             if isinstance(o, Sphere):
                 kinds.append(SPHERE)
@@ -439,7 +445,7 @@ class SphereModel:
                 dims.append([o.radius, 0.5 * o.length, 0.0])
             else:
                 assert isinstance(o, Mesh)
-                geo = coal_geometry(o)
+                geo = sc.coal_objects()[k][1].collisionGeometry()  # (loaded once per scene)
                 assert isinstance(geo, coal.BVHModelBase)
                 ((c, r),) = fit_bodies([geo], tolerance, use_cache)
                 for ck, rk in zip(c, r, strict=True):

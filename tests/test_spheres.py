@@ -127,6 +127,23 @@ def test_mesh_obstacle_is_covered(tmp_path) -> None:
     assert np.max(np.linalg.norm(pts[:, :2], axis=1)) == pytest.approx(0.3, rel=1e-3)
 
 
+def test_a_fine_mesh_is_covered_within_the_inside_test_budget(monkeypatch) -> None:
+    """A mesh of many triangles gets a coarser grid of interior candidates (a 327,680-triangle
+    ball took 250 s in the inside test), and its cover stays complete and tight."""
+    import trimesh
+
+    ball = trimesh.creation.icosphere(subdivisions=4, radius=0.1)  # 5,120 triangles
+    v, f = np.asarray(ball.vertices), np.asarray(ball.faces)
+    full = S.fit_mesh(v, f, 0.02)
+    monkeypatch.setattr(S, "WINDING_PAIRS", 5e4)  # (about 10 interior candidates)
+    coarse = S.fit_mesh(v, f, 0.02)
+    rng = np.random.default_rng(3)
+    pts = np.vstack([v, _on_triangles(v, f, 4000, rng)])
+    for c, r in (full, coarse):
+        assert _excess(pts, c, r).max() <= 1e-9
+        assert np.max(np.linalg.norm(c, axis=1) + r) <= 0.1 + 2.5 * 0.02
+
+
 # ------------------------------------------------------------------------------ SDFs
 @pytest.mark.parametrize("shape", scene_near_robot().obstacles, ids=lambda o: o.kind)
 def test_obstacle_sdf_matches_coal(shape) -> None:
