@@ -711,7 +711,13 @@ class RobotModel:
         f = self.frame_index(frame)
         arr = np.asarray(q)
         if arr.shape == (self.nq,) and arr.dtype.kind in "fiu":
-            return self.fk_pinocchio(arr.astype(float), frame)
+            # (a Data of its own: the State a Python goal reads stays valid if it calls fk)
+            data = getattr(self._local, "fk_data", None)
+            if data is None:
+                data = self._local.fk_data = self.model.createData()
+            pin.forwardKinematics(self.model, data, self.to_pinocchio(arr, copy=False))
+            fid = self.frame_ids[f]
+            return pin.updateFramePlacement(self.model, data, fid).homogeneous  # type: ignore[no-any-return]
         out = self.tree.fk(q)
         return out[..., f, :, :]
 

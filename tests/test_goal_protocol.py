@@ -179,3 +179,16 @@ def test_look_at_a_point_at_the_frame_origin_is_never_met() -> None:
     (err,) = prob.verify(q)
     assert not err.met
     assert not np.all(swarm_ik.problem.judge(prob.goal_errors(q)[0], [True], 1e-5, 1e-5))
+
+
+def test_a_state_stays_valid_when_a_goal_calls_robot_fk() -> None:
+    """A Python goal may call ``robot.fk`` inside ``residual(state)``: the state it reads keeps
+    the kinematics of its own ``q``."""
+    r = swarm_ik.load_robot("panda")
+    rng = np.random.default_rng(4)
+    q1, q2 = r.random_q(rng), r.random_q(rng)
+    state = G.State(r, q1)
+    before = state.pose(r.ee_frame)
+    other = r.fk(q2)
+    np.testing.assert_array_equal(state.pose(r.ee_frame), before)
+    np.testing.assert_allclose(other, r.fk(q2[None])[0], atol=1e-12)
