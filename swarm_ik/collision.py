@@ -473,12 +473,18 @@ class _Checker:
         self.obstacles = [obj for _, obj in scene.coal_objects()]
         self.obstacle_names = [name for name, _ in scene.coal_objects()]
         self.manager: Any = None
+        self.body_manager: Any = None
         if self.obstacles:
             self.manager = coal.DynamicAABBTreeCollisionManager()
             scene.boxes()  # (computes each object's box)
             for obj in self.obstacles:
                 self.manager.registerObject(obj)
             self.manager.setup()
+            # the bodies in a tree of their own: one query of tree against tree
+            self.body_manager = coal.DynamicAABBTreeCollisionManager()
+            for obj in self.bodies:
+                self.body_manager.registerObject(obj)
+            self.body_manager.setup()
         self.obs_lo, self.obs_hi = scene.boxes()
 
     def _set_margin(self, margin: float) -> None:
@@ -506,18 +512,15 @@ class _Checker:
         if self.manager is None:
             return False
         coal = self._coal
-        for obj in self.bodies:
-            if margin == 0.0:
-                hit = coal.CollisionCallBackDefault()
-                self.manager.collide(obj, hit)
-                if hit.data.result.isCollision():
-                    return True
-            else:  # (the tree's boxes ignore a security margin: its distance instead)
-                near = coal.DistanceCallBackDefault()
-                self.manager.distance(obj, near)
-                if near.data.result.min_distance < margin:
-                    return True
-        return False
+        self.body_manager.update()  # (the bodies' new boxes)
+        if margin == 0.0:
+            hit = coal.CollisionCallBackDefault()
+            self.manager.collide(self.body_manager, hit)
+            return bool(hit.data.result.isCollision())
+        # (the trees' boxes ignore a security margin: the smallest distance instead)
+        near = coal.DistanceCallBackDefault()
+        self.manager.distance(self.body_manager, near)
+        return bool(near.data.result.min_distance < margin)
 
     def _gaps(self) -> FloatArray:
         """Lower bounds of the body–obstacle distances ``(nb, n_obstacles)`` [m]: the gaps
