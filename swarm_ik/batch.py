@@ -159,7 +159,7 @@ def _solve_targets(
     n = bounds.lower.shape[0]
     block = min(_RESTART_BLOCK, max(max_starts - 1, 1))
     starts = np.empty((block, n))
-    pq, pdp, pdr, pst, pev = lm.polish_outputs(block, n)
+    pq, pdp, pdr, pst, pev = lm.polish_outputs_nb(block, n)
     seed_key = _splitmix64(np.uint64(seed))
     s_lo = np.empty(n)
     s_hi = np.empty(n)
@@ -169,7 +169,7 @@ def _solve_targets(
     par = goals.par
     timed = deadline != NO_DEADLINE
     late = False
-    work = lm.make_work(tree, goals, goals.rows_primary)
+    work = lm.make_work_nb(tree, goals, goals.rows_primary)
     for i in range(n_targets):
         if timed and not late:
             late = _wall_clock() > deadline

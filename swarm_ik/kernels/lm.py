@@ -391,9 +391,10 @@ class Work(NamedTuple):
     x_red: FloatArray
 
 
-@numba.njit(cache=True)
-def make_work(t: TreeArrays, g: GoalTable, rows: int) -> Work:  # pragma: no cover - compiled
-    """Scratch for :func:`lm_run` and friends (``rows``: the largest stack)."""
+def make_work(t: TreeArrays, g: GoalTable, rows: int) -> Work:
+    """Scratch for :func:`lm_run` and friends (``rows``: the largest stack): numpy's
+    allocations, in Python for a caller in Python (nothing to compile before the first
+    solve), :func:`make_work_nb` inside the kernels."""
     nq = t.nq
     nj = t.kind.shape[0]
     nf = t.frame_joint.shape[0]
@@ -425,6 +426,10 @@ def make_work(t: TreeArrays, g: GoalTable, rows: int) -> Work:  # pragma: no cov
         np.empty(nq),
         np.empty(nq),
     )
+
+
+make_work_nb = numba.njit(cache=True)(make_work)
+""":func:`make_work` compiled, for the kernels that allocate their own scratch."""
 
 
 @numba.njit(cache=True)
@@ -465,14 +470,16 @@ def gram(jac: FloatArray, m: int, n: int, out: FloatArray) -> float:  # pragma: 
     return trace
 
 
-@numba.njit(cache=True)
-def polish_outputs(
-    k: int, n: int
-) -> tuple[FloatArray, FloatArray, FloatArray, IntArray, IntArray]:  # pragma: no cover
+def polish_outputs(k: int, n: int) -> tuple[FloatArray, FloatArray, FloatArray, IntArray, IntArray]:
     """The output arrays of :func:`lm_run` for ``k`` starts of ``n`` joints: ``(out_q,
-    out_dp, out_dr, out_status, out_evals)``."""
+    out_dp, out_dr, out_status, out_evals)`` (in Python; :func:`polish_outputs_nb` inside the
+    kernels)."""
     i64 = np.int64
     return np.empty((k, n)), np.empty(k), np.empty(k), np.empty(k, dtype=i64), np.empty(k, i64)
+
+
+polish_outputs_nb = numba.njit(cache=True)(polish_outputs)
+""":func:`polish_outputs` compiled, for the kernels."""
 
 
 @numba.njit(cache=True, inline="always")
@@ -764,7 +771,7 @@ def secondary_descent(
     n = q_in.shape[0]
     m1 = g.rows_primary
     m2 = g.rows_secondary
-    w = make_work(t, g, m1)
+    w = make_work_nb(t, g, m1)
     res2 = np.zeros(max(m2, 1))
     jac2 = np.zeros((max(m2, 1), n))
     res2_t = np.zeros(max(m2, 1))
@@ -867,7 +874,7 @@ def errors_batch(q: FloatArray, t: TreeArrays, g: GoalTable, ks: GoalKernels, b:
     """Errors of every goal ``(pop, ng, 2)`` and the secondary cost ``(pop,)`` of each row of
     ``q`` ``(pop, nq)`` (no Jacobians)."""
     m = max(g.rows_primary, g.rows_secondary)
-    w = make_work(t, g, m)
+    w = make_work_nb(t, g, m)
     for k in range(q.shape[0]):
         fk_one(q[k], t, w.fk, False)
         goal_rows(q[k], w.fk, g, ks, True, False, w.res, w.jac, w.err, w.work)
@@ -895,7 +902,7 @@ def residuals_batch(
     """Stacked residuals ``(pop, rows)``, step Jacobians ``(pop, rows, nq)`` and errors
     ``(pop, ng, 2)`` of the primary (or secondary) goals for each row of ``q``."""
     m = max(g.rows_primary, g.rows_secondary)
-    w = make_work(t, g, m)
+    w = make_work_nb(t, g, m)
     for k in range(q.shape[0]):
         fk_one(q[k], t, w.fk, True)
         goal_rows(q[k], w.fk, g, ks, primary, True, out_res[k], out_jac[k], out_err[k], w.work)
