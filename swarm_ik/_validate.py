@@ -17,6 +17,7 @@ from __future__ import annotations
 
 import os
 import reprlib
+from collections.abc import Callable
 from pathlib import Path
 from typing import Any
 
@@ -24,6 +25,19 @@ import numpy as np
 
 from swarm_ik._types import FloatArray
 from swarm_ik.errors import InvalidArgumentError, InvalidTargetError
+
+
+def floats_or(
+    value: Any, message: Callable[[], str], cls: type[Exception] = InvalidArgumentError
+) -> FloatArray:
+    """``np.array(value, dtype=float)``, or ``cls(message())`` where numpy cannot convert it
+    (letters, ragged nesting, None, other objects): the one conversion behind the checks of
+    joint vectors, goal vectors, polygons and step bounds (the message made only on a
+    refusal)."""
+    try:
+        return np.array(value, dtype=float)
+    except (TypeError, ValueError):
+        raise cls(message()) from None
 
 
 def float_array(value: Any, what: str = "targets", *, target: bool = True) -> FloatArray:

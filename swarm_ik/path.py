@@ -66,6 +66,7 @@ import numba
 import numpy as np
 from numpy.typing import NDArray
 
+from swarm_ik._validate import floats_or
 from swarm_ik.errors import InvalidArgumentError, InvalidTargetError
 
 FloatArray = NDArray[np.float64]
@@ -282,12 +283,10 @@ def _check_step(robot: Any, value: Any) -> FloatArray:
         raise InvalidArgumentError(
             f"max_joint_step must be a positive number or {robot.nq} of them, got {value!r}"
         )
-    try:
-        arr = np.array(value, dtype=float)
-    except (TypeError, ValueError):
-        raise InvalidArgumentError(
-            f"max_joint_step must be a positive number or {robot.nq} of them, got {value!r}"
-        ) from None
+    arr = floats_or(
+        value,
+        lambda: f"max_joint_step must be a positive number or {robot.nq} of them, got {value!r}",
+    )
     if arr.ndim == 0:
         arr = np.full(robot.nq, float(arr))
     if arr.shape != (robot.nq,):

@@ -12,16 +12,16 @@ from typing import Any
 import numpy as np
 
 from swarm_ik._types import FloatArray
+from swarm_ik._validate import floats_or
 from swarm_ik.errors import InvalidArgumentError, InvalidTargetError
 
 
 def _floats(value: Any, what: str) -> FloatArray:
     """``value`` as a float array, or :class:`InvalidTargetError` naming it (strings, ragged
     nesting, None...)."""
-    try:
-        return np.array(value, dtype=float)
-    except (TypeError, ValueError):
-        raise InvalidTargetError(f"{what} must be numbers, got {reprlib.repr(value)}") from None
+    return floats_or(
+        value, lambda: f"{what} must be numbers, got {reprlib.repr(value)}", InvalidTargetError
+    )
 
 
 def is_finite_nonneg(value: Any) -> bool:

@@ -24,6 +24,7 @@ from numpy.typing import NDArray
 
 from swarm_ik import urdf
 from swarm_ik._types import FloatArray
+from swarm_ik._validate import floats_or
 from swarm_ik.errors import InvalidArgumentError, RobotFileNotFoundError, RobotModelError, unknown
 from swarm_ik.kernels import lie
 from swarm_ik.kernels.fk import BALL, CONTINUOUS, KIND_NAMES, PRISMATIC, REVOLUTE, TreeArrays
@@ -964,12 +965,9 @@ class RobotModel:
 
     def check_q(self, q: Any, what: str = "q") -> FloatArray:
         """Validate a joint vector: shape ``(nq,)`` and finite; returns it as floats."""
-        try:
-            arr = np.array(q, dtype=float)
-        except (TypeError, ValueError):
-            raise InvalidArgumentError(
-                f"{what} must be {self.nq} numbers (one per joint), got {reprlib.repr(q)}"
-            ) from None
+        arr = floats_or(
+            q, lambda: f"{what} must be {self.nq} numbers (one per joint), got {reprlib.repr(q)}"
+        )
         if arr.shape != (self.nq,):
             raise InvalidArgumentError(
                 f"{what} must hold {self.nq} values (one per joint: "

@@ -30,6 +30,7 @@ import numba
 import numpy as np
 from numpy.typing import NDArray
 
+from swarm_ik._validate import floats_or
 from swarm_ik.errors import InvalidArgumentError, UnknownNameError
 from swarm_ik.kernels.lm import GOAL_SIGNATURE, kernel_list
 
@@ -196,10 +197,7 @@ def vec3(value: Any, what: str, *, unit: bool = False) -> FloatArray:
     :class:`InvalidArgumentError` naming ``what``."""
     if isinstance(value, (str, bytes)):
         raise InvalidArgumentError(f"{what} must be 3 numbers, got {value!r}")
-    try:
-        arr = np.array(value, dtype=float)
-    except (TypeError, ValueError):
-        raise InvalidArgumentError(f"{what} must be 3 numbers, got {reprlib.repr(value)}") from None
+    arr = floats_or(value, lambda: f"{what} must be 3 numbers, got {reprlib.repr(value)}")
     if arr.shape != (3,):
         raise InvalidArgumentError(f"{what} must be 3 numbers, got shape {arr.shape}")
     if not np.all(np.isfinite(arr)):

@@ -11,6 +11,7 @@ import numba
 import numpy as np
 import pinocchio as pin
 
+from swarm_ik._validate import floats_or
 from swarm_ik.errors import InvalidArgumentError
 from swarm_ik.goals.base import Encoded, FloatArray, Goal, State, non_negative, vec3
 
@@ -133,12 +134,9 @@ def support_polygon(value: Any) -> FloatArray:
     Raises:
         InvalidArgumentError: naming what is wrong.
     """
-    try:
-        poly = np.array(value, dtype=float)
-    except (TypeError, ValueError):
-        raise InvalidArgumentError(
-            f"CenterOfMass.support must be (x, y) vertices, got {reprlib.repr(value)}"
-        ) from None
+    poly = floats_or(
+        value, lambda: f"CenterOfMass.support must be (x, y) vertices, got {reprlib.repr(value)}"
+    )
     if poly.ndim != 2 or poly.shape[1] != 2 or poly.shape[0] < 3:
         raise InvalidArgumentError(
             f"CenterOfMass.support must be at least 3 (x, y) vertices, got shape {poly.shape}"

@@ -9,6 +9,7 @@ from typing import TYPE_CHECKING, Any, ClassVar
 import numba
 import numpy as np
 
+from swarm_ik._validate import floats_or
 from swarm_ik.errors import InvalidArgumentError
 from swarm_ik.goals.base import Encoded, FloatArray, Goal, State, frame_index
 from swarm_ik.kernels import lie
@@ -60,10 +61,7 @@ def pose_tolerance(value: Any) -> tuple[float, ...] | None:
     what = "Pose.tolerance must be 6 numbers (tx, ty, tz [m], rx, ry, rz [rad])"
     if isinstance(value, (str, bytes, bool)):
         raise InvalidArgumentError(f"{what}, got {value!r}")
-    try:
-        arr = np.array(value, dtype=float)
-    except (TypeError, ValueError):
-        raise InvalidArgumentError(f"{what}, got {value!r}") from None
+    arr = floats_or(value, lambda: f"{what}, got {value!r}")
     if arr.shape != (6,):
         raise InvalidArgumentError(f"{what}, got shape {arr.shape}")
     if not np.all(np.isfinite(arr)) or np.any(arr < 0.0):
