@@ -460,6 +460,14 @@ class _Checker:
         hm.setCollisionPairs(pair_map, True)
         self.gm, self.hm = gm, hm
         self.gd, self.hd = pin.GeometryData(gm), pin.GeometryData(hm)
+        # the self pairs of a verdict without margin through Pinocchio's broad phase (the
+        # bodies' boxes first: 14 µs against 48 µs for the Panda's 44 pairs); it places the
+        # bodies in data and gd as forwardKinematics and updateGeometryPlacements do
+        self.self_broad: Any = None
+        if len(gm.collisionPairs):
+            self.self_broad = pin.BroadPhaseManager_DynamicAABBTreeCollisionManager(
+                self.model, gm, self.gd
+            )
         self.labels = [
             _key(rc.body_links[cp.first], rc.body_links[cp.second]) for cp in gm.collisionPairs
         ]
@@ -493,10 +501,12 @@ class _Checker:
                 req.security_margin = margin
             self.margin = margin
 
-    def _place(self, q_pin: FloatArray) -> None:
-        """The bodies at ``q_pin``: Pinocchio's placements and the coal objects'."""
-        pin.forwardKinematics(self.model, self.data, q_pin)
-        pin.updateGeometryPlacements(self.model, self.data, self.gm, self.gd)
+    def _place(self, q_pin: FloatArray, placed: bool = False) -> None:
+        """The bodies at ``q_pin``: Pinocchio's placements (unless already ``placed``) and
+        the coal objects'."""
+        if not placed:
+            pin.forwardKinematics(self.model, self.data, q_pin)
+            pin.updateGeometryPlacements(self.model, self.data, self.gm, self.gd)
         for obj, placement in zip(self.bodies, self.gd.oMg, strict=True):
             obj.setTransform(placement)
             obj.computeAABB()
@@ -506,11 +516,18 @@ class _Checker:
         if not self.labels and self.manager is None:
             return False
         self._set_margin(margin)
-        self._place(q_pin)
-        if self.labels and pin.computeCollisions(self.gm, self.gd, True):
-            return True
-        if self.manager is None:
-            return False
+        if margin == 0.0 and self.self_broad is not None:  # (its boxes ignore a margin)
+            if pin.computeCollisions(self.model, self.data, self.self_broad, q_pin, True):
+                return True
+            if self.manager is None:
+                return False
+            self._place(q_pin, placed=True)
+        else:
+            self._place(q_pin)
+            if self.labels and pin.computeCollisions(self.gm, self.gd, True):
+                return True
+            if self.manager is None:
+                return False
         coal = self._coal
         self.body_manager.update()  # (the bodies' new boxes)
         if margin == 0.0:
