@@ -290,11 +290,8 @@ class Route:
         self._lock = threading.Lock()
         self._warm = False  # (warm_up ran for this route)
         # the first start without q0 when no Posture goal names one (the middle of the ranges)
-        self._mid = (
-            None
-            if any(isinstance(g, Posture) for g in problem.goals)
-            else (hybrid.default_seed(problem))
-        )
+        has_posture = any(isinstance(g, Posture) for g in problem.goals)
+        self._mid = None if has_posture else hybrid.default_seed(problem)
         self.compiled = (
             solver == "swarm" and self.stop_on_success and hybrid.compiled_ok(problem, prefer)
         )

@@ -345,8 +345,7 @@ def solve_many(
         if not (isinstance(tol, (int, float, np.number)) and math.isfinite(tol) and tol > 0):
             raise InvalidArgumentError(f"{label} must be a positive number, got {tol!r}")
     check_budget(max_evals, time_limit)
-    start_q = prepare_q0(problem, q0)
-    ref = start_q if start_q is not None else 0.5 * (problem.lower + problem.upper)
+    start_q, ref = _start_and_reference(problem, q0)
     if isinstance(seed, np.random.Generator):
         seed_label = None
     else:  # refused exactly as swarm_ik.optimize.make_rng refuses it (no Generator made yet)
@@ -428,8 +427,7 @@ def windings_of(problem: IKProblem, results: list[Result], q0: Any = None) -> li
     """
     if not isinstance(problem, IKProblem):
         raise InvalidArgumentError(f"problem must be an IKProblem, got {type(problem).__name__}")
-    start_q = prepare_q0(problem, q0)
-    ref = start_q if start_q is not None else 0.5 * (problem.lower + problem.upper)
+    ref = _start_and_reference(problem, q0)[1]
     out = []
     for r in results:
         if not isinstance(r, Result):
@@ -502,6 +500,13 @@ def _results(
             r = Result(**kw)
         out.append(r)
     return out
+
+
+def _start_and_reference(problem: IKProblem, q0: Any) -> tuple[FloatArray | None, FloatArray]:
+    """``q0`` validated (:func:`swarm_ik.api.prepare_q0`) and the reference the solutions are
+    ordered by: ``q0``, else the middle of the ranges."""
+    start_q = prepare_q0(problem, q0)
+    return start_q, start_q if start_q is not None else 0.5 * (problem.lower + problem.upper)
 
 
 def _with_windings(problem: IKProblem, rep: Result, ref: FloatArray) -> list[Result]:

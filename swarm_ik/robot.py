@@ -713,12 +713,7 @@ class RobotModel:
         arr = np.asarray(q)
         if arr.shape == (self.nq,) and arr.dtype.kind in "fiu":
             # (a Data of its own: the State a Python goal reads stays valid if it calls fk)
-            data = getattr(self._local, "fk_data", None)
-            if data is None:
-                data = self._local.fk_data = self.model.createData()
-            pin.forwardKinematics(self.model, data, self.to_pinocchio(arr, copy=False))
-            fid = self.frame_ids[f]
-            return pin.updateFramePlacement(self.model, data, fid).homogeneous  # type: ignore[no-any-return]
+            return self._frame_pose(arr, self.frame_ids[f], self._data("fk_data"))
         out = self.tree.fk(q)
         return out[..., f, :, :]
 
@@ -791,12 +786,20 @@ class RobotModel:
         self.__dict__.update(state)
         object.__setattr__(self, "_local", threading.local())
 
-    def _data(self) -> Any:
-        """Pinocchio ``Data`` of :attr:`model`, one per thread (reused between calls)."""
-        data = getattr(self._local, "data", None)
+    def _data(self, slot: str = "data") -> Any:
+        """Pinocchio ``Data`` of :attr:`model`, one per thread and ``slot`` (reused between
+        calls)."""
+        data = getattr(self._local, slot, None)
         if data is None:
-            data = self._local.data = self.model.createData()
+            data = self.model.createData()
+            setattr(self._local, slot, data)
         return data
+
+    def _frame_pose(self, q: FloatArray, fid: int, data: Any) -> FloatArray:
+        """Pose ``(4, 4)`` of Pinocchio frame ``fid`` at ``q`` by Pinocchio's FK on ``data``."""
+        pin.forwardKinematics(self.model, data, self.to_pinocchio(q, copy=False))
+        # (eigenpy returns the 4x4 as a new array of its own: no copy needed)
+        return pin.updateFramePlacement(self.model, data, fid).homogeneous  # type: ignore[no-any-return]
 
     def fk_pinocchio(self, q: FloatArray, frame: str | None = None) -> FloatArray:
         """Reference FK of one goal frame through ``pinocchio.forwardKinematics`` +
@@ -809,11 +812,7 @@ class RobotModel:
         Returns:
             Pose, shape ``(4, 4)``.
         """
-        fid = self.frame_ids[self.frame_index(frame)]
-        data = self._data()
-        pin.forwardKinematics(self.model, data, self.to_pinocchio(q, copy=False))
-        # (eigenpy returns the 4x4 as a new array of its own: no copy needed)
-        return pin.updateFramePlacement(self.model, data, fid).homogeneous  # type: ignore[no-any-return]
+        return self._frame_pose(q, self.frame_ids[self.frame_index(frame)], self._data())
 
     def fk_pinocchio_bound(self, configuration: bool = False) -> Callable[[FloatArray], FloatArray]:
         """:meth:`fk_pinocchio` of the first goal frame as a function of ``q`` with its

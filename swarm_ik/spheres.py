@@ -425,11 +425,10 @@ class SphereModel:
         spheres = (sph_body, sph_local, sph_radius, body_start, bound_local, bound_radius)
         coarse: list[tuple[str, str]] = []
         if len(pairs) and coarse_samples > 0:  # (the robot's own: made once per robot)
-            memo = rc.__dict__.setdefault("_coarse", {})
-            key = (tolerance, bool(self_collision), int(coarse_samples), use_cache)
-            if key not in memo:
-                memo[key] = _drop_coarse_pairs(rc, pairs, spheres, coarse_samples)
-            pairs, coarse = memo[key]
+            key = (tolerance, int(coarse_samples))
+            if key not in rc.coarse_rule:
+                rc.coarse_rule[key] = _drop_coarse_pairs(rc, pairs, spheres, coarse_samples)
+            pairs, coarse = rc.coarse_rule[key]
         kinds, rots, poss, dims, names = [], [], [], [], []
         sc = as_scene(scene)
         for k, (name, o) in enumerate(zip(sc.names, sc.obstacles, strict=True)):
