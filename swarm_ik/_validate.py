@@ -40,6 +40,34 @@ def floats_or(
         raise cls(message()) from None
 
 
+def nonnegative(
+    value: Any, what: str, shape: tuple[int, ...], bad_value: str | None = None
+) -> FloatArray | None:
+    """None for None, else ``value`` as finite floats ``>= 0`` of ``shape``: the check of a
+    goal's optional tolerance or radius.
+
+    Args:
+        value: What the user gave.
+        what: The message's first part when ``value`` is not numbers of ``shape`` (text,
+            booleans, letters, another shape).
+        shape: The expected shape (``()``: one number).
+        bad_value: The first part when a number is negative or not finite (default ``what``).
+
+    Raises:
+        InvalidArgumentError: ``"{what}, got …"`` or ``"{bad_value}, got …"``.
+    """
+    if value is None:
+        return None
+    if isinstance(value, (str, bytes, bool)):
+        raise InvalidArgumentError(f"{what}, got {value!r}")
+    arr = floats_or(value, lambda: f"{what}, got {value!r}")
+    if arr.shape != shape:
+        raise InvalidArgumentError(f"{what}, got shape {arr.shape}")
+    if not np.all(np.isfinite(arr)) or np.any(arr < 0.0):
+        raise InvalidArgumentError(f"{bad_value or what}, got {arr.tolist()}")
+    return arr
+
+
 def float_array(value: Any, what: str = "targets", *, target: bool = True) -> FloatArray:
     """``value`` as a float array, or a SwarmIKError naming ``what``.
 

@@ -64,12 +64,11 @@ from swarm_ik.goals import AvoidCollisions, Goal, Pose, Position, State, kernel_
 from swarm_ik.kernels import lie, lm
 from swarm_ik.kernels.fk import TreeArrays
 from swarm_ik.kernels.lm import CONVERGED, NOT_RUN
-from swarm_ik.kernels.search import sampling_window, splitmix64
+from swarm_ik.kernels.search import sampling_window, splitmix64, wall_clock
 from swarm_ik.pose import make_pose, matrix_to_quat
 from swarm_ik.problem import IKProblem
 from swarm_ik.robot import RobotModel
 from swarm_ik.scene import Scene
-from swarm_ik.urdf import sampling_bounds
 
 POSE_COLUMNS = ("x", "y", "z", "qx", "qy", "qz", "qw")
 """Columns of a target table: position [m] and quaternion ``(x, y, z, w)``."""
@@ -95,15 +94,6 @@ def target_uniforms(seed: int, index: int, n: int) -> FloatArray:  # pragma: no 
 
 NO_DEADLINE = -1.0
 """``deadline`` of :func:`_solve_targets` when there is no time limit."""
-
-
-@numba.njit(cache=True)
-def _wall_clock() -> float:  # pragma: no cover - compiled
-    """Seconds since the epoch (``time.time``, in ``numba.objmode``): the clock of a
-    ``time_limit``, comparable between the processes of one machine (Dask workers)."""
-    with numba.objmode(t="float64"):
-        t = time.time()
-    return t
 
 
 @numba.njit(cache=True)
@@ -147,8 +137,8 @@ def _solve_targets(
         secondary_evals: Evaluations of the null-space descent of the secondary goals after a
             target converged (:func:`swarm_ik.kernels.lm.secondary_descent`; none without
             secondary goals).
-        deadline: :func:`_wall_clock` time after which no target and no restart block starts
-            (:data:`NO_DEADLINE`: none).
+        deadline: :func:`~swarm_ik.kernels.search.wall_clock` time after which no target
+            and no restart block starts (:data:`NO_DEADLINE`: none).
         out_q: Best point per target, shape ``(N, nq)`` (the seed for a target not started).
         out_evals: FK + Jacobian evaluations per target, ``(N,)``.
         out_starts: Starts polished per target, ``(N,)`` (0: not started before the deadline).
@@ -172,7 +162,7 @@ def _solve_targets(
     work = lm.make_work_nb(tree, goals, goals.rows_primary)
     for i in range(n_targets):
         if timed and not late:
-            late = _wall_clock() > deadline
+            late = wall_clock() > deadline
         if late:  # out of time: not started
             for j in range(n):
                 out_q[i, j] = q_seed[i, j]
@@ -213,7 +203,7 @@ def _solve_targets(
             if converged or done >= max_starts:
                 break
             if timed:
-                late = _wall_clock() > deadline
+                late = wall_clock() > deadline
                 if late:
                     break
             k = min(block, max_starts - done)
@@ -900,7 +890,7 @@ def solve_chunk(
     With a collision goal the targets first go through the problem without it (the polish of
     the pose and the other goals, as the plain batch), the converged answers then tested by
     coal; those in contact are polished again without the goal from a random start of their
-    own (:func:`_retry_start`), up to :data:`FREE_RETRIES` times, each answer tested by coal;
+    own (:func:`_retry_starts`), up to :data:`FREE_RETRIES` times, each answer tested by coal;
     only those still in contact go through the kernel with the collision goal's sphere rows,
     from where the first pass left them (restarts as usual).  Each target's answer still
     depends only on its seed, index, target and start.
@@ -949,8 +939,8 @@ def solve_chunk(
         for k in range(FREE_RETRIES):  # another branch, from a random start of the target's own
             if not redo.size:
                 break
-            q_k = np.array(
-                [_retry_start(bc, settings.seed, int(index[i]), k, q_seed[i]) for i in redo]
+            q_k = _retry_starts(
+                bc.bounds.lower, bc.bounds.upper, q_seed[redo], settings.seed, index[redo], k
             )
             qk, evk, stk, convk = _polish_problem(
                 bg, bg.free_problem, targets[redo], q_k, q_seed[redo], index[redo], settings
@@ -1000,12 +990,26 @@ passes left 7.3 % of the targets to the sphere rows (506 poses/s), 16 left 2.3 %
 left 0.4 % (867/s, success 99.9 %)."""
 
 
-def _retry_start(bc: BatchChain, seed: int, index: int, k: int, q_seed: FloatArray) -> FloatArray:
-    """Retry ``k``'s start of target ``index``: uniform in the restart window around its seed
-    (:func:`swarm_ik.urdf.sampling_bounds`), from a stream of ``(seed, index, k)`` alone, so an
-    answer does not depend on the chunking."""
-    lo, hi = sampling_bounds(bc.bounds.lower, bc.bounds.upper, q_seed)
-    return np.random.default_rng([seed, index, k, 0x5EED]).uniform(lo, hi)
+@numba.njit(cache=True)
+def _retry_starts(
+    lower: FloatArray, upper: FloatArray, q_seed: FloatArray, seed: int, index: IntArray, k: int
+) -> FloatArray:  # pragma: no cover - compiled
+    """Retry ``k``'s start of each target ``index[r]`` ``(m, nq)``: uniform in the restart
+    window around its seed ``q_seed[r]`` (:func:`~swarm_ik.kernels.search.sampling_window`),
+    from a SplitMix64 stream of ``(seed, index, k)`` alone, so an answer does not depend on
+    the chunking."""
+    m, n = q_seed.shape
+    out = np.empty((m, n))
+    lo = np.empty(n)
+    hi = np.empty(n)
+    base = _splitmix64(np.uint64(seed) ^ np.uint64(0x5EED))
+    for r in range(m):
+        sampling_window(lower, upper, q_seed[r], lo, hi)
+        key = _splitmix64(_splitmix64(base ^ np.uint64(index[r])) + np.uint64(k))
+        for j in range(n):
+            u = float(_splitmix64(key + np.uint64(j + 1)) >> np.uint64(11)) * (2.0**-53)
+            out[r, j] = min(lo[j] + u * (hi[j] - lo[j]), hi[j])
+    return out
 
 
 def _run_chunk(

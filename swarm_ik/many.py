@@ -54,6 +54,7 @@ from swarm_ik.branches import (
     windings as _windings,
 )
 from swarm_ik.errors import InvalidArgumentError, unknown
+from swarm_ik.kernels import joints
 from swarm_ik.optimize import check_budget, make_rng
 from swarm_ik.problem import IKProblem
 from swarm_ik.result import Result
@@ -562,66 +563,14 @@ def _fold_rows(
         ok[s] = good
 
 
-@numba.njit(cache=True)
-def _min_dist2(
-    qs: FloatArray, kept: FloatArray, periodic: NDArray[np.bool_], out: FloatArray
-) -> None:  # pragma: no cover - compiled
-    """Squared wrapped distance of each row of ``qs`` to its nearest row of ``kept``."""
-    for s in range(qs.shape[0]):
-        best = np.inf
-        for r in range(kept.shape[0]):
-            d2 = 0.0
-            for j in range(qs.shape[1]):
-                e = qs[s, j] - kept[r, j]
-                if periodic[j]:
-                    e = (e + math.pi) % TWO_PI - math.pi
-                d2 += e * e
-                if d2 >= best:
-                    break
-            if d2 < best:
-                best = d2
-        out[s] = best
-
-
-@numba.njit(cache=True)
-def _new_rows(
-    qs: FloatArray,
-    kept: FloatArray,
-    periodic: NDArray[np.bool_],
-    tol2: float,
-    out: NDArray[np.int64],
-) -> int:  # pragma: no cover - compiled
-    """Rows of ``qs`` farther than ``√tol2`` (wrapped) from every row of ``kept`` and from
-    every earlier row picked (greedy, in order) into ``out``; returns how many."""
-    c = 0
-    n = qs.shape[1]
-    for s in range(qs.shape[0]):
-        fresh = True
-        for r in range(kept.shape[0] + c):
-            d2 = 0.0
-            for j in range(n):
-                other = kept[r, j] if r < kept.shape[0] else qs[out[r - kept.shape[0]], j]
-                e = qs[s, j] - other
-                if periodic[j]:
-                    e = (e + math.pi) % TWO_PI - math.pi
-                d2 += e * e
-            if d2 < tol2:
-                fresh = False
-                break
-        if fresh:
-            out[c] = s
-            c += 1
-    return c
-
-
 @functools.cache
 def _warm_up() -> None:
     """Compile (or load from numba's cache) this module's kernels once per process, before a
     solve's clock starts (their types do not depend on the robot)."""
     z, flags = np.zeros((1, 1)), np.ones(1, dtype=np.bool_)
     _fold_rows(z, z[0], z[0], flags, z[0], np.empty((1, 1)), np.empty(1, dtype=np.bool_))
-    _min_dist2(z, z, flags, np.empty(1))
-    _new_rows(z, z, flags, 1.0, np.empty(1, dtype=np.int64))
+    joints.min_dist2(z, z, flags, np.empty(1))
+    joints.fresh_rows(z, z, flags, np.ones(1), 1.0, False, np.empty(1, dtype=np.int64))
 
 
 class _Folder:
@@ -649,7 +598,7 @@ class _Folder:
         """Wrapped distance of each row of ``qs`` ``(m, nq)`` to its nearest kept branch."""
         out = np.full(qs.shape[0], np.inf)
         if self.kept.shape[0] and qs.shape[0]:
-            _min_dist2(np.ascontiguousarray(qs, dtype=float), self.kept, self.periodic, out)
+            joints.min_dist2(np.ascontiguousarray(qs, dtype=float), self.kept, self.periodic, out)
             np.sqrt(out, out=out)
         return out
 
@@ -659,8 +608,10 @@ class _Folder:
         if qs.shape[0] == 0:
             return []
         idx = np.empty(qs.shape[0], dtype=np.int64)
-        c = _new_rows(np.ascontiguousarray(qs, dtype=float), self.kept, self.periodic,
-                      tol * tol, idx)  # fmt: skip
+        unit = np.ones(qs.shape[1])
+        unit = np.ones(qs.shape[1])
+        c = joints.fresh_rows(np.ascontiguousarray(qs, dtype=float), self.kept, self.periodic,
+                              unit, float(tol), False, idx)  # fmt: skip
         return idx[:c].tolist()
 
 

@@ -68,6 +68,7 @@ from numpy.typing import NDArray
 
 from swarm_ik._validate import floats_or
 from swarm_ik.errors import InvalidArgumentError, InvalidTargetError
+from swarm_ik.kernels import joints
 
 FloatArray = NDArray[np.float64]
 
@@ -750,40 +751,10 @@ def _merge(base: FloatArray, new: Any, ctx: _Context, tol: float = DUPLICATE) ->
     if rows.shape[0] == 0:
         return base
     idx = np.empty(rows.shape[0], dtype=np.int64)
-    c = _fresh_rows(np.ascontiguousarray(base), rows, ctx.step, ctx.wrap, float(tol), idx)
+    c = joints.fresh_rows(
+        rows, np.ascontiguousarray(base), ctx.wrap, ctx.step, float(tol), True, idx
+    )
     return np.vstack([base, rows[idx[:c]]]) if c else base
-
-
-@numba.njit(cache=True)
-def _fresh_rows(
-    kept: FloatArray, rows: FloatArray, step: FloatArray, wrap: NDArray[np.bool_], tol: float,
-    out: NDArray[np.int64],
-) -> int:  # pragma: no cover - compiled  # fmt: skip
-    """Indices (into ``out``) of the rows of ``rows`` at least ``tol`` (largest ``|Δq_j| /
-    step_j``, continuous joints wrapped) from every row of ``kept`` and every row taken
-    before them; returns how many."""
-    c = 0
-    n = rows.shape[1]
-    two_pi = 2.0 * math.pi
-    for s in range(rows.shape[0]):
-        fresh = True
-        for r in range(kept.shape[0] + c):
-            far = False
-            for j in range(n):
-                other = kept[r, j] if r < kept.shape[0] else rows[out[r - kept.shape[0]], j]
-                d = rows[s, j] - other
-                if wrap[j]:
-                    d = (d + math.pi) % two_pi - math.pi
-                if abs(d) >= tol * step[j]:
-                    far = True
-                    break
-            if not far:
-                fresh = False
-                break
-        if fresh:
-            out[c] = s
-            c += 1
-    return c
 
 
 def _pick(qs: FloatArray, r: Any, t: Any, k: int, ctx: _Context) -> FloatArray:

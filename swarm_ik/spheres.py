@@ -55,7 +55,6 @@ from swarm_ik.kernels.spheres import (
     SPHERE,
     SphereArrays,
     penetration,
-    penetration_cost,
     sphere_centres,
 )
 
@@ -301,6 +300,22 @@ def fit_bodies(
             with contextlib.suppress(OSError):
                 tmp.unlink()
     return fits
+
+
+_NO_ROWS = (np.empty((0, 6, 0)), np.empty(0), np.empty((0, 0)), np.empty((0, 2), dtype=np.int64))
+
+
+def penetration_cost(
+    rot: FloatArray, pos: FloatArray, arrays: SphereArrays, margin: float, scratch: FloatArray
+) -> tuple[float, float]:
+    """Sum of squared residuals [m²] over every active pair and the largest residual [m]
+    (0 when clear): :func:`~swarm_ik.kernels.spheres.penetration` without its rows (the
+    swarm's fitness term)."""
+    jac, res, rows_jac, pair = _NO_ROWS
+    _, total, worst = penetration(
+        rot, pos, jac, arrays, float(margin), scratch, False, res, rows_jac, pair
+    )
+    return float(total), float(worst)
 
 
 def _drop_coarse_pairs(
@@ -550,7 +565,7 @@ class SphereModel:
     def cost(self, q: Any, margin: float = 0.0) -> tuple[float, float]:
         """:func:`penetration_cost` at ``q`` (Pinocchio kinematics)."""
         rot, pos, _ = self.body_kinematics(q)
-        return penetration_cost(rot, pos, self.arrays, float(margin), self.scratch())  # type: ignore[no-any-return]
+        return penetration_cost(rot, pos, self.arrays, margin, self.scratch())
 
     def world_spheres(self, q: Any) -> tuple[FloatArray, FloatArray]:
         """World sphere centres ``(ns, 3)`` [m] and radii ``(ns,)`` at ``q`` (for drawing)."""

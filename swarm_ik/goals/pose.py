@@ -9,7 +9,7 @@ from typing import TYPE_CHECKING, Any, ClassVar
 import numba
 import numpy as np
 
-from swarm_ik._validate import floats_or
+from swarm_ik._validate import nonnegative
 from swarm_ik.errors import InvalidArgumentError
 from swarm_ik.goals.base import Encoded, FloatArray, Goal, State, frame_index
 from swarm_ik.kernels import lie
@@ -56,16 +56,12 @@ def pose_tolerance(value: Any) -> tuple[float, ...] | None:
     Raises:
         InvalidArgumentError: anything else, naming ``Pose.tolerance``.
     """
-    if value is None:
+    arr = nonnegative(
+        value, "Pose.tolerance must be 6 numbers (tx, ty, tz [m], rx, ry, rz [rad])", (6,),
+        "Pose.tolerance must be finite and >= 0",
+    )  # fmt: skip
+    if arr is None:
         return None
-    what = "Pose.tolerance must be 6 numbers (tx, ty, tz [m], rx, ry, rz [rad])"
-    if isinstance(value, (str, bytes, bool)):
-        raise InvalidArgumentError(f"{what}, got {value!r}")
-    arr = floats_or(value, lambda: f"{what}, got {value!r}")
-    if arr.shape != (6,):
-        raise InvalidArgumentError(f"{what}, got shape {arr.shape}")
-    if not np.all(np.isfinite(arr)) or np.any(arr < 0.0):
-        raise InvalidArgumentError(f"Pose.tolerance must be finite and >= 0, got {arr.tolist()}")
     if np.any(arr[3:] > math.pi):
         raise InvalidArgumentError(
             "Pose.tolerance: rotation bounds must be at most π (π frees the axis), got "

@@ -2,14 +2,13 @@
 
 from __future__ import annotations
 
-import math
 from dataclasses import dataclass, field
 from typing import TYPE_CHECKING, Any, ClassVar
 
 import numba
 import numpy as np
 
-from swarm_ik.errors import InvalidArgumentError
+from swarm_ik._validate import nonnegative
 from swarm_ik.goals.base import Encoded, FloatArray, Goal, State, frame_index
 from swarm_ik.kernels.rows import ball_rows, position_rows
 
@@ -36,18 +35,10 @@ def ball_radius(value: Any) -> float | None:
     Raises:
         InvalidArgumentError: anything else, naming ``Position.radius``.
     """
-    if value is None:
+    r = nonnegative(value, "Position.radius must be a finite number >= 0 (metres)", ())
+    if r is None:
         return None
-    what = "Position.radius must be a finite number >= 0 (metres)"
-    if isinstance(value, (str, bytes, bool)):
-        raise InvalidArgumentError(f"{what}, got {value!r}")
-    try:
-        r = float(value)
-    except (TypeError, ValueError):
-        raise InvalidArgumentError(f"{what}, got {value!r}") from None
-    if not (math.isfinite(r) and r >= 0.0):
-        raise InvalidArgumentError(f"{what}, got {value!r}")
-    return r
+    return float(r)
 
 
 @dataclass(frozen=True)

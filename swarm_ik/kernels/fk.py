@@ -19,6 +19,7 @@ from typing import NamedTuple
 
 import numba
 import numpy as np
+from numba.extending import register_jitable
 
 from swarm_ik._types import FloatArray, IntArray
 from swarm_ik.kernels.lie import exp3_nb, jr_nb
@@ -211,14 +212,18 @@ class FKScratch(NamedTuple):
     ball: FloatArray
 
 
+@register_jitable
 def fk_scratch(tree: TreeArrays) -> FKScratch:
-    """Buffers for :func:`fk_one` on ``tree``."""
+    """Buffers for :func:`fk_one` on ``tree`` (callable from Python and from compiled code:
+    ``numba.extending.register_jitable``)."""
+    nj = tree.kind.shape[0]
+    nf = tree.frame_joint.shape[0]
     return FKScratch(
-        np.empty((tree.nj, 3, 3)),
-        np.empty((tree.nj, 3)),
-        np.empty((tree.nf, 3, 3)),
-        np.empty((tree.nf, 3)),
-        np.empty((tree.nf, 6, tree.nq)),
+        np.empty((nj, 3, 3)),
+        np.empty((nj, 3)),
+        np.empty((nf, 3, 3)),
+        np.empty((nf, 3)),
+        np.empty((nf, 6, tree.nq)),
         np.empty((3, 3)),
     )
 
@@ -358,17 +363,9 @@ def fk_batch(
     """:func:`fk_one` for each row of ``q`` ``(pop, nq)``: poses into ``out_t``
     ``(pop, nf, 4, 4)``, Jacobians into ``out_j`` ``(pop, nf, 6, nq)`` when ``want_jac``."""
     pop = q.shape[0]
-    nj = t.kind.shape[0]
     nf = t.frame_joint.shape[0]
     nq = q.shape[1]
-    s = FKScratch(
-        np.empty((nj, 3, 3)),
-        np.empty((nj, 3)),
-        np.empty((nf, 3, 3)),
-        np.empty((nf, 3)),
-        np.empty((nf, 6, nq)),
-        np.empty((3, 3)),
-    )
+    s = fk_scratch(t)
     for k in range(pop):
         fk_one(q[k], t, s, want_jac)
         for f in range(nf):

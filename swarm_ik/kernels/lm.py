@@ -42,7 +42,7 @@ from numba.typed import List
 
 from swarm_ik._types import BoolArray, FloatArray, IntArray
 from swarm_ik.errors import InvalidArgumentError
-from swarm_ik.kernels.fk import FKScratch, TreeArrays, fk_one
+from swarm_ik.kernels.fk import FKScratch, TreeArrays, fk_one, fk_scratch
 
 # status of a polished start
 NOT_RUN = 0
@@ -396,19 +396,10 @@ def make_work(t: TreeArrays, g: GoalTable, rows: int) -> Work:
     allocations, in Python for a caller in Python (nothing to compile before the first
     solve), :func:`make_work_nb` inside the kernels."""
     nq = t.nq
-    nj = t.kind.shape[0]
-    nf = t.frame_joint.shape[0]
     ng = g.kind.shape[0]
     m = max(rows, 1)
     return Work(
-        FKScratch(
-            np.empty((nj, 3, 3)),
-            np.empty((nj, 3)),
-            np.empty((nf, 3, 3)),
-            np.empty((nf, 3)),
-            np.empty((nf, 6, nq)),
-            np.empty((3, 3)),
-        ),
+        fk_scratch(t),
         np.zeros(m),
         np.zeros((m, nq)),
         np.zeros(m),

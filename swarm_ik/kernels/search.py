@@ -52,6 +52,15 @@ def now() -> float:  # pragma: no cover - compiled
     return t
 
 
+@numba.njit(cache=True)
+def wall_clock() -> float:  # pragma: no cover - compiled
+    """Seconds since the epoch (``time.time``, in ``numba.objmode``): the clock of a batch's
+    ``time_limit``, comparable between the processes of one machine (Dask workers)."""
+    with numba.objmode(t="float64"):
+        t = time.time()
+    return t
+
+
 # --------------------------------------------------------------------------- randomness
 @numba.njit(cache=True)
 def splitmix64(x: np.uint64) -> np.uint64:  # pragma: no cover - compiled

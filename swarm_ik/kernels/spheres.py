@@ -20,7 +20,6 @@ import math
 from typing import NamedTuple
 
 import numba
-import numpy as np
 
 from swarm_ik._types import FloatArray, IntArray
 
@@ -33,9 +32,8 @@ OBSTACLE_KINDS = ("sphere", "box", "capsule", "cylinder")
 
 # ======================================================================= compiled code
 class SphereArrays(NamedTuple):
-    """The sphere model as the penetration kernels read it (:func:`penetration`,
-    :func:`penetration_cost`; held by :class:`SphereModel` and by the LM kernel's
-    :class:`swarm_ik.kernels.lm.CollisionArrays`).
+    """The sphere model as the penetration kernel reads it (:func:`penetration`; held by
+    :class:`SphereModel` and by the LM kernel's :class:`swarm_ik.kernels.lm.CollisionArrays`).
 
     Attributes:
         sph_body: Body of each sphere, ``(ns,)``, spheres grouped by body.
@@ -245,7 +243,7 @@ def penetration(
     out_pair: IntArray,
 ) -> tuple[int, float, float]:  # pragma: no cover - compiled
     """Penetration residual rows and their Jacobian (see the module docstring), and the sums
-    over every active pair (:func:`penetration_cost` is this without rows).
+    over every active pair (without ``want_rows``: the swarm's fitness term).
 
     Args:
         body_rot: World rotation of each collision body, ``(nb, 3, 3)``.
@@ -343,24 +341,6 @@ def penetration(
                 out_jac[k - 1, c], out_jac[k, c] = out_jac[k, c], out_jac[k - 1, c]
             k -= 1
     return rows, total, worst
-
-
-@numba.njit(cache=True)
-def penetration_cost(
-    body_rot: FloatArray,
-    body_pos: FloatArray,
-    model: SphereArrays,
-    margin: float,
-    scratch: FloatArray,
-) -> tuple[float, float]:  # pragma: no cover - compiled
-    """Sum of squared residuals [m²] over every active pair and the largest residual [m]
-    (0 when clear), without Jacobian: the swarm's fitness term.  Arguments as
-    :func:`penetration`."""
-    _, total, worst = penetration(
-        body_rot, body_pos, np.empty((0, 6, 0)), model, margin, scratch, False, np.empty(0),
-        np.empty((0, 0)), np.empty((0, 2), dtype=np.int64),
-    )  # fmt: skip
-    return total, worst
 
 
 @numba.njit(cache=True)
