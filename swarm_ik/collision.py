@@ -57,6 +57,13 @@ ALWAYS_FRACTION = 0.95
 
 _RULE_VERSION = 1
 
+SMALL_SCENE = 128
+"""Scenes of at most this many obstacles join the robot's bodies in one Pinocchio geometry
+model for a verdict without margin: one C++ call then places the bodies and runs the broad
+and narrow phases (Panda: 23 µs among 10 boxes, 33 µs among 40, against 70–80 µs placing
+coal's objects from Python); a larger scene keeps coal's tree of obstacles (a Pinocchio
+model's pairs grow with bodies × obstacles: at 600 obstacles the one call took 177 µs)."""
+
 
 # ------------------------------------------------------------------------------ SRDF
 def _robot_name(path: Path) -> str | None:
@@ -486,6 +493,7 @@ class _Checker:
         self.obs_lo, self.obs_hi = scene.boxes()  # (computes each object's box)
         self.manager: Any = None
         self.body_manager: Any = None
+        self._scene_broad: Any = None  # (built on the first verdict without margin)
         if self.obstacles:
             self.manager = coal.DynamicAABBTreeCollisionManager()
             for obj in self.obstacles:
@@ -515,11 +523,42 @@ class _Checker:
             obj.setTransform(placement)
             obj.computeAABB()
 
+    def _scene_manager(self) -> Any:
+        """Pinocchio's broad phase over one geometry model of the robot's bodies and the
+        obstacles (the self pairs, and every body with every obstacle), for a scene of at
+        most :data:`SMALL_SCENE` obstacles; None for a larger one."""
+        if self._scene_broad is None and len(self.obstacles) <= SMALL_SCENE:
+            gm = pin.GeometryModel()
+            for g in self.gm.geometryObjects:
+                gm.addGeometryObject(pin.GeometryObject(g))
+            for name, obj in zip(self.obstacle_names, self.obstacles, strict=True):
+                tf = obj.getTransform()
+                placement = pin.SE3(np.array(tf.getRotation()), np.array(tf.getTranslation()))
+                gm.addGeometryObject(
+                    pin.GeometryObject(name, 0, placement, obj.collisionGeometry())
+                )
+            nb, n = len(self.gm.geometryObjects), len(gm.geometryObjects)
+            pair_map = np.zeros((n, n), dtype=bool)
+            for cp in self.gm.collisionPairs:
+                pair_map[cp.first, cp.second] = True
+            pair_map[:nb, nb:] = True
+            gm.setCollisionPairs(pair_map, True)
+            self._scene_data = self.model.createData()
+            self._scene_gm, self._scene_gd = gm, pin.GeometryData(gm)  # (kept alive)
+            self._scene_broad = pin.BroadPhaseManager_DynamicAABBTreeCollisionManager(
+                self.model, gm, self._scene_gd
+            )
+        return self._scene_broad
+
     def collide(self, q_pin: FloatArray, margin: float) -> bool:
         """Whether any pair is in contact (stops at the first)."""
         if not self.labels and self.manager is None:
             return False
         self._set_margin(margin)
+        if margin == 0.0 and self.manager is not None:  # a small scene: one C++ call
+            broad = self._scene_manager()
+            if broad is not None:
+                return bool(pin.computeCollisions(self.model, self._scene_data, broad, q_pin, True))
         if margin == 0.0 and self.self_broad is not None:  # (its boxes ignore a margin)
             if pin.computeCollisions(self.model, self.data, self.self_broad, q_pin, True):
                 return True
