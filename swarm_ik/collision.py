@@ -42,6 +42,7 @@ from typing import Any
 
 import numpy as np
 import pinocchio as pin
+from numpy.typing import NDArray
 
 from swarm_ik._types import FloatArray
 from swarm_ik.errors import RobotFileNotFoundError, RobotModelError
@@ -419,6 +420,22 @@ class RobotCollision:
         q = self.robot.check_q(q)
         ck = self._checker(as_scene(scene), bool(self_collision))
         return ck.collide(self.robot.to_pinocchio(q), float(margin))
+
+    def collides_many(
+        self, qs: Any, scene: Scene | None = None, margin: float = 0.0, self_collision: bool = True
+    ) -> NDArray[np.bool_]:
+        """:meth:`collides` of each row of ``qs`` ``(n, nq)`` → ``(n,)`` (checked once)."""
+        from swarm_ik.errors import InvalidArgumentError
+
+        arr = np.asarray(qs, dtype=float)
+        if arr.ndim != 2 or arr.shape[1] != self.robot.nq or not np.isfinite(arr).all():
+            raise InvalidArgumentError(
+                f"qs must be finite joint vectors of shape (n, {self.robot.nq}), got shape "
+                f"{arr.shape}"
+            )
+        ck = self._checker(as_scene(scene), bool(self_collision))
+        to_pin, m = self.robot.to_pinocchio, float(margin)
+        return np.array([ck.collide(to_pin(q, copy=False), m) for q in arr], dtype=bool)
 
     def body_placements(self, q: Any) -> tuple[FloatArray, FloatArray]:
         """World poses of the collision bodies at ``q`` (Pinocchio):

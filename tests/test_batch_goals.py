@@ -222,3 +222,25 @@ def test_answers_in_contact_are_retried_without_the_sphere_rows(panda, monkeypat
     rows_only = solve_batch(panda, targets, seed=0, goals=goals)
     assert res.success.sum() >= rows_only.success.sum()
     assert res.success_rate >= 0.95
+
+
+def test_free_table_holds_only_free_configurations_and_depends_on_the_seed(panda):
+    """The retry table of a collision goal: every entry free by coal, its poses the FK of
+    its entries, the same table again from the same seed (a worker builds its own), another
+    from another seed."""
+    from swarm_ik.batch import BatchChain, BatchGoals
+    from swarm_ik.bench.throughput import box_scene
+
+    scene = box_scene(panda, 40, 0)
+    goals = [G.AvoidCollisions(scene)]
+    bounds = BatchChain.from_robot(panda).bounds
+    qs, poses = BatchGoals(panda, goals, False, panda.fk(panda.mid_q())).free_table(bounds, 3)
+    rc = panda.collision_model()
+    assert len(qs) > 100
+    assert not rc.collides_many(qs, scene).any()
+    np.testing.assert_allclose(poses, panda.fk(qs), atol=1e-12)
+    panda._cache.pop("free_tables")
+    again, _ = BatchGoals(panda, goals, False, panda.fk(panda.mid_q())).free_table(bounds, 3)
+    np.testing.assert_array_equal(again, qs)
+    other, _ = BatchGoals(panda, goals, False, panda.fk(panda.mid_q())).free_table(bounds, 4)
+    assert other.shape != qs.shape or not np.array_equal(other, qs)
