@@ -71,7 +71,7 @@ def main() -> None:
 def draw(robot: swarm_ik.RobotModel, q: np.ndarray, q_fixed: np.ndarray, target: np.ndarray,
          html: Path | None) -> None:  # fmt: skip
     """The robot at ``q``, the fixed-base attempt ghosted, a triad at the target and one at
-    the tool, seen from the side: served live, or written to ``html``."""
+    the tool (:func:`swarm_ik.viz.show_pose`): served live, or written to ``html``."""
     try:
         from swarm_ik import viz
 
@@ -79,15 +79,8 @@ def draw(robot: swarm_ik.RobotModel, q: np.ndarray, q_fixed: np.ndarray, target:
     except swarm_ik.SwarmIKError as exc:
         print(f"viewer skipped: {exc}")
         return
-    scene.add_robot(robot, q, name="robot")
-    scene.add_robot(robot, q_fixed, name="ghost", color=viz.GHOST_COLOR)
-    scene.add_triad("target", target, length=0.15, sphere=(1.0, 0.85, 0.1, 0.45))
-    scene.add_triad("reached", robot.fk(q, TOOL), length=0.1)
-    view = np.array([0.1, -1.0, 0.35])
     lines = ["TIAGo: the base drives, the arm reaches", "ghost: base fixed (out of reach)"]
-    scene.add_label("label", lines, position=[0.9, 0.0, 1.75], height=0.25, facing=view)
-    base = robot.fk(q, BASE)[:3, 3]
-    scene.frame_camera([[-0.4, -0.4, 0.0], [0.4, 0.4, 1.9], base, target[:3, 3]], direction=view)
+    viz.show_pose(robot, q, target=target, ghost_q=q_fixed, lines=lines, scene=scene)
     print(scene.publish(html, "tiago.html", quick=QUICK))
 
 

@@ -1,11 +1,14 @@
 """Shared fixtures and helpers: robots are loaded once per session (loading parses URDFs);
 small URDFs are written as text with ``urdf_text`` / ``urdf_joint``; the command line is run
-with ``cli_json`` and kept from loading robots with ``no_robot_loading``."""
+with ``cli_json`` and ``cli_error``, and kept from loading robots with ``no_robot_loading``
+(``refused``: both at once)."""
 
 from __future__ import annotations
 
+import functools
 import json
 import os
+from collections.abc import Callable
 
 import numpy as np
 import pytest
@@ -134,3 +137,21 @@ def cli_json(capsys: pytest.CaptureFixture[str], *argv: str, code: int = 0) -> d
     out = json.loads(capsys.readouterr().out)
     assert rc == code, out
     return out
+
+
+def cli_error(capsys: pytest.CaptureFixture[str], *argv: str, code: int = 2) -> str:
+    """``swarm-ik ARGV`` run in this process, failing: its exit code checked (``code``) and the
+    one line it wrote on stderr returned."""
+    from swarm_ik.cli import main
+
+    rc = main(list(argv))
+    err = capsys.readouterr().err.strip().splitlines()
+    assert rc == code and len(err) == 1, (rc, err)
+    return err[0]
+
+
+@pytest.fixture()
+def refused(no_robot_loading: None, capsys: pytest.CaptureFixture[str]) -> Callable[..., str]:
+    """:func:`cli_error` of a command line that must be refused before a robot is loaded
+    (:func:`no_robot_loading`): called with ``ARGV``, it returns the one error line."""
+    return functools.partial(cli_error, capsys)

@@ -14,11 +14,12 @@ import signal
 import subprocess
 import sys
 import time
+from collections.abc import Callable
 from pathlib import Path
 from typing import Any
 
 import pytest
-from conftest import FROM_Q, cli_json, never
+from conftest import FROM_Q, cli_error, cli_json, never
 
 import swarm_ik
 from swarm_ik import cli
@@ -35,12 +36,6 @@ ARGS = {
     "bench": ["bench", "ik", "--quick", "--out", "{tmp}/b"],
 }
 """A valid command line of every sub-command."""
-
-
-def _err_line(capsys: pytest.CaptureFixture[str]) -> str:
-    err = capsys.readouterr().err.strip().splitlines()
-    assert len(err) == 1, err
-    return err[0]
 
 
 def _run(*argv: str, timeout: float = 300, **kwargs: Any) -> subprocess.CompletedProcess[str]:
@@ -127,11 +122,8 @@ def test_every_help_renders(
 
 # -------------------------------------------------------------------- 2: --goals files
 @pytest.mark.parametrize("kind", ["fifo", "device", "folder", "too large"])
-@pytest.mark.usefixtures("no_robot_loading")
 def test_goals_that_is_not_a_small_regular_file_exits_2(
-    kind: str,
-    tmp_path: Path,
-    capsys: pytest.CaptureFixture[str],
+    kind: str, tmp_path: Path, refused: Callable[..., str]
 ) -> None:
     if kind == "fifo":
         if not hasattr(os, "mkfifo"):
@@ -153,20 +145,17 @@ def test_goals_that_is_not_a_small_regular_file_exits_2(
             fh.truncate(_args.MAX_GOALS_BYTES + 1)
         expect = "over the limit of 16 MiB"
     t0 = time.perf_counter()
-    assert cli.main(["solve", "--robot", "panda", "--goals", str(path)]) == 2
+    line = refused("solve", "--robot", "panda", "--goals", str(path))
     assert time.perf_counter() - t0 < 5.0  # refused, never opened
-    line = _err_line(capsys)
     assert "--goals" in line and expect in line
 
 
-@pytest.mark.usefixtures("no_robot_loading")
 def test_goals_nested_too_deep_exits_2_with_one_line(
-    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+    tmp_path: Path, refused: Callable[..., str]
 ) -> None:
     path = tmp_path / "deep.json"
     path.write_text("[" * 100_000 + "]" * 100_000)
-    assert cli.main(["solve", "--robot", "panda", "--goals", str(path)]) == 2
-    line = _err_line(capsys)
+    line = refused("solve", "--robot", "panda", "--goals", str(path))
     assert "nested 100000 levels deep, over the limit of 100" in line
 
 
@@ -213,8 +202,8 @@ def test_viewer_wait_returns_at_once_without_a_terminal(
 
 def test_show_wait_refuses_negative_and_nan(capsys: pytest.CaptureFixture[str]) -> None:
     for bad in ("-1", "nan", "soon"):
-        assert cli.main(["solve", "--robot", "yumi_left", *FROM_Q, "--show-wait", bad]) == 2
-        assert "--show-wait" in _err_line(capsys)
+        line = cli_error(capsys, "solve", "--robot", "yumi_left", *FROM_Q, "--show-wait", bad)
+        assert "--show-wait" in line
 
 
 def test_solve_show_with_no_terminal_does_not_block(tmp_path: Path) -> None:
@@ -253,14 +242,10 @@ def test_position_only_takes_a_position_and_reports_no_rotation_error(
         (["--position-only", "--pose", "0.4", "0.1"], "or 3 (X Y Z) with --position-only"),
     ],
 )
-@pytest.mark.usefixtures("no_robot_loading")
 def test_pose_of_the_wrong_length_is_one_usage_line(
-    argv: list[str],
-    message: str,
-    capsys: pytest.CaptureFixture[str],
+    argv: list[str], message: str, refused: Callable[..., str]
 ) -> None:
-    assert cli.main(["solve", "--robot", "panda", *argv]) == 2
-    line = _err_line(capsys)
+    line = refused("solve", "--robot", "panda", *argv)
     assert message in line and "swarm-ik solve --help" in line
 
 
@@ -275,16 +260,11 @@ def test_pose_of_the_wrong_length_is_one_usage_line(
         (["0", "0", "0", "1", "1", "0"], "not on z"),
     ],
 )
-@pytest.mark.usefixtures("no_robot_loading")
 def test_reach_refuses_non_finite_or_inverted_bounds_before_loading(
-    bounds: list[str],
-    message: str,
-    tmp_path: Path,
-    capsys: pytest.CaptureFixture[str],
+    bounds: list[str], message: str, tmp_path: Path, refused: Callable[..., str]
 ) -> None:
     argv = ["reach", "--robot", "yumi_left", "--out", str(tmp_path / "m.npz"), "--bounds"]
-    assert cli.main([*argv, *bounds]) == 2
-    line = _err_line(capsys)
+    line = refused(*argv, *bounds)
     assert "--bounds" in line and message in line
     assert list(tmp_path.iterdir()) == []
 
@@ -309,40 +289,52 @@ def read_only_dir(tmp_path: Path) -> Path:
         d.chmod(0o755)
 
 
+READ_ONLY = "cannot write in folder"
+
+
 @pytest.mark.parametrize(
-    ("command", "option", "name"),
+    ("command", "option", "path", "message"),
     [
-        ("batch", "--out", "r.npz"),
-        ("reach", "--out", "m.npz"),
-        ("reach", "--png", "m.png"),
-        ("solve", "--html", "s.html"),
-        ("show", "--html", "s.html"),
-        ("bench", "--out", "bench-out"),
+        ("batch", "--out", "{ro}/r.npz", READ_ONLY),
+        ("reach", "--out", "{ro}/m.npz", READ_ONLY),
+        ("reach", "--png", "{ro}/m.png", READ_ONLY),
+        ("solve", "--html", "{ro}/s.html", READ_ONLY),
+        ("show", "--html", "{ro}/s.html", READ_ONLY),
+        ("bench", "--out", "{ro}/bench-out", READ_ONLY),
+        ("reach", "--out", "missing/m.npz", "does not exist"),
+        ("reach", "--out", ".", "is a folder"),
+        ("reach", "--png", "missing/m.png", "does not exist"),
+        ("reach", "--html", "missing/m.html", "does not exist"),
+        ("reach", "--out", "m.txt", "valid: .npz"),
     ],
 )
-@pytest.mark.usefixtures("no_robot_loading")
-def test_outputs_in_a_read_only_folder_exit_2_before_any_work(
+def test_bad_outputs_exit_2_before_any_work(
     command: str,
     option: str,
-    name: str,
-    read_only_dir: Path,
+    path: str,
+    message: str,
     tmp_path: Path,
     monkeypatch: pytest.MonkeyPatch,
-    capsys: pytest.CaptureFixture[str],
+    request: pytest.FixtureRequest,
+    refused: Callable[..., str],
 ) -> None:
-    if command in ("solve", "show"):
+    """Output paths that cannot be written ({ro}: in a read-only folder) are refused before
+    any robot is loaded, and nothing is written."""
+    if command in ("solve", "show") or option == "--html":
         pytest.importorskip("meshcat")
     monkeypatch.chdir(tmp_path)
     argv = [a.format(tmp=tmp_path) for a in ARGS[command]]
     if option in argv:
         argv = argv[: argv.index(option)]
+    if path.startswith("{ro}"):
+        path = path.format(ro=request.getfixturevalue("read_only_dir"))
     if command == "bench":
         import swarm_ik.bench.ik as bench_ik
 
         monkeypatch.setattr(bench_ik, "run", never)
-    assert cli.main([*argv, option, str(read_only_dir / name)]) == 2
-    line = _err_line(capsys)
-    assert option in line and "cannot write in folder" in line
+    line = refused(*argv, option, path)
+    assert option in line and message in line
+    assert [p.name for p in tmp_path.iterdir()] in ([], ["ro"])  # nothing written
 
 
 def test_output_probe_leaves_nothing_behind(tmp_path: Path) -> None:
@@ -377,8 +369,7 @@ def test_meshes_not_found_are_named_in_one_line_before_solving(
     monkeypatch.setattr(swarm_ik, "solve_many", never)
     argv = [command, "--robot", str(urdf), "--html", str(tmp_path / "a.html")]
     argv += ["--from-q", "0.1", "0.2"] + (["--position-only"] if command == "solve" else [])
-    assert cli.main(argv) == 2
-    line = _err_line(capsys)
+    line = cli_error(capsys, *argv)
     assert "2 of the 2 meshes of robot 'arm' cannot be found" in line
     assert "package://nowhere_pkg/meshes/b.stl" in line and "meshes/c.stl" in line
     assert "ROS_PACKAGE_PATH" in line
@@ -421,8 +412,7 @@ def test_ctrl_c_and_unexpected_errors_in_every_sub_command(
     assert cli.main(argv) == 130
     assert capsys.readouterr().err.strip() == "swarm-ik: interrupted"
     monkeypatch.setattr(module, "run", boom)
-    assert cli.main(argv) == 3
-    assert "internal error (RuntimeError: broken here)" in _err_line(capsys)
+    assert "internal error (RuntimeError: broken here)" in cli_error(capsys, *argv, code=3)
     monkeypatch.setenv("SWARM_IK_DEBUG", "1")
     with pytest.raises(RuntimeError):
         cli.main(argv)
@@ -471,18 +461,14 @@ def test_real_sigint_during_a_solve_is_one_line_and_130(tmp_path: Path) -> None:
 
 # ------------------------------------------------------------------------------ 8: xacro
 @pytest.mark.parametrize("command", ["solve", "show", "batch", "reach"])
-@pytest.mark.usefixtures("no_robot_loading")
 def test_xacro_robot_is_refused_before_loading(
-    command: str,
-    tmp_path: Path,
-    capsys: pytest.CaptureFixture[str],
+    command: str, tmp_path: Path, refused: Callable[..., str]
 ) -> None:
     xacro = tmp_path / "arm.urdf.xacro"
     xacro.write_text('<robot xmlns:xacro="http://www.ros.org/wiki/xacro" name="arm"/>')
     argv = [a.format(tmp=tmp_path) for a in ARGS[command]]
     argv[argv.index("yumi_left")] = str(xacro)
-    assert cli.main(argv) == 2
-    line = _err_line(capsys)
+    line = refused(*argv)
     assert "xacro files must be expanded first" in line
     assert "`xacro arm.urdf.xacro > arm.urdf`" in line
 

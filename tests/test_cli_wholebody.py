@@ -1,4 +1,5 @@
-"""``--floating-base``, ``--base-box`` and ``--lock`` on the command line, the whole-body goals
+"""``--floating-base``, ``--base-box`` and ``--lock`` on the command line (their bad values are
+in ``tests/test_robustness.py``, with the command line's other errors), the whole-body goals
 in a ``--goals`` file, and the whole URDF's configuration in the JSON report."""
 
 from __future__ import annotations
@@ -9,10 +10,9 @@ from pathlib import Path
 import numpy as np
 import pinocchio as pin
 import pytest
-from conftest import cli_json
+from conftest import cli_error, cli_json
 
 import swarm_ik
-from swarm_ik.cli import main
 
 TALOS = [
     "--robot", "talos", "--frame", "left_sole_link", "--frame", "right_sole_link",
@@ -75,35 +75,9 @@ def test_lock_on_an_arm_holds_the_joint(capsys: pytest.CaptureFixture[str]) -> N
     assert full[model.joints[model.getJointId("panda_joint4")].idx_q] == -1.5
 
 
-@pytest.mark.parametrize(
-    ("extra", "words"),
-    [
-        (["--lock", "no_such_joint=0"], "unknown joint 'no_such_joint'"),
-        (["--lock", "panda_joint4=abc"], "expected JOINT=VALUE"),
-        (["--lock", "panda_joint4=0.5"], "outside its limits"),
-        (["--lock", "panda_joint4=-1", "--lock", "panda_joint4=-2"], "more than once"),
-        (["--base-box", "2"], "--base-box needs --floating-base"),
-        (["--floating-base", "--base-box", "1", "2"], "one number or three"),
-        (["--floating-base", "--base-box", "-1"], "base_box"),
-    ],
-)
-def test_bad_model_options_exit_2_with_one_line(
-    extra: list[str], words: str, capsys: pytest.CaptureFixture[str]
-) -> None:
-    rc = main(
-        ["solve", "--robot", "panda", *extra, "--pose", "0.4", "0", "0.4", "0", "0", "0", "1"]
-    )
-    assert rc == 2
-    err = capsys.readouterr().err.strip().splitlines()
-    assert len(err) == 1 and words in err[0], err
-
-
 def test_bad_whole_body_goal_in_file_exits_2(
     tmp_path: Path, capsys: pytest.CaptureFixture[str]
 ) -> None:
     path = tmp_path / "bad.json"
     path.write_text(json.dumps([{"type": "CenterOfMass", "support": [[0, 0], [1, 0]]}]))
-    rc = main(["solve", *TALOS, "--goals", str(path)])
-    assert rc == 2
-    err = capsys.readouterr().err.strip().splitlines()
-    assert len(err) == 1 and "at least 3" in err[0], err
+    assert "at least 3" in cli_error(capsys, "solve", *TALOS, "--goals", str(path))

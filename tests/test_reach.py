@@ -1,6 +1,7 @@
 """swarm_ik.reach: the grid size is checked before allocating, the HTML page is the viewer's
 scene (point cloud, robot, colour legend), and the command line (swarm_ik.cli.reach) refuses
-bad output paths and missing extras before computing."""
+missing extras before computing (its bad output paths are tested with the other commands'
+in ``tests/test_cli.py``)."""
 
 from __future__ import annotations
 
@@ -26,9 +27,8 @@ def yumi() -> swarm_ik.RobotModel:
 
 
 def _parse(*argv: str) -> argparse.Namespace:
-    parser = argparse.ArgumentParser()
-    reach_cli.add_arguments(parser)
-    return parser.parse_args(list(argv))
+    subparsers = argparse.ArgumentParser().add_subparsers()
+    return reach_cli.add_parser(subparsers).parse_args(list(argv))
 
 
 @pytest.mark.parametrize("resolution", [0.002, 1e-4, 1e-300])
@@ -71,29 +71,6 @@ def test_html_is_the_scene_with_robot_and_legend(yumi: swarm_ik.RobotModel, tmp_
 
 def test_cli_defaults_to_no_scheduler() -> None:
     assert _parse("--robot", "yumi_left").scheduler == "none"
-
-
-@pytest.mark.parametrize(
-    ("option", "bad", "message"),
-    [
-        ("--out", "missing/m.npz", "does not exist"),
-        ("--out", ".", "is a folder"),
-        ("--png", "missing/m.png", "does not exist"),
-        ("--html", "missing/m.html", "does not exist"),
-        ("--out", "m.txt", "valid: .npz"),
-    ],
-)
-def test_cli_checks_output_paths_before_computing(
-    tmp_path: Path, monkeypatch: pytest.MonkeyPatch, option: str, bad: str, message: str
-) -> None:
-    monkeypatch.chdir(tmp_path)
-    called: list[Any] = []
-    monkeypatch.setattr(reach, "reach_map", lambda *a, **k: called.append(1))
-    args = _parse("--robot", "yumi_left", option, bad)
-    with pytest.raises(InvalidArgumentError, match=message):
-        reach_cli.run(args)
-    assert not called  # nothing was computed
-    assert list(tmp_path.iterdir()) == []
 
 
 def test_cli_missing_matplotlib_is_refused_first(

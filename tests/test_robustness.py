@@ -14,7 +14,7 @@ from pathlib import Path
 
 import numpy as np
 import pytest
-from conftest import FROM_Q, cli_json, urdf_joint, urdf_text
+from conftest import FROM_Q, cli_error, cli_json, urdf_joint, urdf_text
 from conftest import URDF_LIMIT as LIMIT
 
 import swarm_ik
@@ -614,6 +614,17 @@ def test_unreachable_and_degenerate_targets_give_an_honest_result(
             ["--robot", "yumi_left", "--pose", "nan", "0", "0.3", "0", "0", "0", "1"],
             "position must be 3 finite numbers",
         ),
+        # the model options (--lock, --base-box, --floating-base)
+        (["--robot", "panda", "--lock", "no_such_joint=0"], "unknown joint 'no_such_joint'"),
+        (["--robot", "panda", "--lock", "panda_joint4=abc"], "expected JOINT=VALUE"),
+        (["--robot", "panda", "--lock", "panda_joint4=0.5"], "outside its limits"),
+        (
+            ["--robot", "panda", "--lock", "panda_joint4=-1", "--lock", "panda_joint4=-2"],
+            "more than once",
+        ),
+        (["--robot", "panda", "--base-box", "2"], "--base-box needs --floating-base"),
+        (["--robot", "panda", "--floating-base", "--base-box", "1", "2"], "one number or three"),
+        (["--robot", "panda", "--floating-base", "--base-box", "-1"], "base_box"),
     ],
 )
 def test_cli_turns_every_error_into_one_line_and_exit_code_2(
@@ -622,13 +633,10 @@ def test_cli_turns_every_error_into_one_line_and_exit_code_2(
     bad = _write(tmp_path, "not xml", "bad.urdf")
     args = [a.format(bad=bad, missing=tmp_path / "missing.urdf") for a in args]
     if "--pose" not in args:
-        args += ["--from-q", "0.1", "-0.5", "0.2", "0.3", "-0.2", "0.4", "0.1"]
-    rc = main(["solve", *args])
-    err = capsys.readouterr().err
-    assert rc == 2, err
-    lines = err.strip().splitlines()
-    assert len(lines) == 1 and lines[0].startswith("swarm-ik: error: "), err
-    assert message in lines[0]
+        args += FROM_Q
+    line = cli_error(capsys, "solve", *args)
+    assert re.match(r"swarm-ik( solve)?: error: ", line), line  # (a usage error names solve)
+    assert message in line
 
 
 # =================================================================== issue 16: any input

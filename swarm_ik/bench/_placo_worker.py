@@ -1,11 +1,12 @@
 """placo's side of the whole-body benchmark, run by the placo environment's Python.
 
-Not imported by swarm_ik: :func:`swarm_ik.bench.wholebody_peers.run_placo` runs this file as
-``<placo env>/bin/python _placo_worker.py PROBLEMS.npz ANSWERS.npz`` (placo's wheel pins an
-older ``pin`` and ``numpy`` than swarm_ik's, so it lives in its own virtual environment).  It
+Not run inside swarm_ik's process: :func:`swarm_ik.bench.wholebody_peers.run_placo` runs this
+file as ``<placo env>/bin/python _placo_worker.py PROBLEMS.npz ANSWERS.npz`` (placo's wheel pins
+an older ``pin`` and ``numpy`` than swarm_ik's, so it lives in its own virtual environment).  It
 imports only the standard library, numpy, placo and that environment's pinocchio (placo and
-pinocchio inside :func:`main`, so that the main environment can import this module, e.g. for
-its doctests, without them).
+pinocchio inside :func:`main`, so that the main environment can import this module without
+them: for its doctests, and for :func:`geometry_free_urdf`, which
+:mod:`swarm_ik.bench.peers` uses too).
 
 Input (``PROBLEMS.npz``, written by ``run_placo``; ``n`` targets, ``nq = 7 + len(joint_names)``):
 
@@ -73,7 +74,7 @@ STALL_RATIO = 1e-3
 has stalled."""
 
 
-def _geometry_free_urdf(path: str) -> str:
+def geometry_free_urdf(path: str | os.PathLike[str]) -> str:
     """The URDF's text without ``<visual>`` and ``<collision>`` elements (kinematics and
     inertias unchanged; no mesh has to be found)."""
     root = ET.parse(path).getroot()
@@ -186,7 +187,7 @@ def main(argv: list[str]) -> int:
         prob = {k: f[k] for k in f.files}
     urdf = str(prob["urdf"])
     robot = placo.RobotWrapper(
-        os.path.dirname(urdf), placo.Flags.ignore_collisions, _geometry_free_urdf(urdf)
+        os.path.dirname(urdf), placo.Flags.ignore_collisions, geometry_free_urdf(urdf)
     )
     perm = _index_map(robot.model, prob["joint_names"])
     n, nq = prob["q0"].shape

@@ -337,28 +337,19 @@ def collision_free_targets(
     Raises:
         InvalidArgumentError: fewer than ``n`` found within ``max_draws`` draws.
     """
-    rc = robot.collision_model()
-    qs: list[np.ndarray] = []
-    drawn = 0
-    while len(qs) < n:
-        if drawn >= max_draws:
-            raise InvalidArgumentError(
-                f"{robot.name}/{bench_scene.name}: only {len(qs)} collision-free targets in "
-                f"{drawn} draws"
-            )
-        q = robot.random_q(rng, batch)
-        drawn += batch
-        if bench_scene.inside is not None:
+    keep: Callable[[np.ndarray], np.ndarray] | None = None
+    if bench_scene.inside is not None:
+        lo, hi = bench_scene.inside
+
+        def keep(q: np.ndarray) -> np.ndarray:
+            """The rows of ``q`` whose tool frame lies inside the cubby or the shelf."""
             p = np.asarray(robot.fk(q))[:, :3, 3]
-            lo, hi = bench_scene.inside
-            q = q[np.all((p > lo) & (p < hi), axis=1)]
-        for qi in q:
-            if not rc.collides(qi, bench_scene.scene):
-                qs.append(qi)
-                if len(qs) == n:
-                    break
-    qa = np.array(qs)
-    return qa, np.asarray(robot.fk(qa), dtype=float).reshape(n, 4, 4)
+            return q[np.all((p > lo) & (p < hi), axis=1)]
+
+    return common.collision_free_targets(
+        robot, bench_scene.scene, n, rng, batch=batch, max_draws=max_draws,
+        where=f"{robot.name}/{bench_scene.name}", what="targets", keep=keep,
+    )  # fmt: skip
 
 
 # ----------------------------------------------------------------------------- judging
@@ -1244,19 +1235,11 @@ def run(args: argparse.Namespace) -> int:
     robots = [r.strip() for r in str(args.robots).split(",") if r.strip()]
     scenes = _names(args.scenes, SCENES, "scenes", {"hard": HARD_SCENES, "all": SCENES})
     solvers = _names(args.solvers, SOLVERS, "solvers")
-    n = 10 if args.quick else int(args.n)
-    if n < 1:
-        raise InvalidArgumentError(f"--n must be a positive integer, got {args.n}")
-    budget_ms = float(args.budget_ms)
-    if not (math.isfinite(budget_ms) and budget_ms > 0):
-        raise InvalidArgumentError(f"--budget-ms must be a positive number, got {args.budget_ms}")
+    n = 10 if args.quick else common.positive_int(args.n, "--n")
+    budget_ms = common.positive_number(args.budget_ms, "--budget-ms")
     budget = budget_ms / 1e3
     nb = n if args.batch_n is None else int(args.batch_n)
-    abl_ms = float(args.ablation_budget_ms)
-    if not (math.isfinite(abl_ms) and abl_ms > 0):
-        raise InvalidArgumentError(
-            f"--ablation-budget-ms must be a positive number, got {args.ablation_budget_ms}"
-        )
+    abl_ms = common.positive_number(args.ablation_budget_ms, "--ablation-budget-ms")
     na = n if args.ablation_n is None or args.quick else int(args.ablation_n)
     if na < 1:
         raise InvalidArgumentError(f"--ablation-n must be a positive integer, got {na}")

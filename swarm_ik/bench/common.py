@@ -1,14 +1,16 @@
 """Shared helpers of the benchmarks (each exists once, here).
 
 * robots: :func:`cached_robot` (a per-process cache of :func:`swarm_ik.load_robot`);
-* targets: :func:`fk_targets` (FK of joint vectors drawn uniformly within the limits);
+* targets: :func:`fk_targets` (FK of joint vectors drawn uniformly within the limits),
+  :func:`collision_free_targets` (those of them free of contact);
 * files: :func:`read_csv` (rows as strings), :func:`add_out` and :func:`resolve_out` (the
   ``--out`` / ``--quick`` rules), :func:`write_run_info`, :func:`render` (reports from
   template files in ``swarm_ik/bench/templates``);
 * the machine: :func:`machine_info`, :func:`cpu_count`, :func:`single_thread`;
 * statistics: :func:`summarize`, :func:`timing`, :func:`success_rate`, :func:`judge`;
 * C-library plumbing for peers: :func:`quiet_c_output`, :func:`urdf_root_link`;
-* the command line: :func:`module_main` (the ``main(argv)`` of ``python -m swarm_ik.bench.NAME``).
+* the command line: :func:`module_main` (the ``main(argv)`` of ``python -m swarm_ik.bench.NAME``),
+  :func:`positive_int` and :func:`positive_number` (options checked before any work).
 """
 
 from __future__ import annotations
@@ -78,6 +80,30 @@ def module_main(
     return main
 
 
+def positive_int(value: Any, option: str) -> int:
+    """An option's value as an integer of at least 1.
+
+    Raises:
+        InvalidArgumentError: ``"{option} must be a positive integer, got {value}"``.
+    """
+    n = int(value)
+    if n < 1:
+        raise InvalidArgumentError(f"{option} must be a positive integer, got {value}")
+    return n
+
+
+def positive_number(value: Any, option: str) -> float:
+    """An option's value as a finite number above 0.
+
+    Raises:
+        InvalidArgumentError: ``"{option} must be a positive number, got {value}"``.
+    """
+    x = float(value)
+    if not (math.isfinite(x) and x > 0):
+        raise InvalidArgumentError(f"{option} must be a positive number, got {value}")
+    return x
+
+
 # --------------------------------------------------------------------------- robots, targets
 @functools.lru_cache(maxsize=16)
 def cached_robot(name: str) -> Any:
@@ -102,6 +128,62 @@ def fk_targets(robot: Any, n: int, seed: int | Sequence[int]) -> np.ndarray:
     rng = np.random.default_rng(seed)
     q = np.atleast_2d(robot.random_q(rng, max(int(n), 1)))[: int(n)]
     return np.asarray(robot.fk(q), dtype=float).reshape(int(n), 4, 4)
+
+
+def collision_free_targets(
+    robot: Any,
+    scene: Any,
+    n: int,
+    rng: np.random.Generator,
+    *,
+    batch: int,
+    max_draws: int,
+    where: str,
+    what: str,
+    keep: Callable[[np.ndarray], np.ndarray] | None = None,
+) -> tuple[np.ndarray, np.ndarray]:
+    """Reachable collision-free targets: FK of the first ``n`` joint vectors drawn uniformly
+    within the limits, ``batch`` per round, that the exact check finds free of contact (self
+    and ``scene``).
+
+    Args:
+        robot: A :class:`~swarm_ik.RobotModel`.
+        scene: The obstacles (a :class:`~swarm_ik.Scene`).
+        n: Number of targets.
+        rng: Random generator.
+        batch: Joint vectors drawn per round.
+        max_draws: Most joint vectors drawn before giving up.
+        where: What the error names first (the robot, and the scene).
+        what: What the error counts (``"targets"``, ``"joint vectors"``).
+        keep: Optional filter of each round's draws, before the contact check: the rows of
+            its ``(batch, nq)`` argument worth checking.
+
+    Returns:
+        ``(q (n, nq), targets (n, 4, 4))``.
+
+    Raises:
+        InvalidArgumentError: fewer than ``n`` found within ``max_draws`` draws (``"{where}:
+            only {k} collision-free {what} in {drawn} draws"``).
+    """
+    rc = robot.collision_model()
+    found: list[np.ndarray] = []
+    drawn = 0
+    while len(found) < n:
+        if drawn >= max_draws:
+            raise InvalidArgumentError(
+                f"{where}: only {len(found)} collision-free {what} in {drawn} draws"
+            )
+        q = robot.random_q(rng, batch)
+        drawn += batch
+        if keep is not None:
+            q = keep(q)
+        for qi in q:
+            if not rc.collides(qi, scene):
+                found.append(qi)
+                if len(found) == n:
+                    break
+    qs = np.array(found).reshape(n, robot.nq)
+    return qs, np.asarray(robot.fk(qs), dtype=float).reshape(n, 4, 4)
 
 
 # --------------------------------------------------------------------------- files

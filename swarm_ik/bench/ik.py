@@ -312,14 +312,15 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
         default=None,
         help=f"targets per robot (default 1000; with --quick {plans.IK_QUICK_N})",
     )
+    budgets = " ".join(f"{b:g}" for b in IKPlan.budgets_ms)  # IKPlan's default
     parser.add_argument(
         "--budgets-ms",
         nargs="+",
         type=float,
-        default=[5.0],
+        default=list(IKPlan.budgets_ms),
         metavar="MS",
-        help="time budgets per call [ms] (default 5); peers without a time limit (rtb, ikpy) "
-        "run to their own iteration limits, and their times show it",
+        help=f"time budgets per call [ms] (default {budgets}); peers without a time limit "
+        "(rtb, ikpy) run to their own iteration limits, and their times show it",
     )
     parser.add_argument("--seed", type=int, default=0, help="seed of targets and run order")
     parser.add_argument(

@@ -34,6 +34,7 @@ from __future__ import annotations
 import argparse
 import os
 import time
+from collections.abc import Iterator
 from pathlib import Path
 from typing import Any
 
@@ -67,13 +68,12 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("--arms", nargs="+", default=list(ARMS), help="robots")
     parser.add_argument("--kinds", nargs="+", default=list(KINDS), choices=KINDS)
     parser.add_argument("--seed", type=int, default=0, help="seed of the paths")
-    parser.add_argument("--quick", action="store_true", help="N = 10 paths (a smoke run)")
-    parser.add_argument("--no-peers", action="store_true", help="skip TRAC-IK and rtb")
-    parser.add_argument(
-        "--from-csv",
-        action="store_true",
-        help="write path.md again from --out's paths.csv (no solving)",
-    )
+    for switch, text in [
+        ("--quick", "N = 10 paths (a smoke run)"),
+        ("--no-peers", "skip TRAC-IK and rtb"),
+        ("--from-csv", "write path.md again from --out's paths.csv (no solving)"),
+    ]:
+        parser.add_argument(switch, action="store_true", help=text)
     common.add_out(parser, "path", type=Path)
 
 
@@ -283,6 +283,18 @@ def _p90(rows: list[dict[str, Any]], key: str) -> str:
     return f"{np.percentile(vals, 90):.1f}" if vals else "–"
 
 
+def _cells(
+    rows: list[dict[str, Any]], arms: list[str], kinds: list[str]
+) -> Iterator[tuple[str, str, list[dict[str, Any]]]]:
+    """``(arm, kind, its rows)`` for every arm and kind that has rows, in the report's order
+    (arms, then kinds)."""
+    for arm in arms:
+        for kind in kinds:
+            rr = [r for r in rows if r["arm"] == arm and r["kind"] == kind]
+            if rr:
+                yield arm, kind, rr
+
+
 def summarize(rows: list[dict[str, Any]], args: argparse.Namespace, load: str) -> str:
     """The Markdown report."""
     w = args.waypoints
@@ -308,45 +320,38 @@ def summarize(rows: list[dict[str, Any]], args: argparse.Namespace, load: str) -
         "| greedy swarm_ik | TRAC-IK greedy | rtb ik_LM greedy |",
         "|---|---|---|---|---|---|---|---|---|---|---|---|",
     ]
-    for arm in arms:
-        for kind in kinds:
-            rr = [r for r in rows if r["arm"] == arm and r["kind"] == kind]
-            if not rr:
-                continue
-            ok = [
-                dict(r, ours_ok=int(int(r["ours_success"]) and int(r["ours_jump_free"])))
-                for r in rr
-            ]
-            agree = beyond = "–"
-            if rr[0]["ref_exists"] != "":
-                same = sum(int(r["ours_ok"] == int(r["ref_exists"])) for r in ok)
-                agree = f"{100.0 * same / len(ok):.0f} % ({same}/{len(ok)})"
-                beyond = str(
-                    sum(
-                        int(r["ours_ok"] and not int(r["ref_exists"]) and int(r["ours_verified"]))
-                        for r in ok
-                    )
-                )
-            claims = sum(int(r["ours_claims_proof"]) for r in rr)
-            rechecked = sum(int(r["proof_rechecked"] or 0) for r in rr)
-            wrong = sum(1 - int(r["ours_verified"]) for r in rr)
-            wrong += sum(  # a proof contradicted by the reference, the recheck or the truth
-                1
-                for r in ok
-                if int(r["ours_claims_proof"])
-                and (
-                    r["kind"] == "joint"  # (FK of a smooth trajectory: a path exists)
-                    or (r["ref_exists"] != "" and int(r["ref_exists"]))
-                    or not int(r["proof_rechecked"] or 0)
+    for arm, kind, rr in _cells(rows, arms, kinds):
+        ok = [dict(r, ours_ok=int(int(r["ours_success"]) and int(r["ours_jump_free"]))) for r in rr]
+        agree = beyond = "–"
+        if rr[0]["ref_exists"] != "":
+            same = sum(int(r["ours_ok"] == int(r["ref_exists"])) for r in ok)
+            agree = f"{100.0 * same / len(ok):.0f} % ({same}/{len(ok)})"
+            beyond = str(
+                sum(
+                    int(r["ours_ok"] and not int(r["ref_exists"]) and int(r["ours_verified"]))
+                    for r in ok
                 )
             )
-            lines.append(
-                f"| {arm} | {kind} | {len(rr)} | {_share(rr, 'ref_exists')} | "
-                f"{_share(ok, 'ours_ok')} | {agree} | {beyond} | {claims} ({rechecked}) | "
-                f"{wrong} | "
-                f"{_share(rr, 'greedy_jump_free')} | {_share(rr, 'tracik_jump_free')} | "
-                f"{_share(rr, 'rtb_jump_free')} |"
+        claims = sum(int(r["ours_claims_proof"]) for r in rr)
+        rechecked = sum(int(r["proof_rechecked"] or 0) for r in rr)
+        wrong = sum(1 - int(r["ours_verified"]) for r in rr)
+        wrong += sum(  # a proof contradicted by the reference, the recheck or the truth
+            1
+            for r in ok
+            if int(r["ours_claims_proof"])
+            and (
+                r["kind"] == "joint"  # (FK of a smooth trajectory: a path exists)
+                or (r["ref_exists"] != "" and int(r["ref_exists"]))
+                or not int(r["proof_rechecked"] or 0)
             )
+        )
+        lines.append(
+            f"| {arm} | {kind} | {len(rr)} | {_share(rr, 'ref_exists')} | "
+            f"{_share(ok, 'ours_ok')} | {agree} | {beyond} | {claims} ({rechecked}) | "
+            f"{wrong} | "
+            f"{_share(rr, 'greedy_jump_free')} | {_share(rr, 'tracik_jump_free')} | "
+            f"{_share(rr, 'rtb_jump_free')} |"
+        )
     lines += [
         "",
         "Reference (6R arms): every eaik branch of every waypoint with every in-limit 2π copy "
@@ -371,18 +376,14 @@ def summarize(rows: list[dict[str, Any]], args: argparse.Namespace, load: str) -
         "exhaustive reference |",
         "|---|---|---|---|---|---|---|---|---|---|---|",
     ]
-    for arm in arms:
-        for kind in kinds:
-            rr = [r for r in rows if r["arm"] == arm and r["kind"] == kind]
-            if not rr:
-                continue
-            lines.append(
-                f"| {arm} | {kind} | {_median(rr, 'ours_ms')} | {_p90(rr, 'ours_ms')} | "
-                f"{_median(rr, 'ours_cpu_ms')} | {_median(rr, 'ours_ms', 1.0 / w)} | "
-                f"{_median(rr, 'ours_candidates')} | "
-                f"{_median(rr, 'greedy_ms')} | {_median(rr, 'tracik_ms')} | "
-                f"{_median(rr, 'rtb_ms')} | {_median(rr, 'ref_ms')} |"
-            )
+    for arm, kind, rr in _cells(rows, arms, kinds):
+        lines.append(
+            f"| {arm} | {kind} | {_median(rr, 'ours_ms')} | {_p90(rr, 'ours_ms')} | "
+            f"{_median(rr, 'ours_cpu_ms')} | {_median(rr, 'ours_ms', 1.0 / w)} | "
+            f"{_median(rr, 'ours_candidates')} | "
+            f"{_median(rr, 'greedy_ms')} | {_median(rr, 'tracik_ms')} | "
+            f"{_median(rr, 'rtb_ms')} | {_median(rr, 'ref_ms')} |"
+        )
     lines += ["", *_targets(rows)]
     pooled = []
     for arm in arms:

@@ -53,6 +53,7 @@ from typing import Any, Protocol
 
 import numpy as np
 
+from swarm_ik.bench._placo_worker import geometry_free_urdf
 from swarm_ik.bench.common import quiet_c_output, urdf_link_of_frame, urdf_root_link
 from swarm_ik.errors import InvalidArgumentError
 
@@ -254,16 +255,6 @@ class TracIK:
 
 
 # --------------------------------------------------------------------------- rtb
-def _urdf_without_geometry(path: Any) -> str:
-    """The URDF text without ``<visual>`` / ``<collision>`` (no meshes to resolve)."""
-    root = ET.parse(path).getroot()
-    for link in root.findall("link"):
-        for tag in ("visual", "collision"):
-            for el in link.findall(tag):
-                link.remove(el)
-    return ET.tostring(root, encoding="unicode")
-
-
 @functools.lru_cache(maxsize=16)
 def _rtb_ets(urdf: str, root: str, ee: str) -> Any:
     import warnings
@@ -328,7 +319,7 @@ class RtbIK:
         self.name = name
         self.robot = robot
         self.ets = _rtb_ets(
-            _urdf_without_geometry(robot.urdf_path),
+            geometry_free_urdf(robot.urdf_path),
             urdf_root_link(robot.urdf_path),
             urdf_link_of_frame(robot.urdf_path, robot.ee_frame),
         )

@@ -168,25 +168,11 @@ def collision_free_targets(
     Raises:
         InvalidArgumentError: fewer than ``n`` found in ``max_draws`` draws.
     """
-    from swarm_ik.errors import InvalidArgumentError
-
     rng = np.random.default_rng([int(seed), len(scene), 12])
-    rc = robot.collision_model()
-    found: list[np.ndarray] = []
-    drawn = 0
-    while len(found) < n:
-        if drawn >= max_draws:
-            raise InvalidArgumentError(
-                f"{robot.name}: only {len(found)} collision-free joint vectors in {drawn} draws"
-            )
-        for q in robot.random_q(rng, 1024):
-            if not rc.collides(q, scene):
-                found.append(q)
-                if len(found) == n:
-                    break
-        drawn += 1024
-    qs = np.array(found).reshape(n, robot.nq)
-    return qs, np.asarray(robot.fk(qs), dtype=float).reshape(n, 4, 4)
+    return common.collision_free_targets(
+        robot, scene, n, rng, batch=1024, max_draws=max_draws, where=robot.name,
+        what="joint vectors",
+    )  # fmt: skip
 
 
 def _row(

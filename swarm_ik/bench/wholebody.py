@@ -263,14 +263,11 @@ def plot_times(path: Path, rows: list[dict[str, Any]], solvers: list[str]) -> Pa
 
 def run(args: argparse.Namespace) -> int:
     """Run the benchmark; write ``wholebody.csv``, ``summary.md`` and ``times.png``."""
-    n = 20 if args.quick else int(args.n)
-    if n < 1:
-        raise InvalidArgumentError(f"--n must be a positive integer, got {args.n}")
+    n = 20 if args.quick else common.positive_int(args.n, "--n")
     limit_ms = float(args.time_limit_ms)
     if not (math.isfinite(limit_ms) and limit_ms > 0):
         raise InvalidArgumentError(f"--time-limit-ms must be positive, got {args.time_limit_ms}")
-    if int(args.chunk) < 1:
-        raise InvalidArgumentError(f"--chunk must be a positive integer, got {args.chunk}")
+    chunk = common.positive_int(args.chunk, "--chunk")
     solvers = [s.strip() for s in str(args.solvers).split(",") if s.strip()]
     bad = [s for s in solvers if s not in SOLVERS]
     if bad or not solvers:
@@ -291,7 +288,6 @@ def run(args: argparse.Namespace) -> int:
     ours.solve(np.arange(min(3, n)), limit)  # compiled kernels loaded before any clock
     rows: list[dict[str, Any]] = []
     versions: dict[str, str] = {}
-    chunk = int(args.chunk)
     for start in range(0, n, chunk):
         index = np.arange(start, min(n, start + chunk))
         sub = targets.subset(index)

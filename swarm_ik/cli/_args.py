@@ -12,8 +12,9 @@ import argparse
 import os
 import stat
 import tempfile
+from collections.abc import Callable
 from pathlib import Path
-from typing import Any
+from typing import Any, NamedTuple
 
 from swarm_ik.errors import InvalidArgumentError
 
@@ -172,6 +173,36 @@ def add_robot(parser: Any, *, frame: bool = True) -> None:
     )
 
 
+class RobotCommand(NamedTuple):
+    """The ``add_parser(subparsers)`` of a sub-command that works on one robot: called with
+    the ``swarm-ik`` sub-parsers, it adds the parser ``name`` (``help``: its line in
+    ``swarm-ik --help``; ``description``: the top of ``swarm-ik NAME --help``), with
+    :func:`add_robot`'s options first and then the command's own (``add_arguments``).
+
+    Attributes:
+        name: The sub-command.
+        add_arguments: Adds the command's options (after the robot's) to its parser.
+        help: One line for ``swarm-ik --help``.
+        description: The paragraph of ``swarm-ik NAME --help``.
+        frame: Whether ``--robot`` comes with ``--frame`` (see :func:`add_robot`).
+    """
+
+    name: str
+    add_arguments: Callable[[argparse.ArgumentParser], None]
+    help: str
+    description: str
+    frame: bool = True
+
+    def __call__(self, subparsers: Any) -> argparse.ArgumentParser:
+        """Add the sub-command to ``subparsers``; returns its parser."""
+        parser: argparse.ArgumentParser = subparsers.add_parser(
+            self.name, help=self.help, description=self.description
+        )
+        add_robot(parser, frame=self.frame)
+        self.add_arguments(parser)
+        return parser
+
+
 def lock_argument(text: str) -> tuple[str, float | None]:
     """``--lock``'s type: ``JOINT=VALUE`` or ``JOINT`` → ``(name, value or None)``."""
     name, sep, raw = text.partition("=")
@@ -213,6 +244,27 @@ def add_tolerances(parser: Any) -> None:
     )
     parser.add_argument(
         "--tol-rot", type=float, default=1e-5, help="rotation tolerance [rad] (default 1e-5)"
+    )
+
+
+def add_lm_options(parser: Any, max_starts: int, starts_help: str) -> None:
+    """The options of the compiled Levenberg-Marquardt search (``batch``, ``reach``):
+    :func:`add_tolerances`, ``--max-starts N`` and ``--max-iters N``.
+
+    Args:
+        parser: The parser to add them to.
+        max_starts: Default of ``--max-starts``.
+        starts_help: Help of ``--max-starts`` (what one start is for), before its default.
+    """
+    add_tolerances(parser)
+    parser.add_argument(
+        "--max-starts",
+        type=int,
+        default=max_starts,
+        help=f"{starts_help} (default {max_starts})",
+    )
+    parser.add_argument(
+        "--max-iters", type=int, default=60, help="most LM iterations per start (default 60)"
     )
 
 

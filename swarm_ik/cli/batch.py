@@ -23,34 +23,34 @@ from __future__ import annotations
 import argparse
 import sys
 from pathlib import Path
-from typing import Any
 
 from swarm_ik.cli._args import (
     EXIT_INTERRUPTED,
     EXIT_NOT_REACHED,
     EXIT_OK,
+    RobotCommand,
+    add_lm_options,
     add_q0,
-    add_robot,
     add_scheduler,
-    add_tolerances,
     check_input_file,
     check_output_file,
     robot_kwargs,
 )
 
+HELP = "solve many targets at once (vectorised, optionally on Dask)"
+"""One line for ``swarm-ik --help``."""
+DESCRIPTION = (
+    "Solve many target poses of one robot with the compiled "
+    "Levenberg-Marquardt polish and restarts; writes one row per target.  Exit 0 when "
+    "every target is solved, 1 when some are not, 130 on Ctrl-C (the finished rows are "
+    "written)."
+)
+"""The top of ``swarm-ik batch --help``."""
 
-def add_parser(subparsers: Any) -> argparse.ArgumentParser:
-    """Add ``batch`` to the ``swarm-ik`` sub-parsers."""
-    b: argparse.ArgumentParser = subparsers.add_parser(
-        "batch",
-        help="solve many targets at once (vectorised, optionally on Dask)",
-        description="Solve many target poses of one robot with the compiled "
-        "Levenberg-Marquardt polish and restarts; writes one row per target.  Exit 0 when "
-        "every target is solved, 1 when some are not, 130 on Ctrl-C (the finished rows are "
-        "written).",
-    )
-    add_robot(b)
-    src = b.add_mutually_exclusive_group(required=True)
+
+def add_arguments(parser: argparse.ArgumentParser) -> None:
+    """The options of ``swarm-ik batch`` after the robot's (see :func:`run`)."""
+    src = parser.add_mutually_exclusive_group(required=True)
     src.add_argument(
         "--targets",
         type=Path,
@@ -64,7 +64,7 @@ def add_parser(subparsers: Any) -> argparse.ArgumentParser:
         metavar="N",
         help="N targets = FK of configurations drawn uniformly within the limits",
     )
-    b.add_argument(
+    parser.add_argument(
         "--out",
         type=Path,
         required=True,
@@ -72,25 +72,21 @@ def add_parser(subparsers: Any) -> argparse.ArgumentParser:
         help="result file: .npz (q, errors, success, ...) or .csv; its folder must exist and "
         "be writable (checked before solving)",
     )
-    add_q0(b, "first start for every target (one value per joint); default mid-range")
-    b.add_argument("--position-only", action="store_true", help="ignore the target orientation")
-    b.add_argument("--chunk-size", type=int, default=None, help="targets per task")
-    b.add_argument(
+    add_q0(parser, "first start for every target (one value per joint); default mid-range")
+    parser.add_argument(
+        "--position-only", action="store_true", help="ignore the target orientation"
+    )
+    parser.add_argument("--chunk-size", type=int, default=None, help="targets per task")
+    parser.add_argument(
         "--seed", type=int, default=0, help="seed of the restarts (and of sampled targets)"
     )
-    add_tolerances(b)
-    b.add_argument(
-        "--max-starts",
-        type=int,
-        default=128,
-        help="most LM starts per target, the seed included (default 128)",
-    )
-    b.add_argument(
-        "--max-iters", type=int, default=60, help="most LM iterations per start (default 60)"
-    )
-    add_scheduler(b)
-    b.add_argument("--no-progress", action="store_true", help="no progress bar")
-    return b
+    add_lm_options(parser, 128, "most LM starts per target, the seed included")
+    add_scheduler(parser)
+    parser.add_argument("--no-progress", action="store_true", help="no progress bar")
+
+
+add_parser = RobotCommand("batch", add_arguments, HELP, DESCRIPTION)
+"""Add ``batch`` to the ``swarm-ik`` sub-parsers."""
 
 
 def run(args: argparse.Namespace) -> int:

@@ -25,27 +25,29 @@ from typing import Any
 from swarm_ik.cli._args import (
     EXIT_NOT_REACHED,
     EXIT_OK,
-    add_robot,
+    RobotCommand,
+    add_q0,
     add_tolerances,
     check_input_file,
     check_output_file,
     robot_kwargs,
 )
 
+HELP = "a jump-free joint path through Cartesian waypoints"
+"""One line for ``swarm-ik --help``."""
+DESCRIPTION = (
+    "Solve a path of end-effector poses so that no joint moves more than "
+    "--max-step between consecutive waypoints (every IK branch considered; on 6R arms "
+    "with a closed form a path with jumps proves that none without exists).  Exit 0 when "
+    "every waypoint is reached without a jump, 1 otherwise (the path found is written and "
+    "the reason printed)."
+)
+"""The top of ``swarm-ik path --help``."""
 
-def add_parser(subparsers: Any) -> argparse.ArgumentParser:
-    """Add ``path`` to the ``swarm-ik`` sub-parsers."""
-    p: argparse.ArgumentParser = subparsers.add_parser(
-        "path",
-        help="a jump-free joint path through Cartesian waypoints",
-        description="Solve a path of end-effector poses so that no joint moves more than "
-        "--max-step between consecutive waypoints (every IK branch considered; on 6R arms "
-        "with a closed form a path with jumps proves that none without exists).  Exit 0 when "
-        "every waypoint is reached without a jump, 1 otherwise (the path found is written and "
-        "the reason printed).",
-    )
-    add_robot(p)
-    p.add_argument(
+
+def add_arguments(parser: argparse.ArgumentParser) -> None:
+    """The options of ``swarm-ik path`` after the robot's (see :func:`run`)."""
+    parser.add_argument(
         "--poses",
         type=Path,
         required=True,
@@ -53,7 +55,7 @@ def add_parser(subparsers: Any) -> argparse.ArgumentParser:
         help="waypoints: .npz/.npy ((N,4,4) or (N,7) array) or .csv (x,y,z,qx,qy,qz,qw or 16 "
         "matrix columns), N >= 2",
     )
-    p.add_argument(
+    parser.add_argument(
         "--max-step",
         nargs="+",
         type=float,
@@ -62,38 +64,39 @@ def add_parser(subparsers: Any) -> argparse.ArgumentParser:
         help="largest joint change between consecutive waypoints [rad, or m for prismatic "
         "joints]: one value, or one per joint (default 0.2)",
     )
-    p.add_argument(
-        "--q0", nargs="+", type=float, default=None, help="current joint values (one per joint)"
-    )
-    p.add_argument(
+    add_q0(parser, "current joint values (one per joint)")
+    parser.add_argument(
         "--scene",
         default=None,
         metavar="FILE",
         help="obstacles (JSON, cuRobo .yml, MoveIt .scene or URDF; docs/scenes.md): every "
         "waypoint collision-free (self and scene)",
     )
-    p.add_argument(
+    parser.add_argument(
         "--densify",
         type=int,
         default=0,
         metavar="K",
         help="check each step through K interpolated poses (default 0)",
     )
-    p.add_argument("--seed", type=int, default=0, help="seed (default 0)")
-    p.add_argument("--time-limit", type=float, default=None, help="seconds for the search")
-    add_tolerances(p)
-    p.add_argument(
+    parser.add_argument("--seed", type=int, default=0, help="seed (default 0)")
+    parser.add_argument("--time-limit", type=float, default=None, help="seconds for the search")
+    add_tolerances(parser)
+    parser.add_argument(
         "--out", type=Path, default=None, metavar="FILE", help="joint path: .csv or .npy"
     )
-    p.add_argument(
+    parser.add_argument(
         "--html",
         type=Path,
         default=None,
         metavar="FILE",
         help="write a page stepping through the path (.html; needs [viz])",
     )
-    p.add_argument("--json", action="store_true", help="print one JSON object")
-    return p
+    parser.add_argument("--json", action="store_true", help="print one JSON object")
+
+
+add_parser = RobotCommand("path", add_arguments, HELP, DESCRIPTION)
+"""Add ``path`` to the ``swarm-ik`` sub-parsers."""
 
 
 def run(args: argparse.Namespace) -> int:

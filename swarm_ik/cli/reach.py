@@ -19,35 +19,30 @@ from typing import Any
 from swarm_ik.cli import _viewer
 from swarm_ik.cli._args import (
     EXIT_OK,
-    add_robot,
+    RobotCommand,
+    add_lm_options,
     add_scheduler,
-    add_tolerances,
     check_output_file,
     robot_kwargs,
 )
 from swarm_ik.errors import InvalidArgumentError
+
+HELP = "reachability map on a voxel grid (npz + PNG slices + HTML point cloud)"
+"""One line for ``swarm-ik --help``."""
+DESCRIPTION = (
+    "Reachability index per voxel: the fraction of K orientations solved at "
+    "its centre.  Writes the map (.npz), a PNG of three slices (needs [plot]) and, with "
+    "meshcat installed, an HTML point cloud; every output is checked before solving."
+)
+"""The top of ``swarm-ik reach --help``."""
 
 MAX_TARGETS = 5_000_000
 """Default of ``--max-targets`` (:data:`swarm_ik.reach.MAX_TARGETS`, restated here so that
 building the parser imports no numerics; a test keeps the two equal)."""
 
 
-def add_parser(subparsers: Any) -> argparse.ArgumentParser:
-    """Add ``reach`` to the ``swarm-ik`` sub-parsers."""
-    p: argparse.ArgumentParser = subparsers.add_parser(
-        "reach",
-        help="reachability map on a voxel grid (npz + PNG slices + HTML point cloud)",
-        description="Reachability index per voxel: the fraction of K orientations solved at "
-        "its centre.  Writes the map (.npz), a PNG of three slices (needs [plot]) and, with "
-        "meshcat installed, an HTML point cloud; every output is checked before solving.",
-    )
-    add_arguments(p)
-    return p
-
-
-def add_arguments(parser: Any) -> None:
-    """The options of ``swarm-ik reach`` (see :func:`run`)."""
-    add_robot(parser)
+def add_arguments(parser: argparse.ArgumentParser) -> None:
+    """The options of ``swarm-ik reach`` after the robot's (see :func:`run`)."""
     parser.add_argument(
         "--resolution", type=float, default=0.1, help="voxel edge [m] (default 0.1)"
     )
@@ -91,13 +86,7 @@ def add_arguments(parser: Any) -> None:
     parser.add_argument(
         "--seed", type=int, default=0, help="seed of the orientations and restarts (default 0)"
     )
-    add_tolerances(parser)
-    parser.add_argument(
-        "--max-starts", type=int, default=16, help="most LM starts per pose (default 16)"
-    )
-    parser.add_argument(
-        "--max-iters", type=int, default=60, help="most LM iterations per start (default 60)"
-    )
+    add_lm_options(parser, 16, "most LM starts per pose")
     parser.add_argument(
         "--max-targets",
         type=int,
@@ -106,6 +95,10 @@ def add_arguments(parser: Any) -> None:
     )
     add_scheduler(parser)
     parser.add_argument("--no-progress", action="store_true", help="no progress bar")
+
+
+add_parser = RobotCommand("reach", add_arguments, HELP, DESCRIPTION)
+"""Add ``reach`` to the ``swarm-ik`` sub-parsers."""
 
 
 def has_module(module: str) -> bool:

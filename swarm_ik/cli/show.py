@@ -8,22 +8,25 @@ import argparse
 from typing import Any
 
 from swarm_ik.cli import _viewer
-from swarm_ik.cli._args import EXIT_NOT_REACHED, EXIT_OK, add_pose, add_robot, robot_kwargs
+from swarm_ik.cli._args import EXIT_NOT_REACHED, EXIT_OK, RobotCommand, add_pose, robot_kwargs
+
+HELP = (
+    "look at a robot configuration, or at several solutions of a target, in meshcat "
+    "(live, or exported to a self-contained HTML file)"
+)
+"""One line for ``swarm-ik --help``."""
+DESCRIPTION = (
+    "Draw a robot at given joint values (--q, repeatable) and/or a target pose "
+    "(--pose or --from-q); with a target and no --q, solve it first "
+    "(--solutions N distinct solutions).  Without --html the live viewer opens (its URL "
+    "is printed); needs [viz]."
+)
+"""The top of ``swarm-ik show --help``."""
 
 
-def add_parser(subparsers: Any) -> argparse.ArgumentParser:
-    """Add ``show`` to the ``swarm-ik`` sub-parsers."""
-    p: argparse.ArgumentParser = subparsers.add_parser(
-        "show",
-        help="look at a robot configuration, or at several solutions of a target, in meshcat "
-        "(live, or exported to a self-contained HTML file)",
-        description="Draw a robot at given joint values (--q, repeatable) and/or a target pose "
-        "(--pose or --from-q); with a target and no --q, solve it first "
-        "(--solutions N distinct solutions).  Without --html the live viewer opens (its URL "
-        "is printed); needs [viz].",
-    )
-    add_robot(p)
-    p.add_argument(
+def add_arguments(parser: argparse.ArgumentParser) -> None:
+    """The options of ``swarm-ik show`` after the robot's (see :func:`run`)."""
+    parser.add_argument(
         "--q",
         nargs="+",
         type=float,
@@ -32,44 +35,49 @@ def add_parser(subparsers: Any) -> argparse.ArgumentParser:
         metavar="Q",
         help="joint values (rad / m, one per joint); repeat --q for several",
     )
-    tgt = p.add_mutually_exclusive_group()
+    tgt = parser.add_mutually_exclusive_group()
     add_pose(tgt)
     tgt.add_argument(
         "--from-q", nargs="+", type=float, metavar="Q", help="target = FK of these joint values"
     )
-    p.add_argument(
+    parser.add_argument(
         "--solutions",
         type=int,
         default=1,
         metavar="N",
         help="with a target and no --q: how many distinct solutions to find and show (default 1)",
     )
-    p.add_argument(
+    parser.add_argument(
         "--min-distance",
         type=float,
         default=0.5,
         help="smallest joint-space distance between two shown solutions (rad / m, default 0.5)",
     )
-    p.add_argument(
+    parser.add_argument(
         "--solver",
         default=None,
         help="solver for the target (default: swarm_ik.solve_many; with a name, that solver "
         "from successive seeds)",
     )
-    p.add_argument("--seed", type=int, default=0, help="random seed (default 0)")
-    p.add_argument(
+    parser.add_argument("--seed", type=int, default=0, help="random seed (default 0)")
+    parser.add_argument(
         "--layout",
         default="side",
         choices=["side", "steps"],
         help="several configurations: side by side (default), or one robot stepping through them",
     )
-    p.add_argument("--html", default=None, metavar="FILE", help="write a self-contained HTML page")
-    p.add_argument(
+    parser.add_argument(
+        "--html", default=None, metavar="FILE", help="write a self-contained HTML page"
+    )
+    parser.add_argument(
         "--show", action="store_true", help="also keep the live viewer open when --html is given"
     )
-    _viewer.add_show_wait(p)
-    p.add_argument("--open", action="store_true", help="open the live viewer in a web browser")
-    return p
+    _viewer.add_show_wait(parser)
+    parser.add_argument("--open", action="store_true", help="open the live viewer in a web browser")
+
+
+add_parser = RobotCommand("show", add_arguments, HELP, DESCRIPTION)
+"""Add ``show`` to the ``swarm-ik`` sub-parsers."""
 
 
 def run(args: argparse.Namespace) -> int:

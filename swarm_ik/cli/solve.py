@@ -15,9 +15,9 @@ from swarm_ik.cli import _viewer
 from swarm_ik.cli._args import (
     EXIT_NOT_REACHED,
     EXIT_OK,
+    RobotCommand,
     add_pose,
     add_q0,
-    add_robot,
     add_scene,
     add_tolerances,
     check_goals_file,
@@ -26,6 +26,14 @@ from swarm_ik.cli._args import (
     solve_kwargs,
 )
 from swarm_ik.errors import InvalidArgumentError
+
+HELP = "solve one IK target (a pose, FK of joint values, or a goals file)"
+"""One line for ``swarm-ik --help``."""
+DESCRIPTION = (
+    "Solve one IK target of a robot and print the joint values; exit 0 when "
+    "the target is reached within the tolerances, 1 when not (the best found is printed)."
+)
+"""The top of ``swarm-ik solve --help``."""
 
 
 def _parse_param(text: str) -> tuple[str, Any]:
@@ -42,26 +50,19 @@ def _parse_param(text: str) -> tuple[str, Any]:
     return key.strip(), value
 
 
-def add_parser(subparsers: Any) -> argparse.ArgumentParser:
-    """Add ``solve`` to the ``swarm-ik`` sub-parsers."""
+def add_arguments(parser: argparse.ArgumentParser) -> None:
+    """The options of ``swarm-ik solve`` after the robot's (see :func:`run`)."""
     from swarm_ik import solvers
     from swarm_ik.api import DEFAULT_SOLVER
 
-    p: argparse.ArgumentParser = subparsers.add_parser(
-        "solve",
-        help="solve one IK target (a pose, FK of joint values, or a goals file)",
-        description="Solve one IK target of a robot and print the joint values; exit 0 when "
-        "the target is reached within the tolerances, 1 when not (the best found is printed).",
-    )
-    add_robot(p, frame=False)
-    p.add_argument(
+    parser.add_argument(
         "--frame",
         action="append",
         default=None,
         help="goal frame; repeat for several (default: the robot's tool frame); --pose is for "
         "the first, --from-q poses every frame",
     )
-    tgt = p.add_mutually_exclusive_group(required=True)
+    tgt = parser.add_mutually_exclusive_group(required=True)
     add_pose(tgt, position_only=True)
     tgt.add_argument(
         "--goals",
@@ -78,40 +79,40 @@ def add_parser(subparsers: Any) -> argparse.ArgumentParser:
         metavar="Q",
         help="target = FK of these joint values (rad / m), one per joint",
     )
-    p.add_argument(
+    parser.add_argument(
         "--solver",
         default=DEFAULT_SOLVER,
         help=f"one of: {', '.join(solvers.names())} (default {DEFAULT_SOLVER})",
     )
-    p.add_argument(
+    parser.add_argument(
         "--fitness",
         default="se3",
         help="se3 (default), paper-l1, euler-zyz or paper-pso",
     )
-    p.add_argument(
+    parser.add_argument(
         "--position-only",
         action="store_true",
         help="solve for the position of the target only (e.g. chains with fewer than six "
         "joints): --pose X Y Z is enough, and no rotation error is reported",
     )
-    p.add_argument("--seed", type=int, default=0, help="random seed (default 0)")
-    p.add_argument("--max-evals", type=int, default=None, help="most fitness evaluations")
-    p.add_argument("--time-limit", type=float, default=None, help="seconds")
-    add_tolerances(p)
-    add_q0(p, "starting joint values (one per joint)")
-    add_scene(p, "obstacles the answer must be clear of (and of itself)")
-    p.add_argument(
+    parser.add_argument("--seed", type=int, default=0, help="random seed (default 0)")
+    parser.add_argument("--max-evals", type=int, default=None, help="most fitness evaluations")
+    parser.add_argument("--time-limit", type=float, default=None, help="seconds")
+    add_tolerances(parser)
+    add_q0(parser, "starting joint values (one per joint)")
+    add_scene(parser, "obstacles the answer must be clear of (and of itself)")
+    parser.add_argument(
         "--no-self-collision",
         action="store_true",
         help="with --scene: check the robot against the scene only",
     )
-    p.add_argument(
+    parser.add_argument(
         "--srdf",
         default=None,
         metavar="FILE",
         help="SRDF of disabled self-collision pairs (default: found)",
     )
-    p.add_argument(
+    parser.add_argument(
         "--param",
         action="append",
         type=_parse_param,
@@ -119,33 +120,36 @@ def add_parser(subparsers: Any) -> argparse.ArgumentParser:
         metavar="NAME=VALUE",
         help="solver parameter, repeatable (e.g. --param pop_size=50)",
     )
-    p.add_argument("--json", action="store_true", help="print one JSON object")
-    p.add_argument(
+    parser.add_argument("--json", action="store_true", help="print one JSON object")
+    parser.add_argument(
         "--show",
         action="store_true",
         help="look at the solution in meshcat's live viewer (prints its URL; needs [viz]); "
         "see --show-wait for how long it stays up",
     )
-    _viewer.add_show_wait(p)
-    p.add_argument(
+    _viewer.add_show_wait(parser)
+    parser.add_argument(
         "--animate",
         action="store_true",
         help="with --show or --html: replay the optimiser's best-so-far configuration over its "
         "iterations",
     )
-    p.add_argument(
+    parser.add_argument(
         "--html",
         default=None,
         metavar="FILE",
         help="write the scene to a self-contained .html file (no server needed; needs [viz])",
     )
-    p.add_argument(
+    parser.add_argument(
         "--compare",
         default=None,
         metavar="SOLVER",
         help="with --show or --html: also solve with SOLVER (e.g. dls) and draw its answer ghosted",
     )
-    return p
+
+
+add_parser = RobotCommand("solve", add_arguments, HELP, DESCRIPTION, frame=False)
+"""Add ``solve`` to the ``swarm-ik`` sub-parsers (``--frame``, repeatable, is its own)."""
 
 
 def run(args: argparse.Namespace) -> int:
