@@ -398,22 +398,20 @@ class SphereModel:
         scene: Any = None,
         tolerance: float = TOLERANCE,
         self_collision: bool = True,
-        use_cache: bool = True,
-        coarse_samples: int = COARSE_SAMPLES,
     ) -> SphereModel:
-        """Fit spheres to every body of ``robot_collision`` and convert ``scene``.
+        """Fit spheres to every body of ``robot_collision`` (read from and written to the
+        cache folder) and convert ``scene``.
+
+        A self pair whose spheres overlap in at least 95 % of :data:`COARSE_SAMPLES` random
+        configurations while the exact geometry touches in none is left to the exact check
+        alone (listed in ``coarse_pairs``); e.g. UR5's ``ee_link`` box, always a few
+        millimetres from ``wrist_2_link``.
 
         Args:
             robot_collision: A :class:`~swarm_ik.collision.RobotCollision`.
             scene: A :class:`~swarm_ik.scene.Scene` (or shapes, a JSON path, ``None``).
             tolerance: Fitting tolerance [m].
             self_collision: Keep the enabled self-collision body pairs (else none).
-            use_cache: Read and write fitted spheres in the cache folder.
-            coarse_samples: Random configurations of the coarse-pair rule (0: keep every
-                pair): a self pair whose spheres overlap in at least 95 % of them while the
-                exact geometry touches in none is left to the exact check alone (listed in
-                ``coarse_pairs``); e.g. UR5's ``ee_link`` box, always a few millimetres from
-                ``wrist_2_link``.
         """
         import coal
 
@@ -424,7 +422,7 @@ class SphereModel:
             raise InvalidArgumentError(f"tolerance must be a positive number [m], got {tolerance}")
         rc = robot_collision
         objs = list(rc.geom_model.geometryObjects)
-        fits = fit_bodies([g.geometry for g in objs], tolerance, use_cache)
+        fits = fit_bodies([g.geometry for g in objs], tolerance)
         counts = [len(r) for _, r in fits]
         body_start = np.concatenate([[0], np.cumsum(counts)]).astype(np.int64)
         sph_local = np.vstack([c for c, _ in fits])
@@ -439,10 +437,10 @@ class SphereModel:
         pairs = np.array(rc.self_pairs if self_collision else [], dtype=np.int64).reshape(-1, 2)
         spheres = (sph_body, sph_local, sph_radius, body_start, bound_local, bound_radius)
         coarse: list[tuple[str, str]] = []
-        if len(pairs) and coarse_samples > 0:  # (the robot's own: made once per robot)
-            key = (tolerance, int(coarse_samples))
+        if len(pairs):  # (the robot's own: made once per robot)
+            key = (tolerance, COARSE_SAMPLES)
             if key not in rc.coarse_rule:
-                rc.coarse_rule[key] = _drop_coarse_pairs(rc, pairs, spheres, coarse_samples)
+                rc.coarse_rule[key] = _drop_coarse_pairs(rc, pairs, spheres, COARSE_SAMPLES)
             pairs, coarse = rc.coarse_rule[key]
         kinds, rots, poss, dims, names = [], [], [], [], []
         sc = as_scene(scene)
@@ -461,7 +459,7 @@ class SphereModel:
                 assert isinstance(o, Mesh)
                 geo = sc.coal_objects()[k][1].collisionGeometry()  # (loaded once per scene)
                 assert isinstance(geo, coal.BVHModelBase)
-                ((c, r),) = fit_bodies([geo], tolerance, use_cache)
+                ((c, r),) = fit_bodies([geo], tolerance)
                 for ck, rk in zip(c, r, strict=True):
                     kinds.append(SPHERE)
                     dims.append([rk, 0.0, 0.0])
