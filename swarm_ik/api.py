@@ -168,13 +168,11 @@ def prepare_q0(problem: IKProblem, q0: Any) -> np.ndarray | None:
     if q0 is None:
         return None
     q = problem.robot.wrap(problem.robot.check_q(q0, "q0"))
+    if (q >= problem.lower).all() and (q <= problem.upper).all():
+        return q
     fixed = np.clip(q, problem.lower, problem.upper)
-    outside = np.flatnonzero(fixed != q)
-    if outside.size:
-        names = [problem.robot.joint_names[i] for i in outside]
-        warnings.warn(
-            f"q0 lies outside the joint limits at {names}; clipped into them", stacklevel=3
-        )
+    names = [problem.robot.joint_names[i] for i in np.flatnonzero(fixed != q)]
+    warnings.warn(f"q0 lies outside the joint limits at {names}; clipped into them", stacklevel=3)
     return fixed
 
 

@@ -935,8 +935,11 @@ class RobotModel:
     def wrap(self, q: FloatArray) -> FloatArray:
         """Continuous joints wrapped into ``[-π, π)``; other values unchanged (same shape)."""
         q = np.array(q, dtype=float)
-        m = self.continuous_mask
-        if m.any():
+        if "wrapped" not in self._cache:  # (None: no continuous joint)
+            m = self.continuous_mask
+            self._cache["wrapped"] = m if m.any() else None
+        m = self._cache["wrapped"]
+        if m is not None:
             q[..., m] = (q[..., m] + np.pi) % (2 * np.pi) - np.pi
         return q
 
@@ -972,7 +975,7 @@ class RobotModel:
                 f"{what} must hold {self.nq} values (one per joint: "
                 f"{', '.join(self.joint_names)}); got shape {arr.shape}"
             )
-        if not np.all(np.isfinite(arr)):
+        if not np.isfinite(arr).all():
             raise InvalidArgumentError(f"{what} contains NaN or infinite values: {arr.tolist()}")
         return arr
 
