@@ -335,7 +335,7 @@ class Route:
                 raise InvalidArgumentError(
                     "a route runs problems of the goal types it was made for"
                 )
-            par = gl.encode(problem.robot, q_start).par
+            par = problem.encode(i, q_start).par
             a, b = int(tab.p0[i]), int(tab.p0[i + 1])
             if par.shape[0] != b - a:
                 raise InvalidArgumentError(
@@ -620,10 +620,12 @@ def _route_key(problem: IKProblem, solver: str, settings: dict[str, Any]) -> Any
     # (a bounded Pose or Position encodes other rows and flags: its form is part of the key,
     # as a route rebinds only the floats)
     goals = tuple((type(g), g.frame_name(), g.weight, g.primary, g.exact) for g in problem.goals)
+    # a goal that adds frames (collision bodies…) encodes more than floats: the goal itself
+    adding = tuple(problem.compiled_goals[i] for i in sorted(problem._frame0))
     key = (
         solver, tuple(sorted((k, v) for k, v in settings.items() if k != "params")),
-        tuple(sorted(settings["params"].items())), goals, problem.fitness_name, problem.w_rot,
-        problem.position_only, problem.lower.tobytes(), problem.upper.tobytes(),
+        tuple(sorted(settings["params"].items())), goals, adding, problem.fitness_name,
+        problem.w_rot, problem.position_only, problem.lower.tobytes(), problem.upper.tobytes(),
         id(problem.tree), problem.python_goals == (),
     )  # fmt: skip
     try:

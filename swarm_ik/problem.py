@@ -100,6 +100,39 @@ def _valid_q(q: Any, nq: int) -> bool:
     )
 
 
+def _tree_with_frames(
+    robot: RobotModel, added: list[tuple[int, tuple[Any, Any, Any]]]
+) -> tuple[Any, dict[int, int]]:
+    """The robot's tree with the frames goals add (collision bodies, centres of mass) after
+    its goal frames, and the index of each adding goal's first frame (by the goal's position
+    among the compiled goals): made once per robot and set of added frames, so that problems
+    of the same goals share one tree (and with it their route, :func:`swarm_ik.api.route_for`).
+
+    Args:
+        robot: The robot.
+        added: ``(position, (joint ids (k,), rotations (k, 3, 3), translations (k, 3)))`` per
+            goal that adds frames (:meth:`Goal.extra_frames`), in goal order.
+    """
+    key = tuple((i, *(np.asarray(a).tobytes() for a in extra)) for i, extra in added)
+    trees = robot._cache.setdefault("trees", {})
+    hit = trees.get(key)
+    if hit is None:
+        t = robot.tree
+        joints, rots, poss = [t.frame_joint], [t.frame_rot], [t.frame_pos]
+        frame0 = {}
+        for i, extra in added:
+            frame0[i] = sum(len(j) for j in joints)
+            fj, fr, fp = robot.canonical_frames(*extra)
+            joints.append(fj)
+            rots.append(fr)
+            poss.append(fp)
+        tree = t.with_frames(np.concatenate(joints), np.concatenate(rots), np.concatenate(poss))
+        if len(trees) >= 32:  # (many scenes or goal sets: keep memory bounded)
+            trees.clear()
+        hit = trees[key] = (tree, frame0)
+    return hit[0], dict(hit[1])
+
+
 def judge(
     errors: FloatArray, primary: Sequence[bool] | NDArray[Any], tol_pos: float, tol_rot: float
 ) -> NDArray[np.bool_]:
@@ -303,22 +336,13 @@ class IKProblem:
         self._frame0: dict[int, int] = {}
         """Index of the first frame each frame-adding goal owns (by position in
         ``compiled_goals``)."""
-        t = robot.tree
-        joints, rots, poss = [t.frame_joint], [t.frame_rot], [t.frame_pos]
+        added = []
         for i, gl in enumerate(self.compiled_goals):
             extra = gl.extra_frames(robot)
-            if extra is None:
-                continue
-            # the frames a goal adds (collision bodies, centres of mass) after the others
-            self._frame0[i] = sum(len(j) for j in joints)
-            fj, fr, fp = robot.canonical_frames(*extra)
-            joints.append(fj)
-            rots.append(fr)
-            poss.append(fp)
-        if self._frame0:
-            self.tree = t.with_frames(
-                np.concatenate(joints), np.concatenate(rots), np.concatenate(poss)
-            )
+            if extra is not None:
+                added.append((i, extra))
+        if added:
+            self.tree, self._frame0 = _tree_with_frames(robot, added)
         # angular errors in the se3 cost: w_rot (m/rad); position errors: 1
         self._table_cache = {}
         self._free: list[IKProblem | None] = []  # (without_collisions, made once)

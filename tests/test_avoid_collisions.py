@@ -149,3 +149,28 @@ def test_collision_goal_tries_the_free_search_first_and_keeps_the_budget() -> No
         assert res.n_evals <= 40 + 30  # (one polish may finish its step)
         assert time.perf_counter() - t0 < 5.0
     assert solved >= 1
+
+
+def test_problems_of_two_scenes_alternating_are_each_judged_in_their_own() -> None:
+    """Problems whose collision goals differ only by their scene (the same bodies, so the same
+    added frames) alternate: every success is free of contact in its own scene, and a target
+    is solved the same whichever scene's problem ran before it."""
+    r = robot("panda")
+    table = Scene([Box([0.6, 0.6, 0.04], [0.55, 0.0, -0.02])])
+    post = Scene([Box([0.08, 0.08, 0.5], [0.45, 0.25, 0.25]), Sphere(0.05, [0.3, -0.3, 0.4])])
+    rc = r.collision_model()
+    rng = np.random.default_rng(7)
+    free = [
+        q for q in r.random_q(rng, 80) if not rc.collides(q, table) and not rc.collides(q, post)
+    ]
+    results = {}
+    for k, q in enumerate(free[:6]):
+        for scene in (table, post) if k % 2 else (post, table):
+            problem = swarm_ik.IKProblem(r, r.fk(q), goals=[G.AvoidCollisions(scene)])
+            res = swarm_ik.solve(problem, seed=k, time_limit=0.2)
+            assert res.success and not rc.collides(res.q, scene)
+            results[k, id(scene)] = res.q
+    for k, q in enumerate(free[:6]):  # again, one scene at a time: the same answers
+        problem = swarm_ik.IKProblem(r, r.fk(q), goals=[G.AvoidCollisions(post)])
+        again = swarm_ik.solve(problem, seed=k, time_limit=0.2)
+        np.testing.assert_allclose(again.q, results[k, id(post)], atol=1e-12)
