@@ -113,6 +113,20 @@ def test_unreachable_targets_fail_after_all_starts(get_robot):
     assert np.all(res.position_error[:2] > 4.0)
 
 
+@pytest.mark.parametrize("max_starts", [1, 3, 12])
+def test_max_starts_bounds_every_target_with_the_restart_table(get_robot, max_starts):
+    """The seed, the restart table's nearest configurations and the random restarts together
+    spend at most ``max_starts`` starts per target; unreachable targets spend them all."""
+    robot = get_robot("panda")
+    _, targets = fk_targets(robot, 200, seed=6)
+    targets[:3, :3, 3] += 5.0  # out of reach
+    res = solve_batch(robot, targets, seed=0, max_starts=max_starts)
+    assert np.all(res.n_starts <= max_starts) and np.all(res.n_starts >= 1)
+    np.testing.assert_array_equal(res.n_starts[:3], [max_starts] * 3)
+    assert not res.success[:3].any()
+    assert res.success[3:].mean() >= {1: 0.6, 3: 0.9, 12: 0.97}[max_starts]
+
+
 def test_q0_seeds_each_target(get_robot):
     robot = get_robot("panda")
     q_true, targets = fk_targets(robot, 30, seed=4)
