@@ -506,6 +506,31 @@ def plot(csv_path: Path, png_path: Path) -> Path:
     return png_path
 
 
+def box_ratios(rows: list[dict[str, str]]) -> str:
+    """The collision-free rows' poses/s as a ratio of the plain batch's on the same targets
+    (a Markdown table, empty without box rows)."""
+    rate = {(r["robot"], r["n"], r["method"]): float(r["poses_per_s"]) for r in rows}
+    out = []
+    for (robot, n, method), plain in rate.items():
+        head, _, kind = method.partition("-")
+        if not head.startswith("boxes") or kind != "plain" or plain <= 0:
+            continue
+        cells = [
+            f"{rate[(robot, n, f'{head}-{v}')] / plain:.2f}" if (robot, n, f"{head}-{v}") in rate
+            else "–"
+            for v in ("avoid-1proc", "avoid-dask")
+        ]  # fmt: skip
+        out.append(f"| {robot} | {head[5:]} | {int(n):,} | {cells[0]} | {cells[1]} |")
+    if not out:
+        return ""
+    return (
+        "\nWith `AvoidCollisions`, poses/s as a ratio of the plain batch's on the same targets:"
+        "\n\n| robot | boxes | N | 1 process | on Dask |\n|---|---:|---:|---:|---:|\n"
+        + "\n".join(out)
+        + "\n"
+    )
+
+
 def report(csv_path: Path, prof_path: Path, md_path: Path, png_name: str, scheduler: str) -> Path:
     """Markdown summary of ``throughput.csv`` and ``profile.csv`` (``templates/throughput.md``)."""
     rows = common.read_csv(csv_path)
@@ -542,6 +567,7 @@ def report(csv_path: Path, prof_path: Path, md_path: Path, png_name: str, schedu
                 "(`box_scene`), targets the FK of joint vectors free of contact (coal); "
                 "`AvoidCollisions` rows judge every answer with coal inside the timed call, "
                 "the rows without the goal are judged with coal afterwards (not timed).\n"
+                + box_ratios(rows)
                 if any(r["method"].startswith("boxes") for r in rows)
                 else ""
             ),
