@@ -198,8 +198,10 @@ def test_time_limit_reports_targets_not_reached_as_unsolved(panda):
     assert not reached.all()  # 3000 targets take longer than 10 ms
     assert not cut.success[~reached].any()
     np.testing.assert_array_equal(cut.q[~reached], np.tile(panda.mid_q(), ((~reached).sum(), 1)))
-    done = np.flatnonzero(reached)[:-1]  # (the last one reached may be cut in its restarts)
-    np.testing.assert_array_equal(cut.q[done], full.q[done])
+    # the seeds' starts come first, restarts in later passes: a success within the limit is
+    # the answer without it
+    assert cut.success.any()
+    np.testing.assert_array_equal(cut.q[cut.success], full.q[cut.success])
     assert cut.settings.deadline is not None
 
 
