@@ -463,34 +463,27 @@ class BatchGoals:
         rc = self.problem.robot.collision_model()
         return rc.collides_many(qs, gl.scene, gl.margin, bool(gl.self_collision))
 
-    def free_table(self, bounds: lm.Bounds, seed: int) -> tuple[FloatArray, FloatArray]:
+    def free_table(self, bc: BatchChain, seed: int) -> tuple[FloatArray, FloatArray]:
         """The scene's table of collision-free configurations: of :data:`FREE_TABLE_DRAWS`
-        joint vectors drawn uniformly in the restart window of the middle of the ranges
-        (:func:`~swarm_ik.kernels.search.sampling_window`) from ``seed``, those coal finds
-        free, with their poses of the first goal frame: ``(q (K, nq), poses (K, 4, 4))``.
-        Made once per scene, collision settings, bounds and seed in each process (kept on the
-        robot for the next batch); the same in every process, so a target's answer does not
-        depend on the chunking."""
+        draws of :func:`_window_table` from ``seed``, those coal finds free, with their poses
+        of the first goal frame: ``(q (K, nq), poses (K, 4, 4))``.  Made once per scene,
+        collision settings, bounds and seed in each process (kept on the robot for the next
+        batch); the same in every process, so a target's answer does not depend on the
+        chunking."""
         gl = self.collision
-        robot = self.problem.robot
-        tables = robot._cache.setdefault("free_tables", {})
+        tables = self.problem.robot._cache.setdefault("free_tables", {})
         key = (
             gl.scene if gl is not None else None, None if gl is None else gl.margin,
             None if gl is None else bool(gl.self_collision), int(seed),
-            bounds.lower.tobytes(), bounds.upper.tobytes(),
+            bc.bounds.lower.tobytes(), bc.bounds.upper.tobytes(),
         )  # fmt: skip
         hit = tables.get(key)
         if hit is None:
             if len(tables) >= 8:
                 tables.clear()
-            lo, hi = np.empty_like(bounds.lower), np.empty_like(bounds.upper)
-            mid = 0.5 * (bounds.lower + bounds.upper)
-            sampling_window(bounds.lower, bounds.upper, mid, lo, hi)
-            rng = np.random.default_rng([int(seed), 0xF2EE])
-            qs = rng.uniform(lo, hi, size=(FREE_TABLE_DRAWS, lo.shape[0]))
-            qs = np.ascontiguousarray(qs[~self.in_contact(qs)])
-            poses = np.asarray(robot.fk(qs), dtype=float).reshape(-1, 4, 4)
-            hit = tables[key] = (qs, poses)
+            hit = tables[key] = _window_table(
+                bc, seed, 0xF2EE, FREE_TABLE_DRAWS, lambda qs: ~self.in_contact(qs)
+            )
         return hit  # type: ignore[no-any-return]
 
     def judge(
@@ -890,8 +883,8 @@ _Polished = tuple[FloatArray, IntArray, IntArray, BoolArray]
 """``(q (n, nq), evaluations (n,), starts (n,), converged (n,))`` of a polish pass."""
 
 RESTART_TABLE = 512
-"""Joint vectors of the restart table (:func:`_seed_table_restarts`): drawn uniformly in the
-restart window of the middle of the ranges from the batch's seed, the same in every process."""
+"""Joint vectors of the restart table (:func:`_seed_table_restarts`; :func:`_window_table`
+from the batch's seed)."""
 
 TABLE_RESTARTS = 8
 """Restarts of a target whose first start did not converge that start from the table's
@@ -901,13 +894,20 @@ needed 28–31 evaluations each against 62 with uniform restarts, 18–19 per ta
 against 24.1."""
 
 
-def _restart_table(bc: BatchChain, seed: int) -> tuple[FloatArray, FloatArray]:
-    """The restart table: ``(q (K, nq), poses of the first goal frame (K, 4, 4))``."""
+def _window_table(
+    bc: BatchChain, seed: int, salt: int, n: int, keep: Any = None
+) -> tuple[FloatArray, FloatArray]:
+    """A table of starts: ``n`` joint vectors drawn uniformly in the restart window of the
+    middle of the ranges (:func:`~swarm_ik.kernels.search.sampling_window`) from
+    ``(seed, salt)``, those ``keep`` (rows → mask) keeps, with their poses of the first goal
+    frame: ``(q (K, nq), poses (K, 4, 4))``; the same in every process."""
     b = bc.bounds
     lo, hi = np.empty_like(b.lower), np.empty_like(b.upper)
     sampling_window(b.lower, b.upper, 0.5 * (b.lower + b.upper), lo, hi)
-    rng = np.random.default_rng([int(seed), 0x7AB1E])
-    qs = np.ascontiguousarray(rng.uniform(lo, hi, size=(RESTART_TABLE, lo.shape[0])))
+    qs = np.random.default_rng([int(seed), salt]).uniform(lo, hi, size=(n, lo.shape[0]))
+    if keep is not None:
+        qs = qs[keep(qs)]
+    qs = np.ascontiguousarray(qs)
     return qs, np.asarray(bc.tree.fk(qs), dtype=float)[:, 0]
 
 
@@ -916,7 +916,7 @@ def _seed_table_restarts(
 ) -> _Polished:
     """Every target polished from its seed; one that did not converge from up to
     :data:`TABLE_RESTARTS` of the restart table's configurations nearest to its pose
-    (:func:`_restart_table`, :func:`_nearest_poses`), one start a pass; one still not
+    (:func:`_window_table`, :func:`_nearest_poses`), one start a pass; one still not
     converged gets the kernel's random restarts for the rest of ``max_starts``.  A target's
     answer depends only on its seed, index, target and start (not on the chunking).
 
@@ -934,7 +934,7 @@ def _seed_table_restarts(
     redo = np.flatnonzero(~conv)
     k_table = min(TABLE_RESTARTS, settings.max_starts - 1)
     if redo.size and k_table > 0:
-        table_q, table_poses = _restart_table(bc, settings.seed)
+        table_q, table_poses = _window_table(bc, settings.seed, 0x7AB1E, RESTART_TABLE)
         near = _nearest_poses(table_poses, targets[redo], k_table, settings)
         for k in range(near.shape[1]):
             if not redo.size:
@@ -1032,33 +1032,25 @@ def solve_chunk(
             )
 
         q, evals, starts, conv = _seed_table_restarts(polish, bc, targets, q_seed, settings)
-    elif bg.collision is None:
+    else:  # the problem of the goals; with a collision goal, passes without it, each answer
+        # tested by coal, and the sphere rows only where every pass ended in contact
         goals = bg
+        problem = bg.problem if bg.collision is None else bg.free_problem
 
         def polish(rows: IntArray, q_first: FloatArray, s: BatchSettings) -> _Polished:
             return _polish_problem(
-                goals, goals.problem, targets[rows], q_first, q_seed[rows], index[rows], s
+                goals, problem, targets[rows], q_first, q_seed[rows], index[rows], s
             )
 
         q, evals, starts, conv = _seed_table_restarts(polish, bc, targets, q_seed, settings)
-    else:  # passes without the collision goal, each answer tested by coal; the sphere rows
-        # only where every pass ended in contact
-        free_goals = bg
-
-        def polish(rows: IntArray, q_first: FloatArray, s: BatchSettings) -> _Polished:
-            return _polish_problem(
-                free_goals, free_goals.free_problem, targets[rows], q_first, q_seed[rows],
-                index[rows], s,
-            )  # fmt: skip
-
-        q, evals, starts, conv = _seed_table_restarts(polish, bc, targets, q_seed, settings)
+    if bg is not None and bg.collision is not None:
         done = np.flatnonzero(conv)
         free[done] = ~bg.in_contact(q[done])
         redo = np.flatnonzero(conv & ~free)
         one_start = dataclasses.replace(settings, max_starts=1)  # (a retry is one start)
         near = np.empty((redo.size, 0), dtype=np.int64)
         if redo.size and FREE_TABLE_RETRIES:
-            table_q, table_poses = bg.free_table(bc.bounds, settings.seed)
+            table_q, table_poses = bg.free_table(bc, settings.seed)
             near = _nearest_poses(table_poses, targets[redo], FREE_TABLE_RETRIES, settings)
         for k in range(FREE_RETRIES):  # another branch: from the table's free configurations
             if not redo.size:  # nearest to the target, then from random starts
@@ -1069,9 +1061,7 @@ def solve_chunk(
                 q_k = _retry_starts(
                     bc.bounds.lower, bc.bounds.upper, q_seed[redo], settings.seed, index[redo], k
                 )
-            qk, evk, stk, convk = _polish_problem(
-                bg, bg.free_problem, targets[redo], q_k, q_seed[redo], index[redo], one_start
-            )
+            qk, evk, stk, convk = polish(redo, q_k, one_start)
             evals[redo] += evk
             starts[redo] += stk
             ok = np.flatnonzero(convk)

@@ -235,14 +235,14 @@ def test_free_table_holds_only_free_configurations_and_depends_on_the_seed(panda
 
     scene = box_scene(panda, 40, 0)
     goals = [G.AvoidCollisions(scene)]
-    bounds = BatchChain.from_robot(panda).bounds
-    qs, poses = BatchGoals(panda, goals, False, panda.fk(panda.mid_q())).free_table(bounds, 3)
+    chain = BatchChain.from_robot(panda)
+    qs, poses = BatchGoals(panda, goals, False, panda.fk(panda.mid_q())).free_table(chain, 3)
     rc = panda.collision_model()
     assert len(qs) > 100
     assert not rc.collides_many(qs, scene).any()
     np.testing.assert_allclose(poses, panda.fk(qs), atol=1e-12)
     panda._cache.pop("free_tables")
-    again, _ = BatchGoals(panda, goals, False, panda.fk(panda.mid_q())).free_table(bounds, 3)
+    again, _ = BatchGoals(panda, goals, False, panda.fk(panda.mid_q())).free_table(chain, 3)
     np.testing.assert_array_equal(again, qs)
-    other, _ = BatchGoals(panda, goals, False, panda.fk(panda.mid_q())).free_table(bounds, 4)
+    other, _ = BatchGoals(panda, goals, False, panda.fk(panda.mid_q())).free_table(chain, 4)
     assert other.shape != qs.shape or not np.array_equal(other, qs)
