@@ -666,7 +666,6 @@ def _relax(
     ka = qa.shape[0]
     n = qa.shape[1]
     has_forbid = forbid.shape[0] == ka and forbid.shape[1] == qb.shape[0]
-    two_pi = 2.0 * math.pi
     for b in range(qb.shape[0]):
         best_r = 1 << 40
         best_t = math.inf
@@ -683,7 +682,7 @@ def _relax(
             for j in range(n):  # (stops as soon as the step cannot be the best)
                 d = qb[b, j] - qa[a, j]
                 if wrap[j]:
-                    d = (d + math.pi) % two_pi - math.pi
+                    d = joints.wrapped(d)
                 d = abs(d)
                 if not jumped and d > step[j] * (1.0 + 1e-9):
                     jumped = True

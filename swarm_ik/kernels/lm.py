@@ -43,6 +43,7 @@ from numba.typed import List
 from swarm_ik._types import BoolArray, FloatArray, IntArray
 from swarm_ik.errors import InvalidArgumentError
 from swarm_ik.kernels.fk import FKScratch, TreeArrays, fk_one, fk_scratch
+from swarm_ik.kernels.joints import wrapped
 
 # status of a polished start
 NOT_RUN = 0
@@ -515,7 +516,7 @@ def into_bounds(v: float, j: int, b: Bounds) -> float:  # pragma: no cover - com
     """Value ``v`` of joint ``j`` wrapped into ``[-π, π)`` if continuous, then clipped to
     the bounds (the compiled twin of :meth:`swarm_ik.solvers.base.Evaluator.clip`)."""
     if b.wrap[j]:
-        v = (v + math.pi) % (2.0 * math.pi) - math.pi
+        v = wrapped(v)
     if v < b.lower[j]:
         return b.lower[j]
     if v > b.upper[j]:

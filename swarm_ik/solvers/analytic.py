@@ -45,6 +45,7 @@ from numpy.typing import NDArray
 from swarm_ik._types import FloatArray
 from swarm_ik.branches import BRANCH_TOL, TWO_PI, pose_errors, pose_errors_of
 from swarm_ik.errors import SwarmIKError
+from swarm_ik.kernels.joints import wrapped
 from swarm_ik.solvers.base import Evaluator, register
 
 if TYPE_CHECKING:
@@ -277,7 +278,7 @@ def _fold_unique(
         for r in range(c):
             e2 = 0.0
             for j in range(n):
-                e = (row[j] - out[r, j] + math.pi) % TWO_PI - math.pi
+                e = wrapped(row[j] - out[r, j])
                 e2 += e * e
             if e2 < tol2:
                 dup = True
