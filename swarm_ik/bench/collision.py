@@ -93,6 +93,7 @@ from typing import Any
 
 import numpy as np
 
+from swarm_ik._validate import positive_float
 from swarm_ik.bench import common
 from swarm_ik.errors import InvalidArgumentError
 from swarm_ik.problem import largest_errors
@@ -1236,13 +1237,14 @@ def run(args: argparse.Namespace) -> int:
     scenes = _names(args.scenes, SCENES, "scenes", {"hard": HARD_SCENES, "all": SCENES})
     solvers = _names(args.solvers, SOLVERS, "solvers")
     n = 10 if args.quick else common.positive_int(args.n, "--n")
-    budget_ms = common.positive_number(args.budget_ms, "--budget-ms")
+    budget_ms = positive_float(args.budget_ms, "--budget-ms")
     budget = budget_ms / 1e3
     nb = n if args.batch_n is None else int(args.batch_n)
-    abl_ms = common.positive_number(args.ablation_budget_ms, "--ablation-budget-ms")
-    na = n if args.ablation_n is None or args.quick else int(args.ablation_n)
-    if na < 1:
-        raise InvalidArgumentError(f"--ablation-n must be a positive integer, got {na}")
+    abl_ms = positive_float(args.ablation_budget_ms, "--ablation-budget-ms")
+    na = (
+        n if args.ablation_n is None or args.quick
+        else common.positive_int(args.ablation_n, "--ablation-n")
+    )  # fmt: skip
     out = common.resolve_out(args.out, COMMAND, args.quick)
     common.single_thread()
     import swarm_ik

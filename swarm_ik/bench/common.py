@@ -10,7 +10,8 @@
 * statistics: :func:`summarize`, :func:`timing`, :func:`success_rate`, :func:`judge`;
 * C-library plumbing for peers: :func:`quiet_c_output`, :func:`urdf_root_link`;
 * the command line: :func:`module_main` (the ``main(argv)`` of ``python -m swarm_ik.bench.NAME``),
-  :func:`positive_int` and :func:`positive_number` (options checked before any work).
+  :func:`positive_int` (an option checked before any work; numbers:
+  :func:`swarm_ik._validate.positive_float`).
 """
 
 from __future__ import annotations
@@ -90,18 +91,6 @@ def positive_int(value: Any, option: str) -> int:
     if n < 1:
         raise InvalidArgumentError(f"{option} must be a positive integer, got {value}")
     return n
-
-
-def positive_number(value: Any, option: str) -> float:
-    """An option's value as a finite number above 0.
-
-    Raises:
-        InvalidArgumentError: ``"{option} must be a positive number, got {value}"``.
-    """
-    x = float(value)
-    if not (math.isfinite(x) and x > 0):
-        raise InvalidArgumentError(f"{option} must be a positive number, got {value}")
-    return x
 
 
 # --------------------------------------------------------------------------- robots, targets
