@@ -304,6 +304,8 @@ class Route:
                 **{k: kw[k] for k in _LM_KEYS},
             )  # fmt: skip
             self._bound_goals = problem.compiled_goals
+            p0 = self.pol.table.p0.tolist()  # each goal's block of the table's floats
+            self._blocks = [(p0[i], p0[i + 1]) for i in range(len(p0) - 1)]
             self.state = hybrid.search_state(self.pol, kw["pop_size"])
             self._n_swarm = int(round(kw["swarm_fraction"] * kw["pop_size"]))
 
@@ -327,21 +329,17 @@ class Route:
         bound = self._bound_goals
         if len(goals) != len(bound):
             raise InvalidArgumentError("a route runs problems of the goal types it was made for")
-        tab = self.pol.table
+        floats = self.pol.table.par
         for i, (gl, old) in enumerate(zip(goals, bound, strict=True)):
             if gl is old and not getattr(gl, "uses_start", False):
                 continue
-            if type(gl) is not type(old) or gl.exact != old.exact:
-                raise InvalidArgumentError(
-                    "a route runs problems of the goal types it was made for"
-                )
             par = problem.encode(i, q_start).par
-            a, b = int(tab.p0[i]), int(tab.p0[i + 1])
-            if par.shape[0] != b - a:
+            a, b = self._blocks[i]
+            if type(gl) is not type(old) or gl.exact != old.exact or par.shape[0] != b - a:
                 raise InvalidArgumentError(
                     "a route runs problems of the goal types it was made for"
                 )
-            tab.par[a:b] = par
+            floats[a:b] = par
         self._bound_goals = goals
 
     def run(

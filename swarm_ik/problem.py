@@ -528,7 +528,7 @@ class IKProblem:
     def within_bounds(self, q: FloatArray, tol: float = 1e-12) -> bool:
         """Whether ``q`` lies within the problem's bounds (± ``tol``)."""
         q = np.asarray(q, dtype=float)
-        return bool(((q >= self.lower - tol) & (q <= self.upper + tol)).all())
+        return bool((q >= self.lower - tol).all() and (q <= self.upper + tol).all())
 
     @property
     def collision_goal(self) -> Any:

@@ -28,6 +28,7 @@ from typing import TYPE_CHECKING, Any, ClassVar, NamedTuple
 
 import numba
 import numpy as np
+import pinocchio as pin
 from numpy.typing import NDArray
 
 from swarm_ik._validate import floats_or
@@ -105,13 +106,10 @@ class State:
     """
 
     def __init__(self, robot: RobotModel, q: Any, q0: Any = None) -> None:
-        import pinocchio as pin
-
         self.robot = robot
         self.q = np.asarray(q, dtype=float)
         self.q0 = None if q0 is None else np.asarray(q0, dtype=float)
-        self._pin = pin
-        self._q_pin = robot.to_pinocchio(self.q)
+        self._q_pin = robot.to_pinocchio(self.q, copy=False)  # (read only)
         self._data = robot._data()  # (one Data per thread, reused)
         pin.framesForwardKinematics(robot.model, self._data, self._q_pin)
         self._jacobians = False
@@ -142,7 +140,7 @@ class State:
         """LOCAL_WORLD_ALIGNED Jacobian of ``frame`` ``(6, nq)``: linear rows [m/rad] first,
         then angular; columns in the order of ``q`` (mimic columns summed into their
         drivers')."""
-        pin, robot = self._pin, self.robot
+        robot = self.robot
         if not self._jacobians:
             pin.computeJointJacobians(robot.model, self._data, self._q_pin)
             self._jacobians = True
@@ -310,7 +308,7 @@ class Goal:
         details)``; a Python goal's own ``tolerance`` attribute, when it has one, replaces
         ``tol_pos``."""
         dp, dr = self.errors(state)
-        if not self.compiled and getattr(self, "tolerance", None) is not None:
+        if getattr(self, "tolerance", None) is not None and not self.compiled:
             tol_pos = float(self.tolerance)  # type: ignore[attr-defined]
         met = not (dp > tol_pos) and not (dr > tol_rot)
         if math.isnan(dp) and math.isnan(dr):

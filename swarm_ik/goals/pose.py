@@ -133,6 +133,8 @@ class Pose(Goal):
         """The float parameters of a target ``(4, 4)``, or of targets ``(N, 4, 4)`` as
         ``(N, 12)``: what :func:`swarm_ik.solve_batch` writes per target."""
         t = np.asarray(target, dtype=float)
+        if t.ndim == 2:  # (one target: the per-call path of IKSolver)
+            return np.concatenate((t[:3, :3].ravel(), t[:3, 3]))
         out = np.empty(t.shape[:-2] + (12,))
         out[..., :9] = t[..., :3, :3].reshape(t.shape[:-2] + (9,))
         out[..., 9:] = t[..., :3, 3]
