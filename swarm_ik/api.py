@@ -333,9 +333,13 @@ class Route:
         for i, (gl, old) in enumerate(zip(goals, bound, strict=True)):
             if gl is old and not getattr(gl, "uses_start", False):
                 continue
+            if type(gl) is not type(old) or gl.exact != old.exact:
+                raise InvalidArgumentError(
+                    "a route runs problems of the goal types it was made for"
+                )
             par = problem.encode(i, q_start).par
             a, b = self._blocks[i]
-            if type(gl) is not type(old) or gl.exact != old.exact or par.shape[0] != b - a:
+            if par.shape[0] != b - a:
                 raise InvalidArgumentError(
                     "a route runs problems of the goal types it was made for"
                 )

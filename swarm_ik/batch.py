@@ -66,7 +66,7 @@ from swarm_ik.goals import AvoidCollisions, Goal, Pose, Position, State, kernel_
 from swarm_ik.kernels import lie, lm
 from swarm_ik.kernels.fk import TreeArrays
 from swarm_ik.kernels.lm import CONVERGED, NOT_RUN
-from swarm_ik.kernels.search import sampling_window, splitmix64, wall_clock
+from swarm_ik.kernels.search import sampling_window, splitmix64, uniform_at, uniforms, wall_clock
 from swarm_ik.pose import make_pose, matrix_to_quat
 from swarm_ik.problem import IKProblem
 from swarm_ik.robot import RobotModel
@@ -86,12 +86,8 @@ _splitmix64 = splitmix64  # one SplitMix64 (kernels/search.py): the restart stre
 @numba.njit(cache=True)
 def target_uniforms(seed: int, index: int, n: int) -> FloatArray:  # pragma: no cover
     """The first ``n`` uniforms in ``[0, 1)`` of target ``index``'s stream (for tests and
-    tools; the kernel draws the same numbers inline)."""
-    key = _splitmix64(_splitmix64(np.uint64(seed)) ^ np.uint64(index))
-    out = np.empty(n)
-    for c in range(n):
-        out[c] = float(_splitmix64(key + np.uint64(c + 1)) >> np.uint64(11)) * (2.0**-53)
-    return out
+    tools; the kernel draws the same numbers with :func:`~swarm_ik.kernels.search.uniform_at`)."""
+    return uniforms(_splitmix64(_splitmix64(np.uint64(seed)) ^ np.uint64(index)), 0, n)
 
 
 NO_DEADLINE = -1.0
@@ -157,7 +153,6 @@ def _solve_targets(
     s_hi = np.empty(n)
     q_in = np.empty(n)
     q_sec = np.empty(n)
-    scale = 2.0**-53
     par = goals.par
     timed = deadline != NO_DEADLINE
     late = False
@@ -212,7 +207,7 @@ def _solve_targets(
             for s in range(k):
                 for j in range(n):
                     counter += np.uint64(1)
-                    u = float(_splitmix64(key + counter) >> np.uint64(11)) * scale
+                    u = uniform_at(key, counter)
                     starts[s, j] = min(s_lo[j] + u * (s_hi[j] - s_lo[j]), s_hi[j])
         if converged and goals.rows_secondary > 0 and secondary_evals > 0:
             for j in range(n):
@@ -1172,7 +1167,7 @@ def _retry_starts(
         sampling_window(lower, upper, q_seed[r], lo, hi)
         key = _splitmix64(_splitmix64(base ^ np.uint64(index[r])) + np.uint64(k))
         for j in range(n):
-            u = float(_splitmix64(key + np.uint64(j + 1)) >> np.uint64(11)) * (2.0**-53)
+            u = uniform_at(key, np.uint64(j + 1))
             out[r, j] = min(lo[j] + u * (hi[j] - lo[j]), hi[j])
     return out
 

@@ -45,7 +45,7 @@ import pinocchio as pin
 from numpy.typing import NDArray
 
 from swarm_ik._types import FloatArray
-from swarm_ik.errors import RobotFileNotFoundError, RobotModelError
+from swarm_ik.errors import InvalidArgumentError, RobotFileNotFoundError, RobotModelError
 from swarm_ik.paths import cache_dir, package_dirs
 from swarm_ik.scene import Scene, as_scene
 
@@ -224,7 +224,7 @@ class RobotCollision:
         disabled: Disabled link pairs by reason: ``"adjacent"``, ``"rigid"``, ``"srdf"``,
             ``"never"``, ``"always"``.
         coarse_rule: The sphere models' coarse-pair rule, made once per robot
-            (:meth:`swarm_ik.spheres.SphereModel.from_collision`), by ``(tolerance, samples)``.
+            (:meth:`swarm_ik.spheres.SphereModel.from_collision`), by fitting tolerance.
     """
 
     robot: Any
@@ -236,7 +236,7 @@ class RobotCollision:
     srdf_path: Path | None
     pair_rule: str
     disabled: dict[str, list[tuple[str, str]]]
-    coarse_rule: dict[tuple[float, int], Any] = field(default_factory=dict, repr=False)
+    coarse_rule: dict[float, Any] = field(default_factory=dict, repr=False)
     _local: threading.local = field(default_factory=threading.local, repr=False)
 
     @classmethod
@@ -425,8 +425,6 @@ class RobotCollision:
         self, qs: Any, scene: Scene | None = None, margin: float = 0.0, self_collision: bool = True
     ) -> NDArray[np.bool_]:
         """:meth:`collides` of each row of ``qs`` ``(n, nq)`` → ``(n,)`` (checked once)."""
-        from swarm_ik.errors import InvalidArgumentError
-
         arr = np.asarray(qs, dtype=float)
         if arr.ndim != 2 or arr.shape[1] != self.robot.nq or not np.isfinite(arr).all():
             raise InvalidArgumentError(

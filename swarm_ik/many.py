@@ -609,7 +609,6 @@ class _Folder:
             return []
         idx = np.empty(qs.shape[0], dtype=np.int64)
         unit = np.ones(qs.shape[1])
-        unit = np.ones(qs.shape[1])
         c = joints.fresh_rows(np.ascontiguousarray(qs, dtype=float), self.kept, self.periodic,
                               unit, float(tol), False, idx)  # fmt: skip
         return idx[:c].tolist()

@@ -438,10 +438,9 @@ class SphereModel:
         spheres = (sph_body, sph_local, sph_radius, body_start, bound_local, bound_radius)
         coarse: list[tuple[str, str]] = []
         if len(pairs):  # (the robot's own: made once per robot)
-            key = (tolerance, COARSE_SAMPLES)
-            if key not in rc.coarse_rule:
-                rc.coarse_rule[key] = _drop_coarse_pairs(rc, pairs, spheres, COARSE_SAMPLES)
-            pairs, coarse = rc.coarse_rule[key]
+            if tolerance not in rc.coarse_rule:
+                rc.coarse_rule[tolerance] = _drop_coarse_pairs(rc, pairs, spheres, COARSE_SAMPLES)
+            pairs, coarse = rc.coarse_rule[tolerance]
         kinds, rots, poss, dims, names = [], [], [], [], []
         sc = as_scene(scene)
         for k, (name, o) in enumerate(zip(sc.names, sc.obstacles, strict=True)):

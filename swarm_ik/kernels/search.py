@@ -77,7 +77,9 @@ SAMPLING_WIDTH = 20.0
 
 
 @numba.njit(cache=True)
-def _uniform(key: np.uint64, c: np.uint64) -> float:  # pragma: no cover - compiled
+def uniform_at(key: np.uint64, c: np.uint64) -> float:  # pragma: no cover - compiled
+    """Uniform number ``c`` in ``[0, 1)`` of the stream ``key``: ``splitmix64(key + c) >> 11
+    · 2⁻⁵³`` (every compiled draw of the package, the batch's included)."""
     return float(splitmix64(key + c) >> np.uint64(11)) * (2.0**-53)
 
 
@@ -86,7 +88,7 @@ def uniforms(key: np.uint64, first: int, n: int) -> FloatArray:  # pragma: no co
     """Uniforms ``first + 1 … first + n`` of the stream ``key`` in ``[0, 1)`` (tests, tools)."""
     out = np.empty(n)
     for c in range(n):
-        out[c] = _uniform(key, np.uint64(first + c + 1))
+        out[c] = uniform_at(key, np.uint64(first + c + 1))
     return out
 
 
@@ -390,7 +392,7 @@ def swarm_search(
             for s in range(m - 1):
                 for j in range(n):
                     counter += np.uint64(1)
-                    queue[s, j] = min(lo[j] + (hi[j] - lo[j]) * _uniform(stream, counter), hi[j])
+                    queue[s, j] = min(lo[j] + (hi[j] - lo[j]) * uniform_at(stream, counter), hi[j])
             n_queue = m - 1
             continue
         if n_queue != 0:
@@ -421,7 +423,7 @@ def swarm_search(
                     for s in range(n_sw):
                         for j in range(n):
                             counter += np.uint64(1)
-                            rr[L, s, j] = _uniform(stream, counter)
+                            rr[L, s, j] = uniform_at(stream, counter)
             gwo_move_into(queue, n_sw, lead, a, r1, r2, moved)
             for s in range(n_sw):
                 for j in range(n):
@@ -432,7 +434,7 @@ def swarm_search(
         for s in range(n_sw, m):
             for j in range(n):
                 counter += np.uint64(1)
-                queue[s, j] = min(lo[j] + (hi[j] - lo[j]) * _uniform(stream, counter), hi[j])
+                queue[s, j] = min(lo[j] + (hi[j] - lo[j]) * uniform_at(stream, counter), hi[j])
         n_queue = m
     if best_f < np.inf and best_f < ev_f and not stopped:
         ev_f, ev_dp, ev_dr = _offer(best_q, best_f, best_dp, best_dr, ev_q)
