@@ -438,14 +438,9 @@ def windings_of(problem: IKProblem, results: list[Result], q0: Any = None) -> li
 
 
 # -------------------------------------------------------------------------- helpers
-_RESULT_FIELDS = {f.name: f for f in dataclasses.fields(Result)}
 _RESULT_DEFAULTS = {
-    k: f.default for k, f in _RESULT_FIELDS.items() if f.default is not dataclasses.MISSING
+    f.name: f.default for f in dataclasses.fields(Result) if f.default is not dataclasses.MISSING
 }
-_FAST_RESULT = "__slots__" not in vars(Result) and not hasattr(Result, "__post_init__")
-"""Results are built by setting the frozen dataclass's ``__dict__`` (≈ 0.5 µs instead of
-2.2 µs through ``__init__``: a quarter of the analytic path's time for 8 branches); the
-objects equal (``==``) ones built by ``Result(...)``."""
 
 
 def _result(
@@ -475,7 +470,7 @@ def _results(
     seed: int | None,
 ) -> list[Result]:
     """Verified solutions ``qs`` ``(k, nq)`` as :class:`Result` objects, each ``q`` a fresh
-    copy, built in one go (the analytic path's 8 results cost ≈ 4 µs instead of ≈ 18 µs)."""
+    copy."""
     k = qs.shape[0]
     if k == 0:
         return []
@@ -494,12 +489,7 @@ def _results(
         kw["n_evals"] = int(evals[i])
         kw["time_s"] = float(times[i])
         kw["history"] = hist[i]
-        if _FAST_RESULT:
-            r = object.__new__(Result)
-            object.__setattr__(r, "__dict__", kw)
-        else:
-            r = Result(**kw)
-        out.append(r)
+        out.append(Result(**kw))
     return out
 
 

@@ -108,3 +108,32 @@ def test_installed_numba_is_within_the_bounded_range_of_pyproject() -> None:
     assert any(s.operator in ("<", "<=") for s in specifier), spec
     assert any(s.operator in (">", ">=") for s in specifier), spec
     assert numba.__version__ in specifier, (numba.__version__, spec)
+
+
+@pytest.mark.parametrize("argv", [["solve"], ["batch"], ["path"], ["--help"]])
+def test_cli_usage_errors_and_help_load_no_kernels(argv: list[str]) -> None:
+    """Building the parser (a usage error, ``--help``) loads neither numba nor the solver
+    registry: only ``swarm-ik solve --help`` lists the solvers, and imports them to do so."""
+    code = (
+        "import sys, json, contextlib, io\n"
+        "from swarm_ik.cli import main\n"
+        "out, err = io.StringIO(), io.StringIO()\n"
+        "with contextlib.redirect_stdout(out), contextlib.redirect_stderr(err):\n"
+        "    try:\n"
+        f"        code = main({argv!r})\n"
+        "    except SystemExit as e:\n"
+        "        code = e.code\n"
+        "print(json.dumps([code, sorted(m for m in sys.modules if m.split('.')[0] == 'numba')]))\n"
+    )
+    code_, loaded = json.loads(_run(code))
+    assert code_ in (0, 2)
+    assert loaded == []
+
+
+def test_solve_help_lists_the_registered_solvers() -> None:
+    from swarm_ik import solvers
+    from swarm_ik.cli import build_parser
+
+    text = build_parser("solve")._subparsers._group_actions[0].choices["solve"].format_help()
+    flat = " ".join(text.split())
+    assert "one of: " + ", ".join(solvers.names()) + " (default swarm)" in flat

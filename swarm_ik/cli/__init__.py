@@ -23,6 +23,7 @@ they need when they run), so that a Ctrl-C during start-up is caught by :func:`m
 from __future__ import annotations
 
 import argparse
+import copy
 import gc
 import json
 import os
@@ -82,7 +83,9 @@ _NEGATIVE_NUMBER = re.compile(
 
 class Formatter(argparse.HelpFormatter):
     """Help layout: an option whose ``metavar`` is one string describing all its values
-    (``--pose X Y Z [QX QY QZ QW]``) is shown with it as written, not repeated; and the
+    (``--pose X Y Z [QX QY QZ QW]``) is shown with it as written, not repeated; an option
+    with ``help_values`` (a function returning a dict) fills its help's ``%(name)s`` fields
+    from it when the help is shown (names that need heavy imports); and the
     column of the help texts counts the indent of sub-command names, so that a name as long
     as ``throughput`` keeps its help on its own line (argparse leaves it out)."""
 
@@ -94,6 +97,13 @@ class Formatter(argparse.HelpFormatter):
         if names:
             width = max(map(len, names)) + self._current_indent + self._indent_increment
             self._action_max_length = max(self._action_max_length, width)
+
+    def _expand_help(self, action: argparse.Action) -> str:
+        values = getattr(action, "help_values", None)  # values computed when help is shown
+        if values is not None:
+            action = copy.copy(action)
+            vars(action).update(values())
+        return super()._expand_help(action)
 
     def _format_args(self, action: argparse.Action, default_metavar: str) -> str:
         if getattr(action, "whole_metavar", False) and isinstance(action.metavar, str):

@@ -50,11 +50,17 @@ def _parse_param(text: str) -> tuple[str, Any]:
     return key.strip(), value
 
 
-def add_arguments(parser: argparse.ArgumentParser) -> None:
-    """The options of ``swarm-ik solve`` after the robot's (see :func:`run`)."""
+def _solver_names() -> dict[str, str]:
+    """The registry's names for ``--solver``'s help, imported only when the help is shown
+    (the registry loads numba: 0.8 s that every other use of the parser would pay)."""
     from swarm_ik import solvers
     from swarm_ik.api import DEFAULT_SOLVER
 
+    return {"solvers": ", ".join(solvers.names()), "default_solver": DEFAULT_SOLVER}
+
+
+def add_arguments(parser: argparse.ArgumentParser) -> None:
+    """The options of ``swarm-ik solve`` after the robot's (see :func:`run`)."""
     parser.add_argument(
         "--frame",
         action="append",
@@ -79,11 +85,12 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
         metavar="Q",
         help="target = FK of these joint values (rad / m), one per joint",
     )
-    parser.add_argument(
+    solver = parser.add_argument(
         "--solver",
-        default=DEFAULT_SOLVER,
-        help=f"one of: {', '.join(solvers.names())} (default {DEFAULT_SOLVER})",
+        default=None,
+        help="one of: %(solvers)s (default %(default_solver)s)",
     )
+    solver.help_values = _solver_names  # type: ignore[attr-defined]  # (see Formatter)
     parser.add_argument(
         "--fitness",
         default="se3",
@@ -157,7 +164,10 @@ def run(args: argparse.Namespace) -> int:
     import numpy as np
 
     import swarm_ik
+    from swarm_ik.api import DEFAULT_SOLVER
 
+    if args.solver is None:  # (the parser leaves the registry unloaded: see _solver_names)
+        args.solver = DEFAULT_SOLVER
     drawing = _viewer.wants_drawing(args)
     if drawing:  # refused before solving: meshcat missing, an unwritable page
         _viewer.check_viewer(args, live=bool(args.show))
