@@ -145,13 +145,17 @@ def end_reason(
     time_limit: float | None,
     tol_pos: float = 1e-5,
     tol_rot: float = 1e-5,
+    q: Any = None,
 ) -> str:
-    """Why a solve ended (see :attr:`swarm_ik.result.Result.reason`)."""
+    """Why a solve ended (see :attr:`swarm_ik.result.Result.reason`); ``q``: the answer, where
+    goals pulling against each other (:meth:`IKProblem.opposing_goals`) are looked for."""
     if success:
         return "converged"
     if unreachable_goal(problem) is not None:
         return "unreachable"
     if conflicting_goals(problem, tol_pos, tol_rot) is not None:
+        return "conflicting_goals"
+    if q is not None and int(problem.primary.sum()) >= 2 and problem.opposing_goals(q):
         return "conflicting_goals"
     if max_evals is not None and n_evals >= max_evals:
         return "budget"
@@ -537,6 +541,7 @@ class Route:
                 self.time_limit,
                 self.tol_pos,
                 self.tol_rot,
+                q,
             ),  # fmt: skip
         )
 

@@ -255,7 +255,9 @@ class IKProblem:
         if goals is not None:
             if not isinstance(goals, Sequence):
                 raise InvalidArgumentError(
-                    f"goals must be a list of goal terms (swarm_ik.goals), got {goals!r}"
+                    "goals must be a list of goal terms (swarm_ik.goals), got "
+                    f"{type(goals).__name__}"
+                    + (" (put it in a list)" if isinstance(goals, Goal) else "")
                 )
             for gl in goals:
                 if not isinstance(gl, Goal):
@@ -333,6 +335,17 @@ class IKProblem:
         """The goals with a compiled kernel, in order (the goal table's entries)."""
         self.python_goals = tuple(gl for gl in terms if not gl.compiled)
         """The goals written in Python (``residual(state)``/``jacobian(state)``)."""
+        for gl in self.python_goals:
+            missing = [
+                m for m in ("residual", "jacobian") if getattr(type(gl), m) is getattr(Goal, m)
+            ]
+            if missing:
+                raise InvalidArgumentError(
+                    f"{gl.describe()} has no compiled kernel and defines no "
+                    f"{' and no '.join(m + '(state)' for m in missing)}: a goal written in "
+                    "Python defines residual(state) -> (m,) and jacobian(state) -> (m, nq) "
+                    "(docs/goals.md)"
+                )
         self._frame0: dict[int, int] = {}
         """Index of the first frame each frame-adding goal owns (by position in
         ``compiled_goals``)."""
@@ -453,7 +466,7 @@ class IKProblem:
                         continue
                     err[k, i] = gl.errors(state)
                     if not gl.is_primary:
-                        r = gl.weight * np.asarray(gl.residual(state), dtype=float)
+                        r = goals_base.search_rows(gl, state, want_jac=False)[0]
                         cost2[k] += float(r @ r)
         return err, cost2
 
@@ -489,11 +502,14 @@ class IKProblem:
         e = np.where(np.isnan(err), 0.0, err)
         return e[..., 0].max(-1), e[..., 1].max(-1)
 
-    def residual_jacobian(self, q_batch: FloatArray) -> tuple[FloatArray, FloatArray, FloatArray]:
+    def residual_jacobian(
+        self, q_batch: FloatArray, primary: bool = True
+    ) -> tuple[FloatArray, FloatArray, FloatArray]:
         """Fitness, stacked primary residual and its step Jacobian, for Gauss–Newton steps.
 
         Args:
             q_batch: Joint vectors, shape ``(pop, nq)``.
+            primary: The primary stack (default), or the secondary one.
 
         Returns:
             ``fitness (pop,)``; ``err (pop, rows)`` with ``r(q + δ) ≈ r − J δ`` (for a pose:
@@ -503,27 +519,61 @@ class IKProblem:
         """
         q2 = np.ascontiguousarray(np.atleast_2d(q_batch), dtype=float)
         tab = self.table(None)
-        pop, m = q2.shape[0], tab.rows_primary
-        res = np.empty((pop, m))
-        jac = np.empty((pop, m, self.nq))
+        pop, m = q2.shape[0], tab.rows_primary if primary else tab.rows_secondary
+        res = np.zeros((pop, m))
+        jac = np.zeros((pop, m, self.nq))
         err = np.empty((pop, len(self.compiled_goals), 2))
         if self.compiled_goals:
-            lm.residuals_batch(q2, self.tree, tab, kernels(), self.bounds, True, res, jac, err)
-        py = [gl for gl in self.python_goals if gl.is_primary]
+            lm.residuals_batch(q2, self.tree, tab, kernels(), self.bounds, primary, res, jac, err)
+        py = [gl for gl in self.python_goals if gl.is_primary == primary]
         if py:
             extra_r, extra_j = [], []
             for k in range(pop):
                 state = State(self.robot, q2[k])
-                rk = [gl.weight * np.atleast_1d(np.asarray(gl.residual(state), float)) for gl in py]
-                jk = [
-                    -gl.weight * np.asarray(gl.jacobian(state), float).reshape(-1, self.nq)
-                    for gl in py
-                ]
-                extra_r.append(np.concatenate(rk))
-                extra_j.append(np.concatenate(jk))
+                rows = [goals_base.search_rows(gl, state) for gl in py]
+                extra_r.append(np.concatenate([r for r, _ in rows]))
+                extra_j.append(-np.concatenate([j for _, j in rows]))
             res = np.concatenate([res, np.array(extra_r)], axis=1)
             jac = np.concatenate([jac, np.array(extra_j)], axis=1)
         return self.fitness(q2), res, jac
+
+    def opposing_goals(self, q: Any, ratio: float = 0.1) -> str | None:
+        """Primary goals that pull against each other at ``q``, if any: their labels.
+
+        Each primary goal pulls on the joints along the gradient of its share of the
+        search's cost, ``g_i = w_i² J_iᵀ r_i`` (its rows of :func:`goals.base.search_rows`, on
+        Pinocchio's state; goals without a numpy Jacobian, such as ``AvoidCollisions``, are
+        left out), over the joints free to move (a joint at a limit that the sum pushes
+        outwards is held).  The goals oppose when at least two of them pull with at least
+        ``ratio`` of the largest pull ``‖g_i‖`` while the sum ``‖Σ g_i‖`` is at most ``ratio``
+        of it: no small step lowers one's residual without raising another's (two goals no
+        configuration meets together end so, as may goals stuck against each other at a
+        local minimum).  Those pulling that hard are named.
+        """
+        qv = self.robot.check_q(q, "q")
+        state = State(self.robot, qv)
+        pulls = []
+        for gl in self.goals:
+            if not gl.is_primary or type(gl).jacobian is Goal.jacobian:
+                continue
+            r, jac = goals_base.search_rows(gl, state)
+            assert jac is not None
+            pulls.append((gl, jac.T @ r))
+        if len(pulls) < 2:
+            return None
+        total = np.sum([g for _, g in pulls], axis=0)
+        fixed = ~self.bounds.wrap
+        held = fixed & (
+            ((qv <= self.lower + 1e-12) & (total > 0.0))
+            | ((qv >= self.upper - 1e-12) & (total < 0.0))
+        )
+        free = ~held
+        size = [float(np.linalg.norm(g[free])) for _, g in pulls]
+        big = max(size)
+        if not big > 0.0 or float(np.linalg.norm(total[free])) > ratio * big:
+            return None
+        names = [gl.describe() for (gl, _), n in zip(pulls, size, strict=True) if n >= ratio * big]
+        return " and ".join(names) if len(names) >= 2 else None
 
     def within_bounds(self, q: FloatArray, tol: float = 1e-12) -> bool:
         """Whether ``q`` lies within the problem's bounds (± ``tol``)."""

@@ -36,8 +36,10 @@ class Result:
             evaluation budget ran out), ``"time_limit"``, ``"local_minima"`` (every start
             ended in a local minimum or at its iteration cap within the solver's own
             iteration count), ``"unreachable"`` (a goal point lies beyond the frame's
-            reach: no joint vector can meet it), or ``"stopped"`` (the solver returned on its
-            own before its budget without success).
+            reach: no joint vector can meet it), ``"conflicting_goals"`` (two goals of one
+            frame at places no pose meets together, or primary goals pulling against each
+            other at the answer: :meth:`swarm_ik.IKProblem.opposing_goals`), or
+            ``"stopped"`` (the solver returned on its own before its budget without success).
     """
 
     q: FloatArray

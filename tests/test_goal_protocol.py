@@ -192,3 +192,159 @@ def test_a_state_stays_valid_when_a_goal_calls_robot_fk() -> None:
     other = r.fk(q2)
     np.testing.assert_array_equal(state.pose(r.ee_frame), before)
     np.testing.assert_allclose(other, r.fk(q2[None])[0], atol=1e-12)
+
+
+@dataclass(frozen=True)
+class OnSphere(G.Goal):
+    """The frame origin on a sphere (metres), with an optional tolerance of its own."""
+
+    frame: str
+    center: tuple = (0.0, 0.0, 0.5)
+    radius: float = 0.3
+    tolerance: float | None = None
+
+    def residual(self, state):
+        return np.array([np.linalg.norm(state.pose(self.frame)[:3, 3] - self.center) - self.radius])
+
+    def jacobian(self, state):
+        d = state.pose(self.frame)[:3, 3] - np.asarray(self.center)
+        return (d / np.linalg.norm(d))[None] @ state.jacobian(self.frame)[:3]
+
+
+def test_contradictory_python_goals_end_with_conflicting_goals() -> None:
+    """Two goals no configuration meets together (spheres of different radii about one point)
+    fail, and the reason says the goals pull against each other."""
+    r = robot("panda")
+    goals = [OnSphere("panda_hand_tcp", radius=0.3), OnSphere("panda_hand_tcp", radius=0.4)]
+    prob = swarm_ik.IKProblem(r, goals=goals)
+    res = swarm_ik.solve(prob, seed=0, time_limit=2.0)
+    assert not res.success and res.reason == "conflicting_goals"
+    assert prob.opposing_goals(res.q) == "OnSphere(panda_hand_tcp) and OnSphere(panda_hand_tcp)"
+
+
+def test_goals_on_separate_chains_cut_short_are_not_called_conflicting() -> None:
+    """Reachable goals of two arms stopped by the budget: their pulls act on different joints
+    and cannot cancel, so the reason is the budget."""
+    r = swarm_ik.load_robot("baxter")
+    rng = np.random.default_rng(3)
+    for k in range(5):
+        left, right = r.fk_all(r.random_q(rng))
+        goals = [G.Pose("left_gripper", left), G.Pose("right_gripper", right)]
+        res = swarm_ik.solve(swarm_ik.IKProblem(r, goals=goals), seed=k, max_evals=3)
+        assert not res.success and res.reason == "budget"
+        assert swarm_ik.IKProblem(r, goals=goals).opposing_goals(res.q) is None
+
+
+def test_a_python_goal_is_searched_within_its_own_tolerance() -> None:
+    """A sphere 0.5 mm off the target point with a 1 mm tolerance: the target point meets both,
+    so the solve puts the frame there (rather than splitting the difference) and succeeds."""
+    r = robot("panda")
+    p = r.fk(r.random_q(np.random.default_rng(6)))[:3, 3]
+    c = np.array([0.0, 0.0, 0.5])
+    sphere = OnSphere("panda_hand_tcp", tuple(c), float(np.linalg.norm(p - c)) + 5e-4, 1e-3)
+    res = swarm_ik.solve(
+        swarm_ik.IKProblem(r, goals=[sphere, G.Position("panda_hand_tcp", p)]), seed=0
+    )
+    assert res.success, res
+    assert np.linalg.norm(r.fk_pinocchio(res.q)[:3, 3] - p) <= 1e-5
+
+
+def test_search_rows_of_a_goal_with_a_tolerance_match_central_differences() -> None:
+    """The dead-zoned rows of a Python goal with a tolerance: zero inside the ball, shortened
+    by it outside, with the Jacobian of that function."""
+    r = robot("panda")
+    q = r.random_q(np.random.default_rng(7))
+    d = float(np.linalg.norm(r.fk(q)[:3, 3] - np.array([0.0, 0.0, 0.5])))
+    for radius, tol in ((d - 0.05, 0.02), (d - 0.01, 0.02)):  # outside, inside the ball
+        goal = OnSphere("panda_hand_tcp", radius=radius, tolerance=tol, weight=2.0)
+        res, jac = G.base.search_rows(goal, G.State(r, q))
+        raw = float(goal.residual(G.State(r, q))[0])
+        np.testing.assert_allclose(res, [2.0 * np.sign(raw) * max(abs(raw) - tol, 0.0)])
+        h = 1e-6
+        for j in range(r.nq):
+            e = np.zeros(r.nq)
+            e[j] = h
+            up = G.base.search_rows(goal, G.State(r, q + e), want_jac=False)[0]
+            down = G.base.search_rows(goal, G.State(r, q - e), want_jac=False)[0]
+            want = (up - down) / (2 * h)
+            if radius == d - 0.01:  # inside: the radial row kept (continuous at the sphere)
+                want = 2.0 * goal.jacobian(G.State(r, q))[:, j]
+            np.testing.assert_allclose(jac[:, j], want, atol=1e-7)
+
+
+@dataclass(frozen=True)
+class Misshapen(G.Goal):
+    frame: str
+    rows: int = 1
+    cols: int = 7
+    value: float = 0.0
+
+    def residual(self, state):
+        return np.full(1, self.value)
+
+    def jacobian(self, state):
+        return np.zeros((self.rows, self.cols))
+
+
+@dataclass(frozen=True)
+class NoJacobian(G.Goal):
+    frame: str
+
+    def residual(self, state):
+        return np.zeros(1)
+
+
+@pytest.mark.parametrize(
+    ("goal", "match"),
+    [
+        (
+            Misshapen("panda_hand_tcp", cols=8),
+            r"Misshapen\(panda_hand_tcp\)\.jacobian.*\(1, 7\).*\(1, 8\)",
+        ),
+        (Misshapen("panda_hand_tcp", rows=2), r"jacobian\(state\) must have shape \(1, 7\)"),
+        (Misshapen("panda_hand_tcp", value=float("nan")), "not finite"),
+    ],
+)
+def test_a_python_goal_returning_bad_arrays_is_refused_with_its_name(goal, match) -> None:
+    r = robot("panda")
+    prob = swarm_ik.IKProblem(r, goals=[goal, G.Position("panda_hand_tcp", [0.4, 0.0, 0.4])])
+    with pytest.raises(InvalidArgumentError, match=match):
+        swarm_ik.solve(prob, seed=0, max_evals=20)
+
+
+def test_a_python_goal_without_a_jacobian_is_refused_when_the_problem_is_made() -> None:
+    with pytest.raises(InvalidArgumentError, match=r"NoJacobian.*defines no jacobian\(state\)"):
+        swarm_ik.IKProblem(robot("panda"), goals=[NoJacobian("panda_hand_tcp")])
+
+
+def test_one_goal_instead_of_a_list_is_refused_in_one_line() -> None:
+    r = robot("panda")
+    with pytest.raises(InvalidArgumentError) as info:
+        swarm_ik.IKProblem(r, goals=G.Pose(r.ee_frame, r.fk(r.mid_q())))
+    assert "\n" not in str(info.value) and "put it in a list" in str(info.value)
+
+
+def test_a_secondary_python_goal_is_lowered_in_the_primary_null_space() -> None:
+    """A Python goal made secondary (the elbow at a height) beside a primary position of the
+    hand: both met by the configuration the targets came from.  The null-space descent
+    lowers the secondary residual far below where the position alone leaves it, to zero
+    unless a joint limit stops the descent (it slides along the limit no further), and never
+    costs the primary goal."""
+    r = robot("panda")
+    rng = np.random.default_rng(8)
+    exact = 0
+    for k in range(5):
+        q_t = r.random_q(rng)
+        p = r.fk(q_t)[:3, 3]
+        elbow = float(G.State(r, q_t).pose("panda_link4")[2, 3])
+        hand = G.Position("panda_hand_tcp", p)
+        alone = swarm_ik.solve(swarm_ik.IKProblem(r, goals=[hand]), seed=k)
+        goals = [hand, OnPlane("panda_link4", height=elbow, primary=False)]
+        res = swarm_ik.solve(swarm_ik.IKProblem(r, goals=goals), seed=k, time_limit=5.0)
+        assert res.success
+        assert np.linalg.norm(r.fk_pinocchio(res.q)[:3, 3] - p) <= 1e-5
+        before = abs(float(G.State(r, alone.q).pose("panda_link4")[2, 3]) - elbow)
+        after = abs(float(G.State(r, res.q).pose("panda_link4")[2, 3]) - elbow)
+        assert after <= max(1e-6, 0.1 * before), (k, before, after)
+        exact += after <= 1e-6
+    assert exact >= 3

@@ -90,8 +90,8 @@ class PythonPolisher(NamedTuple):
         q[w] = (q[w] + np.pi) % (2 * np.pi) - np.pi
         return np.clip(q, self.bounds.lower, self.bounds.upper)
 
-    def _rj(self, q: FloatArray) -> tuple[FloatArray, FloatArray]:
-        _f, r, j = self.problem.residual_jacobian(q[None])
+    def _rj(self, q: FloatArray, primary: bool = True) -> tuple[FloatArray, FloatArray]:
+        _f, r, j = self.problem.residual_jacobian(q[None], primary)
         return r[0], j[0]
 
     def polish(self, starts: FloatArray, max_evals: int, stop_first: bool = True) -> Any:
@@ -169,8 +169,54 @@ class PythonPolisher(NamedTuple):
         return PolishOutcome(out_q, dp, dr, status, evals, int(used))
 
     def secondary(self, q: FloatArray, max_evals: int) -> tuple[FloatArray, int]:
-        """No null-space descent for problems with Python goals: ``q`` unchanged."""
-        return np.asarray(q, dtype=float), 0
+        """Lower the secondary goals' cost in the null space of the primary ones: the rules of
+        :func:`swarm_ik.kernels.lm.secondary_descent` in numpy (``δ = J₁⁺ r₁ + N z``,
+        ``N = I − J₁⁺J₁``, ``(NᵀJ₂ᵀJ₂N + μ·tr/n·I) z = NᵀJ₂ᵀ r₂``; a step kept only when every
+        primary goal stays within the polish tolerances and the secondary cost falls).
+        Returns ``(q', evaluations)``."""
+        q = np.asarray(q, dtype=float).copy()
+        prob, n = self.problem, q.shape[0]
+        if max_evals < 1 or not prob.has_secondary:
+            return q, 0
+        r1, j1 = self._rj(q)
+        r2, j2 = self._rj(q, primary=False)
+        used = 1
+        if not self._within(self._errors(q)[0]):
+            return q, used
+        cost2 = float(r2 @ r2)
+        eye = np.eye(n)
+        mu = 1e-3
+        while used < max_evals and mu < 1e6 and cost2 > 0.0:
+            a1 = j1.T @ j1
+            try:
+                pinv = np.linalg.solve(a1 + (1e-10 * np.trace(a1) / n + 1e-14) * eye, j1.T)
+            except np.linalg.LinAlgError:
+                break
+            proj = eye - pinv @ j1
+            b = j2 @ proj
+            a2 = b.T @ b
+            tr2 = float(np.trace(a2))
+            if tr2 <= 1e-300:
+                break  # the secondary goals cannot move in the null space
+            try:
+                z = np.linalg.solve(a2 + mu * tr2 / n * eye, b.T @ r2)
+            except np.linalg.LinAlgError:
+                mu *= 10.0
+                continue
+            q_t = self._into_bounds(q + pinv @ r1 + proj @ z)
+            r1_t, j1_t = self._rj(q_t)
+            r2_t, j2_t = self._rj(q_t, primary=False)
+            used += 1
+            cost2_t = float(r2_t @ r2_t)
+            if cost2_t < cost2 and self._within(self._errors(q_t)[0]):
+                rel = (cost2 - cost2_t) / cost2
+                q, r1, j1, r2, j2, cost2 = q_t, r1_t, j1_t, r2_t, j2_t, cost2_t
+                mu = max(mu * 0.3, 1e-9)
+                if rel < 1e-6:
+                    break
+            else:
+                mu *= 10.0
+        return q, used
 
     def with_posture(self, q_ref: FloatArray) -> PythonPolisher:
         """The same polisher (``prefer="nearest"`` keeps the nearest converged start)."""
