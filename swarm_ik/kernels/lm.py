@@ -745,7 +745,11 @@ def secondary_descent(
     From a point whose primary goals are within tolerance, iterate
     ``δ = J₁⁺ r₁ + N z`` with ``J₁⁺ = (J₁ᵀJ₁ + εI)⁻¹J₁ᵀ``, ``N = I − J₁⁺J₁`` (the primary
     null-space projector) and ``z`` the damped least-squares step of the secondary stack
-    restricted to it, ``(NᵀJ₂ᵀJ₂N + μI) z = NᵀJ₂ᵀ r₂``.  A step is kept only when every
+    restricted to it, ``(NᵀJ₂ᵀJ₂N + μI) z = NᵀJ₂ᵀ r₂``.  A joint at a limit that ``δ``
+    pushes outwards is held (its column of ``J₁`` zeroed, ``I`` replaced by the diagonal of
+    the free joints) and the step made again, so that the descent slides along a limit
+    instead of stopping there (the numpy twin: :func:`swarm_ik.solvers.python_lm.
+    _null_space_step`).  A step is kept only when every
     primary goal stays within ``tol_*`` and the secondary cost decreases (lexicographic
     order: the secondary goals never cost primary accuracy); otherwise ``μ`` grows.  On a
     non-redundant problem the null space is empty and nothing moves.
@@ -790,49 +794,80 @@ def secondary_descent(
     if not within_tolerance(w.err, g, tol_pos, tol_rot):
         return used
     mu = 1e-3
+    free = np.empty(n, dtype=np.bool_)
     while used < max_evals and mu < 1e6 and cost2 > 0.0:
-        # A1 = J1ᵀJ1 + εI, factor
-        tr = gram(w.jac, m1, n, a1)
-        eps = 1e-10 * (tr / n) + 1e-14
-        for i in range(n):
-            a1[i, i] += eps
-        # proj = A1⁻¹ J1ᵀJ1 column by column (before factoring, keep J1ᵀJ1 = a1 − εI)
         for j in range(n):
+            free[j] = True
+        status = 0  # 0: a step; 1: no move possible (stop); 2: grow the damping
+        while True:  # the step over the free joints; a joint it pushes out of range is held
+            # A1 = J1ᵀJ1 + εI over the free joints (the others' rows and columns zero), factor
+            gram(w.jac, m1, n, a1)
+            tr = 0.0
             for i in range(n):
-                a2[i, j] = a1[i, j] - (eps if i == j else 0.0)
-        if not _chol_factor(a1, n):
-            break
-        for j in range(n):
-            for i in range(n):
-                col[i] = a2[i, j]
-            _chol_back(a1, col, n, x)
-            for i in range(n):
-                proj[i, j] = (1.0 if i == j else 0.0) - x[i]  # N = I − J1⁺J1
-        # primary correction x = A1⁻¹ J1ᵀ r1
-        jt_r(w.jac, w.res, m1, n, col)
-        _chol_back(a1, col, n, x)
-        # B = J2 N; (BᵀB + μ tr I) z = Bᵀ r2
-        for a in range(m2):
+                for j in range(n):
+                    if not (free[i] and free[j]):
+                        a1[i, j] = 0.0
+                tr += a1[i, i]
+            eps = 1e-10 * (tr / n) + 1e-14
+            # proj = D_F − A1⁻¹ J1ᵀJ1 column by column (before factoring: J1ᵀJ1 = a1 − εI)
             for j in range(n):
-                s_b = 0.0
+                for i in range(n):
+                    a2[i, j] = a1[i, j]
+            for i in range(n):
+                a1[i, i] += eps
+            if not _chol_factor(a1, n):
+                status = 1
+                break
+            for j in range(n):
+                for i in range(n):
+                    col[i] = a2[i, j]
+                _chol_back(a1, col, n, x)
+                for i in range(n):
+                    proj[i, j] = (1.0 if (i == j and free[i]) else 0.0) - x[i]  # N
+            # primary correction x = A1⁻¹ J1ᵀ r1 (free joints)
+            jt_r(w.jac, w.res, m1, n, col)
+            for i in range(n):
+                if not free[i]:
+                    col[i] = 0.0
+            _chol_back(a1, col, n, x)
+            # B = J2 N; (BᵀB + μ tr I) z = Bᵀ r2
+            for a in range(m2):
+                for j in range(n):
+                    s_b = 0.0
+                    for k in range(n):
+                        s_b += jac2[a, k] * proj[k, j]
+                    bmat[a, j] = s_b
+            tr2 = gram(bmat, m2, n, a2)
+            jt_r(bmat, res2, m2, n, rhs)
+            if tr2 <= 1e-300:
+                status = 1  # the secondary goals cannot move in the null space
+                break
+            for i in range(n):
+                a2[i, i] += mu * tr2 / n
+            if not _chol_factor(a2, n):
+                status = 2
+                break
+            _chol_back(a2, rhs, n, z)
+            for i in range(n):
+                s_d = x[i]
                 for k in range(n):
-                    s_b += jac2[a, k] * proj[k, j]
-                bmat[a, j] = s_b
-        tr2 = gram(bmat, m2, n, a2)
-        jt_r(bmat, res2, m2, n, rhs)
-        if tr2 <= 1e-300:
-            break  # the secondary goals cannot move in the null space
-        for i in range(n):
-            a2[i, i] += mu * tr2 / n
-        if not _chol_factor(a2, n):
+                    s_d += proj[i, k] * z[k]
+                delta[i] = s_d
+            out = False
+            for j in range(n):
+                if free[j] and not b.wrap[j]:
+                    if (q[j] <= b.lower[j] and delta[j] < 0.0) or (
+                        q[j] >= b.upper[j] and delta[j] > 0.0
+                    ):
+                        free[j] = False
+                        out = True
+            if not out:
+                break
+        if status == 1:
+            break
+        if status == 2:
             mu *= 10.0
             continue
-        _chol_back(a2, rhs, n, z)
-        for i in range(n):
-            s_d = x[i]
-            for k in range(n):
-                s_d += proj[i, k] * z[k]
-            delta[i] = s_d
         _step_into_bounds(q, delta, 1.0, b, q_t)
         evaluate(q_t, t, g, ks, w, True, True)
         used += 1

@@ -172,10 +172,11 @@ class PythonPolisher(NamedTuple):
         """Lower the secondary goals' cost in the null space of the primary ones: the rules of
         :func:`swarm_ik.kernels.lm.secondary_descent` in numpy (``δ = J₁⁺ r₁ + N z``,
         ``N = I − J₁⁺J₁``, ``(NᵀJ₂ᵀJ₂N + μ·tr/n·I) z = NᵀJ₂ᵀ r₂``; a step kept only when every
-        primary goal stays within the polish tolerances and the secondary cost falls).
-        Returns ``(q', evaluations)``."""
+        primary goal stays within the polish tolerances and the secondary cost falls; a joint
+        at a limit that the step pushes outwards is held, :func:`_null_space_step`).  Returns
+        ``(q', evaluations)``."""
         q = np.asarray(q, dtype=float).copy()
-        prob, n = self.problem, q.shape[0]
+        prob = self.problem
         if max_evals < 1 or not prob.has_secondary:
             return q, 0
         r1, j1 = self._rj(q)
@@ -184,26 +185,15 @@ class PythonPolisher(NamedTuple):
         if not self._within(self._errors(q)[0]):
             return q, used
         cost2 = float(r2 @ r2)
-        eye = np.eye(n)
         mu = 1e-3
         while used < max_evals and mu < 1e6 and cost2 > 0.0:
-            a1 = j1.T @ j1
-            try:
-                pinv = np.linalg.solve(a1 + (1e-10 * np.trace(a1) / n + 1e-14) * eye, j1.T)
-            except np.linalg.LinAlgError:
-                break
-            proj = eye - pinv @ j1
-            b = j2 @ proj
-            a2 = b.T @ b
-            tr2 = float(np.trace(a2))
-            if tr2 <= 1e-300:
+            delta, grow = _null_space_step(q, r1, j1, r2, j2, mu, self.bounds)
+            if delta is None:
+                if grow:
+                    mu *= 10.0
+                    continue
                 break  # the secondary goals cannot move in the null space
-            try:
-                z = np.linalg.solve(a2 + mu * tr2 / n * eye, b.T @ r2)
-            except np.linalg.LinAlgError:
-                mu *= 10.0
-                continue
-            q_t = self._into_bounds(q + pinv @ r1 + proj @ z)
+            q_t = self._into_bounds(q + delta)
             r1_t, j1_t = self._rj(q_t)
             r2_t, j2_t = self._rj(q_t, primary=False)
             used += 1
@@ -237,3 +227,55 @@ class PythonPolisher(NamedTuple):
     def secondary_cost(self, q_batch: FloatArray) -> FloatArray:
         """Squared norm of the secondary stack for each row of ``q_batch`` ``(k, nq)``."""
         return np.asarray(self.problem._errors_and_cost2(q_batch, None)[1])
+
+
+def _null_space_step(
+    q: FloatArray,
+    r1: FloatArray,
+    j1: FloatArray,
+    r2: FloatArray,
+    j2: FloatArray,
+    mu: float,
+    bounds: lm.Bounds,
+) -> tuple[FloatArray | None, bool]:
+    """One step of the secondary descent over the joints free to move (the numpy twin of the
+    step in :func:`swarm_ik.kernels.lm.secondary_descent`): ``δ = J₁⁺ r₁ + N z`` on the free
+    joints ``F`` (``J₁`` with the other columns zeroed, ``N = D_F − J₁⁺J₁``), a joint at a
+    limit that ``δ`` pushes outwards then held (out of ``F``) and the step made again, so
+    that the step slides along the limit instead of being clipped there.
+
+    Args:
+        q: The point ``(nq,)``; ``r1``, ``j1``: primary residual and step Jacobian; ``r2``,
+            ``j2``: the secondary ones; ``mu``: the damping; ``bounds``: the limits.
+
+    Returns:
+        ``(δ, False)``; ``(None, True)`` when the damped system is singular (grow ``mu``);
+        ``(None, False)`` when the secondary goals cannot move in the null space.
+    """
+    n = q.shape[0]
+    eye = np.eye(n)
+    free = np.ones(n, dtype=bool)
+    held = ~bounds.wrap
+    while True:
+        j1f = j1 * free
+        a1 = j1f.T @ j1f
+        pinv = np.linalg.solve(a1 + (1e-10 * np.trace(a1) / n + 1e-14) * eye, j1f.T)
+        proj = np.diag(free.astype(float)) - pinv @ j1f
+        b = j2 @ proj
+        a2 = b.T @ b
+        tr2 = float(np.trace(a2))
+        if tr2 <= 1e-300:
+            return None, False
+        try:
+            z = np.linalg.solve(a2 + mu * tr2 / n * eye, b.T @ r2)
+        except np.linalg.LinAlgError:
+            return None, True
+        delta = pinv @ r1 + proj @ z
+        out = (
+            free
+            & held
+            & (((q <= bounds.lower) & (delta < 0.0)) | ((q >= bounds.upper) & (delta > 0.0)))
+        )
+        if not out.any():
+            return delta, False
+        free &= ~out
