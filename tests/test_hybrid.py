@@ -285,3 +285,40 @@ def test_cartesian_path_example_runs(capsys: pytest.CaptureFixture[str]) -> None
     mod.main()
     out = capsys.readouterr().out
     assert out.count("solved 25/25") == 6  # line and circle, three ways each
+
+
+@pytest.mark.parametrize("python_twin", [False, True])
+def test_secondary_descent_reaches_the_constrained_optimum(python_twin: bool) -> None:
+    """The null-space descent of a ``Posture`` secondary beside a position, from an exact
+    answer: the primary goal stays within tolerance, the posture cost falls, and in most
+    cases the descent ends where SciPy's SLSQP finds the constrained optimum from the same
+    point (both local methods: the rest end at other local optima).  The compiled kernel
+    and its numpy twin (used for problems with goals written in Python) give the same."""
+    from scipy.optimize import minimize
+
+    from swarm_ik.goals import Position, Posture
+    from swarm_ik.solvers.python_lm import PythonPolisher
+
+    r = robot("panda")
+    rng = np.random.default_rng(11)
+    at_optimum = 0
+    for _ in range(8):
+        q_t, q_ref = r.random_q(rng), r.random_q(rng)
+        p = r.fk(q_t)[:3, 3]
+        prob = swarm_ik.IKProblem(r, goals=[Position(r.ee_frame, p), Posture(q_ref)])
+        pol = Polisher.from_problem(prob)
+        if python_twin:
+            pol = PythonPolisher(prob, pol.bounds, pol.cfg, pol.kernel_tol_pos, pol.kernel_tol_rot)
+        q, used = pol.secondary(q_t, 200)
+        assert used <= 200
+        assert np.linalg.norm(r.fk_pinocchio(q)[:3, 3] - p) <= 1e-5
+        assert np.linalg.norm(q - q_ref) < np.linalg.norm(q_t - q_ref)
+        best = minimize(
+            lambda x, q_ref=q_ref: 0.5 * np.sum((x - q_ref) ** 2), q_t,
+            jac=lambda x, q_ref=q_ref: x - q_ref,
+            constraints=[{"type": "eq", "fun": lambda x, p=p: r.fk(x)[:3, 3] - p}],
+            bounds=list(zip(r.lower, r.upper, strict=True)), method="SLSQP",
+            options={"maxiter": 500, "ftol": 1e-12},
+        )  # fmt: skip
+        at_optimum += abs(np.linalg.norm(q - q_ref) - np.linalg.norm(best.x - q_ref)) < 1e-3
+    assert at_optimum >= 4

@@ -171,12 +171,13 @@ class PythonPolisher(NamedTuple):
     def secondary(self, q: FloatArray, max_evals: int) -> tuple[FloatArray, int]:
         """Lower the secondary goals' cost in the null space of the primary ones: the rules of
         :func:`swarm_ik.kernels.lm.secondary_descent` in numpy (``δ = J₁⁺ r₁ + N z``,
-        ``N = I − J₁⁺J₁``, ``(NᵀJ₂ᵀJ₂N + μ·tr/n·I) z = NᵀJ₂ᵀ r₂``; a step kept only when every
-        primary goal stays within the polish tolerances and the secondary cost falls; a joint
-        at a limit that the step pushes outwards is held, :func:`_null_space_step`).  Returns
-        ``(q', evaluations)``."""
+        ``N = I − J₁⁺J₁``, ``(NᵀJ₂ᵀJ₂N + μ·tr/n·I) z = NᵀJ₂ᵀ r₂``, a joint at a limit that the
+        step pushes outwards held, :func:`_null_space_step`; the step cut to the trust
+        radius, the primary goals brought back by Gauss–Newton steps, and the step kept only
+        when every primary goal is within the polish tolerances and the secondary cost
+        falls).  Returns ``(q', evaluations)``."""
         q = np.asarray(q, dtype=float).copy()
-        prob = self.problem
+        prob, n = self.problem, q.shape[0]
         if max_evals < 1 or not prob.has_secondary:
             return q, 0
         r1, j1 = self._rj(q)
@@ -185,27 +186,40 @@ class PythonPolisher(NamedTuple):
         if not self._within(self._errors(q)[0]):
             return q, used
         cost2 = float(r2 @ r2)
-        mu = 1e-3
-        while used < max_evals and mu < 1e6 and cost2 > 0.0:
+        mu, reach = 1e-3, lm.SECONDARY_REACH
+        while used < max_evals and mu < 1e6 and reach > 1e-6 and cost2 > 0.0:
             delta, grow = _null_space_step(q, r1, j1, r2, j2, mu, self.bounds)
             if delta is None:
                 if grow:
                     mu *= 10.0
                     continue
                 break  # the secondary goals cannot move in the null space
-            q_t = self._into_bounds(q + delta)
+            big = float(np.abs(delta).max())
+            q_t = self._into_bounds(q + (min(1.0, reach / big) if big > 0.0 else 1.0) * delta)
             r1_t, j1_t = self._rj(q_t)
-            r2_t, j2_t = self._rj(q_t, primary=False)
             used += 1
+            for _ in range(lm.SECONDARY_RESTORE):  # back onto the primary goals
+                if self._within(self._errors(q_t)[0]) or used >= max_evals:
+                    break
+                a = j1_t.T @ j1_t
+                a += (1e-10 * np.trace(a) / n + 1e-14) * np.eye(n)
+                try:
+                    q_t = self._into_bounds(q_t + np.linalg.solve(a, j1_t.T @ r1_t))
+                except np.linalg.LinAlgError:
+                    break
+                r1_t, j1_t = self._rj(q_t)
+                used += 1
+            r2_t, j2_t = self._rj(q_t, primary=False)
             cost2_t = float(r2_t @ r2_t)
             if cost2_t < cost2 and self._within(self._errors(q_t)[0]):
                 rel = (cost2 - cost2_t) / cost2
                 q, r1, j1, r2, j2, cost2 = q_t, r1_t, j1_t, r2_t, j2_t, cost2_t
                 mu = max(mu * 0.3, 1e-9)
-                if rel < 1e-6:
+                reach = min(2.0 * reach, 1.0)
+                if rel < 1e-9:
                     break
             else:
-                mu *= 10.0
+                reach *= 0.25
         return q, used
 
     def with_posture(self, q_ref: FloatArray) -> PythonPolisher:
