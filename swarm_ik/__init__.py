@@ -39,7 +39,7 @@ _LAZY = {
     "Result": "swarm_ik.result",
     "RobotModel": "swarm_ik.robot",
     "load_robot": "swarm_ik.robot",
-    "robot_names": "swarm_ik.robot",
+    "robot_names": "swarm_ik.paths",
     "Scene": "swarm_ik.scene",
 }
 _SUBMODULES = ("goals", "problem", "solvers")
@@ -68,10 +68,11 @@ if TYPE_CHECKING:  # for type checkers and IDEs: the names as if imported eagerl
     from swarm_ik.batch import solve_batch
     from swarm_ik.many import solve_many, windings_of
     from swarm_ik.optimize import OptimizeResult, minimize
+    from swarm_ik.paths import robot_names
     from swarm_ik.pose import make_pose, project_to_se3
     from swarm_ik.problem import IKProblem
     from swarm_ik.result import Result
-    from swarm_ik.robot import RobotModel, load_robot, robot_names
+    from swarm_ik.robot import RobotModel, load_robot
     from swarm_ik.scene import Scene
 
 __version__ = "0.1.0"

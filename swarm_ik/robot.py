@@ -28,60 +28,13 @@ from swarm_ik._validate import floats_or
 from swarm_ik.errors import InvalidArgumentError, RobotFileNotFoundError, RobotModelError, unknown
 from swarm_ik.kernels import lie
 from swarm_ik.kernels.fk import BALL, CONTINUOUS, KIND_NAMES, PRISMATIC, REVOLUTE, TreeArrays
-from swarm_ik.paths import bundled_robot_dir, example_robot_data_dir
-
-BUNDLED: dict[str, tuple[str, str]] = {
-    "yumi_left": ("yumi_left.urdf", "yumi_tool"),
-    "loading_manipulator": ("loading_manipulator.urdf", "spreader"),
-    "loading_manipulator_long": ("loading_manipulator_long.urdf", "spreader"),
-}
-"""Bundled robots: name -> (file in ``robots/``, end-effector frame)."""
-
-EXAMPLE_ROBOTS: dict[str, tuple[str, str | tuple[str, ...]]] = {
-    "panda": ("panda_description/urdf/panda.urdf", "panda_hand_tcp"),
-    "ur3": ("ur_description/urdf/ur3_robot.urdf", "tool0"),
-    "ur5": ("ur_description/urdf/ur5_robot.urdf", "tool0"),
-    "ur10": ("ur_description/urdf/ur10_robot.urdf", "tool0"),
-    "kinova": ("kinova_description/robots/kinova.urdf", "j2s6s200_end_effector"),
-    "xarm7": ("xarm_description/urdf/xarm7.urdf", "link_eef"),
-    "z1": ("z1_description/urdf/z1.urdf", "link06"),
-    "baxter_left": ("baxter_description/urdf/baxter.urdf", "left_gripper"),
-    "baxter": ("baxter_description/urdf/baxter.urdf", ("left_gripper", "right_gripper")),
-    "talos": (
-        "talos_data/robots/talos_reduced.urdf",
-        ("gripper_left_base_link", "gripper_right_base_link"),
-    ),
-}
-"""Robots of the ``example-robot-data`` package with a curated default: name -> (URDF path
-under its ``robots/`` folder, default end-effector frame(s)).  Joints off the root →
-end-effector chain (grippers) are locked at their neutral value.  Every other URDF of the
-package loads by its file name too (:func:`example_robot_files`), with the default frame
-rule of a file."""
-
-
-def example_robot_files() -> dict[str, str]:
-    """Every URDF of the installed example-robot-data by name: the file's stem with hyphens
-    as underscores (``tiago``, ``romeo``, ``solo12``, ``b1_z1``), the first in path order where
-    two files share a stem; name -> path under its ``robots/`` folder.  Empty when the
-    package is not installed."""
-    try:
-        root = example_robot_data_dir()
-    except RobotFileNotFoundError:
-        return {}
-    out: dict[str, str] = {}
-    for p in sorted(root.rglob("*.urdf")):
-        out.setdefault(p.stem.replace("-", "_"), p.relative_to(root).as_posix())
-    return out
-
-
-def robot_names() -> dict[str, list[str]]:
-    """Robots loadable by name: ``{"bundled": [...], "example-robot-data": [...]}`` (the
-    curated :data:`EXAMPLE_ROBOTS`, with their usual tool frames, and every other URDF of the
-    package, :func:`example_robot_files`)."""
-    return {
-        "bundled": sorted(BUNDLED),
-        "example-robot-data": sorted(set(EXAMPLE_ROBOTS) | set(example_robot_files())),
-    }
+from swarm_ik.paths import (  # (the robot tables live there: no kernels to list them)
+    BUNDLED,
+    EXAMPLE_ROBOTS,
+    bundled_robot_dir,
+    example_robot_data_dir,
+    example_robot_files,
+)
 
 
 def _joint_kind_axis(jmodel: Any) -> tuple[int, FloatArray]:

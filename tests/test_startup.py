@@ -137,3 +137,17 @@ def test_solve_help_lists_the_registered_solvers() -> None:
     text = build_parser("solve")._subparsers._group_actions[0].choices["solve"].format_help()
     flat = " ".join(text.split())
     assert "one of: " + ", ".join(solvers.names()) + " (default swarm)" in flat
+
+
+def test_listing_the_robots_loads_no_kernels() -> None:
+    """``swarm-ik robots`` reads the robot tables of ``swarm_ik.paths``: no numba, no
+    Pinocchio."""
+    code = (
+        "import sys, json, contextlib, io\n"
+        "from swarm_ik.cli import main\n"
+        "with contextlib.redirect_stdout(io.StringIO()):\n"
+        "    code = main(['robots'])\n"
+        "print(json.dumps([code, sorted({m.split('.')[0] for m in sys.modules} & "
+        "{'numba', 'pinocchio'})]))\n"
+    )
+    assert json.loads(_run(code)) == [0, []]

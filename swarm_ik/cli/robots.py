@@ -19,7 +19,7 @@ def add_parser(subparsers: Any) -> argparse.ArgumentParser:
 
 def run(args: argparse.Namespace) -> int:
     """Print the robot names; returns 0."""
-    from swarm_ik.robot import BUNDLED, EXAMPLE_ROBOTS, example_robot_files
+    from swarm_ik.paths import BUNDLED, EXAMPLE_ROBOTS, example_robot_files
 
     print("bundled (robots/):")
     for name, (fname, frame) in sorted(BUNDLED.items()):
