@@ -503,13 +503,14 @@ class IKProblem:
         return e[..., 0].max(-1), e[..., 1].max(-1)
 
     def residual_jacobian(
-        self, q_batch: FloatArray, primary: bool = True
+        self, q_batch: FloatArray, primary: bool = True, q0: FloatArray | None = None
     ) -> tuple[FloatArray, FloatArray, FloatArray]:
         """Fitness, stacked primary residual and its step Jacobian, for Gauss–Newton steps.
 
         Args:
             q_batch: Joint vectors, shape ``(pop, nq)``.
             primary: The primary stack (default), or the secondary one.
+            q0: The solve's start (what ``MinimalDisplacement`` goals hold to), or None.
 
         Returns:
             ``fitness (pop,)``; ``err (pop, rows)`` with ``r(q + δ) ≈ r − J δ`` (for a pose:
@@ -518,7 +519,7 @@ class IKProblem:
             first, then the Python goals' (``−∂r/∂q`` of their ``jacobian``).
         """
         q2 = np.ascontiguousarray(np.atleast_2d(q_batch), dtype=float)
-        tab = self.table(None)
+        tab = self.table(q0)
         pop, m = q2.shape[0], tab.rows_primary if primary else tab.rows_secondary
         res = np.zeros((pop, m))
         jac = np.zeros((pop, m, self.nq))
@@ -529,7 +530,7 @@ class IKProblem:
         if py:
             extra_r, extra_j = [], []
             for k in range(pop):
-                state = State(self.robot, q2[k])
+                state = State(self.robot, q2[k], q0)
                 rows = [goals_base.search_rows(gl, state) for gl in py]
                 extra_r.append(np.concatenate([r for r, _ in rows]))
                 extra_j.append(-np.concatenate([j for _, j in rows]))

@@ -23,7 +23,6 @@ they need when they run), so that a Ctrl-C during start-up is caught by :func:`m
 from __future__ import annotations
 
 import argparse
-import copy
 import gc
 import json
 import os
@@ -84,8 +83,9 @@ _NEGATIVE_NUMBER = re.compile(
 class Formatter(argparse.HelpFormatter):
     """Help layout: an option whose ``metavar`` is one string describing all its values
     (``--pose X Y Z [QX QY QZ QW]``) is shown with it as written, not repeated; an option
-    with ``help_values`` (a function returning a dict) fills its help's ``%(name)s`` fields
-    from it when the help is shown (names that need heavy imports); and the
+    given a ``help_text`` function after it was added shows what that function returns,
+    made when the help is printed (names that need heavy imports; the plain ``help`` given
+    to ``add_argument`` is what argparse checks there); and the
     column of the help texts counts the indent of sub-command names, so that a name as long
     as ``throughput`` keeps its help on its own line (argparse leaves it out)."""
 
@@ -99,10 +99,9 @@ class Formatter(argparse.HelpFormatter):
             self._action_max_length = max(self._action_max_length, width)
 
     def _expand_help(self, action: argparse.Action) -> str:
-        values = getattr(action, "help_values", None)  # values computed when help is shown
-        if values is not None:
-            action = copy.copy(action)
-            vars(action).update(values())
+        text = getattr(action, "help_text", None)  # a help made only when it is shown
+        if text is not None:
+            return str(text())
         return super()._expand_help(action)
 
     def _format_args(self, action: argparse.Action, default_metavar: str) -> str:

@@ -50,13 +50,13 @@ def _parse_param(text: str) -> tuple[str, Any]:
     return key.strip(), value
 
 
-def _solver_names() -> dict[str, str]:
-    """The registry's names for ``--solver``'s help, imported only when the help is shown
-    (the registry loads numba: 0.8 s that every other use of the parser would pay)."""
+def _solver_help() -> str:
+    """``--solver``'s help with the registry's names, made only when the help is shown (the
+    registry loads numba: 0.8 s that every other use of the parser would pay)."""
     from swarm_ik import solvers
     from swarm_ik.api import DEFAULT_SOLVER
 
-    return {"solvers": ", ".join(solvers.names()), "default_solver": DEFAULT_SOLVER}
+    return f"one of: {', '.join(solvers.names())} (default {DEFAULT_SOLVER})"
 
 
 def add_arguments(parser: argparse.ArgumentParser) -> None:
@@ -86,11 +86,9 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
         help="target = FK of these joint values (rad / m), one per joint",
     )
     solver = parser.add_argument(
-        "--solver",
-        default=None,
-        help="one of: %(solvers)s (default %(default_solver)s)",
+        "--solver", default=None, help="a registered solver (the list: swarm-ik solve --help)"
     )
-    solver.help_values = _solver_names  # type: ignore[attr-defined]  # (see Formatter)
+    solver.help_text = _solver_help  # type: ignore[attr-defined]  # (see Formatter)
     parser.add_argument(
         "--fitness",
         default="se3",
@@ -166,7 +164,7 @@ def run(args: argparse.Namespace) -> int:
     import swarm_ik
     from swarm_ik.api import DEFAULT_SOLVER
 
-    if args.solver is None:  # (the parser leaves the registry unloaded: see _solver_names)
+    if args.solver is None:  # (the parser leaves the registry unloaded: see _solver_help)
         args.solver = DEFAULT_SOLVER
     drawing = _viewer.wants_drawing(args)
     if drawing:  # refused before solving: meshcat missing, an unwritable page

@@ -328,20 +328,16 @@ def search_rows(
     goal: Goal, state: State, want_jac: bool = True
 ) -> tuple[FloatArray, FloatArray | None]:
     """A goal's weighted rows as the search stacks them, from its numpy ``residual`` and
-    ``jacobian``: ``(w·r (m,), w·∂r/∂q (m, nq) or None)``.
-
-    A Python goal with a ``tolerance`` is judged by ``‖r‖ ≤ tolerance`` (:meth:`Goal.met`), so
-    it is searched with that ball's dead zone, as ``Position(radius=…)`` is: ``r·(1 − t/‖r‖)``
-    beyond the ball, 0 inside it, so the other goals' rows take the slack.  Its Jacobian is
-    ``s·J + (1 − s)·u uᵀJ`` with ``u = r/‖r‖`` and ``s = 1 − t/‖r‖`` outside, 0 inside (the
-    radial row kept, continuous at the sphere, as :func:`swarm_ik.kernels.rows.ball_rows`).
+    ``jacobian``: ``(w·r (m,), w·∂r/∂q (m, nq) or None)``.  The search drives them to zero;
+    a goal's own ``tolerance`` judges the answer (:meth:`Goal.met`), it shapes no row (a goal
+    that should leave slack says so in its residual, as ``Position(radius=…)`` does).  A
+    one-row goal may return its Jacobian as ``(nq,)``.
 
     Raises:
         InvalidArgumentError: a Python goal without ``residual``/``jacobian``, or returning
-            arrays of another shape than ``(m,)`` and ``(m, nq)`` or values that are not
-            finite (the goal and the shapes named).
+            arrays of another shape than ``(m,)`` and ``(m, nq)`` (the goal and the shapes
+            named).
     """
-    name = goal.describe()
     nq = state.q.shape[0]
     try:
         r = np.asarray(goal.residual(state), dtype=float)
@@ -355,29 +351,22 @@ def search_rows(
         if goal.compiled:
             raise
         raise InvalidArgumentError(
-            f"{name}: residual(state) and jacobian(state) must return arrays of numbers "
-            f"({type(exc).__name__}: {reprlib.repr(str(exc))})"
+            f"{goal.describe()}: residual(state) and jacobian(state) must return arrays of "
+            f"numbers ({type(exc).__name__}: {reprlib.repr(str(exc))})"
         ) from None
     if r.ndim > 1:
-        raise InvalidArgumentError(f"{name}.residual(state) must have shape (m,), got {r.shape}")
+        raise InvalidArgumentError(
+            f"{goal.describe()}.residual(state) must have shape (m,), got {r.shape}"
+        )
     r = np.atleast_1d(r)
     if jac is not None and jac.shape != (r.shape[0], nq):
-        raise InvalidArgumentError(
-            f"{name}.jacobian(state) must have shape ({r.shape[0]}, {nq}) (one row per "
-            f"residual entry, one column per joint), got {jac.shape}"
-        )
-    if not goal.compiled and not (np.isfinite(r).all() and (jac is None or np.isfinite(jac).all())):
-        raise InvalidArgumentError(
-            f"{name}: residual or jacobian not finite at q = {np.round(state.q, 6).tolist()}"
-        )
-    tol = None if goal.compiled else getattr(goal, "tolerance", None)
-    if tol is not None and float(tol) > 0.0:
-        t, norm = float(tol), float(np.linalg.norm(r))
-        u = r / norm if norm > 1e-12 else np.zeros_like(r)
-        s = max(norm - t, 0.0) / norm if norm > 1e-12 else 0.0  # 1 − t/‖r‖ outside, 0 inside
-        if jac is not None:  # s·J + (1 − s)·u uᵀ J: continuous at the sphere
-            jac = s * jac + (1.0 - s) * np.outer(u, u @ jac)
-        r = max(norm - t, 0.0) * u
+        if jac.shape == (nq,) and r.shape[0] == 1:
+            jac = jac[None]
+        else:
+            raise InvalidArgumentError(
+                f"{goal.describe()}.jacobian(state) must have shape ({r.shape[0]}, {nq}) (one "
+                f"row per residual entry, one column per joint), got {jac.shape}"
+            )
     w = goal.weight
     return w * r, (None if jac is None else w * jac)
 

@@ -138,7 +138,7 @@ class Polisher(NamedTuple):
         if problem.python_goals:  # goals written in Python: the numpy polish
             return PythonPolisher(  # type: ignore[return-value]
                 problem, bounds, cfg, float(tol_pos) * cfg.tol_margin,
-                float(tol_rot) * cfg.tol_margin,
+                float(tol_rot) * cfg.tol_margin, q0,
             )  # fmt: skip
         table = problem.table(q0)
         return cls(

@@ -51,6 +51,7 @@ class PythonPolisher(NamedTuple):
         cfg: LM settings.
         kernel_tol_pos: Position tolerance the polish stops at [m].
         kernel_tol_rot: Angular tolerance the polish stops at [rad].
+        q0: The solve's start (what ``MinimalDisplacement`` goals hold to), or None.
     """
 
     problem: IKProblem
@@ -58,6 +59,7 @@ class PythonPolisher(NamedTuple):
     cfg: LMSettings
     kernel_tol_pos: float
     kernel_tol_rot: float
+    q0: FloatArray | None = None
 
     @property
     def wrap(self) -> Any:
@@ -80,7 +82,7 @@ class PythonPolisher(NamedTuple):
         return True
 
     def _errors(self, q: FloatArray) -> tuple[FloatArray, float, float]:
-        err = self.problem.goal_errors(q[None])[0]
+        err = self.problem.goal_errors(q[None], self.q0)[0]
         e = np.where(np.isnan(err), 0.0, err)[self.problem.primary]
         return err, float(e[:, 0].max(initial=0.0)), float(e[:, 1].max(initial=0.0))
 
@@ -91,7 +93,7 @@ class PythonPolisher(NamedTuple):
         return np.clip(q, self.bounds.lower, self.bounds.upper)
 
     def _rj(self, q: FloatArray, primary: bool = True) -> tuple[FloatArray, FloatArray]:
-        _f, r, j = self.problem.residual_jacobian(q[None], primary)
+        _f, r, j = self.problem.residual_jacobian(q[None], primary, self.q0)
         return r[0], j[0]
 
     def polish(self, starts: FloatArray, max_evals: int, stop_first: bool = True) -> Any:
@@ -240,7 +242,7 @@ class PythonPolisher(NamedTuple):
 
     def secondary_cost(self, q_batch: FloatArray) -> FloatArray:
         """Squared norm of the secondary stack for each row of ``q_batch`` ``(k, nq)``."""
-        return np.asarray(self.problem._errors_and_cost2(q_batch, None)[1])
+        return np.asarray(self.problem._errors_and_cost2(q_batch, self.q0)[1])
 
 
 def _null_space_step(
@@ -273,7 +275,10 @@ def _null_space_step(
     while True:
         j1f = j1 * free
         a1 = j1f.T @ j1f
-        pinv = np.linalg.solve(a1 + (1e-10 * np.trace(a1) / n + 1e-14) * eye, j1f.T)
+        try:
+            pinv = np.linalg.solve(a1 + (1e-10 * np.trace(a1) / n + 1e-14) * eye, j1f.T)
+        except np.linalg.LinAlgError:
+            return None, False  # (the kernel stops there too)
         proj = np.diag(free.astype(float)) - pinv @ j1f
         b = j2 @ proj
         a2 = b.T @ b
