@@ -738,6 +738,17 @@ within tolerance before the step is judged (the step is curved: its first-order 
 correction leaves an error of the order of its square)."""
 
 
+@numba.njit(cache=True, inline="always")
+def secondary_rule(kept: bool, mu: float, reach: float) -> tuple[float, float]:
+    """The damping and trust radius of the secondary descent after a trial step: kept, the
+    damping ×0.3 (not below 1e-9) and the radius ×2 (up to 1); refused, the radius ×¼.  The
+    one rule of :func:`secondary_descent` and its numpy twin
+    (:meth:`swarm_ik.solvers.python_lm.PythonPolisher.secondary`)."""
+    if kept:
+        return max(mu * 0.3, 1e-9), min(2.0 * reach, 1.0)
+    return mu, reach * 0.25
+
+
 @numba.njit(cache=True)
 def secondary_descent(
     q_in: FloatArray,
@@ -928,12 +939,11 @@ def secondary_descent(
                 for j in range(n):
                     jac2[a, j] = jac2_t[a, j]
             cost2 = cost2_t
-            mu = max(mu * 0.3, 1e-9)
-            reach = min(2.0 * reach, 1.0)
+            mu, reach = secondary_rule(True, mu, reach)
             if rel < 1e-9:
                 break
         else:
-            reach *= 0.25
+            mu, reach = secondary_rule(False, mu, reach)
     return used
 
 

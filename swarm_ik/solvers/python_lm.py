@@ -216,12 +216,11 @@ class PythonPolisher(NamedTuple):
             if cost2_t < cost2 and self._within(self._errors(q_t)[0]):
                 rel = (cost2 - cost2_t) / cost2
                 q, r1, j1, r2, j2, cost2 = q_t, r1_t, j1_t, r2_t, j2_t, cost2_t
-                mu = max(mu * 0.3, 1e-9)
-                reach = min(2.0 * reach, 1.0)
+                mu, reach = lm.secondary_rule(True, mu, reach)
                 if rel < 1e-9:
                     break
             else:
-                reach *= 0.25
+                mu, reach = lm.secondary_rule(False, mu, reach)
         return q, used
 
     def with_posture(self, q_ref: FloatArray) -> PythonPolisher:
