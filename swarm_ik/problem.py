@@ -519,6 +519,15 @@ class IKProblem:
             first, then the Python goals' (``−∂r/∂q`` of their ``jacobian``).
         """
         q2 = np.ascontiguousarray(np.atleast_2d(q_batch), dtype=float)
+        res, jac = self.stacked_rows(q2, primary, q0)
+        return self.fitness(q2), res, jac
+
+    def stacked_rows(
+        self, q_batch: FloatArray, primary: bool = True, q0: FloatArray | None = None
+    ) -> tuple[FloatArray, FloatArray]:
+        """The stacked residual and step Jacobian of :meth:`residual_jacobian` without the
+        fitness (what the numpy polish steps with): ``(pop, rows)``, ``(pop, rows, nq)``."""
+        q2 = np.ascontiguousarray(np.atleast_2d(q_batch), dtype=float)
         tab = self.table(q0)
         pop, m = q2.shape[0], tab.rows_primary if primary else tab.rows_secondary
         res = np.zeros((pop, m))
@@ -536,7 +545,7 @@ class IKProblem:
                 extra_j.append(-np.concatenate([j for _, j in rows]))
             res = np.concatenate([res, np.array(extra_r)], axis=1)
             jac = np.concatenate([jac, np.array(extra_j)], axis=1)
-        return self.fitness(q2), res, jac
+        return res, jac
 
     def opposing_goals(self, q: Any, ratio: float = 0.1) -> str | None:
         """Primary goals that pull against each other at ``q``, if any: their labels.

@@ -93,7 +93,7 @@ class PythonPolisher(NamedTuple):
         return np.clip(q, self.bounds.lower, self.bounds.upper)
 
     def _rj(self, q: FloatArray, primary: bool = True) -> tuple[FloatArray, FloatArray]:
-        _f, r, j = self.problem.residual_jacobian(q[None], primary, self.q0)
+        r, j = self.problem.stacked_rows(q[None], primary, self.q0)
         return r[0], j[0]
 
     def polish(self, starts: FloatArray, max_evals: int, stop_first: bool = True) -> Any:
