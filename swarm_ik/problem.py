@@ -134,14 +134,18 @@ def _tree_with_frames(
 
 
 def judge(
-    errors: FloatArray, primary: Sequence[bool] | NDArray[Any], tol_pos: float, tol_rot: float
+    errors: FloatArray,
+    primary: Sequence[bool] | NDArray[Any],
+    tol_pos: float | FloatArray,
+    tol_rot: float,
 ) -> NDArray[np.bool_]:
     """The one success judge: which goals are met.
 
     Args:
         errors: ``(ng, 2)`` errors ``[position m, angle rad]`` (NaN where a goal has none).
         primary: Which goals are primary, ``(ng,)`` (secondary goals always count as met).
-        tol_pos: Position tolerance [m].
+        tol_pos: Position tolerance [m], or one per goal ``(ng,)``
+            (:meth:`IKProblem.position_tolerances`).
         tol_rot: Angular tolerance [rad].
 
     Returns:
@@ -585,6 +589,15 @@ class IKProblem:
         names = [gl.describe() for (gl, _), n in zip(pulls, size, strict=True) if n >= ratio * big]
         return " and ".join(names) if len(names) >= 2 else None
 
+    def position_tolerances(self, tol_pos: float) -> float | FloatArray:
+        """The position tolerance each goal is judged against: ``tol_pos``, or a Python
+        goal's own ``tolerance`` where it has one (as :meth:`Goal.met` judges it), ``(ng,)``
+        (``tol_pos`` itself when no goal has its own)."""
+        own = [None if gl.compiled else getattr(gl, "tolerance", None) for gl in self.goals]
+        if all(t is None for t in own):
+            return tol_pos
+        return np.array([tol_pos if t is None else float(t) for t in own])
+
     def within_bounds(self, q: FloatArray, tol: float = 1e-12) -> bool:
         """Whether ``q`` lies within the problem's bounds (± ``tol``)."""
         q = np.asarray(q, dtype=float)
@@ -603,7 +616,8 @@ class IKProblem:
             return False
         col = self.collision_goal
         if col is None:
-            return bool(np.all(judge(self.goal_errors(q)[0], self.primary, tol_pos, tol_rot)))
+            tp = self.position_tolerances(tol_pos)
+            return bool(np.all(judge(self.goal_errors(q)[0], self.primary, tp, tol_rot)))
         return self.candidate_cost(q, tol_pos, tol_rot) is not None
 
     def without_collisions(self) -> IKProblem | None:
@@ -631,7 +645,9 @@ class IKProblem:
         col = self.collision_goal
         err = self.goal_errors(q)[0]
         others = self.primary & np.array([g is not col for g in self.goals])
-        if not np.all(judge(err[others], [True] * int(others.sum()), tol_pos, tol_rot)):
+        tp = self.position_tolerances(tol_pos)
+        tp = tp[others] if isinstance(tp, np.ndarray) else tp
+        if not np.all(judge(err[others], [True] * int(others.sum()), tp, tol_rot)):
             return None
         if col is not None and self.robot.collision_model().collides(
             q, col.scene, col.margin, bool(col.self_collision)

@@ -367,3 +367,20 @@ def test_minimal_displacement_beside_a_python_goal_holds_to_the_start() -> None:
         res = swarm_ik.solve(swarm_ik.IKProblem(r, goals=goals), q0=q0, seed=k)
         assert res.success
         assert np.linalg.norm(res.q - q0) < np.linalg.norm(q_t - q0)
+
+
+@pytest.mark.parametrize("own", [None, 1e-7, 1e-3])
+def test_the_stop_test_and_the_check_agree_on_a_python_goals_own_tolerance(own) -> None:
+    """One judge: ``IKProblem.is_success`` (the search's stop test) and ``verify`` (the
+    answer's check) agree, a Python goal's own tolerance included, on points just inside and
+    outside each tolerance."""
+    r = robot("panda")
+    rng = np.random.default_rng(13)
+    q = r.random_q(rng)
+    d = float(np.linalg.norm(r.fk(q)[:3, 3] - np.array([0.0, 0.0, 0.5])))
+    for off in (5e-8, 5e-6, 5e-4, 5e-2):
+        goal = OnSphere("panda_hand_tcp", radius=d + off, tolerance=own)
+        prob = swarm_ik.IKProblem(r, goals=[goal])
+        met = all(e.met for e in prob.verify(q))
+        assert prob.is_success(q, 1e-5, 1e-5) == met
+        assert met == (off <= (1e-5 if own is None else own))
