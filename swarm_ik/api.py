@@ -155,7 +155,7 @@ def end_reason(
         return "unreachable"
     if conflicting_goals(problem, tol_pos, tol_rot) is not None:
         return "conflicting_goals"
-    if q is not None and int(problem.primary.sum()) >= 2 and problem.opposing_goals(q):
+    if q is not None and problem.opposing_goals(q):
         return "conflicting_goals"
     if max_evals is not None and n_evals >= max_evals:
         return "budget"

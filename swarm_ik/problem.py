@@ -157,6 +157,18 @@ def judge(
     return (ok_p & ok_r) | ~np.asarray(primary, dtype=bool)
 
 
+def pushed_out(
+    q: FloatArray, direction: FloatArray, bounds: lm.Bounds, tol: float = 0.0
+) -> NDArray[np.bool_]:
+    """The joints at a limit (within ``tol``) that a move along ``direction`` ``(nq,)`` would
+    push out of range (continuous joints never): the joints an active-set step holds.  The
+    one rule of the numpy polish, its null-space step and :meth:`IKProblem.opposing_goals`
+    (the compiled kernels spell it in their loops)."""
+    lo = (q <= bounds.lower + tol) & (direction < 0.0)
+    hi = (q >= bounds.upper - tol) & (direction > 0.0)
+    return ~bounds.wrap & (lo | hi)  # type: ignore[no-any-return]
+
+
 _ONE_PRIMARY = np.ones(1, dtype=np.bool_)
 _ONE_PRIMARY.flags.writeable = False
 """The primary mask of a problem made of a target alone (shared, read-only)."""
@@ -564,6 +576,8 @@ class IKProblem:
         configuration meets together end so, as may goals stuck against each other at a
         local minimum).  Those pulling that hard are named.
         """
+        if int(self.primary.sum()) < 2:
+            return None
         qv = self.robot.check_q(q, "q")
         state = State(self.robot, qv)
         pulls = []
@@ -576,12 +590,7 @@ class IKProblem:
         if len(pulls) < 2:
             return None
         total = np.sum([g for _, g in pulls], axis=0)
-        fixed = ~self.bounds.wrap
-        held = fixed & (
-            ((qv <= self.lower + 1e-12) & (total > 0.0))
-            | ((qv >= self.upper - 1e-12) & (total < 0.0))
-        )
-        free = ~held
+        free = ~pushed_out(qv, -total, self.bounds, 1e-12)  # (the descent moves along −Σg)
         size = [float(np.linalg.norm(g[free])) for _, g in pulls]
         big = max(size)
         if not big > 0.0 or float(np.linalg.norm(total[free])) > ratio * big:
@@ -593,10 +602,10 @@ class IKProblem:
         """The position tolerance each goal is judged against: ``tol_pos``, or a Python
         goal's own ``tolerance`` where it has one (as :meth:`Goal.met` judges it), ``(ng,)``
         (``tol_pos`` itself when no goal has its own)."""
-        own = [None if gl.compiled else getattr(gl, "tolerance", None) for gl in self.goals]
+        own = [gl.own_tolerance() for gl in self.goals]
         if all(t is None for t in own):
             return tol_pos
-        return np.array([tol_pos if t is None else float(t) for t in own])
+        return np.array([tol_pos if t is None else t for t in own])
 
     def within_bounds(self, q: FloatArray, tol: float = 1e-12) -> bool:
         """Whether ``q`` lies within the problem's bounds (± ``tol``)."""

@@ -308,12 +308,20 @@ class Goal:
         details)``; a Python goal's own ``tolerance`` attribute, when it has one, replaces
         ``tol_pos``."""
         dp, dr = self.errors(state)
-        if getattr(self, "tolerance", None) is not None and not self.compiled:
-            tol_pos = float(self.tolerance)  # type: ignore[attr-defined]
+        own = self.own_tolerance()
+        if own is not None:
+            tol_pos = own
         met = not (dp > tol_pos) and not (dr > tol_rot)
         if math.isnan(dp) and math.isnan(dr):
             met = False  # nothing measured: never a vacuous success
         return float(dp), float(dr), bool(met), None
+
+    def own_tolerance(self) -> float | None:
+        """A Python goal's own position tolerance (its ``tolerance`` attribute), which
+        replaces the solve's ``tol_pos`` wherever this goal is judged; None for a goal without
+        one and for compiled goals (their tolerance shapes their rows instead)."""
+        tol = None if self.compiled else getattr(self, "tolerance", None)
+        return None if tol is None else float(tol)
 
     def rows(self, robot: RobotModel, state: State | None = None) -> int:
         """Number of residual rows (a Python goal: the length of its residual)."""

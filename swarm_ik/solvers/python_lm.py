@@ -19,7 +19,7 @@ import numpy as np
 from swarm_ik._types import FloatArray, IntArray
 from swarm_ik.kernels import lm
 from swarm_ik.kernels.lm import BUDGET, CONVERGED, ITER_CAP, LOCAL_MIN, NOT_RUN, LMSettings
-from swarm_ik.problem import IKProblem
+from swarm_ik.problem import IKProblem, pushed_out
 
 
 class PolishOutcome(NamedTuple):
@@ -74,9 +74,9 @@ class PythonPolisher(NamedTuple):
             if not prim:
                 continue
             tp = self.kernel_tol_pos
-            own = None if gl.compiled else getattr(gl, "tolerance", None)
+            own = gl.own_tolerance()
             if own is not None:
-                tp = float(own) * self.kernel_tol_pos / margin
+                tp = own * self.kernel_tol_pos / margin
             if e[0] > tp or e[1] > self.kernel_tol_rot or (np.isnan(e[0]) and np.isnan(e[1])):
                 return False
         return True
@@ -131,7 +131,7 @@ class PythonPolisher(NamedTuple):
                 a = jac.T @ jac
                 g = jac.T @ r
                 scale = np.trace(a) / n + 1e-300
-                free = ~(~b.wrap & (((q <= b.lower) & (g < 0.0)) | ((q >= b.upper) & (g > 0.0))))
+                free = ~pushed_out(q, g, b)
                 if not free.any():
                     st = LOCAL_MIN
                     break
@@ -270,7 +270,6 @@ def _null_space_step(
     n = q.shape[0]
     eye = np.eye(n)
     free = np.ones(n, dtype=bool)
-    held = ~bounds.wrap
     while True:
         j1f = j1 * free
         a1 = j1f.T @ j1f
@@ -289,11 +288,7 @@ def _null_space_step(
         except np.linalg.LinAlgError:
             return None, True
         delta = pinv @ r1 + proj @ z
-        out = (
-            free
-            & held
-            & (((q <= bounds.lower) & (delta < 0.0)) | ((q >= bounds.upper) & (delta > 0.0)))
-        )
+        out = free & pushed_out(q, delta, bounds)
         if not out.any():
             return delta, False
         free &= ~out
