@@ -66,7 +66,7 @@ from swarm_ik.goals import AvoidCollisions, Goal, Pose, Position, State, kernel_
 from swarm_ik.kernels import lie, lm
 from swarm_ik.kernels.fk import TreeArrays
 from swarm_ik.kernels.lm import CONVERGED, NOT_RUN
-from swarm_ik.kernels.search import sampling_window, splitmix64, uniform_at, uniforms, wall_clock
+from swarm_ik.kernels.search import sampling_window, splitmix64, uniform_in, uniforms, wall_clock
 from swarm_ik.pose import make_pose, matrix_to_quat
 from swarm_ik.problem import IKProblem
 from swarm_ik.robot import RobotModel
@@ -207,8 +207,7 @@ def _solve_targets(
             for s in range(k):
                 for j in range(n):
                     counter += np.uint64(1)
-                    u = uniform_at(key, counter)
-                    starts[s, j] = min(s_lo[j] + u * (s_hi[j] - s_lo[j]), s_hi[j])
+                    starts[s, j] = uniform_in(s_lo[j], s_hi[j], key, counter)
         if converged and goals.rows_secondary > 0 and secondary_evals > 0:
             for j in range(n):
                 q_in[j] = out_q[i, j]
@@ -1167,8 +1166,7 @@ def _retry_starts(
         sampling_window(lower, upper, q_seed[r], lo, hi)
         key = _splitmix64(_splitmix64(base ^ np.uint64(index[r])) + np.uint64(k))
         for j in range(n):
-            u = uniform_at(key, np.uint64(j + 1))
-            out[r, j] = min(lo[j] + u * (hi[j] - lo[j]), hi[j])
+            out[r, j] = uniform_in(lo[j], hi[j], key, np.uint64(j + 1))
     return out
 
 

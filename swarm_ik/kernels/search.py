@@ -84,6 +84,15 @@ def uniform_at(key: np.uint64, c: np.uint64) -> float:  # pragma: no cover - com
 
 
 @numba.njit(cache=True)
+def uniform_in(
+    lo: float, hi: float, key: np.uint64, c: np.uint64
+) -> float:  # pragma: no cover - compiled
+    """Draw ``c`` of the stream ``key`` uniform in ``[lo, hi]`` (a random start's joint in
+    its sampling window: the search's restarts and the batch's)."""
+    return min(lo + (hi - lo) * uniform_at(key, c), hi)
+
+
+@numba.njit(cache=True)
 def uniforms(key: np.uint64, first: int, n: int) -> FloatArray:  # pragma: no cover
     """Uniforms ``first + 1 … first + n`` of the stream ``key`` in ``[0, 1)`` (tests, tools)."""
     out = np.empty(n)
@@ -392,7 +401,7 @@ def swarm_search(
             for s in range(m - 1):
                 for j in range(n):
                     counter += np.uint64(1)
-                    queue[s, j] = min(lo[j] + (hi[j] - lo[j]) * uniform_at(stream, counter), hi[j])
+                    queue[s, j] = uniform_in(lo[j], hi[j], stream, counter)
             n_queue = m - 1
             continue
         if n_queue != 0:
@@ -434,7 +443,7 @@ def swarm_search(
         for s in range(n_sw, m):
             for j in range(n):
                 counter += np.uint64(1)
-                queue[s, j] = min(lo[j] + (hi[j] - lo[j]) * uniform_at(stream, counter), hi[j])
+                queue[s, j] = uniform_in(lo[j], hi[j], stream, counter)
         n_queue = m
     if best_f < np.inf and best_f < ev_f and not stopped:
         ev_f, ev_dp, ev_dr = _offer(best_q, best_f, best_dp, best_dr, ev_q)
