@@ -411,10 +411,6 @@ class BatchGoals:
     def __setstate__(self, state: dict[str, Any]) -> None:
         self.__dict__.update(state)
 
-    def __dask_tokenize__(self) -> str:
-        """A deterministic Dask token: the content that is sent."""
-        return hashlib.sha1(pickle.dumps(self.__getstate__())).hexdigest()
-
     @property
     def collision(self) -> AvoidCollisions | None:
         """The primary ``AvoidCollisions`` goal, if any."""

@@ -12,9 +12,10 @@ an existing Dask scheduler.
   machines (each with swarm_ik installed).
 * a ``distributed.Client``: used as is (not closed).
 
-Each chunk is one Dask task with a deterministic ("pure") key built from the function and the
-chunk's content, so resubmitting a chunk never computes it twice, and the results come back in
-the order of the chunks.  When a worker dies, the scheduler recomputes its unfinished tasks on
+Each chunk is one Dask task with a key of its own call and place (``name-<call>-<index>``), so
+a call never meets the tasks of an earlier one (a failed call's tasks are cancelled, and a
+retry on the same client gets tasks of its own), and the results come back in the order of
+the chunks.  When a worker dies, the scheduler recomputes its unfinished tasks on
 the remaining workers (Dask's own fault tolerance); nothing is lost or duplicated.  Whatever
 runs in the chunks must not depend on which worker runs it: :func:`swarm_ik.solve_batch`
 keys its random streams by target index for that reason.
@@ -28,6 +29,7 @@ from __future__ import annotations
 
 import logging
 import os
+import uuid
 from collections.abc import Callable, Iterator, Sequence
 from contextlib import ExitStack, closing, contextmanager
 from typing import Any, TypeVar
@@ -223,12 +225,11 @@ def map_chunks(
                 bar.update(w)
             return out
         distributed = _import_distributed()
-        from dask.base import tokenize
-
-        token = tokenize(func)
-        keys = [f"{name}-{i}-{tokenize(token, item)}" for i, item in enumerate(items)]
+        # keys of this call alone: a key of an earlier call that failed may still name its
+        # cancelled task on this client, which would answer for the new one
+        call = uuid.uuid4().hex[:16]
         futures = [
-            client.submit(func, item, key=k, pure=True) for k, item in zip(keys, items, strict=True)
+            client.submit(func, item, key=f"{name}-{call}-{i}") for i, item in enumerate(items)
         ]
         position = {f.key: i for i, f in enumerate(futures)}
         try:

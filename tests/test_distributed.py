@@ -60,7 +60,7 @@ def test_local_cluster_of_two_workers_gives_identical_results(get_robot):
         assert distributed.n_workers(client) == 2
         a = solve_batch(robot, targets, seed=4, scheduler=client)
         b = solve_batch(robot, targets, seed=4, scheduler=client, chunk_size=101)
-        # the same chunks again: pure keys, served from the cluster, same answer
+        # the same chunks again, on the same client: computed again, the same answer
         c = solve_batch(robot, targets, seed=4, scheduler=client, chunk_size=101)
         used = client.run(os.getpid)
     assert len(set(used.values())) == 2  # two worker processes
@@ -207,3 +207,31 @@ def test_map_chunks_on_a_scheduler_address(get_robot):
         assert cluster.scheduler_address.startswith("tcp://127.0.0.1:")
         out = distributed.map_chunks(_square, list(range(7)), scheduler=cluster.scheduler_address)
         assert out == [i * i for i in range(7)]
+
+
+def _square_or_fail(x: int) -> int:
+    if x < 0:
+        raise ValueError(f"negative chunk {x}")
+    return x * x
+
+
+def test_map_chunks_retried_after_a_failure_on_the_same_client():
+    """A call whose chunk fails raises that chunk's error; the same chunks submitted again on
+    the same client (the failed call's error, and with it its futures, still held) are
+    computed, not answered by the failed call's cancelled tasks."""
+    with dask_distributed.LocalCluster(
+        n_workers=1, threads_per_worker=1, processes=False, dashboard_address=None
+    ) as cluster, dask_distributed.Client(cluster) as client:  # fmt: skip
+        items = list(range(6))
+        held = []
+        for _ in range(3):
+            with pytest.raises(ValueError, match="negative chunk -1") as info:
+                distributed.map_chunks(_square_or_fail, [-1, *items], client=client)
+            held.append(info.value)  # (its traceback holds the failed call's futures)
+            again = [-2, *items]  # (the same chunks at the same places after the first)
+            with pytest.raises(ValueError, match="negative chunk -2"):
+                distributed.map_chunks(_square_or_fail, again, client=client)
+            assert distributed.map_chunks(_square_or_fail, [0, *items], client=client) == [
+                0,
+                *(i * i for i in items),
+            ]
