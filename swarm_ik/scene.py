@@ -549,7 +549,7 @@ class Scene:
             UnknownNameError: an unknown shape type (the valid ones listed).
             SceneDependencyError: a YAML file without PyYAML installed.
         """
-        p = Path(path).expanduser()
+        p = _path_arg(path, "scene file")
         fmt = _SUFFIXES.get(p.suffix.lower())
         text = _read_text(p, decode=p.suffix.lower() != ".urdf")  # URDFs: any XML encoding
         if fmt is None or (fmt == "urdf" and p.suffix.lower() == ".xml"):
@@ -580,19 +580,18 @@ class Scene:
             InvalidArgumentError: another extension.
             SceneDependencyError: YAML without PyYAML installed.
         """
-        p = Path(path).expanduser()
+        p = _path_arg(path, "scene file")
         ext = p.suffix.lower()
         if ext == ".json":
             return self.to_json(p)
-        if ext in (".yml", ".yaml"):
-            yaml = _yaml()
-            text = yaml.safe_dump(self.to_curobo(), sort_keys=False, default_flow_style=None)
-            p.write_text(text)
-            return p
-        raise InvalidArgumentError(
-            f"{p}: scenes are written as .json (swarm_ik) or .yml/.yaml (cuRobo), "
-            f"not {ext or 'a file without extension'!r}"
-        )
+        if ext not in (".yml", ".yaml"):
+            raise InvalidArgumentError(
+                f"{p}: scenes are written as .json (swarm_ik) or .yml/.yaml (cuRobo), "
+                f"not {ext or 'a file without extension'!r}"
+            )
+        yaml = _yaml(str(p))
+        _write_text(p, yaml.safe_dump(self.to_curobo(), sort_keys=False, default_flow_style=None))
+        return p
 
     # ------------------------------------------------------------------------ JSON
     def to_dict(self) -> dict[str, Any]:
@@ -698,8 +697,8 @@ class Scene:
 
     def to_json(self, path: str | os.PathLike[str]) -> Path:
         """Write the scene to a JSON file; returns its path."""
-        p = Path(path)
-        p.write_text(json.dumps(self.to_dict(), indent=1, allow_nan=False) + "\n")
+        p = _path_arg(path, "scene file")
+        _write_text(p, json.dumps(self.to_dict(), indent=1, allow_nan=False) + "\n")
         return p
 
     @classmethod
@@ -711,7 +710,7 @@ class Scene:
             InvalidArgumentError: not JSON, too large or deep, or a bad obstacle (see
                 :meth:`from_dict`).
         """
-        p = Path(path).expanduser()
+        p = _path_arg(path, "scene file")
         data = _parse_json(_read_text(p), p)
         return cls.from_dict(data, base_dir=p.resolve().parent, where=str(p))
 
@@ -738,7 +737,8 @@ class Scene:
                 section = "mesh"
                 d = {"file_path": o.path, "scale": list(o.scale), "pose": seven}
             out.setdefault(section, {})[name] = d
-        return out
+        order = ("cuboid", "sphere", "capsule", "cylinder", "mesh")
+        return {k: out[k] for k in order if k in out}
 
     # ------------------------------------------------------------------------ coal
     def coal_objects(self) -> list[tuple[str, Any]]:
@@ -816,6 +816,11 @@ def as_scene(scene: Scene | Sequence[Shape] | str | os.PathLike[str] | None) -> 
         return scene
     if isinstance(scene, (str, os.PathLike)):
         return Scene.load(scene)
+    if not isinstance(scene, Iterable):
+        raise InvalidArgumentError(
+            f"scene must be a Scene, a list of shapes, a scene file's path or None, got "
+            f"{type(scene).__name__} ({reprlib.repr(scene)})"
+        )
     return Scene(scene)
 
 
@@ -936,15 +941,36 @@ _CUROBO: dict[str, tuple[tuple[str, ...], tuple[str, ...]]] = {
 """cuRobo world sections: required and optional fields of their obstacles."""
 
 
-@functools.cache
-def _yaml() -> Any:
+def _yaml(where: str | None = None) -> Any:
+    """PyYAML, or a one-line refusal naming ``where`` (the file) when it is not installed."""
     try:
         import yaml
     except ImportError:
+        head = f"{where}: " if where else ""
         raise SceneDependencyError(
-            "cuRobo YAML scenes need PyYAML: pip install pyyaml (import name 'yaml')"
+            f"{head}cuRobo YAML scenes need PyYAML: pip install pyyaml (import name 'yaml')"
         ) from None
     return yaml
+
+
+def _path_arg(path: Any, what: str) -> Path:
+    """``path`` as a :class:`~pathlib.Path` (``~`` expanded), refused unless it is a string or
+    a path."""
+    if not isinstance(path, (str, os.PathLike)) or str(path) == "":
+        raise InvalidArgumentError(
+            f"the {what} must be a path (a string or a pathlib.Path), got {reprlib.repr(path)}"
+        )
+    return Path(path).expanduser()
+
+
+def _write_text(p: Path, text: str) -> None:
+    """Write ``text`` to ``p``, an unwritable place refused in one line."""
+    try:
+        p.write_text(text)
+    except OSError as exc:
+        raise InvalidArgumentError(
+            f"cannot write the scene to {str(p)!r}: {exc.strerror or exc}"
+        ) from None
 
 
 @functools.cache
@@ -981,7 +1007,7 @@ def _yaml_loader() -> Any:
 
 
 def _parse_yaml(text: str, p: Path) -> Any:
-    yaml = _yaml()
+    yaml = _yaml(str(p))
     return _parsed_tree(
         p,
         "YAML",

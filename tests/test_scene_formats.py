@@ -17,6 +17,7 @@ import pytest
 
 from swarm_ik import scene as S
 from swarm_ik.errors import InvalidArgumentError, SwarmIKError, UnknownNameError
+from swarm_ik.goals import AvoidCollisions
 from swarm_ik.scene import (
     Box,
     Capsule,
@@ -445,19 +446,47 @@ def test_shape_constructors_refuse_wrong_types() -> None:
         assert "\n" not in msg and all(w in msg for w in words), (words, msg)
 
 
-def test_yaml_without_pyyaml_names_the_package(tmp_path: Path, monkeypatch) -> None:
-    S._yaml.cache_clear()
+def test_yaml_without_pyyaml_names_the_package_and_the_file(tmp_path: Path, monkeypatch) -> None:
     S._yaml_loader.cache_clear()
     monkeypatch.setitem(sys.modules, "yaml", None)  # import yaml -> ImportError
     try:
-        with pytest.raises(SceneDependencyError, match="PyYAML: pip install pyyaml"):
+        with pytest.raises(SceneDependencyError, match=r"world\.yml: .*PyYAML: pip install pyyaml"):
             Scene.load(DATA / "world.yml")
-        with pytest.raises(ImportError):
+        with pytest.raises(SceneDependencyError, match=r"w\.yml: .*PyYAML"):
             Scene([Sphere(0.1)]).save(tmp_path / "w.yml")
+        assert not (tmp_path / "w.yml").exists()
         assert Scene.load(DATA / "table.json")  # the other formats do not need it
     finally:
-        S._yaml.cache_clear()
         S._yaml_loader.cache_clear()
+
+
+def test_curobo_sections_are_written_in_the_documented_order(tmp_path: Path) -> None:
+    shapes = [
+        Mesh(str(DATA / "block.obj"), name="m"),
+        Cylinder(0.1, 0.2, name="cy"),
+        Capsule(0.1, 0.2, name="ca"),
+        Sphere(0.1, name="s"),
+        Box((0.1, 0.1, 0.1), name="b"),
+    ]
+    path = Scene(shapes).save(tmp_path / "w.yml")
+    sections = re.findall(r"^(\w+):", path.read_text(), flags=re.M)
+    assert sections == ["cuboid", "sphere", "capsule", "cylinder", "mesh"]
+
+
+def test_scene_paths_and_values_of_the_wrong_kind_are_refused(tmp_path: Path) -> None:
+    scene = Scene([Sphere(0.1)])
+    for make, words in [
+        (lambda: Scene.load(None), ["scene file must be a path", "None"]),
+        (lambda: Scene.from_json(3), ["scene file must be a path", "3"]),
+        (lambda: scene.save(tmp_path / "no" / "such" / "w.json"), ["cannot write", "w.json"]),
+        (lambda: scene.save(tmp_path / "no" / "such" / "w.yml"), ["cannot write", "w.yml"]),
+        (lambda: as_scene(42), ["scene must be a Scene", "int"]),
+        (lambda: AvoidCollisions(scene=42), ["scene must be a Scene", "int"]),
+    ]:
+        with pytest.raises(InvalidArgumentError) as info:
+            make()
+        msg = str(info.value)
+        assert "\n" not in msg and all(w in msg for w in words), (words, msg)
 
 
 # ---------------------------------------------------------------------------- the docs
