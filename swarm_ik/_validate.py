@@ -15,6 +15,7 @@ would raise deep inside.  They are meant to be called at the door of the public 
 
 from __future__ import annotations
 
+import math
 import os
 import reprlib
 from collections.abc import Callable
@@ -196,9 +197,12 @@ def check_grid_size(
         extent = np.asarray(upper, dtype=float).reshape(3) - np.asarray(lower, dtype=float).reshape(
             3
         )
-        fit = float(np.cbrt(np.prod(np.maximum(extent, res)) / max_cells))
+        with np.errstate(over="ignore"):  # (bounds of 1e300 m: no resolution fits)
+            fit = float(np.cbrt(np.prod(np.maximum(extent, res)) / max_cells))
+        hint = f"--resolution {fit:.3g} or coarser, or " if math.isfinite(fit) else ""
         raise InvalidArgumentError(
-            f"a grid of {res:g} m voxels over this box has {n} voxels, more than the cap of "
-            f"{max_cells}; use --resolution {fit:.3g} or coarser, or smaller --bounds"
+            f"a grid of {res:g} m voxels over this box has "
+            f"{format(n, '.3g') if n.bit_length() < 1000 else 'over 1e300'} voxels, more than "
+            f"the cap of {max_cells}; use {hint}smaller --bounds"
         )
     return n

@@ -17,6 +17,7 @@ Python goals, secondary goals).  Both paths end in the same judge.
 from __future__ import annotations
 
 import dataclasses
+import math
 import sys
 import threading
 import time
@@ -92,7 +93,7 @@ def unreachable_goal(problem: IKProblem) -> str | None:
         else:
             continue
         slack = _slack(gl)[0]  # (a bounded goal's region reaches this much nearer)
-        far = float(np.linalg.norm(point)) - slack
+        far = math.hypot(*(float(v) for v in point)) - slack  # (no overflow at 1e300 m)
         if far > problem.robot.reach_radius(gl.frame) * (1 + 1e-9):
             return gl.describe()
         if slack > 0.0:

@@ -775,29 +775,41 @@ def check_targets(targets: Any, orth_tol: float = 1e-6) -> FloatArray:
         raise InvalidTargetError(
             f"targets must have shape (N, 4, 4) or (N, 7) (x y z qx qy qz qw); got {arr.shape}"
         )
-    finite = np.isfinite(arr).all(axis=(1, 2))
+    # a block at a time: a Ctrl-C is answered between blocks (millions of targets)
+    for a in range(0, arr.shape[0], _CHECK_BLOCK):
+        _check_pose_block(arr[a : a + _CHECK_BLOCK], a, orth_tol)
+    return np.ascontiguousarray(arr)
+
+
+_CHECK_BLOCK = 1 << 16
+"""Targets validated per numpy pass in :func:`check_targets`."""
+
+
+def _check_pose_block(blk: FloatArray, first: int, orth_tol: float) -> None:
+    """:func:`check_targets`' tests of the poses ``blk`` ``(n, 4, 4)``, the first of them
+    target ``first`` (messages name targets by their index in the batch)."""
+    finite = np.isfinite(blk).all(axis=(1, 2))
     if not finite.all():
         raise InvalidTargetError(
-            f"target {int(np.flatnonzero(~finite)[0])} contains NaN or infinite values"
+            f"target {first + int(np.flatnonzero(~finite)[0])} contains NaN or infinite values"
         )
-    bottom = np.abs(arr[:, 3] - np.array([0.0, 0.0, 0.0, 1.0])).max(axis=-1, initial=0.0) > 1e-9
+    bottom = np.abs(blk[:, 3] - np.array([0.0, 0.0, 0.0, 1.0])).max(axis=-1, initial=0.0) > 1e-9
     if bottom.any():
         i = int(np.flatnonzero(bottom)[0])
         raise InvalidTargetError(
-            f"target {i}: bottom row must be [0, 0, 0, 1], got {arr[i, 3].tolist()}"
+            f"target {first + i}: bottom row must be [0, 0, 0, 1], got {blk[i, 3].tolist()}"
         )
-    rot = arr[:, :3, :3]
+    rot = blk[:, :3, :3]
     orth = np.abs(np.einsum("nji,njk->nik", rot, rot) - np.eye(3)).max(axis=(1, 2), initial=0.0)
-    det = np.linalg.det(rot) if arr.shape[0] else np.ones(0)
+    det = np.linalg.det(rot) if blk.shape[0] else np.ones(0)
     bad = (orth > orth_tol) | (np.abs(det - 1.0) > orth_tol)
     if bad.any():
         i = int(np.flatnonzero(bad)[0])
         raise InvalidTargetError(
-            f"target {i}: rotation is not orthonormal (max|RᵀR − I| = {orth[i]:.3g}, "
+            f"target {first + i}: rotation is not orthonormal (max|RᵀR − I| = {orth[i]:.3g}, "
             f"det = {det[i]:.9g}, tolerance {orth_tol:g}); fix it with "
             "swarm_ik.pose.project_to_se3"
         )
-    return np.ascontiguousarray(arr)
 
 
 def _seed_starts(bc: BatchChain, q0: Any, n: int) -> FloatArray:

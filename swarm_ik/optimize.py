@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import reprlib
 import time
 import warnings
 from dataclasses import dataclass
@@ -62,15 +63,24 @@ def make_rng(seed: int | np.random.Generator | None) -> np.random.Generator:
     return s if isinstance(s, np.random.Generator) else np.random.default_rng(s)
 
 
+MAX_EVALS_LIMIT = 2**62
+"""The largest ``max_evals`` (the compiled kernels count evaluations in 64-bit integers)."""
+
+
 def check_budget(max_evals: int | None, time_limit: float | None) -> None:
-    """Refuse a zero/negative evaluation budget or time limit."""
+    """Refuse a zero/negative evaluation budget or time limit, or one beyond
+    :data:`MAX_EVALS_LIMIT` evaluations."""
     if max_evals is not None and (
-        isinstance(max_evals, bool) or not isinstance(max_evals, (int, np.integer)) or max_evals < 1
+        isinstance(max_evals, bool)
+        or not isinstance(max_evals, (int, np.integer))
+        or not 1 <= max_evals <= MAX_EVALS_LIMIT
     ):
-        raise InvalidArgumentError(f"max_evals must be a positive integer, got {max_evals!r}")
+        raise InvalidArgumentError(
+            f"max_evals must be an integer from 1 to 2**62, got {reprlib.repr(max_evals)}"
+        )
     if time_limit is not None and not (is_finite_nonneg(time_limit) and float(time_limit) > 0):
         raise InvalidArgumentError(
-            f"time_limit must be a positive number of seconds, got {time_limit!r}"
+            f"time_limit must be a positive number of seconds, got {reprlib.repr(time_limit)}"
         )
 
 

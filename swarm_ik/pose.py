@@ -32,7 +32,7 @@ def is_finite_nonneg(value: Any) -> bool:
         return False
     try:
         v = float(value)
-    except (TypeError, ValueError):
+    except (TypeError, ValueError, OverflowError):  # (an int beyond a float: not finite)
         return False
     return bool(0.0 <= v < np.inf)
 

@@ -493,6 +493,10 @@ class RobotModel:
         if ee_frame is None:
             ee_frame, frame_reason = urdf.default_ee_frame(full, info)
             urdf.log.info("%s: %s", p, frame_reason)
+        if not isinstance(ee_frame, (str, list, tuple)):
+            raise InvalidArgumentError(
+                f"ee_frame must be a frame name or a list of them, got {ee_frame!r:.80}"
+            )
         frames = [ee_frame] if isinstance(ee_frame, str) else list(ee_frame)
         if not frames:
             raise InvalidArgumentError("ee_frame: give a frame name or a non-empty list of them")

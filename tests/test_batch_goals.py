@@ -193,8 +193,11 @@ def test_result_files_hold_the_goal_checks(tmp_path, avoid_result):
 def test_time_limit_reports_targets_not_reached_as_unsolved(panda):
     targets = panda.fk(panda.random_q(np.random.default_rng(5), 3000))
     full = solve_batch(panda, targets, seed=0)
-    cut = solve_batch(panda, targets, seed=0, time_limit=0.01)
-    reached = cut.n_starts > 0
+    for limit in (0.01, 0.03, 0.1):  # (a loaded machine may reach none in the first)
+        cut = solve_batch(panda, targets, seed=0, time_limit=limit)
+        reached = cut.n_starts > 0
+        if reached.any():
+            break
     assert not reached.all()  # 3000 targets take longer than 10 ms
     assert not cut.success[~reached].any()
     np.testing.assert_array_equal(cut.q[~reached], np.tile(panda.mid_q(), ((~reached).sum(), 1)))

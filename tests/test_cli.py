@@ -487,3 +487,72 @@ def test_output_pipe_closed_by_the_reader_is_141_without_a_traceback() -> None:
     err = proc.stderr.read()
     assert proc.wait(timeout=120) == 141, err
     assert "Traceback" not in err
+
+
+# ------------------------------------------------------------- numbers of every sub-command
+@pytest.mark.parametrize(
+    ("argv", "words"),
+    [
+        (["batch", "--robot", "yumi_left", "--random", "2", "--out", "{tmp}/r.npz", "--seed", "-1"],
+         ["--seed", "[0, 2**63)"]),
+        (["reach", "--robot", "yumi_left", "--out", "{tmp}/m.npz", "--seed", "-1"], ["--seed"]),
+        (["reach", "--robot", "yumi_left", "--out", "{tmp}/m.npz", "--max-targets", "0"],
+         ["--max-targets", "from 1"]),
+        (["bench", "ik", "--quick", "--out", "{tmp}/b", "--seed", "-1"], ["--seed"]),
+        (["bench", "ik", "--quick", "--out", "{tmp}/b", "--budgets-ms", "nan"],
+         ["--budgets-ms", "finite number > 0"]),
+        (["bench", "ik", "--quick", "--out", "{tmp}/b", "--budgets-ms", "inf"], ["--budgets-ms"]),
+        (["bench", "many", "--out", "{tmp}/b", "--n-targets", "0"], ["--n-targets"]),
+        (["bench", "goals", "--out", "{tmp}/b", "--n", "-3"], ["--n", "from 1"]),
+        (["bench", "throughput", "--quick", "--out", "{tmp}/b", "--boxes", "-1"], ["--boxes"]),
+        (["bench", "collision", "--quick", "--out", "{tmp}/b", "--seed", "-1"], ["--seed"]),
+        (["bench", "wholebody", "--quick", "--out", "{tmp}/b", "--seed", "-1"], ["--seed"]),
+        (["solve", "--robot", "yumi_left", *FROM_Q, "--max-evals", "99999999999999999999999"],
+         ["max_evals", "2**62"]),
+        (["solve", "--robot", "yumi_left", *FROM_Q, "--solver", "gwo", "--param",
+          "iterations=1000000000"], ["iterations", "MAX_ITERATIONS"]),
+    ],
+)  # fmt: skip
+def test_numbers_out_of_range_are_refused_with_one_line(
+    argv: list[str], words: list[str], tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    line = cli_error(capsys, *(a.format(tmp=tmp_path) for a in argv))
+    assert all(w in line for w in words), line
+
+
+def test_empty_target_files_and_huge_reach_bounds_are_refused(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    import numpy as np
+
+    (tmp_path / "empty.csv").write_text("x,y,z,qx,qy,qz,qw\n")
+    np.save(tmp_path / "empty.npy", np.zeros((0, 4, 4)))
+    for name in ("empty.csv", "empty.npy"):
+        line = cli_error(capsys, "batch", "--robot", "yumi_left", "--targets",
+                         str(tmp_path / name), "--out", str(tmp_path / "b.npz"))  # fmt: skip
+        assert "holds no targets" in line
+    bounds = ["-1e300"] * 3 + ["1e300"] * 3
+    line = cli_error(
+        capsys,
+        "reach",
+        "--robot",
+        "yumi_left",
+        "--bounds",
+        *bounds,
+        "--out",
+        str(tmp_path / "m.npz"),
+    )
+    assert "over 1e300 voxels" in line and "smaller --bounds" in line
+
+
+def test_api_budgets_beyond_numbers_are_refused() -> None:
+    from swarm_ik.errors import InvalidArgumentError
+
+    robot = swarm_ik.load_robot("yumi_left")
+    problem = swarm_ik.IKProblem(robot, robot.fk(robot.mid_q()))
+    with pytest.raises(InvalidArgumentError, match="max_evals"):
+        swarm_ik.solve(problem, max_evals=10**30)
+    with pytest.raises(InvalidArgumentError, match="time_limit"):
+        swarm_ik.solve(problem, time_limit=10**400)
+    with pytest.raises(InvalidArgumentError, match="ee_frame"):
+        swarm_ik.load_robot("yumi_left", 5)  # type: ignore[arg-type]

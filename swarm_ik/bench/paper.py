@@ -52,6 +52,7 @@ from typing import Any
 
 import numpy as np
 
+from swarm_ik import _argtypes
 from swarm_ik.bench import common, published, runner, solve_runs
 from swarm_ik.bench.common import Stats
 from swarm_ik.bench.plans import (
@@ -698,7 +699,7 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     )
     parser.add_argument(
         "--jobs",
-        type=int,
+        type=_argtypes.count(1),
         default=common.cpu_count(),
         help="worker processes (default: the CPUs available)",
     )
@@ -717,7 +718,7 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     subset = "subset to run: " + ", ".join(EXPERIMENTS)
     parser.add_argument("--experiments", nargs="+", metavar="ID", help=subset)
     runs = "override the number of runs per case and solver everywhere"
-    parser.add_argument("--runs", type=int, help=runs)
+    parser.add_argument("--runs", type=_argtypes.count(1), help=runs)
     parser.add_argument("--no-plots", action="store_true", help="skip the PNG plots")
     parser.add_argument("--no-progress", action="store_true", help="no progress bar")
     parser.add_argument(
@@ -828,18 +829,19 @@ def run(args: argparse.Namespace) -> int:
             written = make_plots(cfg, out)
         except PlotExtraMissingError as exc:
             print(f"swarm-ik: {exc}", file=sys.stderr)
+    if interrupted:  # (no report: the run that resumes writes it; Ctrl-C ends at once)
+        print(
+            "interrupted: finished runs are saved; run the same command again to resume "
+            "(it writes the report)",
+            file=sys.stderr,
+        )
+        return 130
     report = out / "report.md"
     report.write_text(build_report(cfg, out))
     print(
         f"report: {report}" + (f"; plots: {len(written)} PNG in {out}" if written else ""),
         file=sys.stderr,
     )
-    if interrupted:
-        print(
-            "interrupted: finished runs are saved; run the same command again to resume",
-            file=sys.stderr,
-        )
-        return 130
     return 0
 
 

@@ -23,6 +23,7 @@ import io
 import json
 import math
 import multiprocessing
+import os
 import sys
 import time
 from collections.abc import Callable, Iterable, Mapping, Sequence
@@ -375,7 +376,8 @@ def _execute_pool(
     """Run ``todo`` over ``jobs`` spawned processes, at most ``2·jobs`` queued at a time (an
     interruption cancels the rest at once; what finishes meanwhile is still written)."""
     ctx = multiprocessing.get_context("spawn")  # no fork: safe with numba/BLAS threads
-    pool = ProcessPoolExecutor(max_workers=jobs, mp_context=ctx, initializer=initializer)
+    init = None if initializer is None else functools.partial(_quiet_initializer, initializer)
+    pool = ProcessPoolExecutor(max_workers=jobs, mp_context=ctx, initializer=init)
     futures: dict[Future[Outcome], Task] = {}
     queue = iter(todo)
     try:
@@ -392,13 +394,24 @@ def _execute_pool(
                 if nxt is not None:
                     futures[pool.submit(worker, nxt)] = nxt
     except KeyboardInterrupt:
-        pool.shutdown(wait=True, cancel_futures=True)
         for fut in futures:
             if fut.done() and not fut.cancelled() and fut.exception() is None:
                 write(fut.result())
+        pool.shutdown(wait=False, cancel_futures=True)
+        for proc in multiprocessing.active_children():  # the pool's workers: stopped now, not
+            proc.terminate()  # after the runs they hold (Ctrl-C answers within a second)
         raise
     finally:
         pool.shutdown(wait=True, cancel_futures=True)
+
+
+def _quiet_initializer(initializer: Callable[[], None]) -> None:
+    """A pool worker's ``initializer``, ended without a traceback by the Ctrl-C that a
+    terminal sends to the whole process group (the parent reports the interruption)."""
+    try:
+        initializer()
+    except KeyboardInterrupt:
+        os._exit(130)
 
 
 _INITIALIZED: set[Any] = set()

@@ -24,6 +24,7 @@ import argparse
 import sys
 from pathlib import Path
 
+from swarm_ik import _argtypes
 from swarm_ik.cli._args import (
     EXIT_INTERRUPTED,
     EXIT_NOT_REACHED,
@@ -78,7 +79,10 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     )
     parser.add_argument("--chunk-size", type=int, default=None, help="targets per task")
     parser.add_argument(
-        "--seed", type=int, default=0, help="seed of the restarts (and of sampled targets)"
+        "--seed",
+        type=_argtypes.seed,
+        default=0,
+        help="seed of the restarts (and of sampled targets)",
     )
     add_lm_options(parser, 128, "most LM starts per target, the seed included")
     add_scheduler(parser)
@@ -111,9 +115,17 @@ def run(args: argparse.Namespace) -> int:
     if args.targets is not None:
         targets = read_targets_file(args.targets)
         source = str(args.targets)
+        if len(targets) == 0:
+            raise InvalidArgumentError(f"--targets {args.targets}: the file holds no targets")
     else:
         rng = np.random.default_rng(args.seed)
-        targets = robot.fk(robot.random_q(rng, args.random))
+        # drawn and FK'd a block at a time: a Ctrl-C is answered between blocks, not after
+        # millions of targets
+        step = 1 << 16
+        targets = np.empty((args.random, 4, 4))
+        for a in range(0, args.random, step):
+            m = min(step, args.random - a)
+            targets[a : a + m] = robot.fk(robot.random_q(rng, m))
         source = f"{args.random} FK-sampled targets (seed {args.seed})"
     from swarm_ik.batch import solve_batch
 

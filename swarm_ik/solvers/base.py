@@ -38,6 +38,9 @@ MIN_POP_SIZE = 4
 """Smallest ``pop_size`` any population solver accepts (HLFOA needs 4 distinct members)."""
 MAX_POP_SIZE = 1_000_000
 """Largest ``pop_size`` any solver accepts."""
+MAX_ITERATIONS = 1_000_000
+"""Largest ``iterations`` any solver accepts (a million generations of a population of 30 run
+for minutes; a ``time_limit`` bounds a solve of any length)."""
 MAX_POPULATION_VALUES = 10_000_000
 """Largest ``pop_size · dim`` (numbers in one population array: 80 MB of float64; a solver
 keeps a few such arrays).  Checked by :meth:`SolverSpec.resolve` when it is given ``dim`` and
@@ -554,7 +557,7 @@ class SolverSpec:
         sizes shared by the population solvers for every solver that has them: ``pop_size``
         must be an integer in ``[MIN_POP_SIZE, MAX_POP_SIZE]`` (and ``pop_size · dim`` at
         most :data:`MAX_POPULATION_VALUES` when ``dim`` is given), ``iterations`` an integer
-        ``>= 1``.
+        in ``[1, MAX_ITERATIONS]``.
 
         Args:
             overrides: Parameter values given by the user.
@@ -590,6 +593,12 @@ class SolverSpec:
                 raise InvalidArgumentError(
                     f"{key} must be >= {least} (an integer) for solver {self.name!r}, got {v!r}"
                 )
+        if "iterations" in out and out["iterations"] > MAX_ITERATIONS:
+            raise InvalidArgumentError(
+                f"iterations must be <= {MAX_ITERATIONS} for solver {self.name!r} "
+                f"(swarm_ik.solvers.base.MAX_ITERATIONS; time_limit bounds a longer solve), "
+                f"got {out['iterations']!r}"
+            )
         if "pop_size" in out:
             if out["pop_size"] > MAX_POP_SIZE:
                 raise InvalidArgumentError(
