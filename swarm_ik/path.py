@@ -110,6 +110,22 @@ MAX_COVER = 200
 the walks)."""
 MAX_WALK = 200
 """Most steps of the walks along the self-motion of one waypoint."""
+MAX_PATH_POSES = 100_000
+"""Most poses one path solves: waypoints plus the ``densify`` poses between them (each costs
+a solve, 0.1–1 ms; more are refused rather than run for hours with their memory growing)."""
+
+
+def _check_path_size(n: int, densify: int) -> None:
+    """Refuse a path of more than :data:`MAX_PATH_POSES` poses (``n`` waypoints, ``densify``
+    poses between consecutive ones)."""
+    total = n + max(n - 1, 0) * densify
+    if total > MAX_PATH_POSES:
+        raise InvalidArgumentError(
+            f"a path of {n} waypoints with densify={densify} has {total} poses, more than "
+            f"{MAX_PATH_POSES} (swarm_ik.path.MAX_PATH_POSES); split it or densify less"
+        )
+
+
 DENSIFY_ROUNDS = 32
 """Most rounds of the densify check (each removes the failing steps and searches again)."""
 _STEP_SLACK = 1e-9
@@ -211,9 +227,11 @@ def solve_path(
         scene: Obstacles (a :class:`swarm_ik.scene.Scene`, shapes, or a scene JSON file):
             shortcut for adding ``AvoidCollisions(scene)`` at every waypoint.
         frame: The goal frame of ``poses`` (default ``robot.ee_frame``).
-        time_limit: Most wall-clock seconds for building candidates [s]; when reached, the
-            remaining waypoints are only tracked (the reason says so).  Results are
-            deterministic for a seed only when the limit is not reached.
+        time_limit: Most wall-clock seconds for building candidates and checking the
+            ``densify`` poses [s]; when reached, the remaining waypoints are only tracked (one
+            solve each, 0.1–1 ms), the remaining interpolated poses are not solved (their steps
+            count as jumps), and the reason says so.  Results are deterministic for a seed only
+            when the limit is not reached.
         seed: Seed (or Generator) of every random choice (the solvers' seeds are drawn from
             it): the same seed gives the same path.
         densify: Poses interpolated between consecutive waypoints (position lerp, rotation
@@ -255,6 +273,7 @@ def solve_path(
     wps = _Waypoints.build(robot, poses, goals, scene, frame)
     if densify and wps.poses is None:
         raise InvalidArgumentError("densify needs poses (goal lists are not interpolated)")
+    _check_path_size(wps.n, int(densify))
     deadline = None if time_limit is None else t_start + float(time_limit)
     ctx = _Context(robot, wps, step, float(tol_pos), float(tol_rot), rng, deadline)
     graph = _build(ctx, start)
@@ -482,6 +501,7 @@ def _parse_poses(poses: Any) -> FloatArray:
         )
     if arr.shape[0] < 2:
         raise InvalidArgumentError(f"a path needs at least 2 waypoints, got {arr.shape[0]}")
+    _check_path_size(arr.shape[0], 0)
     out = np.empty((arr.shape[0], 4, 4))
     for i, row in enumerate(arr):
         try:
@@ -1268,6 +1288,10 @@ def _densify(
             if key not in checked:
                 checked[key] = _check_step_dense(ctx, i, qa, qb, k)
             ok, chain, size = checked[key]
+            if not ok and ctx.timed_out:  # (cut by the time limit: unchecked, not rejected)
+                dense.append(chain)
+                failed = True
+                continue
             within = float(np.max(ctx.steps(qa, qb) / ctx.step)) <= 1.0 + _STEP_SLACK
             if not ok and within and _rejected_size(rejected, i, qa, qb, ctx) is None:
                 rejected.setdefault(i, []).append((_canon(qa, ctx), _canon(qb, ctx), size))
@@ -1279,6 +1303,8 @@ def _densify(
         dense, failed = check(choice)
         if not failed:
             return choice, dense, True
+        if ctx.out_of_time():  # (no round more: the steps left unchecked count as jumps)
+            return choice, dense, False
         choice = _search(graph, start, ctx, rejected)
     dense, failed = check(choice)
     return choice, dense, not failed
@@ -1302,6 +1328,10 @@ def _check_step_dense(
     q = qa
     met_all = True
     for s in range(1, k + 1):
+        if ctx.out_of_time():  # the rest of the step unchecked: joint-space points, not met
+            chain.extend(q + (qb - q) * (t / (k + 1 - s + 1)) for t in range(1, k + 2 - s))
+            met_all = False
+            break
         pose = interpolate_pose(pa, pb, s / (k + 1))
         qn, met = ctx.track(ctx.wps.target_at(pose, i), q)
         met_all = met_all and met
@@ -1452,11 +1482,12 @@ def _reason(
             )
         else:
             msg += "; not exhaustive (numerical candidate sets): the fewest jumps found"
-        if k and not densify_ok:
+        if k and not densify_ok and not ctx.timed_out:
             msg += f"; densify checks stopped after {DENSIFY_ROUNDS} rounds"
         parts.append(msg)
     if ctx.timed_out:
-        parts.append("time_limit reached: the later waypoints were only tracked")
+        unchecked = "; the interpolated poses of the later steps were not checked" if k else ""
+        parts.append("time_limit reached: the later waypoints were only tracked" + unchecked)
     if not parts:
         checked = f", {k} interpolated poses per step checked" if k else ""
         return (

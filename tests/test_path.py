@@ -324,3 +324,22 @@ def test_cli_writes_the_path_and_exits_by_outcome(tmp_path, capsys):
     assert report["reconfigurations"][0][0] == 4 and not report["jump_free"]
     with pytest.raises(InvalidArgumentError, match="--out"):
         _cli(["--robot", "ur5", "--poses", str(src), "--out", str(tmp_path / "q.txt")])
+
+
+def test_a_path_of_too_many_poses_is_refused_and_densify_keeps_the_time_limit() -> None:
+    """More than MAX_PATH_POSES poses (waypoints and interpolated ones) are refused before
+    any solve; a densify that the time limit cuts reports its later steps unchecked (not as
+    jumps) and returns within about the limit."""
+    import time
+
+    robot = swarm_ik.load_robot("panda")
+    qs = robot.mid_q() + 0.02 * np.arange(40)[:, None]
+    poses = np.array([robot.fk(q) for q in qs])
+    with pytest.raises(InvalidArgumentError, match="MAX_PATH_POSES"):
+        solve_path(robot, poses, densify=sp.MAX_PATH_POSES)
+    solve_path(robot, poses[:3])  # (kernels loaded before the clock below)
+    t0 = time.perf_counter()
+    res = solve_path(robot, poses, time_limit=0.1, densify=200)
+    assert time.perf_counter() - t0 < 5.0  # (200 × 39 poses take about a minute unbounded)
+    assert "time_limit reached" in res.reason and "not checked" in res.reason
+    assert "jumps beyond" not in res.reason
