@@ -27,6 +27,7 @@ from typing import Any
 
 import numpy as np
 
+from swarm_ik import kernels
 from swarm_ik.errors import InvalidArgumentError, unknown
 from swarm_ik.goals import AvoidCollisions, Orientation, Pose, Position, Posture
 from swarm_ik.kernels import search
@@ -211,8 +212,9 @@ def warm_up(route: Route) -> None:
     try:
         problem = route.problem
         q = np.ascontiguousarray(problem.robot.mid_q()).clip(problem.lower, problem.upper)
-        if route.compiled:  # the one compiled call of the route
-            route._search(q, np.uint64(1), 1, 60.0)  # (with a clock: its first read is slow)
+        if route.compiled:  # the one compiled call of the route (with a clock: its first
+            # read is slow); a cache damaged inside its files is removed and compiled again
+            kernels.loaded_despite_damage(lambda: route._search(q, np.uint64(1), 1, 60.0))
         else:  # what the solvers' loops call, on a plain problem of the same goals (the
             # methods of a subclass or of the instance are the caller's: not run here)
             plain = IKProblem(problem.robot, goals=list(problem.goals))

@@ -63,7 +63,7 @@ import numpy as np
 from swarm_ik._types import BoolArray, FloatArray, IntArray
 from swarm_ik.errors import InvalidArgumentError, InvalidTargetError, SwarmIKError
 from swarm_ik.goals import AvoidCollisions, Goal, Pose, Position, State, kernel_slot, kernels
-from swarm_ik.kernels import lie, lm
+from swarm_ik.kernels import lie, lm, loaded_despite_damage
 from swarm_ik.kernels.fk import TreeArrays
 from swarm_ik.kernels.lm import CONVERGED, NOT_RUN
 from swarm_ik.kernels.search import sampling_window, splitmix64, uniform_in, uniforms, wall_clock
@@ -870,13 +870,16 @@ def _polish_targets(
     starts = np.zeros(n, dtype=np.int64)
     conv = np.zeros(n, dtype=np.bool_)
     if n:
-        _solve_targets(
-            t_par, cols, np.ascontiguousarray(q_seed, dtype=float), index, tree, goals,
-            kernels(), bounds, settings.lm_settings(), settings.tol_pos * settings.tol_margin,
-            settings.tol_rot * settings.tol_margin, int(settings.max_starts),
-            int(settings.seed), SECONDARY_EVALS,
-            NO_DEADLINE if settings.deadline is None else float(settings.deadline),
-            q, evals, starts, conv,
+        seeds = np.ascontiguousarray(q_seed, dtype=float)
+        loaded_despite_damage(  # (a cache damaged inside its files: removed, compiled again)
+            lambda: _solve_targets(
+                t_par, cols, seeds, index, tree, goals, kernels(), bounds,
+                settings.lm_settings(), settings.tol_pos * settings.tol_margin,
+                settings.tol_rot * settings.tol_margin, int(settings.max_starts),
+                int(settings.seed), SECONDARY_EVALS,
+                NO_DEADLINE if settings.deadline is None else float(settings.deadline),
+                q, evals, starts, conv,
+            )
         )  # fmt: skip
     return q, evals, starts, conv
 
@@ -1256,10 +1259,10 @@ def solve_batch(
             most half of them), and the targets not reached are reported unsolved
             (``n_starts`` 0, ``q`` their seed).  Checking the targets and building the result
             cost about 1–2 µs per target, so a limit much shorter than that is overrun (200,000
-            targets in 0.2 s: 0.4 s).  Every target first gets its seed's start, then the targets still open
-            their restarts (one pass after another), so a target reached may be left unsolved
-            where a call without the limit would have restarted it; every success is the
-            answer of a call without the limit.  Which targets are reached depends on the
+            targets in 0.2 s: 0.4 s).  Every target first gets its seed's start, then the
+            targets still open their restarts (one pass after another), so a target reached
+            may be left unsolved where a call without the limit would have restarted it;
+            every success is the answer of a call without the limit.  Which targets are reached depends on the
             machine's speed.
         scheduler: ``None`` (in this process, no Dask), ``"local"`` (an embedded
             ``dask.distributed.LocalCluster``, one single-threaded worker process per core),

@@ -1324,7 +1324,7 @@ def _check_step_dense(
     """
     assert ctx.wps.poses is not None
     pa, pb = ctx.wps.poses[i - 1], ctx.wps.poses[i]
-    chain = []
+    chain: list[FloatArray] = []
     q = qa
     met_all = True
     for s in range(1, k + 1):

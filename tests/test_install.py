@@ -150,6 +150,47 @@ def test_a_truncated_numba_cache_file_is_removed_and_the_kernel_rebuilt(
         assert drop_damaged_cache_files([str(cut.parent)]) == [str(cut)], k
 
 
+KERNEL = "import numba\n@numba.njit(cache=True)\ndef f(x):\n    return x + 1\n"
+LOADED = (
+    "import kernel, swarm_ik.kernels as K\n"
+    "K.cache_folders = lambda d: [{folder!r}]  # (this kernel's folder as swarm_ik's)\n"
+    "print(K.loaded_despite_damage(lambda: kernel.f(41)))\n"
+)
+
+
+def test_a_cache_file_damaged_inside_is_removed_when_loading_fails(tmp_path: Path) -> None:
+    """A data file whole in length but with flipped bytes: numba fails on every run (``LLVM
+    bitcode parsing error``) and the check on import cannot see it; the first call that loads
+    it (:func:`swarm_ik.kernels.loaded_despite_damage`) removes the cache files, says so in one
+    line and compiles again; later runs load the new files.  An error of the call itself is
+    raised as it is, and removes nothing."""
+    (tmp_path / "kernel.py").write_text(KERNEL)
+    cache = tmp_path / "cache"
+    env = _env(NUMBA_CACHE_DIR=str(cache), PYTHONPATH=str(tmp_path))
+    plain = "import kernel\nprint(kernel.f(41))\n"
+    assert _python(plain, env, tmp_path).stdout.strip() == "42"
+    (data,) = cache.rglob("*.nbc")
+    damaged = bytearray(data.read_bytes())
+    for k in range(len(damaged) // 2, len(damaged) // 2 + 64):
+        damaged[k] ^= 0xFF
+    data.write_bytes(bytes(damaged))
+    for _ in range(2):  # numba alone: the same failure on every run
+        assert _python(plain, env, tmp_path).returncode != 0
+    code = LOADED.format(folder=str(data.parent))
+    run = _python(code, env, tmp_path)
+    assert run.returncode == 0 and run.stdout.strip() == "42", run.stderr[-2000:]
+    (line,) = run.stderr.strip().splitlines()
+    assert "loading the compiled kernels failed" in line and "compiling again" in line
+    run = _python(plain, env, tmp_path)  # the new files load, nothing said
+    assert run.returncode == 0 and run.stdout.strip() == "42" and not run.stderr.strip()
+
+    files = sorted(p.name for p in data.parent.iterdir())
+    bad = "import swarm_ik.kernels as K\nK.loaded_despite_damage(lambda: 1 / 0)\n"
+    run = _python(bad, env, tmp_path)
+    assert "ZeroDivisionError" in run.stderr and "loading the compiled" not in run.stderr
+    assert sorted(p.name for p in data.parent.iterdir()) == files
+
+
 def test_import_removes_damaged_swarm_ik_cache_files(tmp_path: Path) -> None:
     """``import swarm_ik.kernels`` checks the folder numba will load swarm_ik's kernels from
     and removes what is not whole, with one line on stderr."""
@@ -163,6 +204,25 @@ def test_import_removes_damaged_swarm_ik_cache_files(tmp_path: Path) -> None:
     assert not damaged.exists()
     (line,) = run.stderr.strip().splitlines()
     assert "removed 1 damaged numba cache file(s) (lie.log3_nb-33.py311.nbi)" in line
+
+
+def test_import_clears_folders_and_files_in_the_wrong_places(tmp_path: Path) -> None:
+    """A folder where a cache file should be is removed with the damaged files; a file where
+    a module's cache folder should be is removed (numba would find no place to cache in:
+    ``no locator available``, exit 3 on every run)."""
+    cache = tmp_path / "numba"
+    folders = [Path(f) for f in cache_folders(str(cache))]
+    kernels_folder = folders[KERNEL_PACKAGES.index("kernels")]
+    kernels_folder.mkdir(parents=True)
+    (kernels_folder / "lie.log3_nb-33.py311.nbi").mkdir()
+    goals_folder = folders[KERNEL_PACKAGES.index("goals")]
+    goals_folder.write_text("")
+    run = _python("import swarm_ik.kernels", _env(NUMBA_CACHE_DIR=str(cache)), ROOT)
+    assert run.returncode == 0, run.stderr[-2000:]
+    assert not (kernels_folder / "lie.log3_nb-33.py311.nbi").exists()
+    assert not goals_folder.exists()
+    (line,) = run.stderr.strip().splitlines()
+    assert "removed 1 damaged numba cache file(s)" in line
 
 
 # --------------------------------------------------------- swarm_ik's own cache folder

@@ -33,6 +33,7 @@ from numpy.typing import NDArray
 
 from swarm_ik._validate import floats_or
 from swarm_ik.errors import InvalidArgumentError, UnknownNameError
+from swarm_ik.kernels import loaded_despite_damage
 from swarm_ik.kernels.lm import GOAL_SIGNATURE, kernel_list
 
 if TYPE_CHECKING:
@@ -71,7 +72,9 @@ def kernel_slot(kernel: Any) -> int:
             # the kernel of exactly this signature (compiled now, or loaded from numba's
             # cache): typed as a first-class function, so the list of kernels built from it is
             # one cached type whatever the kernels are
-            typed = numba.njit(GOAL_SIGNATURE, cache=True)(kernel.py_func)
+            typed = loaded_despite_damage(
+                lambda: numba.njit(GOAL_SIGNATURE, cache=True)(kernel.py_func)
+            )
         except Exception as exc:  # numba's typing errors have no public base class
             first = str(exc).strip().splitlines()[0] if str(exc).strip() else type(exc).__name__
             raise InvalidArgumentError(

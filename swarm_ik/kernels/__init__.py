@@ -22,11 +22,15 @@ from __future__ import annotations
 
 import hashlib
 import os
+import shutil
 import sys
-from collections.abc import Iterable
-from typing import IO
+from collections.abc import Callable, Iterable
+from typing import IO, TypeVar
 
 from swarm_ik import paths
+from swarm_ik.errors import SwarmIKError
+
+T = TypeVar("T")
 
 KERNEL_PACKAGES = ("", "goals", "kernels", "solvers")
 """The sub-packages of swarm_ik (``""``: the package itself) whose modules define
@@ -64,7 +68,7 @@ def settle_numba_cache() -> str | None:
         set), or ``None`` for the ``__pycache__`` folders next to the modules.
     """
     given = os.environ.get("NUMBA_CACHE_DIR")
-    if given and paths.writable_dir(given):
+    if given and paths.writable_dir(given) and _subfolders_usable(given):
         return given
     if all(paths.writable_dir(os.path.join(d, "__pycache__")) for d in source_dirs()):
         return None  # numba's default, next to the sources
@@ -93,6 +97,21 @@ def settle_numba_cache() -> str | None:
     if config is not None:
         config.CACHE_DIR = str(folder)
     return str(folder)
+
+
+def _subfolders_usable(numba_cache_dir: str) -> bool:
+    """Whether numba can write swarm_ik's kernels under ``numba_cache_dir``: each module
+    folder's sub-folder there (:func:`cache_folders`) absent or a writable folder.  A file in
+    its place is removed (numba would find no place to cache in: ``no locator available``)."""
+    for sub in cache_folders(numba_cache_dir):
+        if os.path.lexists(sub) and not os.path.isdir(sub):
+            try:
+                os.remove(sub)
+            except OSError:
+                return False
+        elif os.path.isdir(sub) and not os.access(sub, os.W_OK | os.X_OK):
+            return False
+    return True
 
 
 def cache_folders(numba_cache_dir: str | None) -> list[str]:
@@ -171,6 +190,11 @@ def drop_damaged_cache_files(folders: Iterable[str]) -> list[str]:
             if not name.endswith((".nbi", ".nbc")):
                 continue
             path = os.path.join(folder, name)
+            if os.path.isdir(path) and not os.path.islink(path):  # (a folder in its place)
+                shutil.rmtree(path, ignore_errors=True)
+                if not os.path.exists(path):
+                    removed.append(path)
+                continue
             try:
                 with open(path, "rb") as f:
                     size = os.fstat(f.fileno()).st_size
@@ -183,9 +207,73 @@ def drop_damaged_cache_files(folders: Iterable[str]) -> list[str]:
     return removed
 
 
+_SETTLED: list[str | None] = [None]
+"""The folder numba caches swarm_ik's kernels under, as :func:`settle_numba_cache` settled
+it on import (None: the ``__pycache__`` folders)."""
+
+
+def drop_cache_files(folders: Iterable[str]) -> list[str]:
+    """Remove every numba cache file (``.nbi``, ``.nbc``) in ``folders``; returns the paths
+    removed (those that could not be are left)."""
+    removed = []
+    for folder in folders:
+        try:
+            names = sorted(os.listdir(folder))
+        except OSError:
+            continue
+        for name in names:
+            if name.endswith((".nbi", ".nbc")):
+                path = os.path.join(folder, name)
+                try:
+                    os.remove(path)
+                except OSError:
+                    continue
+                removed.append(path)
+    return removed
+
+
+def _raised_loading_a_cache(exc: BaseException) -> bool:
+    """Whether ``exc`` was raised while numba read a cache file (a frame of its caching
+    module in the traceback): only then are the cache files removed."""
+    tb = exc.__traceback__
+    while tb is not None:
+        name = tb.tb_frame.f_code.co_filename.replace("\\", "/")
+        if name.endswith("numba/core/caching.py"):
+            return True
+        tb = tb.tb_next
+    return False
+
+
+def loaded_despite_damage(load: Callable[[], T]) -> T:
+    """``load()``, a first call that loads compiled kernels from numba's cache; when it fails
+    and swarm_ik's cache holds files, they are all removed (one line on stderr) and ``load``
+    runs once more, compiling anew.  A cache file whole in length but damaged inside (flipped
+    bytes: numba's ``LLVM bitcode parsing error`` or a ``UnicodeDecodeError`` on every run),
+    which the check on import cannot see, so costs one compile instead of every solve.  An
+    error that is not the cache's comes back from the second call as it was."""
+    try:
+        return load()
+    except (KeyboardInterrupt, SwarmIKError):
+        raise
+    except Exception as exc:
+        if not _raised_loading_a_cache(exc):
+            raise
+        removed = drop_cache_files(cache_folders(_SETTLED[0]))
+        if not removed:
+            raise
+        _notice(
+            f"loading the compiled kernels failed ({type(exc).__name__}: "
+            f"{str(exc).strip().splitlines()[0][:120] if str(exc).strip() else ''}); removed "
+            f"{len(removed)} numba cache file(s) under "
+            f"{os.path.commonpath([os.path.dirname(p) for p in removed])}; compiling again"
+        )
+        return load()
+
+
 def _settle() -> None:
     """Settle the cache folder, then drop the damaged files in it (one line on stderr)."""
-    removed = drop_damaged_cache_files(cache_folders(settle_numba_cache()))
+    _SETTLED[0] = settle_numba_cache()
+    removed = drop_damaged_cache_files(cache_folders(_SETTLED[0]))
     if removed:
         names = ", ".join(os.path.basename(p) for p in removed[:3])
         more = f" and {len(removed) - 3} more" if len(removed) > 3 else ""
