@@ -1262,8 +1262,8 @@ def solve_batch(
             targets in 0.2 s: 0.4 s).  Every target first gets its seed's start, then the
             targets still open their restarts (one pass after another), so a target reached
             may be left unsolved where a call without the limit would have restarted it;
-            every success is the answer of a call without the limit.  Which targets are reached depends on the
-            machine's speed.
+            every success is the answer of a call without the limit.  Which targets are
+            reached depends on the machine's speed.
         scheduler: ``None`` (in this process, no Dask), ``"local"`` (an embedded
             ``dask.distributed.LocalCluster``, one single-threaded worker process per core),
             a scheduler address such as ``"tcp://127.0.0.1:8786"``, or a

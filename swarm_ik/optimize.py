@@ -71,12 +71,15 @@ def check_budget(max_evals: int | None, time_limit: float | None) -> None:
     """Refuse a zero/negative evaluation budget or time limit, or one beyond
     :data:`MAX_EVALS_LIMIT` evaluations."""
     if max_evals is not None and (
-        isinstance(max_evals, bool)
-        or not isinstance(max_evals, (int, np.integer))
-        or not 1 <= max_evals <= MAX_EVALS_LIMIT
+        isinstance(max_evals, bool) or not isinstance(max_evals, (int, np.integer)) or max_evals < 1
     ):
         raise InvalidArgumentError(
-            f"max_evals must be an integer from 1 to 2**62, got {reprlib.repr(max_evals)}"
+            f"max_evals must be a positive integer, got {reprlib.repr(max_evals)}"
+        )
+    if max_evals is not None and max_evals > MAX_EVALS_LIMIT:
+        raise InvalidArgumentError(
+            f"max_evals must be at most 2**62 (swarm_ik.optimize.MAX_EVALS_LIMIT), got "
+            f"{reprlib.repr(max_evals)}"
         )
     if time_limit is not None and not (is_finite_nonneg(time_limit) and float(time_limit) > 0):
         raise InvalidArgumentError(

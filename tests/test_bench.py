@@ -561,7 +561,7 @@ def test_bench_outputs_and_sizes_are_checked_before_work(tmp_path, capsys) -> No
     assert "is a file" in capsys.readouterr().err
     assert main(["bench", "throughput", "--sizes", "0", "--out", str(tmp_path / "t")]) == 2
     err = capsys.readouterr().err.strip()
-    assert "--sizes must be positive" in err and len(err.splitlines()) == 1
+    assert "argument --sizes: must be an integer from 1" in err and len(err.splitlines()) == 1
 
 
 @pytest.mark.parametrize("name", sorted(BENCHMARKS))

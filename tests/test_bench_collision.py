@@ -182,14 +182,29 @@ def test_cli_writes_csvs_and_a_summary_from_them(tmp_path) -> None:
 @pytest.mark.parametrize(
     "argv,message",
     [(["--scenes", "kitchen"], "valid: table, shelf, cubby"),
-     (["--solvers", "magic"], "valid: ours\\+goal"), (["--n", "0"], "--n must be a positive"),
-     (["--budget-ms", "-1"], "--budget-ms must be a positive")],
+     (["--solvers", "magic"], "valid: ours\\+goal")],
 )  # fmt: skip
 def test_bad_options_are_refused(argv: list[str], message: str, tmp_path) -> None:
     parser = argparse.ArgumentParser()
     C.add_arguments(parser)
     with pytest.raises(swarm_ik.SwarmIKError, match=message):
         C.run(parser.parse_args([*argv, "--out", str(tmp_path / "x")]))
+
+
+@pytest.mark.parametrize(
+    "argv,message",
+    [(["--n", "0"], "argument --n: must be an integer from 1"),
+     (["--budget-ms", "-1"], "argument --budget-ms: must be a finite number > 0"),
+     (["--seed", "-1"], "argument --seed: a seed must be in")],
+)  # fmt: skip
+def test_bad_numbers_are_refused_when_parsed(
+    argv: list[str], message: str, capsys: pytest.CaptureFixture[str]
+) -> None:
+    parser = argparse.ArgumentParser()
+    C.add_arguments(parser)
+    with pytest.raises(SystemExit) as info:
+        parser.parse_args(argv)
+    assert info.value.code == 2 and message in capsys.readouterr().err
 
 
 def test_diagnosis_finds_the_generating_branch_collision_free() -> None:

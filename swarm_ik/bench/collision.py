@@ -93,7 +93,7 @@ from typing import Any
 
 import numpy as np
 
-from swarm_ik import _argtypes
+from swarm_ik import argtypes
 from swarm_ik._validate import positive_float
 from swarm_ik.bench import common
 from swarm_ik.errors import InvalidArgumentError
@@ -1174,13 +1174,13 @@ def _ablation_lines(abl: Sequence[dict[str, str]], info: dict[str, Any]) -> list
 def add_arguments(parser: argparse.ArgumentParser) -> None:
     """Options of ``swarm-ik bench collision``."""
     parser.add_argument(
-        "--n", type=_argtypes.count(1), default=200, help="targets per scene and robot"
+        "--n", type=argtypes.count(1), default=200, help="targets per scene and robot"
     )
     parser.add_argument(
-        "--budget-ms", type=_argtypes.positive_number, default=20.0, help="budget per target [ms]"
+        "--budget-ms", type=argtypes.positive_number, default=20.0, help="budget per target [ms]"
     )
     parser.add_argument(
-        "--seed", type=_argtypes.seed, default=0, help="seed of the scenes and targets"
+        "--seed", type=argtypes.seed, default=0, help="seed of the scenes and targets"
     )
     parser.add_argument("--robots", default=",".join(ROBOTS), help="comma-separated robots")
     parser.add_argument(
@@ -1189,10 +1189,10 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
         f"{','.join(HARD_SCENES)}; 'all' = every scene",
     )  # fmt: skip
     parser.add_argument("--solvers", default=",".join(SOLVERS), help="comma-separated solvers")
-    parser.add_argument("--batch-n", type=_argtypes.count(1), default=None,
+    parser.add_argument("--batch-n", type=argtypes.count(1), default=None,
                         help="targets of the batch loop (default --n)")  # fmt: skip
     parser.add_argument(
-        "--diagnose", type=_argtypes.count(0), default=0, metavar="N",
+        "--diagnose", type=argtypes.count(0), default=0, metavar="N",
         help="also diagnose ours+goal on the first N targets of each scene (sphere "
         "tolerances, budgets, closed-form branches; slow the first time: fits spheres)",
     )  # fmt: skip
@@ -1203,7 +1203,7 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     )  # fmt: skip
     parser.add_argument("--ablation-budget-ms", type=float, default=50.0,
                         help="time limit per target of the ablation [ms]")  # fmt: skip
-    parser.add_argument("--ablation-n", type=_argtypes.count(1), default=None,
+    parser.add_argument("--ablation-n", type=argtypes.count(1), default=None,
                         help="targets per scene of the ablation (default --n)")  # fmt: skip
     parser.add_argument("--quick", action="store_true", help="N = 10 (a smoke run)")
     parser.add_argument("--out", default=None, help="output folder (default ./bench-collision)")

@@ -33,7 +33,7 @@ from typing import Any
 
 import numpy as np
 
-from swarm_ik import _argtypes
+from swarm_ik import argtypes
 from swarm_ik.bench import common, peers, plans, runner
 from swarm_ik.bench.plans import IKPlan, IKTask
 from swarm_ik.errors import InvalidArgumentError
@@ -309,7 +309,7 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     )
     parser.add_argument(
         "--n",
-        type=_argtypes.count(1),
+        type=argtypes.count(1),
         default=None,
         help=f"targets per robot (default 1000; with --quick {plans.IK_QUICK_N})",
     )
@@ -317,30 +317,30 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument(
         "--budgets-ms",
         nargs="+",
-        type=_argtypes.positive_number,
+        type=argtypes.positive_number,
         default=list(IKPlan.budgets_ms),
         metavar="MS",
         help=f"time budgets per call [ms] (default {budgets}); peers without a time limit "
         "(rtb, ikpy) run to their own iteration limits, and their times show it",
     )
     parser.add_argument(
-        "--seed", type=_argtypes.seed, default=0, help="seed of targets and run order"
+        "--seed", type=argtypes.seed, default=0, help="seed of targets and run order"
     )
     parser.add_argument(
         "--tol",
-        type=_argtypes.positive_number,
+        type=argtypes.positive_number,
         default=1e-5,
         help="strict tolerance [m and rad] (default 1e-5)",
     )
     parser.add_argument(
         "--lenient-tol",
-        type=_argtypes.positive_number,
+        type=argtypes.positive_number,
         default=2e-5,
         help="lenient tolerance [m and rad] (default 2e-5)",
     )
     parser.add_argument(
         "--jobs",
-        type=_argtypes.count(1),
+        type=argtypes.count(1),
         default=1,
         help="worker processes (default 1: one call at a time, as a timing benchmark should; "
         "more only to check that it works)",

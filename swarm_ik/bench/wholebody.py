@@ -41,7 +41,7 @@ from typing import Any
 
 import numpy as np
 
-from swarm_ik import _argtypes
+from swarm_ik import argtypes
 from swarm_ik.bench import common
 from swarm_ik.bench import wholebody_peers as wp
 from swarm_ik.errors import InvalidArgumentError, SwarmIKError
@@ -63,20 +63,20 @@ FIELDS = (
 def add_arguments(parser: argparse.ArgumentParser) -> None:
     """The options of ``swarm-ik bench wholebody``."""
     parser.add_argument(
-        "--n", type=_argtypes.count(1), default=500, help="number of targets (default 500)"
+        "--n", type=argtypes.count(1), default=500, help="number of targets (default 500)"
     )
     parser.add_argument(
-        "--seed", type=_argtypes.seed, default=1, help="seed of the targets (default 1)"
+        "--seed", type=argtypes.seed, default=1, help="seed of the targets (default 1)"
     )
     parser.add_argument(
         "--time-limit-ms",
-        type=_argtypes.positive_number,
+        type=argtypes.positive_number,
         default=100.0,
         help="limit of one call [ms] (default 100)",
     )
     parser.add_argument(
         "--chunk",
-        type=_argtypes.count(1),
+        type=argtypes.count(1),
         default=50,
         help="targets per interleaved chunk (default 50)",
     )

@@ -24,7 +24,7 @@ import argparse
 import sys
 from pathlib import Path
 
-from swarm_ik import _argtypes
+from swarm_ik import argtypes
 from swarm_ik.cli._args import (
     EXIT_INTERRUPTED,
     EXIT_NOT_REACHED,
@@ -80,7 +80,7 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("--chunk-size", type=int, default=None, help="targets per task")
     parser.add_argument(
         "--seed",
-        type=_argtypes.seed,
+        type=argtypes.seed,
         default=0,
         help="seed of the restarts (and of sampled targets)",
     )

@@ -22,7 +22,7 @@ import json
 from pathlib import Path
 from typing import Any
 
-from swarm_ik import _argtypes
+from swarm_ik import argtypes
 from swarm_ik.cli._args import (
     EXIT_NOT_REACHED,
     EXIT_OK,
@@ -80,7 +80,7 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
         metavar="K",
         help="check each step through K interpolated poses (default 0)",
     )
-    parser.add_argument("--seed", type=_argtypes.seed, default=0, help="seed (default 0)")
+    parser.add_argument("--seed", type=argtypes.seed, default=0, help="seed (default 0)")
     parser.add_argument("--time-limit", type=float, default=None, help="seconds for the search")
     add_tolerances(parser)
     parser.add_argument(

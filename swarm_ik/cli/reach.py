@@ -16,7 +16,7 @@ import sys
 from pathlib import Path
 from typing import Any
 
-from swarm_ik import _argtypes
+from swarm_ik import argtypes
 from swarm_ik.cli import _viewer
 from swarm_ik.cli._args import (
     EXIT_OK,
@@ -58,7 +58,7 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     )
     parser.add_argument(
         "--orientations",
-        type=_argtypes.count(1),
+        type=argtypes.count(1),
         default=8,
         metavar="K",
         help="orientations tried per voxel (default 8, seeded random rotations)",
@@ -86,14 +86,14 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("--no-html", action="store_true", help="do not write the HTML page")
     parser.add_argument(
         "--seed",
-        type=_argtypes.seed,
+        type=argtypes.seed,
         default=0,
         help="seed of the orientations and restarts (default 0)",
     )
     add_lm_options(parser, 16, "most LM starts per pose")
     parser.add_argument(
         "--max-targets",
-        type=_argtypes.count(1),
+        type=argtypes.count(1),
         default=MAX_TARGETS,
         help=f"refuse grids of more poses (voxels × K) than this (default {MAX_TARGETS})",
     )

@@ -7,7 +7,7 @@ from __future__ import annotations
 import argparse
 from typing import Any
 
-from swarm_ik import _argtypes
+from swarm_ik import argtypes
 from swarm_ik.cli import _viewer
 from swarm_ik.cli._args import EXIT_NOT_REACHED, EXIT_OK, RobotCommand, add_pose, robot_kwargs
 
@@ -60,7 +60,7 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
         help="solver for the target (default: swarm_ik.solve_many; with a name, that solver "
         "from successive seeds)",
     )
-    parser.add_argument("--seed", type=_argtypes.seed, default=0, help="random seed (default 0)")
+    parser.add_argument("--seed", type=argtypes.seed, default=0, help="random seed (default 0)")
     parser.add_argument(
         "--layout",
         default="side",
