@@ -169,7 +169,10 @@ def grid_cells(lower: Any, upper: Any, resolution: float) -> int:
     hi = np.asarray(upper, dtype=float).reshape(3)
     n = 1
     for a in range(3):
-        n *= max(1, int(np.ceil((hi[a] - lo[a]) / resolution - 1e-9)))
+        per_axis = (float(hi[a]) - float(lo[a])) / resolution - 1e-9  # (Python floats: an
+        if not math.isfinite(per_axis):  # extent beyond 1.8e308 m is inf, without a warning)
+            return 2**1100  # (more than any cap; over 1e300 in the message)
+        n *= max(1, math.ceil(per_axis))
     return n
 
 
@@ -194,10 +197,10 @@ def check_grid_size(
     res = positive_float(resolution, "resolution")
     n = grid_cells(lower, upper, res)
     if n > max_cells:
-        extent = np.asarray(upper, dtype=float).reshape(3) - np.asarray(lower, dtype=float).reshape(
-            3
-        )
-        with np.errstate(over="ignore"):  # (bounds of 1e300 m: no resolution fits)
+        with np.errstate(over="ignore", invalid="ignore"):  # (bounds of 1e300 m: none fits)
+            extent = np.asarray(upper, dtype=float).reshape(3) - np.asarray(
+                lower, dtype=float
+            ).reshape(3)
             fit = float(np.cbrt(np.prod(np.maximum(extent, res)) / max_cells))
         hint = f"--resolution {fit:.3g} or coarser, or " if math.isfinite(fit) else ""
         raise InvalidArgumentError(

@@ -229,8 +229,9 @@ def solve_path(
         frame: The goal frame of ``poses`` (default ``robot.ee_frame``).
         time_limit: Most wall-clock seconds for building candidates and checking the
             ``densify`` poses [s]; when reached, the remaining waypoints are only tracked (one
-            solve each, 0.1–1 ms), the remaining interpolated poses are not solved (their steps
-            count as jumps), and the reason says so.  Results are deterministic for a seed only
+            solve each, 0.1–1 ms), the remaining interpolated poses are not solved (the path
+            through them is filled in joint space and reported unchecked, not as jumps), and
+            the reason says so.  Results are deterministic for a seed only
             when the limit is not reached.
         seed: Seed (or Generator) of every random choice (the solvers' seeds are drawn from
             it): the same seed gives the same path.
@@ -1303,7 +1304,7 @@ def _densify(
         dense, failed = check(choice)
         if not failed:
             return choice, dense, True
-        if ctx.out_of_time():  # (no round more: the steps left unchecked count as jumps)
+        if ctx.out_of_time():  # (no round more: the steps left are reported unchecked)
             return choice, dense, False
         choice = _search(graph, start, ctx, rejected)
     dense, failed = check(choice)
@@ -1329,7 +1330,12 @@ def _check_step_dense(
     met_all = True
     for s in range(1, k + 1):
         if ctx.out_of_time():  # the rest of the step unchecked: joint-space points, not met
-            chain.extend(q + (qb - q) * (t / (k + 1 - s + 1)) for t in range(1, k + 2 - s))
+            d = qb - q  # (the short way round on joints compared modulo 2π)
+            d[ctx.wrap] = (d[ctx.wrap] + np.pi) % (2 * np.pi) - np.pi
+            for t in range(1, k + 2 - s):
+                p = q + d * (t / (k + 2 - s))
+                p[ctx.true_wrap] = (p[ctx.true_wrap] + np.pi) % (2 * np.pi) - np.pi
+                chain.append(p)
             met_all = False
             break
         pose = interpolate_pose(pa, pb, s / (k + 1))

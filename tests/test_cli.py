@@ -505,6 +505,8 @@ def test_output_pipe_closed_by_the_reader_is_141_without_a_traceback() -> None:
         (["bench", "many", "--out", "{tmp}/b", "--n-targets", "0"], ["--n-targets"]),
         (["bench", "goals", "--out", "{tmp}/b", "--n", "-3"], ["--n", "from 1"]),
         (["bench", "throughput", "--quick", "--out", "{tmp}/b", "--boxes", "-1"], ["--boxes"]),
+        (["bench", "throughput", "--quick", "--out", "{tmp}/b", "--loop-max", "-1"],
+         ["--loop-max", "from 0"]),
         (["bench", "collision", "--quick", "--out", "{tmp}/b", "--seed", "-1"], ["--seed"]),
         (["bench", "wholebody", "--quick", "--out", "{tmp}/b", "--seed", "-1"], ["--seed"]),
         (["solve", "--robot", "yumi_left", *FROM_Q, "--max-evals", "99999999999999999999999"],
@@ -543,6 +545,18 @@ def test_empty_target_files_and_huge_reach_bounds_are_refused(
         str(tmp_path / "m.npz"),
     )
     assert "over 1e300 voxels" in line and "smaller --bounds" in line
+    widest = ["-1e308"] * 3 + ["1e308"] * 3  # (an extent beyond a float)
+    line = cli_error(
+        capsys,
+        "reach",
+        "--robot",
+        "yumi_left",
+        "--bounds",
+        *widest,
+        "--out",
+        str(tmp_path / "m.npz"),
+    )
+    assert "over 1e300 voxels" in line
 
 
 def test_api_budgets_beyond_numbers_are_refused() -> None:
@@ -556,3 +570,15 @@ def test_api_budgets_beyond_numbers_are_refused() -> None:
         swarm_ik.solve(problem, time_limit=10**400)
     with pytest.raises(InvalidArgumentError, match="ee_frame"):
         swarm_ik.load_robot("yumi_left", 5)  # type: ignore[arg-type]
+
+
+def test_a_schedule_of_many_evaluations_stays_within_the_iteration_cap() -> None:
+    """``SolverSpec.schedule`` of a budget beyond MAX_ITERATIONS iterations (DLS: one
+    evaluation each) gives settings that ``solve`` accepts."""
+    from swarm_ik.solvers import base
+
+    kw = base.get("dls").schedule(2_000_000)
+    assert kw["iterations"] == base.MAX_ITERATIONS and kw["max_evals"] == 2_000_000
+    robot = swarm_ik.load_robot("yumi_left")
+    problem = swarm_ik.IKProblem(robot, robot.fk(robot.mid_q()))
+    assert swarm_ik.solve(problem, "dls", **kw).success

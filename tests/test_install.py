@@ -7,6 +7,7 @@ from __future__ import annotations
 import contextlib
 import json
 import os
+import pickle
 import re
 import shlex
 import shutil
@@ -527,3 +528,32 @@ def test_read_only_install_with_unwritable_home_solves(
     assert lines[1] == "True" and lines[-1] == "0"
     assert "removed 2 damaged numba cache file(s)" in second.stderr
     assert drop_damaged_cache_files({str(nbi.parent), str(nbc.parent)}) == []
+
+
+def test_a_users_goal_kernel_that_cannot_be_cached_removes_nothing(tmp_path: Path) -> None:
+    """A goal kernel of the user's that numba cannot cache (defined in a script read from
+    stdin: no file, ``no locator available``) is refused as it was; swarm_ik's own cache
+    files are left where they are (the recovery is for swarm_ik's kernels)."""
+    cache = tmp_path / "numba"
+    folder = Path(cache_folders(str(cache))[KERNEL_PACKAGES.index("kernels")])
+    folder.mkdir(parents=True)
+    kept = folder / "lie.log3_nb-33.py311.nbi"
+    kept.write_bytes(pickle.dumps(1) + pickle.dumps({}))
+    script = (
+        "import numba\n"
+        "from swarm_ik.goals import kernel_slot\n"
+        "from swarm_ik.errors import InvalidArgumentError\n"
+        "@numba.njit\n"
+        "def mine(par, ipar, q, f_pos, f_rot, f_jac, want_jac, res, jac, err, work):\n"
+        "    res[0] = q[0]\n"
+        "try:\n"
+        "    kernel_slot(mine)\n"
+        "except InvalidArgumentError as exc:\n"
+        "    print('refused', exc)\n"
+    )
+    run = subprocess.run(
+        [sys.executable, "-"], input=script, env=_env(NUMBA_CACHE_DIR=str(cache)),
+        cwd=ROOT, capture_output=True, text=True, timeout=300,
+    )  # fmt: skip
+    assert run.stdout.startswith("refused") and "no locator" in run.stdout, run.stderr[-2000:]
+    assert kept.exists() and "removed" not in run.stderr

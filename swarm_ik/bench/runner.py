@@ -374,9 +374,11 @@ def _execute_pool(
     initializer: Callable[[], None] | None,
 ) -> None:
     """Run ``todo`` over ``jobs`` spawned processes, at most ``2·jobs`` queued at a time (an
-    interruption cancels the rest at once; what finishes meanwhile is still written)."""
+    interruption writes what has finished, cancels the queue and stops the workers at once:
+    the runs they held are lost, to be run again on resume)."""
     ctx = multiprocessing.get_context("spawn")  # no fork: safe with numba/BLAS threads
     init = None if initializer is None else functools.partial(_quiet_initializer, initializer)
+    others = set(multiprocessing.active_children())  # (children that are not the pool's)
     pool = ProcessPoolExecutor(max_workers=jobs, mp_context=ctx, initializer=init)
     futures: dict[Future[Outcome], Task] = {}
     queue = iter(todo)
@@ -398,8 +400,8 @@ def _execute_pool(
             if fut.done() and not fut.cancelled() and fut.exception() is None:
                 write(fut.result())
         pool.shutdown(wait=False, cancel_futures=True)
-        for proc in multiprocessing.active_children():  # the pool's workers: stopped now, not
-            proc.terminate()  # after the runs they hold (Ctrl-C answers within a second)
+        for proc in set(multiprocessing.active_children()) - others:  # the pool's workers:
+            proc.terminate()  # stopped now, not after their runs (Ctrl-C within a second)
         raise
     finally:
         pool.shutdown(wait=True, cancel_futures=True)

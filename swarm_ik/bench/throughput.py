@@ -99,7 +99,7 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     )
     parser.add_argument(
         "--loop-max",
-        type=argtypes.count(1),
+        type=argtypes.count(0),
         default=1000,
         help="largest N for the loops over solve and TRAC-IK (default 1000)",
     )

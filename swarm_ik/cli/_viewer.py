@@ -181,9 +181,9 @@ def wait(args: argparse.Namespace) -> None:
             until = "until Ctrl-C" if math.isinf(limit) else f"for {limit:g} s (Ctrl-C closes it)"
             _say(args, f"the viewer stays up {until}")
             _sleep(limit)
-    except EOFError:  # (stdin closed: nobody can press Enter)
-        pass
-    finally:  # (a Ctrl-C or SIGTERM goes on: exit 130, after meshcat's server is stopped)
+    except (KeyboardInterrupt, EOFError):  # Ctrl-C (or SIGTERM) is how the viewer closes:
+        pass  # the command then exits with its own outcome (0, or 1 for solve's "not reached")
+    finally:
         if installed:
             signal.signal(signal.SIGTERM, signal.SIG_DFL if previous is None else previous)
 

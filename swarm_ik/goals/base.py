@@ -72,9 +72,13 @@ def kernel_slot(kernel: Any) -> int:
             # the kernel of exactly this signature (compiled now, or loaded from numba's
             # cache): typed as a first-class function, so the list of kernels built from it is
             # one cached type whatever the kernels are
-            typed = loaded_despite_damage(
-                lambda: numba.njit(GOAL_SIGNATURE, cache=True)(kernel.py_func)
-            )
+            def compiled() -> Any:
+                return numba.njit(GOAL_SIGNATURE, cache=True)(kernel.py_func)
+
+            ours = str(getattr(kernel.py_func, "__module__", "")).startswith("swarm_ik.")
+            # (a damaged cache of swarm_ik's own kernels is removed and compiled again; a
+            # user's kernel is the user's, its errors reported as they are)
+            typed = loaded_despite_damage(compiled) if ours else compiled()
         except Exception as exc:  # numba's typing errors have no public base class
             first = str(exc).strip().splitlines()[0] if str(exc).strip() else type(exc).__name__
             raise InvalidArgumentError(

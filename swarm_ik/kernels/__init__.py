@@ -234,7 +234,10 @@ def drop_cache_files(folders: Iterable[str]) -> list[str]:
 
 def _raised_loading_a_cache(exc: BaseException) -> bool:
     """Whether ``exc`` was raised while numba read a cache file (a frame of its caching
-    module in the traceback): only then are the cache files removed."""
+    module in the traceback), not because numba found no folder to cache in: only then are
+    the cache files removed."""
+    if "no locator available" in str(exc):
+        return False
     tb = exc.__traceback__
     while tb is not None:
         name = tb.tb_frame.f_code.co_filename.replace("\\", "/")

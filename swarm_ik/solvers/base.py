@@ -538,13 +538,16 @@ class SolverSpec:
             budget: Evaluations, ``>= 1``.
 
         Returns:
-            Keyword arguments for :func:`swarm_ik.solve` (``max_evals``, maybe ``iterations``).
+            Keyword arguments for :func:`swarm_ik.solve` (``max_evals``, maybe ``iterations``,
+            at most :data:`MAX_ITERATIONS`).
         """
         if self.evals_per_iteration is not None:
-            return {"iterations": -(-budget // self.evals_per_iteration), "max_evals": budget}
-        if self.budget_only or "pop_size" not in self.params or "iterations" not in self.params:
+            its = -(-budget // self.evals_per_iteration)
+        elif self.budget_only or "pop_size" not in self.params or "iterations" not in self.params:
             return {"max_evals": budget}
-        return {"iterations": -(-budget // int(self.params["pop_size"])), "max_evals": budget}
+        else:
+            its = -(-budget // int(self.params["pop_size"]))
+        return {"iterations": min(its, MAX_ITERATIONS), "max_evals": budget}
 
     def resolve(self, overrides: Mapping[str, Any], dim: int | None = None) -> dict[str, Any]:
         """Defaults updated with ``overrides``; unknown names are refused, listing valid ones.
