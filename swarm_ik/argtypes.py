@@ -50,3 +50,8 @@ def positive_number(text: str) -> float:
     if not (math.isfinite(value) and value > 0.0):
         raise argparse.ArgumentTypeError(f"must be a finite number > 0, got {text}")
     return value
+
+
+def add_seed(parser: argparse.ArgumentParser, help: str, default: int = 0) -> None:
+    """``--seed`` (:func:`seed`) on ``parser``, described by ``help``."""
+    parser.add_argument("--seed", type=seed, default=default, help=f"{help} (default {default})")

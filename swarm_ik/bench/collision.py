@@ -95,6 +95,7 @@ import numpy as np
 
 from swarm_ik import argtypes
 from swarm_ik._validate import positive_float
+from swarm_ik.argtypes import count, positive_number
 from swarm_ik.bench import common
 from swarm_ik.errors import InvalidArgumentError
 from swarm_ik.problem import largest_errors
@@ -1173,15 +1174,11 @@ def _ablation_lines(abl: Sequence[dict[str, str]], info: dict[str, Any]) -> list
 # --------------------------------------------------------------------------------- CLI
 def add_arguments(parser: argparse.ArgumentParser) -> None:
     """Options of ``swarm-ik bench collision``."""
+    parser.add_argument("--n", type=count(1), default=200, help="targets per scene and robot")
     parser.add_argument(
-        "--n", type=argtypes.count(1), default=200, help="targets per scene and robot"
+        "--budget-ms", type=positive_number, default=20.0, help="budget per target [ms]"
     )
-    parser.add_argument(
-        "--budget-ms", type=argtypes.positive_number, default=20.0, help="budget per target [ms]"
-    )
-    parser.add_argument(
-        "--seed", type=argtypes.seed, default=0, help="seed of the scenes and targets"
-    )
+    argtypes.add_seed(parser, "seed of the scenes and targets")
     parser.add_argument("--robots", default=",".join(ROBOTS), help="comma-separated robots")
     parser.add_argument(
         "--scenes", default=",".join(DEFAULT_SCENES),
@@ -1189,12 +1186,12 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
         f"{','.join(HARD_SCENES)}; 'all' = every scene",
     )  # fmt: skip
     parser.add_argument("--solvers", default=",".join(SOLVERS), help="comma-separated solvers")
-    parser.add_argument("--batch-n", type=argtypes.count(1), default=None,
+    parser.add_argument("--batch-n", type=count(1), default=None,
                         help="targets of the batch loop (default --n)")  # fmt: skip
     parser.add_argument(
-        "--diagnose", type=argtypes.count(0), default=0, metavar="N",
+        "--diagnose", type=count(0), default=0, metavar="N",
         help="also diagnose ours+goal on the first N targets of each scene (sphere "
-        "tolerances, budgets, closed-form branches; slow the first time: fits spheres)",
+        "tolerances, budgets, closed-form branches; slow the first time: fits spheres)"
     )  # fmt: skip
     parser.add_argument(
         "--ablation", action="store_true",
@@ -1203,7 +1200,7 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     )  # fmt: skip
     parser.add_argument("--ablation-budget-ms", type=float, default=50.0,
                         help="time limit per target of the ablation [ms]")  # fmt: skip
-    parser.add_argument("--ablation-n", type=argtypes.count(1), default=None,
+    parser.add_argument("--ablation-n", type=count(1), default=None,
                         help="targets per scene of the ablation (default --n)")  # fmt: skip
     parser.add_argument("--quick", action="store_true", help="N = 10 (a smoke run)")
     parser.add_argument("--out", default=None, help="output folder (default ./bench-collision)")

@@ -27,6 +27,7 @@ import numpy as np
 import swarm_ik
 from swarm_ik import argtypes
 from swarm_ik import goals as G
+from swarm_ik.argtypes import count, positive_number
 from swarm_ik.bench import common
 
 HELP = "goal sets: two-arm Baxter (vs pink), axis and look-at goals, the effect of a posture goal"
@@ -39,16 +40,11 @@ ARMS = ("panda", "ur5", "xarm7")
 
 def add_arguments(parser: argparse.ArgumentParser) -> None:
     """Options of ``swarm-ik bench goals``."""
+    parser.add_argument("--n", type=count(1), default=500, help="targets per experiment and robot")
     parser.add_argument(
-        "--n", type=argtypes.count(1), default=500, help="targets per experiment and robot"
+        "--budget-ms", type=positive_number, default=20.0, help="time budget per solve [ms]"
     )
-    parser.add_argument(
-        "--budget-ms",
-        type=argtypes.positive_number,
-        default=20.0,
-        help="time budget per solve [ms]",
-    )
-    parser.add_argument("--seed", type=argtypes.seed, default=0, help="seed of the targets")
+    argtypes.add_seed(parser, "seed of the targets")
     parser.add_argument("--quick", action="store_true", help="N = 30 (a smoke run)")
     parser.add_argument("--no-pink", action="store_true", help="skip the pink peer")
     parser.add_argument("--out", default=None, help="output folder (default ./bench-goals)")

@@ -34,6 +34,7 @@ from typing import Any
 import numpy as np
 
 from swarm_ik import argtypes
+from swarm_ik.argtypes import count, positive_number
 from swarm_ik.bench import common, peers, plans, runner
 from swarm_ik.bench.plans import IKPlan, IKTask
 from swarm_ik.errors import InvalidArgumentError
@@ -309,7 +310,7 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     )
     parser.add_argument(
         "--n",
-        type=argtypes.count(1),
+        type=count(1),
         default=None,
         help=f"targets per robot (default 1000; with --quick {plans.IK_QUICK_N})",
     )
@@ -317,30 +318,28 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument(
         "--budgets-ms",
         nargs="+",
-        type=argtypes.positive_number,
+        type=positive_number,
         default=list(IKPlan.budgets_ms),
         metavar="MS",
         help=f"time budgets per call [ms] (default {budgets}); peers without a time limit "
         "(rtb, ikpy) run to their own iteration limits, and their times show it",
     )
-    parser.add_argument(
-        "--seed", type=argtypes.seed, default=0, help="seed of targets and run order"
-    )
+    argtypes.add_seed(parser, "seed of targets and run order")
     parser.add_argument(
         "--tol",
-        type=argtypes.positive_number,
+        type=positive_number,
         default=1e-5,
         help="strict tolerance [m and rad] (default 1e-5)",
     )
     parser.add_argument(
         "--lenient-tol",
-        type=argtypes.positive_number,
+        type=positive_number,
         default=2e-5,
         help="lenient tolerance [m and rad] (default 2e-5)",
     )
     parser.add_argument(
         "--jobs",
-        type=argtypes.count(1),
+        type=count(1),
         default=1,
         help="worker processes (default 1: one call at a time, as a timing benchmark should; "
         "more only to check that it works)",

@@ -23,6 +23,7 @@ from typing import Any, cast
 import numpy as np
 
 from swarm_ik import argtypes
+from swarm_ik.argtypes import count
 from swarm_ik.bench import common
 
 ARMS = ("ur5", "ur10", "z1")
@@ -31,12 +32,10 @@ ARMS = ("ur5", "ur10", "z1")
 def add_arguments(parser: argparse.ArgumentParser) -> None:
     """Options of ``swarm-ik bench many``."""
     parser.add_argument(
-        "--n-targets", type=argtypes.count(1), default=50, help="targets per arm (default 50)"
+        "--n-targets", type=count(1), default=50, help="targets per arm (default 50)"
     )
-    parser.add_argument(
-        "--n", type=argtypes.count(1), default=16, help="solve_many's n (default 16)"
-    )
-    parser.add_argument("--seed", type=argtypes.seed, default=0, help="seed of the targets")
+    parser.add_argument("--n", type=count(1), default=16, help="solve_many's n (default 16)")
+    argtypes.add_seed(parser, "seed of the targets")
     parser.add_argument("--arms", nargs="+", default=list(ARMS), help="6R arms to measure")
     parser.add_argument("--out", type=Path, default=Path("bench-many"), help="output folder")
 

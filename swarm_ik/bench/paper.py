@@ -52,7 +52,7 @@ from typing import Any
 
 import numpy as np
 
-from swarm_ik import argtypes
+from swarm_ik.argtypes import count
 from swarm_ik.bench import common, published, runner, solve_runs
 from swarm_ik.bench.common import Stats
 from swarm_ik.bench.plans import (
@@ -699,7 +699,7 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     )
     parser.add_argument(
         "--jobs",
-        type=argtypes.count(1),
+        type=count(1),
         default=common.cpu_count(),
         help="worker processes (default: the CPUs available)",
     )
@@ -718,7 +718,7 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     subset = "subset to run: " + ", ".join(EXPERIMENTS)
     parser.add_argument("--experiments", nargs="+", metavar="ID", help=subset)
     runs = "override the number of runs per case and solver everywhere"
-    parser.add_argument("--runs", type=argtypes.count(1), help=runs)
+    parser.add_argument("--runs", type=count(1), help=runs)
     parser.add_argument("--no-plots", action="store_true", help="skip the PNG plots")
     parser.add_argument("--no-progress", action="store_true", help="no progress bar")
     parser.add_argument(

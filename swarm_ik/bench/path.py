@@ -41,6 +41,7 @@ from typing import Any
 import numpy as np
 
 from swarm_ik import argtypes
+from swarm_ik.argtypes import count
 from swarm_ik.bench import common
 
 ARMS = ("ur5", "ur10", "panda", "xarm7")
@@ -64,15 +65,11 @@ FIELDS = (
 
 def add_arguments(parser: argparse.ArgumentParser) -> None:
     """Options of ``python -m swarm_ik.bench.path``."""
-    parser.add_argument(
-        "--n", type=argtypes.count(1), default=100, help="paths per arm and kind (100)"
-    )
-    parser.add_argument(
-        "--waypoints", type=argtypes.count(1), default=40, help="waypoints per path (40)"
-    )
+    parser.add_argument("--n", type=count(1), default=100, help="paths per arm and kind (100)")
+    parser.add_argument("--waypoints", type=count(1), default=40, help="waypoints per path (40)")
     parser.add_argument("--arms", nargs="+", default=list(ARMS), help="robots")
     parser.add_argument("--kinds", nargs="+", default=list(KINDS), choices=KINDS)
-    parser.add_argument("--seed", type=argtypes.seed, default=0, help="seed of the paths")
+    argtypes.add_seed(parser, "seed of the paths")
     for switch, text in [
         ("--quick", "N = 10 paths (a smoke run)"),
         ("--no-peers", "skip TRAC-IK and rtb"),

@@ -47,6 +47,7 @@ import numpy as np
 
 import swarm_ik
 from swarm_ik import argtypes, distributed, solve_batch
+from swarm_ik.argtypes import count, positive_number
 from swarm_ik.batch import BatchChain, BatchResult, check_targets, pose_errors
 from swarm_ik.bench import common, plans
 from swarm_ik.robot import RobotModel
@@ -92,26 +93,22 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument(
         "--sizes",
         nargs="+",
-        type=argtypes.count(1),
+        type=count(1),
         default=None,
         help=f"numbers of targets (default {' '.join(map(str, DEFAULT_SIZES))}; "
         f"{' '.join(map(str, QUICK_SIZES))} with --quick)",
     )
     parser.add_argument(
         "--loop-max",
-        type=argtypes.count(0),
+        type=count(0),
         default=1000,
         help="largest N for the loops over solve and TRAC-IK (default 1000)",
     )
-    parser.add_argument(
-        "--tol", type=argtypes.positive_number, default=1e-5, help="tolerance [m] and [rad]"
-    )
-    parser.add_argument(
-        "--seed", type=argtypes.seed, default=0, help="seed of the targets and solves"
-    )
+    parser.add_argument("--tol", type=positive_number, default=1e-5, help="tolerance [m] and [rad]")
+    argtypes.add_seed(parser, "seed of the targets and solves")
     parser.add_argument(
         "--repeat",
-        type=argtypes.count(1),
+        type=count(1),
         default=3,
         help="timed runs of each batch measurement; the fastest is kept (the "
         "results are identical run to run)",
@@ -127,7 +124,7 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument(
         "--boxes",
         nargs="+",
-        type=argtypes.count(1),
+        type=count(1),
         default=[],
         metavar="K",
         help="also time solve_batch with goals=[AvoidCollisions(scene)] on a scene of K random "

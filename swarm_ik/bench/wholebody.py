@@ -42,6 +42,7 @@ from typing import Any
 import numpy as np
 
 from swarm_ik import argtypes
+from swarm_ik.argtypes import count, positive_number
 from swarm_ik.bench import common
 from swarm_ik.bench import wholebody_peers as wp
 from swarm_ik.errors import InvalidArgumentError, SwarmIKError
@@ -62,23 +63,16 @@ FIELDS = (
 
 def add_arguments(parser: argparse.ArgumentParser) -> None:
     """The options of ``swarm-ik bench wholebody``."""
-    parser.add_argument(
-        "--n", type=argtypes.count(1), default=500, help="number of targets (default 500)"
-    )
-    parser.add_argument(
-        "--seed", type=argtypes.seed, default=1, help="seed of the targets (default 1)"
-    )
+    parser.add_argument("--n", type=count(1), default=500, help="number of targets (default 500)")
+    argtypes.add_seed(parser, "seed of the targets", default=1)
     parser.add_argument(
         "--time-limit-ms",
-        type=argtypes.positive_number,
+        type=positive_number,
         default=100.0,
         help="limit of one call [ms] (default 100)",
     )
     parser.add_argument(
-        "--chunk",
-        type=argtypes.count(1),
-        default=50,
-        help="targets per interleaved chunk (default 50)",
+        "--chunk", type=count(1), default=50, help="targets per interleaved chunk (default 50)"
     )
     parser.add_argument(
         "--solvers",

@@ -78,12 +78,7 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
         "--position-only", action="store_true", help="ignore the target orientation"
     )
     parser.add_argument("--chunk-size", type=int, default=None, help="targets per task")
-    parser.add_argument(
-        "--seed",
-        type=argtypes.seed,
-        default=0,
-        help="seed of the restarts (and of sampled targets)",
-    )
+    argtypes.add_seed(parser, "seed of the restarts (and of sampled targets)")
     add_lm_options(parser, 128, "most LM starts per target, the seed included")
     add_scheduler(parser)
     parser.add_argument("--no-progress", action="store_true", help="no progress bar")

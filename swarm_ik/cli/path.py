@@ -80,7 +80,7 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
         metavar="K",
         help="check each step through K interpolated poses (default 0)",
     )
-    parser.add_argument("--seed", type=argtypes.seed, default=0, help="seed (default 0)")
+    argtypes.add_seed(parser, "seed")
     parser.add_argument("--time-limit", type=float, default=None, help="seconds for the search")
     add_tolerances(parser)
     parser.add_argument(

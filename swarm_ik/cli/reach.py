@@ -17,6 +17,7 @@ from pathlib import Path
 from typing import Any
 
 from swarm_ik import argtypes
+from swarm_ik.argtypes import count
 from swarm_ik.cli import _viewer
 from swarm_ik.cli._args import (
     EXIT_OK,
@@ -58,7 +59,7 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     )
     parser.add_argument(
         "--orientations",
-        type=argtypes.count(1),
+        type=count(1),
         default=8,
         metavar="K",
         help="orientations tried per voxel (default 8, seeded random rotations)",
@@ -84,16 +85,11 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
         "meshcat is installed)",
     )
     parser.add_argument("--no-html", action="store_true", help="do not write the HTML page")
-    parser.add_argument(
-        "--seed",
-        type=argtypes.seed,
-        default=0,
-        help="seed of the orientations and restarts (default 0)",
-    )
+    argtypes.add_seed(parser, "seed of the orientations and restarts")
     add_lm_options(parser, 16, "most LM starts per pose")
     parser.add_argument(
         "--max-targets",
-        type=argtypes.count(1),
+        type=count(1),
         default=MAX_TARGETS,
         help=f"refuse grids of more poses (voxels × K) than this (default {MAX_TARGETS})",
     )

@@ -60,7 +60,7 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
         help="solver for the target (default: swarm_ik.solve_many; with a name, that solver "
         "from successive seeds)",
     )
-    parser.add_argument("--seed", type=argtypes.seed, default=0, help="random seed (default 0)")
+    argtypes.add_seed(parser, "random seed")
     parser.add_argument(
         "--layout",
         default="side",

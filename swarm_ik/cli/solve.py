@@ -101,7 +101,7 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
         help="solve for the position of the target only (e.g. chains with fewer than six "
         "joints): --pose X Y Z is enough, and no rotation error is reported",
     )
-    parser.add_argument("--seed", type=argtypes.seed, default=0, help="random seed (default 0)")
+    argtypes.add_seed(parser, "random seed")
     parser.add_argument("--max-evals", type=int, default=None, help="most fitness evaluations")
     parser.add_argument("--time-limit", type=float, default=None, help="seconds")
     add_tolerances(parser)

@@ -24,7 +24,7 @@ import hashlib
 import os
 import shutil
 import sys
-from collections.abc import Callable, Iterable
+from collections.abc import Callable, Iterable, Iterator
 from typing import IO, TypeVar
 
 from swarm_ik import paths
@@ -181,30 +181,35 @@ def drop_damaged_cache_files(folders: Iterable[str]) -> list[str]:
         The paths removed.
     """
     removed = []
+    for path in _cache_files(folders):
+        if os.path.isdir(path) and not os.path.islink(path):  # (a folder in its place)
+            shutil.rmtree(path, ignore_errors=True)
+            if not os.path.exists(path):
+                removed.append(path)
+            continue
+        try:
+            with open(path, "rb") as f:
+                size = os.fstat(f.fileno()).st_size
+                if _whole_pickles(f, size, 2 if path.endswith(".nbi") else 1):
+                    continue
+            os.remove(path)
+        except OSError:
+            continue
+        removed.append(path)
+    return removed
+
+
+def _cache_files(folders: Iterable[str]) -> Iterator[str]:
+    """The paths of the numba cache entries (``.nbi``, ``.nbc``) in ``folders`` (those that
+    cannot be listed skipped)."""
     for folder in folders:
         try:
             names = sorted(os.listdir(folder))
         except OSError:
             continue
         for name in names:
-            if not name.endswith((".nbi", ".nbc")):
-                continue
-            path = os.path.join(folder, name)
-            if os.path.isdir(path) and not os.path.islink(path):  # (a folder in its place)
-                shutil.rmtree(path, ignore_errors=True)
-                if not os.path.exists(path):
-                    removed.append(path)
-                continue
-            try:
-                with open(path, "rb") as f:
-                    size = os.fstat(f.fileno()).st_size
-                    if _whole_pickles(f, size, 2 if name.endswith(".nbi") else 1):
-                        continue
-                os.remove(path)
-            except OSError:
-                continue
-            removed.append(path)
-    return removed
+            if name.endswith((".nbi", ".nbc")):
+                yield os.path.join(folder, name)
 
 
 _SETTLED: list[str | None] = [None]
@@ -216,19 +221,12 @@ def drop_cache_files(folders: Iterable[str]) -> list[str]:
     """Remove every numba cache file (``.nbi``, ``.nbc``) in ``folders``; returns the paths
     removed (those that could not be are left)."""
     removed = []
-    for folder in folders:
+    for path in _cache_files(folders):
         try:
-            names = sorted(os.listdir(folder))
+            os.remove(path)
         except OSError:
             continue
-        for name in names:
-            if name.endswith((".nbi", ".nbc")):
-                path = os.path.join(folder, name)
-                try:
-                    os.remove(path)
-                except OSError:
-                    continue
-                removed.append(path)
+        removed.append(path)
     return removed
 
 
