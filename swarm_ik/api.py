@@ -294,6 +294,7 @@ class Route:
         self.prefer = prefer
         self._lock = threading.Lock()
         self._warm = False  # (warm_up ran for this route)
+        self._judge_s = 0.0  # (seconds a judge takes on this route: see _search_limit)
         # the first start without q0 when no Posture goal names one (the middle of the ranges)
         has_posture = any(isinstance(g, Posture) for g in problem.goals)
         self._mid = None if has_posture else hybrid.default_seed(problem)
@@ -420,8 +421,9 @@ class Route:
                 self._rebind(problem, q_start)
                 t0 = time.perf_counter()
                 out = self._search(
-                    np.ascontiguousarray(seed_q, dtype=float), key, max_evals, time_limit
-                )
+                    np.ascontiguousarray(seed_q, dtype=float), key, max_evals,
+                    self._search_limit(time_limit),
+                )  # fmt: skip
                 elapsed = time.perf_counter() - t0
             q, fit, n_evals, history = out.q, out.fitness, out.used, out.history
             n_evals += first_evals
@@ -436,7 +438,7 @@ class Route:
 
             ev = base.Evaluator(
                 problem.fitness, problem.lower, problem.upper, max_evals=max_evals,
-                time_limit=time_limit, problem=problem, q0=q_start,
+                time_limit=self._search_limit(time_limit), problem=problem, q0=q_start,
                 stop=stop if self.stop_on_success else None, tolerance=(tol_pos, tol_rot),
                 on_improvement=on_improvement, key=key,
             )  # fmt: skip
@@ -448,7 +450,22 @@ class Route:
             n_evals, history = ev.n_evals, np.asarray(ev.history, dtype=float)
             n_evals += first_evals
             elapsed += first_s
-        return self.judge(problem, q, fit, n_evals, elapsed, history, seed_val, q_start)
+        t_judge = time.perf_counter()
+        result = self.judge(
+            problem, q, fit, n_evals, elapsed, history, seed_val, q_start,
+            limit=self._search_limit(time_limit),
+        )  # fmt: skip
+        # what judging costs this route (rising at once, falling slowly): kept out of the
+        # search's time limit, so that the whole call stays within it
+        self._judge_s = max(time.perf_counter() - t_judge, 0.9 * self._judge_s)
+        return result
+
+    def _search_limit(self, time_limit: float | None) -> float | None:
+        """The search's share of ``time_limit``: less what judging its answer costs on this
+        route (measured on its earlier runs), at most half of it."""
+        if time_limit is None:
+            return None
+        return time_limit - min(self._judge_s, 0.5 * time_limit)
 
     def _collision_free_first(
         self,
@@ -513,8 +530,10 @@ class Route:
         history: np.ndarray,
         seed: int | None,
         q_start: np.ndarray | None = None,
+        limit: float | None = None,
     ) -> Result:
-        """The one judge: the answer's errors from Pinocchio, its limits, why it ended."""
+        """The one judge: the answer's errors from Pinocchio, its limits, why it ended
+        (``limit``: the search's time limit, when it was given less than the route's)."""
         goal_errors = problem.verify(q, self.tol_pos, self.tol_rot, q0=q_start)
         within = problem.within_bounds(q)
         success = within
@@ -544,7 +563,7 @@ class Route:
                 n_evals,
                 self.max_evals,
                 elapsed,
-                self.time_limit,
+                self.time_limit if limit is None else limit,
                 self.tol_pos,
                 self.tol_rot,
                 q,
