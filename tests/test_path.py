@@ -343,3 +343,28 @@ def test_a_path_of_too_many_poses_is_refused_and_densify_keeps_the_time_limit() 
     assert time.perf_counter() - t0 < 5.0  # (200 × 39 poses take about a minute unbounded)
     assert "time_limit reached" in res.reason and "not checked" in res.reason
     assert "jumps beyond" not in res.reason
+
+
+def test_a_densify_step_cut_by_the_time_limit_is_filled_the_short_way_round() -> None:
+    """The rest of a step the time limit cut is filled in joint space: on a joint compared
+    modulo 2π (3.10 → -3.10 rad is a 0.083 rad step) the short way, wrapped into [-π, π),
+    and reported not met."""
+    import types
+
+    wrap = np.array([True, False])
+
+    def steps(a: np.ndarray, b: np.ndarray, true: bool = False) -> np.ndarray:
+        d = np.abs(np.asarray(b) - np.asarray(a))
+        d[..., wrap] = np.abs((d[..., wrap] + np.pi) % (2 * np.pi) - np.pi)
+        return d
+
+    ctx = types.SimpleNamespace(
+        wps=types.SimpleNamespace(poses=[np.eye(4), np.eye(4)]), out_of_time=lambda: True,
+        steps=steps, step=np.array([0.1, 0.1]), wrap=wrap, true_wrap=wrap,
+    )  # fmt: skip
+    qa, qb = np.array([3.10, 0.0]), np.array([-3.10, 0.0])
+    ok, chain, travel = sp._check_step_dense(ctx, 1, qa, qb, 5)  # type: ignore[arg-type]
+    assert not ok and chain.shape == (6, 2)
+    np.testing.assert_allclose(chain[-1], qb)
+    assert travel < 0.1  # (0.083 rad in all, not 6.2 the long way)
+    assert np.all(np.abs(chain[:, 0]) <= np.pi)
