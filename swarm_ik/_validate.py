@@ -162,16 +162,17 @@ MAX_GRID_CELLS = 10_000_000
 the intermediate arrays about 0.6 GB); checked before any array is allocated."""
 
 
-def grid_cells(lower: Any, upper: Any, resolution: float) -> int:
+def grid_cells(lower: Any, upper: Any, resolution: float) -> int | float:
     """Voxels of the grid :func:`swarm_ik.reach.grid_axes` would build, counted without
-    allocating it (``ceil(extent / resolution)`` per axis, at least one)."""
+    allocating it (``ceil(extent / resolution)`` per axis, at least one; ``inf`` for an
+    extent beyond a float)."""
     lo = np.asarray(lower, dtype=float).reshape(3)
     hi = np.asarray(upper, dtype=float).reshape(3)
     n = 1
     for a in range(3):
         per_axis = (float(hi[a]) - float(lo[a])) / resolution - 1e-9  # (Python floats: an
         if not math.isfinite(per_axis):  # extent beyond 1.8e308 m is inf, without a warning)
-            return 2**1100  # (more than any cap; over 1e300 in the message)
+            return math.inf
         n *= max(1, math.ceil(per_axis))
     return n
 
@@ -205,7 +206,7 @@ def check_grid_size(
         hint = f"--resolution {fit:.3g} or coarser, or " if math.isfinite(fit) else ""
         raise InvalidArgumentError(
             f"a grid of {res:g} m voxels over this box has "
-            f"{format(n, '.3g') if n.bit_length() < 1000 else 'over 1e300'} voxels, more than "
+            f"{format(n, '.3g') if n < 1e300 else 'over 1e300'} voxels, more than "
             f"the cap of {max_cells}; use {hint}smaller --bounds"
         )
-    return n
+    return int(n)  # (finite here: at most max_cells)

@@ -406,6 +406,7 @@ class Route:
                 max_evals = max(max_evals - first_evals, 1)
         else:
             first_s, first_evals = 0.0, 0
+        search_limit = self._search_limit(time_limit)
         # an integer seed keys the compiled search itself (one SplitMix64 step); a Generator
         # gives its first draw
         key = None if seed_val is None else search.key_of_seed(seed_val)
@@ -421,9 +422,8 @@ class Route:
                 self._rebind(problem, q_start)
                 t0 = time.perf_counter()
                 out = self._search(
-                    np.ascontiguousarray(seed_q, dtype=float), key, max_evals,
-                    self._search_limit(time_limit),
-                )  # fmt: skip
+                    np.ascontiguousarray(seed_q, dtype=float), key, max_evals, search_limit
+                )
                 elapsed = time.perf_counter() - t0
             q, fit, n_evals, history = out.q, out.fitness, out.used, out.history
             n_evals += first_evals
@@ -438,7 +438,7 @@ class Route:
 
             ev = base.Evaluator(
                 problem.fitness, problem.lower, problem.upper, max_evals=max_evals,
-                time_limit=self._search_limit(time_limit), problem=problem, q0=q_start,
+                time_limit=search_limit, problem=problem, q0=q_start,
                 stop=stop if self.stop_on_success else None, tolerance=(tol_pos, tol_rot),
                 on_improvement=on_improvement, key=key,
             )  # fmt: skip
@@ -452,9 +452,8 @@ class Route:
             elapsed += first_s
         t_judge = time.perf_counter()
         result = self.judge(
-            problem, q, fit, n_evals, elapsed, history, seed_val, q_start,
-            limit=self._search_limit(time_limit),
-        )  # fmt: skip
+            problem, q, fit, n_evals, elapsed, history, seed_val, q_start, limit=search_limit
+        )
         # what judging costs this route (rising at once, falling slowly): kept out of the
         # search's time limit, so that the whole call stays within it
         self._judge_s = max(time.perf_counter() - t_judge, 0.9 * self._judge_s)

@@ -801,7 +801,7 @@ def _check_pose_block(blk: FloatArray, first: int, orth_tol: float) -> None:
         )
     rot = blk[:, :3, :3]
     orth = np.abs(np.einsum("nji,njk->nik", rot, rot) - np.eye(3)).max(axis=(1, 2), initial=0.0)
-    det = np.linalg.det(rot) if blk.shape[0] else np.ones(0)
+    det = np.linalg.det(rot)  # (blocks are never empty)
     bad = (orth > orth_tol) | (np.abs(det - 1.0) > orth_tol)
     if bad.any():
         i = int(np.flatnonzero(bad)[0])

@@ -603,7 +603,7 @@ class _Context:
         wrap = self.true_wrap if true else self.wrap
         d = np.asarray(b, dtype=float) - np.asarray(a, dtype=float)
         if wrap.any():
-            d[..., wrap] = (d[..., wrap] + np.pi) % (2 * np.pi) - np.pi
+            _wrap_angles(d, wrap)
         return np.abs(d)
 
     def self_motion(self, i: int, q: FloatArray) -> list[FloatArray]:
@@ -991,7 +991,7 @@ def _fill(ctx: _Context, i: int, layer: FloatArray) -> FloatArray:
     nulls = _null(ctx, layer)
     d = layer[None, :, :] - layer[:, None, :]  # d[a, b] = layer[b] − layer[a]
     if ctx.wrap.any():
-        d[..., ctx.wrap] = (d[..., ctx.wrap] + np.pi) % (2 * np.pi) - np.pi
+        _wrap_angles(d, ctx.wrap)
     d /= ctx.step
     reach = np.max(np.abs(d), axis=2)
     along = np.einsum("abj,aj->ab", d, nulls / ctx.step)
@@ -1192,11 +1192,16 @@ size)]``, configurations of waypoints ``i − 1`` and ``i`` modulo 2π (:func:`_
 2π copy of the step is the same motion, and fails alike), size the largest joint travel."""
 
 
+def _wrap_angles(x: FloatArray, mask: NDArray[np.bool_]) -> FloatArray:
+    """``x`` with its entries on ``mask`` (along the last axis) wrapped into ``[-π, π)``, in
+    place; returns ``x``."""
+    x[..., mask] = (x[..., mask] + np.pi) % (2 * np.pi) - np.pi
+    return x
+
+
 def _canon(qs: FloatArray, ctx: _Context) -> FloatArray:
     """Rows of ``qs`` with every revolute joint wrapped into ``[-π, π)``."""
-    out = np.array(qs, dtype=float)
-    out[..., ctx.angular] = (out[..., ctx.angular] + np.pi) % (2 * np.pi) - np.pi
-    return out
+    return _wrap_angles(np.array(qs, dtype=float), ctx.angular)
 
 
 def _same(rows: FloatArray, q: FloatArray) -> NDArray[np.bool_]:
@@ -1330,12 +1335,9 @@ def _check_step_dense(
     met_all = True
     for s in range(1, k + 1):
         if ctx.out_of_time():  # the rest of the step unchecked: joint-space points, not met
-            d = qb - q  # (the short way round on joints compared modulo 2π)
-            d[ctx.wrap] = (d[ctx.wrap] + np.pi) % (2 * np.pi) - np.pi
+            d = _wrap_angles(qb - q, ctx.wrap)  # (the short way round on joints modulo 2π)
             for t in range(1, k + 2 - s):
-                p = q + d * (t / (k + 2 - s))
-                p[ctx.true_wrap] = (p[ctx.true_wrap] + np.pi) % (2 * np.pi) - np.pi
-                chain.append(p)
+                chain.append(_wrap_angles(q + d * (t / (k + 2 - s)), ctx.true_wrap))
             met_all = False
             break
         pose = interpolate_pose(pa, pb, s / (k + 1))
