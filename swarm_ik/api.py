@@ -173,8 +173,13 @@ def prepare_q0(problem: IKProblem, q0: Any) -> np.ndarray | None:
     clipped into them with a warning (continuous joints wrapped first)."""
     if q0 is None:
         return None
-    q = problem.robot.wrap(problem.robot.check_q(q0, "q0"))
-    if (q >= problem.lower).all() and (q <= problem.upper).all():
+    robot = problem.robot
+    if type(q0) is np.ndarray and q0.dtype == np.float64 and q0.shape == (robot.nq,):
+        q = robot.wrap(q0)  # (a copy; a NaN fails the bounds test, then check_q names it)
+        if problem.within_bounds(q, 0.0):
+            return q
+    q = robot.wrap(robot.check_q(q0, "q0"))
+    if problem.within_bounds(q, 0.0):
         return q
     fixed = np.clip(q, problem.lower, problem.upper)
     names = [problem.robot.joint_names[i] for i in np.flatnonzero(fixed != q)]
@@ -315,20 +320,31 @@ class Route:
             p0 = self.pol.table.p0.tolist()  # each goal's block of the table's floats
             self._blocks = [(p0[i], p0[i + 1]) for i in range(len(p0) - 1)]
             self.state = hybrid.search_state(self.pol, kw["pop_size"])
-            self._n_swarm = int(round(kw["swarm_fraction"] * kw["pop_size"]))
+            # the arguments of the compiled search that are the route's (see _search)
+            self._search_args = (
+                self.state, self.pol.kernel_tol_pos, self.pol.kernel_tol_rot, self.tol_pos,
+                self.tol_rot, 0.0 if problem.position_only else float(problem.w_rot),
+                int(kw["pop_size"]), int(round(kw["swarm_fraction"] * kw["pop_size"])),
+                int(kw["iterations"]),
+            )  # fmt: skip
 
     def _search(
         self, q_start: np.ndarray, key: np.uint64, max_evals: int | None, time_limit: float | None
-    ) -> hybrid.SearchOutcome:
-        """The compiled search from ``q_start`` on the route's state."""
-        kw = self.kwargs
-        return hybrid.compiled_search(
-            self.pol, q_start, key, pop_size=kw["pop_size"], n_swarm=self._n_swarm,
-            iterations=kw["iterations"], stop=True, tol_pos=self.tol_pos, tol_rot=self.tol_rot,
-            w_rot=0.0 if self.problem.position_only else self.problem.w_rot,
-            max_evals=max_evals, remaining=2**62 if max_evals is None else max_evals,
-            evals_before=0, time_limit=time_limit, t0=time.perf_counter(), state=self.state,
+    ) -> tuple[np.ndarray, float, int, np.ndarray]:
+        """The compiled search (:func:`swarm_ik.kernels.search.swarm_search`, called as
+        :func:`swarm_ik.solvers.hybrid.compiled_search` calls it) from ``q_start`` on the
+        route's state: ``(answer (nq,), its fitness, evaluations, history)``."""
+        st, k_pos, k_rot, tol_pos, tol_rot, w_rot, pop, n_swarm, iterations = self._search_args
+        out_q = np.empty(q_start.shape[0])
+        used, fit, _, _, _, hist = search.swarm_search(
+            st, q_start, k_pos, k_rot, tol_pos, tol_rot, w_rot, pop, n_swarm, iterations,
+            max_evals is None and time_limit is None,
+            2**62 if max_evals is None else int(max_evals),
+            -1 if max_evals is None else int(max_evals), 0,
+            search.NO_LIMIT if time_limit is None else float(time_limit), time.perf_counter(), key,
+            out_q,
         )  # fmt: skip
+        return out_q, fit, used, hist
 
     def _rebind(self, problem: IKProblem, q_start: np.ndarray | None) -> None:
         """Write the parameter blocks of ``problem``'s goals that differ from the bound ones
@@ -421,11 +437,10 @@ class Route:
             with self._lock:  # (the bound table and scratch serve one run at a time)
                 self._rebind(problem, q_start)
                 t0 = time.perf_counter()
-                out = self._search(
+                q, fit, n_evals, history = self._search(
                     np.ascontiguousarray(seed_q, dtype=float), key, max_evals, search_limit
                 )
                 elapsed = time.perf_counter() - t0
-            q, fit, n_evals, history = out.q, out.fitness, out.used, out.history
             n_evals += first_evals
             elapsed += first_s
             if not np.isfinite(fit) or len(problem.goals) > 1:  # (the problem's own sum)
@@ -652,16 +667,24 @@ def _route_key(problem: IKProblem, solver: str, settings: dict[str, Any]) -> Any
     """What a route bound to another problem must share with ``problem`` to run it (the
     solver, every setting, the goal types, frames, weights and priorities, the bounds and the
     tree), or None when a setting cannot be a key (then a route is made for this call)."""
-    # (a bounded Pose or Position encodes other rows and flags: its form is part of the key,
-    # as a route rebinds only the floats)
-    goals = tuple((type(g), g.frame_name(), g.weight, g.primary, g.exact) for g in problem.goals)
-    # a goal that adds frames (collision bodies…) encodes more than floats: the goal itself
-    adding = tuple(problem.compiled_goals[i] for i in sorted(problem._frame0))
+    part = problem.__dict__.get("_route_key_part")
+    if part is None:  # (the problem's share, made once per problem and kept by its retargeted
+        # copies, with which it shares all of it: IKProblem.with_target)
+        # (a bounded Pose or Position encodes other rows and flags: its form is part of the
+        # key, as a route rebinds only the floats)
+        goals = tuple(
+            (type(g), g.frame_name(), g.weight, g.primary, g.exact) for g in problem.goals
+        )
+        # a goal that adds frames (collision bodies…) encodes more than floats: the goal itself
+        adding = tuple(problem.compiled_goals[i] for i in sorted(problem._frame0))
+        part = problem.__dict__["_route_key_part"] = (
+            goals, adding, problem.fitness_name, problem.w_rot, problem.position_only,
+            problem.lower.tobytes(), problem.upper.tobytes(), id(problem.tree),
+            problem.python_goals == (),
+        )  # fmt: skip
     key = (
         solver, tuple(sorted((k, v) for k, v in settings.items() if k != "params")),
-        tuple(sorted(settings["params"].items())), goals, adding, problem.fitness_name,
-        problem.w_rot, problem.position_only, problem.lower.tobytes(), problem.upper.tobytes(),
-        id(problem.tree), problem.python_goals == (),
+        tuple(sorted(settings["params"].items())), part,
     )  # fmt: skip
     try:
         hash(key)

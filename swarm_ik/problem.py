@@ -26,8 +26,8 @@ from swarm_ik.errors import InvalidArgumentError, InvalidTargetError, unknown
 from swarm_ik.fitness import FITNESS, get_fitness
 from swarm_ik.goals import AvoidCollisions, Goal, Pose, Position, State, kernel_slot, kernels
 from swarm_ik.goals import base as goals_base
-from swarm_ik.kernels import lm
-from swarm_ik.pose import ORTH_TOL, as_pose, is_finite_nonneg
+from swarm_ik.kernels import joints, lm
+from swarm_ik.pose import FLOAT64, ORTH_TOL, as_pose, is_finite_nonneg
 from swarm_ik.robot import RobotModel
 
 SECONDARY_WEIGHT = 1e-3
@@ -94,9 +94,9 @@ def _valid_q(q: Any, nq: int) -> bool:
     """Whether ``q`` is already a finite float64 vector of length ``nq`` (no copy needed)."""
     return (
         type(q) is np.ndarray
-        and q.dtype == np.float64
+        and q.dtype is FLOAT64
         and q.shape == (nq,)
-        and bool(np.isfinite(q).all())
+        and math.isfinite(sum(q.tolist()))  # (a sum that overflows: the full check decides)
     )
 
 
@@ -232,6 +232,27 @@ class IKProblem:
             raise InvalidArgumentError(
                 f"robot must be a RobotModel (see swarm_ik.load_robot), got {type(robot).__name__}"
             )
+        if (
+            goals is None
+            and target is not None
+            and fitness == "se3"
+            and lower is None
+            and upper is None
+            and w_rot is _W_ROT
+            and lam is _LAM
+            and mu is _MU
+            and orth_tol is _ORTH_TOL
+        ):  # a pose target with every default: a copy of the robot's pose problem, retargeted
+            template = robot._cache.get("pose_problem")
+            if template is None:
+                template = object.__new__(IKProblem)
+                template._make(robot, robot.fk_pinocchio(robot.mid_q()), None, fitness,
+                               w_rot, lam, mu, orth_tol, None, None)  # fmt: skip
+                template.lower.flags.writeable = False  # (shared by the problems made so)
+                template.upper.flags.writeable = False
+                robot._cache["pose_problem"] = template
+            template._retarget(self, target)
+            return
         self._make(robot, target, goals, fitness, w_rot, lam, mu, orth_tol, lower, upper)
 
     def _make(
@@ -323,10 +344,6 @@ class IKProblem:
                 f"bounds [{self.lower[j]:g}, {self.upper[j]:g}] exceed its limits "
                 f"[{robot.lower[j]:g}, {robot.upper[j]:g}]"
             )
-        self.plain_pose = target is not None and goals is None and fitness == "se3" and not narrowed
-        """A pose (or, with ``w_rot=0``, position) target for the first goal frame within the
-        robot's own limits, nothing else: :func:`swarm_ik.solve` may answer it through a
-        cached :class:`swarm_ik.IKSolver` (the same result)."""
         self.position_only = (
             isinstance(terms[0], Position)  # (the target's goal alone: Pose or Position)
             if goals is None
@@ -396,10 +413,11 @@ class IKProblem:
             self.table(None)  # validate every goal against the robot now
 
     def __getstate__(self) -> dict[str, Any]:
-        """Pickled without its goal tables: their kernel slots are this process's (the
-        receiving process encodes the goals again)."""
+        """Pickled without its goal tables (their kernel slots are this process's: the
+        receiving process encodes the goals again) and its share of a route's key."""
         state = dict(self.__dict__)
         state["_table_cache"] = {}
+        state.pop("_route_key_part", None)  # (it names this process's tree by its id)
         return state
 
     # ------------------------------------------------------------------ goals
@@ -441,9 +459,15 @@ class IKProblem:
         else: the per-call path of :class:`swarm_ik.IKSolver`."""
         if not self.single_pose or self.target is None:
             raise InvalidArgumentError("with_target needs a single-pose problem")
-        new = object.__new__(type(self))  # (a shallow copy: copy.copy's protocol costs 6 µs)
+        new = object.__new__(type(self))
+        self._retarget(new, target)
+        return new
+
+    def _retarget(self, new: IKProblem, target: Any) -> None:
+        """Make ``new`` this single-pose problem with another target (validated): a shallow
+        copy (``copy.copy``'s protocol costs 6 µs) sharing everything but the target."""
         new.__dict__.update(self.__dict__)
-        new.target = as_pose(target)
+        new.target = as_pose(target, orth_tol=self.orth_tol)
         if isinstance(self.goals[0], Position):
             new.goals = (Position(self.robot.ee_frame, new.target[:3, 3]),)
         else:
@@ -451,7 +475,6 @@ class IKProblem:
         new.compiled_goals = new.goals
         new._table_cache = {}
         new._free = []
-        return new
 
     @classmethod
     def from_q(cls, robot: RobotModel, q: Any, fitness: str = "se3", **kwargs: Any) -> IKProblem:
@@ -610,7 +633,9 @@ class IKProblem:
     def within_bounds(self, q: FloatArray, tol: float = 1e-12) -> bool:
         """Whether ``q`` lies within the problem's bounds (± ``tol``)."""
         q = np.asarray(q, dtype=float)
-        return bool((q >= self.lower - tol).all() and (q <= self.upper + tol).all())
+        if q.shape != self.lower.shape:
+            return bool((q >= self.lower - tol).all() and (q <= self.upper + tol).all())
+        return bool(joints.in_box(q, self.lower, self.upper, float(tol)))
 
     @property
     def collision_goal(self) -> Any:

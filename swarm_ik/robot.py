@@ -695,7 +695,10 @@ class RobotModel:
         followers set from their drivers); ``copy=False``: ``q`` itself where the two vectors
         are the same (for a caller that only reads it, such as Pinocchio's FK)."""
         q = np.asarray(q, dtype=float).reshape(self.nq)
-        if self._pinocchio_q_is_q():
+        same = self._cache.get("q_is_pinocchio_q")
+        if same is None:
+            same = self._cache["q_is_pinocchio_q"] = self._pinocchio_q_is_q()
+        if same:
             return q.copy() if copy else q
         return np.array(_converted(self._to_pinocchio_plan(), self.model.nq, q.tolist()))
 

@@ -155,6 +155,37 @@ def test_iksolver_and_solve_equal_the_general_path(w_rot: float) -> None:
     assert seen  # the callback ran: the general path was taken
 
 
+def test_pose_problem_with_defaults_equals_the_general_constructor() -> None:
+    """IKProblem(robot, T) with every default (a retargeted copy of the robot's pose
+    problem) has the goals, bounds and results of the constructor's general path (taken here
+    by giving the bounds), refuses the same bad targets, and pickles to the same problem."""
+    import pickle
+
+    robot = swarm_ik.load_robot("kinova")
+    rng = np.random.default_rng(12)
+    for i, q in enumerate(robot.random_q(rng, 6)):
+        T = robot.fk(q)
+        fast = swarm_ik.IKProblem(robot, T)
+        general = swarm_ik.IKProblem(robot, T, lower=robot.lower, upper=robot.upper)
+        np.testing.assert_array_equal(fast.target, T)
+        (g_fast,), (g_general,) = fast.goals, general.goals
+        assert fast.target is not T and type(g_fast) is type(g_general) is swarm_ik.goals.Pose
+        assert g_fast.frame == g_general.frame and g_fast.tolerance is g_general.tolerance
+        np.testing.assert_array_equal(g_fast.target, g_general.target)
+        np.testing.assert_array_equal(fast.lower, general.lower)
+        np.testing.assert_array_equal(fast.upper, general.upper)
+        assert fast.single_pose and not fast.position_only and fast.w_rot == general.w_rot
+        a = swarm_ik.solve(fast, seed=i, max_evals=3000)
+        _same_result(a, swarm_ik.solve(general, seed=i, max_evals=3000))
+        _same_result(a, swarm_ik.solve(pickle.loads(pickle.dumps(fast)), seed=i, max_evals=3000))
+        assert a.success
+    bad = robot.fk(robot.mid_q())
+    bad[0, 0] += 1e-3
+    for kwargs in ({}, {"lower": robot.lower}):
+        with pytest.raises(swarm_ik.InvalidTargetError, match="orthonormal"):
+            swarm_ik.IKProblem(robot, bad, **kwargs)  # type: ignore[arg-type]
+
+
 def test_iksolver_start_checked_like_solve() -> None:
     """A start is refused, clipped (with a warning) or used as it is, as prepare_q0 does."""
     robot = swarm_ik.load_robot("ur5")  # (continuous-free limits of ±2π)

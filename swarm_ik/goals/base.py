@@ -118,7 +118,7 @@ class State:
         self.q0 = None if q0 is None else np.asarray(q0, dtype=float)
         self._q_pin = robot.to_pinocchio(self.q, copy=False)  # (read only)
         self._data = robot._data()  # (one Data per thread, reused)
-        pin.framesForwardKinematics(robot.model, self._data, self._q_pin)
+        pin.forwardKinematics(robot.model, self._data, self._q_pin)  # (frames: as asked)
         self._jacobians = False
 
     def frame_id(self, frame: str) -> int:
@@ -141,7 +141,8 @@ class State:
 
     def pose(self, frame: str) -> FloatArray:
         """World pose of ``frame``, ``(4, 4)`` [m]."""
-        return self._data.oMf[self.frame_id(frame)].homogeneous  # type: ignore[no-any-return]  # (a new array)
+        placement = pin.updateFramePlacement(self.robot.model, self._data, self.frame_id(frame))
+        return placement.homogeneous  # type: ignore[no-any-return]  # (a new array)
 
     def jacobian(self, frame: str) -> FloatArray:
         """LOCAL_WORLD_ALIGNED Jacobian of ``frame`` ``(6, nq)``: linear rows [m/rad] first,

@@ -76,6 +76,11 @@ def dead_zone(e: FloatArray, t: FloatArray) -> FloatArray:
     return np.asarray(-np.sign(e) * np.maximum(np.abs(e) - t, 0.0))
 
 
+_PARAMS_OF_POSE = np.array([0, 1, 2, 4, 5, 6, 8, 9, 10, 3, 7, 11])
+"""Where :meth:`Pose.params` of one target reads its 4×4 entries (flat, row-major): the
+rotation row by row, then the position."""
+
+
 @dataclass(frozen=True)
 class Pose(Goal):
     """The frame at a full pose, exactly or within bounds.
@@ -133,8 +138,8 @@ class Pose(Goal):
         """The float parameters of a target ``(4, 4)``, or of targets ``(N, 4, 4)`` as
         ``(N, 12)``: what :func:`swarm_ik.solve_batch` writes per target."""
         t = np.asarray(target, dtype=float)
-        if t.ndim == 2:  # (one target: the per-call path of IKSolver)
-            return np.concatenate((t[:3, :3].ravel(), t[:3, 3]))
+        if t.ndim == 2:  # (one target: the per-call path of IKSolver, one numpy operation)
+            return t.take(_PARAMS_OF_POSE)
         out = np.empty(t.shape[:-2] + (12,))
         out[..., :9] = t[..., :3, :3].reshape(t.shape[:-2] + (9,))
         out[..., 9:] = t[..., :3, 3]
