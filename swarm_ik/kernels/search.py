@@ -106,17 +106,11 @@ def stream_key(rng: np.random.Generator) -> np.uint64:
     return np.uint64(rng.integers(0, 2**64, dtype=np.uint64))
 
 
-_GOLDEN = 0x9E3779B97F4A7C15
-_MASK64 = 2**64 - 1
-
-
 def key_of_seed(seed: int) -> np.uint64:
     """The ``uint64`` key of a search's random stream for an integer seed ``0 <= seed <
-    2**64``: one SplitMix64 output of the seed (the same in every process and platform)."""
-    z = (int(seed) + _GOLDEN) & _MASK64
-    z = ((z ^ (z >> 30)) * 0xBF58476D1CE4E5B9) & _MASK64
-    z = ((z ^ (z >> 27)) * 0x94D049BB133111EB) & _MASK64
-    return np.uint64(z ^ (z >> 31))
+    2**64``: one SplitMix64 output of the seed (the same in every process and platform;
+    compiled: Python's integers cost several µs per call)."""
+    return np.uint64(splitmix64(np.uint64(seed)))
 
 
 # --------------------------------------------------------------------------- grey wolf
@@ -341,8 +335,6 @@ def swarm_search(
             queue[:n_queue], t, g, ks, b, cfg, kernel_tol_pos, kernel_tol_rot, cap, True,
             pq[:n_queue], pdp[:n_queue], pdr[:n_queue], pst[:n_queue], pev[:n_queue], work,
         )  # fmt: skip
-        if u > 0 and has_time:
-            sec_per_eval = 0.5 * sec_per_eval + 0.5 * (now() - t_call) / u
         open_gen = True
         r = 0
         while r < n_queue and pst[r] != 0:
@@ -372,6 +364,8 @@ def swarm_search(
                 stopped = ev_dp <= tol_pos and ev_dr <= tol_rot
             if stopped or used >= max_evals or (has_time and now() - t0 >= time_limit):
                 break
+        if u > 0 and has_time:  # (read after the stop test: a run that ends needs no estimate)
+            sec_per_eval = 0.5 * sec_per_eval + 0.5 * (now() - t_call) / u
         n_done = r - 1 if (r > 0 and pst[r - 1] == BUDGET) else r
         # archive of polished local minima, best first (stable), pop_size kept
         for s in range(n_done):
