@@ -429,21 +429,20 @@ class Route:
         if self.compiled and on_improvement is None:
             if key is None:
                 key = search.stream_key(seed)  # type: ignore[arg-type]
-            seed_q = q_start
+            seed_q = q_start  # (prepare_q0's copy: float64, contiguous)
             if seed_q is None:
                 mid, bound = self._mid, self.problem
                 same_box = problem.lower is bound.lower and problem.upper is bound.upper
                 seed_q = mid if mid is not None and same_box else hybrid.default_seed(problem)
+                seed_q = np.ascontiguousarray(seed_q, dtype=float)
             with self._lock:  # (the bound table and scratch serve one run at a time)
                 self._rebind(problem, q_start)
                 t0 = time.perf_counter()
-                q, fit, n_evals, history = self._search(
-                    np.ascontiguousarray(seed_q, dtype=float), key, max_evals, search_limit
-                )
+                q, fit, n_evals, history = self._search(seed_q, key, max_evals, search_limit)
                 elapsed = time.perf_counter() - t0
             n_evals += first_evals
             elapsed += first_s
-            if not np.isfinite(fit) or len(problem.goals) > 1:  # (the problem's own sum)
+            if not math.isfinite(fit) or len(problem.goals) > 1:  # (the problem's own sum)
                 fit = float(problem.fitness(q[None])[0])
         else:
             tol_pos, tol_rot = self.tol_pos, self.tol_rot
@@ -663,6 +662,12 @@ def solve(
     return route_for(problem, solver, settings).run(problem, q0, seed, on_improvement)
 
 
+_ROUTE_SETTINGS = frozenset(
+    ("max_evals", "time_limit", "tol_pos", "tol_rot", "stop_on_success", "prefer", "params")
+)
+"""The keywords of :class:`Route` a route's key names (:func:`_route_key`)."""
+
+
 def _route_key(problem: IKProblem, solver: str, settings: dict[str, Any]) -> Any:
     """What a route bound to another problem must share with ``problem`` to run it (the
     solver, every setting, the goal types, frames, weights and priorities, the bounds and the
@@ -682,9 +687,13 @@ def _route_key(problem: IKProblem, solver: str, settings: dict[str, Any]) -> Any
             problem.lower.tobytes(), problem.upper.tobytes(), id(problem.tree),
             problem.python_goals == (),
         )  # fmt: skip
+    if not settings.keys() <= _ROUTE_SETTINGS:  # (a setting the key below does not name)
+        return None
+    get, params = settings.get, settings.get("params") or {}
     key = (
-        solver, tuple(sorted((k, v) for k, v in settings.items() if k != "params")),
-        tuple(sorted(settings["params"].items())), part,
+        solver, get("max_evals"), get("time_limit"), get("tol_pos"), get("tol_rot"),
+        get("stop_on_success"), get("prefer"), tuple(sorted(params.items())) if params else (),
+        part,
     )  # fmt: skip
     try:
         hash(key)

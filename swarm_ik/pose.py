@@ -128,9 +128,8 @@ def clearly_pose(
     """Whether the 4×4 matrix of the 16 entries ``a … w`` (row by row) passes :func:`as_pose`'s
     checks with a margin: finite, bottom row ``[0, 0, 0, 1]`` within 1e-9, ``max |RᵀR − I|``
     and ``|det R − 1|`` within ``orth_tol / 2``.  False means "let the full checks judge" (a
-    borderline or bad matrix).  Scalar arithmetic, run as it is by :func:`as_pose` (2 µs
-    where the numpy checks take 12 µs) and compiled by
-    :func:`swarm_ik.kernels.search.pose_ok` (the one definition of both)."""
+    borderline or bad matrix).  Scalar arithmetic (2 µs where the numpy checks take 12 µs),
+    kept in plain Python, as the whole module is (it loads no numba)."""
     if not math.isfinite(a + b + c + x + d + e + f + y + g + h + i + z + p + q + r + w):
         return False  # (a sum of finite numbers may overflow: then the full check decides)
     if abs(p) > 1e-9 or abs(q) > 1e-9 or abs(r) > 1e-9 or abs(w - 1.0) > 1e-9:

@@ -203,6 +203,29 @@ def test_pose_problem_with_defaults_equals_the_general_constructor() -> None:
             swarm_ik.IKProblem(robot, bad, **kwargs)  # type: ignore[arg-type]
 
 
+def test_solves_of_one_problem_type_keep_each_its_own_settings() -> None:
+    """Problems that differ only in their targets share a route per settings: a solve with
+    other settings (budget, tolerances, a solver parameter) runs with its own, whatever ran
+    before it."""
+    robot = swarm_ik.load_robot("panda")
+    rng = np.random.default_rng(5)
+    for i, q in enumerate(robot.random_q(rng, 4)):
+        T = robot.fk(q)
+        strict = swarm_ik.solve(swarm_ik.IKProblem(robot, T), seed=i, max_evals=3000)
+        short = swarm_ik.solve(swarm_ik.IKProblem(robot, T), seed=i, max_evals=2)
+        loose = swarm_ik.solve(
+            swarm_ik.IKProblem(robot, T), seed=i, max_evals=3000, tol_pos=1e-2, tol_rot=1e-2
+        )
+        again = swarm_ik.solve(swarm_ik.IKProblem(robot, T), seed=i, max_evals=3000)
+        assert short.n_evals <= 2 and not short.success
+        assert loose.success and loose.n_evals <= strict.n_evals
+        assert strict.success and strict.position_error <= 1e-5
+        assert strict.rotation_error <= 1e-5
+        _same_result(again, strict)
+        with pytest.raises(swarm_ik.InvalidArgumentError, match="pop_size"):
+            swarm_ik.solve(swarm_ik.IKProblem(robot, T), seed=i, max_evals=30, pop_size=0)
+
+
 def test_iksolver_start_checked_like_solve() -> None:
     """A start is refused, clipped (with a warning) or used as it is, as prepare_q0 does."""
     robot = swarm_ik.load_robot("ur5")  # (continuous-free limits of ±2π)
