@@ -268,7 +268,8 @@ def swarm_search(
         max_evals: Evaluations this call may use (the evaluator's remaining budget).
         budget_total: The evaluator's ``max_evals`` (``-1``: none), for the ``a`` schedule.
         evals_before: Evaluations the evaluator had counted before this call.
-        time_limit: Seconds since ``t0`` after which no polish starts (``NO_LIMIT``: none).
+        time_limit: Seconds since ``t0`` after which no polish starts (``NO_LIMIT``: none;
+            the first, of the seed alone, always runs).
         t0: Start of the solve on the clock of :func:`now` [s].
         key: Random stream key (:func:`key_of_seed`, :func:`stream_key`).
         out_q: The answer (lowest fitness seen), ``(nq,)``.
@@ -320,9 +321,13 @@ def swarm_search(
         if stopped or used >= max_evals:
             break
         calls += 1
-        # the clock, when there is a time limit, and every 16th polish call in any case:
-        # entering Python there is where a pending Ctrl-C raises KeyboardInterrupt
-        t_call = now() if has_time or (calls & 15) == 0 else 0.0
+        # the clock: not before the first polish call (one start, at most max_iters
+        # evaluations, begun at t0), then before each under a time limit, and every 16th in
+        # any case (entering Python there is where a pending Ctrl-C raises KeyboardInterrupt)
+        if calls == 1:
+            t_call = t0
+        else:
+            t_call = now() if has_time or (calls & 15) == 0 else 0.0
         if has_time and t_call - t0 >= time_limit:
             break
         if unlimited and gen >= iterations:
