@@ -217,6 +217,7 @@ def warm_up(route: Route) -> None:
     try:
         problem = route.problem
         q = np.ascontiguousarray(problem.robot.mid_q()).clip(problem.lower, problem.upper)
+        problem.within_bounds(q)  # (the judge's bounds test, compiled)
         if route.compiled:  # the one compiled call of the route (with a clock: its first
             # read is slow); a cache damaged inside its files is removed and compiled again
             kernels.loaded_despite_damage(lambda: route._search(q, np.uint64(1), 1, 60.0))
@@ -432,7 +433,8 @@ class Route:
             seed_q = q_start  # (prepare_q0's copy: float64, contiguous)
             if seed_q is None:
                 mid, bound = self._mid, self.problem
-                same_box = problem.lower is bound.lower and problem.upper is bound.upper
+                # (one Bounds per robot for its own limits: see IKProblem)
+                same_box = problem.bounds is bound.bounds
                 seed_q = mid if mid is not None and same_box else hybrid.default_seed(problem)
                 seed_q = np.ascontiguousarray(seed_q, dtype=float)
             with self._lock:  # (the bound table and scratch serve one run at a time)

@@ -212,6 +212,8 @@ class IKProblem:
 
     target: FloatArray | None
     goals: tuple[Goal, ...]
+    lower: FloatArray
+    upper: FloatArray
     _table_cache: dict[Any, lm.GoalTable]
 
     def __init__(
@@ -248,10 +250,9 @@ class IKProblem:
                 template = object.__new__(IKProblem)
                 template._make(robot, robot.fk_pinocchio(robot.mid_q()), None, fitness,
                                w_rot, lam, mu, orth_tol, None, None)  # fmt: skip
-                template.lower.flags.writeable = False  # (shared by the problems made so)
-                template.upper.flags.writeable = False
                 robot._cache["pose_problem"] = template
-            template._retarget(self, target)
+            template._retarget(self, target, orth_tol)
+            self.lower, self.upper = template.lower.copy(), template.upper.copy()  # (its own)
             return
         self._make(robot, target, goals, fitness, w_rot, lam, mu, orth_tol, lower, upper)
 
@@ -460,14 +461,15 @@ class IKProblem:
         if not self.single_pose or self.target is None:
             raise InvalidArgumentError("with_target needs a single-pose problem")
         new = object.__new__(type(self))
-        self._retarget(new, target)
+        self._retarget(new, target, ORTH_TOL)
         return new
 
-    def _retarget(self, new: IKProblem, target: Any) -> None:
-        """Make ``new`` this single-pose problem with another target (validated): a shallow
-        copy (``copy.copy``'s protocol costs 6 µs) sharing everything but the target."""
+    def _retarget(self, new: IKProblem, target: Any, orth_tol: float) -> None:
+        """Make ``new`` this single-pose problem with another target (validated with
+        ``orth_tol``): a shallow copy (``copy.copy``'s protocol costs 6 µs) sharing everything
+        but the target."""
         new.__dict__.update(self.__dict__)
-        new.target = as_pose(target, orth_tol=self.orth_tol)
+        new.target = as_pose(target, orth_tol=orth_tol)
         if isinstance(self.goals[0], Position):
             new.goals = (Position(self.robot.ee_frame, new.target[:3, 3]),)
         else:

@@ -203,6 +203,25 @@ def test_pose_problem_with_defaults_equals_the_general_constructor() -> None:
             swarm_ik.IKProblem(robot, bad, **kwargs)  # type: ignore[arg-type]
 
 
+def test_default_pose_problems_own_their_bounds_and_retarget_with_the_default_check() -> None:
+    """Problems made from the robot's pose problem each own writable bounds (a change to one
+    leaves the others alone), and with_target checks a new target's rotation against the
+    default orthonormality tolerance, whatever the problem was made with."""
+    robot = swarm_ik.load_robot("panda")
+    rng = np.random.default_rng(2)
+    a = swarm_ik.IKProblem(robot, robot.fk(robot.random_q(rng)))
+    b = swarm_ik.IKProblem(robot, robot.fk(robot.random_q(rng)))
+    a.lower[0] = a.lower[0] + 0.1
+    assert b.lower[0] == robot.lower[0] and a.lower[0] != robot.lower[0]
+    assert swarm_ik.IKProblem(robot, robot.fk(robot.mid_q())).lower[0] == robot.lower[0]
+    off = robot.fk(robot.mid_q())
+    off[:3, :3] *= 1.00002  # max|RᵀR − I| = 4e-5: beyond the default 1e-6
+    loose = swarm_ik.IKProblem(robot, robot.fk(robot.mid_q()), orth_tol=1e-3)
+    swarm_ik.IKProblem(robot, off, orth_tol=1e-3)  # (accepted when the problem is made)
+    with pytest.raises(swarm_ik.InvalidTargetError, match="orthonormal"):
+        loose.with_target(off)
+
+
 def test_solves_of_one_problem_type_keep_each_its_own_settings() -> None:
     """Problems that differ only in their targets share a route per settings: a solve with
     other settings (budget, tolerances, a solver parameter) runs with its own, whatever ran
