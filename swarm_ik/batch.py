@@ -1142,22 +1142,54 @@ def _nearest_poses(
     poses: FloatArray, targets: FloatArray, k: int, settings: BatchSettings
 ) -> IntArray:
     """Indices ``(n, min(k, K))`` of the ``poses`` ``(K, 4, 4)`` nearest to each target
-    ``(n, 4, 4)``, nearest first, by the distance of :data:`POSE_LENGTH` (the position alone
-    when ``settings.position_only``), as matrix products:
-    ``‖p‖² + ‖p*‖² − 2 p·p* + L²(3 − vec(R)·vec(R*))``."""
+    ``(n, 4, 4)``, nearest first (the lower index first between equals), by the distance
+    ``‖p − p*‖² + L²(3 − tr(RᵀR*))`` of :data:`POSE_LENGTH` (the position alone when
+    ``settings.position_only``): :func:`_nearest_rows`."""
     k = min(k, poses.shape[0])
-    pos, rot = poses[:, :3, 3], poses[:, :3, :3].reshape(-1, 9)
     out = np.empty((targets.shape[0], k), dtype=np.int64)
-    for a in range(0, targets.shape[0], 1024):  # (n × K distances a block at a time)
-        t = targets[a : a + 1024]
-        tpos = t[:, :3, 3]
-        d = (tpos * tpos).sum(1)[:, None] + (pos * pos).sum(1)[None, :] - 2.0 * tpos @ pos.T
-        if not settings.position_only:
-            d += POSE_LENGTH**2 * (3.0 - t[:, :3, :3].reshape(-1, 9) @ rot.T)
-        part = np.argpartition(d, k - 1, axis=1)[:, :k] if k < d.shape[1] else np.argsort(d, 1)
-        rows = np.arange(d.shape[0])[:, None]
-        out[a : a + 1024] = part[rows, np.argsort(d[rows, part], axis=1)]
+    _nearest_rows(
+        np.ascontiguousarray(poses, dtype=float), np.ascontiguousarray(targets, dtype=float),
+        0.0 if settings.position_only else POSE_LENGTH**2, out,
+    )  # fmt: skip
     return out
+
+
+@numba.njit(cache=True)
+def _nearest_rows(
+    poses: FloatArray, targets: FloatArray, w_rot2: float, out: IntArray
+) -> None:  # pragma: no cover - compiled
+    """For each target ``(n, 4, 4)``, the indices of the ``out.shape[1]`` poses ``(K, 4, 4)``
+    nearest to it into ``out``, nearest first, by ``‖p − p*‖² + w_rot2·(3 − tr(RᵀR*))``: one
+    pass over the poses keeping the nearest in order (insertion), where numpy's matrix
+    products and partial sorts cost 30 µs a target."""
+    k = out.shape[1]
+    if k == 0:
+        return
+    best = np.empty(k)
+    for i in range(targets.shape[0]):
+        m = 0
+        for c in range(poses.shape[0]):
+            dx = poses[c, 0, 3] - targets[i, 0, 3]
+            dy = poses[c, 1, 3] - targets[i, 1, 3]
+            dz = poses[c, 2, 3] - targets[i, 2, 3]
+            d = dx * dx + dy * dy + dz * dz
+            if w_rot2 > 0.0:
+                tr = 0.0
+                for a in range(3):
+                    for b in range(3):
+                        tr += poses[c, a, b] * targets[i, a, b]
+                d += w_rot2 * (3.0 - tr)
+            if m == k and not d < best[k - 1]:
+                continue
+            s = m if m < k else k - 1  # (the slot it enters from: the end)
+            while s > 0 and d < best[s - 1]:
+                best[s] = best[s - 1]
+                out[i, s] = out[i, s - 1]
+                s -= 1
+            best[s] = d
+            out[i, s] = c
+            if m < k:
+                m += 1
 
 
 @numba.njit(cache=True)

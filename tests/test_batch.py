@@ -330,3 +330,25 @@ def test_cli_reach(tmp_path, capsys):
     except ImportError:  # pragma: no cover
         return
     assert out.with_suffix(".html").is_file()
+
+
+@pytest.mark.parametrize("position_only", [False, True])
+def test_nearest_table_poses_match_a_sort_of_every_distance(position_only: bool) -> None:
+    """The restart table's nearest poses: for each target the k poses of least
+    ``‖p − p*‖² + L²(3 − tr(RᵀR*))`` (position alone when position-only), nearest first,
+    as a full stable sort of the distances orders them; fewer poses than k give them all."""
+    from swarm_ik import batch
+
+    robot = swarm_ik.load_robot("ur5")
+    rng = np.random.default_rng(7)
+    table, targets = robot.fk(robot.random_q(rng, 200)), robot.fk(robot.random_q(rng, 50))
+    settings = batch.BatchSettings(position_only=position_only)
+    d = ((table[None, :, :3, 3] - targets[:, None, :3, 3]) ** 2).sum(-1)
+    if not position_only:
+        tr = np.einsum("cab,iab->ic", table[:, :3, :3], targets[:, :3, :3])
+        d = d + batch.POSE_LENGTH**2 * (3.0 - tr)
+    ref = np.argsort(d, axis=1, kind="stable")
+    for k in (1, 8, 200, 300):
+        got = batch._nearest_poses(table, targets, k, settings)
+        np.testing.assert_array_equal(got, ref[:, : min(k, 200)])
+    assert batch._nearest_poses(table[:0], targets, 8, settings).shape == (50, 0)
