@@ -384,3 +384,35 @@ def test_the_stop_test_and_the_check_agree_on_a_python_goals_own_tolerance(own) 
         met = all(e.met for e in prob.verify(q))
         assert prob.is_success(q, 1e-5, 1e-5) == met
         assert met == (off <= (1e-5 if own is None else own))
+
+
+@dataclass(frozen=True)
+class NearReferencePose(G.Goal):
+    """The frame origin at its place in a reference posture: a goal that runs Pinocchio's FK
+    at other joint values (the reference) while the state is read."""
+
+    frame: str
+    q_ref: tuple
+
+    def residual(self, state):
+        ref = state.robot.fk_pinocchio(np.asarray(self.q_ref), self.frame)
+        return state.pose(self.frame)[:3, 3] - ref[:3, 3]
+
+    def jacobian(self, state):
+        return state.jacobian(self.frame)[:3]
+
+
+def test_a_goal_running_its_own_fk_leaves_the_state_of_the_others() -> None:
+    """A Python goal that computes Pinocchio's FK at other joint values while it is judged
+    does not change what the state gives the goals judged after it."""
+    r = robot("panda")
+    rng = np.random.default_rng(4)
+    q, q_ref, q_target = r.random_q(rng), r.random_q(rng), r.random_q(rng)
+    pose = G.Pose(r.ee_frame, r.fk(q_target))
+    alone = swarm_ik.IKProblem(r, goals=[pose]).verify(q)[0]
+    near = NearReferencePose(r.ee_frame, tuple(q_ref))
+    both = swarm_ik.IKProblem(r, goals=[near, pose]).verify(q)
+    assert both[1].position_error == alone.position_error
+    assert both[1].rotation_error == alone.rotation_error
+    ref = r.fk_pinocchio(q_ref)[:3, 3]
+    assert both[0].position_error == pytest.approx(np.linalg.norm(r.fk(q)[:3, 3] - ref))

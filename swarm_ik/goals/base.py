@@ -103,8 +103,9 @@ def kernels() -> Any:
 class State:
     """What a Python goal sees: the joint vector and Pinocchio's kinematics at it.
 
-    Read it while the goal is evaluated (it reuses the robot's Pinocchio ``Data`` of the
-    calling thread).
+    Read it while the goal is evaluated (it reuses a Pinocchio ``Data`` of the robot and the
+    calling thread kept for states, so a goal may run Pinocchio's FK at other joint values,
+    e.g. through :meth:`RobotModel.fk_pinocchio`, without changing what the state reads).
 
     Attributes:
         robot: The robot.
@@ -117,7 +118,7 @@ class State:
         self.q = np.asarray(q, dtype=float)
         self.q0 = None if q0 is None else np.asarray(q0, dtype=float)
         self._q_pin = robot.to_pinocchio(self.q, copy=False)  # (read only)
-        self._data = robot._data()  # (one Data per thread, reused)
+        self._data = robot._data("state")  # (one Data per thread for states, reused)
         pin.forwardKinematics(robot.model, self._data, self._q_pin)  # (frames: as asked)
         self._jacobians = False
 
