@@ -512,25 +512,33 @@ def _chol_back(a: FloatArray, b: FloatArray, n: int, x: FloatArray) -> None:  # 
 
 
 @numba.njit(cache=True, inline="always")
+def clip_joint(v: float, periodic: bool, lo: float, hi: float) -> float:  # pragma: no cover
+    """``v`` wrapped into ``[-π, π)`` if ``periodic``, then clipped to ``[lo, hi]``."""
+    if periodic:
+        v = wrapped(v)
+    if v < lo:
+        return lo
+    if v > hi:
+        return hi
+    return v
+
+
+@numba.njit(cache=True, inline="always")
 def into_bounds(v: float, j: int, b: Bounds) -> float:  # pragma: no cover - compiled
     """Value ``v`` of joint ``j`` wrapped into ``[-π, π)`` if continuous, then clipped to
     the bounds (the compiled twin of :meth:`swarm_ik.solvers.base.Evaluator.clip`)."""
-    if b.wrap[j]:
-        v = wrapped(v)
-    if v < b.lower[j]:
-        return b.lower[j]
-    if v > b.upper[j]:
-        return b.upper[j]
-    return v
+    return clip_joint(v, b.wrap[j], b.lower[j], b.upper[j])
 
 
 @numba.njit(cache=True, inline="always")
 def _step_into_bounds(
     q: FloatArray, delta: FloatArray, scale: float, b: Bounds, out: FloatArray
 ) -> None:  # pragma: no cover - compiled
-    """``out = q + scale·delta``, continuous joints wrapped into [-π, π), then clipped."""
+    """``out = q + scale·delta``, continuous joints wrapped into [-π, π), then clipped (the
+    bounds' fields read once, not per joint: see ``docs/performance.md``)."""
+    wrap, lower, upper = b.wrap, b.lower, b.upper
     for j in range(q.shape[0]):
-        out[j] = into_bounds(q[j] + scale * delta[j], j, b)
+        out[j] = clip_joint(q[j] + scale * delta[j], wrap[j], lower[j], upper[j])
 
 
 @numba.njit(cache=True, inline="always")
