@@ -218,6 +218,9 @@ def warm_up(route: Route) -> None:
         problem = route.problem
         q = np.ascontiguousarray(problem.robot.mid_q()).clip(problem.lower, problem.upper)
         problem.within_bounds(q)  # (the judge's bounds test, compiled)
+        # the search's clock: its objmode block compiles at its first call in each process
+        # (40-80 ms), here rather than inside a solve's time limit
+        search.now()
         if route.compiled:  # the one compiled call of the route (with a clock: its first
             # read is slow); a cache damaged inside its files is removed and compiled again
             kernels.loaded_despite_damage(lambda: route._search(q, np.uint64(1), 1, 60.0))

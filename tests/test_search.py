@@ -132,6 +132,26 @@ def test_time_limit_is_honoured_inside_the_compiled_loop() -> None:
     assert r.time_s < 0.01 + 0.05  # one polish call of overshoot at most (loaded machine)
 
 
+def test_first_time_limited_solve_of_a_process_keeps_its_limit() -> None:
+    """The first solve of a fresh process with a time limit stays within it: what loads on
+    first use (the kernels, the clock's objmode block, 40-80 ms) loads when the IKSolver is
+    made, not inside a solve."""
+    import subprocess
+    import sys
+
+    script = (
+        "import numpy as np, swarm_ik\n"
+        "robot = swarm_ik.load_robot('panda')\n"
+        "ik = swarm_ik.IKSolver(robot, time_limit=0.005)\n"
+        "T = np.eye(4); T[:3, 3] = [3.0, 0.0, 0.5]\n"  # (unreachable: runs to its limit)
+        "print(ik.solve(T).time_s)\n"
+    )
+    out = subprocess.run(
+        [sys.executable, "-c", script], capture_output=True, text=True, check=True, timeout=300
+    )
+    assert float(out.stdout.split()[-1]) < 0.005 + 0.03
+
+
 def _same_result(a: swarm_ik.Result, b: swarm_ik.Result) -> None:
     np.testing.assert_array_equal(a.q, b.q)
     assert (a.n_evals, a.success, a.reason, a.fitness) == (
