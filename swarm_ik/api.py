@@ -173,12 +173,7 @@ def prepare_q0(problem: IKProblem, q0: Any) -> np.ndarray | None:
     clipped into them with a warning (continuous joints wrapped first)."""
     if q0 is None:
         return None
-    robot = problem.robot
-    if type(q0) is np.ndarray and q0.dtype == np.float64 and q0.shape == (robot.nq,):
-        q = robot.wrap(q0)  # (a copy; a NaN fails the bounds test, then check_q names it)
-        if problem.within_bounds(q, 0.0):
-            return q
-    q = robot.wrap(robot.check_q(q0, "q0"))
+    q = problem.robot.wrap(problem.robot.check_q(q0, "q0"))
     if problem.within_bounds(q, 0.0):
         return q
     fixed = np.clip(q, problem.lower, problem.upper)
@@ -324,31 +319,20 @@ class Route:
             p0 = self.pol.table.p0.tolist()  # each goal's block of the table's floats
             self._blocks = [(p0[i], p0[i + 1]) for i in range(len(p0) - 1)]
             self.state = hybrid.search_state(self.pol, kw["pop_size"])
-            # the arguments of the compiled search that are the route's (see _search)
-            self._search_args = (
-                self.state, self.pol.kernel_tol_pos, self.pol.kernel_tol_rot, self.tol_pos,
-                self.tol_rot, 0.0 if problem.position_only else float(problem.w_rot),
-                int(kw["pop_size"]), int(round(kw["swarm_fraction"] * kw["pop_size"])),
-                int(kw["iterations"]),
-            )  # fmt: skip
+            self._n_swarm = int(round(kw["swarm_fraction"] * kw["pop_size"]))
 
     def _search(
         self, q_start: np.ndarray, key: np.uint64, max_evals: int | None, time_limit: float | None
-    ) -> tuple[np.ndarray, float, int, np.ndarray]:
-        """The compiled search (:func:`swarm_ik.kernels.search.swarm_search`, called as
-        :func:`swarm_ik.solvers.hybrid.compiled_search` calls it) from ``q_start`` on the
-        route's state: ``(answer (nq,), its fitness, evaluations, history)``."""
-        st, k_pos, k_rot, tol_pos, tol_rot, w_rot, pop, n_swarm, iterations = self._search_args
-        out_q = np.empty(q_start.shape[0])
-        used, fit, _, _, _, hist = search.swarm_search(
-            st, q_start, k_pos, k_rot, tol_pos, tol_rot, w_rot, pop, n_swarm, iterations,
-            max_evals is None and time_limit is None,
-            2**62 if max_evals is None else int(max_evals),
-            -1 if max_evals is None else int(max_evals), 0,
-            search.NO_LIMIT if time_limit is None else float(time_limit), time.perf_counter(), key,
-            out_q,
+    ) -> hybrid.SearchOutcome:
+        """The compiled search from ``q_start`` on the route's state."""
+        kw = self.kwargs
+        return hybrid.compiled_search(
+            self.pol, q_start, key, pop_size=kw["pop_size"], n_swarm=self._n_swarm,
+            iterations=kw["iterations"], stop=True, tol_pos=self.tol_pos, tol_rot=self.tol_rot,
+            w_rot=0.0 if self.problem.position_only else self.problem.w_rot,
+            max_evals=max_evals, remaining=2**62 if max_evals is None else max_evals,
+            evals_before=0, time_limit=time_limit, t0=time.perf_counter(), state=self.state,
         )  # fmt: skip
-        return out_q, fit, used, hist
 
     def _rebind(self, problem: IKProblem, q_start: np.ndarray | None) -> None:
         """Write the parameter blocks of ``problem``'s goals that differ from the bound ones
@@ -443,8 +427,9 @@ class Route:
             with self._lock:  # (the bound table and scratch serve one run at a time)
                 self._rebind(problem, q_start)
                 t0 = time.perf_counter()
-                q, fit, n_evals, history = self._search(seed_q, key, max_evals, search_limit)
+                out = self._search(seed_q, key, max_evals, search_limit)
                 elapsed = time.perf_counter() - t0
+            q, fit, n_evals, history = out.q, out.fitness, out.used, out.history
             n_evals += first_evals
             elapsed += first_s
             if not math.isfinite(fit) or len(problem.goals) > 1:  # (the problem's own sum)

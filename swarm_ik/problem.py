@@ -27,7 +27,7 @@ from swarm_ik.fitness import FITNESS, get_fitness
 from swarm_ik.goals import AvoidCollisions, Goal, Pose, Position, State, kernel_slot, kernels
 from swarm_ik.goals import base as goals_base
 from swarm_ik.kernels import joints, lm
-from swarm_ik.pose import FLOAT64, ORTH_TOL, as_pose, is_finite_nonneg
+from swarm_ik.pose import ORTH_TOL, as_pose, is_finite_nonneg
 from swarm_ik.robot import RobotModel
 
 SECONDARY_WEIGHT = 1e-3
@@ -88,16 +88,6 @@ def largest_errors(goal_errors: Sequence[GoalError]) -> tuple[float, float]:
         (e.rotation_error for e in goal_errors if not math.isnan(e.rotation_error)), default=0.0
     )
     return float(dp), float(dr)
-
-
-def _valid_q(q: Any, nq: int) -> bool:
-    """Whether ``q`` is already a finite float64 vector of length ``nq`` (no copy needed)."""
-    return (
-        type(q) is np.ndarray
-        and q.dtype is FLOAT64
-        and q.shape == (nq,)
-        and math.isfinite(sum(q.tolist()))  # (a sum that overflows: the full check decides)
-    )
 
 
 def _tree_with_frames(
@@ -698,7 +688,7 @@ class IKProblem:
     ) -> tuple[GoalError, ...]:
         """Errors of every primary goal at ``q`` computed with Pinocchio's own FK (and coal
         for collisions), not the compiled kernels, judged against the tolerances."""
-        qv = q if _valid_q(q, self.nq) else self.robot.check_q(q, "q")
+        qv = q if self.robot.is_q(q) else self.robot.check_q(q, "q")
         state = State(self.robot, qv, q0)
         out = []
         for gl, prim in zip(self.goals, self.primary, strict=True):

@@ -35,6 +35,7 @@ from swarm_ik.paths import (  # (the robot tables live there: no kernels to list
     example_robot_data_dir,
     example_robot_files,
 )
+from swarm_ik.pose import FLOAT64
 
 
 def _joint_kind_axis(jmodel: Any) -> tuple[int, FloatArray]:
@@ -687,18 +688,20 @@ class RobotModel:
 
     def _pinocchio_q_is_q(self) -> bool:
         """Whether Pinocchio's configuration of :attr:`model` is ``q`` itself (no continuous
-        joint in (cos, sin), no mimic follower)."""
-        return self.model.nq == self.nq and not self.mimic and not self.floating_base
+        joint in (cos, sin), no mimic follower; decided once)."""
+        same = self._cache.get("q_is_pinocchio_q")
+        if same is None:
+            same = self._cache["q_is_pinocchio_q"] = (
+                self.model.nq == self.nq and not self.mimic and not self.floating_base
+            )
+        return bool(same)
 
     def to_pinocchio(self, q: FloatArray, copy: bool = True) -> FloatArray:
         """Pinocchio configuration of :attr:`model` for ``q`` (continuous → cos, sin; mimic
         followers set from their drivers); ``copy=False``: ``q`` itself where the two vectors
         are the same (for a caller that only reads it, such as Pinocchio's FK)."""
         q = np.asarray(q, dtype=float).reshape(self.nq)
-        same = self._cache.get("q_is_pinocchio_q")
-        if same is None:
-            same = self._cache["q_is_pinocchio_q"] = self._pinocchio_q_is_q()
-        if same:
+        if self._pinocchio_q_is_q():
             return q.copy() if copy else q
         return np.array(_converted(self._to_pinocchio_plan(), self.model.nq, q.tolist()))
 
@@ -925,8 +928,20 @@ class RobotModel:
         floating base at the centre of its box, not turned)."""
         return 0.5 * (self.lower + self.upper)
 
+    def is_q(self, q: Any) -> bool:
+        """Whether ``q`` is already a finite float64 vector ``(nq,)`` (nothing to convert)."""
+        return (
+            type(q) is np.ndarray
+            and q.dtype is FLOAT64
+            and q.shape == (self.nq,)
+            and math.isfinite(sum(q.tolist()))  # (a sum that overflows: the full check decides)
+        )
+
     def check_q(self, q: Any, what: str = "q") -> FloatArray:
-        """Validate a joint vector: shape ``(nq,)`` and finite; returns it as floats."""
+        """Validate a joint vector: shape ``(nq,)`` and finite; returns it as floats (a
+        copy)."""
+        if self.is_q(q):
+            return q.copy()  # type: ignore[no-any-return]
         arr = floats_or(
             q, lambda: f"{what} must be {self.nq} numbers (one per joint), got {reprlib.repr(q)}"
         )
