@@ -39,6 +39,7 @@ from numpy.typing import NDArray
 
 from swarm_ik._types import BoolArray, FloatArray
 from swarm_ik.errors import InvalidArgumentError
+from swarm_ik.kernels import lie
 from swarm_ik.problem import largest_errors
 
 if TYPE_CHECKING:
@@ -210,9 +211,10 @@ def pose_errors(problem: IKProblem, qs: Any) -> tuple[FloatArray, FloatArray]:
 
 def pose_errors_of(m: FloatArray, goal: Any) -> tuple[FloatArray, FloatArray]:
     """Errors of the poses ``m`` ``(k, 4, 4)`` against one Pose / Position goal, bit for bit
-    as the goal's own ``errors`` computes them for one pose (``np.linalg.norm`` of the offset,
-    :func:`swarm_ik.kernels.lie.angle` of ``Rᵀ_target·R`` on the stack: the same NumPy
-    operations per row), so that a :class:`Result`'s errors equal :func:`swarm_ik.verify`'s.
+    as the goal's own ``errors`` computes them for one pose (a Pose: the offset's norm as the
+    in-order sum of squares, :func:`swarm_ik.kernels.lie.relative_angles`, the batched twin of
+    ``Pose.errors``' :func:`~swarm_ik.kernels.lie.angle_between`), so that a
+    :class:`Result`'s errors equal :func:`swarm_ik.verify`'s.
     """
     k = m.shape[0]
     if not goal.exact:
@@ -222,15 +224,8 @@ def pose_errors_of(m: FloatArray, goal: Any) -> tuple[FloatArray, FloatArray]:
         return np.array([math.sqrt(x.dot(x)) for x in d]), np.zeros(k)
     target = goal.target
     d = m[:, :3, 3] - target[:3, 3]
-    dp = np.array([math.sqrt(x.dot(x)) for x in d])  # np.linalg.norm of a 1-D vector: dot
-    r = target[:3, :3].T @ m[:, :3, :3]
-    # lie.angle's arithmetic, operation for operation (its np.linalg.norm over the last axis
-    # is sqrt of the in-order sum of squares), without its np.stack: ≈ 4 µs instead of 15
-    sx = r[:, 2, 1] - r[:, 1, 2]
-    sy = r[:, 0, 2] - r[:, 2, 0]
-    sz = r[:, 1, 0] - r[:, 0, 1]
-    c = r[:, 0, 0] + r[:, 1, 1] + r[:, 2, 2] - 1.0
-    return dp, np.arctan2(np.sqrt(sx * sx + sy * sy + sz * sz), c)
+    dp = np.sqrt(d[:, 0] * d[:, 0] + d[:, 1] * d[:, 1] + d[:, 2] * d[:, 2])  # (Pose.errors')
+    return dp, lie.relative_angles(target[:3, :3], m[:, :3, :3])
 
 
 # ----------------------------------------------------------------------- polishing

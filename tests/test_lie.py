@@ -54,3 +54,19 @@ def test_jr_inverse_twins_equal_pinocchio_jlog3(scale: float) -> None:
         lie.jr_inv_nb(phi, float(np.linalg.norm(phi)), out)
         np.testing.assert_allclose(out, lie.jr_inv(phi), atol=1e-12)
         np.testing.assert_allclose(out, pin.Jlog3(pin.exp3(phi)), atol=1e-9)
+
+
+@pytest.mark.parametrize("theta", ANGLES)
+def test_relative_angle_one_pair_equals_the_batched_one_bit_for_bit(theta: float) -> None:
+    rng = np.random.default_rng(3 + int(theta * 1e3))
+    r_a = np.array([pin.exp3(rng.normal(size=3)) for _ in range(20)])
+    axes = rng.normal(size=(20, 3))
+    axes /= np.linalg.norm(axes, axis=1, keepdims=True)
+    r_b = np.array([a @ pin.exp3(theta * ax) for a, ax in zip(r_a, axes, strict=True)])
+    batched = lie.relative_angles(r_a, r_b)  # (one target per row, as the batch's check)
+    shared = lie.relative_angles(r_a[0], r_b)  # (one target, many answers)
+    for k in range(20):
+        assert lie.angle_between(r_a[k], r_b[k]) == batched[k]  # the same bits
+        assert lie.angle_between(r_a[0], r_b[k]) == shared[k]
+        assert batched[k] == pytest.approx(theta, abs=1e-7)
+        assert batched[k] == pytest.approx(float(lie.angle(r_a[k].T @ r_b[k])), abs=1e-12)

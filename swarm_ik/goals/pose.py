@@ -174,7 +174,7 @@ class Pose(Goal):
         m = np.asarray(poses, dtype=float)
         if self.tolerance is None:
             dp = np.linalg.norm(m[..., :3, 3] - self.target[:3, 3], axis=-1)
-            return dp, lie.angle(self.target[:3, :3].T @ m[..., :3, :3])
+            return dp, lie.relative_angles(self.target[:3, :3], m[..., :3, :3])
         t = np.asarray(self.tolerance)
         e, phi = self.offsets(m)
         dp = np.linalg.norm(dead_zone(e, t[:3]), axis=-1)

@@ -164,14 +164,51 @@ def angle(rot: FloatArray) -> FloatArray:
     return np.arctan2(np.linalg.norm(s, axis=-1), c)
 
 
+def relative_angles(r_a: FloatArray, r_b: FloatArray) -> FloatArray:
+    """Rotation angles θ ∈ [0, π] of ``r_aᵀ r_b`` → ``(...)``, for rotations ``r_a`` and
+    ``r_b`` ``(..., 3, 3)`` (broadcast), accurate near 0 and π.
+
+    The product's entries are written out, ``m_ij = a_0i b_0j + a_1i b_1j + a_2i b_2j`` in
+    that order, each an elementwise NumPy operation, then :func:`angle`'s ``atan2`` of the
+    skew and trace parts (libm's, per element): :func:`angle_between` runs the same operations
+    on Python floats, so a batched check (:func:`swarm_ik.branches.pose_errors_of`) and the
+    one-answer judge (``Pose.errors``) agree to the last bit, where a matrix product may sum
+    in another order.
+    """
+    a = np.asarray(r_a, dtype=float)
+    b = np.asarray(r_b, dtype=float)
+
+    def m(i: int, j: int) -> FloatArray:
+        return (  # type: ignore[no-any-return]
+            a[..., 0, i] * b[..., 0, j] + a[..., 1, i] * b[..., 1, j] + a[..., 2, i] * b[..., 2, j]
+        )
+
+    s0 = m(2, 1) - m(1, 2)
+    s1 = m(0, 2) - m(2, 0)
+    s2 = m(1, 0) - m(0, 1)
+    c = m(0, 0) + m(1, 1) + m(2, 2) - 1.0
+    y = np.sqrt(s0 * s0 + s1 * s1 + s2 * s2)
+    # libm's atan2 per element: NumPy's arctan2 runs SIMD code on some CPUs (AVX-512) whose
+    # last bit differs from math.atan2's in about one case in twelve
+    theta = map(math.atan2, np.ravel(y).tolist(), np.ravel(c).tolist())
+    return np.fromiter(theta, dtype=float, count=np.size(y)).reshape(np.shape(y))
+
+
 def angle_between(r_a: FloatArray, r_b: FloatArray) -> float:
-    """Rotation angle θ ∈ [0, π] of ``r_aᵀ r_b`` for two rotations ``(3, 3)`` (one pair: the
-    scalar twin of :func:`angle`, for the per-answer check)."""
-    m = (np.asarray(r_a).T @ np.asarray(r_b)).tolist()
-    s0 = m[2][1] - m[1][2]
-    s1 = m[0][2] - m[2][0]
-    s2 = m[1][0] - m[0][1]
-    c = m[0][0] + m[1][1] + m[2][2] - 1.0
+    """Rotation angle θ ∈ [0, π] of ``r_aᵀ r_b`` for two rotations ``(3, 3)``: the scalar
+    twin of :func:`relative_angles` (the same operations in the same order, on Python floats:
+    no NumPy call but two ``tolist``, for the per-answer check)."""
+    (a00, a01, a02), (a10, a11, a12), (a20, a21, a22) = np.asarray(r_a).tolist()
+    (b00, b01, b02), (b10, b11, b12), (b20, b21, b22) = np.asarray(r_b).tolist()
+    s0 = (a02 * b01 + a12 * b11 + a22 * b21) - (a01 * b02 + a11 * b12 + a21 * b22)
+    s1 = (a00 * b02 + a10 * b12 + a20 * b22) - (a02 * b00 + a12 * b10 + a22 * b20)
+    s2 = (a01 * b00 + a11 * b10 + a21 * b20) - (a00 * b01 + a10 * b11 + a20 * b21)
+    c = (
+        (a00 * b00 + a10 * b10 + a20 * b20)
+        + (a01 * b01 + a11 * b11 + a21 * b21)
+        + (a02 * b02 + a12 * b12 + a22 * b22)
+        - 1.0
+    )
     return math.atan2(math.sqrt(s0 * s0 + s1 * s1 + s2 * s2), c)
 
 
