@@ -154,8 +154,8 @@ class Pose(Goal):
 
     def encode(self, robot: RobotModel, q0: FloatArray | None) -> Encoded:
         f = frame_index(self, robot)
-        if self.tolerance is None:
-            return Encoded(self.params(self.target), np.array([f], dtype=np.int64), 6)
+        if self.tolerance is None:  # (the per-call path of IKSolver: one take)
+            return Encoded(self.target.take(_PARAMS_OF_POSE), np.array([f], dtype=np.int64), 6)
         par = np.concatenate([self.params(self.target), np.asarray(self.tolerance, dtype=float)])
         return Encoded(par, np.array([f], dtype=np.int64), 6)
 
@@ -207,6 +207,6 @@ class Pose(Goal):
         if self.tolerance is not None:
             dp_b, dr_b = self.pose_errors(pose)
             return float(dp_b), float(dr_b)
-        d = (pose[:3, 3] - self.target[:3, 3]).tolist()
-        dp = math.sqrt(d[0] * d[0] + d[1] * d[1] + d[2] * d[2])
-        return dp, lie.angle_between(self.target[:3, :3], pose[:3, :3])
+        p, t = pose.tolist(), self.target.tolist()  # (Python floats: one answer)
+        d0, d1, d2 = p[0][3] - t[0][3], p[1][3] - t[1][3], p[2][3] - t[2][3]
+        return math.sqrt(d0 * d0 + d1 * d1 + d2 * d2), lie.angle_between(t, p)

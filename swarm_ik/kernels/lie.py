@@ -12,6 +12,7 @@ Jacobian inverse is ``Jr⁻¹(φ) = I + ½[φ]× + k(θ)[φ]×²`` with
 from __future__ import annotations
 
 import math
+from typing import Any
 
 import numba
 import numpy as np
@@ -194,12 +195,15 @@ def relative_angles(r_a: FloatArray, r_b: FloatArray) -> FloatArray:
     return np.fromiter(theta, dtype=float, count=np.size(y)).reshape(np.shape(y))
 
 
-def angle_between(r_a: FloatArray, r_b: FloatArray) -> float:
-    """Rotation angle θ ∈ [0, π] of ``r_aᵀ r_b`` for two rotations ``(3, 3)``: the scalar
-    twin of :func:`relative_angles` (the same operations in the same order, on Python floats:
-    no NumPy call but two ``tolist``, for the per-answer check)."""
-    (a00, a01, a02), (a10, a11, a12), (a20, a21, a22) = np.asarray(r_a).tolist()
-    (b00, b01, b02), (b10, b11, b12), (b20, b21, b22) = np.asarray(r_b).tolist()
+def angle_between(r_a: Any, r_b: Any) -> float:
+    """Rotation angle θ ∈ [0, π] of ``r_aᵀ r_b`` for two rotations ``(3, 3)``, or the
+    rotations of two poses ``(4, 4)``, as arrays or nested lists (rows): the scalar twin of
+    :func:`relative_angles` (the same operations in the same order, on Python floats: no NumPy
+    call but ``tolist``, for the per-answer check)."""
+    a = r_a.tolist() if isinstance(r_a, np.ndarray) else r_a
+    b = r_b.tolist() if isinstance(r_b, np.ndarray) else r_b
+    (a00, a01, a02, *_), (a10, a11, a12, *_), (a20, a21, a22, *_) = a[:3]
+    (b00, b01, b02, *_), (b10, b11, b12, *_), (b20, b21, b22, *_) = b[:3]
     s0 = (a02 * b01 + a12 * b11 + a22 * b21) - (a01 * b02 + a11 * b12 + a21 * b22)
     s1 = (a00 * b02 + a10 * b12 + a20 * b22) - (a02 * b00 + a12 * b10 + a22 * b20)
     s2 = (a01 * b00 + a11 * b10 + a21 * b20) - (a00 * b01 + a10 * b11 + a20 * b21)
