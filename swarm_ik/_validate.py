@@ -25,7 +25,26 @@ from typing import Any
 import numpy as np
 
 from swarm_ik._types import FloatArray
+from swarm_ik.argtypes import SEED_LIMIT
 from swarm_ik.errors import InvalidArgumentError, InvalidTargetError
+
+
+def check_seed(seed: Any) -> int | np.random.Generator:
+    """A seed as every solver takes it: an integer in ``[0, 2**63)`` (as an ``int``) or a
+    Generator, as it is (None is seed 0).
+
+    Raises:
+        InvalidArgumentError: the seed is negative, too large, or not an integer.
+    """
+    if isinstance(seed, np.random.Generator):
+        return seed
+    if seed is None:
+        return 0
+    if isinstance(seed, (bool, np.bool_)) or not isinstance(seed, (int, np.integer)):
+        raise InvalidArgumentError(f"seed must be a non-negative integer, got {seed!r}")
+    if not 0 <= seed < SEED_LIMIT:
+        raise InvalidArgumentError(f"seed must be in [0, 2**63), got {seed}")
+    return int(seed)
 
 
 def floats_or(

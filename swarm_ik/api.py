@@ -28,10 +28,11 @@ from typing import Any
 import numpy as np
 
 from swarm_ik import kernels
+from swarm_ik._validate import check_seed
 from swarm_ik.errors import InvalidArgumentError, unknown
 from swarm_ik.goals import AvoidCollisions, Orientation, Pose, Position, Posture
 from swarm_ik.kernels import search
-from swarm_ik.optimize import check_budget, check_seed, make_rng
+from swarm_ik.optimize import check_budget, make_rng
 from swarm_ik.pose import is_finite_nonneg
 from swarm_ik.problem import GoalError, IKProblem
 from swarm_ik.result import Result

@@ -11,7 +11,7 @@ import math
 from collections.abc import Callable
 
 SEED_LIMIT = 2**63
-"""Seeds are integers in ``[0, SEED_LIMIT)`` (as :func:`swarm_ik.optimize.check_seed`)."""
+"""Seeds are integers in ``[0, SEED_LIMIT)`` (as :func:`swarm_ik._validate.check_seed`)."""
 
 
 def seed(text: str) -> int:

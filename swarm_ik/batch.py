@@ -61,6 +61,7 @@ import numba
 import numpy as np
 
 from swarm_ik._types import BoolArray, FloatArray, IntArray
+from swarm_ik._validate import check_seed
 from swarm_ik.errors import InvalidArgumentError, InvalidTargetError, SwarmIKError
 from swarm_ik.goals import AvoidCollisions, Goal, Pose, Position, State, kernel_slot, kernels
 from swarm_ik.kernels import lie, lm, loaded_despite_damage
@@ -277,9 +278,9 @@ class BatchSettings:
                 f"max_starts must be at most {MAX_STARTS} (swarm_ik.batch.MAX_STARTS; "
                 f"time_limit bounds the whole call), got {self.max_starts!r}"
             )
-        s = self.seed
-        if isinstance(s, bool) or not isinstance(s, (int, np.integer)) or not 0 <= s < 2**63:
-            raise InvalidArgumentError(f"seed must be an integer in [0, 2**63), got {s!r}")
+        if self.seed is None or isinstance(self.seed, np.random.Generator):
+            raise InvalidArgumentError(f"seed must be an integer in [0, 2**63), got {self.seed!r}")
+        check_seed(self.seed)
         if not 0.0 < self.tol_margin <= 1.0:
             raise InvalidArgumentError(f"tol_margin must be in (0, 1], got {self.tol_margin!r}")
         d = self.deadline

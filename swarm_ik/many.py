@@ -37,6 +37,7 @@ import numpy as np
 import pinocchio as pin
 from numpy.typing import NDArray
 
+from swarm_ik._validate import check_seed
 from swarm_ik.api import Route, prepare_q0, warm_up
 from swarm_ik.branches import (
     BRANCH_TOL,
@@ -347,15 +348,8 @@ def solve_many(
             raise InvalidArgumentError(f"{label} must be a positive number, got {tol!r}")
     check_budget(max_evals, time_limit)
     start_q, ref = _start_and_reference(problem, q0)
-    if isinstance(seed, np.random.Generator):
-        seed_label = None
-    else:  # refused exactly as swarm_ik.optimize.make_rng refuses it (no Generator made yet)
-        seed_label = 0 if seed is None else seed
-        if isinstance(seed_label, bool) or not isinstance(seed_label, (int, np.integer)):
-            raise InvalidArgumentError(f"seed must be a non-negative integer, got {seed!r}")
-        if seed_label < 0 or seed_label >= 2**63:
-            raise InvalidArgumentError(f"seed must be in [0, 2**63), got {seed_label}")
-        seed_label = int(seed_label)
+    checked = check_seed(seed)  # (before any Generator is made)
+    seed_label = None if isinstance(checked, np.random.Generator) else checked
 
     use_analytic = False
     if method == "analytic":

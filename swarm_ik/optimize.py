@@ -10,6 +10,7 @@ from typing import Any
 
 import numpy as np
 
+from swarm_ik._validate import check_seed
 from swarm_ik.errors import InvalidArgumentError
 from swarm_ik.pose import is_finite_nonneg
 from swarm_ik.solvers import base
@@ -33,24 +34,6 @@ class OptimizeResult:
     n_evals: int
     time_s: float
     history: FloatArray
-
-
-def check_seed(seed: Any) -> int | np.random.Generator:
-    """A seed as the solvers take it: an integer in ``[0, 2**63)`` or a Generator (None is
-    seed 0).
-
-    Raises:
-        InvalidArgumentError: the seed is negative, too large, or not an integer.
-    """
-    if isinstance(seed, np.random.Generator):
-        return seed
-    if seed is None:
-        return 0
-    if isinstance(seed, bool) or not isinstance(seed, (int, np.integer)):
-        raise InvalidArgumentError(f"seed must be a non-negative integer, got {seed!r}")
-    if seed < 0 or seed >= 2**63:
-        raise InvalidArgumentError(f"seed must be in [0, 2**63), got {seed}")
-    return int(seed)
 
 
 def make_rng(seed: int | np.random.Generator | None) -> np.random.Generator:

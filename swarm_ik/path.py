@@ -66,7 +66,7 @@ import numba
 import numpy as np
 from numpy.typing import NDArray
 
-from swarm_ik._validate import floats_or
+from swarm_ik._validate import check_seed, floats_or
 from swarm_ik.errors import InvalidArgumentError, InvalidTargetError
 from swarm_ik.kernels import joints
 
@@ -270,7 +270,8 @@ def solve_path(
         raise InvalidArgumentError(
             f"time_limit must be a positive number or None, got {time_limit!r}"
         )
-    rng = _make_rng(seed)
+    seed = check_seed(seed)
+    rng = seed if isinstance(seed, np.random.Generator) else np.random.default_rng(seed)
     wps = _Waypoints.build(robot, poses, goals, scene, frame)
     if densify and wps.poses is None:
         raise InvalidArgumentError("densify needs poses (goal lists are not interpolated)")
@@ -335,18 +336,6 @@ def _check_q0(robot: Any, q0: Any) -> FloatArray | None:
             f"{q[j]:g} not in [{robot.lower[j]:g}, {robot.upper[j]:g}]"
         )
     return np.clip(q, robot.lower, robot.upper)
-
-
-def _make_rng(seed: Any) -> np.random.Generator:
-    if isinstance(seed, np.random.Generator):
-        return seed
-    if isinstance(seed, (bool, np.bool_)) or not isinstance(seed, (int, np.integer)):
-        raise InvalidArgumentError(
-            f"seed must be a non-negative integer or a Generator, got {seed!r}"
-        )
-    if not 0 <= int(seed) < 2**63:
-        raise InvalidArgumentError(f"seed must be in [0, 2**63), got {seed}")
-    return np.random.default_rng(int(seed))
 
 
 def _goal_list(value: Any, what: str) -> list[Any]:
