@@ -777,13 +777,14 @@ def check_targets(targets: Any, orth_tol: float = 1e-6) -> FloatArray:
             f"targets must have shape (N, 4, 4) or (N, 7) (x y z qx qy qz qw); got {arr.shape}"
         )
     # a block at a time: a Ctrl-C is answered between blocks (millions of targets)
-    for a in range(0, arr.shape[0], _CHECK_BLOCK):
-        _check_pose_block(arr[a : a + _CHECK_BLOCK], a, orth_tol)
+    for a in range(0, arr.shape[0], BLOCK):
+        _check_pose_block(arr[a : a + BLOCK], a, orth_tol)
     return np.ascontiguousarray(arr)
 
 
-_CHECK_BLOCK = 1 << 16
-"""Targets validated per numpy pass in :func:`check_targets`."""
+BLOCK = 1 << 16
+"""Targets per numpy pass where a pass over millions of them is split so that a Ctrl-C is
+answered between passes (the validation of :func:`check_targets`, the CLI's random targets)."""
 
 
 def _check_pose_block(blk: FloatArray, first: int, orth_tol: float) -> None:

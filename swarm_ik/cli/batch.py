@@ -116,10 +116,11 @@ def run(args: argparse.Namespace) -> int:
         rng = np.random.default_rng(args.seed)
         # drawn and FK'd a block at a time: a Ctrl-C is answered between blocks, not after
         # millions of targets
-        step = 1 << 16
+        from swarm_ik.batch import BLOCK
+
         targets = np.empty((args.random, 4, 4))
-        for a in range(0, args.random, step):
-            m = min(step, args.random - a)
+        for a in range(0, args.random, BLOCK):
+            m = min(BLOCK, args.random - a)
             targets[a : a + m] = robot.fk(robot.random_q(rng, m))
         source = f"{args.random} FK-sampled targets (seed {args.seed})"
     from swarm_ik.batch import solve_batch

@@ -77,7 +77,7 @@ def dead_zone(e: FloatArray, t: FloatArray) -> FloatArray:
 
 
 _PARAMS_OF_POSE = np.array([0, 1, 2, 4, 5, 6, 8, 9, 10, 3, 7, 11])
-"""Where :meth:`Pose.params` of one target reads its 4×4 entries (flat, row-major): the
+"""Where :meth:`Pose.params` reads a target's 4×4 entries (flat, row-major): the
 rotation row by row, then the position."""
 
 
@@ -138,12 +138,7 @@ class Pose(Goal):
         """The float parameters of a target ``(4, 4)``, or of targets ``(N, 4, 4)`` as
         ``(N, 12)``: what :func:`swarm_ik.solve_batch` writes per target."""
         t = np.asarray(target, dtype=float)
-        if t.ndim == 2:  # (one target: the per-call path of IKSolver, one numpy operation)
-            return t.take(_PARAMS_OF_POSE)
-        out = np.empty(t.shape[:-2] + (12,))
-        out[..., :9] = t[..., :3, :3].reshape(t.shape[:-2] + (9,))
-        out[..., 9:] = t[..., :3, 3]
-        return out
+        return t.reshape(t.shape[:-2] + (16,)).take(_PARAMS_OF_POSE, axis=-1)
 
     @property
     def exact(self) -> bool:
