@@ -31,6 +31,7 @@ _LAZY = {
     "solve_batch": "swarm_ik.batch",
     "solve_many": "swarm_ik.many",
     "windings_of": "swarm_ik.many",
+    "solve_path": "swarm_ik.path",
     "OptimizeResult": "swarm_ik.optimize",
     "minimize": "swarm_ik.optimize",
     "make_pose": "swarm_ik.pose",
@@ -68,6 +69,7 @@ if TYPE_CHECKING:  # for type checkers and IDEs: the names as if imported eagerl
     from swarm_ik.batch import solve_batch
     from swarm_ik.many import solve_many, windings_of
     from swarm_ik.optimize import OptimizeResult, minimize
+    from swarm_ik.path import solve_path
     from swarm_ik.paths import robot_names
     from swarm_ik.pose import make_pose, project_to_se3
     from swarm_ik.problem import IKProblem
@@ -98,6 +100,7 @@ __all__ = [
     "solve",
     "solve_batch",
     "solve_many",
+    "solve_path",
     "goals",
     "solvers",
     "verify",

@@ -918,7 +918,7 @@ def _tracked(
             bad.append(q)
             continue
         good.append(q)
-        for s in ctx.self_motion(i, q):
+        for s in [] if ctx.timed_out else ctx.self_motion(i, q):
             qs, oks = ctx.track(target, s)
             if oks:
                 good.append(qs)
@@ -1086,7 +1086,8 @@ def _build(ctx: _Context, start: FloatArray | None) -> _Graph:
         par = np.empty((0, nq))
         if i > 0 and not cert:
             qa, ok_rows = graph.layers[i - 1], graph.valid[i - 1]
-            beam = MAX_COVER if ctx.cover else BEAM
+            # out of time: one solve from the best candidate (the path is still complete)
+            beam = 1 if ctx.out_of_time() else MAX_COVER if ctx.cover else BEAM
             if ok_rows.any():
                 par = _pick(qa[ok_rows], ra0[ok_rows], ta0[ok_rows], beam, ctx)
             else:
