@@ -170,6 +170,18 @@ def test_same_seed_same_path():
     assert a.reconfigurations == b.reconfigurations and a.reason == b.reason
 
 
+def test_seed_none_is_seed_zero_as_in_solve():
+    robot = get("ur5")
+    poses = robot.fk(smooth_q(robot, 2, n=8))
+    a = solve_path(robot, poses, seed=None)
+    b = solve_path(robot, poses, seed=0)
+    np.testing.assert_array_equal(a.q, b.q)
+    with pytest.raises(InvalidArgumentError, match=r"seed must be in \[0, 2\*\*63\)"):
+        solve_path(robot, poses, seed=2**63)
+    with pytest.raises(InvalidArgumentError, match="seed must be a non-negative integer"):
+        solve_path(robot, poses, seed=True)
+
+
 def test_goal_lists_per_waypoint():
     from swarm_ik.goals import Axis, Position
 
