@@ -66,9 +66,10 @@ import numba
 import numpy as np
 from numpy.typing import NDArray
 
-from swarm_ik._validate import check_seed, floats_or
+from swarm_ik._validate import floats_or
 from swarm_ik.errors import InvalidArgumentError, InvalidTargetError
 from swarm_ik.kernels import joints
+from swarm_ik.optimize import make_rng
 
 FloatArray = NDArray[np.float64]
 
@@ -270,8 +271,7 @@ def solve_path(
         raise InvalidArgumentError(
             f"time_limit must be a positive number or None, got {time_limit!r}"
         )
-    seed = check_seed(seed)
-    rng = seed if isinstance(seed, np.random.Generator) else np.random.default_rng(seed)
+    rng = make_rng(seed)
     wps = _Waypoints.build(robot, poses, goals, scene, frame)
     if densify and wps.poses is None:
         raise InvalidArgumentError("densify needs poses (goal lists are not interpolated)")
@@ -597,9 +597,10 @@ class _Context:
 
     def self_motion(self, i: int, q: FloatArray) -> list[FloatArray]:
         """Starts pushed from ``q`` along the self-motion of waypoint ``i`` (null space of the
-        frame's Jacobian, half the bound each way; random pushes for goal lists)."""
-        if self.cover:
-            return []  # (covered by walks along the self-motion: _fill)
+        frame's Jacobian, half the bound each way; random pushes for goal lists); none once
+        the time limit is reached (each later waypoint: one solve)."""
+        if self.cover or self.timed_out:
+            return []  # (cover: covered by walks along the self-motion, _fill)
         if self.redundant_pose:
             jac = self.robot.jacobian_pinocchio(q, self.wps.frame)
             _, _, vt = np.linalg.svd(jac)
@@ -918,7 +919,7 @@ def _tracked(
             bad.append(q)
             continue
         good.append(q)
-        for s in [] if ctx.timed_out else ctx.self_motion(i, q):
+        for s in ctx.self_motion(i, q):
             qs, oks = ctx.track(target, s)
             if oks:
                 good.append(qs)

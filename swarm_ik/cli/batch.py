@@ -93,12 +93,10 @@ def run(args: argparse.Namespace) -> int:
     import numpy as np
 
     import swarm_ik
-    from swarm_ik.batch import read_targets_file
+    from swarm_ik.batch import BLOCK, MAX_TARGETS, read_targets_file, solve_batch
     from swarm_ik.errors import InvalidArgumentError
 
     check_output_file(args.out, "--out", (".csv", ".npz"))  # before any work
-    from swarm_ik.batch import MAX_TARGETS
-
     if args.random is not None and not 1 <= args.random <= MAX_TARGETS:
         raise InvalidArgumentError(
             f"--random must be a count from 1 to {MAX_TARGETS} (swarm_ik.batch.MAX_TARGETS), "
@@ -116,15 +114,11 @@ def run(args: argparse.Namespace) -> int:
         rng = np.random.default_rng(args.seed)
         # drawn and FK'd a block at a time: a Ctrl-C is answered between blocks, not after
         # millions of targets
-        from swarm_ik.batch import BLOCK
-
         targets = np.empty((args.random, 4, 4))
         for a in range(0, args.random, BLOCK):
             m = min(BLOCK, args.random - a)
             targets[a : a + m] = robot.fk(robot.random_q(rng, m))
         source = f"{args.random} FK-sampled targets (seed {args.seed})"
-    from swarm_ik.batch import solve_batch
-
     res = solve_batch(
         robot,
         targets,
