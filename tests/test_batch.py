@@ -8,6 +8,7 @@ import numpy as np
 import pytest
 
 import swarm_ik
+from swarm_ik import batch
 from swarm_ik.batch import (
     BatchChain,
     BatchSettings,
@@ -113,18 +114,39 @@ def test_unreachable_targets_fail_after_all_starts(get_robot):
     assert np.all(res.position_error[:2] > 4.0)
 
 
-@pytest.mark.parametrize("max_starts", [1, 3, 12])
+@pytest.mark.parametrize("max_starts", [1, 2, 3, 12])
 def test_max_starts_bounds_every_target_with_the_restart_table(get_robot, max_starts):
-    """The seed, the restart table's nearest configurations and the random restarts together
-    spend at most ``max_starts`` starts per target; unreachable targets spend them all."""
+    """The seed, the restart table's nearest configurations, the random restarts and the
+    patient last start together spend at most ``max_starts`` starts per target, and the
+    evaluations of as many starts (the last one ``PATIENT_ITERS`` times as long); unreachable
+    targets spend all the starts."""
     robot = get_robot("panda")
     _, targets = fk_targets(robot, 200, seed=6)
     targets[:3, :3, 3] += 5.0  # out of reach
     res = solve_batch(robot, targets, seed=0, max_starts=max_starts)
     assert np.all(res.n_starts <= max_starts) and np.all(res.n_starts >= 1)
     np.testing.assert_array_equal(res.n_starts[:3], [max_starts] * 3)
+    long_starts = 0 if max_starts == 1 else batch.PATIENT_ITERS - 1
+    assert np.all(res.n_evals <= (max_starts + long_starts) * batch.BATCH_MAX_ITERS)
     assert not res.success[:3].any()
-    assert res.success[3:].mean() >= {1: 0.6, 3: 0.9, 12: 0.97}[max_starts]
+    assert res.success[3:].mean() >= {1: 0.6, 2: 0.75, 3: 0.9, 12: 0.97}[max_starts]
+
+
+def test_the_last_start_polishes_the_best_point_patiently(get_robot):
+    """With two starts, the second polishes the first's end point with up to
+    ``PATIENT_ITERS × max_iters`` evaluations and no verdict on slow steps: it solves targets
+    the first start gave up on (same first start: the same answer where it was the only)."""
+    robot = get_robot("panda")
+    _, targets = fk_targets(robot, 200, seed=6)
+    one = solve_batch(robot, targets, max_starts=1, max_iters=10)
+    two = solve_batch(robot, targets, max_starts=2, max_iters=10)
+    first_only = two.n_starts == 1
+    np.testing.assert_array_equal(two.q[first_only], one.q[first_only])
+    gained = two.success & ~one.success
+    assert gained.sum() >= 10
+    np.testing.assert_array_equal(two.n_starts[gained], 2)
+    second = two.n_evals[gained] - one.n_evals[gained]
+    assert np.all(second <= batch.PATIENT_ITERS * 10) and np.any(second > 10)
 
 
 def test_q0_seeds_each_target(get_robot):

@@ -7,7 +7,7 @@ Every compiled solve (``solve``, ``IKSolver``, ``solve_many``, ``solve_batch``) 
 * the goal table (:class:`GoalTable`): per goal its kernel slot, weight, primary flag, rows
   and its own parameter block (floats ``par`` and integers ``ipar``), plus the typed list of
   goal kernels;
-* the bounds (:class:`Bounds`) and the settings (:class:`LMSettings`, one set of defaults:
+* the bounds (:class:`Bounds`) and the settings (:class:`LMSettings`, defaults:
   :data:`DEFAULT_LM`).
 
 **The goal protocol.**  A compiled goal is a function of :data:`GOAL_SIGNATURE`::
@@ -122,7 +122,7 @@ def kernel_list(kernels: Sequence[Any]) -> GoalKernels:
 
 
 class LMSettings(NamedTuple):
-    """Settings of the Levenberg–Marquardt polish (the one set of defaults: :data:`DEFAULT_LM`),
+    """Settings of the Levenberg–Marquardt polish (defaults: :data:`DEFAULT_LM`),
     each documented under its field.
 
     ``max_iters``, ``lam0``, ``max_step`` and ``stall_rel`` were tuned together on Panda,
@@ -181,7 +181,8 @@ class LMSettings(NamedTuple):
 
 
 DEFAULT_LM = LMSettings()
-"""The one set of LM defaults used by every solve path."""
+"""The LM defaults of every solve path; the batch solver gives up stalling starts sooner
+(its own ``lam0``, ``stall_rel`` and ``max_iters``: :data:`swarm_ik.batch.BATCH_LAM0`)."""
 
 
 class Bounds(NamedTuple):
