@@ -83,6 +83,13 @@ CLOSED_FORM_N = 16
 """``n`` of :func:`swarm_ik.solve_many` where the closed form applies (every branch: ≤ 16)."""
 TRACK_EVALS = 3000
 """Evaluation budget of one tracking solve (a budget, not a time limit: deterministic)."""
+FINISH_PER_WAYPOINT = 2e-5
+"""Seconds per waypoint that :func:`solve_path` keeps out of a ``time_limit`` for the check
+of the path at its end (Pinocchio's FK and each waypoint's goals: 15–25 µs per waypoint
+measured, Panda), up to half the limit."""
+SEARCH_SHARE = 0.5
+"""Share of a ``time_limit`` (after the check's reserve) for building candidates; the rest
+tracks the remaining waypoints one solve each."""
 FULL_BRANCHES = 8
 """Branches (modulo 2π) of a generic pose of a 6R arm with three parallel axes or a
 spherical wrist: a closed-form set with this many is complete."""
@@ -228,12 +235,16 @@ def solve_path(
         scene: Obstacles (a :class:`swarm_ik.scene.Scene`, shapes, or a scene JSON file):
             shortcut for adding ``AvoidCollisions(scene)`` at every waypoint.
         frame: The goal frame of ``poses`` (default ``robot.ee_frame``).
-        time_limit: Most wall-clock seconds for building candidates and checking the
-            ``densify`` poses [s]; when reached, the remaining waypoints are only tracked (one
-            solve each, 0.1–1 ms), the remaining interpolated poses are not solved (the path
-            through them is filled in joint space and reported unchecked, not as jumps), and
-            the reason says so.  Results are deterministic for a seed only
-            when the limit is not reached.
+        time_limit: Most wall-clock seconds for the whole call [s].  After
+            :data:`SEARCH_SHARE` of it (less :data:`FINISH_PER_WAYPOINT` per waypoint kept
+            for the final check) no more candidates are built: the remaining waypoints are
+            only tracked (one solve each, 0.1–1 ms) and the remaining interpolated poses are
+            not solved (the path through them is filled in joint space and reported
+            unchecked, not as jumps).  Waypoints not tracked by the limit are not solved:
+            they hold the configuration before them and are reported not reached.  The
+            reason says which of these happened.  Waypoint 0 always gets one solve, so a
+            limit shorter than that solve is overrun.  Results are deterministic for a seed
+            only when the limit is not reached.
         seed: Seed (or Generator) of every random choice (the solvers' seeds are drawn from
             it): the same seed gives the same path.
         densify: Poses interpolated between consecutive waypoints (position lerp, rotation
@@ -276,8 +287,11 @@ def solve_path(
     if densify and wps.poses is None:
         raise InvalidArgumentError("densify needs poses (goal lists are not interpolated)")
     _check_path_size(wps.n, int(densify))
-    deadline = None if time_limit is None else t_start + float(time_limit)
-    ctx = _Context(robot, wps, step, float(tol_pos), float(tol_rot), rng, deadline)
+    limit = None
+    if time_limit is not None:  # (the check at the end is inside the limit)
+        reserve = min(FINISH_PER_WAYPOINT * wps.n, 0.5 * float(time_limit))
+        limit = t_start + float(time_limit) - reserve
+    ctx = _Context(robot, wps, step, float(tol_pos), float(tol_rot), rng, limit, t_start)
     graph = _build(ctx, start)
     rejected: Rejected = {}
     choice = _search(graph, start, ctx, rejected)
@@ -520,7 +534,7 @@ class _Context:
 
     def __init__(
         self, robot: Any, wps: _Waypoints, step: FloatArray, tol_pos: float, tol_rot: float,
-        rng: np.random.Generator, deadline: float | None,
+        rng: np.random.Generator, limit: float | None, t_start: float = 0.0,
     ) -> None:  # fmt: skip
         import swarm_ik
 
@@ -530,7 +544,9 @@ class _Context:
         self.tol_pos = tol_pos
         self.tol_rot = tol_rot
         self.rng = rng
-        self.deadline = deadline
+        self.limit = limit  # no waypoint is solved after it
+        # no candidates are built after this (the remaining waypoints tracked)
+        self.deadline = None if limit is None else t_start + SEARCH_SHARE * (limit - t_start)
         self.true_wrap = np.ascontiguousarray(robot.continuous_mask)
         self.wrap = self.true_wrap  # the search's metric (set below for a 7-joint arm)
         self.angular = np.array([k != "prismatic" for k in robot.joint_kinds], dtype=bool)
@@ -550,14 +566,20 @@ class _Context:
             self.wrap = np.ascontiguousarray(self.true_wrap | self.windings)
         self.full_branches = _structural_branches(robot)
         self.timed_out = False
+        self.cut: int | None = None  # the first waypoint left unsolved at the limit
 
     def seed(self) -> int:
         return int(self.rng.integers(2**31))
 
     def out_of_time(self) -> bool:
+        """Whether the candidates' share of the time limit is spent (tracking only)."""
         if self.deadline is not None and time.perf_counter() >= self.deadline:
             self.timed_out = True
         return self.timed_out
+
+    def past_limit(self) -> bool:
+        """Whether the time limit is spent (no waypoint is solved any more)."""
+        return self.limit is not None and time.perf_counter() >= self.limit
 
     def track(
         self, target: tuple[FloatArray | None, Any], q_start: FloatArray
@@ -1055,6 +1077,17 @@ def _build(ctx: _Context, start: FloatArray | None) -> _Graph:
     closed_ok = True  # until a waypoint shows that the closed form does not apply
     merge_tol = COVER_MERGE if ctx.cover else DUPLICATE
     for i in range(n):
+        if i > 0 and (ctx.cut is not None or ctx.past_limit()):
+            # not solved: the best candidate of the waypoint before held, not reached
+            ctx.timed_out = True
+            ctx.cut = i if ctx.cut is None else ctx.cut
+            ra, ta = value(i - 1)
+            graph.layers.append(_pick(graph.layers[i - 1], ra, ta, 1, ctx))
+            graph.valid.append(np.zeros(1, dtype=bool))
+            graph.certified.append(False)
+            graph.closed.append(False)
+            values.append(None)
+            continue
         qb = np.empty((0, nq))
         cert = used_closed = spread_done = False
         if closed_ok and not ctx.out_of_time():
@@ -1448,7 +1481,8 @@ def _reason(
 ) -> str:  # fmt: skip
     """One line: what the path is and why it is (not) a success."""
     parts: list[str] = []
-    missed = [int(i) for i in np.flatnonzero(~np.asarray(reached))]
+    cut = q.shape[0] if ctx.cut is None else ctx.cut
+    missed = [int(i) for i in np.flatnonzero(~np.asarray(reached)) if i < cut]
     if missed:
         where = ", ".join(str(i) for i in missed[:10]) + (" …" if len(missed) > 10 else "")
         beyond = [i for i in missed if _beyond_reach(ctx, i)]
@@ -1486,7 +1520,12 @@ def _reason(
         parts.append(msg)
     if ctx.timed_out:
         unchecked = "; the interpolated poses of the later steps were not checked" if k else ""
-        parts.append("time_limit reached: the later waypoints were only tracked" + unchecked)
+        msg = "time_limit reached: after half of it the later waypoints were only tracked"
+        if ctx.cut is not None:
+            last = q.shape[0] - 1
+            held = f"waypoints {ctx.cut}–{last}" if ctx.cut < last else f"waypoint {last}"
+            msg += f", and {held} not solved (holding waypoint {ctx.cut - 1}'s configuration)"
+        parts.append(msg + unchecked)
     if not parts:
         checked = f", {k} interpolated poses per step checked" if k else ""
         return (

@@ -153,12 +153,35 @@ def test_q0_is_honoured():
     assert "within max_joint_step of q0" in res.reason
 
 
-def test_time_limit_reached_still_gives_a_path():
+def test_time_limit_reached_holds_the_waypoints_not_solved():
+    """A limit shorter than one solve: waypoint 0 still gets its solve, every later one holds
+    its configuration and is reported not reached, and the reason says from where."""
     robot = get("panda")
     q = smooth_q(robot, 16, n=12)
     res = solve_path(robot, robot.fk(q), time_limit=1e-6)
-    assert "time_limit reached" in res.reason
-    assert res.q.shape == (12, robot.nq) and res.reached.all()  # tracked: every waypoint met
+    assert res.q.shape == (12, robot.nq) and not res.success
+    assert res.reached[0] and not res.reached[1:].any()
+    np.testing.assert_array_equal(res.q[1:], np.broadcast_to(res.q[0], (11, robot.nq)))
+    assert "time_limit reached" in res.reason and "waypoints 1–11 not solved" in res.reason
+    assert res.jump_free  # (holding still is no jump)
+
+
+def test_time_limit_covers_the_whole_call():
+    """Candidates until half the limit, then tracking, then the waypoints left unsolved: the
+    call returns within about the limit (1.3 s unbounded for this path) with a path whose
+    solved part is met and whose rest holds still."""
+    import time
+
+    robot = get("panda")
+    poses = robot.fk(robot.mid_q() + 0.01 * np.arange(200)[:, None] * np.ones(robot.nq))
+    solve_path(robot, poses[:3])  # (kernels loaded before the clock below)
+    t0 = time.perf_counter()
+    res = solve_path(robot, poses, time_limit=0.05)
+    assert time.perf_counter() - t0 < 0.3
+    cut = int(np.argmin(res.reached))
+    assert 0 < cut < 200 and res.reached[:cut].all() and not res.reached[cut:].any()
+    assert np.all(res.q[cut:] == res.q[cut - 1])
+    assert f"waypoints {cut}–199 not solved" in res.reason
 
 
 def test_same_seed_same_path():
