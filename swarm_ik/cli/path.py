@@ -81,7 +81,12 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
         help="check each step through K interpolated poses (default 0)",
     )
     argtypes.add_seed(parser, "seed")
-    parser.add_argument("--time-limit", type=float, default=None, help="seconds for the search")
+    parser.add_argument(
+        "--time-limit",
+        type=float,
+        default=None,
+        help="seconds for the whole call (waypoints not solved by then: held, not reached)",
+    )
     add_tolerances(parser)
     parser.add_argument(
         "--out", type=Path, default=None, metavar="FILE", help="joint path: .csv or .npy"
