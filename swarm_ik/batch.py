@@ -227,20 +227,25 @@ BATCH_MAX_ITERS = 60
 """Evaluations per start of the batch solver (the default of :func:`solve_batch`, so that
 ``BatchSettings()`` is what ``solve_batch`` uses)."""
 
-BATCH_LAM0 = 0.1
-"""Initial LM damping of the batch solver (``lam0`` of :data:`swarm_ik.kernels.lm.DEFAULT_LM`
-is 0.3).  With :data:`BATCH_STALL_REL`, chosen on 6,000 FK targets each of Panda, UR5,
-Kinova, xArm7 and YuMi's left arm (``lam0`` 0.03 / 0.1 / 0.3 × ``stall_rel`` 0.05 – 0.3 ×
-``stall_iters`` 2 / 3): 16.6 against 18.3 evaluations per Panda target, 21.4 against 23.9 on
-YuMi, the same targets solved (99.98–100 %); ``stall_iters`` 2 lost targets on YuMi.  The
-batch's starts (the middle of the ranges, then the restart table's nearest poses) gain from
-giving up a stalling start sooner; the single solve's swarm search did not (25.9 against 24.9
-evaluations per Panda target), so it keeps the defaults."""
+RESTART_LAM0 = 0.1
+"""Initial LM damping of a batch target's restarts and of a first start at the middle of the
+ranges (:func:`_restarts`; a ``q0`` the caller gave and the patient last start keep ``lam0``
+of :data:`swarm_ik.kernels.lm.DEFAULT_LM`, 0.3).  With
+:data:`RESTART_STALL_REL`, chosen on 6,000 FK targets each of Panda, UR5, UR10, Kinova, xArm7
+and YuMi's left arm (``lam0`` 0.03 / 0.1 / 0.3 × ``stall_rel`` 0.05 – 0.3 × ``stall_iters``
+2 / 3, on every start): 16.6 against 18.3 evaluations per Panda target, 21.4 against 23.9 on
+YuMi, the same targets solved; ``stall_iters`` 2 lost targets on YuMi.  A restart is a guess
+that gains from being given up sooner, and so is the middle of the ranges, the first start
+when the caller gives no ``q0`` (16.6 against 16.8 evaluations per Panda target, 21.6 against
+23.1 on YuMi, with it quick rather than patient); a ``q0`` the caller gave keeps the patient
+defaults (``BatchSettings.own_start``): on it the quick settings lost 2 of 300 Panda paths of
+:func:`swarm_ik.path.solve_path`, whose tracking is that one start.  The single solve's swarm
+search gained nothing from them (25.9 against 24.9 evaluations per Panda target)."""
 
-BATCH_STALL_REL = 0.15
-"""A batch LM step lowering the squared residual by less than this fraction counts as a
+RESTART_STALL_REL = 0.15
+"""A restart's LM step lowering the squared residual by less than this fraction counts as a
 stall (``stall_rel`` of :data:`~swarm_ik.kernels.lm.DEFAULT_LM` is 0.05): see
-:data:`BATCH_LAM0`."""
+:data:`RESTART_LAM0`."""
 
 
 @dataclass(frozen=True)
@@ -257,14 +262,19 @@ class BatchSettings:
         max_iters: Most FK + Jacobian evaluations per start (the patient last start:
             :data:`PATIENT_ITERS` times as many).
         seed: Seed of the per-target restart streams, ``0 <= seed < 2**63``.
-        lam0: Initial LM damping, relative to the mean diagonal of ``JᵀJ``.
+        lam0: Initial LM damping, relative to the mean diagonal of ``JᵀJ`` (the restarts:
+            :data:`RESTART_LAM0`).
         max_step: Largest joint change per LM step (rad, or m for prismatic joints).
-        stall_rel: A step reducing the squared residual by less than this fraction…
+        stall_rel: A step reducing the squared residual by less than this fraction… (the
+            restarts: :data:`RESTART_STALL_REL`)
         stall_iters: …this many times in a row ends a start (local minimum).
         tol_margin: The kernel stops at this fraction of the tolerances, so the independent
             check passes with margin.
         deadline: Wall-clock time (``time.time()``, seconds since the epoch) after which no
             target starts (``solve_batch``'s ``time_limit``); None: no limit.
+        own_start: The first start of each target is the caller's ``q0`` (polished with
+            ``lam0`` and ``stall_rel``), not the middle of the ranges (a guess, polished as
+            a restart: :func:`_restarts`).
     """
 
     tol_pos: float = 1e-5
@@ -273,12 +283,13 @@ class BatchSettings:
     max_starts: int = 128
     max_iters: int = BATCH_MAX_ITERS
     seed: int = 0
-    lam0: float = BATCH_LAM0
+    lam0: float = lm.DEFAULT_LM.lam0
     max_step: float = lm.DEFAULT_LM.max_step
-    stall_rel: float = BATCH_STALL_REL
+    stall_rel: float = lm.DEFAULT_LM.stall_rel
     stall_iters: int = lm.DEFAULT_LM.stall_iters
     tol_margin: float = lm.DEFAULT_LM.tol_margin
     deadline: float | None = None
+    own_start: bool = False
 
     def __post_init__(self) -> None:
         for label in ("tol_pos", "tol_rot"):
@@ -294,6 +305,8 @@ class BatchSettings:
                 f"max_starts must be at most {MAX_STARTS} (swarm_ik.batch.MAX_STARTS; "
                 f"time_limit bounds the whole call), got {self.max_starts!r}"
             )
+        if not isinstance(self.own_start, bool):
+            raise InvalidArgumentError(f"own_start must be a bool, got {self.own_start!r}")
         if self.seed is None or isinstance(self.seed, np.random.Generator):
             raise InvalidArgumentError(f"seed must be an integer in [0, 2**63), got {self.seed!r}")
         check_seed(self.seed)
@@ -941,7 +954,9 @@ def _seed_table_restarts(
     :data:`TABLE_RESTARTS` of the restart table's configurations nearest to its pose
     (:func:`_window_table`, :func:`_nearest_poses`), one start a pass; one still not
     converged gets the kernel's random restarts, and its last start is a patient polish of
-    the best point it found (:func:`_patient`), within ``max_starts`` in all.  A target's
+    the best point it found (:func:`_patient`), within ``max_starts`` in all.  The restarts,
+    and a first start that is the middle of the ranges, give up sooner than a first start
+    the caller gave (:func:`_restarts`).  A target's
     answer depends only on its seed, index, target and start (not on the chunking).
 
     Args:
@@ -954,7 +969,8 @@ def _seed_table_restarts(
     """
     n = targets.shape[0]
     one = dataclasses.replace(settings, max_starts=1)
-    q, evals, starts, conv = polish(np.arange(n), q_seed, one)
+    first = one if settings.own_start else _restarts(one)  # (the middle of the ranges: a guess)
+    q, evals, starts, conv = polish(np.arange(n), q_seed, first)
     redo = np.flatnonzero(~conv & (starts > 0))  # (one not started: the time limit is spent)
     after_seed = settings.max_starts - 1
     patient = min(after_seed, 1)  # the last start: the best point, polished patiently
@@ -965,7 +981,7 @@ def _seed_table_restarts(
         for k in range(near.shape[1]):
             if not redo.size:
                 break
-            qk, evk, stk, convk = polish(redo, table_q[near[:, k]], one)
+            qk, evk, stk, convk = polish(redo, table_q[near[:, k]], _restarts(one))
             evals[redo] += evk
             starts[redo] += stk
             q[redo[convk]], conv[redo[convk]] = qk[convk], True
@@ -973,7 +989,7 @@ def _seed_table_restarts(
     left = after_seed - patient - k_table
     if redo.size and left > 0:  # the kernel's random restarts, after a start from the best
         # point found (a local minimum: it stalls in a few evaluations)
-        rest = dataclasses.replace(settings, max_starts=left)
+        rest = dataclasses.replace(_restarts(settings), max_starts=left)
         q2, ev2, st2, conv2 = polish(redo, np.ascontiguousarray(q[redo]), rest)
         evals[redo] += ev2
         starts[redo] += st2
@@ -987,6 +1003,13 @@ def _seed_table_restarts(
     return q, evals, starts, conv
 
 
+def _restarts(settings: BatchSettings) -> BatchSettings:
+    """Settings of a batch target's restarts: ``settings`` with :data:`RESTART_LAM0` and
+    :data:`RESTART_STALL_REL` (less damping at first, an earlier verdict on a stalling
+    start)."""
+    return dataclasses.replace(settings, lam0=RESTART_LAM0, stall_rel=RESTART_STALL_REL)
+
+
 PATIENT_ITERS = 4
 """The patient last start of a batch target (:func:`_patient`) may run this many times
 ``max_iters`` evaluations."""
@@ -996,11 +1019,11 @@ def _patient(settings: BatchSettings) -> BatchSettings:
     """Settings of a target's last start, a polish of the best point its other starts found:
     one start of :data:`PATIENT_ITERS` × ``max_iters`` evaluations that no slow step ends
     (``stall_rel`` 0: only ``stall_iters`` rejected steps in a row, or the damping exploding,
-    end it).  The batch's quick verdict on a stalling start (:data:`BATCH_STALL_REL`) gives up
-    on targets near a singular or limit configuration whose steps shrink slowly: measured on
-    100,000 Panda FK targets, 21 ended unsolved (errors 2e-5–2e-4), 14 of them solved by this
-    start (9 unsolved with the patient ``stall_rel`` 0.05 on every start, at 10 % lower
-    throughput)."""
+    end it).  The restarts' quick verdict on a stalling start (:data:`RESTART_STALL_REL`)
+    gives up on targets near a singular or limit configuration whose steps shrink slowly:
+    measured on 100,000 Panda FK targets with the quick settings on every start, 21 ended
+    unsolved (errors 2e-5–2e-4), 14 of them solved by this start (9 unsolved with the patient
+    ``stall_rel`` 0.05 on every start, at 10 % lower throughput)."""
     return dataclasses.replace(
         settings, max_starts=1, stall_rel=0.0, max_iters=PATIENT_ITERS * settings.max_iters
     )
@@ -1098,7 +1121,7 @@ def solve_chunk(
         done = np.flatnonzero(conv)
         free[done] = ~bg.in_contact(q[done])
         redo = np.flatnonzero(conv & ~free)
-        one_start = dataclasses.replace(settings, max_starts=1)  # (a retry is one start)
+        one_start = dataclasses.replace(_restarts(settings), max_starts=1)  # (one start each)
         near = np.empty((redo.size, 0), dtype=np.int64)
         if redo.size and FREE_TABLE_RETRIES:
             table_q, table_poses = bg.free_table(bc, settings.seed)
@@ -1388,6 +1411,7 @@ def solve_batch(
         max_iters=max_iters,
         seed=seed,
         deadline=deadline,
+        own_start=q0 is not None,
     )
     poses = check_targets(targets)
     n = poses.shape[0]

@@ -181,8 +181,8 @@ class LMSettings(NamedTuple):
 
 
 DEFAULT_LM = LMSettings()
-"""The LM defaults of every solve path; the batch solver gives up stalling starts sooner
-(its own ``lam0``, ``stall_rel`` and ``max_iters``: :data:`swarm_ik.batch.BATCH_LAM0`)."""
+"""The LM defaults of every solve path; the batch solver's restarts give up stalling starts
+sooner (:data:`swarm_ik.batch.RESTART_LAM0`), and its starts have their own ``max_iters``."""
 
 
 class Bounds(NamedTuple):
