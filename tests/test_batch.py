@@ -219,6 +219,8 @@ def test_settings_are_validated(get_robot):
             solve_batch(robot, t, **kwargs)
     with pytest.raises(InvalidArgumentError, match="RobotModel"):
         solve_batch("panda", t)  # type: ignore[arg-type]
+    with pytest.raises(InvalidArgumentError, match="own_start must be a bool, got 'yes'"):
+        batch.BatchSettings(own_start="yes")  # type: ignore[arg-type]
 
 
 def test_check_targets():
