@@ -27,6 +27,7 @@ numba types at once; the structures one by one are typed in Python on every call
 
 from __future__ import annotations
 
+import functools
 import time
 from typing import Any, NamedTuple
 
@@ -106,10 +107,12 @@ def stream_key(rng: np.random.Generator) -> np.uint64:
     return np.uint64(rng.integers(0, 2**64, dtype=np.uint64))
 
 
+@functools.lru_cache(maxsize=1024)
 def key_of_seed(seed: int) -> np.uint64:
     """The ``uint64`` key of a search's random stream for an integer seed ``0 <= seed <
     2**64``: one SplitMix64 output of the seed (the same in every process and platform;
-    compiled: Python's integers cost several µs per call)."""
+    compiled: Python's integers cost several µs per call; remembered per seed, as most
+    solves pass the same few seeds and a compiled call costs 2 µs)."""
     return np.uint64(splitmix64(np.uint64(seed)))
 
 
