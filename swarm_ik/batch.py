@@ -969,7 +969,8 @@ def _seed_table_restarts(
     """
     n = targets.shape[0]
     one = dataclasses.replace(settings, max_starts=1)
-    first = one if settings.own_start else _restarts(one)  # (the middle of the ranges: a guess)
+    quick_one = _restarts(one)
+    first = one if settings.own_start else quick_one  # (the middle of the ranges: a guess)
     q, evals, starts, conv = polish(np.arange(n), q_seed, first)
     redo = np.flatnonzero(~conv & (starts > 0))  # (one not started: the time limit is spent)
     after_seed = settings.max_starts - 1
@@ -981,7 +982,7 @@ def _seed_table_restarts(
         for k in range(near.shape[1]):
             if not redo.size:
                 break
-            qk, evk, stk, convk = polish(redo, table_q[near[:, k]], _restarts(one))
+            qk, evk, stk, convk = polish(redo, table_q[near[:, k]], quick_one)
             evals[redo] += evk
             starts[redo] += stk
             q[redo[convk]], conv[redo[convk]] = qk[convk], True

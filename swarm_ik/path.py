@@ -287,11 +287,12 @@ def solve_path(
     if densify and wps.poses is None:
         raise InvalidArgumentError("densify needs poses (goal lists are not interpolated)")
     _check_path_size(wps.n, int(densify))
-    limit = None
+    deadline = limit = None
     if time_limit is not None:  # (the check at the end is inside the limit)
         reserve = min(FINISH_PER_WAYPOINT * wps.n, 0.5 * float(time_limit))
         limit = t_start + float(time_limit) - reserve
-    ctx = _Context(robot, wps, step, float(tol_pos), float(tol_rot), rng, limit, t_start)
+        deadline = t_start + SEARCH_SHARE * (limit - t_start)
+    ctx = _Context(robot, wps, step, float(tol_pos), float(tol_rot), rng, deadline, limit)
     graph = _build(ctx, start)
     rejected: Rejected = {}
     choice = _search(graph, start, ctx, rejected)
@@ -534,7 +535,7 @@ class _Context:
 
     def __init__(
         self, robot: Any, wps: _Waypoints, step: FloatArray, tol_pos: float, tol_rot: float,
-        rng: np.random.Generator, limit: float | None, t_start: float = 0.0,
+        rng: np.random.Generator, deadline: float | None, limit: float | None,
     ) -> None:  # fmt: skip
         import swarm_ik
 
@@ -544,9 +545,8 @@ class _Context:
         self.tol_pos = tol_pos
         self.tol_rot = tol_rot
         self.rng = rng
+        self.deadline = deadline  # no candidates are built after it (only tracking)
         self.limit = limit  # no waypoint is solved after it
-        # no candidates are built after this (the remaining waypoints tracked)
-        self.deadline = None if limit is None else t_start + SEARCH_SHARE * (limit - t_start)
         self.true_wrap = np.ascontiguousarray(robot.continuous_mask)
         self.wrap = self.true_wrap  # the search's metric (set below for a 7-joint arm)
         self.angular = np.array([k != "prismatic" for k in robot.joint_kinds], dtype=bool)
