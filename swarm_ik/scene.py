@@ -343,7 +343,7 @@ class Mesh:
             raise InvalidArgumentError(
                 f"mesh: path must be a file path (a string), got {reprlib.repr(raw)}"
             )
-        p = Path(os.fsdecode(raw)).expanduser()
+        p = _expanded(os.fsdecode(raw), "mesh path")
         if not p.is_file():
             raise SceneFileNotFoundError(f"mesh: file not found: {str(p)!r}")
         object.__setattr__(self, "path", str(p.resolve()))
@@ -550,21 +550,24 @@ class Scene:
             SceneDependencyError: a YAML file without PyYAML installed.
         """
         p = _path_arg(path, "scene file")
-        fmt = _SUFFIXES.get(p.suffix.lower())
-        text = _read_text(p, decode=p.suffix.lower() != ".urdf")  # URDFs: any XML encoding
-        if fmt is None or (fmt == "urdf" and p.suffix.lower() == ".xml"):
+        suffix = p.suffix.lower()
+        fmt = _SUFFIXES.get(suffix)
+        text = _read_text(p, decode=fmt != "urdf")  # URDFs: any XML encoding
+        if suffix == ".xml":  # (a URDF, told by its bytes: the XML names its own encoding)
+            fmt = "urdf" if re.search(rb"<robot[\s>]", _read_bytes(p)) else None
+        elif fmt is None:
             fmt = _sniff(text)
-            if fmt is None:
-                raise InvalidArgumentError(
-                    f"{p}: cannot tell the scene format; name the file with one of the "
-                    f"extensions {', '.join(_SUFFIXES)}"
-                )
+        if fmt is None:
+            raise InvalidArgumentError(
+                f"{p}: cannot tell the scene format; name the file with one of the "
+                f"extensions {', '.join(_SUFFIXES)}"
+            )
         if fmt == "json":
             return cls.from_dict(_parse_json(text, p), base_dir=p.resolve().parent, where=str(p))
         if fmt == "curobo":
             return _from_curobo(_parse_yaml(text, p), p.resolve().parent, str(p))
         if fmt == "moveit":
-            out = Path(mesh_dir) if mesh_dir is not None else None
+            out = None if mesh_dir is None else _path_arg(mesh_dir, "mesh_dir")
             shapes = _from_moveit(text, str(p), out)
         else:
             shapes = _from_urdf(p)
@@ -688,7 +691,7 @@ class Scene:
                         raise InvalidArgumentError(
                             f"path must be a string, got {reprlib.repr(raw)}"
                         )
-                    p = Path(raw).expanduser()
+                    p = _expanded(raw, "mesh path")
                     if base_dir is not None and not p.is_absolute():
                         fields["path"] = str(Path(base_dir) / p)
                 shapes.append(shape_cls(**fields))
@@ -850,10 +853,16 @@ def _read_text(p: Path, decode: bool = True) -> str:
     if not decode:
         return ""
     try:
-        return p.read_bytes().decode("utf-8-sig")
+        return _read_bytes(p).decode("utf-8-sig")
     except UnicodeDecodeError as exc:
         raise InvalidArgumentError(f"{p}: not a UTF-8 text file ({exc.reason} at byte "
                                    f"{exc.start})") from None  # fmt: skip
+
+
+def _read_bytes(p: Path) -> bytes:
+    """The bytes of a scene file, an unreadable one refused in one line."""
+    try:
+        return p.read_bytes()
     except OSError as exc:
         raise InvalidArgumentError(f"{p}: cannot be read ({exc.strerror})") from None
 
@@ -960,7 +969,18 @@ def _path_arg(path: Any, what: str) -> Path:
         raise InvalidArgumentError(
             f"the {what} must be a path (a string or a pathlib.Path), got {reprlib.repr(path)}"
         )
-    return Path(path).expanduser()
+    return _expanded(path, what)
+
+
+def _expanded(path: str | os.PathLike[str], what: str) -> Path:
+    """``Path(path)`` with a leading ``~`` or ``~user`` expanded; one that names no home
+    folder is refused in one line."""
+    try:
+        return Path(path).expanduser()
+    except RuntimeError:  # (pathlib: "Could not determine home directory")
+        raise InvalidArgumentError(
+            f"the {what} {os.fsdecode(path)!r} starts with '~' but names no home folder"
+        ) from None
 
 
 def _write_text(p: Path, text: str) -> None:
@@ -1069,7 +1089,7 @@ def _curobo_shape(section: str, name: str, d: Mapping[str, Any], base_dir: Path)
     raw = d["file_path"]
     if not isinstance(raw, str) or not raw:
         raise InvalidArgumentError(f"file_path must be a file path, got {reprlib.repr(raw)}")
-    path = Path(raw).expanduser()
+    path = _expanded(raw, "mesh file_path")
     if not path.is_absolute():
         path = base_dir / path
         if not path.is_file():
@@ -1084,8 +1104,11 @@ def _curobo_shape(section: str, name: str, d: Mapping[str, Any], base_dir: Path)
 
 def _from_curobo(data: Any, base_dir: Path, where: str) -> Scene:
     """A scene from a parsed cuRobo world (``WorldConfig.from_dict``'s layout)."""
-    if data is None:
-        return Scene()
+    if data is None:  # (an empty world would turn collision avoidance off unnoticed)
+        raise InvalidArgumentError(
+            f"{where}: the file holds no cuRobo world (empty, or comments only); sections: "
+            f"{', '.join(_CUROBO)}"
+        )
     if not isinstance(data, dict):
         raise InvalidArgumentError(
             f"{where}: a cuRobo world is a mapping of sections ({', '.join(_CUROBO)}), "
@@ -1158,8 +1181,8 @@ class _Stream:
         """``file: line N: object 'x': `` for a message."""
         return f"{self.where}: line {self.line() if line is None else line}: {self.context}"
 
-    def fail(self, message: str) -> InvalidArgumentError:
-        return InvalidArgumentError(_one_line(f"{self.at()}{message}"))
+    def fail(self, message: str, line: int | None = None) -> InvalidArgumentError:
+        return InvalidArgumentError(_one_line(f"{self.at(line)}{message}"))
 
     def token(self, what: str) -> str:
         m = _TOKEN.match(self.text, self.pos)
@@ -1192,10 +1215,26 @@ class _Stream:
             raise self.fail(f"{what} must be a whole number >= 0, got {reprlib.repr(tok)}")
         return int(tok)
 
+    def row(self, what: str, labels: Sequence[str]) -> list[float]:
+        """The numbers of one line, one per label (MoveIt writes a position, a quaternion and
+        a colour each on a line of its own): a line with more or fewer is refused, where
+        reading token by token would take the next line's numbers as these."""
+        line = self.next_line()
+        form = f"{what} must be {len(labels)} numbers on one line ({' '.join(labels)})"
+        values: list[float] = []
+        for c in labels:
+            if self.next_line() != line:
+                raise self.fail(f"{form}; it has {len(values)}", line)
+            values.append(self.number(f"{what} {c}"))
+        extra = self.rest_of_line()
+        if extra:
+            raise self.fail(f"{form}; more follow: {reprlib.repr(extra)}", line)
+        return values
+
     def pose(self, what: str) -> FloatArray:
         """``x y z`` then ``qx qy qz qw`` (MoveIt's ``readPoseFromText``), normalised."""
-        pos = [self.number(f"{what} {c}") for c in "xyz"]
-        quat = [self.number(f"{what} q{c}") for c in "xyzw"]
+        pos = self.row(f"{what} position", "xyz")
+        quat = self.row(f"{what} quaternion", ("qx", "qy", "qz", "qw"))
         try:
             rot = _quat_matrix(quat, "xyzw")
         except InvalidArgumentError as exc:
@@ -1212,12 +1251,18 @@ def _write_obj(vertices: FloatArray, triangles: Any, mesh_dir: Path | None) -> P
         from swarm_ik.paths import cache_dir
 
         mesh_dir = cache_dir() / "scene_meshes"
-    mesh_dir.mkdir(parents=True, exist_ok=True)
     path = mesh_dir / f"moveit-{hashlib.sha256(text.encode()).hexdigest()[:24]}.obj"
-    if not path.is_file():
-        tmp = path.with_suffix(f".{os.getpid()}.tmp")
-        tmp.write_text(text)
-        os.replace(tmp, path)
+    try:
+        mesh_dir.mkdir(parents=True, exist_ok=True)
+        if not path.is_file():
+            tmp = path.with_suffix(f".{os.getpid()}.tmp")
+            tmp.write_text(text)
+            os.replace(tmp, path)
+    except OSError as exc:
+        raise InvalidArgumentError(
+            f"cannot write the scene's inline mesh into {str(mesh_dir)!r} "
+            f"({exc.strerror or type(exc).__name__}); give mesh_dir a writable folder"
+        ) from None
     return path
 
 
@@ -1234,6 +1279,7 @@ def _moveit_shape(s: _Stream, mesh_dir: Path | None) -> Callable[[FloatArray, st
         r, length = s.number("cylinder radius"), s.number("cylinder length")
         return lambda pose, name: Cylinder(r, length, _m4(pose), name=name)
     if kind == "mesh":
+        line = s.line()
         nv, nt = s.count("mesh vertex count"), s.count("mesh triangle count")
         if nt == 0:
             raise s.fail("mesh with no triangles")
@@ -1244,7 +1290,13 @@ def _moveit_shape(s: _Stream, mesh_dir: Path | None) -> Callable[[FloatArray, st
             if max(tri) >= nv:
                 raise s.fail(f"mesh triangle {i} {tri} names a vertex beyond the {nv} given")
             tris.append(tri)
-        path = _write_obj(verts.reshape(nv, 3), tris, mesh_dir)
+        v = verts.reshape(nv, 3)
+        t = np.array(tris, dtype=np.int64)
+        area2 = np.linalg.norm(np.cross(v[t[:, 1]] - v[t[:, 0]], v[t[:, 2]] - v[t[:, 0]]), axis=1)
+        if not np.any(area2 > 0.0):
+            raise s.fail("mesh: its triangles all have zero area (no surface to collide with)",
+                         line)  # fmt: skip
+        path = _write_obj(v, tris, mesh_dir)
         return lambda pose, name: Mesh(str(path), _m4(pose), name=name)
     if kind == "cone":
         raise s.fail(
@@ -1295,8 +1347,7 @@ def _from_moveit(text: str, where: str, mesh_dir: Path | None) -> list[Shape]:
             line = s.next_line()
             build = _moveit_shape(s, mesh_dir)
             pose = obj_pose @ s.pose(f"shape {k} pose")
-            for c in "rgba":
-                s.number(f"shape {k} colour {c}")
+            s.row(f"shape {k} colour", "rgba")
             made.append((build, pose, line))
         if new_format:
             for k in range(s.count("number of subframes")):

@@ -315,6 +315,8 @@ YAML_BAD = [
     ("cuboid:\n  [a]: {dims: [1, 1, 1], pose: [0, 0, 0, 1, 0, 0, 0]}\n", J,
      ["not a YAML file", "unhashable key"]),
     ("cuboid: [1, 2]\n", J, ["cuboid must map obstacle names"]),
+    ("", J, ["holds no cuRobo world"]),  # (an empty world would switch collisions off)
+    ("# only a comment\n", J, ["holds no cuRobo world", "cuboid, sphere"]),
     ("- 1\n- 2\n", J, ["a mapping of sections"]),
     ("cuboid:\n  t: {dims: [1, 1, 1], pose: [0, 0, 0, 1, 0, 0, 0]}\n"
      "  t: {dims: [1, 1, 1], pose: [0, 0, 0, 1, 0, 0, 0]}\n", J, ["'t' given twice"]),
@@ -363,6 +365,19 @@ MOVEIT_BAD = [
      ["no triangles"]),
     ("s\n" + GOOD_OBJECT + GOOD_OBJECT + ".\n", J, ["['a'] used more than once"]),
     ("only a name line", J, ["ends after its name line"]),
+    # a pose or colour line of the wrong length (reading token by token would take the next
+    # line's numbers: a 5-number quaternion, or a 4-number position before a 3-number one)
+    ("s\n* a\n1\nbox\n1 1 1\n0 0 0\n0 0 0 1 0\n0 0 0 0\n.\n", J,
+     ["line 7", "quaternion must be 4 numbers on one line", "more follow: '0'"]),
+    ("s\n* a\n1\nbox\n1 1 1\n0.5 0 0 0.3\n0 0 1\n0 0 0 0\n.\n", J,
+     ["line 6", "position must be 3 numbers on one line", "more follow: '0.3'"]),
+    ("s\n* a\n1\nbox\n1 1 1\n0 0 0\n0 0 1\n0 0 0 0\n.\n", J,
+     ["line 7", "quaternion must be 4 numbers on one line", "it has 3"]),
+    ("s\n* a\n1\nbox\n1 1 1\n0 0 0\n0 0 0 1\n0 0 0\n.\n", J,
+     ["line 8", "colour must be 4 numbers on one line", "it has 3"]),
+    # a mesh with no surface (its every triangle of zero area), refused where it is written
+    ("s\n* a\n1\nmesh\n3 1\n0 0 0\n1 0 0\n2 0 0\n0 1 2\n0 0 0\n0 0 0 1\n0 0 0 0\n.\n", J,
+     ["line 4", "zero area"]),
 ]  # fmt: skip
 
 
@@ -530,3 +545,41 @@ def test_mangled_files_never_escape_as_bare_python_errors(tmp_path: Path) -> Non
                 Scene.load(tmp_path / name, mesh_dir=tmp_path / "meshes")
             except SwarmIKError as exc:
                 assert "\n" not in str(exc), (name, text, str(exc))
+
+
+def test_home_folder_paths_that_name_no_user_are_refused(tmp_path: Path) -> None:
+    """``~nosuchuser/…`` (pathlib cannot expand it) is refused in one line, as a scene path, a
+    JSON mesh path and a cuRobo mesh path."""
+    _refused(Path("~nosuchuser_swarm_ik/x.json"), J, ["starts with '~'", "no home folder"])
+    (tmp_path / "m.json").write_text(
+        json.dumps([{"type": "mesh", "path": "~nosuchuser_swarm_ik/m.obj"}])
+    )
+    _refused(tmp_path / "m.json", J, ["obstacle 0", "~nosuchuser_swarm_ik/m.obj", "no home"])
+    (tmp_path / "m.yml").write_text(
+        "mesh:\n  m: {file_path: ~nosuchuser_swarm_ik/m.obj, pose: [0, 0, 0, 1, 0, 0, 0]}\n"
+    )
+    _refused(tmp_path / "m.yml", J, ["~nosuchuser_swarm_ik/m.obj", "no home"])
+
+
+def test_a_mesh_dir_that_cannot_hold_the_meshes_is_refused(tmp_path: Path) -> None:
+    """A MoveIt scene's inline mesh is written into ``mesh_dir``: a file there, or a value
+    that is no path, is refused in one line."""
+    text = "s\n* a\n1\nmesh\n3 1\n0 0 0\n1 0 0\n0 1 0\n0 1 2\n0 0 0\n0 0 0 1\n0 0 0 0\n.\n"
+    (tmp_path / "m.scene").write_text(text)
+    (tmp_path / "afile").write_text("x")
+    _refused(tmp_path / "m.scene", J, ["cannot write", "afile", "writable"],
+             mesh_dir=tmp_path / "afile")  # fmt: skip
+    _refused(tmp_path / "m.scene", J, ["mesh_dir must be a path", "got 5"], mesh_dir=5)
+    assert Scene.load(tmp_path / "m.scene", mesh_dir=tmp_path / "ok").names == ("a",)
+
+
+def test_an_xml_urdf_in_another_encoding_is_read(tmp_path: Path) -> None:
+    """A ``.xml`` holding a ``<robot>`` is told by its bytes, so an XML that declares another
+    encoding reads as it does under ``.urdf``."""
+    body = (
+        '<?xml version="1.0" encoding="ISO-8859-1"?><robot name="r\xe9"><link name="a">'
+        '<collision><geometry><box size="1 1 1"/></geometry></collision></link></robot>'
+    )
+    for ext in (".urdf", ".xml"):
+        (tmp_path / f"o{ext}").write_bytes(body.encode("latin-1"))
+        assert Scene.load(tmp_path / f"o{ext}").names == ("a_0",)
