@@ -370,6 +370,7 @@ class IKProblem:
                     "Python defines residual(state) -> (m,) and jacobian(state) -> (m, nq) "
                     "(docs/goals.md)"
                 )
+            gl.own_tolerance()  # (a bad tolerance refused now, not judged as met later)
         self._frame0: dict[int, int] = {}
         """Index of the first frame each frame-adding goal owns (by position in
         ``compiled_goals``)."""

@@ -106,6 +106,21 @@ def test_python_goal_alone_and_its_own_tolerance() -> None:
     assert err.met and err.position_error <= 1e-6
 
 
+@pytest.mark.parametrize(
+    "tol, words",
+    [(float("nan"), "positive finite"), (-1.0, "positive finite"), (0.0, "positive finite"),
+     (float("inf"), "positive finite"), ("abc", "'abc'"), (True, "True"), ([1e-3], "[0.001]")],
+)  # fmt: skip
+def test_a_python_goals_bad_own_tolerance_is_refused_when_the_problem_is_made(tol, words) -> None:
+    """NaN would judge any error as met (``not (dp > nan)``): every tolerance that is not a
+    positive finite number is refused, naming the goal."""
+    r = robot("panda")
+    goal = DistanceBetween("panda_hand_tcp", "panda_link0", 0.5, tolerance=tol)
+    with pytest.raises(InvalidArgumentError, match=r"DistanceBetween.*tolerance") as info:
+        swarm_ik.IKProblem(r, goals=[goal])
+    assert words in str(info.value)
+
+
 def test_python_goals_with_paper_solvers_use_the_same_judge() -> None:
     r = robot("panda")
     p = r.fk(r.random_q(np.random.default_rng(4)))[:3, 3]

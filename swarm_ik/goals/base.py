@@ -328,9 +328,24 @@ class Goal:
     def own_tolerance(self) -> float | None:
         """A Python goal's own position tolerance (its ``tolerance`` attribute), which
         replaces the solve's ``tol_pos`` wherever this goal is judged; None for a goal without
-        one and for compiled goals (their tolerance shapes their rows instead)."""
+        one and for compiled goals (their tolerance shapes their rows instead).
+
+        Raises:
+            InvalidArgumentError: a tolerance that is not a positive finite number (NaN would
+                judge every error as met).
+        """
         tol = None if self.compiled else getattr(self, "tolerance", None)
-        return None if tol is None else float(tol)
+        if tol is None:
+            return None
+        if isinstance(tol, bool) or not isinstance(tol, (int, float, np.integer, np.floating)):
+            raise InvalidArgumentError(
+                f"{self.describe()}: tolerance must be a positive number, got {reprlib.repr(tol)}"
+            )
+        if not (math.isfinite(tol) and tol > 0):
+            raise InvalidArgumentError(
+                f"{self.describe()}: tolerance must be a positive finite number, got {tol!r}"
+            )
+        return float(tol)
 
     def rows(self, robot: RobotModel, state: State | None = None) -> int:
         """Number of residual rows (a Python goal: the length of its residual)."""
