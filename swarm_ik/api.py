@@ -76,8 +76,9 @@ def _slack(goal: Any) -> tuple[float, float]:
 
 UNREACHABLE_BUDGET = (0.05, 3000)
 """``(seconds, evaluations)`` a solve spends at most on a problem :func:`unreachable_goal`
-proves unreachable, whatever budget it was given: the best point found is still returned
-(``reason="unreachable"``), and ``time_limit=1e9`` on a target beyond reach returns at once."""
+proves unreachable or :func:`conflicting_goals` proves contradictory, whatever budget it was
+given: the best point found is still returned (``reason="unreachable"`` or
+``"conflicting_goals"``), and ``time_limit=1e9`` on a target beyond reach returns at once."""
 
 
 def unreachable_goal(problem: IKProblem) -> str | None:
@@ -387,9 +388,10 @@ class Route:
         seed_val = None if isinstance(seed, np.random.Generator) else (0 if seed is None else seed)
         max_evals, time_limit = self.max_evals, self.time_limit
         cap_s, cap_evals = UNREACHABLE_BUDGET
-        if ((time_limit or 0.0) > cap_s or (max_evals or 0) > cap_evals) and unreachable_goal(
-            problem
-        ) is not None:  # proven unreachable: a large budget would buy nothing
+        if ((time_limit or 0.0) > cap_s or (max_evals or 0) > cap_evals) and (
+            unreachable_goal(problem) is not None
+            or conflicting_goals(problem, self.tol_pos, self.tol_rot) is not None
+        ):  # proven unreachable or contradictory: a large budget would buy nothing
             time_limit = cap_s if time_limit is None else min(time_limit, cap_s)
             max_evals = cap_evals if max_evals is None else min(max_evals, cap_evals)
         if (

@@ -1138,6 +1138,24 @@ def test_target_beyond_reach_returns_at_once_whatever_the_budget(solver: str) ->
     assert res.reason == "unreachable"
 
 
+def test_goals_proven_contradictory_return_within_the_same_cap() -> None:
+    """Two goals of one frame 10 cm apart: proven contradictory before the search, so the
+    solve ends at api.UNREACHABLE_BUDGET with reason "conflicting_goals", not at time_limit."""
+    from swarm_ik.api import UNREACHABLE_BUDGET
+    from swarm_ik.goals import Position
+
+    robot = swarm_ik.load_robot("panda")
+    p = robot.fk(robot.mid_q())[:3, 3]
+    goals = [Position(robot.ee_frame, p), Position(robot.ee_frame, p + [0.1, 0.0, 0.0])]
+    problem = IKProblem(robot, goals=goals)
+    swarm_ik.solve(problem, time_limit=0.01)  # (compiled before the clock)
+    t0 = time.perf_counter()
+    res = swarm_ik.solve(problem, time_limit=30.0, max_evals=10**9)
+    assert time.perf_counter() - t0 < 10 * UNREACHABLE_BUDGET[0] + 1.0
+    assert not res.success and res.reason == "conflicting_goals"
+    assert res.n_evals <= UNREACHABLE_BUDGET[1]
+
+
 def test_thousands_of_obstacles_stay_within_the_solve_budget() -> None:
     """3,000 obstacles: the exact checker is built in coal's broad phase (a Pinocchio model
     holding them grew quadratically: 28 s for a 0.1 s solve) and the check still equals the
