@@ -767,13 +767,15 @@ MAX_STARTS = 10_000
 """Largest ``max_starts`` (about 0.5 s of starts per target on a 7-joint arm)."""
 
 
-def check_targets(targets: Any, orth_tol: float = 1e-6) -> FloatArray:
+def check_targets(targets: Any, orth_tol: float = 1e-6, positions: bool = False) -> FloatArray:
     """Validate a batch of target poses.
 
     Args:
         targets: Poses, shape ``(N, 4, 4)`` [m], or rows ``x y z qx qy qz qw``, shape
-            ``(N, 7)`` (quaternions normalised).
+            ``(N, 7)`` (quaternions normalised); with ``positions`` also points, shape
+            ``(N, 3)`` [m] (their poses unrotated).
         orth_tol: Tolerance on the orthonormality of the rotation blocks.
+        positions: Whether ``(N, 3)`` points are targets (a position-only batch).
 
     Returns:
         Poses, shape ``(N, 4, 4)``, contiguous.
@@ -790,6 +792,14 @@ def check_targets(targets: Any, orth_tol: float = 1e-6) -> FloatArray:
             f"{arr.shape[0]} targets; at most {MAX_TARGETS} per call "
             "(swarm_ik.batch.MAX_TARGETS): split them"
         )
+    if positions and arr.ndim == 2 and arr.shape[1] == 3:
+        if not np.all(np.isfinite(arr)):
+            bad = int(np.flatnonzero(~np.isfinite(arr).all(axis=1))[0])
+            raise InvalidTargetError(f"target {bad} contains NaN or infinite values")
+        out = np.zeros((arr.shape[0], 4, 4))
+        out[:, [0, 1, 2, 3], [0, 1, 2, 3]] = 1.0
+        out[:, :3, 3] = arr
+        return out
     if arr.ndim == 2 and arr.shape[1] == 7:
         if not np.all(np.isfinite(arr)):
             bad = int(np.flatnonzero(~np.isfinite(arr).all(axis=1))[0])
@@ -802,8 +812,10 @@ def check_targets(targets: Any, orth_tol: float = 1e-6) -> FloatArray:
                 raise InvalidTargetError(f"target {i}: {exc}") from None
         return out
     if arr.ndim != 3 or arr.shape[1:] != (4, 4):
+        also = ", (N, 3) points" if positions else ""
         raise InvalidTargetError(
-            f"targets must have shape (N, 4, 4) or (N, 7) (x y z qx qy qz qw); got {arr.shape}"
+            f"targets must have shape (N, 4, 4) or (N, 7) (x y z qx qy qz qw){also}; "
+            f"got {arr.shape}"
         )
     # a block at a time: a Ctrl-C is answered between blocks (millions of targets)
     for a in range(0, arr.shape[0], BLOCK):
@@ -1342,7 +1354,7 @@ def solve_batch(
     Args:
         robot: The robot.
         targets: Target poses, shape ``(N, 4, 4)`` [m], or rows ``x y z qx qy qz qw``,
-            shape ``(N, 7)``.
+            shape ``(N, 7)``; with ``position_only`` also points, shape ``(N, 3)`` [m].
         seed: Seed of the per-target restart streams, ``0 <= seed < 2**63``.
         q0: First start, shape ``(nq,)`` (all targets) or ``(N, nq)`` (one per target);
             clipped into the limits with a warning when outside.  Default: the middle of the
@@ -1414,7 +1426,7 @@ def solve_batch(
         deadline=deadline,
         own_start=q0 is not None,
     )
-    poses = check_targets(targets)
+    poses = check_targets(targets, positions=settings.position_only)
     n = poses.shape[0]
     bc = BatchChain.from_robot(robot)
     labels = None

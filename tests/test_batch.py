@@ -183,6 +183,26 @@ def test_position_only(get_robot):
     assert np.median(res.rotation_error) > 0.1
 
 
+def test_position_only_takes_points(get_robot):
+    """A position-only batch takes ``(N, 3)`` points, with the answers of their poses; a pose
+    batch refuses them, naming the shapes it takes."""
+    robot = get_robot("yumi_left")
+    _, targets = fk_targets(robot, 30, seed=7)
+    points = targets[:, :3, 3].copy()
+    res = solve_batch(robot, points, position_only=True)
+    assert res.success.all()
+    reached = np.array([robot.fk_pinocchio(q)[:3, 3] for q in res.q])
+    assert np.all(np.linalg.norm(reached - points, axis=1) <= TOL)
+    same = solve_batch(robot, targets, position_only=True)
+    np.testing.assert_array_equal(res.q, same.q)  # (a point is its pose's position)
+    with pytest.raises(InvalidTargetError, match=r"\(N, 4, 4\) or \(N, 7\).*got \(30, 3\)"):
+        solve_batch(robot, points)
+    bad = points.copy()
+    bad[4, 1] = np.nan
+    with pytest.raises(InvalidTargetError, match="target 4 contains NaN"):
+        solve_batch(robot, bad, position_only=True)
+
+
 def test_does_not_loop_over_solve(get_robot, monkeypatch):
     def forbidden(*args, **kwargs):
         raise AssertionError("solve_batch must not call swarm_ik.solve")
