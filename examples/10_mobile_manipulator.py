@@ -5,10 +5,10 @@ TIAGo (``tiago_no_hand.urdf`` of example-robot-data, loaded by its name: a wheel
 prismatic torso lift, a 7-joint arm) is loaded twice.  With its base fixed to the world (8
 joints: the lift and the arm) the target is out of reach: the solve fails and returns the
 closest pose it found.  With ``floating_base=True`` (six more entries at the head of ``q``:
-the base position, then its rotation vector) and ``base_footprint`` as a second goal frame, a
-:class:`swarm_ik.goals.Pose` with per-axis bounds keeps the base on the floor (x and y free
-within the base box, z = 0, upright, any heading: ``tolerance=(B, B, 0, 0, 0, π)``) and the
-solve succeeds, the base driven towards the target.  The torso lift is left free (the solver
+the base position, then its rotation vector) and ``base_footprint`` as a second goal frame,
+two goals keep the base on the floor (:class:`swarm_ik.goals.JointValue` holds its height at 0,
+:class:`swarm_ik.goals.Axis` its z axis up; x and y stay free within the base box, the heading
+free) and the solve succeeds, the base driven towards the target.  The torso lift is left free (the solver
 may raise the arm).  The answer is drawn in meshcat with the fixed-base attempt ghosted
 (``--html FILE`` writes a self-contained page instead of serving it; needs
 ``pip install swarm_ik[viz]``; without the extra the viewer is skipped with a note).
@@ -25,7 +25,7 @@ from pathlib import Path
 import numpy as np
 
 import swarm_ik
-from swarm_ik.goals import Pose
+from swarm_ik.goals import Axis, JointValue, Pose
 
 QUICK = os.environ.get("SWARM_IK_QUICK") == "1"
 ROBOT = "tiago_no_hand"  # example-robot-data's tiago_description/robots/tiago_no_hand.urdf
@@ -52,8 +52,8 @@ def main() -> None:
 
     robot = swarm_ik.load_robot(ROBOT, [TOOL, BASE], floating_base=True, base_box=BOX)
     print(f"floating base: {robot.nq} entries in q, the base's 6 then the same {arm.nq} joints")
-    on_floor = Pose(BASE, np.eye(4), tolerance=(BOX, BOX, 0.0, 0.0, 0.0, np.pi))
-    problem = swarm_ik.IKProblem(robot, goals=[Pose(TOOL, target), on_floor])
+    on_floor = [JointValue("root_joint.z", 0.0), Axis(BASE, [0, 0, 1], [0, 0, 1])]
+    problem = swarm_ik.IKProblem(robot, goals=[Pose(TOOL, target), *on_floor])
     result = swarm_ik.solve(problem, seed=0, time_limit=budget)
     print(f"  success={result.success} ({result.reason}) in {1e3 * result.time_s:.2f} ms")
     for e in result.goal_errors:
