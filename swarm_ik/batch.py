@@ -1495,13 +1495,16 @@ def _workers_ignore_sigint() -> Iterator[None]:
 
 
 # --------------------------------------------------------------------------- files
-def read_targets(path: str | Path) -> FloatArray:
+def read_targets(path: str | Path, positions: bool = False) -> FloatArray:
     """Read target poses from a file.
 
     * ``.npz``: the array ``targets`` (or ``poses``, or the file's only array), shape
       ``(N, 4, 4)`` or ``(N, 7)``; ``.npy``: one such array.
     * ``.csv``: one target per row, either 7 columns ``x y z qx qy qz qw`` (a header naming
       them, in any order, is recognised) or 16 columns (the 4x4 matrix row by row).
+
+    With ``positions`` (a position-only batch) points are targets too: arrays ``(N, 3)``,
+    CSV rows of 3 columns ``x y z``.
 
     Returns:
         Valid poses, shape ``(N, 4, 4)``.
@@ -1516,14 +1519,14 @@ def read_targets(path: str | Path) -> FloatArray:
     suffix = p.suffix.lower()
     if suffix in (".npz", ".npy"):
         if suffix == ".npy":  # (mapped: its shape is checked before it is read)
-            return check_targets(np.load(p, allow_pickle=False, mmap_mode="r"))
+            return check_targets(np.load(p, allow_pickle=False, mmap_mode="r"), positions=positions)
         data = np.load(p, allow_pickle=False)
         keys = list(data.keys())
         for k in ("targets", "poses"):
             if k in keys:
-                return check_targets(data[k])
+                return check_targets(data[k], positions=positions)
         if len(keys) == 1:
-            return check_targets(data[keys[0]])
+            return check_targets(data[keys[0]], positions=positions)
         raise InvalidArgumentError(
             f"{p}: no array named 'targets' or 'poses'; arrays in the file: {', '.join(keys)}"
         )
@@ -1542,6 +1545,8 @@ def read_targets(path: str | Path) -> FloatArray:
                 body = rows
                 if all(c in header for c in POSE_COLUMNS):
                     cols = [header.index(c) for c in POSE_COLUMNS]
+                elif positions and all(c in header for c in POSE_COLUMNS[:3]):
+                    cols = [header.index(c) for c in POSE_COLUMNS[:3]]
                 elif len(header) != 16:
                     missing = [c for c in POSE_COLUMNS if c not in header]
                     raise InvalidArgumentError(
@@ -1552,13 +1557,14 @@ def read_targets(path: str | Path) -> FloatArray:
         if table.size == 0:
             return np.empty((0, 4, 4))
         if cols is not None:
-            return check_targets(table[:, cols])
-        if table.shape[1] == 7:
-            return check_targets(table)
+            return check_targets(table[:, cols], positions=positions)
+        if table.shape[1] == 7 or (positions and table.shape[1] == 3):
+            return check_targets(table, positions=positions)
         if table.shape[1] == 16:
             return check_targets(table.reshape(-1, 4, 4))
+        points = ", or 3 (x y z) for position-only targets" if positions else ""
         raise InvalidArgumentError(
-            f"{p}: rows must have 7 columns (x y z qx qy qz qw) or 16 (a 4x4 matrix), "
+            f"{p}: rows must have 7 columns (x y z qx qy qz qw) or 16 (a 4x4 matrix){points}, "
             f"got {table.shape[1]}"
         )
     raise InvalidArgumentError(
@@ -1615,7 +1621,7 @@ def write_targets(path: str | Path, targets: Any) -> Path:
     return p
 
 
-def read_targets_file(path: str | os.PathLike[str]) -> FloatArray:
+def read_targets_file(path: str | os.PathLike[str], positions: bool = False) -> FloatArray:
     """:func:`swarm_ik.batch.read_targets`, with unreadable files turned into one message.
 
     Raises:
@@ -1624,7 +1630,7 @@ def read_targets_file(path: str | os.PathLike[str]) -> FloatArray:
         InvalidTargetError: a row is not a valid pose.
     """
     try:
-        return read_targets(Path(path))
+        return read_targets(Path(path), positions)
     except SwarmIKError:
         raise
     except (

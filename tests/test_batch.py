@@ -289,6 +289,27 @@ def test_target_files_round_trip(get_robot, tmp_path):
         read_targets(tmp_path / "missing.csv")
 
 
+def test_position_only_target_files_take_points(tmp_path):
+    """With ``positions``, a file of points is read as targets (CSV ``x,y,z`` with or without
+    a header, ``(N, 3)`` arrays); without it they are refused, the shapes named."""
+    pts = np.array([[0.4, 0.1, 0.5], [0.3, -0.2, 0.4]])
+    (tmp_path / "h.csv").write_text("z,x,y\n0.5,0.4,0.1\n0.4,0.3,-0.2\n")
+    np.savetxt(tmp_path / "n.csv", pts, delimiter=",")
+    np.save(tmp_path / "p.npy", pts)
+    for name in ("h.csv", "n.csv", "p.npy"):
+        out = read_targets(tmp_path / name, positions=True)
+        np.testing.assert_allclose(out[:, :3, 3], pts)
+        np.testing.assert_array_equal(out[:, :3, :3], np.broadcast_to(np.eye(3), (2, 3, 3)))
+    with pytest.raises(InvalidArgumentError, match="header lacks column"):
+        read_targets(tmp_path / "h.csv")
+    with pytest.raises(InvalidArgumentError, match="7 columns .* got 3"):
+        read_targets(tmp_path / "n.csv")
+    with pytest.raises(InvalidTargetError, match=r"\(N, 7\) .*; got \(2, 3\)"):
+        read_targets(tmp_path / "p.npy")
+    assert main(["batch", "--robot", "panda", "--targets", str(tmp_path / "h.csv"),
+                 "--position-only", "--out", str(tmp_path / "r.csv")]) == 0  # fmt: skip
+
+
 def test_result_files(get_robot, tmp_path):
     robot = get_robot("yumi_left")
     _, targets = fk_targets(robot, 10, seed=1)

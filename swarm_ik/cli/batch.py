@@ -57,7 +57,8 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
         type=Path,
         metavar="FILE",
         help="targets: .npz/.npy ((N,4,4) or (N,7) array) or .csv "
-        "(x,y,z,qx,qy,qz,qw or 16 matrix columns)",
+        "(x,y,z,qx,qy,qz,qw or 16 matrix columns); with --position-only also points "
+        "((N,3), or .csv columns x,y,z)",
     )
     src.add_argument(
         "--random",
@@ -106,7 +107,7 @@ def run(args: argparse.Namespace) -> int:
         check_input_file(args.targets, "--targets", None)
     robot = swarm_ik.load_robot(args.robot, ee_frame=args.frame, **robot_kwargs(args))
     if args.targets is not None:
-        targets = read_targets_file(args.targets)
+        targets = read_targets_file(args.targets, positions=args.position_only)
         source = str(args.targets)
         if len(targets) == 0:
             raise InvalidArgumentError(f"--targets {args.targets}: the file holds no targets")
