@@ -579,7 +579,7 @@ def evaluate(
     return goal_rows(q, w.fk, g, ks, True, want_jac, w.res, w.jac, w.err, w.work)
 
 
-@numba.njit(cache=True)
+@numba.njit(cache=True, inline="always")
 def lm_run(
     starts: FloatArray,
     t: TreeArrays,
