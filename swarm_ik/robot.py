@@ -613,9 +613,11 @@ class RobotModel:
         ``(joint ids (nb,), rotations (nb, 3, 3), centres in the joint frames (nb, 3) [m],
         mass fractions m_b / M (nb,))``, from the URDF's inertials.  Locked and off-path links
         are merged into the body of the joint that carries them (Pinocchio's reduced model),
-        so ``Σ μ_b p_b`` is the whole URDF's centre of mass as ``pinocchio.centerOfMass``
-        gives it: of the links that joints move (on a fixed base, the links fixed to the world
-        are left out; a floating base carries every link).
+        and the links a held joint next to the world carries (merged into the world's body)
+        are one fixed point at joint 0 (:meth:`held_world_mass`), so ``Σ μ_b p_b`` is the
+        whole URDF's centre of mass as ``pinocchio.centerOfMass`` gives it: of the links
+        that joints of the URDF move (on a fixed base the links fixed to the world are left
+        out, as Pinocchio does; a floating base carries every link).
 
         Raises:
             RobotModelError: the URDF gives no link masses.
@@ -624,13 +626,38 @@ class RobotModel:
         if cached is None:
             model = self.model
             ids = [j for j in range(1, model.njoints) if model.inertias[j].mass > 0.0]
+            mass = [float(model.inertias[j].mass) for j in ids]
+            lever = [np.asarray(model.inertias[j].lever, dtype=float) for j in ids]
+            m_w, c_w = self.held_world_mass()
+            if m_w > 0.0:
+                ids, mass, lever = [0, *ids], [m_w, *mass], [c_w, *lever]
             if not ids:
                 raise RobotModelError(f"{self.urdf_path}: the URDF gives no link masses")
-            mass = np.array([model.inertias[j].mass for j in ids])
-            lever = np.array([np.asarray(model.inertias[j].lever) for j in ids]).reshape(-1, 3)
+            m = np.array(mass)
             rots = np.repeat(np.eye(3)[None], len(ids), axis=0)
-            cached = (np.array(ids, dtype=np.int64), rots, lever, mass / mass.sum())
+            cached = (np.array(ids, dtype=np.int64), rots, np.array(lever).reshape(-1, 3),
+                      m / m.sum())  # fmt: skip
             self._cache["mass_frames"] = cached
+        return cached  # type: ignore[no-any-return]
+
+    def held_world_mass(self) -> tuple[float, FloatArray]:
+        """The mass [kg] and world centre [m] of the links that joints of the URDF move but
+        that this model holds fixed to the world (a locked joint next to the root, on a fixed
+        base, or an off-path one: Pinocchio's reduced model merges them into its world body,
+        which ``pinocchio.centerOfMass`` leaves out), ``(0, zeros)`` when none."""
+        cached = self._cache.get("held_world_mass")
+        if cached is None:
+            red, full = self.model.inertias[0], self.full_model.inertias[0]
+            m_w = float(red.mass) - float(full.mass)
+            moment = float(red.mass) * np.asarray(red.lever, dtype=float) - float(
+                full.mass
+            ) * np.asarray(full.lever, dtype=float)
+            total = sum(float(i.mass) for i in self.full_model.inertias)
+            if m_w <= 1e-12 * max(total, 1e-300):  # (nothing merged but rounding)
+                cached = (0.0, np.zeros(3))
+            else:
+                cached = (m_w, moment / m_w)
+            self._cache["held_world_mass"] = cached
         return cached  # type: ignore[no-any-return]
 
     def collision_model(self) -> Any:

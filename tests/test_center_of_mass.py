@@ -37,9 +37,17 @@ def _kernel_rows(robot: swarm_ik.RobotModel, goal: CenterOfMass, q: np.ndarray) 
     return res[0], jac[0], err[0, 0]
 
 
-@pytest.mark.parametrize("name", ["talos", "panda"])
+@pytest.mark.parametrize("name", ["talos", "panda", "panda-locked", "talos-fixed"])
 def test_center_and_jacobian_match_pinocchio(name: str, talos: swarm_ik.RobotModel) -> None:
-    robot = talos if name == "talos" else swarm_ik.load_robot("panda")
+    """Against ``pinocchio.centerOfMass`` on the whole URDF, including the links a held joint
+    next to a fixed base carries (panda's joint 1 locked; a fixed-base Talos's legs, off the
+    paths to its default frames), which the reduced model merges into its world body."""
+    robot = {
+        "talos": lambda: talos,
+        "panda": lambda: swarm_ik.load_robot("panda"),
+        "panda-locked": lambda: swarm_ik.load_robot("panda", locked={"panda_joint1": 0.5}),
+        "talos-fixed": lambda: swarm_ik.load_robot("talos"),
+    }[name]()
     goal = CenterOfMass(point=[0.1, -0.2, 0.3], axes="xyz")
     rng = np.random.default_rng(0)
     full = robot.full_model
@@ -55,6 +63,7 @@ def test_center_and_jacobian_match_pinocchio(name: str, talos: swarm_ik.RobotMod
             cols = [full.joints[full.getJointId(n)].idx_v for n in robot.joint_names]
             np.testing.assert_allclose(jac, jc[:, cols], atol=1e-12)
         np.testing.assert_allclose(-jac, goal.jacobian(State(robot, q)), atol=1e-12)
+        np.testing.assert_allclose(goal.residual(State(robot, q)), goal.point - c_ref, atol=1e-12)
         h = 1e-6
         num = np.empty((3, robot.nq))
         for k in range(robot.nq):

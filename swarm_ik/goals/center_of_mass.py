@@ -169,8 +169,9 @@ def support_polygon(value: Any) -> FloatArray:
 @dataclass(frozen=True)
 class CenterOfMass(Goal):
     """The whole robot's centre of mass ``c = Σ m_b p_b / M`` (masses and centres from the
-    URDF's inertials; as ``pinocchio.centerOfMass``, without links fixed to the world) at a
-    point on the given axes, and/or its ground projection inside a support polygon.
+    URDF's inertials; as ``pinocchio.centerOfMass`` on the whole URDF: every link a joint of
+    the URDF moves, locked and off-path ones included, without the links fixed to the world)
+    at a point on the given axes, and/or its ground projection inside a support polygon.
 
     * ``point``: rows ``r_a = p*_a − c_a`` for each axis of ``axes`` (metres).
     * ``support``: one inequality row ``r = −max(0, d + margin)``, ``d`` the signed distance
@@ -252,10 +253,19 @@ class CenterOfMass(Goal):
         model = robot.model
         data = robot._data()  # (one Data per thread, reused)
         q_pin = robot.to_pinocchio(state.q)
+        if jacobian:
+            jac = np.array(pin.jacobianCenterOfMass(model, data, q_pin)).reshape(3, model.nv)
+        else:
+            pin.centerOfMass(model, data, q_pin)
+        com, moving = np.array(data.com[0]), float(data.mass[0])
+        # the links held fixed to the world (merged into the reduced model's world body, which
+        # pinocchio.centerOfMass leaves out): one fixed point of their mass
+        m_w, c_w = robot.held_world_mass()
+        share = moving / (moving + m_w)
+        com = share * com + (1.0 - share) * c_w
         if not jacobian:
-            return np.array(pin.centerOfMass(model, data, q_pin)), None
-        jac = np.array(pin.jacobianCenterOfMass(model, data, q_pin)).reshape(3, model.nv)
-        return np.array(data.com[0]), robot.velocity_to_q(jac, state.q)
+            return com, None
+        return com, robot.velocity_to_q(share * jac, state.q)
 
     def _support_row(self, c: FloatArray) -> tuple[float, FloatArray]:
         poly = np.ascontiguousarray(self.support, dtype=float)
