@@ -136,14 +136,28 @@ def _locked_values(
                 f"locked must be a dict joint -> value or a list of joint names, got {locked!r}"
             ) from None
     names = [full.names[j] for j in range(1, full.njoints) if full.joints[j].nv == 1]
+
+    def limits(jid: int) -> tuple[float, float] | None:
+        jm = full.joints[jid]
+        if jm.nq != 1:  # (a continuous joint: no limits)
+            return None
+        return float(full.lowerPositionLimit[jm.idx_q]), float(full.upperPositionLimit[jm.idx_q])
+
     out: dict[int, float] = {}
     for name, value in items:
         if not isinstance(name, str) or name not in names:
             raise unknown("joint", name, names)
+        if name in mimic:
+            driver, a, b = mimic[name]
+            raise InvalidArgumentError(
+                f"locked joint {name!r} mimics {driver!r} ({name} = {a:g}·{driver} + {b:g}): "
+                f"lock its driver {driver!r} instead (its followers follow it)"
+            )
         jid = int(full.getJointId(name))
         jm = full.joints[jid]
         if value is None:
             v = 0.0 if jm.nq == 2 else float(pin.neutral(full)[jm.idx_q])
+            what = f"its neutral value {v:g}"
         else:
             try:
                 v = float(value)
@@ -153,18 +167,27 @@ def _locked_values(
                 raise InvalidArgumentError(
                     f"locked joint {name!r}: the value must be a finite number, got {value!r}"
                 )
-            if jm.nq == 1:
-                lo = float(full.lowerPositionLimit[jm.idx_q])
-                hi = float(full.upperPositionLimit[jm.idx_q])
-                if not (lo - 1e-9 <= v <= hi + 1e-9):
-                    raise InvalidArgumentError(
-                        f"locked joint {name!r}: {v:g} is outside its limits [{lo:g}, {hi:g}]"
-                    )
+            what = f"{v:g}"
+        lim = limits(jid)
+        if lim is not None and not (lim[0] - 1e-9 <= v <= lim[1] + 1e-9):
+            hint = f"; give the value to hold: locked={{{name!r}: v}}" if value is None else ""
+            raise InvalidArgumentError(
+                f"locked joint {name!r}: {what} is outside its limits [{lim[0]:g}, {lim[1]:g}]"
+                + hint
+            )
         out[jid] = v
     for follower, (driver, a, b) in mimic.items():
         d = int(full.getJointId(driver))
         if d in out and full.existJointName(follower):
-            out[int(full.getJointId(follower))] = a * out[d] + b
+            fid = int(full.getJointId(follower))
+            out[fid] = v = a * out[d] + b
+            lim = limits(fid)
+            if lim is not None and not (lim[0] - 1e-9 <= v <= lim[1] + 1e-9):
+                raise InvalidArgumentError(
+                    f"locked joint {driver!r} at {out[d]:g} holds its mimic follower "
+                    f"{follower!r} at {v:g} ({follower} = {a:g}·{driver} + {b:g}), outside "
+                    f"its limits [{lim[0]:g}, {lim[1]:g}]"
+                )
     return out
 
 

@@ -170,6 +170,18 @@ def test_locked_list_holds_the_neutral_value() -> None:
         ({"locked": {"panda_joint4": float("nan")}}, InvalidArgumentError, "finite"),
         ({"locked": {"panda_joint4": "a"}}, InvalidArgumentError, "finite"),
         ({"locked": 3}, InvalidArgumentError, "locked must be"),
+        # held at its neutral 0, which is outside panda_joint4's limits [-3.07, -0.07]
+        (
+            {"locked": ["panda_joint4"]},
+            InvalidArgumentError,
+            "neutral value 0 is outside its limits.*give the value",
+        ),
+        # a mimic follower is held through its driver (panda_finger_joint2 mimics joint1)
+        (
+            {"locked": {"panda_finger_joint2": 0.01}},
+            InvalidArgumentError,
+            "mimics 'panda_finger_joint1'.*lock its driver",
+        ),
         ({"floating_base": "yes"}, InvalidArgumentError, "floating_base"),
         ({"floating_base": True, "base_box": -1.0}, InvalidArgumentError, "base_box"),
         ({"floating_base": True, "base_box": [1.0, 2.0]}, InvalidArgumentError, "base_box"),
@@ -181,9 +193,9 @@ def test_bad_input_refused(kwargs: dict, error: type, words: str) -> None:
 
 
 def test_every_joint_locked_is_refused() -> None:
-    names = [f"panda_joint{i}" for i in range(1, 8)]
+    held = {f"panda_joint{i}": -1.0 if i == 4 else 0.0 for i in range(1, 8)}  # (in limits)
     with pytest.raises(swarm_ik.errors.RobotModelError, match="nothing to solve"):
-        swarm_ik.load_robot("panda", locked=names)
+        swarm_ik.load_robot("panda", locked=held)
 
 
 def test_locked_joint_held_on_every_solve_path() -> None:
