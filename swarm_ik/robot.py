@@ -251,6 +251,17 @@ def _reduce(
         )
     locked = [j for j in range(1, full.njoints) if j not in keep]
     q_ref = pin.neutral(full)
+    for j in locked:  # off the paths: the neutral value, the nearest within the limits
+        jm = full.joints[j]
+        if jm.nq == 1 and j not in held:
+            lo, hi = full.lowerPositionLimit[jm.idx_q], full.upperPositionLimit[jm.idx_q]
+            if lo <= hi:
+                q_ref[jm.idx_q] = min(max(q_ref[jm.idx_q], lo), hi)
+    for follower, (driver, a, b) in mimic.items():  # an off-path follower follows its driver
+        if follower in jid and driver in jid and jid[follower] in locked:
+            jf, jd = full.joints[jid[follower]], full.joints[jid[driver]]
+            if jf.nq == 1 and jd.nq == 1 and jid[follower] not in held:
+                q_ref[jf.idx_q] = a * q_ref[jd.idx_q] + b
     for j, v in held.items():
         jm = full.joints[j]
         if jm.nq == 2:
