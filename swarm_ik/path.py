@@ -890,9 +890,9 @@ def _close(rows: FloatArray, q: FloatArray, tol: float) -> NDArray[np.bool_]:
 
 
 def _least_squares_solutions(robot: Any, pose: FloatArray) -> FloatArray | None:
-    """eaik's least-squares solutions of ``pose``, ``(m, nq)`` (``solve_many`` keeps only the
-    exact ones; one that meets the tolerances is an exact solution eaik classed as least
-    squares: two branches merging at a singularity).  None when eaik cannot be asked (then
+    """eaik's least-squares solutions of ``pose``, ``(m, nq)`` (one that meets the tolerances
+    is an exact solution eaik classed as least squares: two branches merging at a
+    singularity; ``solve_many`` keeps those).  None when eaik cannot be asked (then
     no waypoint is certified complete)."""
     try:
         from swarm_ik.solvers import analytic

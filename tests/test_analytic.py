@@ -39,6 +39,23 @@ def test_solve_all_contains_generating_branch(name):
             assert np.min(d[~np.eye(qs.shape[0], dtype=bool)]) > br.BRANCH_TOL
 
 
+@pytest.mark.parametrize(
+    "q",
+    [np.zeros(6), [0.3, -1.0, 0.0, -0.5, 1.1, 0.2], [0.3, -1.0, 1e-7, -0.5, 1.1, 0.2]],
+    ids=["home", "elbow-straight", "elbow-almost-straight"],
+)
+def test_singular_poses_keep_the_exact_solutions_eaik_calls_least_squares(q):
+    """With the elbow straight two branches merge and eaik calls the exact solution least
+    squares: the closed form keeps it (it found none of these reachable poses)."""
+    robot = swarm_ik.load_robot("ur5")
+    problem = swarm_ik.IKProblem.from_q(robot, np.asarray(q, dtype=float))
+    qs, dp, dr = analytic.solve_all(problem)
+    assert qs.shape[0] >= 1 and np.all(dp <= 1e-5) and np.all(dr <= 1e-5)
+    for qi in qs:
+        np.testing.assert_allclose(robot.fk_pinocchio(qi), problem.target, atol=1e-5)
+    assert len(swarm_ik.solve_many(problem, n=16)) >= 1
+
+
 def test_representative_nearest_reference():
     robot = swarm_ik.load_robot("ur5")
     q = np.array([0.3, -1.0, 1.2, -0.5, 1.1, 0.2])

@@ -40,7 +40,6 @@ from typing import TYPE_CHECKING, Any
 import numba
 import numpy as np
 import pinocchio as pin
-from numpy.typing import NDArray
 
 from swarm_ik._types import FloatArray
 from swarm_ik.branches import BRANCH_TOL, TWO_PI, pose_errors, pose_errors_of
@@ -241,7 +240,6 @@ def pinocchio_errors(problem: IKProblem, qs: Any) -> tuple[FloatArray, FloatArra
 @numba.njit(cache=True)
 def _fold_unique(
     qs: FloatArray,
-    is_ls: NDArray[np.bool_],
     lo: FloatArray,
     hi: FloatArray,
     ref: FloatArray,
@@ -249,16 +247,15 @@ def _fold_unique(
     out: FloatArray,
     key: FloatArray,
 ) -> int:  # pragma: no cover - compiled
-    """The exact solutions' in-limit 2π copies nearest to ``ref``, joint by joint, without
-    duplicates modulo 2π (squared wrapped distance below ``tol2``), sorted by squared
-    distance to ``ref`` (into ``key``); returns how many were written to ``out``."""
+    """The solutions' in-limit 2π copies nearest to ``ref``, joint by joint, without
+    duplicates modulo 2π (squared wrapped distance below ``tol2``: the first one given is
+    kept), sorted by squared distance to ``ref`` (into ``key``); returns how many were
+    written to ``out``."""
     k, n = qs.shape
     c = 0
     inv = 1.0 / TWO_PI
     row = np.empty(n)
     for s in range(k):
-        if is_ls[s]:
-            continue
         fits = True
         d2 = 0.0
         for j in range(n):
@@ -355,7 +352,14 @@ def solve_supported(
         return np.empty((0, nq)), np.empty(0), np.empty(0)
     out = np.empty((k, nq))
     key = np.empty(k)
-    c = _fold_unique(qs, sol.is_LS, lo, hi, ref, BRANCH_TOL * BRANCH_TOL, out, key)
+    # eaik's exact solutions first, then its least-squares ones: at a singularity (UR5's
+    # straight elbow, its home pose among them) two branches merge and eaik calls the exact
+    # solution least squares (solve_many found none there); one that folds onto an exact
+    # solution is its duplicate, and the check below drops those that miss the pose
+    order = np.argsort(np.asarray(sol.is_LS, dtype=bool), kind="stable")
+    c = _fold_unique(
+        np.ascontiguousarray(qs[order]), lo, hi, ref, BRANCH_TOL * BRANCH_TOL, out, key
+    )
     # the check: Pinocchio's own FK of each branch left
     m = robot.fk_pinocchio_many(out[:c])
     dp, dr = pose_errors_of(m, problem.goals[0])  # bit for bit as swarm_ik.verify
