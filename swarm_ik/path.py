@@ -86,7 +86,15 @@ TRACK_EVALS = 3000
 FINISH_PER_WAYPOINT = 2e-5
 """Seconds per waypoint that :func:`solve_path` keeps out of a ``time_limit`` for the check
 of the path at its end (Pinocchio's FK and each waypoint's goals: 15–25 µs per waypoint
-measured, Panda), up to half the limit."""
+measured, Panda), with :data:`SEARCH_PER_LAYER` up to half the limit."""
+SEARCH_PER_LAYER = 5e-6
+"""Seconds per waypoint kept for the search through the candidates (one compiled call per
+layer: 2.5–3.5 µs measured), besides :data:`SEARCH_PER_PAIR`."""
+SEARCH_PER_PAIR = 1e-8
+"""Seconds per pair of candidates of consecutive waypoints kept for the search as the
+candidates are built (7 ns measured on a UR5, 14–16 ns on a Panda: a UR5 circle of 200
+waypoints has 8 million pairs, a 58 ms search), so that a ``time_limit`` stops building
+candidates early enough for the search and the check to end within it."""
 SEARCH_SHARE = 0.5
 """Share of a ``time_limit`` (after the check's reserve) for building candidates; the rest
 tracks the remaining waypoints one solve each."""
@@ -236,15 +244,18 @@ def solve_path(
             shortcut for adding ``AvoidCollisions(scene)`` at every waypoint.
         frame: The goal frame of ``poses`` (default ``robot.ee_frame``).
         time_limit: Most wall-clock seconds for the whole call [s].  After
-            :data:`SEARCH_SHARE` of it (less :data:`FINISH_PER_WAYPOINT` per waypoint kept
-            for the final check) no more candidates are built: the remaining waypoints are
+            :data:`SEARCH_SHARE` of it (less what the search through the candidates and the
+            final check will take: :data:`FINISH_PER_WAYPOINT` and :data:`SEARCH_PER_LAYER`
+            per waypoint, up to half the limit, and :data:`SEARCH_PER_PAIR` per pair of
+            candidates built) no more candidates are built: the remaining waypoints are
             only tracked (one solve each, 0.1–1 ms) and the remaining interpolated poses are
             not solved (the path through them is filled in joint space and reported
             unchecked, not as jumps).  Waypoints not tracked by the limit are not solved:
             they hold the configuration before them and are reported not reached.  The
-            reason says which of these happened.  Waypoint 0 always gets one solve, so a
-            limit shorter than that solve is overrun.  Results are deterministic for a seed
-            only when the limit is not reached.
+            reason says which of these happened.  Waypoint 0 always gets one solve, and the
+            poses are validated and the answers checked in any case (about 45 µs per
+            waypoint), so a limit shorter than these is overrun.  Results are deterministic
+            for a seed only when the limit is not reached.
         seed: Seed (or Generator) of every random choice (the solvers' seeds are drawn from
             it): the same seed gives the same path.
         densify: Poses interpolated between consecutive waypoints (position lerp, rotation
@@ -288,8 +299,9 @@ def solve_path(
         raise InvalidArgumentError("densify needs poses (goal lists are not interpolated)")
     _check_path_size(wps.n, int(densify))
     deadline = limit = None
-    if time_limit is not None:  # (the check at the end is inside the limit)
-        reserve = min(FINISH_PER_WAYPOINT * wps.n, 0.5 * float(time_limit))
+    if time_limit is not None:  # (the search and the check at the end are inside the limit)
+        per_waypoint = FINISH_PER_WAYPOINT + SEARCH_PER_LAYER
+        reserve = min(per_waypoint * wps.n, 0.5 * float(time_limit))
         limit = t_start + float(time_limit) - reserve
         deadline = t_start + SEARCH_SHARE * (limit - t_start)
     ctx = _Context(robot, wps, step, float(tol_pos), float(tol_rot), rng, deadline, limit)
@@ -567,9 +579,16 @@ class _Context:
         self.full_branches = _structural_branches(robot)
         self.timed_out = False
         self.cut: int | None = None  # the first waypoint left unsolved at the limit
+        self.search_s = 0.0  # what searching the candidates built so far will take [s]
 
     def seed(self) -> int:
         return int(self.rng.integers(2**31))
+
+    def built(self, k_before: int, k: int) -> None:
+        """A layer of ``k`` candidates after one of ``k_before``: the search's time for their
+        pairs (:data:`SEARCH_PER_PAIR`) is kept out of the time limit (not out of the
+        candidates' share: the tracking after it is short of the limit) from now on."""
+        self.search_s += SEARCH_PER_PAIR * k_before * k
 
     def out_of_time(self) -> bool:
         """Whether the candidates' share of the time limit is spent (tracking only)."""
@@ -579,7 +598,7 @@ class _Context:
 
     def past_limit(self) -> bool:
         """Whether the time limit is spent (no waypoint is solved any more)."""
-        return self.limit is not None and time.perf_counter() >= self.limit
+        return self.limit is not None and time.perf_counter() + self.search_s >= self.limit
 
     def track(
         self, target: tuple[FloatArray | None, Any], q_start: FloatArray
@@ -1083,6 +1102,7 @@ def _build(ctx: _Context, start: FloatArray | None) -> _Graph:
             ctx.cut = i if ctx.cut is None else ctx.cut
             ra, ta = value(i - 1)
             graph.layers.append(_pick(graph.layers[i - 1], ra, ta, 1, ctx))
+            ctx.built(graph.layers[i - 1].shape[0], 1)
             graph.valid.append(np.zeros(1, dtype=bool))
             graph.certified.append(False)
             graph.closed.append(False)
@@ -1158,6 +1178,8 @@ def _build(ctx: _Context, start: FloatArray | None) -> _Graph:
                 q, met = _stand_in(ctx, i, graph.layers, start)
                 qb, ok_b = q[None], np.array([met])
         graph.layers.append(qb)
+        if i > 0:
+            ctx.built(graph.layers[i - 1].shape[0], qb.shape[0])
         graph.valid.append(ok_b)
         graph.certified.append(cert)
         graph.closed.append(used_closed)

@@ -184,6 +184,29 @@ def test_time_limit_covers_the_whole_call():
     assert f"waypoints {cut}–199 not solved" in res.reason
 
 
+def test_the_search_through_many_candidates_is_inside_the_time_limit():
+    """A UR5 circle: eight closed-form branches and their 2π copies per waypoint, millions
+    of candidate pairs (a 58 ms search unbounded). The time kept for the search grows with
+    the candidates built, so the call ends within its limit, where it overran by the search
+    (57 ms for a 50 ms limit)."""
+    import time
+
+    robot = get("ur5")
+    t0 = robot.fk(np.random.default_rng(11).uniform(robot.lower, robot.upper))
+    s = np.linspace(0.0, 2 * np.pi, 200)
+    poses = np.repeat(t0[None], 200, axis=0)
+    poses[:, 0, 3] += 0.1 * (np.cos(s) - 1.0)
+    poses[:, 1, 3] += 0.1 * np.sin(s)
+    solve_path(robot, poses[:5])  # (kernels loaded before the clock below)
+    walls = []
+    for _ in range(3):
+        start = time.perf_counter()
+        res = solve_path(robot, poses, time_limit=0.05)
+        walls.append(time.perf_counter() - start)
+        assert res.reached[0]
+    assert min(walls) <= 0.05 + 0.003, walls
+
+
 def test_same_seed_same_path():
     robot = get("panda")
     poses = robot.fk(smooth_q(robot, 8, n=15))
