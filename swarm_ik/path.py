@@ -177,7 +177,8 @@ class PathResult:
         time_s: Wall-clock time [s].
         exhaustive: Every waypoint's candidate set was certified complete (closed form), so
             the jump verdict is exact: with jumps, no jump-free path through the waypoints
-            exists.
+            exists (False when the jumps are only those the densify check found: that check
+            proves nothing).
         n_candidates: Candidates considered per waypoint, ``(N,)``.
         travel: Joint travel of the path, ``Σ_steps Σ_j |Δq_j|`` [rad / m].
         q_dense: With ``densify=k``: the checked path through the interpolated poses,
@@ -1460,7 +1461,8 @@ def _finish(
         reached=reached,
         reason=reason,
         time_s=time.perf_counter() - t_start,
-        exhaustive=graph.exhaustive,
+        # (jumps that only the densify check found prove nothing: the verdict is not exact)
+        exhaustive=graph.exhaustive and (not jumps or proof),
         n_candidates=np.array([layer.shape[0] for layer in graph.layers], dtype=np.int64),
         travel=float(d.sum()),
         q_dense=dense,
@@ -1534,6 +1536,12 @@ def _reason(
             msg += (
                 "; exhaustive: every waypoint's closed-form set is complete, so this proves "
                 f"that no jump-free path exists{origin} through these waypoints"
+            )
+        elif graph.exhaustive and k:
+            msg += (
+                "; the waypoints' closed-form sets are complete and a path through them "
+                "alone is jump-free, but the densify check of the interpolated poses failed "
+                "its steps: not a proof, the fewest jumps found"
             )
         else:
             msg += "; not exhaustive (numerical candidate sets): the fewest jumps found"

@@ -207,6 +207,23 @@ def test_the_search_through_many_candidates_is_inside_the_time_limit():
     assert min(walls) <= 0.05 + 0.003, walls
 
 
+def test_jumps_only_the_densify_check_found_are_no_proof():
+    """Two UR5 waypoints 0.15 rad apart whose interpolated poses cross a singularity: the
+    waypoints' closed-form sets are complete and jump-free, the densify check fails the step.
+    ``exhaustive`` is then False (with jumps it would claim that no jump-free path exists) and
+    the reason says the jump comes from the densify check, not from numerical sets."""
+    robot = get("ur5")
+    rng = np.random.default_rng(3)
+    for _ in range(24):  # (the 24th pair of the stream: one such step)
+        qa = robot.random_q(rng)
+        qb = np.clip(qa + rng.uniform(-0.15, 0.15, 6), robot.lower, robot.upper)
+    poses = np.array([robot.fk(qa), robot.fk(qb)])
+    assert solve_path(robot, poses).jump_free  # (the waypoints alone)
+    res = solve_path(robot, poses, densify=8)
+    assert not res.jump_free and not res.exhaustive
+    assert "densify check" in res.reason and "numerical" not in res.reason
+
+
 def test_same_seed_same_path():
     robot = get("panda")
     poses = robot.fk(smooth_q(robot, 8, n=15))
