@@ -705,6 +705,24 @@ class BatchResult(_Rows):
         """
         p = Path(path)
         suffix = p.suffix.lower()
+        if suffix not in (".npz", ".csv"):
+            raise InvalidArgumentError(
+                f"cannot write results to {str(p)!r}: unknown suffix {p.suffix!r}; "
+                "valid suffixes: .csv, .npz"
+            )
+        # written beside and renamed into place: an interruption (Ctrl-C, a full disk) leaves
+        # the file as it was, never a partial one
+        part = p.with_name(f"{p.name}.{os.getpid()}.part")
+        try:
+            self._write(part, suffix, targets)
+            os.replace(part, p)
+        except BaseException:
+            part.unlink(missing_ok=True)
+            raise
+        return p
+
+    def _write(self, p: Path, suffix: str, targets: FloatArray | None) -> None:
+        """Write the answers to ``p`` in the format of ``suffix`` (see :meth:`save`)."""
         if suffix == ".npz":
             arrays: dict[str, Any] = {
                 "q": self.q,
@@ -723,8 +741,9 @@ class BatchResult(_Rows):
             if self.goals_met is not None:
                 arrays["goal_labels"] = np.array(self.goal_labels, dtype=str)
                 arrays["goals_met"] = self.goals_met
-            np.savez_compressed(p, **arrays)
-        elif suffix == ".csv":
+            with p.open("wb") as fb:  # (a file object: numpy adds no suffix to it)
+                np.savez_compressed(fb, **arrays)
+        else:
             names = self.joint_names or tuple(f"q{j}" for j in range(self.q.shape[1]))
             with p.open("w", newline="") as fh:
                 w = csv.writer(fh)
@@ -745,12 +764,6 @@ class BatchResult(_Rows):
                         ]
                         + ([] if met is None else [int(v) for v in met[i]])
                     )
-        else:
-            raise InvalidArgumentError(
-                f"cannot write results to {str(p)!r}: unknown suffix {p.suffix!r}; "
-                "valid suffixes: .csv, .npz"
-            )
-        return p
 
     def __repr__(self) -> str:
         return (

@@ -310,6 +310,27 @@ def test_position_only_target_files_take_points(tmp_path):
                  "--position-only", "--out", str(tmp_path / "r.csv")]) == 0  # fmt: skip
 
 
+def test_an_interrupted_save_leaves_no_partial_file(get_robot, tmp_path, monkeypatch):
+    """A save interrupted while writing (Ctrl-C) leaves the file as it was and no part file:
+    the answers are written beside it and renamed into place."""
+    robot = get_robot("yumi_left")
+    res = solve_batch(robot, fk_targets(robot, 5, seed=1)[1])
+    out = tmp_path / "r.csv"
+    out.write_text("before\n")
+
+    def interrupted(*args, **kwargs):
+        raise KeyboardInterrupt
+
+    monkeypatch.setattr(batch.csv, "writer", interrupted)
+    with pytest.raises(KeyboardInterrupt):
+        res.save(out)
+    assert out.read_text() == "before\n"
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["r.csv"]
+    monkeypatch.undo()
+    res.save(out)
+    assert out.read_text().count("\n") == 6
+
+
 def test_result_files(get_robot, tmp_path):
     robot = get_robot("yumi_left")
     _, targets = fk_targets(robot, 10, seed=1)
