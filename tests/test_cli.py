@@ -571,3 +571,17 @@ def test_a_schedule_of_many_evaluations_stays_within_the_iteration_cap() -> None
     robot = swarm_ik.load_robot("yumi_left")
     problem = swarm_ik.IKProblem(robot, robot.fk(robot.mid_q()))
     assert swarm_ik.solve(problem, "dls", **kw).success
+
+
+def test_a_ctrl_c_swallowed_in_a_callback_is_raised_again() -> None:
+    """Python swallows a KeyboardInterrupt raised in a callback from compiled code (numba's
+    and llvmlite's while kernels load: "Exception ignored on calling ctypes callback"); the
+    console script's hook raises it again in the main thread, so the command stops (130)."""
+    import time
+    import types
+
+    from swarm_ik import cli
+
+    cli._unraisable(types.SimpleNamespace(exc_value=KeyboardInterrupt()))
+    with pytest.raises(KeyboardInterrupt):
+        time.sleep(2.0)

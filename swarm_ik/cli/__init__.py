@@ -22,16 +22,20 @@ they need when they run), so that a Ctrl-C during start-up is caught by :func:`m
 
 from __future__ import annotations
 
+import _thread
 import argparse
 import gc
 import json
 import os
 import re
+import signal
 import sys
+import threading
 import warnings
 from collections.abc import Sequence
 from typing import Any, NoReturn
 
+from swarm_ik import kernels
 from swarm_ik.cli import batch, bench, path, reach, robots, show, solve, warmup
 from swarm_ik.cli._args import (
     EXIT_BAD_INPUT,
@@ -193,7 +197,9 @@ def main(argv: Sequence[str] | None = None) -> int:
             # numba's note that first-class functions (the goal kernels' table) are
             # experimental: a design choice of the package, not the user's concern
             warnings.filterwarnings("ignore", message="First-class function type feature")
-            return _dispatch(args)
+            # (a numba cache damaged inside its files, met by any compiled call of the
+            # command: the files removed, the command run again, compiling anew)
+            return kernels.loaded_despite_damage(lambda: _dispatch(args))
     except UsageError as exc:
         return _fail(str(exc), EXIT_BAD_INPUT, as_json, "UsageError")
     except SwarmIKError as exc:
@@ -205,6 +211,8 @@ def main(argv: Sequence[str] | None = None) -> int:
         os.dup2(devnull, sys.stdout.fileno())  # (so that the exit's flush fails quietly)
         return EXIT_BROKEN_PIPE
     except Exception as exc:
+        if _SIGINTS[0]:  # (a Ctrl-C that cut a C routine short: SystemError and the like)
+            return _interrupted(as_json)
         if os.environ.get("SWARM_IK_DEBUG"):
             raise
         what = "out of memory" if isinstance(exc, MemoryError) else f"{type(exc).__name__}: {exc}"
@@ -238,5 +246,34 @@ def _own_process() -> None:
     ``argv``, in someone else's process).
 
     The collector is off until the command is known (:data:`SHORT_COMMANDS` keep it off).
+    A Ctrl-C is counted (:func:`_on_sigint`), and one that lands in a callback from compiled
+    code, where Python swallows it ("Exception ignored on calling ctypes callback": numba's
+    and llvmlite's while kernels load), is raised again (:func:`_unraisable`).
     """
     gc.disable()
+    signal.signal(signal.SIGINT, _on_sigint)
+    sys.unraisablehook = _unraisable
+
+
+_SIGINTS = [0]
+"""Ctrl-Cs this process received (the console script's handler)."""
+
+
+def _on_sigint(signum: int, frame: Any) -> None:
+    """Python's own Ctrl-C (``KeyboardInterrupt``), counted: an error that follows one (a C
+    routine cut short, ``SystemError``) is reported as the interruption it is."""
+    _SIGINTS[0] += 1
+    signal.default_int_handler(signum, frame)
+
+
+def _unraisable(args: Any) -> None:
+    """``sys.unraisablehook``: a ``KeyboardInterrupt`` raised where it cannot propagate (a
+    callback from compiled code) is raised again in the main thread; anything else as
+    Python reports it."""
+    if isinstance(args.exc_value, KeyboardInterrupt):  # (raised a moment later: out of the
+        # callback, where it would be swallowed again)
+        timer = threading.Timer(0.02, _thread.interrupt_main)
+        timer.daemon = True
+        timer.start()
+        return
+    sys.__unraisablehook__(args)

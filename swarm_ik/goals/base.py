@@ -94,8 +94,8 @@ def kernel_slot(kernel: Any) -> int:
 
 def kernels() -> Any:
     """The typed list of every registered goal kernel (made again after a registration)."""
-    if not _LIST:
-        _LIST.append(kernel_list(_KERNELS))
+    if not _LIST:  # (its builder is a compiled call too: a cache damaged inside, removed)
+        _LIST.append(loaded_despite_damage(lambda: kernel_list(_KERNELS)))
     return _LIST[0]
 
 

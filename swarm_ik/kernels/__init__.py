@@ -245,6 +245,20 @@ def _raised_loading_a_cache(exc: BaseException) -> bool:
     return False
 
 
+def _interrupted(exc: BaseException) -> bool:
+    """Whether ``exc`` is what a Ctrl-C leaves when it cuts a C routine short (a
+    ``SystemError``, or an error raised while a ``KeyboardInterrupt`` was handled): an
+    interruption, not a damaged cache (whose files would all be removed for nothing)."""
+    seen: set[int] = set()
+    e: BaseException | None = exc
+    while e is not None and id(e) not in seen:
+        if isinstance(e, (SystemError, KeyboardInterrupt)):
+            return True
+        seen.add(id(e))
+        e = e.__cause__ or e.__context__
+    return False
+
+
 def loaded_despite_damage(load: Callable[[], T]) -> T:
     """``load()``, a first call that loads compiled kernels from numba's cache; when it fails
     and swarm_ik's cache holds files, they are all removed (one line on stderr) and ``load``
@@ -257,7 +271,7 @@ def loaded_despite_damage(load: Callable[[], T]) -> T:
     except (KeyboardInterrupt, SwarmIKError):
         raise
     except Exception as exc:
-        if not _raised_loading_a_cache(exc):
+        if not _raised_loading_a_cache(exc) or _interrupted(exc):
             raise
         removed = drop_cache_files(cache_folders(_SETTLED[0]))
         if not removed:

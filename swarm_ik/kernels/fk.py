@@ -22,6 +22,7 @@ import numpy as np
 from numba.extending import register_jitable
 
 from swarm_ik._types import FloatArray, IntArray
+from swarm_ik.kernels import loaded_despite_damage
 from swarm_ik.kernels.lie import exp3_nb, jr_nb
 
 REVOLUTE = 0
@@ -165,7 +166,7 @@ class TreeArrays(NamedTuple):
         """Poses of every frame: ``(nq,) -> (nf, 4, 4)`` or ``(pop, nq) -> (pop, nf, 4, 4)``."""
         q2, single = self._prep(q)
         out_t = np.empty((q2.shape[0], self.nf, 4, 4))
-        fk_batch(q2, self, out_t, np.empty((1, 1, 6, 1)), False)
+        loaded_despite_damage(lambda: fk_batch(q2, self, out_t, np.empty((1, 1, 6, 1)), False))
         return out_t[0] if single else out_t
 
     def fk_jacobian(self, q: FloatArray) -> tuple[FloatArray, FloatArray]:
@@ -175,7 +176,7 @@ class TreeArrays(NamedTuple):
         pop = q2.shape[0]
         out_t = np.empty((pop, self.nf, 4, 4))
         out_j = np.empty((pop, self.nf, 6, self.nq))
-        fk_batch(q2, self, out_t, out_j, True)
+        loaded_despite_damage(lambda: fk_batch(q2, self, out_t, out_j, True))
         return (out_t[0], out_j[0]) if single else (out_t, out_j)
 
     def _prep(self, q: FloatArray) -> tuple[FloatArray, bool]:
