@@ -29,6 +29,8 @@ from __future__ import annotations
 
 import logging
 import os
+import re
+import socket
 import uuid
 from collections.abc import Callable, Iterator, Sequence
 from contextlib import ExitStack, closing, contextmanager
@@ -137,6 +139,7 @@ def connect(
         finally:
             cluster.close()
         return
+    _probe(scheduler, timeout)
     try:
         client = distributed.Client(scheduler, timeout=timeout)
     except OSError as exc:
@@ -239,3 +242,17 @@ def map_chunks(
         except BaseException:
             client.cancel(futures)
             raise
+
+
+def _probe(scheduler: str, timeout: float) -> None:
+    """Refuse at once a ``tcp://host:port`` scheduler that refuses the connection (Dask's
+    client retries until its ``timeout``, 30 s, before saying so)."""
+    m = re.fullmatch(r"tcp://\[?([^\]/]+?)\]?:(\d+)/?", scheduler)
+    if m is None:
+        return
+    try:
+        socket.create_connection((m.group(1), int(m.group(2))), timeout=min(timeout, 5.0)).close()
+    except OSError as exc:
+        raise InvalidArgumentError(
+            f"could not reach the Dask scheduler at {scheduler!r} ({exc.strerror or exc})"
+        ) from None

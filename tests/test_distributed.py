@@ -45,6 +45,18 @@ def test_map_chunks_in_process_keeps_order():
         distributed.map_chunks(_square, [1, 2], sizes=[1])
 
 
+def test_a_scheduler_refusing_the_connection_is_reported_at_once():
+    """Dask's client retries a refused connection until its timeout (30 s by default); the
+    refusal is reported at once."""
+    import time
+
+    t0 = time.perf_counter()
+    with pytest.raises(InvalidArgumentError, match="could not reach the Dask scheduler"):
+        with distributed.connect("tcp://127.0.0.1:1"):
+            pass
+    assert time.perf_counter() - t0 < 10.0
+
+
 def test_unreachable_scheduler_is_reported():
     with pytest.raises(InvalidArgumentError, match="could not reach the Dask scheduler"):
         with distributed.connect("tcp://127.0.0.1:1", timeout=1):
