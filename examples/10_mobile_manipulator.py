@@ -6,12 +6,12 @@ prismatic torso lift, a 7-joint arm) is loaded twice.  With its base fixed to th
 joints: the lift and the arm) the target is out of reach: the solve fails and returns the
 closest pose it found.  With ``floating_base=True`` (six more entries at the head of ``q``:
 the base position, then its rotation vector) and ``base_footprint`` as a second goal frame,
-two goals keep the base on the floor (:class:`swarm_ik.goals.JointValue` holds its height at 0,
-:class:`swarm_ik.goals.Axis` its z axis up; x and y stay free within the base box, the heading
-free) and the solve succeeds, the base driven towards the target.  The torso lift is left free (the solver
-may raise the arm).  The answer is drawn in meshcat with the fixed-base attempt ghosted
-(``--html FILE`` writes a self-contained page instead of serving it; needs
-``pip install swarm_ik[viz]``; without the extra the viewer is skipped with a note).
+two goals keep the base on the floor (:class:`swarm_ik.goals.JointValue` holds its height
+at 0, :class:`swarm_ik.goals.Axis` its z axis up; x and y stay free within the base box, the
+heading free) and the solve succeeds, the base driven towards the target.  The torso lift
+is left free (the solver may raise the arm).  The answer is drawn in meshcat with the
+fixed-base attempt ghosted (``--html FILE`` writes a self-contained page instead of serving
+it; needs ``pip install swarm_ik[viz]``; without the extra the viewer is skipped with a note).
 
 Run: ``python examples/10_mobile_manipulator.py [--html FILE]``.
 """
