@@ -805,18 +805,16 @@ def check_targets(targets: Any, orth_tol: float = 1e-6, positions: bool = False)
             f"{arr.shape[0]} targets; at most {MAX_TARGETS} per call "
             "(swarm_ik.batch.MAX_TARGETS): split them"
         )
-    if positions and arr.ndim == 2 and arr.shape[1] == 3:
-        if not np.all(np.isfinite(arr)):
-            bad = int(np.flatnonzero(~np.isfinite(arr).all(axis=1))[0])
-            raise InvalidTargetError(f"target {bad} contains NaN or infinite values")
+    rows = arr.ndim == 2 and (arr.shape[1] == 7 or (positions and arr.shape[1] == 3))
+    if rows and not np.all(np.isfinite(arr)):
+        bad = int(np.flatnonzero(~np.isfinite(arr).all(axis=1))[0])
+        raise InvalidTargetError(f"target {bad} contains NaN or infinite values")
+    if rows and arr.shape[1] == 3:  # points: their poses unrotated
         out = np.zeros((arr.shape[0], 4, 4))
         out[:, [0, 1, 2, 3], [0, 1, 2, 3]] = 1.0
         out[:, :3, 3] = arr
         return out
-    if arr.ndim == 2 and arr.shape[1] == 7:
-        if not np.all(np.isfinite(arr)):
-            bad = int(np.flatnonzero(~np.isfinite(arr).all(axis=1))[0])
-            raise InvalidTargetError(f"target {bad} contains NaN or infinite values")
+    if rows:  # x y z qx qy qz qw
         out = np.empty((arr.shape[0], 4, 4))
         for i, row in enumerate(arr):
             try:

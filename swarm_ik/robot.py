@@ -137,11 +137,14 @@ def _locked_values(
             ) from None
     names = [full.names[j] for j in range(1, full.njoints) if full.joints[j].nv == 1]
 
-    def limits(jid: int) -> tuple[float, float] | None:
+    def outside(jid: int, v: float) -> str | None:
+        """The limits ``[lo, hi]`` of joint ``jid`` as text when ``v`` lies outside them
+        (a continuous joint has none)."""
         jm = full.joints[jid]
-        if jm.nq != 1:  # (a continuous joint: no limits)
+        if jm.nq != 1:
             return None
-        return float(full.lowerPositionLimit[jm.idx_q]), float(full.upperPositionLimit[jm.idx_q])
+        lo, hi = float(full.lowerPositionLimit[jm.idx_q]), float(full.upperPositionLimit[jm.idx_q])
+        return None if lo - 1e-9 <= v <= hi + 1e-9 else f"[{lo:g}, {hi:g}]"
 
     out: dict[int, float] = {}
     for name, value in items:
@@ -168,12 +171,11 @@ def _locked_values(
                     f"locked joint {name!r}: the value must be a finite number, got {value!r}"
                 )
             what = f"{v:g}"
-        lim = limits(jid)
-        if lim is not None and not (lim[0] - 1e-9 <= v <= lim[1] + 1e-9):
+        lim = outside(jid, v)
+        if lim is not None:
             hint = f"; give the value to hold: locked={{{name!r}: v}}" if value is None else ""
             raise InvalidArgumentError(
-                f"locked joint {name!r}: {what} is outside its limits [{lim[0]:g}, {lim[1]:g}]"
-                + hint
+                f"locked joint {name!r}: {what} is outside its limits {lim}" + hint
             )
         out[jid] = v
     for follower, (driver, a, b) in mimic.items():
@@ -181,12 +183,12 @@ def _locked_values(
         if d in out and full.existJointName(follower):
             fid = int(full.getJointId(follower))
             out[fid] = v = a * out[d] + b
-            lim = limits(fid)
-            if lim is not None and not (lim[0] - 1e-9 <= v <= lim[1] + 1e-9):
+            lim = outside(fid, v)
+            if lim is not None:
                 raise InvalidArgumentError(
                     f"locked joint {driver!r} at {out[d]:g} holds its mimic follower "
                     f"{follower!r} at {v:g} ({follower} = {a:g}·{driver} + {b:g}), outside "
-                    f"its limits [{lim[0]:g}, {lim[1]:g}]"
+                    f"its limits {lim}"
                 )
     return out
 

@@ -247,8 +247,8 @@ def _own_process() -> None:
 
     The collector is off until the command is known (:data:`SHORT_COMMANDS` keep it off).
     A Ctrl-C is counted (:func:`_on_sigint`), and one that lands in a callback from compiled
-    code, where Python swallows it ("Exception ignored on calling ctypes callback": numba's
-    and llvmlite's while kernels load), is raised again (:func:`_unraisable`).
+    code while kernels load, where Python swallows it ("Exception ignored on calling ctypes
+    callback"), is raised again (:func:`_unraisable`).
     """
     gc.disable()
     signal.signal(signal.SIGINT, _on_sigint)
