@@ -1338,6 +1338,10 @@ def _densify(
             a, b = choice.index[i - 1], choice.index[i]
             qa, qb = graph.layers[i - 1][a], graph.layers[i][b]
             key = (i, a, b)
+            if key not in checked and ctx.out_of_time():  # the steps left: unchecked at once
+                rest = [graph.layers[j][choice.index[j]] for j in range(i - 1, ctx.wps.n)]
+                dense.append(_joint_space_chains(np.array(rest), k, ctx).reshape(-1, qa.size))
+                return np.vstack(dense), True
             if key not in checked:
                 checked[key] = _check_step_dense(ctx, i, qa, qb, k)
             ok, chain, size = checked[key]
@@ -1361,6 +1365,17 @@ def _densify(
         choice = _search(graph, start, ctx, rejected)
     dense, failed = check(choice)
     return choice, dense, not failed
+
+
+def _joint_space_chains(rows: FloatArray, k: int, ctx: _Context) -> FloatArray:
+    """The unchecked chains of the steps between consecutive ``rows`` ``(m, nq)``: ``k``
+    points evenly spaced in joint space (the short way round on joints modulo 2π) and the
+    next row, ``(m − 1, k + 1, nq)``."""
+    qa, qb = rows[:-1], rows[1:]
+    d = _wrap_angles(qb - qa, ctx.wrap)
+    s = np.arange(1, k + 1)[None, :, None] / (k + 1)
+    inner = _wrap_angles(qa[:, None, :] + d[:, None, :] * s, ctx.true_wrap)
+    return np.concatenate([inner, qb[:, None, :]], axis=1)
 
 
 def _check_step_dense(

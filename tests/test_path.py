@@ -443,3 +443,37 @@ def test_a_densify_step_cut_by_the_time_limit_is_filled_the_short_way_round() ->
     np.testing.assert_allclose(chain[-1], qb)
     assert travel < 0.1  # (0.083 rad in all, not 6.2 the long way)
     assert np.all(np.abs(chain[:, 0]) <= np.pi)
+
+
+def test_a_long_densified_path_keeps_its_time_limit() -> None:
+    """3,000 waypoints with 16 poses between each: the steps the time limit leaves are filled
+    in joint space at once (one by one, that fill overran a 0.2 s limit to 0.4–0.8 s), and the
+    dense path still has every pose."""
+    import time
+
+    robot = swarm_ik.load_robot("panda")
+    qs = robot.mid_q() + np.outer(np.linspace(0.0, 1.0, 3000), np.full(robot.nq, 0.6))
+    poses = np.array([robot.fk(q) for q in qs])
+    solve_path(robot, poses[:3], densify=2)  # (kernels loaded before the clock below)
+    t0 = time.perf_counter()
+    res = solve_path(robot, poses, time_limit=0.1, densify=16)
+    assert time.perf_counter() - t0 < 0.3
+    assert res.q_dense is not None and res.q_dense.shape == (2999 * 17 + 1, robot.nq)
+    np.testing.assert_array_equal(res.q_dense[::17], res.q)
+    assert "time_limit reached" in res.reason
+
+
+def test_unchecked_chains_go_the_short_way_round() -> None:
+    """The steps left unchecked are joint-space chains ending at the next waypoint's
+    configuration, the short way round on a joint compared modulo 2π."""
+    import types
+
+    wrap = np.array([True, False])
+    ctx = types.SimpleNamespace(wrap=wrap, true_wrap=wrap)
+    rows = np.array([[3.10, 0.0], [-3.10, 0.3], [-3.0, 0.6]])
+    chains = sp._joint_space_chains(rows, 4, ctx)  # type: ignore[arg-type]
+    assert chains.shape == (2, 5, 2)
+    np.testing.assert_allclose(chains[:, -1], rows[1:])
+    assert np.all(np.abs(chains[..., 0]) <= np.pi)
+    step = np.diff(np.concatenate([[3.10], chains[0, :, 0]]))
+    assert np.all(np.abs((step + np.pi) % (2 * np.pi) - np.pi) < 0.02)  # (not 6.2 in all)

@@ -2,6 +2,9 @@
 
 from __future__ import annotations
 
+import importlib
+import time
+
 import numpy as np
 import pytest
 
@@ -195,3 +198,43 @@ def test_no_point_is_taken_after_the_stop_criterion() -> None:
     ev.add_evals(1, np.zeros(2), 0.0)  # charged, but the answer stays the first success
     ev.record(np.zeros((1, 2)), np.zeros(1))
     assert ev.n_evals == 4 and ev.best_f == 0.25 and rec.f == [0.25]
+
+
+def test_a_large_population_stops_at_the_time_limit() -> None:
+    """Under a time limit a population is evaluated in blocks with the clock read between
+    them: rows after the limit are not evaluated (fitness +inf) nor charged."""
+    slow_rows: list[int] = []
+
+    def slow(x: np.ndarray) -> np.ndarray:
+        slow_rows.append(x.shape[0])
+        time.sleep(0.02)
+        return np.sum(x * x, axis=1)
+
+    pop = 10 * solvers.base.TIMED_CHUNK
+    ev = solvers.Evaluator(slow, np.full(2, -1.0), np.full(2, 1.0), time_limit=0.03)
+    f = ev(np.full((pop, 2), 0.5))
+    assert 1 <= len(slow_rows) < 10 and ev.n_evals == sum(slow_rows) < pop
+    assert np.all(np.isfinite(f[: ev.n_evals])) and np.all(np.isinf(f[ev.n_evals :]))
+    whole = solvers.Evaluator(slow, np.full(2, -1.0), np.full(2, 1.0))  # no limit: one call
+    slow_rows.clear()
+    assert np.all(np.isfinite(whole(np.full((pop, 2), 0.5)))) and slow_rows == [pop]
+
+
+@pytest.mark.parametrize("name", ["gwo", "mgwo"])
+def test_no_move_is_made_after_the_stop(name: str, planar: swarm_ik.RobotModel) -> None:
+    """A pack that met the tolerance in its first evaluation ends there (a move after it would
+    never be evaluated: with a million wolves it cost seconds past the time limit)."""
+    moves: list[int] = []
+    module = importlib.import_module(f"swarm_ik.solvers.{name}")
+    original = module.gwo_move
+
+    def counted(*args: object, **kwargs: object) -> np.ndarray:
+        moves.append(1)
+        return original(*args, **kwargs)  # type: ignore[no-any-return]
+
+    module.gwo_move = counted
+    try:
+        res = swarm_ik.solve(_problem(planar), name, seed=0, q0=Q_STAR, pop_size=8)
+    finally:
+        module.gwo_move = original
+    assert res.success and res.n_evals == 8 and moves == []

@@ -45,6 +45,10 @@ MAX_POPULATION_VALUES = 10_000_000
 """Largest ``pop_size · dim`` (numbers in one population array: 80 MB of float64; a solver
 keeps a few such arrays).  Checked by :meth:`SolverSpec.resolve` when it is given ``dim`` and
 by :meth:`Evaluator.uniform` / :meth:`Evaluator.initial_population` before allocating."""
+
+TIMED_CHUNK = 4096
+"""Rows an :class:`Evaluator` with a time limit evaluates between two reads of the clock (a
+few milliseconds of FK for a 7-joint arm; without a time limit a population is one call)."""
 Objective = Callable[[FloatArray], FloatArray]
 """A batched objective: ``(pop, n) -> (pop,)``; lower is better."""
 
@@ -179,16 +183,27 @@ class Evaluator:
         x_batch = np.asarray(x_batch, dtype=float)
         out = np.full(x_batch.shape[0], np.inf)
         k = self._granted(x_batch.shape[0])
-        if k <= 0:
-            return out
-        f = np.asarray(self.objective(x_batch[:k]), dtype=float)
-        if f.size != k:
-            raise InvalidArgumentError(
-                f"the objective returned shape {f.shape} for {k} points; a batched objective "
-                "maps (pop, n) -> (pop,)"
-            )
-        out[:k] = self._charge(k, x_batch[:k], f.reshape(k))
+        for a, b in self._chunks(k):  # (one chunk without a time limit)
+            if a > 0 and self.done:  # (the time ran out during a large population)
+                break
+            f = np.asarray(self.objective(x_batch[a:b]), dtype=float)
+            if f.size != b - a:
+                raise InvalidArgumentError(
+                    f"the objective returned shape {f.shape} for {b - a} points; a batched "
+                    "objective maps (pop, n) -> (pop,)"
+                )
+            out[a:b] = self._charge(b - a, x_batch[a:b], f.reshape(b - a))
         return out
+
+    def _chunks(self, k: int) -> list[tuple[int, int]]:
+        """Row ranges ``[a, b)`` of a request of ``k`` granted rows, evaluated one after the
+        other: under a time limit, blocks of :data:`TIMED_CHUNK` rows with the clock read
+        between them (so that a population of a million points does not overrun the limit
+        by its own evaluation), else one block."""
+        if k <= 0:
+            return []
+        step = TIMED_CHUNK if self.time_limit is not None else k
+        return [(a, min(a + step, k)) for a in range(0, k, step)]
 
     def residual_jacobian(self, q_batch: FloatArray) -> tuple[FloatArray, FloatArray, FloatArray]:
         """Fitness, pose error twist and Jacobian of an IK problem, counted as evaluations
@@ -213,14 +228,15 @@ class Evaluator:
         q_batch = np.atleast_2d(np.asarray(q_batch, dtype=float))
         pop = q_batch.shape[0]
         k = self._granted(pop)
-        fk, ek, jk = self.problem.residual_jacobian(q_batch[:k])  # k = 0: the shapes only
+        _, ek, jk = self.problem.residual_jacobian(q_batch[:0])  # (the shapes only)
         f = np.full(pop, np.inf)
         err = np.full((pop, *np.shape(ek)[1:]), np.nan)
         jac = np.full((pop, *np.shape(jk)[1:]), np.nan)
-        if k <= 0:
-            return f, err, jac
-        err[:k], jac[:k] = ek, jk
-        f[:k] = self._charge(k, q_batch[:k], np.asarray(fk, dtype=float))
+        for a, b in self._chunks(k):
+            if a > 0 and self.done:
+                break
+            fk, err[a:b], jac[a:b] = self.problem.residual_jacobian(q_batch[a:b])
+            f[a:b] = self._charge(b - a, q_batch[a:b], np.asarray(fk, dtype=float))
         return f, err, jac
 
     def record(self, x_batch: FloatArray, f: FloatArray) -> FloatArray:

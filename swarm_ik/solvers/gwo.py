@@ -195,7 +195,7 @@ def run(
         f = ev(x)
         leader_x, leader_f = update_leaders(leader_x, leader_f, x, f, demote=demote_leaders)
         ev.end_iteration()
-        if t + 1 >= iterations:
+        if t + 1 >= iterations or ev.done:  # (a move no evaluation would see)
             break
         a = max(0.0, 2.0 - 2.0 * t / t_max)
         x = ev.clip(gwo_move(x, leader_x, a, rng))

@@ -163,7 +163,7 @@ def run(
         stall = 0 if king_f < king_prev else stall + 1
         king_prev = king_f
         ev.end_iteration()
-        if t + 1 >= iterations:
+        if t + 1 >= iterations or ev.done:  # (a move no evaluation would see)
             break
         a = max(0.0, 2.0 - 2.0 * t / t_max)
 
