@@ -189,6 +189,22 @@ _NOTICE_AFTER = 1.0
 """Seconds of loading the compiled kernels after which one line on stderr says so."""
 
 
+def _say_preparing() -> None:
+    """The one line on stderr while kernels load (once per process: a warm-up of several
+    routes, as ``swarm-ik warmup`` runs, says it once)."""
+    if not _SAID:
+        _SAID.append(True)
+        print(
+            "swarm_ik: preparing the compiled kernels (compiled once, then loaded from "
+            "numba's cache)…",
+            file=sys.stderr,
+            flush=True,
+        )
+
+
+_SAID: list[bool] = []
+
+
 def warm_up(route: Route) -> None:
     """Load the route's compiled kernels (numba's cache, or a compile on the first run)
     before any clock starts; a line on stderr says so when it takes longer than a second."""
@@ -200,15 +216,7 @@ def warm_up(route: Route) -> None:
     )
     if key in _COMPILED:
         return
-    timer = threading.Timer(
-        _NOTICE_AFTER,
-        lambda: print(
-            "swarm_ik: preparing the compiled kernels (compiled once, then loaded from "
-            "numba's cache)…",
-            file=sys.stderr,
-            flush=True,
-        ),
-    )
+    timer = threading.Timer(_NOTICE_AFTER, _say_preparing)
     timer.daemon = True
     timer.start()
     try:

@@ -109,6 +109,25 @@ def test_warmup_command_prepares_every_solve_path() -> None:
         assert step in out.stderr, out.stderr
 
 
+def test_the_loading_line_is_said_once_per_process() -> None:
+    """Routes of several kinds loading their kernels in one process (as ``swarm-ik warmup``
+    does) print the one line once."""
+    code = (
+        "import swarm_ik, swarm_ik.api as a\n"
+        "a._NOTICE_AFTER = 0.0\n"
+        "r = swarm_ik.load_robot('panda')\n"
+        "p = swarm_ik.IKProblem(r, r.fk(r.mid_q()))\n"
+        "for solver in ('swarm', 'dls', 'gwo'):\n"
+        "    a.warm_up(a.Route(p, solver))\n"
+        "print(len(a._COMPILED))\n"
+    )
+    out = subprocess.run(
+        [sys.executable, "-c", code], capture_output=True, text=True, timeout=600, check=True
+    )
+    assert out.stdout.strip() == "3"
+    assert out.stderr.count("preparing the compiled kernels") == 1, out.stderr
+
+
 def test_installed_numba_is_within_the_bounded_range_of_pyproject() -> None:
     """numba is bounded above and below in pyproject.toml (a release that changes its
     internals must not arrive unseen); CI installs the newest release in the range."""
