@@ -270,19 +270,46 @@ def fk_one(
         s: Output buffers: ``s.f_rot``, ``s.f_pos`` and, when ``want_jac``, ``s.f_jac``.
         want_jac: Whether to fill ``s.f_jac``.
     """
-    kind, parent, q_index, mult, offset = t.kind, t.parent, t.q_index, t.multiplier, t.offset
-    rot_p, pos_p, frame_joint, frame_rot, frame_pos = (
-        t.rot_p, t.pos_p, t.frame_joint, t.frame_rot, t.frame_pos
+    fk_fields(
+        q, t.kind, t.parent, t.q_index, t.multiplier, t.offset, t.rot_p, t.pos_p,
+        t.frame_joint, t.frame_rot, t.frame_pos, s.j_rot, s.j_pos, s.f_rot, s.f_pos, s.f_jac,
+        s.ball, want_jac,
     )  # fmt: skip
-    f_rot, f_pos, f_jac = s.f_rot, s.f_pos, s.f_jac
+
+
+@numba.njit(cache=True, inline="always")
+def fk_fields(
+    q: FloatArray,
+    kind: IntArray,
+    parent: IntArray,
+    q_index: IntArray,
+    mult: FloatArray,
+    offset: FloatArray,
+    rot_p: FloatArray,
+    pos_p: FloatArray,
+    frame_joint: IntArray,
+    frame_rot: FloatArray,
+    frame_pos: FloatArray,
+    jr: FloatArray,
+    jp: FloatArray,
+    f_rot: FloatArray,
+    f_pos: FloatArray,
+    f_jac: FloatArray,
+    ball: FloatArray,
+    want_jac: bool,
+) -> None:  # pragma: no cover - compiled
+    """:func:`fk_one` with the fields of the tree (:class:`TreeArrays`) and of the scratch
+    (:class:`FKScratch`: ``jr`` = ``j_rot``, ``jp`` = ``j_pos``) given one by one, for a
+    loop that reads them once before it starts (the LM loop of
+    :func:`swarm_ik.kernels.lm.lm_run`): each read of a tuple's array field takes a
+    reference count and gives it back, about 60 ns per evaluation here (see
+    ``docs/performance.md``)."""
     nj = kind.shape[0]
-    jr = s.j_rot
-    jp = s.j_pos
     for j in range(nj):
         place(jr, jp, parent[j], rot_p, pos_p, j, jr, jp, j)
         if kind[j] == BALL:  # rot <- rot @ exp([r]x)
             i = q_index[j]
-            m3 = s.ball
+            m3 = ball
             exp3_nb(q[i], q[i + 1], q[i + 2], m3)
             for a in range(3):
                 r0, r1, r2 = jr[j, a, 0], jr[j, a, 1], jr[j, a, 2]
@@ -319,7 +346,7 @@ def fk_one(
                 if kind[k] == BALL:
                     # world angular velocity R·Jr(r)·ṙ: three columns, each an axis through
                     # the joint origin
-                    m3 = s.ball
+                    m3 = ball
                     jr_nb(q[col], q[col + 1], q[col + 2], m3)
                     dx = px - jp[k, 0]
                     dy = py - jp[k, 1]

@@ -42,7 +42,7 @@ from numba.typed import List
 
 from swarm_ik._types import BoolArray, FloatArray, IntArray
 from swarm_ik.errors import InvalidArgumentError
-from swarm_ik.kernels.fk import FKScratch, TreeArrays, fk_one, fk_scratch
+from swarm_ik.kernels.fk import FKScratch, TreeArrays, fk_fields, fk_one, fk_scratch
 from swarm_ik.kernels.joints import wrapped
 
 # status of a polished start
@@ -310,11 +310,42 @@ def goal_rows(
     Returns:
         The squared norm of the stack's residual.
     """
+    n_rows = g.rows_primary if primary else g.rows_secondary
+    return stack_rows(
+        q, g.kind, g.primary, g.row0, g.nrows, g.weight, g.p0, g.par, g.i0, g.ipar,
+        ks.fns, n_rows, s.f_pos, s.f_rot, s.f_jac, primary, want_jac, res, jac, err, work,  # type: ignore[attr-defined]
+    )  # fmt: skip
+
+
+@numba.njit(cache=True, inline="always")
+def stack_rows(
+    q: FloatArray,
+    kind: IntArray,
+    prim: BoolArray,
+    row0: IntArray,
+    nrows: IntArray,
+    weight: FloatArray,
+    p0: IntArray,
+    par: FloatArray,
+    i0: IntArray,
+    ipar: IntArray,
+    fns: Any,
+    n_rows: int,
+    f_pos: FloatArray,
+    f_rot: FloatArray,
+    f_jac: FloatArray,
+    primary: bool,
+    want_jac: bool,
+    res: FloatArray,
+    jac: FloatArray,
+    err: FloatArray,
+    work: FloatArray,
+) -> float:  # pragma: no cover - compiled
+    """:func:`goal_rows` with the fields of the goal table (:class:`GoalTable`), of the goal
+    kernels (``fns``) and of the FK buffers given one by one (``n_rows``: the stack's rows),
+    for a loop that reads them once before it starts (:func:`lm_run`; the reason:
+    :func:`swarm_ik.kernels.fk.fk_fields`)."""
     nq = q.shape[0]
-    kind, prim, row0, nrows, weight = g.kind, g.primary, g.row0, g.nrows, g.weight
-    p0, par, i0, ipar = g.p0, g.par, g.i0, g.ipar
-    f_pos, f_rot, f_jac = s.f_pos, s.f_rot, s.f_jac
-    fns = ks.fns  # type: ignore[attr-defined]
     for i in range(kind.shape[0]):
         if prim[i] != primary:
             continue
@@ -332,7 +363,6 @@ def goal_rows(
                 if want_jac:
                     for j in range(nq):
                         jac[a, j] *= w
-    n_rows = g.rows_primary if primary else g.rows_secondary
     cost = 0.0
     for a in range(n_rows):
         cost += res[a] * res[a]
@@ -341,12 +371,11 @@ def goal_rows(
 
 @numba.njit(cache=True, inline="always")
 def within_tolerance(
-    err: FloatArray, g: GoalTable, tol_pos: float, tol_rot: float
+    err: FloatArray, prim: BoolArray, tol_pos: float, tol_rot: float
 ) -> bool:  # pragma: no cover - compiled
     """The one success judge (compiled twin of :func:`swarm_ik.problem.judge`): every
     primary goal's position error ≤ ``tol_pos`` [m] and angular error ≤ ``tol_rot`` [rad]
-    (NaN entries: the goal has no such error)."""
-    prim = g.primary
+    (NaN entries: the goal has no such error); ``prim``: the goal table's ``primary``."""
     for i in range(prim.shape[0]):
         if prim[i]:
             if err[i, 0] > tol_pos or err[i, 1] > tol_rot:
@@ -356,11 +385,11 @@ def within_tolerance(
 
 
 @numba.njit(cache=True, inline="always")
-def max_errors(err: FloatArray, g: GoalTable) -> tuple[float, float]:  # pragma: no cover
-    """Largest primary position error [m] and angular error [rad] (0 where none)."""
+def max_errors(err: FloatArray, prim: BoolArray) -> tuple[float, float]:  # pragma: no cover
+    """Largest primary position error [m] and angular error [rad] (0 where none; ``prim``:
+    the goal table's ``primary``)."""
     dp = 0.0
     dr = 0.0
-    prim = g.primary
     for i in range(prim.shape[0]):
         if prim[i]:
             if err[i, 0] > dp:
@@ -533,11 +562,16 @@ def into_bounds(v: float, j: int, b: Bounds) -> float:  # pragma: no cover - com
 
 @numba.njit(cache=True, inline="always")
 def _step_into_bounds(
-    q: FloatArray, delta: FloatArray, scale: float, b: Bounds, out: FloatArray
+    q: FloatArray,
+    delta: FloatArray,
+    scale: float,
+    wrap: BoolArray,
+    lower: FloatArray,
+    upper: FloatArray,
+    out: FloatArray,
 ) -> None:  # pragma: no cover - compiled
-    """``out = q + scale·delta``, continuous joints wrapped into [-π, π), then clipped (the
-    bounds' fields read once, not per joint: see ``docs/performance.md``)."""
-    wrap, lower, upper = b.wrap, b.lower, b.upper
+    """``out = q + scale·delta``, continuous joints (``wrap``) wrapped into [-π, π), then
+    clipped to ``[lower, upper]`` (the fields of :class:`Bounds`)."""
     for j in range(q.shape[0]):
         out[j] = clip_joint(q[j] + scale * delta[j], wrap[j], lower[j], upper[j])
 
@@ -628,6 +662,21 @@ def lm_run(
     idx, a_red, b_red, x_red = w.idx, w.a_red, w.b_red, w.x_red
     res, jac, res_t, jac_t, err, err_t = w.res, w.jac, w.res_t, w.jac_t, w.err, w.err_t
     wrap, lower, upper = b.wrap, b.lower, b.upper
+    # the fields the evaluation reads, read once (fk_fields says why)
+    t_kind, t_parent, t_q_index, t_mult, t_offset = (
+        t.kind, t.parent, t.q_index, t.multiplier, t.offset
+    )  # fmt: skip
+    t_rot_p, t_pos_p, t_frame_joint, t_frame_rot, t_frame_pos = (
+        t.rot_p, t.pos_p, t.frame_joint, t.frame_rot, t.frame_pos
+    )  # fmt: skip
+    fs = w.fk
+    j_rot, j_pos, f_rot, f_pos, f_jac, ball = (
+        fs.j_rot, fs.j_pos, fs.f_rot, fs.f_pos, fs.f_jac, fs.ball
+    )  # fmt: skip
+    g_kind, g_prim, g_row0, g_nrows, g_weight = g.kind, g.primary, g.row0, g.nrows, g.weight
+    g_p0, g_par, g_i0, g_ipar = g.p0, g.par, g.i0, g.ipar
+    fns = ks.fns  # type: ignore[attr-defined]
+    work_g = w.work
     used = 0
     for s in range(k_starts):
         out_status[s] = NOT_RUN
@@ -649,8 +698,15 @@ def lm_run(
         while True:
             # the one evaluation site (the start, then each trial): one inlined copy of the
             # FK and the goal rows in this kernel
-            fk_one(q_t, t, w.fk, True)
-            cost_t = goal_rows(q_t, w.fk, g, ks, True, True, res_t, jac_t, err_t, w.work)
+            fk_fields(
+                q_t, t_kind, t_parent, t_q_index, t_mult, t_offset, t_rot_p, t_pos_p,
+                t_frame_joint, t_frame_rot, t_frame_pos, j_rot, j_pos, f_rot, f_pos, f_jac,
+                ball, True,
+            )  # fmt: skip
+            cost_t = stack_rows(
+                q_t, g_kind, g_prim, g_row0, g_nrows, g_weight, g_p0, g_par, g_i0, g_ipar,
+                fns, m, f_pos, f_rot, f_jac, True, True, res_t, jac_t, err_t, work_g,
+            )  # fmt: skip
             used += 1
             ev_s += 1
             if ev_s == 1 or cost_t < cost:  # the start, or an accepted step
@@ -666,7 +722,7 @@ def lm_run(
                     err[i, 0] = err_t[i, 0]
                     err[i, 1] = err_t[i, 1]
                 cost = cost_t
-                if stall >= cfg.stall_iters and not within_tolerance(err, g, tol_pos, tol_rot):
+                if stall >= cfg.stall_iters and not within_tolerance(err, g_prim, tol_pos, tol_rot):
                     status = LOCAL_MIN
                     break
             else:
@@ -674,7 +730,7 @@ def lm_run(
                 if stuck:
                     status = LOCAL_MIN
                     break
-            if within_tolerance(err, g, tol_pos, tol_rot):
+            if within_tolerance(err, g_prim, tol_pos, tol_rot):
                 status = CONVERGED
                 break
             if ev_s >= cfg.max_iters:
@@ -724,8 +780,8 @@ def lm_run(
             shrink = 1.0
             if big > cfg.max_step:
                 shrink = cfg.max_step / big
-            _step_into_bounds(q, delta, shrink, b, q_t)
-        dp, dr = max_errors(err, g)
+            _step_into_bounds(q, delta, shrink, wrap, lower, upper, q_t)
+        dp, dr = max_errors(err, g_prim)
         for j in range(n):
             out_q[s, j] = q[j]
         out_dp[s] = dp
@@ -831,7 +887,7 @@ def secondary_descent(
     evaluate(q, t, g, ks, w, True, False)
     cost2 = goal_rows(q, w.fk, g, ks, False, True, res2, jac2, err2, w.work)
     used = 1
-    if not within_tolerance(w.err, g, tol_pos, tol_rot):
+    if not within_tolerance(w.err, g.primary, tol_pos, tol_rot):
         return used
     mu = 1e-3
     reach = SECONDARY_REACH
@@ -913,12 +969,14 @@ def secondary_descent(
         for j in range(n):
             if abs(delta[j]) > big:
                 big = abs(delta[j])
-        _step_into_bounds(q, delta, min(1.0, reach / big) if big > 0.0 else 1.0, b, q_t)
+        _step_into_bounds(
+            q, delta, min(1.0, reach / big) if big > 0.0 else 1.0, b.wrap, b.lower, b.upper, q_t
+        )
         evaluate(q_t, t, g, ks, w, True, True)
         used += 1
         # back onto the primary goals: Gauss–Newton steps from the trial point
         for _ in range(SECONDARY_RESTORE):
-            if within_tolerance(w.err_t, g, tol_pos, tol_rot) or used >= max_evals:
+            if within_tolerance(w.err_t, g.primary, tol_pos, tol_rot) or used >= max_evals:
                 break
             tr = gram(w.jac_t, m1, n, a2)
             for i in range(n):
@@ -929,10 +987,10 @@ def secondary_descent(
             _chol_back(a2, col, n, x)
             for j in range(n):
                 z[j] = q_t[j]
-            _step_into_bounds(z, x, 1.0, b, q_t)
+            _step_into_bounds(z, x, 1.0, b.wrap, b.lower, b.upper, q_t)
             evaluate(q_t, t, g, ks, w, True, True)
             used += 1
-        ok_primary = within_tolerance(w.err_t, g, tol_pos, tol_rot)
+        ok_primary = within_tolerance(w.err_t, g.primary, tol_pos, tol_rot)
         cost2_t = goal_rows(q_t, w.fk, g, ks, False, True, res2_t, jac2_t, err2, w.work)
         if ok_primary and cost2_t < cost2:
             rel = (cost2 - cost2_t) / cost2
