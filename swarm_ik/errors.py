@@ -45,6 +45,6 @@ def unknown(kind: str, name: object, valid: Iterable[str]) -> UnknownNameError:
         name: The value the user gave.
         valid: The names that would have been accepted.
     """
-    choices = ", ".join(sorted(str(v) for v in valid))
+    choices = ", ".join(sorted({str(v) for v in valid}))  # (each name once)
     plural = kind + ("es" if kind.endswith("s") else "s")  # "fitnesses", "solvers"
     return UnknownNameError(f"unknown {kind} {name!r}; valid {plural}: {choices}")

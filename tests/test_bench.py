@@ -594,3 +594,41 @@ def test_throughput_report_gives_the_collision_free_rows_as_a_ratio_of_the_plain
     assert "| panda | 40 | 100 | 0.25 | 0.40 |" in text
     assert "| panda | 10 | 100 | 0.50 | – |" in text  # (no Dask row)
     assert box_ratios(rows[:1]) == ""
+
+
+@pytest.mark.parametrize("command", ["ik", "paper"])
+def test_report_only_without_results_is_refused_and_writes_nothing(
+    command: str, tmp_path, capsys
+) -> None:
+    """``--report-only`` over a folder with no results: exit 2, one line naming the folder
+    and the command that makes them, and no report (it said it wrote files it had not)."""
+    from swarm_ik.cli import main
+
+    out = tmp_path / "empty"
+    assert main(["bench", command, "--report-only", "--out", str(out)]) == 2
+    err = capsys.readouterr().err.strip()
+    assert len(err.splitlines()) == 1 and "no results to report" in err
+    assert f"swarm-ik bench {command} --out" in err
+    assert not out.exists()
+
+
+@pytest.mark.parametrize(
+    "argv", [["throughput", "--robots", "nosuch"], ["many", "--arms", "nosuch"]]
+)
+def test_a_bad_robot_name_leaves_no_folder(argv: list[str], tmp_path, capsys) -> None:
+    """A refused robot is refused before the output folder is made (a run.json left there
+    changed the next run in that folder)."""
+    from swarm_ik.cli import main
+
+    out = tmp_path / "out"
+    assert main(["bench", *argv, "--out", str(out)]) == 2
+    assert "unknown robot 'nosuch'" in capsys.readouterr().err
+    assert not out.exists()
+
+
+def test_unknown_names_are_listed_once() -> None:
+    """A name both bundled and in example-robot-data (panda) is listed once."""
+    with pytest.raises(swarm_ik.UnknownNameError) as err:
+        swarm_ik.load_robot("nosuch")
+    names = str(err.value).split("valid robots: ")[1].split(", ")
+    assert "panda" in names and len(names) == len(set(names))

@@ -102,6 +102,17 @@ def cached_robot(name: str) -> Any:
     return swarm_ik.load_robot(name)
 
 
+def check_robots(names: Sequence[str]) -> None:
+    """Load each robot of ``names`` (:func:`cached_robot`) before a benchmark writes anything,
+    so that a bad name is refused with the loader's message and leaves no folder behind.
+
+    Raises:
+        SwarmIKError: the loader's error for the first name it refuses.
+    """
+    for name in names:
+        cached_robot(name)
+
+
 def fk_targets(robot: Any, n: int, seed: int | Sequence[int]) -> np.ndarray:
     """Reachable targets: FK of ``n`` joint vectors drawn uniformly within the limits.
 
@@ -249,6 +260,24 @@ def resolve_out(out: str | os.PathLike[str] | None, command: str, quick: bool) -
                 f" a {kind} run may not write there: choose another --out"
             )
     return path
+
+
+def require_results(out: Path, files: Sequence[Path], command: str) -> None:
+    """For ``--report-only``: refuse a folder where none of the CSV ``files`` holds a row (a
+    report of nothing, written over an empty folder, would look like a run).
+
+    Raises:
+        InvalidArgumentError: naming the folder and the command that makes the results.
+    """
+    for path in files:
+        if path.is_file():
+            with path.open() as fh:
+                if fh.readline() and fh.readline().strip():  # (a header and one row)
+                    return
+    raise InvalidArgumentError(
+        f"--report-only: no results to report in {str(out)!r} (no rows in "
+        f"{', '.join(f.name for f in files)}); run `swarm-ik bench {command} --out {out}` first"
+    )
 
 
 def write_run_info(out: Path, command: str, quick: bool, **extra: Any) -> Path:

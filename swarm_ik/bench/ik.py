@@ -408,6 +408,8 @@ def run(args: argparse.Namespace) -> int:
         raise InvalidArgumentError(f"--jobs must be >= 1, got {args.jobs}")
     plan, quick = plan_from_args(args)
     out = common.resolve_out(args.out, COMMAND, quick)
+    if args.report_only:
+        common.require_results(out, [runner.csv_path(out, "peers")], COMMAND)
     common.single_thread()
     common.write_run_info(out, COMMAND, quick)
     missing = [p for p in plans.IK_PEERS if not peers.get(p).available()]

@@ -355,6 +355,7 @@ def run(args: argparse.Namespace) -> int:
     """Run the experiment; returns the exit code."""
     import os
 
+    common.check_robots(args.arms)
     args.out.mkdir(parents=True, exist_ok=True)
     speed = machine_speed()
     rows: list[dict[str, Any]] = []

@@ -769,6 +769,8 @@ def run(args: argparse.Namespace) -> int:
         0 when done, 130 when interrupted (finished runs are saved; rerun to resume).
     """
     cfg, out, ids = config_from_args(args)
+    if args.report_only:
+        common.require_results(out, [runner.csv_path(out, i) for i in ids], "paper")
     common.write_run_info(out, "paper", cfg.name == "quick")
     meta = load_meta(out)
     meta["config"] = cfg.name

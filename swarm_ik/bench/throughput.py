@@ -588,6 +588,7 @@ def run(args: argparse.Namespace) -> int:
 
         raise InvalidArgumentError(f"--sizes must be positive numbers of targets, got {bad}")
     out = common.resolve_out(args.out, "throughput", quick)
+    common.check_robots(args.robots)
     common.write_run_info(out, "throughput", quick)
     loop_max = min(args.loop_max, 100) if quick else args.loop_max
     csv_path, prof_path = run_experiment(
