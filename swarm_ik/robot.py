@@ -512,11 +512,13 @@ class RobotModel:
 
         Raises:
             RobotFileNotFoundError: the file does not exist.
-            RobotModelError: not a URDF, loops, bad limits, no movable joint on a path.
+            RobotModelError: not a regular file, not a URDF, loops, bad limits, no movable joint on a path.
             UnknownNameError: a frame is not a frame of the model (the valid ones listed).
         """
         p = Path(path)
         if not p.is_file():
+            if p.exists():  # (a folder, a device, a pipe: reading it would fail or hang)
+                raise RobotModelError(f"URDF path {str(p)!r} is not a regular file")
             raise RobotFileNotFoundError(f"URDF file not found: {str(p)!r}")
         if not isinstance(floating_base, (bool, np.bool_)):
             raise InvalidArgumentError(

@@ -193,6 +193,13 @@ def test_missing_file_is_refused(tmp_path: Path) -> None:
         swarm_ik.load_robot(str(missing))
 
 
+def test_a_path_that_is_not_a_regular_file_is_refused_as_such(tmp_path: Path) -> None:
+    """A folder or a device as the URDF is not "not found": the message says what it is."""
+    for path in (tmp_path, Path("/dev/null")):
+        with pytest.raises(errors.RobotModelError, match="is not a regular file"):
+            swarm_ik.load_robot(str(path))
+
+
 def test_unknown_robot_name_lists_the_robots() -> None:
     with pytest.raises(errors.UnknownNameError) as info:
         swarm_ik.load_robot("yumi")
