@@ -512,7 +512,8 @@ class RobotModel:
 
         Raises:
             RobotFileNotFoundError: the file does not exist.
-            RobotModelError: not a regular file, not a URDF, loops, bad limits, no movable joint on a path.
+            RobotModelError: not a regular file, not a URDF, loops, bad limits, no movable
+                joint on a path.
             UnknownNameError: a frame is not a frame of the model (the valid ones listed).
         """
         p = Path(path)

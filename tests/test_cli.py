@@ -585,3 +585,29 @@ def test_a_ctrl_c_swallowed_in_a_callback_is_raised_again() -> None:
     cli._unraisable(types.SimpleNamespace(exc_value=KeyboardInterrupt()))
     with pytest.raises(KeyboardInterrupt):
         time.sleep(2.0)
+
+
+@pytest.mark.parametrize(
+    ("argv", "said"),
+    [
+        (["solve", "--robot", "yumi_left", *FROM_Q, "--no-self-collision"], "--scene"),
+        (["solve", "--robot", "yumi_left", *FROM_Q, "--srdf", "x.srdf"], "--scene or --goals"),
+        (["solve", "--robot", "yumi_left", *FROM_Q, "--show-wait", "2"], "--show"),
+        (["reach", "--robot", "yumi_left", "--png", "a.png", "--no-png"], "contradict"),
+        (["reach", "--robot", "yumi_left", "--html", "a.html", "--no-html"], "contradict"),
+        (["show", "--robot", "yumi_left", "--html", "a.html", "--show-wait", "2"], "--show"),
+    ],
+)
+def test_options_that_modify_nothing_or_contradict_are_refused(
+    argv: list[str],
+    said: str,
+    capsys: pytest.CaptureFixture[str],
+    tmp_path: Path,
+    monkeypatch: pytest.MonkeyPatch,
+) -> None:
+    """An option given without the one it modifies, or beside its own negation, is a mistake
+    the user wants to hear about (exit 2, one line naming both), not a silent no-op."""
+    monkeypatch.chdir(tmp_path)
+    line = cli_error(capsys, *argv)
+    assert said in line and argv[-1 if argv[-1].startswith("--") else -2] in line
+    assert not any(tmp_path.iterdir())

@@ -143,6 +143,10 @@ def run(args: argparse.Namespace) -> int:
     _validate.positive_float(args.resolution, "--resolution")
     out = args.out if args.out is not None else Path(f"reach_{Path(args.robot).stem}.npz")
     out = check_output_file(out, "--out", (".npz",))
+    for option, off in ((args.png, args.no_png), (args.html, args.no_html)):
+        if option is not None and off:
+            name = "--png" if option is args.png else "--html"
+            raise InvalidArgumentError(f"{name} FILE and --no-{name[2:]} contradict: give one")
     png = None
     if not args.no_png:
         if not has_module("matplotlib"):

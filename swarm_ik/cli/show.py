@@ -90,6 +90,8 @@ def run(args: argparse.Namespace) -> int:
     from swarm_ik.errors import InvalidArgumentError
 
     live = bool(args.show or not args.html)
+    if args.show_wait is not None and not live:
+        raise InvalidArgumentError("--show-wait applies to the live viewer: add --show")
     _viewer.check_viewer(args, live=live)
     robot = swarm_ik.load_robot(args.robot, ee_frame=args.frame, **robot_kwargs(args))
     _viewer.check_meshes(robot, "show")

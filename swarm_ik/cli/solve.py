@@ -103,7 +103,13 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     )
     argtypes.add_seed(parser, "random seed")
     parser.add_argument("--max-evals", type=int, default=None, help="most fitness evaluations")
-    parser.add_argument("--time-limit", type=float, default=None, help="seconds")
+    parser.add_argument(
+        "--time-limit",
+        type=float,
+        default=None,
+        help="most seconds for the solve, its check included (loading the robot and the "
+        "scene is not counted; --compare's solve gets a limit of its own)",
+    )
     add_tolerances(parser)
     add_q0(parser, "starting joint values (one per joint)")
     add_scene(parser, "obstacles the answer must be clear of (and of itself)")
@@ -167,6 +173,17 @@ def run(args: argparse.Namespace) -> int:
 
     if args.solver is None:  # (the parser leaves the registry unloaded: see _solver_help)
         args.solver = DEFAULT_SOLVER
+    for given, option, needed, other in (  # an option that modifies one not given
+        (args.no_self_collision, "--no-self-collision", args.scene, "--scene"),
+        (args.srdf, "--srdf", args.scene or args.goals, "--scene or --goals"),
+        (args.show_wait is not None, "--show-wait", args.show, "--show"),
+    ):
+        if given and not needed:
+            raise InvalidArgumentError(f"{option} applies to {other}, which was not given")
+    if args.srdf and args.no_self_collision:
+        raise InvalidArgumentError(
+            "--srdf names self-collision pairs, which --no-self-collision does not check"
+        )
     drawing = _viewer.wants_drawing(args)
     if drawing:  # refused before solving: meshcat missing, an unwritable page
         _viewer.check_viewer(args, live=bool(args.show))
