@@ -1324,6 +1324,27 @@ the last polish (the answers' errors and the result's arrays: 1.1–1.9 µs per 
 measured, yumi_left), up to half the limit: targets stop starting that much earlier."""
 
 
+def _with_deadline(
+    bc: BatchChain,
+    settings: BatchSettings,
+    poses: FloatArray,
+    seeds: FloatArray,
+    limit: float,
+    t0: float,
+) -> BatchSettings:
+    """``settings`` with the deadline of a ``time_limit`` of ``limit`` seconds begun at ``t0``
+    (``time.perf_counter()``): this process's kernels loaded first (the first target solved
+    from its seed: a process's first batch loads or compiles them), what the call spent so far
+    charged to the limit up to half of it (as a first solve's loading: the targets keep at
+    least half), and :data:`FINISH_PER_TARGET` per target kept for the end of the call (at
+    most half of what is left)."""
+    if poses.shape[0]:
+        solve_chunk(bc, dataclasses.replace(settings, max_starts=1), 0, poses[:1], seeds[:1])
+    left = max(limit - (time.perf_counter() - t0), 0.5 * limit)
+    left -= min(FINISH_PER_TARGET * poses.shape[0], 0.5 * left)
+    return dataclasses.replace(settings, deadline=time.time() + left)
+
+
 def solve_batch(
     robot: RobotModel,
     targets: Any,
@@ -1389,7 +1410,9 @@ def solve_batch(
             targets still open their restarts (one pass after another), so a target reached
             may be left unsolved where a call without the limit would have restarted it;
             every success is the answer of a call without the limit.  Which targets are
-            reached depends on the machine's speed.
+            reached depends on the machine's speed.  The first batch of a process loads
+            its kernels (or compiles them) before the targets start: charged to the limit up
+            to half of it, as a first :func:`swarm_ik.solve`'s loading.
         scheduler: ``None`` (in this process, no Dask), ``"local"`` (an embedded
             ``dask.distributed.LocalCluster``, one single-threaded worker process per core),
             a scheduler address such as ``"tcp://127.0.0.1:8786"``, or a
@@ -1418,15 +1441,12 @@ def solve_batch(
     from swarm_ik._validate import float_array, positive_float
 
     t0 = time.perf_counter()
-    deadline = None
+    limit = None
     if time_limit is not None:
         limit = positive_float(time_limit, "time_limit")
         wall_clock()  # (its first call in a process loads numba's bridge to Python, ~70 ms:
         # before the clock starts, not inside the budget)
-        deadline = time.time() + limit
     targets = float_array(targets, "targets")
-    if deadline is not None and targets.ndim >= 1:  # the end of the call is in the budget
-        deadline -= min(FINISH_PER_TARGET * targets.shape[0], 0.5 * limit)
     settings = BatchSettings(
         tol_pos=positive_float(tol_pos, "tol_pos"),
         tol_rot=positive_float(tol_rot, "tol_rot"),
@@ -1434,7 +1454,6 @@ def solve_batch(
         max_starts=max_starts,
         max_iters=max_iters,
         seed=seed,
-        deadline=deadline,
         own_start=q0 is not None,
     )
     poses = check_targets(targets, positions=settings.position_only)
@@ -1447,6 +1466,8 @@ def solve_batch(
         bc = dataclasses.replace(bc, goals=bgoals)
         labels = bgoals.labels
     seeds = _seed_starts(bc, q0, n)
+    if limit is not None:
+        settings = _with_deadline(bc, settings, poses, seeds, limit, t0)
     if chunk_size is not None and (
         isinstance(chunk_size, bool)
         or not isinstance(chunk_size, (int, np.integer))

@@ -249,3 +249,21 @@ def test_free_table_holds_only_free_configurations_and_depends_on_the_seed(panda
     np.testing.assert_array_equal(again, qs)
     other, _ = BatchGoals(panda, goals, False, panda.fk(panda.mid_q())).free_table(chain, 4)
     assert other.shape != qs.shape or not np.array_equal(other, qs)
+
+
+def test_a_first_batch_in_a_fresh_process_keeps_half_its_time_limit(tmp_path) -> None:
+    """``swarm-ik batch --time-limit`` in a new process: loading the kernels is charged to
+    the limit up to half of it, so targets are solved (all the limit went to the loading, and
+    none was), and the targets left are said to be not started."""
+    import subprocess
+    import sys
+
+    out = subprocess.run(
+        [sys.executable, "-m", "swarm_ik.cli", "batch", "--robot", "panda", "--random",
+         "100000", "--time-limit", "0.3", "--no-progress", "--out", str(tmp_path / "b.npz")],
+        capture_output=True, text=True, timeout=600,
+    )  # fmt: skip
+    assert out.returncode == 1, out.stderr  # (not every target reached: exit 1)
+    solved = int(out.stdout.split("solved ")[1].split("/")[0])
+    assert solved > 0
+    assert "targets not started before --time-limit" in out.stdout

@@ -81,6 +81,13 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("--chunk-size", type=int, default=None, help="targets per task")
     argtypes.add_seed(parser, "seed of the restarts (and of sampled targets)")
     add_lm_options(parser, 128, "most LM starts per target, the seed included")
+    parser.add_argument(
+        "--time-limit",
+        type=argtypes.positive_number,
+        default=None,
+        metavar="SECONDS",
+        help="seconds for the whole batch: targets not reached by then are reported unsolved",
+    )
     add_scheduler(parser)
     parser.add_argument("--no-progress", action="store_true", help="no progress bar")
 
@@ -130,6 +137,7 @@ def run(args: argparse.Namespace) -> int:
         position_only=args.position_only,
         max_starts=args.max_starts,
         max_iters=args.max_iters,
+        time_limit=args.time_limit,
         scheduler=args.scheduler,
         chunk_size=args.chunk_size,
         progress=not args.no_progress and sys.stderr.isatty(),
@@ -158,5 +166,8 @@ def run(args: argparse.Namespace) -> int:
             f"LM evaluations per target: mean {res.n_evals.mean():.1f}, starts per target: "
             f"mean {res.n_starts.mean():.2f}"
         )
+        not_started = int((res.n_starts == 0).sum())
+        if not_started:
+            print(f"{not_started} targets not started before --time-limit (counted unsolved)")
     print(f"wrote {args.out}")
     return EXIT_OK if n_ok == res.n else EXIT_NOT_REACHED
