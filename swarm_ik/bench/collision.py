@@ -1250,8 +1250,10 @@ def run(args: argparse.Namespace) -> int:
         else common.positive_int(args.ablation_n, "--ablation-n")
     )  # fmt: skip
     out = common.resolve_out(args.out, COMMAND, args.quick)
+    if not robots:
+        raise InvalidArgumentError(f"--robots: no robot in {args.robots!r}")
+    common.check_robots(robots)  # every name, before the first scene is written
     common.single_thread()
-    import swarm_ik
 
     load = f"{os.getloadavg()[0]:.2f}" if hasattr(os, "getloadavg") else "?"
     t_start = time.perf_counter()
@@ -1263,7 +1265,7 @@ def run(args: argparse.Namespace) -> int:
     abl: list[dict[str, Any]] = []
     missing: dict[str, str] = {}
     for rname in robots:
-        robot = swarm_ik.load_robot(rname)
+        robot = common.cached_robot(rname)
         for sname in scenes:
             bs = make_scene(sname, args.seed)
             (out / "scenes").mkdir(parents=True, exist_ok=True)

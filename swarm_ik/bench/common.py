@@ -262,9 +262,15 @@ def resolve_out(out: str | os.PathLike[str] | None, command: str, quick: bool) -
     return path
 
 
-def require_results(out: Path, files: Sequence[Path], command: str) -> None:
+def require_results(out: Path, files: Sequence[Path], command: str, quick: bool = False) -> None:
     """For ``--report-only``: refuse a folder where none of the CSV ``files`` holds a row (a
     report of nothing, written over an empty folder, would look like a run).
+
+    Args:
+        out: The output folder.
+        files: The CSV files a report is built from.
+        command: The benchmark (``swarm-ik bench COMMAND`` makes the results).
+        quick: Whether this is a ``--quick`` invocation (the command named says so too).
 
     Raises:
         InvalidArgumentError: naming the folder and the command that makes the results.
@@ -276,7 +282,8 @@ def require_results(out: Path, files: Sequence[Path], command: str) -> None:
                     return
     raise InvalidArgumentError(
         f"--report-only: no results to report in {str(out)!r} (no rows in "
-        f"{', '.join(f.name for f in files)}); run `swarm-ik bench {command} --out {out}` first"
+        f"{', '.join(f.name for f in files)}); run `swarm-ik bench {command}"
+        f"{' --quick' if quick else ''} --out {out}` first"
     )
 
 

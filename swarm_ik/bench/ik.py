@@ -409,7 +409,9 @@ def run(args: argparse.Namespace) -> int:
     plan, quick = plan_from_args(args)
     out = common.resolve_out(args.out, COMMAND, quick)
     if args.report_only:
-        common.require_results(out, [runner.csv_path(out, "peers")], COMMAND)
+        common.require_results(out, [runner.csv_path(out, "peers")], COMMAND, quick)
+    else:  # (a .urdf path is only checked by loading it)
+        common.check_robots([r for r in plan.robots if r.endswith(".urdf")])
     common.single_thread()
     common.write_run_info(out, COMMAND, quick)
     missing = [p for p in plans.IK_PEERS if not peers.get(p).available()]
@@ -440,7 +442,8 @@ def run(args: argparse.Namespace) -> int:
             file=sys.stderr,
         )
     path = write_summary(out, plan, quick, wall)
-    print(f"wrote {runner.csv_path(out, 'peers')}, {path}", file=sys.stderr)
+    written = [path] if args.report_only else [runner.csv_path(out, "peers"), path]
+    print(f"wrote {', '.join(map(str, written))}", file=sys.stderr)
     return 130 if interrupted else 0
 
 

@@ -770,7 +770,9 @@ def run(args: argparse.Namespace) -> int:
     """
     cfg, out, ids = config_from_args(args)
     if args.report_only:
-        common.require_results(out, [runner.csv_path(out, i) for i in ids], "paper")
+        common.require_results(
+            out, [runner.csv_path(out, i) for i in ids], "paper", bool(args.quick)
+        )
     common.write_run_info(out, "paper", cfg.name == "quick")
     meta = load_meta(out)
     meta["config"] = cfg.name

@@ -446,6 +446,7 @@ def run(args: argparse.Namespace) -> int:
         (out / "path.md").write_text(md)
         print(md)
         return 0
+    common.check_robots(args.arms)  # a bad name refused before the folder is made
     out.mkdir(parents=True, exist_ok=True)
     rows: list[dict[str, Any]] = []
     t0 = time.perf_counter()

@@ -284,7 +284,11 @@ def add_scene(parser: Any, help: str) -> None:
     """``--scene FILE``: obstacles in any format :meth:`swarm_ik.scene.Scene.load` reads,
     named in the help after ``help`` (what the command keeps clear of them)."""
     parser.add_argument(
-        "--scene", default=None, metavar="FILE", help=f"{help}; formats: {SCENE_FORMATS}"
+        "--scene",
+        default=None,
+        type=input_file,
+        metavar="FILE",
+        help=f"{help}; formats: {SCENE_FORMATS}",
     )
 
 
@@ -322,6 +326,24 @@ def _kind(mode: int) -> str:
     if stat.S_ISSOCK(mode):
         return "a socket"
     return "not a regular file"
+
+
+def input_file(text: str) -> str:
+    """The type of an input-file option read after the robot is loaded (``--scene``,
+    ``--srdf``): the path unchanged, refused as soon as it is parsed when it exists but is
+    not a regular file (a folder, a FIFO, ``/dev/zero``), with what it is.  A missing path
+    is let through: the reader names it as missing.
+
+    Raises:
+        argparse.ArgumentTypeError: ``"'PATH' is a folder; give a regular file"`` (exit 2).
+    """
+    try:
+        mode = Path(text).stat().st_mode  # follows links: a link to a FIFO is a FIFO
+    except OSError:
+        return text
+    if not stat.S_ISREG(mode):
+        raise argparse.ArgumentTypeError(f"{text!r} is {_kind(mode)}; give a regular file")
+    return text
 
 
 def check_input_file(path: str | os.PathLike[str], what: str, max_bytes: int | None) -> Path:

@@ -31,6 +31,7 @@ from swarm_ik.cli._args import (
     add_tolerances,
     check_input_file,
     check_output_file,
+    input_file,
     robot_kwargs,
 )
 
@@ -69,6 +70,7 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument(
         "--scene",
         default=None,
+        type=input_file,
         metavar="FILE",
         help="obstacles (JSON, cuRobo .yml, MoveIt .scene or URDF; docs/scenes.md): every "
         "waypoint collision-free (self and scene)",

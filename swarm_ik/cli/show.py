@@ -44,15 +44,16 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument(
         "--solutions",
         type=int,
-        default=1,
+        default=None,
         metavar="N",
         help="with a target and no --q: how many distinct solutions to find and show (default 1)",
     )
     parser.add_argument(
         "--min-distance",
         type=float,
-        default=0.5,
-        help="smallest joint-space distance between two shown solutions (rad / m, default 0.5)",
+        default=None,
+        help="with a target and no --q: smallest joint-space distance between two shown "
+        "solutions (rad / m, default 0.5)",
     )
     parser.add_argument(
         "--solver",
@@ -90,8 +91,17 @@ def run(args: argparse.Namespace) -> int:
     from swarm_ik.errors import InvalidArgumentError
 
     live = bool(args.show or not args.html)
-    if args.show_wait is not None and not live:
-        raise InvalidArgumentError("--show-wait applies to the live viewer: add --show")
+    for option, given in (("--show-wait", args.show_wait is not None), ("--open", args.open)):
+        if given and not live:
+            raise InvalidArgumentError(f"{option} applies to the live viewer: add --show")
+    if args.q:  # (given q's are drawn as they are: nothing is solved)
+        for option, value in (
+            ("--solutions", args.solutions),
+            ("--min-distance", args.min_distance),
+            ("--solver", args.solver),
+        ):
+            if value is not None:
+                raise InvalidArgumentError(f"{option} applies to a target solved, not to --q")
     _viewer.check_viewer(args, live=live)
     robot = swarm_ik.load_robot(args.robot, ee_frame=args.frame, **robot_kwargs(args))
     _viewer.check_meshes(robot, "show")
@@ -119,9 +129,9 @@ def run(args: argparse.Namespace) -> int:
         problem = swarm_ik.IKProblem(robot, target)
         results = viz.several_solutions(
             problem,
-            args.solutions,
+            1 if args.solutions is None else args.solutions,
             solver=args.solver,
-            min_distance=args.min_distance,
+            min_distance=0.5 if args.min_distance is None else args.min_distance,
             seed=args.seed,
         )
     for k, r in enumerate(results):

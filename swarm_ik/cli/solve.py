@@ -22,6 +22,7 @@ from swarm_ik.cli._args import (
     add_scene,
     add_tolerances,
     check_goals_file,
+    input_file,
     pose_target,
     robot_kwargs,
     solve_kwargs,
@@ -121,6 +122,7 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument(
         "--srdf",
         default=None,
+        type=input_file,
         metavar="FILE",
         help="SRDF of disabled self-collision pairs (default: found)",
     )

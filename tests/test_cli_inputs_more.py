@@ -1,0 +1,127 @@
+"""The command line refuses what it cannot use before any work, and leaves nothing behind:
+``--report-only`` over no results, bad benchmark names and schedulers, input paths that are
+not regular files, and options that modify one not given."""
+
+from __future__ import annotations
+
+import os
+from collections.abc import Callable
+from pathlib import Path
+
+import pytest
+from conftest import FROM_Q, cli_error
+
+from swarm_ik.cli import main
+
+Q_PANDA = ["0", "0", "0", "-1.5", "0", "1.5", "0.7"]
+
+
+# ------------------------------------------------------------------ bench: refused, no files
+@pytest.mark.parametrize("command", ["ik", "paper"])
+def test_report_only_over_an_empty_folder_names_the_quick_command(
+    command: str, tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    """An existing empty folder is refused like a missing one, and a ``--quick`` report is
+    pointed at the ``--quick`` run that makes its results; nothing is written there."""
+    out = tmp_path / "empty"
+    out.mkdir()
+    line = cli_error(capsys, "bench", command, "--quick", "--report-only", "--out", str(out))
+    assert "no results to report" in line and str(out) in line
+    assert f"swarm-ik bench {command} --quick --out" in line
+    assert not any(out.iterdir())
+
+
+def test_report_only_says_it_wrote_only_the_report(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    """``bench ik --report-only`` rebuilds summary.md from peers.csv: it does not claim to
+    have written peers.csv."""
+    out = tmp_path / "ik"
+    argv = ["bench", "ik", "--quick", "--n", "2", "--peers", "swarm", "--out", str(out)]
+    assert main(argv) == 0
+    capsys.readouterr()
+    before = (out / "peers.csv").read_bytes()
+    assert main([*argv, "--report-only"]) == 0
+    said = [x for x in capsys.readouterr().err.splitlines() if x.startswith("wrote ")]
+    assert said == [f"wrote {out / 'summary.md'}"]
+    assert (out / "peers.csv").read_bytes() == before
+
+
+@pytest.mark.parametrize(
+    ("argv", "said"),
+    [
+        (["throughput", "--quick", "--scheduler", "bogus"], "unknown scheduler 'bogus'"),
+        (["ik", "--quick", "--robots", "nosuch.urdf"], "nosuch.urdf"),
+        (["collision", "--quick", "--robots", "panda,nosuch"], "unknown robot 'nosuch'"),
+        (["collision", "--quick", "--robots", ","], "--robots"),
+    ],
+)
+def test_a_refused_benchmark_leaves_nothing_in_its_folder(
+    argv: list[str], said: str, tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    """Refused before the folder is made: no run.json (which refused the next run of the
+    other kind there) and no scenes of the robots named before the bad one."""
+    out = tmp_path / "out"
+    line = cli_error(capsys, "bench", *argv, "--out", str(out))
+    assert said in line
+    assert not out.exists()
+
+
+# ------------------------------------------------------- input paths: not "not found"
+def _not_a_file(kind: str, tmp_path: Path) -> tuple[Path, str]:
+    """A path of ``kind`` that exists and is not a regular file, and what the error calls it."""
+    if kind == "fifo":
+        if not hasattr(os, "mkfifo"):
+            pytest.skip("no FIFOs here")
+        path = tmp_path / "pipe"
+        os.mkfifo(path)
+        return path, "is a named pipe (FIFO)"
+    if kind == "device":
+        if not Path("/dev/zero").exists():
+            pytest.skip("no /dev/zero here")
+        return Path("/dev/zero"), "is a device"
+    return tmp_path, "is a folder"
+
+
+@pytest.mark.parametrize("kind", ["fifo", "device", "folder"])
+@pytest.mark.parametrize(
+    ("argv", "option"),
+    [
+        (["solve", "--robot", "yumi_left", *FROM_Q, "--scene"], "--scene"),
+        (["solve", "--robot", "yumi_left", *FROM_Q, "--scene", "s.json", "--srdf"], "--srdf"),
+        (["path", "--robot", "panda", "--poses", "p.csv", "--scene"], "--scene"),
+    ],
+)
+def test_an_input_path_that_is_not_a_regular_file_says_what_it_is(
+    kind: str, argv: list[str], option: str, tmp_path: Path, refused: Callable[..., str]
+) -> None:
+    path, what = _not_a_file(kind, tmp_path)
+    line = refused(*argv, str(path))
+    assert option in line and str(path) in line and what in line
+    assert "not found" not in line
+
+
+# ------------------------------------------------- options that modify one not given
+@pytest.mark.parametrize(
+    ("extra", "option", "other"),
+    [
+        (["--html", "a.html", "--open"], "--open", "--show"),
+        (["--q", *Q_PANDA, "--solutions", "3"], "--solutions", "--q"),
+        (["--q", *Q_PANDA, "--min-distance", "0.2"], "--min-distance", "--q"),
+        (["--q", *Q_PANDA, "--solver", "dls"], "--solver", "--q"),
+    ],
+)
+def test_show_refuses_an_option_that_modifies_nothing(
+    extra: list[str],
+    option: str,
+    other: str,
+    tmp_path: Path,
+    monkeypatch: pytest.MonkeyPatch,
+    refused: Callable[..., str],
+) -> None:
+    """``--open`` without the live viewer, or what tunes a solve beside given ``--q`` (then
+    nothing is solved), is refused naming both options, before the robot is loaded."""
+    monkeypatch.chdir(tmp_path)
+    line = refused("show", "--robot", "panda", *extra)
+    assert option in line and other in line
+    assert not any(tmp_path.iterdir())
