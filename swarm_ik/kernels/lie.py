@@ -32,78 +32,93 @@ def angle_nb(m: FloatArray) -> float:  # pragma: no cover - compiled
 
 
 @numba.njit(cache=True, inline="always")
-def log3_nb(m: FloatArray, out: FloatArray) -> float:  # pragma: no cover - compiled
-    """Rotation vector of ``m`` (3, 3) into ``out`` (3,); returns the angle θ.
+def log3_entries(
+    m00: float,
+    m01: float,
+    m02: float,
+    m10: float,
+    m11: float,
+    m12: float,
+    m20: float,
+    m21: float,
+    m22: float,
+) -> tuple[float, float, float, float]:  # pragma: no cover - compiled
+    """``(θ, φx, φy, φz)``: the angle and rotation vector of the rotation whose entries are
+    given row by row (scalars: no array for the kernels' inner loop to count references of).
 
-    Accurate near 0 (``atan2`` of the skew part) and near π (axis from the symmetric part).
-    """
-    s0 = 0.5 * (m[2, 1] - m[1, 2])
-    s1 = 0.5 * (m[0, 2] - m[2, 0])
-    s2 = 0.5 * (m[1, 0] - m[0, 1])
+    Accurate near 0 (``atan2`` of the skew part) and near π (axis from the symmetric part
+    ``B = c I + (1 − c) a aᵀ``, from its largest diagonal entry).
+    """  # fmt: skip
+    s0 = 0.5 * (m21 - m12)
+    s1 = 0.5 * (m02 - m20)
+    s2 = 0.5 * (m10 - m01)
     sn = math.sqrt(s0 * s0 + s1 * s1 + s2 * s2)
-    c = 0.5 * (m[0, 0] + m[1, 1] + m[2, 2] - 1.0)
+    c = 0.5 * (m00 + m11 + m22 - 1.0)
     theta = math.atan2(sn, c)
     if theta < 1e-5:
         scale = 1.0 + theta * theta / 6.0
-        out[0] = s0 * scale
-        out[1] = s1 * scale
-        out[2] = s2 * scale
-    elif theta < math.pi - 1e-3:
+        return theta, s0 * scale, s1 * scale, s2 * scale
+    if theta < math.pi - 1e-3:
         scale = theta / sn
-        out[0] = s0 * scale
-        out[1] = s1 * scale
-        out[2] = s2 * scale
+        return theta, s0 * scale, s1 * scale, s2 * scale
+    one_c = 1.0 - c
+    if m00 >= m11 and m00 >= m22:
+        ai = math.sqrt(max((m00 - c) / one_c, 0.0))
+        a0, a1, a2 = ai, 0.5 * (m10 + m01) / (one_c * ai), 0.5 * (m20 + m02) / (one_c * ai)
+    elif m11 >= m22:
+        ai = math.sqrt(max((m11 - c) / one_c, 0.0))
+        a0, a1, a2 = 0.5 * (m01 + m10) / (one_c * ai), ai, 0.5 * (m21 + m12) / (one_c * ai)
     else:
-        # symmetric part: B = c I + (1 - c) a aᵀ
-        i = 0
-        if m[1, 1] > m[i, i]:
-            i = 1
-        if m[2, 2] > m[i, i]:
-            i = 2
-        one_c = 1.0 - c
-        ai = math.sqrt(max((m[i, i] - c) / one_c, 0.0))
-        a0 = 0.5 * (m[0, i] + m[i, 0]) / (one_c * ai)
-        a1 = 0.5 * (m[1, i] + m[i, 1]) / (one_c * ai)
-        a2 = 0.5 * (m[2, i] + m[i, 2]) / (one_c * ai)
-        if i == 0:
-            a0 = ai
-        elif i == 1:
-            a1 = ai
-        else:
-            a2 = ai
-        norm = math.sqrt(a0 * a0 + a1 * a1 + a2 * a2)
-        if a0 * s0 + a1 * s1 + a2 * s2 < 0.0:
-            norm = -norm
-        out[0] = theta * a0 / norm
-        out[1] = theta * a1 / norm
-        out[2] = theta * a2 / norm
+        ai = math.sqrt(max((m22 - c) / one_c, 0.0))
+        a0, a1, a2 = 0.5 * (m02 + m20) / (one_c * ai), 0.5 * (m12 + m21) / (one_c * ai), ai
+    norm = math.sqrt(a0 * a0 + a1 * a1 + a2 * a2)
+    if a0 * s0 + a1 * s1 + a2 * s2 < 0.0:
+        norm = -norm
+    return theta, theta * a0 / norm, theta * a1 / norm, theta * a2 / norm
+
+
+@numba.njit(cache=True, inline="always")
+def log3_nb(m: FloatArray, out: FloatArray) -> float:  # pragma: no cover - compiled
+    """Rotation vector of ``m`` (3, 3) into ``out`` (3,); returns the angle θ
+    (:func:`log3_entries`)."""
+    theta, out[0], out[1], out[2] = log3_entries(
+        m[0, 0], m[0, 1], m[0, 2], m[1, 0], m[1, 1], m[1, 2], m[2, 0], m[2, 1], m[2, 2]
+    )
     return theta
 
 
 @numba.njit(cache=True, inline="always")
+def jr_inv_entries(
+    px: float, py: float, pz: float, theta: float
+) -> tuple[float, float, float, float, float, float, float, float, float]:  # pragma: no cover
+    """The entries of ``Jr⁻¹(φ)`` row by row for the rotation vector ``φ = (px, py, pz)`` of
+    angle ``θ`` (``I + ½[φ]× + k[φ]×²``, the module docstring)."""
+    if theta < 1e-3:
+        k = 1.0 / 12.0 + theta * theta / 720.0
+    else:
+        k = 1.0 / (theta * theta) - (1.0 + math.cos(theta)) / (2.0 * theta * math.sin(theta))
+    # [φ]× = [[0, -pz, py], [pz, 0, -px], [-py, px, 0]]; [φ]×² = φφᵀ − θ² I
+    n2 = px * px + py * py + pz * pz
+    return (
+        1.0 + k * (px * px - n2), -0.5 * pz + k * px * py, 0.5 * py + k * px * pz,
+        0.5 * pz + k * py * px, 1.0 + k * (py * py - n2), -0.5 * px + k * py * pz,
+        -0.5 * py + k * pz * px, 0.5 * px + k * pz * py, 1.0 + k * (pz * pz - n2),
+    )  # fmt: skip
+
+
+@numba.njit(cache=True, inline="always")
 def jr_inv_nb(phi: FloatArray, theta: float, out: FloatArray) -> None:  # pragma: no cover
-    """``Jr⁻¹(φ)`` (3, 3) into ``out`` for the rotation vector ``φ`` of angle ``θ``.
+    """``Jr⁻¹(φ)`` (3, 3) into ``out`` for the rotation vector ``φ`` of angle ``θ``
+    (:func:`jr_inv_entries`).
 
     With ``φ = log(R* Rᵀ)`` in world axes and ``ω`` the world angular velocity,
     ``dφ/dt = −Jr⁻¹(φ)·ω`` … up to the sign convention used by the kernel (see
     :mod:`swarm_ik.kernels.lm`); only the matrix is computed here.
     """
-    if theta < 1e-3:
-        k = 1.0 / 12.0 + theta * theta / 720.0
-    else:
-        k = 1.0 / (theta * theta) - (1.0 + math.cos(theta)) / (2.0 * theta * math.sin(theta))
-    px, py, pz = phi[0], phi[1], phi[2]
-    # [φ]× = [[0, -pz, py], [pz, 0, -px], [-py, px, 0]]; [φ]×² = φφᵀ − θ² I
-    n2 = px * px + py * py + pz * pz
-    out[0, 0] = 1.0 + k * (px * px - n2)
-    out[0, 1] = -0.5 * pz + k * px * py
-    out[0, 2] = 0.5 * py + k * px * pz
-    out[1, 0] = 0.5 * pz + k * py * px
-    out[1, 1] = 1.0 + k * (py * py - n2)
-    out[1, 2] = -0.5 * px + k * py * pz
-    out[2, 0] = -0.5 * py + k * pz * px
-    out[2, 1] = 0.5 * px + k * pz * py
-    out[2, 2] = 1.0 + k * (pz * pz - n2)
+    (
+        out[0, 0], out[0, 1], out[0, 2], out[1, 0], out[1, 1], out[1, 2],
+        out[2, 0], out[2, 1], out[2, 2],
+    ) = jr_inv_entries(phi[0], phi[1], phi[2], theta)  # fmt: skip
 
 
 @numba.njit(cache=True, inline="always")
