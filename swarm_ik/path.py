@@ -623,9 +623,20 @@ class _Context:
                 return q, True
         res = swarm_ik.solve(
             problem, q0=q_start, seed=self.seed(), max_evals=TRACK_EVALS,
-            tol_pos=self.tol_pos, tol_rot=self.tol_rot, prefer="nearest",
+            time_limit=self.solve_limit(), tol_pos=self.tol_pos, tol_rot=self.tol_rot,
+            prefer="nearest",
         )  # fmt: skip
         return np.array(res.q, dtype=float), bool(res.success)
+
+    def solve_limit(self) -> float | None:
+        """The time limit of one tracking solve under the call's: what is left of it rounded
+        down to a power of two (few distinct values, so that the solves share their route),
+        at least 1 ms.  A waypoint whose goals are slow Python (milliseconds a call) and
+        cannot be met took its whole evaluation budget: a 0.3 s path limit ended at 14 s."""
+        if self.limit is None:
+            return None
+        left = max(self.limit - time.perf_counter(), 1e-3)
+        return float(2.0 ** math.floor(math.log2(left)))
 
     def steps(self, a: FloatArray, b: FloatArray, true: bool = False) -> FloatArray:
         """``|b − a|`` per joint, broadcasting: continuous joints wrapped, and, in the search's

@@ -477,3 +477,34 @@ def test_unchecked_chains_go_the_short_way_round() -> None:
     assert np.all(np.abs(chains[..., 0]) <= np.pi)
     step = np.diff(np.concatenate([[3.10], chains[0, :, 0]]))
     assert np.all(np.abs((step + np.pi) % (2 * np.pi) - np.pi) < 0.02)  # (not 6.2 in all)
+
+
+def test_slow_python_goals_that_cannot_be_met_keep_the_path_near_its_limit() -> None:
+    """A Python goal of 2 ms a call that no waypoint can meet: each tracking solve gets what
+    is left of the limit (it took its whole evaluation budget: a 0.3 s limit ended at 14 s)."""
+    import dataclasses
+    import time
+
+    from swarm_ik.goals import Goal
+
+    @dataclasses.dataclass(frozen=True)
+    class Above(Goal):  # the tool at least h high (it never is at 2 m)
+        h: float = 2.0
+
+        def residual(self, st):  # type: ignore[no-untyped-def]
+            time.sleep(0.002)
+            return np.array([min(0.0, st.pose("tool0")[2, 3] - self.h)])
+
+        def jacobian(self, st):  # type: ignore[no-untyped-def]
+            jac = st.jacobian("tool0")[2:3]
+            return jac if st.pose("tool0")[2, 3] < self.h else 0 * jac
+
+    robot = get("ur5")
+    start = robot.fk(np.array([0.3, -1.2, 1.4, -1.8, -1.57, 0.0]))
+    poses = np.repeat(start[None], 20, axis=0)
+    poses[:, :3, 3] += np.linspace(0, 1, 20)[:, None] * [-0.1, 0.25, 0.05]
+    solve_path(robot, poses[:2])  # (kernels loaded before the clock below)
+    t0 = time.perf_counter()
+    res = solve_path(robot, poses, goals=[Above()], time_limit=0.3)
+    assert time.perf_counter() - t0 < 4.0
+    assert not res.success and "time_limit reached" in res.reason
