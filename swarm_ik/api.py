@@ -37,6 +37,7 @@ from swarm_ik.pose import is_finite_nonneg
 from swarm_ik.problem import GoalError, IKProblem
 from swarm_ik.result import Result
 from swarm_ik.robot import RobotModel
+from swarm_ik.scene import Scene, Sphere
 from swarm_ik.solvers import base, hybrid
 
 DEFAULT_SOLVER = "swarm"
@@ -101,11 +102,32 @@ def unreachable_goal(problem: IKProblem) -> str | None:
             return gl.describe()
         if slack > 0.0:
             continue  # (a region, not a point: it may reach out of an obstacle)
+        if avoid and not _origin_in_body(problem.robot, gl.frame):
+            continue  # (a frame off the robot's bodies, a grasp point, may lie in an obstacle)
         for av in avoid:  # a goal point inside an obstacle: the robot would be in contact
-            inside = av.obstacle_containing(point)
+            inside = av.obstacle_containing(point, ORIGIN_REACH)
             if inside is not None:
                 return f"{gl.describe()} inside obstacle {inside!r}"
     return None
+
+
+ORIGIN_REACH = 1e-3
+"""[m] How near its frame's origin the robot's own geometry must come (:func:`_origin_in_body`)
+and how deep inside an obstacle the goal point must lie for :func:`unreachable_goal` to call
+the point unreachable: then the body is in contact wherever the frame meets it."""
+
+
+def _origin_in_body(robot: RobotModel, frame: str) -> bool:
+    """Whether the robot's own collision geometry comes within :data:`ORIGIN_REACH` of the
+    origin of ``frame`` (coal's check of a sphere of that radius there, at mid-range: the
+    frame is fixed to its link), so that the origin deep inside an obstacle means contact (a
+    grasp point off the bodies does not).  Cached per robot and frame."""
+    cache = robot._cache.setdefault("origin_in_body", {})
+    if frame not in cache:
+        q = robot.mid_q()
+        probe = Scene([Sphere(ORIGIN_REACH, tuple(robot.fk(q, frame)[:3, 3]))])
+        cache[frame] = robot.collision_model().collides(q, probe, 0.0, False)
+    return bool(cache[frame])
 
 
 def conflicting_goals(problem: IKProblem, tol_pos: float, tol_rot: float) -> str | None:

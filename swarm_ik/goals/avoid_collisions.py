@@ -171,9 +171,9 @@ class AvoidCollisions(Goal):
     def describe(self) -> str:
         return "AvoidCollisions"
 
-    def obstacle_containing(self, point: Any) -> str | None:
-        """Name of a scene obstacle whose inside holds the world ``point`` [m], if any (coal's
-        signed distance of a point-sized probe)."""
+    def obstacle_containing(self, point: Any, depth: float = 0.0) -> str | None:
+        """Name of a scene obstacle whose inside holds the world ``point`` [m] deeper than
+        ``depth`` [m], if any (coal's signed distance of a point-sized probe)."""
         if len(self.scene) == 0:
             return None
         import coal
@@ -185,7 +185,7 @@ class AvoidCollisions(Goal):
         for k in np.flatnonzero(np.all((lo <= p) & (p <= hi), axis=1)).tolist():
             name, obj = objects[k]  # (only an obstacle whose box holds the point can)
             req, res = coal.DistanceRequest(), coal.DistanceResult()
-            if coal.distance(obj, probe, req, res) < 0.0:
+            if coal.distance(obj, probe, req, res) < -depth:
                 return str(name)
         return None
 
