@@ -30,8 +30,9 @@ import numpy as np
 from swarm_ik import kernels
 from swarm_ik._validate import check_seed
 from swarm_ik.errors import InvalidArgumentError, unknown
-from swarm_ik.goals import AvoidCollisions, Orientation, Pose, Position, Posture
+from swarm_ik.goals import AvoidCollisions, Axis, LookAt, Orientation, Pose, Position, Posture
 from swarm_ik.kernels import search
+from swarm_ik.kernels.lie import angle
 from swarm_ik.optimize import check_budget, make_rng
 from swarm_ik.pose import is_finite_nonneg
 from swarm_ik.problem import GoalError, IKProblem
@@ -131,35 +132,72 @@ def _origin_in_body(robot: RobotModel, frame: str) -> bool:
 
 
 def conflicting_goals(problem: IKProblem, tol_pos: float, tol_rot: float) -> str | None:
-    """Two primary goals on one frame that no pose can meet together (a ``Position`` or
-    ``Pose`` at points farther apart than ``2·tol_pos``, orientations further apart than
-    ``2·tol_rot``), if any: their labels."""
-    points: dict[str, list[tuple[Any, Any]]] = {}
-    rots: dict[str, list[tuple[Any, Any]]] = {}
+    """Two primary goals on one frame that no pose can meet together, if any: their labels.
+
+    Found from the goals' data alone, before any search:
+
+    * two points (``Position``, ``Pose``) farther apart than ``2·tol_pos`` plus their regions;
+    * two orientations (``Orientation``, ``Pose``) further apart than ``2·tol_rot`` plus their
+      bounds;
+    * an orientation ``R`` and a frame axis ``a`` held along a world direction ``d``
+      (``Axis``; ``LookAt`` when a point goal holds the frame's origin ``p``: ``d`` the unit
+      vector from ``p`` to the point looked at) with ``∠(R·a, d) > 2·tol_rot``;
+    * two such axes, ``(a₁, d₁)`` and ``(a₂, d₂)``: a rotation keeps angles, so
+      ``|∠(a₁, a₂) − ∠(d₁, d₂)| > 2·tol_rot`` cannot be met (the same axis along two
+      directions, say).
+
+    The angular allowances also hold the regions' bounds (a ``Pose.tolerance``, a
+    ``Position.radius`` seen from the point looked at)."""
+    points: dict[str, list[tuple[Any, Any, float]]] = {}
+    rots: dict[str, list[tuple[Any, Any, float]]] = {}
+    axes: dict[str, list[tuple[Any, Any, Any, float]]] = {}
+    looks: list[Any] = []
     for gl in problem.goals:
         if not gl.is_primary:
             continue
         if isinstance(gl, Pose):
-            points.setdefault(gl.frame, []).append((gl, gl.target[:3, 3]))
-            rots.setdefault(gl.frame, []).append((gl, gl.target[:3, :3]))
+            points.setdefault(gl.frame, []).append((gl, gl.target[:3, 3], _slack(gl)[0]))
+            rots.setdefault(gl.frame, []).append((gl, gl.target[:3, :3], _slack(gl)[1]))
         elif isinstance(gl, Position):
-            points.setdefault(gl.frame, []).append((gl, gl.point))
+            points.setdefault(gl.frame, []).append((gl, gl.point, _slack(gl)[0]))
         elif isinstance(gl, Orientation):
-            rots.setdefault(gl.frame, []).append((gl, gl.rotation))
+            rots.setdefault(gl.frame, []).append((gl, gl.rotation, 0.0))
+        elif isinstance(gl, Axis):
+            axes.setdefault(gl.frame, []).append((gl, gl.axis, gl.direction, 0.0))
+        elif isinstance(gl, LookAt):
+            looks.append(gl)
     for items in points.values():
-        for i, (a, pa) in enumerate(items):
-            for b, pb in items[i + 1 :]:
-                slack = _slack(a)[0] + _slack(b)[0]
-                if float(np.linalg.norm(pa - pb)) > 2 * tol_pos + slack:
+        for i, (a, pa, sa) in enumerate(items):
+            for b, pb, sb in items[i + 1 :]:
+                if float(np.linalg.norm(pa - pb)) > 2 * tol_pos + sa + sb:
                     return f"{a.describe()} and {b.describe()}"
-    from swarm_ik.kernels.lie import angle
-
-    for items in rots.values():
-        for i, (a, ra) in enumerate(items):
-            for b, rb in items[i + 1 :]:
-                if float(angle(ra.T @ rb)) > 2 * tol_rot + _slack(a)[1] + _slack(b)[1]:
+    for gl in looks:  # (a LookAt is an axis along a known direction where its origin is held)
+        for _, p, s in points.get(gl.frame, [])[:1]:
+            e = np.asarray(gl.point, dtype=float) - p
+            dist = float(np.linalg.norm(e))
+            if dist > 2 * (s + tol_pos):  # (the direction known to within asin((s+tol)/dist))
+                wobble = float(np.arcsin(min((s + tol_pos) / dist, 1.0)))
+                axes.setdefault(gl.frame, []).append((gl, gl.axis, e / dist, wobble))
+    allow = 2 * tol_rot
+    for frame, items in rots.items():
+        for i, (a, ra, sa) in enumerate(items):
+            for b, rb, sb in items[i + 1 :]:
+                if float(angle(ra.T @ rb)) > allow + sa + sb:
+                    return f"{a.describe()} and {b.describe()}"
+            for b, ax, d, sb in axes.get(frame, []):
+                if _angle(ra @ ax, d) > allow + sa + sb:
+                    return f"{a.describe()} and {b.describe()}"
+    for items in axes.values():
+        for i, (a, a1, d1, sa) in enumerate(items):
+            for b, a2, d2, sb in items[i + 1 :]:
+                if abs(_angle(a1, a2) - _angle(d1, d2)) > allow + sa + sb:
                     return f"{a.describe()} and {b.describe()}"
     return None
+
+
+def _angle(u: Any, v: Any) -> float:
+    """The angle between two unit vectors [rad], in [0, π]."""
+    return float(np.arctan2(np.linalg.norm(np.cross(u, v)), float(np.dot(u, v))))
 
 
 def end_reason(

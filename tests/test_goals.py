@@ -165,6 +165,55 @@ def test_contradictory_goals_return_the_best_found_with_success_false() -> None:
     assert all(e.position_error == pytest.approx(0.1, abs=1e-3) for e in res.goal_errors)
 
 
+@pytest.mark.parametrize(
+    "case",
+    ["pose+opposite axis", "orientation+axis", "one axis two ways", "look behind a pose",
+     "look behind position+orientation"],
+)  # fmt: skip
+def test_contradictory_axis_goals_end_as_conflicting_goals(case: str) -> None:
+    """An Axis or LookAt that no rotation meeting the frame's other goals can meet is
+    reported as such at once (it ran the whole limit and said "time_limit" before)."""
+    r = robot("panda")
+    f = r.ee_frame
+    target = r.fk(r.random_q(np.random.default_rng(1)))
+    z, p = target[:3, 2], target[:3, 3]
+    back = G.Axis(f, axis=[0, 0, 1], direction=-z)
+    goals = {
+        "pose+opposite axis": [G.Pose(f, target), back],
+        "orientation+axis": [G.Orientation(f, target[:3, :3]), back],
+        "one axis two ways": [
+            G.Axis(f, axis=[0, 0, 1], direction=[0, 0, 1]),
+            G.Axis(f, axis=[0, 0, 1], direction=[1, 0, 0]),
+        ],
+        "look behind a pose": [G.Pose(f, target), G.LookAt(f, axis=[0, 0, 1], point=p - 0.3 * z)],
+        "look behind position+orientation": [
+            G.Position(f, p),
+            G.Orientation(f, target[:3, :3]),
+            G.LookAt(f, axis=[0, 0, 1], point=p - 0.3 * z),
+        ],  # fmt: skip
+    }[case]
+    res = swarm_ik.solve(swarm_ik.IKProblem(r, goals=goals), seed=0, time_limit=0.5)
+    assert not res.success and res.reason == "conflicting_goals"
+    assert res.time_s < 0.2  # (capped at api.UNREACHABLE_BUDGET's 0.05 s search)
+
+
+def test_compatible_axis_goals_are_not_called_conflicting() -> None:
+    r = robot("panda")
+    f = r.ee_frame
+    target = r.fk(r.random_q(np.random.default_rng(1)))
+    z, p = target[:3, 2], target[:3, 3]
+    for goals in (
+        [G.Pose(f, target), G.Axis(f, axis=[0, 0, 1], direction=z)],
+        [G.Pose(f, target), G.LookAt(f, axis=[0, 0, 1], point=p + 0.3 * z)],
+        [
+            G.Axis(f, axis=[0, 0, 1], direction=[0, 0, -1]),
+            G.Axis(f, axis=[1, 0, 0], direction=[1, 0, 0]),
+        ],
+    ):
+        res = swarm_ik.solve(swarm_ik.IKProblem(r, goals=goals), seed=0, time_limit=0.5)
+        assert res.success and res.reason == "converged"
+
+
 def test_unreachable_goal_is_reported_as_such() -> None:
     r = robot("panda")
     res = swarm_ik.solve(
