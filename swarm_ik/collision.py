@@ -402,11 +402,7 @@ class RobotCollision:
         Raises:
             InvalidArgumentError: a bad ``q`` or ``margin``.
         """
-        from swarm_ik.errors import InvalidArgumentError
-
-        margin = float(margin)
-        if not (np.isfinite(margin) and margin >= 0.0):
-            raise InvalidArgumentError(f"margin must be a finite number >= 0 [m], got {margin}")
+        margin = _margin(margin)
         q = self.robot.check_q(q)
         return self._checker(as_scene(scene), bool(self_collision)).run(
             self.robot.to_pinocchio(q), margin
@@ -416,15 +412,25 @@ class RobotCollision:
         self, q: Any, scene: Scene | None = None, margin: float = 0.0, self_collision: bool = True
     ) -> bool:
         """Fast exact test: whether any pair is closer than ``margin`` [m] at ``q`` (coal's
-        ``collide`` only, no distance; same answer as ``not check(...).collision_free``)."""
+        ``collide`` only, no distance; same answer as ``not check(...).collision_free``).
+
+        Raises:
+            InvalidArgumentError: a bad ``q`` or ``margin``.
+        """
+        m = _margin(margin)
         q = self.robot.check_q(q)
         ck = self._checker(as_scene(scene), bool(self_collision))
-        return ck.collide(self.robot.to_pinocchio(q), float(margin))
+        return ck.collide(self.robot.to_pinocchio(q), m)
 
     def collides_many(
         self, qs: Any, scene: Scene | None = None, margin: float = 0.0, self_collision: bool = True
     ) -> NDArray[np.bool_]:
-        """:meth:`collides` of each row of ``qs`` ``(n, nq)`` → ``(n,)`` (checked once)."""
+        """:meth:`collides` of each row of ``qs`` ``(n, nq)`` → ``(n,)`` (checked once).
+
+        Raises:
+            InvalidArgumentError: bad ``qs`` or ``margin``.
+        """
+        m = _margin(margin)
         arr = np.asarray(qs, dtype=float)
         if arr.ndim != 2 or arr.shape[1] != self.robot.nq or not np.isfinite(arr).all():
             raise InvalidArgumentError(
@@ -432,7 +438,7 @@ class RobotCollision:
                 f"{arr.shape}"
             )
         ck = self._checker(as_scene(scene), bool(self_collision))
-        to_pin, m = self.robot.to_pinocchio, float(margin)
+        to_pin = self.robot.to_pinocchio
         return np.array([ck.collide(to_pin(q, copy=False), m) for q in arr], dtype=bool)
 
     def body_placements(self, q: Any) -> tuple[FloatArray, FloatArray]:
@@ -446,6 +452,18 @@ class RobotCollision:
         rot = np.array([np.array(m.rotation) for m in gd.oMg])
         pos = np.array([np.array(m.translation) for m in gd.oMg])
         return rot, pos
+
+
+def _margin(value: Any) -> float:
+    """A security margin: a finite number ``>= 0`` [m], or :class:`InvalidArgumentError`
+    (coal refuses a negative one deep inside Pinocchio; NaN would pass every pair)."""
+    try:
+        m = float(value)
+    except (TypeError, ValueError):
+        m = float("nan")
+    if isinstance(value, (bool, str)) or not (np.isfinite(m) and m >= 0.0):
+        raise InvalidArgumentError(f"margin must be a finite number >= 0 [m], got {value!r}")
+    return m
 
 
 class _Checker:

@@ -9,11 +9,11 @@ import coal
 import numpy as np
 import pinocchio as pin
 import pytest
-from conftest import scene_near_robot
+from conftest import robot, scene_near_robot
 
 from swarm_ik.collision import RobotCollision, find_srdf, parse_srdf
 from swarm_ik.errors import InvalidArgumentError, RobotFileNotFoundError
-from swarm_ik.scene import Scene
+from swarm_ik.scene import Scene, Sphere
 
 _RC: dict[str, RobotCollision] = {}
 
@@ -173,3 +173,20 @@ def test_sampled_rule_without_srdf(get_robot, tmp_path, monkeypatch) -> None:
     assert never and set(rc.self_link_pairs)  # the rule did something, and left pairs
     again = RobotCollision.from_robot(robot, srdf=False, samples=n, seed=7)  # from the cache
     assert again.self_pairs == rc.self_pairs
+
+
+@pytest.mark.parametrize("margin", [-1.0, float("nan"), float("inf"), "abc", True, None])
+def test_bad_margins_are_refused_by_every_check(margin: object) -> None:
+    """check, collides and collides_many refuse a margin that is not a finite number >= 0
+    with one message (collides let coal fail deep inside Pinocchio on -1 and passed NaN)."""
+    r = robot("panda")
+    rc = r.collision_model()
+    q = r.mid_q()
+    scene = Scene([Sphere(0.05, tuple(r.fk(q)[:3, 3] + [0.0, 0.0, 0.3]))])
+    for call in (
+        lambda: rc.check(q, scene, margin=margin),  # type: ignore[arg-type]
+        lambda: rc.collides(q, scene, margin=margin),  # type: ignore[arg-type]
+        lambda: rc.collides_many([q], scene, margin=margin),  # type: ignore[arg-type]
+    ):
+        with pytest.raises(InvalidArgumentError, match="margin must be a finite number >= 0"):
+            call()
