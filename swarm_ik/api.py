@@ -187,9 +187,9 @@ def conflicting_goals(problem: IKProblem, tol_pos: float, tol_rot: float) -> str
             for b, ax, d, sb in axes.get(frame, []):
                 if _angle(ra @ ax, d) > allow + sa + sb:
                     return f"{a.describe()} and {b.describe()}"
-    for items in axes.values():
-        for i, (a, a1, d1, sa) in enumerate(items):
-            for b, a2, d2, sb in items[i + 1 :]:
+    for held in axes.values():
+        for i, (a, a1, d1, sa) in enumerate(held):
+            for b, a2, d2, sb in held[i + 1 :]:
                 if abs(_angle(a1, a2) - _angle(d1, d2)) > allow + sa + sb:
                     return f"{a.describe()} and {b.describe()}"
     return None
