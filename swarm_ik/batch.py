@@ -91,6 +91,11 @@ def target_uniforms(seed: int, index: int, n: int) -> FloatArray:  # pragma: no 
     return uniforms(_splitmix64(_splitmix64(np.uint64(seed)) ^ np.uint64(index)), 0, n)
 
 
+INTERRUPT_EVERY = 64
+"""Targets between two entries of :func:`_solve_targets` into Python (a clock read) without
+a time limit: where a pending Ctrl-C raises ``KeyboardInterrupt`` (a chunk of 10⁶ targets
+ran 15 s past a Ctrl-C; 64 targets take a few ms at most)."""
+
 NO_DEADLINE = -1.0
 """``deadline`` of :func:`_solve_targets` when there is no time limit."""
 
@@ -112,6 +117,7 @@ def _solve_targets(
     seed: int,
     secondary_evals: int,
     deadline: float,
+    reserve: float,
     out_q: FloatArray,
     out_evals: IntArray,
     out_starts: IntArray,
@@ -138,6 +144,9 @@ def _solve_targets(
             secondary goals).
         deadline: :func:`~swarm_ik.kernels.search.wall_clock` time after which no target
             and no restart block starts (:data:`NO_DEADLINE`: none).
+        reserve: Seconds kept before ``deadline`` per target started in this call (for the
+            check of its answer after the call): a target or a restart block starts only
+            while ``deadline − reserve · (targets started)`` has not passed.
         out_q: Best point per target, shape ``(N, nq)`` (the seed for a target not started).
         out_evals: FK + Jacobian evaluations per target, ``(N,)``.
         out_starts: Starts polished per target, ``(N,)`` (0: not started before the deadline).
@@ -160,7 +169,9 @@ def _solve_targets(
     work = lm.make_work_nb(tree, goals, goals.rows_primary)
     for i in range(n_targets):
         if timed and not late:
-            late = wall_clock() > deadline
+            late = wall_clock() > deadline - reserve * i
+        elif not timed and i % INTERRUPT_EVERY == INTERRUPT_EVERY - 1:
+            wall_clock()  # (entering Python: where a pending Ctrl-C raises KeyboardInterrupt)
         if late:  # out of time: not started
             for j in range(n):
                 out_q[i, j] = q_seed[i, j]
@@ -201,7 +212,7 @@ def _solve_targets(
             if converged or done >= max_starts:
                 break
             if timed:
-                late = wall_clock() > deadline
+                late = wall_clock() > deadline - reserve * (i + 1)
                 if late:
                     break
             k = min(block, max_starts - done)
@@ -272,6 +283,9 @@ class BatchSettings:
             check passes with margin.
         deadline: Wall-clock time (``time.time()``, seconds since the epoch) after which no
             target starts (``solve_batch``'s ``time_limit``); None: no limit.
+        reserve: Seconds kept before ``deadline`` per target started in a kernel call, for the
+            check of its answer (:func:`_with_deadline`: :data:`FINISH_PER_STARTED`, and
+            coal's verdicts with a collision goal); ``>= 0``.
         own_start: The first start of each target is the caller's ``q0`` (polished with
             ``lam0`` and ``stall_rel``), not the middle of the ranges (a guess, polished as
             a restart: :func:`_restarts`).
@@ -289,6 +303,7 @@ class BatchSettings:
     stall_iters: int = lm.DEFAULT_LM.stall_iters
     tol_margin: float = lm.DEFAULT_LM.tol_margin
     deadline: float | None = None
+    reserve: float = 0.0
     own_start: bool = False
 
     def __post_init__(self) -> None:
@@ -319,6 +334,9 @@ class BatchSettings:
                 raise InvalidArgumentError(
                     f"deadline must be a positive time.time() value, got {d!r}"
                 )
+        r = self.reserve
+        if isinstance(r, bool) or not isinstance(r, (int, float)) or not (0.0 <= r < math.inf):
+            raise InvalidArgumentError(f"reserve must be a finite number >= 0 [s], got {r!r}")
         self.lm_settings()  # validates lam0, max_step, stall_rel
 
     def lm_settings(self) -> lm.LMSettings:
@@ -602,12 +620,15 @@ class BatchResult(_Rows):
 
     Attributes:
         q: Best joint vector per target (rad / m), shape ``(N, nq)``.
-        position_error: ‖p − p_target‖ [m], ``(N,)``.
-        rotation_error: Geodesic angle between reached and target orientation [rad], ``(N,)``.
+        position_error: ‖p − p_target‖ [m], ``(N,)``; NaN for a target the time limit left
+            unstarted (not measured).
+        rotation_error: Geodesic angle between reached and target orientation [rad], ``(N,)``
+            (NaN likewise).
         success: Both errors within tolerance (rotation ignored when position-only) and ``q``
             within the limits, ``(N,)``.
         n_evals: FK + Jacobian evaluations spent per target, ``(N,)``.
-        n_starts: Starts polished per target (1: the seed start converged), ``(N,)``.
+        n_starts: Starts polished per target (1: the seed start converged; 0: not started
+            before the time limit, ``q`` its first start), ``(N,)``.
         time_s: Wall-clock seconds of the whole call (``setup_s`` included).
         setup_s: Seconds spent starting or connecting to the Dask cluster (0 in-process).
         compute_s: Seconds spent in the chunks, summed over chunks (workers).
@@ -932,6 +953,7 @@ def _polish_targets(
                 settings.tol_rot * settings.tol_margin, int(settings.max_starts),
                 int(settings.seed), SECONDARY_EVALS,
                 NO_DEADLINE if settings.deadline is None else float(settings.deadline),
+                float(settings.reserve),
                 q, evals, starts, conv,
             )
         )  # fmt: skip
@@ -1175,7 +1197,14 @@ def solve_chunk(
             q[redo], conv[redo] = q2, conv2
             evals[redo] += ev2
             starts[redo] += st2
-    dp, dr = pose_errors(bc.tree, q, targets)
+    # errors of the targets started (one the time limit left unstarted: NaN, not measured;
+    # measuring them cost as much as solving a few thousand)
+    dp, dr = np.full(n, np.nan), np.full(n, np.nan)
+    ran = np.flatnonzero(starts > 0)
+    if ran.size == n:
+        dp, dr = pose_errors(bc.tree, q, targets)
+    elif ran.size:
+        dp[ran], dr[ran] = pose_errors(bc.tree, q[ran], targets[ran])
     within = np.all((q >= bc.bounds.lower - 1e-12) & (q <= bc.bounds.upper + 1e-12), axis=1)
     ok = within & (dp <= settings.tol_pos)
     if not settings.position_only:
@@ -1318,10 +1347,18 @@ def default_chunk_size(n: int, n_workers: int = 1) -> int:
     return int(min(4096, max(64, math.ceil(n / max(4 * n_workers, 1)))))
 
 
-FINISH_PER_TARGET = 1.5e-6
+FINISH_PER_TARGET = 0.2e-6
 """Seconds per target that :func:`solve_batch` keeps out of a ``time_limit`` for what follows
-the last polish (the answers' errors and the result's arrays: 1.1–1.9 µs per target
-measured, yumi_left), up to half the limit: targets stop starting that much earlier."""
+the last polish of every target, started or not (the result's arrays, the bounds test), up to
+half of what is left: targets stop starting that much earlier.  The check of a started
+target's answer is kept per target as it starts (:data:`FINISH_PER_STARTED`; a target not
+started is not checked)."""
+
+FINISH_PER_STARTED = 2e-6
+"""Seconds kept before the deadline per started target for the check of its answer (the
+batched FK and errors, :func:`pose_errors`: 1.1–1.9 µs measured, yumi_left); with a
+collision goal, twice coal's verdict at one configuration is added (measured per call in
+:func:`_with_deadline`: the contact test of the answer and the goals' check)."""
 
 
 def _with_deadline(
@@ -1333,16 +1370,29 @@ def _with_deadline(
     t0: float,
 ) -> BatchSettings:
     """``settings`` with the deadline of a ``time_limit`` of ``limit`` seconds begun at ``t0``
-    (``time.perf_counter()``): this process's kernels loaded first (the first target solved
-    from its seed: a process's first batch loads or compiles them), what the call spent so far
-    charged to the limit up to half of it (as a first solve's loading: the targets keep at
-    least half), and :data:`FINISH_PER_TARGET` per target kept for the end of the call (at
-    most half of what is left)."""
+    (``time.perf_counter()``) and the ``reserve`` per started target (:data:`FINISH_PER_STARTED`
+    and, with a collision goal, coal's verdicts timed here).  This process's kernels are loaded
+    first (the first target solved from its seed: a process's first batch loads or compiles
+    them), charged to the limit up to half of it (as a first solve's loading: the targets keep
+    at least half, less what follows); what the call spent reading and checking the targets
+    is charged whole (it grows with their number: 60 ms for 10⁵ poses), and
+    :data:`FINISH_PER_TARGET` per target is kept for the end of the call (at most half of what
+    is left)."""
+    t_load = time.perf_counter()
+    reserve = FINISH_PER_STARTED
     if poses.shape[0]:
         solve_chunk(bc, dataclasses.replace(settings, max_starts=1), 0, poses[:1], seeds[:1])
-    left = max(limit - (time.perf_counter() - t0), 0.5 * limit)
-    left -= min(FINISH_PER_TARGET * poses.shape[0], 0.5 * left)
-    return dataclasses.replace(settings, deadline=time.time() + left)
+        if bc.goals is not None and bc.goals.collision is not None:
+            probe = np.repeat(seeds[:1], 8, axis=0)
+            bc.goals.in_contact(probe[:1])  # (the checker made for the scene: not timed)
+            t_probe = time.perf_counter()
+            bc.goals.in_contact(probe)
+            reserve += 2.0 * (time.perf_counter() - t_probe) / probe.shape[0]
+    now = time.perf_counter()
+    load, other = now - t_load, t_load - t0
+    left = max(limit - other - load, 0.5 * limit - other)
+    left -= min(FINISH_PER_TARGET * poses.shape[0], 0.5 * max(left, 0.0))
+    return dataclasses.replace(settings, deadline=time.time() + left, reserve=reserve)
 
 
 def solve_batch(
@@ -1402,11 +1452,13 @@ def solve_batch(
             (up to ``PATIENT_ITERS × max_iters`` evaluations, no verdict on slow steps).
         max_iters: Most FK + Jacobian evaluations per start.
         time_limit: Seconds for the whole call: no target (nor restart block) starts after
-            them, less :data:`FINISH_PER_TARGET` per target kept for the end of the call (at
-            most half of them), and the targets not reached are reported unsolved
-            (``n_starts`` 0, ``q`` their seed).  Checking the targets and building the result
-            cost about 1–2 µs per target, so a limit much shorter than that is overrun (200,000
-            targets in 0.2 s: 0.4 s).  Every target first gets its seed's start, then the
+            them, less what reading and checking the targets took, :data:`FINISH_PER_TARGET`
+            per target kept for the end of the call and :data:`FINISH_PER_STARTED` per target
+            started (with a collision goal, coal's verdicts too), and the targets not reached
+            are reported unsolved (``n_starts`` 0, ``q`` their seed, errors NaN).  Checking
+            the targets costs about 0.6 µs per target, so a limit shorter than that is
+            overrun (a first call in a process also by loading the kernels, up to half the
+            limit).  Every target first gets its seed's start, then the
             targets still open their restarts (one pass after another), so a target reached
             may be left unsolved where a call without the limit would have restarted it;
             every success is the answer of a call without the limit.  Which targets are

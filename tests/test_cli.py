@@ -459,6 +459,25 @@ def test_real_sigint_during_a_solve_is_one_line_and_130(tmp_path: Path) -> None:
     assert err.strip().splitlines()[-1] == "swarm-ik: interrupted" and "Traceback" not in err
 
 
+@pytest.mark.skipif(sys.platform == "win32", reason="POSIX signals")
+def test_real_sigint_inside_one_large_batch_chunk_stops_within_a_second(tmp_path: Path) -> None:
+    """The batch kernel enters Python every INTERRUPT_EVERY targets, so a Ctrl-C inside a
+    chunk of 10⁶ targets stops the call at once (it ran on to the chunk's end, 15 s)."""
+    proc = subprocess.Popen(
+        [sys.executable, "-m", "swarm_ik.cli", "batch", "--robot", "panda", "--random",
+         "1000000", "--chunk-size", "1000000", "--out", str(tmp_path / "b.npz"),
+         "--no-progress"],
+        stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True, cwd=tmp_path,
+    )  # fmt: skip
+    time.sleep(6.0)
+    sent = time.perf_counter()
+    proc.send_signal(signal.SIGINT)
+    out, err = proc.communicate(timeout=120)
+    assert proc.returncode == 130, err
+    assert time.perf_counter() - sent < 2.0
+    assert "Traceback" not in err
+
+
 # ------------------------------------------------------------------------------ 8: xacro
 @pytest.mark.parametrize("command", ["solve", "show", "batch", "reach"])
 def test_xacro_robot_is_refused_before_loading(
