@@ -465,7 +465,8 @@ class Route:
             time_limit = max(time_limit - spent, 0.5 * time_limit)
         seed_val = None if isinstance(seed, np.random.Generator) else (0 if seed is None else seed)
         cap_s, cap_evals = UNREACHABLE_BUDGET
-        if ((time_limit or 0.0) > cap_s or (max_evals or 0) > cap_evals) and (
+        uncapped = time_limit is None or time_limit > cap_s or max_evals is None
+        if (uncapped or (max_evals or 0) > cap_evals) and (
             unreachable_goal(problem) is not None
             or conflicting_goals(problem, self.tol_pos, self.tol_rot) is not None
         ):  # proven unreachable or contradictory: a large budget would buy nothing
@@ -480,7 +481,9 @@ class Route:
             and not problem.has_secondary
         ):
             t_first = time.perf_counter()
-            first, first_evals = self._collision_free_first(problem, q_start, seed_val, time_limit)
+            first, first_evals = self._collision_free_first(
+                problem, q_start, seed_val, time_limit, max_evals
+            )
             if first is not None:
                 return first
             first_s = time.perf_counter() - t_first
@@ -556,6 +559,7 @@ class Route:
         q_start: np.ndarray | None,
         seed: int | None,
         time_limit: float | None,
+        max_evals: int | None,
     ) -> tuple[Result | None, int]:
         """A problem with a collision goal, first solved without it: searches of the other
         goals (from ``q_start``, then from random starts) for half of ``time_limit`` and of
@@ -573,7 +577,7 @@ class Route:
             return None, 0
         t0 = time.perf_counter()
         share = None if time_limit is None else 0.5 * time_limit
-        half = None if self.max_evals is None else max(self.max_evals // 2, 1)
+        half = None if max_evals is None else max(max_evals // 2, 1)
         settings = dict(
             max_evals=half, time_limit=share, tol_pos=self.tol_pos,
             tol_rot=self.tol_rot, stop_on_success=True, prefer="best", params=self.params,

@@ -1145,6 +1145,28 @@ def test_target_beyond_reach_returns_at_once_whatever_the_budget(solver: str) ->
     assert res.reason == "unreachable"
 
 
+@pytest.mark.parametrize("budget", [{}, {"max_evals": 100_000}, {"time_limit": 1.0}])
+def test_the_cap_holds_for_default_budgets_and_the_collision_first_tries(budget: dict) -> None:
+    """A goal point inside an obstacle: at most api.UNREACHABLE_BUDGET's evaluations with the
+    solver's default budget too, and the tries without the collision goal share the capped
+    budget (13,625 evaluations with no budget given, 21,001 with max_evals=100,000 before)."""
+    from swarm_ik.api import UNREACHABLE_BUDGET
+    from swarm_ik.goals import AvoidCollisions
+    from swarm_ik.scene import Cylinder, Scene
+
+    robot = swarm_ik.load_robot("panda")
+    target = np.diag([1.0, -1.0, -1.0, 1.0])
+    target[:3, 3] = [0.5, 0.0, 0.3]
+    scene = Scene([Cylinder(0.04, 0.6, [0.5, 0.0, 0.3])])
+    problem = IKProblem(robot, target, goals=[AvoidCollisions(scene)])
+    far = np.eye(4)
+    far[:3, 3] = [5.0, 0.0, 0.3]
+    for p in (problem, IKProblem(robot, far)):
+        res = swarm_ik.solve(p, seed=0, **budget)
+        assert not res.success and res.reason == "unreachable"
+        assert res.n_evals <= UNREACHABLE_BUDGET[1]
+
+
 def test_goals_proven_contradictory_return_within_the_same_cap() -> None:
     """Two goals of one frame 10 cm apart: proven contradictory before the search, so the
     solve ends at api.UNREACHABLE_BUDGET with reason "conflicting_goals", not at time_limit."""
