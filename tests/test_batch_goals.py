@@ -291,3 +291,32 @@ def test_a_first_batch_in_a_fresh_process_keeps_half_its_time_limit(tmp_path) ->
     solved = int(out.stdout.split("solved ")[1].split("/")[0])
     assert solved > 0
     assert "targets not started before --time-limit" in out.stdout
+
+
+def test_cli_batch_with_a_scene_gives_collision_free_answers(panda, tmp_path, capsys):
+    """``swarm-ik batch --scene`` applies AvoidCollisions to every target: each success is
+    clear of the scene by coal's exact check; --no-self-collision and --srdf without --scene
+    are refused with one line."""
+    from conftest import cli_error
+
+    from swarm_ik.cli import main
+
+    scene_file = tmp_path / "scene.json"
+    scene_file.write_text(
+        '{"obstacles": [{"type": "Box", "size": [0.1, 0.3, 0.2], "pose": [0.45, 0.2, 0.25]}]}'
+    )
+    out = tmp_path / "res.npz"
+    rc = main(["batch", "--robot", "panda", "--random", "60", "--scene", str(scene_file),
+               "--out", str(out), "--no-progress"])  # fmt: skip
+    assert rc in (0, 1)
+    assert "clear of" in capsys.readouterr().out
+    data = np.load(out)
+    ok = data["success"]
+    assert ok.sum() >= 40
+    scene = Scene.load(scene_file)
+    rc_model = panda.collision_model()
+    assert not rc_model.collides_many(data["q"][ok], scene).any()
+    for flag in (["--no-self-collision"], ["--srdf", str(scene_file)]):
+        line = cli_error(capsys, "batch", "--robot", "panda", "--random", "5", *flag,
+                         "--out", str(out))  # fmt: skip
+        assert "applies to --scene, which was not given" in line

@@ -4,9 +4,11 @@ on Dask).
 ``swarm-ik batch --robot panda --targets poses.npz --out result.npz`` solves every target of
 the file (``.npz``/``.npy``/``.csv``, see :func:`swarm_ik.batch.read_targets`) and writes one
 row per target (``.npz`` or ``.csv``); ``--random N`` solves N targets sampled by forward
-kinematics instead.  ``--scheduler``: ``none`` (default: this process, no Dask), ``local``
-(an embedded Dask LocalCluster, one worker process per core; extra ``dask``), or a scheduler
-address ``tcp://host:port``.
+kinematics instead (``--scene FILE``: every answer clear of the scene's obstacles and of
+itself, the goal :class:`~swarm_ik.goals.AvoidCollisions` of every target; a random target's
+configuration may itself be in contact, so some may be unreachable).  ``--scheduler``:
+``none`` (default: this process, no Dask), ``local`` (an embedded Dask LocalCluster, one
+worker process per core; extra ``dask``), or a scheduler address ``tcp://host:port``.
 
 Exit codes: 0 all targets solved, 1 some not solved, 2 bad input (``--out`` is checked,
 written to and removed, before any work), 130 interrupted.
@@ -32,9 +34,11 @@ from swarm_ik.cli._args import (
     RobotCommand,
     add_lm_options,
     add_q0,
+    add_scene,
     add_scheduler,
     check_input_file,
     check_output_file,
+    input_file,
     robot_kwargs,
 )
 
@@ -88,6 +92,19 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
         metavar="SECONDS",
         help="seconds for the whole batch: targets not reached by then are reported unsolved",
     )
+    add_scene(parser, "obstacles every answer must be clear of (and of itself)")
+    parser.add_argument(
+        "--no-self-collision",
+        action="store_true",
+        help="with --scene: check the robot against the scene only",
+    )
+    parser.add_argument(
+        "--srdf",
+        default=None,
+        type=input_file,
+        metavar="FILE",
+        help="with --scene: SRDF of disabled self-collision pairs (default: found)",
+    )
     add_scheduler(parser)
     parser.add_argument("--no-progress", action="store_true", help="no progress bar")
 
@@ -105,6 +122,13 @@ def run(args: argparse.Namespace) -> int:
     from swarm_ik.errors import InvalidArgumentError
 
     check_output_file(args.out, "--out", (".csv", ".npz"))  # before any work
+    for given, option in ((args.no_self_collision, "--no-self-collision"), (args.srdf, "--srdf")):
+        if given and args.scene is None:
+            raise InvalidArgumentError(f"{option} applies to --scene, which was not given")
+    if args.srdf and args.no_self_collision:
+        raise InvalidArgumentError(
+            "--srdf names self-collision pairs, which --no-self-collision does not check"
+        )
     if args.random is not None and not 1 <= args.random <= MAX_TARGETS:
         raise InvalidArgumentError(
             f"--random must be a count from 1 to {MAX_TARGETS} (swarm_ik.batch.MAX_TARGETS), "
@@ -112,7 +136,16 @@ def run(args: argparse.Namespace) -> int:
         )
     if args.targets is not None:
         check_input_file(args.targets, "--targets", None)
-    robot = swarm_ik.load_robot(args.robot, ee_frame=args.frame, **robot_kwargs(args))
+    robot = swarm_ik.load_robot(
+        args.robot, ee_frame=args.frame, srdf=args.srdf, **robot_kwargs(args)
+    )
+    goals = None
+    if args.scene is not None:  # (the scene read before the targets are drawn)
+        goals = [
+            swarm_ik.goals.AvoidCollisions(
+                swarm_ik.Scene.load(args.scene), self_collision=not args.no_self_collision
+            )
+        ]
     if args.targets is not None:
         targets = read_targets_file(args.targets, positions=args.position_only)
         source = str(args.targets)
@@ -130,6 +163,7 @@ def run(args: argparse.Namespace) -> int:
     res = solve_batch(
         robot,
         targets,
+        goals=goals,
         seed=args.seed,
         q0=args.q0,
         tol_pos=args.tol_pos,
@@ -155,6 +189,8 @@ def run(args: argparse.Namespace) -> int:
     n_ok = int(res.success.sum())
     print(f"robot {robot.name} ({robot.nq} joints), frame {robot.ee_frame}; targets: {source}")
     rot = "" if args.position_only else f" / {args.tol_rot:g} rad"
+    if goals is not None:
+        rot += f", clear of {args.scene} (coal's check)"
     print(
         f"solved {n_ok}/{res.n} ({100 * res.success_rate:.2f} %) within "
         f"{args.tol_pos:g} m{rot} in {res.time_s:.3f} s "
