@@ -98,3 +98,18 @@ def test_bad_scene_exits_2(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -
     q = ["0.1", "-0.5", "0.3", "-2", "0.2", "1.5", "0.4"]
     assert main(["solve", "--robot", "panda", "--from-q", *q, "--scene", str(bad)]) == 2
     assert "radius must be a positive" in capsys.readouterr().err
+
+
+def test_goals_without_a_rotation_report_no_rotation_error(tmp_path, capsys) -> None:
+    """A goals file with only a Position goal: the rotation error is "n/a" (text) and null
+    (JSON), not 0.0, which reads as a rotation met exactly."""
+    f = tmp_path / "goals.json"
+    f.write_text(
+        '{"goals": [{"type": "Position", "frame": "panda_hand_tcp", "point": [0.5, 0.0, 0.4]}]}'
+    )
+    assert main(["solve", "--robot", "panda", "--goals", str(f)]) == 0
+    out = capsys.readouterr().out
+    assert "rotation error n/a (no goal on a rotation)" in out
+    assert main(["solve", "--robot", "panda", "--goals", str(f), "--json"]) == 0
+    d = json.loads(capsys.readouterr().out)
+    assert d["rotation_error"] is None and d["position_error"] < 1e-5

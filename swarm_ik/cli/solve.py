@@ -228,11 +228,19 @@ def run(args: argparse.Namespace) -> int:
     return EXIT_OK if res.success else EXIT_NOT_REACHED
 
 
+def _measured(res: Any, field: str) -> bool:
+    """Whether some goal of ``res`` has an error of this kind (``position_error`` or
+    ``rotation_error``; a Result reports 0.0 where none has: see Result)."""
+    return any(getattr(e, field) == getattr(e, field) for e in res.goal_errors)
+
+
 def _print_json(args: argparse.Namespace, robot: Any, res: Any) -> None:
     d = res.to_dict()
     d.pop("history")
-    if args.position_only:
-        d["rotation_error"] = None  # not measured: the target's rotation was not asked for
+    if args.position_only or not _measured(res, "rotation_error"):
+        d["rotation_error"] = None  # not measured: no goal asked for a rotation
+    if not _measured(res, "position_error"):
+        d["position_error"] = None
     d.update(
         robot=robot.name,
         joint_names=list(robot.joint_names),
@@ -268,8 +276,14 @@ def _print_text(args: argparse.Namespace, robot: Any, res: Any) -> None:
                         "in contact: " + ", ".join("-".join(p) for p in rep.pairs_in_contact)
                     )
             print(f"  {e.goal}: {', '.join(parts)} ({'met' if e.met else 'NOT met'})")
-    rot = "n/a (--position-only)" if args.position_only else f"{res.rotation_error:.3e} rad"
-    print(f"position error {res.position_error:.3e} m, rotation error {rot} ({res.reason})")
+    if args.position_only:
+        rot = "n/a (--position-only)"
+    elif not _measured(res, "rotation_error"):
+        rot = "n/a (no goal on a rotation)"
+    else:
+        rot = f"{res.rotation_error:.3e} rad"
+    pos = f"{res.position_error:.3e} m" if _measured(res, "position_error") else "n/a"
+    print(f"position error {pos}, rotation error {rot} ({res.reason})")
     print(
         f"evaluations {res.n_evals}, time {res.time_s * 1e3:.2f} ms, "
         f"within limits {res.within_limits}"
