@@ -79,8 +79,10 @@ def _slack(goal: Any) -> tuple[float, float]:
 UNREACHABLE_BUDGET = (0.05, 3000)
 """``(seconds, evaluations)`` a solve spends at most on a problem :func:`unreachable_goal`
 proves unreachable or :func:`conflicting_goals` proves contradictory, whatever budget it was
-given: the best point found is still returned (``reason="unreachable"`` or
-``"conflicting_goals"``), and ``time_limit=1e9`` on a target beyond reach returns at once."""
+given (the seconds where it was given a time limit: without one, the evaluations alone bound
+it, so that its result does not depend on the machine's speed): the best point found is still
+returned (``reason="unreachable"`` or ``"conflicting_goals"``), and ``time_limit=1e9`` on a
+target beyond reach returns at once."""
 
 
 def unreachable_goal(problem: IKProblem) -> str | None:
@@ -465,12 +467,13 @@ class Route:
             time_limit = max(time_limit - spent, 0.5 * time_limit)
         seed_val = None if isinstance(seed, np.random.Generator) else (0 if seed is None else seed)
         cap_s, cap_evals = UNREACHABLE_BUDGET
-        uncapped = time_limit is None or time_limit > cap_s or max_evals is None
-        if (uncapped or (max_evals or 0) > cap_evals) and (
+        over = max_evals is None or max_evals > cap_evals or (time_limit or 0.0) > cap_s
+        if over and (
             unreachable_goal(problem) is not None
             or conflicting_goals(problem, self.tol_pos, self.tol_rot) is not None
-        ):  # proven unreachable or contradictory: a large budget would buy nothing
-            time_limit = cap_s if time_limit is None else min(time_limit, cap_s)
+        ):  # proven unreachable or contradictory: a large budget would buy nothing (no time
+            # limit where none was given: a budget of evaluations stays deterministic)
+            time_limit = None if time_limit is None else min(time_limit, cap_s)
             max_evals = cap_evals if max_evals is None else min(max_evals, cap_evals)
         if (
             problem.collision_goal is not None
