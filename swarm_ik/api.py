@@ -31,6 +31,7 @@ from swarm_ik import kernels
 from swarm_ik._validate import check_seed
 from swarm_ik.errors import InvalidArgumentError, unknown
 from swarm_ik.goals import AvoidCollisions, Axis, LookAt, Orientation, Pose, Position, Posture
+from swarm_ik.goals import base as goals_base
 from swarm_ik.kernels import search
 from swarm_ik.kernels.lie import angle
 from swarm_ik.optimize import check_budget, make_rng
@@ -288,12 +289,16 @@ def warm_up(route: Route) -> None:
         # the search's clock: its objmode block compiles at its first call in each process
         # (40-80 ms), here rather than inside a solve's time limit
         search.now()
+        search.key_of_seed(0)  # (every run keys its stream so: Route.run)
         if route.compiled:  # the one compiled call of the route (with a clock: its first
             # read is slow); a cache damaged inside its files is removed and compiled again
             kernels.loaded_despite_damage(lambda: route._search(q, np.uint64(1), 1, 60.0))
         else:  # what the solvers' loops call, on a plain problem of the same goals (the
-            # methods of a subclass or of the instance are the caller's: not run here)
-            plain = IKProblem(problem.robot, goals=list(problem.goals))
+            # methods of a subclass or of the instance are the caller's: not run here), each
+            # Python goal replaced by a stand-in: a user's goal may take milliseconds a call,
+            # and the code around it, what loads kernels, is the same for any Python goal
+            goals = goals_base.stand_ins(problem.goals, problem.lower, problem.upper)
+            plain = IKProblem(problem.robot, goals=goals)
             plain.goal_errors(q)
             plain.residual_jacobian(q)
             if route.solver == "swarm":  # its loop: the compiled polish, null-space descent…
@@ -533,10 +538,14 @@ class Route:
                 on_improvement=on_improvement, key=key,
             )  # fmt: skip
             t0 = time.perf_counter()
-            self.spec.run(ev, make_rng(seed), **self.kwargs)
-            elapsed = time.perf_counter() - t0
-            q = ev.best_x.copy()
-            fit = float(ev.best_f) if np.isfinite(ev.best_f) else float(problem.fitness(q[None])[0])
+            # the values of Python goals computed once per point, the answer's kept for the
+            # judge (a slow goal's stop test, fitness and check read the search's evaluation)
+            with goals_base.reuse_goal_values(bool(problem.python_goals), park=True):
+                self.spec.run(ev, make_rng(seed), **self.kwargs)
+                elapsed = time.perf_counter() - t0
+                q = ev.best_x.copy()
+                fit = ev.best_f if np.isfinite(ev.best_f) else problem.fitness(q[None])[0]
+                fit = float(fit)
             n_evals, history = ev.n_evals, np.asarray(ev.history, dtype=float)
             n_evals += first_evals
             elapsed += first_s
@@ -623,7 +632,28 @@ class Route:
         limit: float | None = None,
     ) -> Result:
         """The one judge: the answer's errors from Pinocchio, its limits, why it ended
-        (``limit``: the search's time limit, when it was given less than the route's)."""
+        (``limit``: the search's time limit, when it was given less than the route's).  A
+        Python goal is judged from the values the search kept for the answer
+        (:func:`swarm_ik.goals.base.reuse_goal_values`), each computed once."""
+        args = (problem, q, fitness, n_evals, elapsed, history, seed, q_start, limit)
+        if problem.python_goals:  # (a slow goal: its values at q computed once, if not yet)
+            with goals_base.reuse_goal_values(resume=True):
+                return self._judge(*args)
+        return self._judge(*args)
+
+    def _judge(
+        self,
+        problem: IKProblem,
+        q: np.ndarray,
+        fitness: float,
+        n_evals: int,
+        elapsed: float,
+        history: np.ndarray,
+        seed: int | None,
+        q_start: np.ndarray | None,
+        limit: float | None,
+    ) -> Result:
+        """:meth:`judge`'s work."""
         goal_errors = problem.verify(q, self.tol_pos, self.tol_rot, q0=q_start)
         within = problem.within_bounds(q)
         success = within

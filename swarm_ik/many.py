@@ -55,6 +55,7 @@ from swarm_ik.branches import (
     windings as _windings,
 )
 from swarm_ik.errors import InvalidArgumentError, unknown
+from swarm_ik.goals.base import reuse_goal_values
 from swarm_ik.kernels import joints
 from swarm_ik.optimize import check_budget, make_rng
 from swarm_ik.problem import IKProblem
@@ -384,13 +385,14 @@ def solve_many(
         k = qs.shape[0]
         elapsed = time.perf_counter() - t0
         results = _results(qs, dps, drs, [0] * k, [elapsed] * k, fits, "analytic", seed_label)
-    else:
-        reps = _numerical(
-            problem, int(n), ref, start_q, make_rng(seed), min_distance, max_evals, time_limit,
-            tol_pos, tol_rot, batch, max_starts, max_iters, patience, t0,
-        )  # fmt: skip
-        qs_all = np.array([r[0] for r in reps]).reshape(-1, problem.nq)
-        fit_all = problem.fitness(qs_all) if reps else np.empty(0)
+    else:  # (a Python goal's values at each point computed once: rows, errors, checks)
+        with reuse_goal_values(bool(problem.python_goals)):
+            reps = _numerical(
+                problem, int(n), ref, start_q, make_rng(seed), min_distance, max_evals,
+                time_limit, tol_pos, tol_rot, batch, max_starts, max_iters, patience, t0,
+            )  # fmt: skip
+            qs_all = np.array([r[0] for r in reps]).reshape(-1, problem.nq)
+            fit_all = problem.fitness(qs_all) if reps else np.empty(0)
         order = np.argsort(
             branch_distance(
                 qs_all, ref, periodic_mask(problem.robot, problem.lower, problem.upper)
@@ -633,10 +635,13 @@ def _valley_roots(
     lo, hi = lower, upper
     evals = 0
 
+    def late() -> bool:
+        return deadline is not None and time.perf_counter() >= deadline
+
     def floor(x: FloatArray) -> tuple[FloatArray, FloatArray, FloatArray, float, FloatArray]:
         nonlocal evals
         for it in range(4):
-            if it and evals >= budget:
+            if it and (evals >= budget or late()):
                 break
             r, jac, _dp, _dr = pol.residual(x)
             evals += 1
@@ -654,7 +659,7 @@ def _valley_roots(
         x, r, u, tan = x0, r0, u0, sgn * v0
         g = float(u @ r)
         for _ in range(_WALK_STEPS):
-            if evals >= budget or (deadline is not None and time.perf_counter() >= deadline):
+            if evals >= budget or late():
                 break
             xn, rn, un, sn, vn = floor(x + _WALK_STEP * tan)
             if un @ u < 0:
@@ -669,7 +674,7 @@ def _valley_roots(
                 a, ga, b, gb = x, g, xn, gn
                 m = xn
                 for _ in range(40):
-                    if evals >= budget:
+                    if evals >= budget or late():
                         break
                     w = ga / (ga - gb)
                     m, rm, um, _sm, _vm = floor(a + w * (b - a))
@@ -783,7 +788,7 @@ def _numerical(
             left = deadline - time.perf_counter() - round_s
             cap = min(cap, max(8, int(0.8 * left / sec_per_eval)))
         t1 = time.perf_counter()
-        out = pol.polish(starts, cap, stop_first=False)
+        out = pol.polish(starts, cap, stop_first=False, deadline=deadline)
         polish_s = time.perf_counter() - t1
         if out.used > 16:
             sec_per_eval = 0.5 * sec_per_eval + 0.5 * polish_s / out.used
@@ -820,7 +825,7 @@ def _numerical(
             )
             for i in stalled[:4]:
                 room_evals = 1 << 62 if max_evals is None else max_evals - used
-                if room_evals < 8:
+                if room_evals < 8 or (deadline is not None and time.perf_counter() >= deadline):
                     break
                 qv = out.q[i]
                 if walked.shape[0] and np.min(branch_distance(walked, qv, periodic)) < _WALK_NEAR:

@@ -531,13 +531,20 @@ def _parse_poses(poses: Any) -> FloatArray:
 
 # -------------------------------------------------------------------- solving
 def _all_solutions(
-    problem: Any, n: int, seed: int, tol_pos: float, tol_rot: float
+    problem: Any, n: int, seed: int, tol_pos: float, tol_rot: float, deadline: float | None
 ) -> tuple[FloatArray, bool]:
     """Every distinct solution :func:`swarm_ik.solve_many` finds: ``(q (k, nq), closed
-    form)``."""
+    form)``, its search ended at ``deadline`` (``time.perf_counter()`` seconds; None: no
+    deadline) and at its own count of starts without a limit (``64 n``) in any case, so that
+    a search the deadline does not cut finds what it finds without one (goals written in
+    Python, milliseconds a call, took minutes past a path's time limit here)."""
     import swarm_ik
 
-    results = swarm_ik.solve_many(problem, n=n, seed=seed, tol_pos=tol_pos, tol_rot=tol_rot)
+    limit = None if deadline is None else max(deadline - time.perf_counter(), 1e-3)
+    results = swarm_ik.solve_many(
+        problem, n=n, seed=seed, tol_pos=tol_pos, tol_rot=tol_rot, time_limit=limit,
+        max_starts=64 * n,
+    )  # fmt: skip
     qs = np.array([r.q for r in results if r.success], dtype=float).reshape(-1, problem.nq)
     closed = bool(results) and all(r.solver == "analytic" for r in results)
     return qs, closed
@@ -860,7 +867,9 @@ def _closed_form(ctx: _Context, i: int) -> tuple[FloatArray, bool, bool] | None:
     pose_problem = ctx.wps.pose_only(i)
     if pose_problem is None:
         return None
-    qs, closed = _all_solutions(pose_problem, CLOSED_FORM_N, ctx.seed(), ctx.tol_pos, ctx.tol_rot)
+    qs, closed = _all_solutions(
+        pose_problem, CLOSED_FORM_N, ctx.seed(), ctx.tol_pos, ctx.tol_rot, ctx.deadline
+    )
     if not closed:
         return qs, False, False
     assert ctx.wps.poses is not None
@@ -946,7 +955,9 @@ def _meets(problem: Any, q: FloatArray, ctx: _Context) -> bool:
 
 def _spread(ctx: _Context, i: int) -> FloatArray:
     """Waypoint ``i``'s own spread of solutions (numerical ``solve_many``)."""
-    qs, _ = _all_solutions(ctx.wps.problem(i), SEEDS, ctx.seed(), ctx.tol_pos, ctx.tol_rot)
+    qs, _ = _all_solutions(
+        ctx.wps.problem(i), SEEDS, ctx.seed(), ctx.tol_pos, ctx.tol_rot, ctx.deadline
+    )
     return qs
 
 

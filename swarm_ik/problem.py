@@ -187,8 +187,8 @@ class IKProblem:
             ``"paper-l1"``, ``"euler-zyz"``, ``"paper-pso"`` (see :mod:`swarm_ik.fitness`).
             (For compatibility a string passed as the third positional argument is taken as
             ``fitness``.)
-        w_rot: Weight of angular errors in ``"se3"`` [m/rad]; 0 with ``target`` makes the
-            problem position-only.
+        w_rot: Weight of angular errors in ``"se3"`` [m/rad]: 0, or between 1e-6 and 1e6
+            (a goal weight's range); 0 with ``target`` makes the problem position-only.
         lam: λ of ``"paper-l1"`` (per metre).
         mu: μ of ``"euler-zyz"``.
         orth_tol: Tolerance on the orthonormality of target rotations.
@@ -269,6 +269,12 @@ class IKProblem:
                 if not is_finite_nonneg(v)
             )  # fmt: skip
             raise InvalidArgumentError(f"{label} must be a finite non-negative number, got {v!r}")
+        low, high = goals_base.WEIGHT_RANGE  # (0: position only; else a weight's range)
+        if float(w_rot) != 0.0 and not low <= float(w_rot) <= high:
+            raise InvalidArgumentError(
+                "w_rot must be 0 (position only) or between 1e-6 and 1e6 [m/rad] (weights are "
+                f"relative), got {float(w_rot):.15g}"
+            )
         self.w_rot = float(w_rot)
         terms: list[Goal] = []
         self.target = None
@@ -496,7 +502,7 @@ class IKProblem:
                 for i, gl in enumerate(self.goals):
                     if gl.compiled:
                         continue
-                    err[k, i] = gl.errors(state)
+                    err[k, i] = goals_base.errors_of(gl, state)
                     if not gl.is_primary:
                         r = goals_base.search_rows(gl, state, want_jac=False)[0]
                         cost2[k] += float(r @ r)
@@ -568,7 +574,7 @@ class IKProblem:
         if self.compiled_goals:
             lm.residuals_batch(q2, self.tree, tab, kernels(), self.bounds, primary, res, jac, err)
         py = [gl for gl in self.python_goals if gl.is_primary == primary]
-        if py:
+        if py and pop:  # (no point: the Python goals' row counts unknown, none given)
             extra_r, extra_j = [], []
             for k in range(pop):
                 state = State(self.robot, q2[k], q0)

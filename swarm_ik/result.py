@@ -20,8 +20,15 @@ class Result:
     Attributes:
         q: Best joint vector found (rad / m, one value per joint), shape ``(nq,)``.
         fitness: Its fitness under the problem's fitness function.
-        position_error: ‖p − p_target‖ [m].
-        rotation_error: Geodesic angle between reached and target orientation [rad].
+        position_error: ‖p − p_target‖ [m]: the largest position error over the primary
+            goals (:func:`swarm_ik.problem.largest_errors`); 0.0 when no primary goal has a
+            position error (e.g. only ``Orientation`` or ``Axis`` goals).
+        rotation_error: Geodesic angle between reached and target orientation [rad]: the
+            largest angular error over the primary goals; 0.0 when no primary goal has an
+            angular error (a position-only problem, ``w_rot=0``, or only ``Position`` goals):
+            then 0.0 means "nothing to measure", not a measured zero.  ``goal_errors`` tells
+            the two apart (NaN where a goal has no such error), and the command line prints
+            ``n/a`` (``null`` in ``--json``) with ``--position-only``.
         n_evals: Fitness evaluations spent (a Jacobian evaluation counts as one).
         time_s: Wall-clock time of the solve [s].
         success: Both errors within the tolerances given to ``solve`` (rotation ignored for

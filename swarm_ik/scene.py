@@ -456,6 +456,25 @@ def _json_pose(value: Any) -> Any:
 
 
 # ------------------------------------------------------------------------------- scene
+def _not_shapes(value: Any) -> str:
+    """Why ``value`` is no ``obstacles`` of :class:`Scene` (one line; where to turn instead)."""
+    head = (
+        "Scene takes a list of shapes ("
+        + ", ".join(c.__name__ for c in SHAPES.values())
+        + "), got "
+    )
+    if value is None:
+        return head + "None (Scene() is the empty scene)"
+    if isinstance(value, Mapping):
+        return (
+            f"{head}a {type(value).__name__}; read a scene's JSON dict with "
+            "Scene.from_dict(data), a scene file with Scene.load(path)"
+        )
+    if isinstance(value, (str, bytes, os.PathLike)):
+        return f"{head}{reprlib.repr(value)}; read a scene file with Scene.load(path)"
+    return f"{head}{type(value).__name__} {reprlib.repr(value)}"
+
+
 class Scene:
     """An immutable collection of obstacles.
 
@@ -464,10 +483,16 @@ class Scene:
             ``Cylinder``, ``Mesh``).  Unnamed shapes are named ``<kind><index>``.
 
     Raises:
-        InvalidArgumentError: an item is not a shape, or two shapes have the same name.
+        InvalidArgumentError: ``obstacles`` is not a list of shapes (a scene JSON dict:
+            :meth:`from_dict`; a file: :meth:`load`), an item is not a shape, or two shapes
+            have the same name.
     """
 
     def __init__(self, obstacles: Iterable[Shape] = ()) -> None:
+        if isinstance(obstacles, (Mapping, str, bytes, os.PathLike)) or not isinstance(
+            obstacles, Iterable
+        ):
+            raise InvalidArgumentError(_not_shapes(obstacles))
         items = tuple(obstacles)
         names: list[str] = []
         for i, o in enumerate(items):

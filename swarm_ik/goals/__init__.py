@@ -24,6 +24,7 @@ True
 
 from __future__ import annotations
 
+import functools
 import json
 import os
 import reprlib
@@ -142,13 +143,27 @@ def goal_to_dict(goal: Goal) -> dict[str, Any]:
     return out
 
 
+def _no_repeats(where: Path, pairs: list[tuple[str, Any]]) -> dict[str, Any]:
+    """A JSON object of a goals file, a key given twice in it refused (json would keep the
+    last value silently)."""
+    out: dict[str, Any] = {}
+    for key, value in pairs:
+        if key in out:
+            raise InvalidArgumentError(
+                f"{where}: key {key!r} given twice in one JSON object (each key once)"
+            )
+        out[key] = value
+    return out
+
+
 def load_goals(source: str | os.PathLike[str] | Sequence[Mapping[str, Any]]) -> list[Goal]:
     """Goals from a JSON file (a list of goal objects, or ``{"goals": [...]}``) or from the
     already-parsed list.
 
     Raises:
         InvalidArgumentError: not a regular file, larger than :data:`MAX_GOALS_FILE`,
-            unreadable, nested too deeply, not a list of goal objects, bad goals.
+            unreadable, nested too deeply, a key given twice in one object, not a list of goal
+            objects, bad goals.
     """
     if isinstance(source, (str, os.PathLike)):
         p = Path(source)
@@ -161,7 +176,7 @@ def load_goals(source: str | os.PathLike[str] | Sequence[Mapping[str, Any]]) -> 
                 f"{p}: larger than the {MAX_GOALS_FILE // 2**20} MiB limit of a goals file"
             )
         try:
-            data = json.loads(p.read_text())
+            data = json.loads(p.read_text(), object_pairs_hook=functools.partial(_no_repeats, p))
         except RecursionError:
             raise InvalidArgumentError(f"{p}: JSON nested too deeply") from None
         except (OSError, UnicodeDecodeError, json.JSONDecodeError) as exc:

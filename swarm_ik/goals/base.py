@@ -21,8 +21,11 @@ of every answer).  ``docs/goals.md`` writes a Python goal step by step.
 
 from __future__ import annotations
 
+import contextlib
 import math
 import reprlib
+import threading
+from collections.abc import Callable, Iterator
 from dataclasses import dataclass, field
 from typing import TYPE_CHECKING, Any, ClassVar, NamedTuple
 
@@ -99,6 +102,107 @@ def kernels() -> Any:
     return _LIST[0]
 
 
+# --------------------------------------------------------------------------- kept values
+KEPT_POINTS = 4096
+"""Most joint vectors whose Python-goal values one scope of :func:`reuse_goal_values` keeps
+(the oldest dropped first)."""
+
+
+class _Kept(threading.local):
+    """The values of the Python goals kept on this thread: the open scope's table (None: no
+    scope open) and the table parked by a scope for the next one that resumes it."""
+
+    table: dict[Any, dict[Any, Any]] | None = None
+    parked: dict[Any, dict[Any, Any]] | None = None
+
+
+_KEPT = _Kept()
+
+
+@contextlib.contextmanager
+def reuse_goal_values(
+    active: bool = True, *, park: bool = False, resume: bool = False
+) -> Iterator[None]:
+    """A scope within which each Python goal's residual, Jacobian and errors at one joint
+    vector (and start ``q0``) are computed once: a later :class:`State` of the same robot at
+    the same ``q`` and ``q0`` is served the values already computed (the polish's rows and its
+    errors, the stop test, the fitness and the judge of the answer all read one evaluation of
+    a slow goal).  Compiled goals are always computed.  A scope opened inside another one
+    shares the outer scope's values.
+
+    The values are kept only while the scope is open (a goal whose inputs change between two
+    solves is evaluated again); at most :data:`KEPT_POINTS` joint vectors are kept.
+
+    Args:
+        active: False: no scope (the values are not kept; a problem without Python goals).
+        park: At the end of the scope (without an error), park its values on this thread for
+            the next scope opened with ``resume`` (the search's values for the judge).
+        resume: Start from the values parked on this thread, if any (they are dropped either
+            way: a parked table serves one scope at most).
+    """
+    if not active or _KEPT.table is not None:  # (no scope, or the outer one serves)
+        yield
+        return
+    parked, _KEPT.parked = _KEPT.parked, None
+    table: dict[Any, dict[Any, Any]] = parked if resume and parked is not None else {}
+    _KEPT.table = table
+    done = False
+    try:
+        yield
+        done = True
+    finally:
+        _KEPT.table = None
+        if park and done:
+            _KEPT.parked = table
+
+
+def _values_at(robot: Any, q: FloatArray, q0: FloatArray | None) -> dict[Any, Any]:
+    """The dict of kept values of the open scope at ``(robot, q, q0)`` (a new one, not kept,
+    when no scope is open: the values are then shared by one state's askers only)."""
+    table = _KEPT.table
+    if table is None:
+        return {}
+    key = (id(robot), q.tobytes(), None if q0 is None else q0.tobytes())
+    values = table.get(key)
+    if values is None:
+        if len(table) >= KEPT_POINTS:
+            del table[next(iter(table))]
+        values = table[key] = {}
+    return values
+
+
+def _kept(goal: Goal, state: State, kind: str, compute: Callable[[State], Any]) -> Any:
+    """``compute(state)`` for a Python goal, computed once per state's point in a scope of
+    :func:`reuse_goal_values` (``kind``: which value); a compiled goal's is always computed."""
+    values = getattr(state, "_values", None)
+    if values is None or goal.compiled:
+        return compute(state)
+    hit = values.get((id(goal), kind))
+    if hit is not None and hit[0] is goal:
+        return hit[1]
+    value = compute(state)
+    values[(id(goal), kind)] = (goal, value)  # (the goal kept: its id stays its own)
+    return value
+
+
+def residual_of(goal: Goal, state: State) -> Any:
+    """``goal.residual(state)`` as a float array (computed once per point in a scope of
+    :func:`reuse_goal_values`)."""
+    return _kept(goal, state, "r", lambda s: np.array(goal.residual(s), dtype=float))
+
+
+def jacobian_of(goal: Goal, state: State) -> Any:
+    """``goal.jacobian(state)`` as a float array (computed once per point in a scope of
+    :func:`reuse_goal_values`)."""
+    return _kept(goal, state, "j", lambda s: np.array(goal.jacobian(s), dtype=float))
+
+
+def errors_of(goal: Goal, state: State) -> tuple[float, float]:
+    """``goal.errors(state)`` (computed once per point in a scope of
+    :func:`reuse_goal_values`)."""
+    return _kept(goal, state, "e", goal.errors)  # type: ignore[no-any-return]
+
+
 # --------------------------------------------------------------------------- state
 class State:
     """What a Python goal sees: the joint vector and Pinocchio's kinematics at it.
@@ -119,6 +223,7 @@ class State:
         self.q0 = None if q0 is None else np.asarray(q0, dtype=float)
         self._q_pin = robot.to_pinocchio(self.q, copy=False)  # (read only)
         self._data = robot._data("state")  # (one Data per thread for states, reused)
+        self._values = _values_at(robot, self.q, self.q0)  # (the Python goals' values here)
         pin.forwardKinematics(robot.model, self._data, self._q_pin)  # (frames: as asked)
         self._jacobians = False
 
@@ -174,16 +279,34 @@ class Encoded(NamedTuple):
     rows: int
 
 
+WEIGHT_RANGE = (1e-6, 1e6)
+"""The weights a goal takes, and the nonzero ``w_rot`` of a problem: ``[1e-6, 1e6]``.
+Weights are relative (the default is 1); beyond this range the squared weighted residuals
+overflow (``1e308``) or the damped least squares of the search is ill-conditioned."""
+
+
 def weight_value(value: Any, what: str = "weight") -> float:
     """A positive finite number, or :class:`InvalidArgumentError` naming ``what``."""
     if isinstance(value, (bool, str)):
         raise InvalidArgumentError(f"{what} must be a positive number, got {value!r}")
     try:
         w = float(value)
-    except (TypeError, ValueError):
+    except (TypeError, ValueError, OverflowError):
         raise InvalidArgumentError(f"{what} must be a positive number, got {value!r}") from None
     if not (np.isfinite(w) and w > 0.0):
         raise InvalidArgumentError(f"{what} must be a positive finite number, got {value!r}")
+    return w
+
+
+def goal_weight(value: Any, what: str = "weight") -> float:
+    """A weight within :data:`WEIGHT_RANGE`, or :class:`InvalidArgumentError` naming ``what``
+    and the range."""
+    w = weight_value(value, what)
+    low, high = WEIGHT_RANGE
+    if not low <= w <= high:
+        raise InvalidArgumentError(
+            f"{what} must be between 1e-6 and 1e6 (weights are relative), got {w:.15g}"
+        )
     return w
 
 
@@ -224,7 +347,8 @@ class Goal:
 
     Attributes:
         weight: Weight of the goal's residual rows (dimensionless; a Pose's rotation rows are
-            in radians, its position rows in metres); keyword-only, positive.
+            in radians, its position rows in metres); keyword-only, between 1e-6 and 1e6
+            (:data:`WEIGHT_RANGE`; weights are relative to each other, default 1).
         primary: Must be met to tolerance (True) or optimised after the primary goals in
             their null space (False); keyword-only (default True, False for the joint-space
             preferences).
@@ -247,7 +371,7 @@ class Goal:
             )
         for label in self.vectors:
             object.__setattr__(self, label, vec3(getattr(self, label), f"{name}.{label}"))
-        object.__setattr__(self, "weight", weight_value(self.weight, f"{name}.weight"))
+        object.__setattr__(self, "weight", goal_weight(self.weight, f"{name}.weight"))
         if not isinstance(self.primary, (bool, np.bool_)):
             raise InvalidArgumentError(
                 f"{name}.primary must be true or false, got {self.primary!r}"
@@ -310,13 +434,13 @@ class Goal:
     def errors(self, state: State) -> tuple[float, float]:
         """``(position error [m], angular error [rad])`` at ``state`` (NaN where none) that
         the tolerances judge; by default the norm of the residual as a position error."""
-        return float(np.linalg.norm(self.residual(state))), float("nan")
+        return float(np.linalg.norm(residual_of(self, state))), float("nan")
 
     def met(self, state: State, tol_pos: float, tol_rot: float) -> tuple[float, float, bool, Any]:
         """The independent check at ``state``: ``(position error, angular error, met,
         details)``; a Python goal's own ``tolerance`` attribute, when it has one, replaces
         ``tol_pos``."""
-        dp, dr = self.errors(state)
+        dp, dr = errors_of(self, state)
         own = self.own_tolerance()
         if own is not None:
             tol_pos = own
@@ -356,6 +480,52 @@ class Goal:
         return int(np.size(self.residual(state)))
 
 
+@dataclass(frozen=True)
+class StandIn(Goal):
+    """A Python goal that costs next to nothing: one joint held at a value (``residual =
+    q[joint] − value``).  It stands in for a problem's own Python goals where only the code
+    around them must run: :func:`swarm_ik.api.warm_up` loads the compiled kernels of a route
+    before its clock starts without calling a user's goals (which may take milliseconds a
+    call).
+
+    Attributes:
+        joint: Index of the joint in ``q``.
+        value: The value it is held at (rad / m).
+    """
+
+    joint: int = 0
+    value: float = 0.0
+
+    def residual(self, state: State) -> FloatArray:
+        """``[q[joint] − value]``."""
+        return np.array([state.q[self.joint] - self.value])
+
+    def jacobian(self, state: State) -> FloatArray:
+        """The unit row of ``joint``, ``(1, nq)``."""
+        jac = np.zeros((1, state.q.shape[0]))
+        jac[0, self.joint] = 1.0
+        return jac
+
+
+def stand_ins(goals: Any, lower: FloatArray, upper: FloatArray) -> list[Goal]:
+    """``goals`` with each Python goal replaced by a :class:`StandIn` of the same weight and
+    priority: a primary one holds the first joint at 70 % of its range (met by a few polish
+    steps from the middle), a secondary one the last joint at 20 % of its range (so that a
+    descent in the primary goals' null space has work to do).  Compiled goals are kept."""
+    lo, hi = np.asarray(lower, dtype=float), np.asarray(upper, dtype=float)
+    last = lo.shape[0] - 1
+    out: list[Goal] = []
+    for gl in goals:
+        if gl.compiled:
+            out.append(gl)
+            continue
+        j, share = (0, 0.7) if gl.is_primary else (last, 0.2)
+        span = hi[j] - lo[j]
+        value = lo[j] + share * span if np.isfinite(span) else np.clip(0.0, lo[j], hi[j])
+        out.append(StandIn(j, float(value), weight=gl.weight, primary=gl.is_primary))
+    return out
+
+
 def search_rows(
     goal: Goal, state: State, want_jac: bool = True
 ) -> tuple[FloatArray, FloatArray | None]:
@@ -372,8 +542,8 @@ def search_rows(
     """
     nq = state.q.shape[0]
     try:
-        r = np.asarray(goal.residual(state), dtype=float)
-        jac = np.asarray(goal.jacobian(state), dtype=float) if want_jac else None
+        r = residual_of(goal, state)
+        jac = jacobian_of(goal, state) if want_jac else None
     except NotImplementedError as exc:
         raise InvalidArgumentError(
             f"{exc}: a goal written in Python defines residual(state) -> (m,) and "

@@ -47,8 +47,14 @@ keeps a few such arrays).  Checked by :meth:`SolverSpec.resolve` when it is give
 by :meth:`Evaluator.uniform` / :meth:`Evaluator.initial_population` before allocating."""
 
 TIMED_CHUNK = 4096
-"""Rows an :class:`Evaluator` with a time limit evaluates between two reads of the clock (a
-few milliseconds of FK for a 7-joint arm; without a time limit a population is one call)."""
+"""Most rows an :class:`Evaluator` with a time limit evaluates between two reads of the clock
+(a few milliseconds of FK for a 7-joint arm; without a time limit a population is one call)."""
+BLOCK_SECONDS = 2e-3
+"""[s] What one block of rows of an :class:`Evaluator` with a time limit should take: its
+blocks start at one row and follow the cost per row measured on the earlier ones (a compiled
+fitness of a microsecond a row: blocks of 2,000 rows; a Python goal of 50 ms a call: one row
+a block), so that the clock is read about this often, or after every row of a slow
+objective."""
 Objective = Callable[[FloatArray], FloatArray]
 """A batched objective: ``(pop, n) -> (pop,)``; lower is better."""
 
@@ -134,6 +140,7 @@ class Evaluator:
         self.history: list[float] = []
         self.stopped = False  # the stop criterion was met
         self.t0 = time.perf_counter()
+        self._row_s: float | None = None  # (seconds per row measured: see _block)
 
     # ----------------------------------------------------------------- budget
     @property
@@ -183,27 +190,44 @@ class Evaluator:
         x_batch = np.asarray(x_batch, dtype=float)
         out = np.full(x_batch.shape[0], np.inf)
         k = self._granted(x_batch.shape[0])
-        for a, b in self._chunks(k):  # (one chunk without a time limit)
-            if a > 0 and self.done:  # (the time ran out during a large population)
-                break
+        a = 0
+        while a < k and not (a > 0 and self.time_up):  # (one block without a time limit)
+            b = a + self._block(k - a)
+            t = time.perf_counter()
             f = np.asarray(self.objective(x_batch[a:b]), dtype=float)
+            self._measured(b - a, time.perf_counter() - t)
             if f.size != b - a:
                 raise InvalidArgumentError(
                     f"the objective returned shape {f.shape} for {b - a} points; a batched "
                     "objective maps (pop, n) -> (pop,)"
                 )
-            out[a:b] = self._charge(b - a, x_batch[a:b], f.reshape(b - a))
+            out[a:b] = f.reshape(b - a)
+            a = b
+        out[:a] = self._charge(a, x_batch[:a], out[:a])
         return out
 
-    def _chunks(self, k: int) -> list[tuple[int, int]]:
-        """Row ranges ``[a, b)`` of a request of ``k`` granted rows, evaluated one after the
-        other: under a time limit, blocks of :data:`TIMED_CHUNK` rows with the clock read
-        between them (so that a population of a million points does not overrun the limit
-        by its own evaluation), else one block."""
-        if k <= 0:
-            return []
-        step = TIMED_CHUNK if self.time_limit is not None else k
-        return [(a, min(a + step, k)) for a in range(0, k, step)]
+    def _block(self, left: int) -> int:
+        """Rows of the next block of a request with ``left`` rows to go: all of them without
+        a time limit; under one, as many as :data:`BLOCK_SECONDS` allows at the cost per row
+        measured so far (one row before any was measured; at most :data:`TIMED_CHUNK`), so
+        that the clock is read between blocks often enough for a slow objective (a Python
+        goal of 50 ms a call) and seldom for a fast one.  The rows evaluated are offered for
+        the best together at the end of the request, so the blocks change nothing but when
+        the time limit is seen."""
+        if self.time_limit is None:
+            return left
+        if self._row_s is None:
+            return 1
+        return max(1, min(left, TIMED_CHUNK, int(BLOCK_SECONDS / max(self._row_s, 1e-9))))
+
+    def _measured(self, rows: int, seconds: float) -> None:
+        """Note the seconds a block of ``rows`` rows took (the cost per row of :meth:`_block`:
+        the latest block's, or half the earlier estimate when that is higher, so that one
+        fast block does not size the next for a slow objective at once)."""
+        if self.time_limit is None or rows <= 0:
+            return
+        per = seconds / rows
+        self._row_s = per if self._row_s is None else max(per, 0.5 * self._row_s)
 
     def residual_jacobian(self, q_batch: FloatArray) -> tuple[FloatArray, FloatArray, FloatArray]:
         """Fitness, pose error twist and Jacobian of an IK problem, counted as evaluations
@@ -228,15 +252,25 @@ class Evaluator:
         q_batch = np.atleast_2d(np.asarray(q_batch, dtype=float))
         pop = q_batch.shape[0]
         k = self._granted(pop)
-        _, ek, jk = self.problem.residual_jacobian(q_batch[:0])  # (the shapes only)
+        parts = []
+        a = 0
+        while a < k and not (a > 0 and self.time_up):  # (blocks as in __call__)
+            b = a + self._block(k - a)
+            t = time.perf_counter()
+            parts.append(self.problem.residual_jacobian(q_batch[a:b]))
+            self._measured(b - a, time.perf_counter() - t)
+            a = b
+        if not parts:  # (nothing evaluated: the shapes only)
+            parts.append(self.problem.residual_jacobian(q_batch[:0]))
+        ek, jk = parts[0][1], parts[0][2]
         f = np.full(pop, np.inf)
         err = np.full((pop, *np.shape(ek)[1:]), np.nan)
         jac = np.full((pop, *np.shape(jk)[1:]), np.nan)
-        for a, b in self._chunks(k):
-            if a > 0 and self.done:
-                break
-            fk, err[a:b], jac[a:b] = self.problem.residual_jacobian(q_batch[a:b])
-            f[a:b] = self._charge(b - a, q_batch[a:b], np.asarray(fk, dtype=float))
+        if a:
+            f[:a] = np.concatenate([np.asarray(p[0], dtype=float) for p in parts])
+            err[:a] = np.concatenate([p[1] for p in parts])
+            jac[:a] = np.concatenate([p[2] for p in parts])
+            f[:a] = self._charge(a, q_batch[:a], f[:a])
         return f, err, jac
 
     def record(self, x_batch: FloatArray, f: FloatArray) -> FloatArray:

@@ -157,9 +157,17 @@ class Polisher(NamedTuple):
         """Continuous-joint mask, ``(nq,)``."""
         return self.bounds.wrap
 
-    def polish(self, starts: FloatArray, max_evals: int, stop_first: bool = True) -> PolishOutcome:
+    def polish(
+        self,
+        starts: FloatArray,
+        max_evals: int,
+        stop_first: bool = True,
+        deadline: float | None = None,
+    ) -> PolishOutcome:
         """Polish ``starts`` ``(k, nq)`` (inside the bounds) with at most ``max_evals``
-        evaluations; with ``stop_first`` the call ends at the first converged start."""
+        evaluations; with ``stop_first`` the call ends at the first converged start.
+        ``deadline`` is the numpy polish's (:class:`PythonPolisher`); this one is held to a
+        time by its ``max_evals`` (about a microsecond each)."""
         starts = np.ascontiguousarray(starts, dtype=float)
         k, n = starts.shape
         out_q = np.empty((k, n))
@@ -174,9 +182,12 @@ class Polisher(NamedTuple):
         )  # fmt: skip
         return PolishOutcome(out_q, dp, dr, status, evals, int(used))
 
-    def secondary(self, q: FloatArray, max_evals: int) -> tuple[FloatArray, int]:
+    def secondary(
+        self, q: FloatArray, max_evals: int, deadline: float | None = None
+    ) -> tuple[FloatArray, int]:
         """Lower the secondary goals' cost in the primary null space
-        (:func:`swarm_ik.kernels.lm.secondary_descent`); returns ``(q', evaluations)``."""
+        (:func:`swarm_ik.kernels.lm.secondary_descent`); returns ``(q', evaluations)``
+        (``deadline``: as :meth:`polish`)."""
         out = np.empty(q.shape[0])
         used = lm.secondary_descent(
             np.ascontiguousarray(q, dtype=float), self.tree, self.table, self.kernels, self.bounds,
@@ -587,6 +598,8 @@ def run(
     open_gen = False
     sec_per_eval = 5e-6
     exact_check = problem.collision_goal is not None and ev.stops_on_success
+    # the numpy polish of Python goals (milliseconds an evaluation) reads the clock itself
+    deadline = None if ev.time_limit is None else ev.t0 + ev.time_limit
     pol_free = None
     if exact_check:
         free = problem.without_collisions()
@@ -602,7 +615,7 @@ def run(
             # collision goal: polish the starts for the other goals alone and let coal judge
             # the converged ones; those in contact continue below with the sphere rows, from
             # where they reached the goals
-            pre = pol_free.polish(queue, cap, stop_first=False)
+            pre = pol_free.polish(queue, cap, stop_first=False, deadline=deadline)
             ev.add_evals(pre.used)
             conv = pre.status == CONVERGED
             for row in np.flatnonzero(conv).tolist():
@@ -619,7 +632,7 @@ def run(
                 left = ev.time_limit - ev.elapsed
                 cap = min(cap, max(8, int(0.8 * left / sec_per_eval)))
         t1 = time.perf_counter()
-        out = pol.polish(queue, cap, stop_first=not (nearest and sol_x))
+        out = pol.polish(queue, cap, stop_first=not (nearest and sol_x), deadline=deadline)
         if out.used > 0:
             sec_per_eval = 0.5 * sec_per_eval + 0.5 * (time.perf_counter() - t1) / out.used
         open_gen = True
@@ -696,7 +709,7 @@ def run(
             k = int(np.argmin(pol_sec.secondary_cost(sols)))
             q_best = sols[k]
             if ev.remaining > 0:
-                q_best, used = pol_sec.secondary(q_best, min(ev.remaining, 200))
+                q_best, used = pol_sec.secondary(q_best, min(ev.remaining, 200), deadline)
                 ev.add_evals(used)
             _r, _j, dp, dr = pol.residual(q_best)
             best_x = q_best

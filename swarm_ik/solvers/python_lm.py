@@ -8,15 +8,22 @@ lower the cost by less than ``stall_rel``), on the problem's stacked residual
 (:meth:`swarm_ik.problem.IKProblem.residual_jacobian`: compiled goals through the kernels,
 Python goals on Pinocchio's state).  Slower than the compiled polish, equally exact: success
 is judged by the same errors (:meth:`IKProblem.goal_errors`).
+
+A Python goal may take milliseconds a call, so the polish also reads the clock: given a
+``deadline`` it starts no evaluation after it (the start it was polishing ends ``BUDGET``, as
+when the evaluations run out), and each point's rows and errors come from one evaluation of
+the goals (:func:`swarm_ik.goals.base.reuse_goal_values`).
 """
 
 from __future__ import annotations
 
+import time
 from typing import Any, NamedTuple
 
 import numpy as np
 
 from swarm_ik._types import FloatArray, IntArray
+from swarm_ik.goals.base import reuse_goal_values
 from swarm_ik.kernels import lm
 from swarm_ik.kernels.lm import BUDGET, CONVERGED, ITER_CAP, LOCAL_MIN, NOT_RUN, LMSettings
 from swarm_ik.problem import IKProblem, pushed_out
@@ -96,9 +103,22 @@ class PythonPolisher(NamedTuple):
         r, j = self.problem.stacked_rows(q[None], primary, self.q0)
         return r[0], j[0]
 
-    def polish(self, starts: FloatArray, max_evals: int, stop_first: bool = True) -> Any:
+    def polish(
+        self,
+        starts: FloatArray,
+        max_evals: int,
+        stop_first: bool = True,
+        deadline: float | None = None,
+    ) -> Any:
         """Polish ``starts`` ``(k, nq)`` with at most ``max_evals`` evaluations (the
-        :class:`swarm_ik.solvers.hybrid.PolishOutcome` of the compiled polish)."""
+        :class:`swarm_ik.solvers.hybrid.PolishOutcome` of the compiled polish), starting none
+        after ``deadline`` (``time.perf_counter()`` seconds; None: no deadline)."""
+        with reuse_goal_values():
+            return self._polish(starts, max_evals, stop_first, deadline)
+
+    def _polish(
+        self, starts: FloatArray, max_evals: int, stop_first: bool, deadline: float | None
+    ) -> Any:
         starts = np.atleast_2d(np.asarray(starts, dtype=float))
         k, n = starts.shape
         out_q = starts.copy()
@@ -108,8 +128,9 @@ class PythonPolisher(NamedTuple):
         evals = np.zeros(k, dtype=np.int64)
         cfg, b = self.cfg, self.bounds
         used = 0
+        late = _clock(deadline)
         for s in range(k):
-            if used >= max_evals:
+            if used >= max_evals or late():
                 break
             q = starts[s].copy()
             r, jac = self._rj(q)
@@ -125,7 +146,7 @@ class PythonPolisher(NamedTuple):
                 if ev >= cfg.max_iters:
                     st = ITER_CAP
                     break
-                if used >= max_evals:
+                if used >= max_evals or late():
                     st = BUDGET
                     break
                 a = jac.T @ jac
@@ -170,14 +191,22 @@ class PythonPolisher(NamedTuple):
                 break
         return PolishOutcome(out_q, dp, dr, status, evals, int(used))
 
-    def secondary(self, q: FloatArray, max_evals: int) -> tuple[FloatArray, int]:
+    def secondary(
+        self, q: FloatArray, max_evals: int, deadline: float | None = None
+    ) -> tuple[FloatArray, int]:
         """Lower the secondary goals' cost in the null space of the primary ones: the rules of
         :func:`swarm_ik.kernels.lm.secondary_descent` in numpy (``δ = J₁⁺ r₁ + N z``,
         ``N = I − J₁⁺J₁``, ``(NᵀJ₂ᵀJ₂N + μ·tr/n·I) z = NᵀJ₂ᵀ r₂``, a joint at a limit that the
         step pushes outwards held, :func:`_null_space_step`; the step cut to the trust
         radius, the primary goals brought back by Gauss–Newton steps, and the step kept only
         when every primary goal is within the polish tolerances and the secondary cost
-        falls).  Returns ``(q', evaluations)``."""
+        falls); no evaluation is started after ``deadline``.  Returns ``(q', evaluations)``."""
+        with reuse_goal_values():
+            return self._secondary(q, max_evals, deadline)
+
+    def _secondary(
+        self, q: FloatArray, max_evals: int, deadline: float | None
+    ) -> tuple[FloatArray, int]:
         q = np.asarray(q, dtype=float).copy()
         prob, n = self.problem, q.shape[0]
         if max_evals < 1 or not prob.has_secondary:
@@ -189,7 +218,8 @@ class PythonPolisher(NamedTuple):
             return q, used
         cost2 = float(r2 @ r2)
         mu, reach = 1e-3, lm.SECONDARY_REACH
-        while used < max_evals and mu < 1e6 and reach > 1e-6 and cost2 > 0.0:
+        late = _clock(deadline)
+        while used < max_evals and mu < 1e6 and reach > 1e-6 and cost2 > 0.0 and not late():
             delta, grow = _null_space_step(q, r1, j1, r2, j2, mu, self.bounds)
             if delta is None:
                 if grow:
@@ -201,7 +231,7 @@ class PythonPolisher(NamedTuple):
             r1_t, j1_t = self._rj(q_t)
             used += 1
             for _ in range(lm.SECONDARY_RESTORE):  # back onto the primary goals
-                if self._within(self._errors(q_t)[0]) or used >= max_evals:
+                if self._within(self._errors(q_t)[0]) or used >= max_evals or late():
                     break
                 a = j1_t.T @ j1_t
                 a += (1e-10 * np.trace(a) / n + 1e-14) * np.eye(n)
@@ -235,13 +265,22 @@ class PythonPolisher(NamedTuple):
         """Stacked primary residual, its step Jacobian, largest position [m] and angular
         [rad] errors."""
         q = np.asarray(q, dtype=float)
-        r, jac = self._rj(q)
-        _err, e_p, e_r = self._errors(q)
+        with reuse_goal_values():  # (the rows and the errors of one evaluation)
+            r, jac = self._rj(q)
+            _err, e_p, e_r = self._errors(q)
         return r, jac, e_p, e_r
 
     def secondary_cost(self, q_batch: FloatArray) -> FloatArray:
         """Squared norm of the secondary stack for each row of ``q_batch`` ``(k, nq)``."""
         return np.asarray(self.problem._errors_and_cost2(q_batch, self.q0)[1])
+
+
+def _clock(deadline: float | None) -> Any:
+    """A test of whether ``deadline`` (``time.perf_counter()`` seconds) has passed (always
+    False without one)."""
+    if deadline is None:
+        return lambda: False
+    return lambda: time.perf_counter() >= deadline
 
 
 def _null_space_step(
