@@ -156,12 +156,12 @@ def reuse_goal_values(
             _KEPT.parked = table
 
 
-def _values_at(robot: Any, q: FloatArray, q0: FloatArray | None) -> dict[Any, Any]:
-    """The dict of kept values of the open scope at ``(robot, q, q0)`` (a new one, not kept,
-    when no scope is open: the values are then shared by one state's askers only)."""
+def _values_at(robot: Any, q: FloatArray, q0: FloatArray | None) -> dict[Any, Any] | None:
+    """The dict of kept values of the open scope at ``(robot, q, q0)`` (None when no scope is
+    open: each asker computes)."""
     table = _KEPT.table
     if table is None:
-        return {}
+        return None
     key = (id(robot), q.tobytes(), None if q0 is None else q0.tobytes())
     values = table.get(key)
     if values is None:
@@ -440,7 +440,7 @@ class Goal:
         """The independent check at ``state``: ``(position error, angular error, met,
         details)``; a Python goal's own ``tolerance`` attribute, when it has one, replaces
         ``tol_pos``."""
-        dp, dr = errors_of(self, state)
+        dp, dr = self.errors(state) if self.compiled else errors_of(self, state)
         own = self.own_tolerance()
         if own is not None:
             tol_pos = own
