@@ -16,6 +16,7 @@ Python goals, secondary goals).  Both paths end in the same judge.
 
 from __future__ import annotations
 
+import contextlib
 import dataclasses
 import math
 import sys
@@ -635,61 +636,47 @@ class Route:
         (``limit``: the search's time limit, when it was given less than the route's).  A
         Python goal is judged from the values the search kept for the answer
         (:func:`swarm_ik.goals.base.reuse_goal_values`), each computed once."""
-        args = (problem, q, fitness, n_evals, elapsed, history, seed, q_start, limit)
-        if problem.python_goals:  # (a slow goal: its values at q computed once, if not yet)
-            with goals_base.reuse_goal_values(resume=True):
-                return self._judge(*args)
-        return self._judge(*args)
+        scope = goals_base.reuse_goal_values(resume=True) if problem.python_goals else _NO_SCOPE
+        with scope:  # (a slow goal: its values at q computed once, if not yet)
+            goal_errors = problem.verify(q, self.tol_pos, self.tol_rot, q0=q_start)
+            within = problem.within_bounds(q)
+            success = within
+            dp = dr = 0.0
+            for e in goal_errors:
+                success = success and e.met
+                if e.position_error > dp:  # (NaN: no such error)
+                    dp = e.position_error
+                if e.rotation_error > dr:
+                    dr = e.rotation_error
+            return Result(
+                q=q,
+                fitness=float(fitness),
+                position_error=float(dp),
+                rotation_error=float(dr),
+                n_evals=int(n_evals),
+                time_s=float(elapsed),
+                success=success,
+                within_limits=bool(within),
+                history=history,
+                solver=self.solver,
+                seed=seed,
+                goal_errors=goal_errors,
+                reason=end_reason(
+                    problem,
+                    success,
+                    n_evals,
+                    self.max_evals,
+                    elapsed,
+                    self.time_limit if limit is None else limit,
+                    self.tol_pos,
+                    self.tol_rot,
+                    q,
+                ),  # fmt: skip
+            )
 
-    def _judge(
-        self,
-        problem: IKProblem,
-        q: np.ndarray,
-        fitness: float,
-        n_evals: int,
-        elapsed: float,
-        history: np.ndarray,
-        seed: int | None,
-        q_start: np.ndarray | None,
-        limit: float | None,
-    ) -> Result:
-        """:meth:`judge`'s work."""
-        goal_errors = problem.verify(q, self.tol_pos, self.tol_rot, q0=q_start)
-        within = problem.within_bounds(q)
-        success = within
-        dp = dr = 0.0
-        for e in goal_errors:
-            success = success and e.met
-            if e.position_error > dp:  # (NaN: no such error)
-                dp = e.position_error
-            if e.rotation_error > dr:
-                dr = e.rotation_error
-        return Result(
-            q=q,
-            fitness=float(fitness),
-            position_error=float(dp),
-            rotation_error=float(dr),
-            n_evals=int(n_evals),
-            time_s=float(elapsed),
-            success=success,
-            within_limits=bool(within),
-            history=history,
-            solver=self.solver,
-            seed=seed,
-            goal_errors=goal_errors,
-            reason=end_reason(
-                problem,
-                success,
-                n_evals,
-                self.max_evals,
-                elapsed,
-                self.time_limit if limit is None else limit,
-                self.tol_pos,
-                self.tol_rot,
-                q,
-            ),  # fmt: skip
-        )
 
+_NO_SCOPE = contextlib.nullcontext()
+"""The judge's scope for a problem without Python goals (nothing kept)."""
 
 COLLISION_FIRST_TRIES = 48
 """Searches without the collision goal a solve with no time limit makes before the search

@@ -47,6 +47,7 @@ from numpy.typing import NDArray
 from swarm_ik._types import FloatArray
 from swarm_ik.errors import InvalidArgumentError, RobotFileNotFoundError, RobotModelError
 from swarm_ik.paths import cache_dir, package_dirs
+from swarm_ik.pose import is_finite_nonneg
 from swarm_ik.scene import Scene, as_scene
 
 SAMPLES = 2000
@@ -457,13 +458,9 @@ class RobotCollision:
 def _margin(value: Any) -> float:
     """A security margin: a finite number ``>= 0`` [m], or :class:`InvalidArgumentError`
     (coal refuses a negative one deep inside Pinocchio; NaN would pass every pair)."""
-    try:
-        m = float(value)
-    except (TypeError, ValueError):
-        m = float("nan")
-    if isinstance(value, (bool, str)) or not (np.isfinite(m) and m >= 0.0):
+    if not is_finite_nonneg(value):
         raise InvalidArgumentError(f"margin must be a finite number >= 0 [m], got {value!r}")
-    return m
+    return float(value)
 
 
 class _Checker:

@@ -60,18 +60,6 @@ def test_weight_1e308_is_refused_and_the_ends_of_the_range_solve() -> None:
         assert res.success, (weight, res.reason)
 
 
-def test_goals_json_weight_outside_the_range_exits_2(
-    tmp_path: Path, capsys: pytest.CaptureFixture[str]
-) -> None:
-    path = tmp_path / "goals.json"
-    path.write_text('[{"type": "Position", "frame": "panda_hand_tcp", "point": [0.5, 0, 0.3], '
-                    '"weight": 1e308}]')  # fmt: skip
-    assert main(["solve", "--robot", "panda", "--goals", str(path)]) == 2
-    err = capsys.readouterr().err.strip()
-    assert len(err.splitlines()) == 1
-    assert "Position.weight must be between 1e-6 and 1e6 (weights are relative)" in err
-
-
 @pytest.mark.parametrize("w_rot", [1e308, 1e7, 1e-9])
 def test_w_rot_outside_the_range_is_refused(w_rot: float) -> None:
     """``w_rot=1e308`` overflowed the se3 fitness (``w_rot·θ`` = inf) of the swarm solvers."""
@@ -129,15 +117,26 @@ def test_goals_file_with_a_key_given_twice_is_refused(tmp_path: Path) -> None:
     assert str(path) in str(info.value)
 
 
-def test_goals_file_with_a_key_given_twice_exits_2(
-    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+@pytest.mark.parametrize(
+    ("text", "message"),
+    [
+        ('[{"type": "Position", "frame": "panda_hand_tcp", "point": [0.5, 0, 0.3], '
+         '"weight": 1e308}]',
+         "Position.weight must be between 1e-6 and 1e6 (weights are relative)"),
+        ('{"goals": [{"type": "Position", "frame": "panda_hand_tcp", '
+         '"point": [0.5, 0.0, 0.3], "point": [0.4, 0.0, 0.3]}]}',
+         "key 'point' given twice"),
+    ],
+)  # fmt: skip
+def test_bad_goals_files_exit_2_with_one_line(
+    text: str, message: str, tmp_path: Path, capsys: pytest.CaptureFixture[str]
 ) -> None:
+    """A weight outside the range, a key given twice: exit 2, one line naming it."""
     path = tmp_path / "goals.json"
-    path.write_text('{"goals": [{"type": "Position", "frame": "panda_hand_tcp", '
-                    '"point": [0.5, 0.0, 0.3], "point": [0.4, 0.0, 0.3]}]}')  # fmt: skip
+    path.write_text(text)
     assert main(["solve", "--robot", "panda", "--goals", str(path)]) == 2
     err = capsys.readouterr().err.strip()
-    assert len(err.splitlines()) == 1 and "key 'point' given twice" in err
+    assert len(err.splitlines()) == 1 and message in err
 
 
 # ------------------------------------------------------------------ 4. rotation_error

@@ -292,6 +292,18 @@ def add_scene(parser: Any, help: str) -> None:
     )
 
 
+def add_collision_options(parser: Any, help: str, srdf_help: str) -> None:
+    """``--scene FILE`` (:func:`add_scene`, ``help``), ``--no-self-collision`` and ``--srdf
+    FILE`` (``srdf_help``): the obstacles and the robot's own pairs a command keeps clear of."""
+    add_scene(parser, help)
+    parser.add_argument(
+        "--no-self-collision",
+        action="store_true",
+        help="with --scene: check the robot against the scene only",
+    )
+    parser.add_argument("--srdf", default=None, type=input_file, metavar="FILE", help=srdf_help)
+
+
 def non_negative_seconds(text: str) -> float:
     """A number of seconds >= 0 (``inf`` allowed), for ``--show-wait``."""
     try:

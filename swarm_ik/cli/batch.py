@@ -32,13 +32,12 @@ from swarm_ik.cli._args import (
     EXIT_NOT_REACHED,
     EXIT_OK,
     RobotCommand,
+    add_collision_options,
     add_lm_options,
     add_q0,
-    add_scene,
     add_scheduler,
     check_input_file,
     check_output_file,
-    input_file,
     robot_kwargs,
 )
 
@@ -92,18 +91,10 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
         metavar="SECONDS",
         help="seconds for the whole batch: targets not reached by then are reported unsolved",
     )
-    add_scene(parser, "obstacles every answer must be clear of (and of itself)")
-    parser.add_argument(
-        "--no-self-collision",
-        action="store_true",
-        help="with --scene: check the robot against the scene only",
-    )
-    parser.add_argument(
-        "--srdf",
-        default=None,
-        type=input_file,
-        metavar="FILE",
-        help="with --scene: SRDF of disabled self-collision pairs (default: found)",
+    add_collision_options(
+        parser,
+        "obstacles every answer must be clear of (and of itself)",
+        "with --scene: SRDF of disabled self-collision pairs (default: found)",
     )
     add_scheduler(parser)
     parser.add_argument("--no-progress", action="store_true", help="no progress bar")

@@ -17,12 +17,11 @@ from swarm_ik.cli._args import (
     EXIT_NOT_REACHED,
     EXIT_OK,
     RobotCommand,
+    add_collision_options,
     add_pose,
     add_q0,
-    add_scene,
     add_tolerances,
     check_goals_file,
-    input_file,
     pose_target,
     robot_kwargs,
     solve_kwargs,
@@ -113,18 +112,10 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     )
     add_tolerances(parser)
     add_q0(parser, "starting joint values (one per joint)")
-    add_scene(parser, "obstacles the answer must be clear of (and of itself)")
-    parser.add_argument(
-        "--no-self-collision",
-        action="store_true",
-        help="with --scene: check the robot against the scene only",
-    )
-    parser.add_argument(
-        "--srdf",
-        default=None,
-        type=input_file,
-        metavar="FILE",
-        help="SRDF of disabled self-collision pairs (default: found)",
+    add_collision_options(
+        parser,
+        "obstacles the answer must be clear of (and of itself)",
+        "SRDF of disabled self-collision pairs (default: found)",
     )
     parser.add_argument(
         "--param",
