@@ -53,7 +53,11 @@ def floats_or(
     """``np.array(value, dtype=float)``, or ``cls(message())`` where numpy cannot convert it
     (letters, ragged nesting, None, other objects): the one conversion behind the checks of
     joint vectors, goal vectors, polygons and step bounds (the message made only on a
-    refusal)."""
+    refusal); complex values are refused too (numpy would drop their imaginary parts with a
+    warning)."""
+    dtype = getattr(value, "dtype", None)
+    if dtype is not None and getattr(dtype, "kind", "") == "c":
+        raise cls(f"{message()} (got complex values)")
     try:
         return np.array(value, dtype=float)
     except (TypeError, ValueError):

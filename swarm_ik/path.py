@@ -505,12 +505,7 @@ def _parse_poses(poses: Any) -> FloatArray:
 
     if isinstance(poses, (str, bytes)):
         raise InvalidArgumentError(f"poses must be an array (N, 4, 4) or (N, 7), got {poses!r}")
-    try:
-        arr = np.asarray(poses, dtype=float)
-    except (TypeError, ValueError):
-        raise InvalidArgumentError(
-            "poses must be an array of numbers, shape (N, 4, 4) or (N, 7)"
-        ) from None
+    arr = floats_or(poses, lambda: "poses must be an array of numbers, shape (N, 4, 4) or (N, 7)")
     if not (arr.ndim == 3 and arr.shape[1:] == (4, 4)) and not (
         arr.ndim == 2 and arr.shape[1] == 7
     ):

@@ -735,6 +735,8 @@ class RobotModel:
         one pose) or ``(pop, nq) -> (pop, 4, 4)`` (the compiled batch FK)."""
         f = self.frame_index(frame)
         arr = np.asarray(q)
+        if arr.dtype.kind == "c":  # (numpy would drop the imaginary parts with a warning)
+            raise InvalidArgumentError(f"q must be real joint values, got complex {arr.dtype}")
         if arr.shape == (self.nq,) and arr.dtype.kind in "fiu":
             # (a Data of its own: the State a Python goal reads stays valid if it calls fk)
             return self._frame_pose(arr, self.frame_ids[f], self._data("fk_data"))

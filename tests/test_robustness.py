@@ -1261,3 +1261,32 @@ def test_batch_limits_named_before_any_work(
             batch.read_targets_file(csv_path)
     finally:
         batch.MAX_TARGETS = original
+
+
+@pytest.mark.parametrize(
+    "call",
+    ["IKProblem", "IKSolver", "solve_path", "Position", "Orientation", "q0", "Posture", "fk"],
+)
+def test_complex_arrays_are_refused_everywhere(call: str) -> None:
+    """A complex array wherever floats are read is refused naming it (numpy dropped the
+    imaginary part with a warning: solve_path answered the real part, success=True)."""
+    from swarm_ik import goals as G
+
+    robot = swarm_ik.load_robot("ur5")
+    q = robot.mid_q()
+    target = robot.fk(q).astype(complex)
+    target[0, 3] += 0.5j
+    calls = {
+        "IKProblem": lambda: IKProblem(robot, target),
+        "IKSolver": lambda: swarm_ik.IKSolver(robot).solve(target),
+        "solve_path": lambda: swarm_ik.solve_path(robot, np.repeat(target[None], 3, 0)),
+        "Position": lambda: G.Position("tool0", np.array([0.4, 0.0, 0.4]) + 1j),
+        "Orientation": lambda: G.Orientation("tool0", np.eye(3) + 0j),
+        "q0": lambda: swarm_ik.solve(IKProblem(robot, robot.fk(q)), q0=q + 1j),
+        "Posture": lambda: IKProblem(robot, robot.fk(q), goals=[G.Posture(q + 1j)]),
+        "fk": lambda: robot.fk(q + 1j),
+    }
+    with warnings.catch_warnings():
+        warnings.simplefilter("error", np.exceptions.ComplexWarning)
+        with pytest.raises(errors.SwarmIKError, match="complex"):
+            calls[call]()

@@ -25,6 +25,8 @@ def orientation_kernel(par, ipar, q, f_pos, f_rot, f_jac, want_jac, res, jac, er
 
 
 def _is_array(v: Any) -> bool:
+    if getattr(getattr(v, "dtype", None), "kind", "") == "c":
+        return False  # (refused by as_pose below, naming the complex values)
     try:
         np.asarray(v, dtype=float)
     except (TypeError, ValueError):
