@@ -431,3 +431,19 @@ def test_a_goal_running_its_own_fk_leaves_the_state_of_the_others() -> None:
     assert both[1].rotation_error == alone.rotation_error
     ref = r.fk_pinocchio(q_ref)[:3, 3]
     assert both[0].position_error == pytest.approx(np.linalg.norm(r.fk(q)[:3, 3] - ref))
+
+
+def test_a_compiled_goal_typed_at_a_prompt_compiles_without_a_cache() -> None:
+    """A goal kernel defined in `python -` (or -c, exec) has no file for numba's cache: it is
+    compiled without one, where it was refused as "does not compile"."""
+    import subprocess
+    import sys
+    from pathlib import Path
+
+    script = Path(__file__).parent / "data" / "compiled_goal_at_prompt.py"
+    proc = subprocess.run(
+        [sys.executable, "-"], input=script.read_text(), capture_output=True, text=True,
+        timeout=300,
+    )  # fmt: skip
+    assert proc.returncode == 0, proc.stderr
+    assert proc.stdout.strip().splitlines()[-1] == "True converged"

@@ -23,6 +23,7 @@ from __future__ import annotations
 
 import contextlib
 import math
+import os
 import reprlib
 import threading
 from collections.abc import Callable, Iterator
@@ -75,8 +76,13 @@ def kernel_slot(kernel: Any) -> int:
             # the kernel of exactly this signature (compiled now, or loaded from numba's
             # cache): typed as a first-class function, so the list of kernels built from it is
             # one cached type whatever the kernels are
+            # (cached on disk when its source is a file: a kernel typed at a prompt, in
+            # `python -c` or exec'd has nowhere numba can keep a cache, and compiles each time)
+            source = getattr(getattr(kernel.py_func, "__code__", None), "co_filename", "")
+            cache = os.path.isfile(source)
+
             def compiled() -> Any:
-                return numba.njit(GOAL_SIGNATURE, cache=True)(kernel.py_func)
+                return numba.njit(GOAL_SIGNATURE, cache=cache)(kernel.py_func)
 
             ours = str(getattr(kernel.py_func, "__module__", "")).startswith("swarm_ik.")
             # (a damaged cache of swarm_ik's own kernels is removed and compiled again; a
