@@ -424,6 +424,11 @@ class _Waypoints:
                     f"goals must be a list of N goal lists (one per waypoint), got {goals!r}"
                 )
             goal_lists = [_goal_list(g, f"goals[{i}]") for i, g in enumerate(goals)]
+            for i, gl in enumerate(goal_lists):
+                if not gl:
+                    raise InvalidArgumentError(
+                        f"goals[{i}] is empty: each waypoint needs at least one goal term"
+                    )
             n = len(goal_lists)
             frame_name = robot.ee_frame
             arr = None
@@ -1548,7 +1553,11 @@ def _reason(
         elif any(graph.closed) and ctx.wps.pose_only(missed[0]) is not None:
             why += " (closed form: none meets it within the joint limits)"
         plural = "s" if len(missed) > 1 else ""
-        parts.append(f"waypoint{plural} {where} unreachable: {why}")
+        proven = beyond or (any(graph.closed) and ctx.wps.pose_only(missed[0]) is not None)
+        if ctx.timed_out and not proven:  # (tracked with what the limit left: not a proof)
+            parts.append(f"waypoint{plural} {where} not reached within the time limit")
+        else:
+            parts.append(f"waypoint{plural} {where} unreachable: {why}")
     if jumps:
         listed = ", ".join(f"{i} ({s:.3g})" for i, s in jumps[:10])
         listed += " …" if len(jumps) > 10 else ""
@@ -1562,7 +1571,7 @@ def _reason(
                 f"is {nearest:.3g} times the bound away)"
             )
         if missed:
-            msg += "; next to an unreachable waypoint the configuration is the best attempt"
+            msg += "; next to a waypoint not reached the configuration is the best attempt"
         elif proof:
             origin = " from q0" if start is not None else ""
             msg += (

@@ -508,3 +508,41 @@ def test_slow_python_goals_that_cannot_be_met_keep_the_path_near_its_limit() -> 
     res = solve_path(robot, poses, goals=[Above()], time_limit=0.3)
     assert time.perf_counter() - t0 < 4.0
     assert not res.success and "time_limit reached" in res.reason
+
+
+def test_empty_waypoint_goal_list_is_refused_naming_it() -> None:
+    robot = swarm_ik.load_robot("ur5")
+    with pytest.raises(InvalidArgumentError, match=r"goals\[0\] is empty"):
+        solve_path(robot, None, goals=[[], []])
+
+
+def test_waypoints_cut_by_the_time_limit_are_not_called_unreachable() -> None:
+    """A goal-list path whose limit ends before every waypoint is met: those not reached are
+    'not reached within the time limit' or 'not solved', never 'unreachable: no IK solution
+    found' (which they are not: without a limit all are reached)."""
+    import time as _time
+    from dataclasses import dataclass
+
+    from swarm_ik.goals import Axis, Goal, Position
+
+    @dataclass(frozen=True)
+    class OnPlane(Goal):
+        frame: str
+        h: float = 0.3
+
+        def residual(self, s):  # type: ignore[no-untyped-def]
+            _time.sleep(0.0005)
+            return np.array([s.pose(self.frame)[2, 3] - self.h])
+
+        def jacobian(self, s):  # type: ignore[no-untyped-def]
+            return s.jacobian(self.frame)[2:3]
+
+    robot = swarm_ik.load_robot("panda")
+    f = "panda_hand_tcp"
+    wps = [
+        [OnPlane(f), Position(f, [0.5, -0.2 + 0.4 * i / 9, 0.3]), Axis(f, [0, 0, 1], [0, 0, -1])]
+        for i in range(10)
+    ]
+    res = solve_path(robot, None, goals=wps, time_limit=0.1, seed=0)
+    assert not res.success and "time_limit reached" in res.reason
+    assert "unreachable" not in res.reason
