@@ -473,7 +473,11 @@ class Route:
             time_limit = max(time_limit - spent, 0.5 * time_limit)
         seed_val = None if isinstance(seed, np.random.Generator) else (0 if seed is None else seed)
         cap_s, cap_evals = UNREACHABLE_BUDGET
-        over = max_evals is None or max_evals > cap_evals or (time_limit or 0.0) > cap_s
+        over = (  # a budget beyond the cap (the solver's default one included)
+            (time_limit or 0.0) > cap_s
+            or (max_evals or 0) > cap_evals
+            or (time_limit is None and max_evals is None)
+        )
         if over and (
             unreachable_goal(problem) is not None
             or conflicting_goals(problem, self.tol_pos, self.tol_rot) is not None
