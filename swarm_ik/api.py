@@ -33,6 +33,7 @@ from swarm_ik._validate import check_seed
 from swarm_ik.errors import InvalidArgumentError, unknown
 from swarm_ik.goals import AvoidCollisions, Axis, LookAt, Orientation, Pose, Position, Posture
 from swarm_ik.goals import base as goals_base
+from swarm_ik.goals.axis import angle_between
 from swarm_ik.kernels import search
 from swarm_ik.kernels.lie import angle
 from swarm_ik.optimize import check_budget, make_rng
@@ -189,19 +190,14 @@ def conflicting_goals(problem: IKProblem, tol_pos: float, tol_rot: float) -> str
                 if float(angle(ra.T @ rb)) > allow + sa + sb:
                     return f"{a.describe()} and {b.describe()}"
             for b, ax, d, sb in axes.get(frame, []):
-                if _angle(ra @ ax, d) > allow + sa + sb:
+                if angle_between(ra @ ax, d) > allow + sa + sb:
                     return f"{a.describe()} and {b.describe()}"
     for held in axes.values():
         for i, (a, a1, d1, sa) in enumerate(held):
             for b, a2, d2, sb in held[i + 1 :]:
-                if abs(_angle(a1, a2) - _angle(d1, d2)) > allow + sa + sb:
+                if abs(angle_between(a1, a2) - angle_between(d1, d2)) > allow + sa + sb:
                     return f"{a.describe()} and {b.describe()}"
     return None
-
-
-def _angle(u: Any, v: Any) -> float:
-    """The angle between two unit vectors [rad], in [0, π]."""
-    return float(np.arctan2(np.linalg.norm(np.cross(u, v)), float(np.dot(u, v))))
 
 
 def end_reason(
