@@ -328,8 +328,8 @@ def test_a_secondary_python_goal_is_lowered_in_the_primary_null_space() -> None:
 
 
 def test_a_python_goal_with_a_tolerance_stops_once_within_it() -> None:
-    """A Python goal's own tolerance judges the answer; the search drives its residual to
-    zero and stops at the first answer within tolerance, in a few evaluations."""
+    """A Python goal's own tolerance judges the answer; the search drives its residual into
+    its slack and stops at the first answer within tolerance, in a few evaluations."""
     r = robot("panda")
     p = r.fk(r.random_q(np.random.default_rng(6)))[:3, 3]
     for seed in range(3):
@@ -338,6 +338,61 @@ def test_a_python_goal_with_a_tolerance_stops_once_within_it() -> None:
         res = swarm_ik.solve(swarm_ik.IKProblem(r, goals=[goal]), seed=seed, max_evals=2000)
         assert res.success and res.reason == "converged"
         assert res.n_evals <= 100
+
+
+@dataclass(frozen=True)
+class OnPlaneWithin(OnPlane):
+    """``OnPlane`` with a tolerance of its own [m]."""
+
+    tolerance: float = 1e-3
+
+
+def test_a_python_goals_own_tolerance_leaves_slack_to_the_other_goals() -> None:
+    """A plane goal with a 1 mm tolerance beside a point 0.5 mm off the plane: the point is
+    met exactly and the plane within its tolerance (before, the search drove the plane's
+    residual to zero, settled half-way and called the goals conflicting)."""
+    r = robot("panda")
+    rng = np.random.default_rng(21)
+    for k in range(3):
+        p = r.fk(r.random_q(rng))[:3, 3]
+        plane = OnPlaneWithin("panda_hand_tcp", height=float(p[2]) - 5e-4)
+        problem = swarm_ik.IKProblem(r, goals=[plane, G.Position("panda_hand_tcp", p)])
+        res = swarm_ik.solve(problem, seed=k, max_evals=3000)
+        assert res.success and res.reason == "converged", (k, res.reason)
+        z = r.fk_pinocchio(res.q)[2, 3]
+        assert abs(z - p[2]) <= 1e-5 and abs(z - plane.height) <= 1e-3
+    # beyond the slack the two goals cannot both be met: the judge says so
+    p = r.fk(r.random_q(rng))[:3, 3]
+    plane = OnPlaneWithin("panda_hand_tcp", height=float(p[2]) - 5e-3)
+    problem = swarm_ik.IKProblem(r, goals=[plane, G.Position("panda_hand_tcp", p)])
+    res = swarm_ik.solve(problem, seed=0, max_evals=3000)
+    assert not res.success and res.reason == "conflicting_goals"
+
+
+@pytest.mark.parametrize("m", [1, 3])
+def test_the_dead_zone_of_an_own_tolerance_matches_finite_differences(m) -> None:
+    """The slack rows of :func:`goals.base.dead_zone` and their Jacobian against central
+    differences, outside the zone; zero rows inside it."""
+    rng = np.random.default_rng(m)
+    a = rng.normal(size=(m, 4))
+    b = rng.normal(size=m)
+
+    def rows(x):
+        return G.base.dead_zone(a @ x + b, a, 0.3)
+
+    x = rng.normal(size=4)
+    r, jac = rows(x)
+    assert np.linalg.norm(a @ x + b) > 0.3
+    fd = np.empty((m, 4))
+    for j in range(4):
+        e = np.zeros(4)
+        e[j] = 1e-6
+        fd[:, j] = (rows(x + e)[0] - rows(x - e)[0]) / 2e-6
+    assert np.allclose(jac, fd, atol=1e-7)
+    assert np.isclose(np.linalg.norm(r), np.linalg.norm(a @ x + b) - 0.3)
+    x_in = np.linalg.lstsq(a, -b + 0.1 * rng.normal(size=m) / np.sqrt(m) * 0.5, rcond=None)[0]
+    r_in, jac_in = rows(x_in)
+    assert not r_in.any() and jac_in is not None and not jac_in.any()
 
 
 def test_a_python_goal_never_defined_is_never_met_and_a_row_jacobian_is_accepted() -> None:
