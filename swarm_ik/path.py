@@ -131,6 +131,16 @@ MAX_PATH_POSES = 100_000
 a solve, 0.1–1 ms; more are refused rather than run for hours with their memory growing)."""
 
 
+def _warm_up(robot: Any, frame: str | None) -> None:
+    """Load what a path of ``robot`` runs (the solvers' and the batch's kernels, the robot's
+    closed form) with an untimed path of two waypoints at the pose of the middle of the
+    ranges (tens of milliseconds once loaded), once per robot and process."""
+    mid = robot.mid_q()
+    pose = robot.fk_pinocchio(mid, frame)
+    robot._cache["path_warm"] = True
+    solve_path(robot, [pose, pose], q0=mid, frame=frame)
+
+
 def _check_path_size(n: int, densify: int) -> None:
     """Refuse a path of more than :data:`MAX_PATH_POSES` poses (``n`` waypoints, ``densify``
     poses between consecutive ones)."""
@@ -255,8 +265,12 @@ def solve_path(
             they hold the configuration before them and are reported not reached.  The
             reason says which of these happened.  Waypoint 0 always gets one solve, and the
             poses are validated and the answers checked in any case (about 45 µs per
-            waypoint), so a limit shorter than these is overrun.  Results are deterministic
-            for a seed only when the limit is not reached.
+            waypoint), so a limit shorter than these is overrun.  The first timed path of a
+            robot in a process loads its kernels first (0.7–1 s from numba's cache, with an
+            untimed path of two waypoints), charged to the limit up to half of it, as a first
+            :func:`swarm_ik.solve`'s loading: such a call overruns by the loading and still
+            gets half its limit.  Results are deterministic for a seed only when the limit is
+            not reached.
         seed: Seed (or Generator) of every random choice (the solvers' seeds are drawn from
             it): the same seed gives the same path.
         densify: Poses interpolated between consecutive waypoints (position lerp, rotation
@@ -300,6 +314,14 @@ def solve_path(
         raise InvalidArgumentError("densify needs poses (goal lists are not interpolated)")
     _check_path_size(wps.n, int(densify))
     deadline = limit = None
+    if time_limit is not None and not robot._cache.get("path_warm"):
+        # the first timed path of a robot in this process: its kernels loaded (0.7-1 s from
+        # numba's cache) before the clock, charged to the limit up to half of it, as a first
+        # solve's loading (the rest of the call keeps at least half)
+        _warm_up(robot, frame)
+        spent = time.perf_counter() - t_start
+        time_limit = max(float(time_limit) - spent, 0.5 * float(time_limit))
+        t_start = time.perf_counter()
     if time_limit is not None:  # (the search and the check at the end are inside the limit)
         per_waypoint = FINISH_PER_WAYPOINT + SEARCH_PER_LAYER
         reserve = min(per_waypoint * wps.n, 0.5 * float(time_limit))

@@ -546,3 +546,28 @@ def test_waypoints_cut_by_the_time_limit_are_not_called_unreachable() -> None:
     res = solve_path(robot, None, goals=wps, time_limit=0.1, seed=0)
     assert not res.success and "time_limit reached" in res.reason
     assert "unreachable" not in res.reason
+
+
+def test_a_first_timed_path_in_a_fresh_process_gets_its_answer() -> None:
+    """The first timed path of a process loads its kernels before the clock, charged to the
+    limit up to half of it (as a first solve's loading): a short reachable path at 50 ms is
+    solved (before, loading took the whole limit and the path ended unsolved)."""
+    import subprocess
+    import sys
+
+    script = (
+        "import numpy as np, swarm_ik\n"
+        "robot = swarm_ik.load_robot('panda')\n"
+        "q = robot.random_q(np.random.default_rng(0))\n"
+        "T0 = robot.fk(q)\n"
+        "wps = []\n"
+        "for k in range(20):\n"
+        "    T = T0.copy(); T[:3, 3] += [0.005 * k, 0, 0]; wps.append(T)\n"
+        "res = swarm_ik.solve_path(robot, wps, q0=q, time_limit=0.05)\n"
+        "print(res.success, all(res.reached))\n"
+    )
+    out = subprocess.run(
+        [sys.executable, "-c", script], capture_output=True, text=True, timeout=300
+    )
+    assert out.returncode == 0, out.stderr
+    assert out.stdout.split() == ["True", "True"], out.stdout
