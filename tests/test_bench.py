@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import argparse
 import csv
 import importlib
 import math
@@ -14,6 +15,7 @@ from pathlib import Path
 
 import numpy as np
 import pytest
+from conftest import never
 
 import swarm_ik
 from swarm_ik import cli
@@ -579,6 +581,26 @@ def test_every_benchmark_runs_as_a_module_with_the_commands_options(name: str, c
     assert options and options == set(re.findall(r"(?<![\w-])--[a-z][\w-]*", as_module))
 
 
+@pytest.mark.parametrize("name", sorted(BENCHMARKS))
+def test_the_help_of_out_names_the_folder_written_with_and_without_quick(name: str) -> None:
+    """``--out``'s help gives the default folder the command uses (``cli.bench._out_folder``,
+    the same as common.resolve_out), and, where ``--quick`` changes it, the quick one too
+    (``bench goals`` and ``bench collision`` named the full run's folder only)."""
+    from swarm_ik.cli.bench import _out_folder
+
+    parser = argparse.ArgumentParser()
+    importlib.import_module(cli.BENCHMARKS[name]).add_arguments(parser)
+    actions = {o: a for a in parser._actions for o in a.option_strings}
+    text = str(actions["--out"].help)
+    full = _out_folder(argparse.Namespace(bench=name, out=None, quick=False))
+    assert f"./{full}" in text
+    if "--quick" in actions:
+        quick = _out_folder(argparse.Namespace(bench=name, out=None, quick=True))
+        assert quick != full and f"./{quick} with --quick" in text
+    else:
+        assert "--quick" not in text
+
+
 def test_throughput_report_gives_the_collision_free_rows_as_a_ratio_of_the_plain_batch():
     from swarm_ik.bench.throughput import box_ratios
 
@@ -624,6 +646,57 @@ def test_a_bad_robot_name_leaves_no_folder(argv: list[str], tmp_path, capsys) ->
     assert main(["bench", *argv, "--out", str(out)]) == 2
     assert "unknown robot 'nosuch'" in capsys.readouterr().err
     assert not out.exists()
+
+
+@pytest.mark.parametrize("arm", ["panda", "yumi_left"])
+def test_bench_many_refuses_an_arm_eaik_cannot_solve_before_making_the_folder(
+    arm: str, tmp_path, monkeypatch, capsys
+) -> None:
+    """``bench many --arms`` with a 7-joint arm: exit 2, one line naming the arm and why, no
+    folder and no work (the folder was made and the machine timed before the refusal)."""
+    pytest.importorskip("eaik")
+    from swarm_ik.bench import many
+    from swarm_ik.cli import main
+
+    monkeypatch.setattr(many, "machine_speed", never)
+    out = tmp_path / "out"
+    assert main(["bench", "many", "--arms", "ur5", arm, "--out", str(out)]) == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and f"--arms {arm}: " in err[0] and "7 joints" in err[0]
+    assert not out.exists()
+    with pytest.raises(InvalidArgumentError, match=f"--arms {arm}: "):
+        many.main(["--arms", arm, "--out", str(out)])  # python -m swarm_ik.bench.many
+    assert not out.exists()
+
+
+def test_bench_many_checks_its_out_folder_as_the_other_benchmarks(tmp_path, monkeypatch) -> None:
+    """``bench many``'s --out goes through common.resolve_out, as every other benchmark's: a
+    file, or a folder holding a quick run, is refused before any work, also when run as
+    ``python -m swarm_ik.bench.many``."""
+    from swarm_ik.bench import many
+
+    monkeypatch.setattr(many, "machine_speed", never)
+    afile = tmp_path / "afile"
+    afile.write_text("")
+    with pytest.raises(InvalidArgumentError, match="is a file; give a folder"):
+        many.main(["--out", str(afile)])
+    quick = tmp_path / "quick"
+    common.write_run_info(quick, "ik", True)
+    with pytest.raises(InvalidArgumentError, match="holds a quick run"):
+        many.main(["--out", str(quick)])
+    assert sorted(p.name for p in quick.iterdir()) == [common.RUN_INFO]
+    assert "default ./bench-many)" in _help(many.main)  # (it has no --quick)
+
+
+def _help(module_main) -> str:
+    """What ``module_main(["--help"])`` prints."""
+    import contextlib
+    import io
+
+    buf = io.StringIO()
+    with contextlib.redirect_stdout(buf), pytest.raises(SystemExit):
+        module_main(["--help"])
+    return buf.getvalue()
 
 
 def test_unknown_names_are_listed_once() -> None:

@@ -125,3 +125,31 @@ def test_show_refuses_an_option_that_modifies_nothing(
     line = refused("show", "--robot", "panda", *extra)
     assert option in line and other in line
     assert not any(tmp_path.iterdir())
+
+
+@pytest.mark.parametrize(
+    ("command", "extra", "expected"),
+    [
+        ("solve", ["--no-self-collision"], "--no-self-collision applies to --scene, which"),
+        ("solve", ["--srdf", "x.srdf"], "--srdf applies to --scene or --goals, which"),
+        ("batch", ["--no-self-collision"], "--no-self-collision applies to --scene, which"),
+        ("batch", ["--srdf", "x.srdf"], "--srdf applies to --scene, which"),
+        ("solve", ["--scene", "s.json", "--srdf", "x.srdf", "--no-self-collision"], "--srdf names"),
+        ("batch", ["--scene", "s.json", "--srdf", "x.srdf", "--no-self-collision"], "--srdf names"),
+    ],
+)
+def test_collision_options_that_modify_nothing_are_refused_alike_by_solve_and_batch(
+    command: str,
+    extra: list[str],
+    expected: str,
+    tmp_path: Path,
+    monkeypatch: pytest.MonkeyPatch,
+    refused: Callable[..., str],
+) -> None:
+    """``check_collision_options`` (one check for both commands): ``--no-self-collision`` and
+    ``--srdf`` without what they modify, or together, refused before the robot is loaded."""
+    monkeypatch.chdir(tmp_path)
+    rest = FROM_Q if command == "solve" else ["--random", "3", "--out", "r.npz"]
+    line = refused(command, "--robot", "yumi_left", *rest, *extra)
+    assert expected in line
+    assert not any(tmp_path.iterdir())

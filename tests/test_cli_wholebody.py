@@ -10,7 +10,7 @@ from pathlib import Path
 import numpy as np
 import pinocchio as pin
 import pytest
-from conftest import cli_error, cli_json
+from conftest import FROM_Q, cli_error, cli_json
 
 import swarm_ik
 
@@ -81,3 +81,44 @@ def test_bad_whole_body_goal_in_file_exits_2(
     path = tmp_path / "bad.json"
     path.write_text(json.dumps([{"type": "CenterOfMass", "support": [[0, 0], [1, 0]]}]))
     assert "at least 3" in cli_error(capsys, "solve", *TALOS, "--goals", str(path))
+
+
+@pytest.mark.parametrize(
+    ("lock", "expected"),
+    [
+        (
+            "panda_joint4=0.5",
+            "--lock panda_joint4=0.5: 0.5 is outside its limits [-3.0718, -0.0698]",
+        ),
+        (
+            "panda_joint4",
+            "--lock panda_joint4: its neutral value 0 is outside its limits [-3.0718, -0.0698]; "
+            "give the value to hold: --lock panda_joint4=VALUE",
+        ),
+    ],
+)
+@pytest.mark.parametrize("command", ["solve", "batch", "reach"])
+def test_lock_outside_the_limits_is_refused_in_the_words_of_the_option(
+    command: str, lock: str, expected: str, tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    """A ``--lock`` outside its joint's limits names the option as typed and the limits (it
+    was ``locked joint 'panda_joint4': ...; give the value to hold: locked={'panda_joint4': v}``,
+    the keyword of ``load_robot``)."""
+    rest = {
+        "solve": FROM_Q,
+        "batch": ["--random", "3", "--out", str(tmp_path / "r.npz")],
+        "reach": ["--out", str(tmp_path / "m.npz"), "--no-png", "--no-html"],
+    }[command]
+    line = cli_error(capsys, command, "--robot", "panda", "--lock", lock, *rest)
+    assert line == f"swarm-ik: error: {expected}"
+    assert "locked" not in line and list(tmp_path.iterdir()) == []
+
+
+@pytest.mark.parametrize("value", ["nan", "inf", "-inf"])
+def test_lock_with_a_value_not_finite_is_refused_when_parsed(
+    value: str, capsys: pytest.CaptureFixture[str], no_robot_loading: None
+) -> None:
+    line = cli_error(
+        capsys, "solve", "--robot", "panda", "--lock", f"panda_joint4={value}", *FROM_Q
+    )
+    assert "argument --lock: expected JOINT=VALUE with a finite number" in line

@@ -1,22 +1,25 @@
 """swarm_ik.reach: the grid size is checked before allocating, the HTML page is the viewer's
 scene (point cloud, robot, colour legend), and the command line (swarm_ik.cli.reach) refuses
-missing extras before computing (its bad output paths are tested with the other commands'
-in ``tests/test_cli.py``)."""
+an output asked for without its extra before computing, and skips one not asked for with a
+note (its bad output paths are tested with the other commands' in ``tests/test_cli.py``)."""
 
 from __future__ import annotations
 
 import argparse
 import base64
 import re
+import sys
 import time
+from collections.abc import Callable
 from pathlib import Path
 from typing import Any
 
 import numpy as np
 import pytest
+from conftest import never
 
 import swarm_ik
-from swarm_ik import reach
+from swarm_ik import cli, reach
 from swarm_ik.cli import reach as reach_cli
 from swarm_ik.errors import InvalidArgumentError
 
@@ -73,13 +76,69 @@ def test_cli_defaults_to_no_scheduler() -> None:
     assert _parse("--robot", "yumi_left").scheduler == "none"
 
 
-def test_cli_missing_matplotlib_is_refused_first(
-    tmp_path: Path, monkeypatch: pytest.MonkeyPatch
+BLOCK = {"--png": "matplotlib.pyplot", "--html": "meshcat.geometry"}
+"""A submodule that each output imports: None in ``sys.modules`` makes its import fail, as
+when the extra is missing or broken (the package itself is still found)."""
+
+
+@pytest.mark.parametrize("option", ["--png", "--html"])
+def test_cli_output_asked_for_without_its_extra_is_refused_first(
+    option: str,
+    tmp_path: Path,
+    monkeypatch: pytest.MonkeyPatch,
+    refused: Callable[..., str],
 ) -> None:
-    monkeypatch.setattr(reach_cli, "has_module", lambda name: name != "matplotlib")
-    monkeypatch.setattr(reach, "reach_map", lambda *a, **k: pytest.fail("computed"))
-    with pytest.raises(InvalidArgumentError, match=r"swarm_ik\[plot\].*--no-png"):
-        reach_cli.run(_parse("--robot", "yumi_left", "--out", str(tmp_path / "m.npz")))
+    """``--png FILE`` / ``--html FILE`` whose extra does not import: exit 2, one line naming
+    the extra, before a robot is loaded or any file written (the command solved and wrote
+    the map, then failed on the picture)."""
+    monkeypatch.setitem(sys.modules, BLOCK[option], None)
+    monkeypatch.setattr(reach, "reach_map", never)
+    suffix = ".png" if option == "--png" else ".html"
+    line = refused(
+        "reach", "--robot", "yumi_left", "--out", str(tmp_path / "m.npz"),
+        option, str(tmp_path / f"m{suffix}"),
+    )  # fmt: skip
+    extra = "plot" if option == "--png" else "viz"
+    assert option in line and f'pip install "swarm_ik[{extra}]"' in line
+    assert list(tmp_path.iterdir()) == []
+
+
+@pytest.mark.parametrize("blocked", [("--png",), ("--html",), ("--png", "--html")])
+def test_cli_output_not_asked_for_without_its_extra_is_skipped_with_a_note(
+    blocked: tuple[str, ...],
+    tmp_path: Path,
+    monkeypatch: pytest.MonkeyPatch,
+    capsys: pytest.CaptureFixture[str],
+) -> None:
+    """A picture written by default whose extra does not import is left out, said in one line
+    on stderr before the work, and the map is written (it was a failure after the work)."""
+    for option in blocked:
+        monkeypatch.setitem(sys.modules, BLOCK[option], None)
+    said: list[str] = []
+    compute = reach.reach_map
+
+    def reach_map(*args: Any, **kwargs: Any) -> reach.ReachMap:
+        said.append(capsys.readouterr().err)  # what was said before the work
+        return compute(*args, **kwargs)
+
+    monkeypatch.setattr(reach, "reach_map", reach_map)
+    out = tmp_path / "m.npz"
+    argv = [
+        "reach", "--robot", "yumi_left", "--resolution", "0.25", "--orientations", "2",
+        "--max-starts", "4", "--out", str(out), "--no-progress",
+    ]  # fmt: skip
+    assert cli.main(argv) == 0
+    err = capsys.readouterr().err
+    assert err == "" and len(said) == 1 and len(said[0].strip().splitlines()) == 1
+    note = said[0]
+    for option, module, extra in (("--png", "matplotlib", "plot"), ("--html", "meshcat", "viz")):
+        if option in blocked:
+            assert f"needs {module}" in note and f'"swarm_ik[{extra}]"' in note
+            assert f"--no-{option[2:]}" in note
+    assert reach.ReachMap.load(out).n_orientations == 2
+    assert out.with_suffix(".png").exists() == ("--png" not in blocked)
+    if "--html" in blocked:
+        assert not out.with_suffix(".html").exists()
 
 
 def test_cli_writes_map_picture_and_page(tmp_path: Path, capsys: Any) -> None:
@@ -93,6 +152,6 @@ def test_cli_writes_map_picture_and_page(tmp_path: Path, capsys: Any) -> None:
     rmap = reach.ReachMap.load(out)
     assert rmap.n_orientations == 2
     assert out.with_suffix(".png").stat().st_size > 10_000
-    if reach_cli.has_module("meshcat"):
+    if reach_cli.has_extra("--html"):
         assert "MeshCat.Viewer" in out.with_suffix(".html").read_text()
     np.testing.assert_array_equal(rmap.index, rmap.hits.mean(axis=-1))

@@ -1203,7 +1203,7 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("--ablation-n", type=count(1), default=None,
                         help="targets per scene of the ablation (default --n)")  # fmt: skip
     parser.add_argument("--quick", action="store_true", help="N = 10 (a smoke run)")
-    parser.add_argument("--out", default=None, help="output folder (default ./bench-collision)")
+    common.add_out(parser, COMMAND)
 
 
 def _names(text: str, valid: Sequence[str], what: str,

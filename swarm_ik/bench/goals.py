@@ -47,7 +47,7 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     argtypes.add_seed(parser, "seed of the targets")
     parser.add_argument("--quick", action="store_true", help="N = 30 (a smoke run)")
     parser.add_argument("--no-pink", action="store_true", help="skip the pink peer")
-    parser.add_argument("--out", default=None, help="output folder (default ./bench-goals)")
+    common.add_out(parser, "goals")
 
 
 def _row(exp: str, robot: str, solver: str, i: int, ok: bool, dp: float, dr: float,

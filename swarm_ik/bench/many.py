@@ -9,7 +9,8 @@ of returned solutions in one branch), wall time of the call, time to the k-th br
 the complete set.  For the 7-joint panda: the covering radius of ``solve_many(n=16)`` over a
 dense pool of solutions (``n=256``), against 16 solutions taken in the order found.
 
-Writes ``many.csv``, ``spread.csv`` and ``many.md`` into ``--out``.
+Writes ``many.csv``, ``spread.csv``, ``many.md`` and ``run.json`` into ``--out`` (checked, with
+the arms, before anything is written: :func:`check_arms`).
 """
 
 from __future__ import annotations
@@ -36,8 +37,18 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     )
     parser.add_argument("--n", type=count(1), default=16, help="solve_many's n (default 16)")
     argtypes.add_seed(parser, "seed of the targets")
-    parser.add_argument("--arms", nargs="+", default=list(ARMS), help="6R arms to measure")
-    parser.add_argument("--out", type=Path, default=Path("bench-many"), help="output folder")
+    parser.add_argument(
+        "--arms",
+        nargs="+",
+        default=list(ARMS),
+        help=f"6-joint arms that eaik solves, to measure (default {' '.join(ARMS)})",
+    )
+    parser.add_argument(  # (no --quick here: common.add_out's help would name one)
+        "--out",
+        type=Path,
+        default=None,
+        help=f"output folder (default ./{common.default_out('many', False)})",
+    )
 
 
 def _match(qs: np.ndarray, ref: np.ndarray, periodic: np.ndarray, tol: float = 1e-6) -> Any:
@@ -351,25 +362,50 @@ def summarize(
     return "\n".join(lines) + "\n"
 
 
+def check_arms(names: list[str]) -> None:
+    """Refuse, before anything is written, an arm that is not a 6-joint chain eaik solves (the
+    reference sets are eaik's): each is loaded (a bad name refused with the loader's message)
+    and its analytic chain built.
+
+    Raises:
+        InvalidArgumentError: ``--arms NAME: why`` (its joint count, or the chain eaik has
+            no decomposition of).
+        AnalyticUnavailableError: eaik is not installed (the message names the extra).
+    """
+    from swarm_ik.errors import InvalidArgumentError
+    from swarm_ik.solvers import analytic
+
+    common.check_robots(names)
+    for name in names:
+        chain = analytic.analytic_chain(common.cached_robot(name))
+        if not chain.supported:
+            raise InvalidArgumentError(
+                f"--arms {name}: {chain.reason}; bench many measures 6-joint arms that eaik "
+                f"solves (default: {' '.join(ARMS)})"
+            )
+
+
 def run(args: argparse.Namespace) -> int:
     """Run the experiment; returns the exit code."""
     import os
 
-    common.check_robots(args.arms)
-    args.out.mkdir(parents=True, exist_ok=True)
+    out = common.resolve_out(args.out, "many", False)  # checked, not made yet
+    check_arms(args.arms)
+    out.mkdir(parents=True, exist_ok=True)
+    common.write_run_info(out, "many", False, n=args.n, n_targets=args.n_targets, arms=args.arms)
     speed = machine_speed()
     rows: list[dict[str, Any]] = []
     for arm in args.arms:
         rows += run_arm(arm, args.n_targets, args.n, args.seed)
     spread = run_spread(args.n, args.n_targets, args.seed)
-    _write_csv(args.out / "many.csv", rows)
-    _write_csv(args.out / "spread.csv", spread)
+    _write_csv(out / "many.csv", rows)
+    _write_csv(out / "spread.csv", spread)
     la = os.getloadavg()
     load = (
         f"load average {la[0]:.1f} / {la[1]:.1f} / {la[2]:.1f} on {os.cpu_count()} cores at the end"
     )
     md = summarize(rows, spread, args.n, min(speed, machine_speed()), load)
-    (args.out / "many.md").write_text(md)
+    (out / "many.md").write_text(md)
     print(md)
     return 0
 

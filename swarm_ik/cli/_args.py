@@ -9,6 +9,7 @@ can catch a Ctrl-C).
 from __future__ import annotations
 
 import argparse
+import math
 import os
 import stat
 import tempfile
@@ -211,11 +212,14 @@ def lock_argument(text: str) -> tuple[str, float | None]:
     if not sep:
         return name.strip(), None
     try:
-        return name.strip(), float(raw)
+        value = float(raw)
     except ValueError:
+        value = float("nan")
+    if not math.isfinite(value):
         raise argparse.ArgumentTypeError(
-            f"expected JOINT=VALUE with a number (rad or m), got {text!r}"
-        ) from None
+            f"expected JOINT=VALUE with a finite number (rad or m), got {text!r}"
+        )
+    return name.strip(), value
 
 
 def robot_kwargs(args: argparse.Namespace) -> dict[str, Any]:
@@ -235,6 +239,64 @@ def robot_kwargs(args: argparse.Namespace) -> dict[str, Any]:
             raise InvalidArgumentError(f"--lock: joint(s) {dup} given more than once")
         out["locked"] = dict(args.lock)  # (None: the joint's neutral value)
     return out
+
+
+def load_robot(args: argparse.Namespace, **kwargs: Any) -> Any:
+    """``swarm_ik.load_robot(args.robot, **kwargs)`` with :func:`robot_kwargs`'s options: the
+    robot of a command line, a ``--lock`` outside its joint's limits refused in the words of
+    the option (:func:`lock_refusal`), not of ``load_robot``'s ``locked=`` keyword.
+
+    Raises:
+        SwarmIKError: the loader's error (an :class:`InvalidArgumentError` for ``--lock``).
+    """
+    import swarm_ik
+
+    model_kwargs = robot_kwargs(args)
+    try:
+        return swarm_ik.load_robot(args.robot, **kwargs, **model_kwargs)
+    except InvalidArgumentError:
+        if not args.lock:
+            raise
+        line = lock_refusal(args, {**kwargs, **model_kwargs})
+        if line is None:
+            raise
+        raise InvalidArgumentError(line) from None
+
+
+def lock_refusal(args: argparse.Namespace, load_kwargs: dict[str, Any]) -> str | None:
+    """Why a ``--lock`` of ``args`` is refused, as the option was typed with the joint's
+    limits (``--lock J=5: 5 is outside its limits [-3.07, -0.07]``, ``--lock J: its neutral
+    value 0 is ...; give the value to hold: --lock J=VALUE``); ``None`` when every locked
+    value is within its limits (the refusal is of something else).  Called once the load
+    refused: the limits are those of the robot loaded without ``locked``."""
+    import pinocchio as pin
+
+    import swarm_ik
+    from swarm_ik.errors import SwarmIKError
+
+    unlocked = {k: v for k, v in load_kwargs.items() if k != "locked"}
+    try:
+        full = swarm_ik.load_robot(args.robot, **unlocked).full_model
+    except SwarmIKError:
+        return None
+    for name, value in args.lock:
+        if not full.existJointName(name):
+            continue
+        jm = full.joints[full.getJointId(name)]
+        if jm.nq != 1:  # (a continuous joint has no limits)
+            continue
+        lo, hi = float(full.lowerPositionLimit[jm.idx_q]), float(full.upperPositionLimit[jm.idx_q])
+        v = float(pin.neutral(full)[jm.idx_q]) if value is None else float(value)
+        if lo - 1e-9 <= v <= hi + 1e-9:
+            continue
+        limits = f"its limits [{lo:.10g}, {hi:.10g}]"
+        if value is None:
+            return (
+                f"--lock {name}: its neutral value {v:.10g} is outside {limits}; give the value "
+                f"to hold: --lock {name}=VALUE"
+            )
+        return f"--lock {name}={v:.10g}: {v:.10g} is outside {limits}"
+    return None
 
 
 def add_tolerances(parser: Any) -> None:
@@ -302,6 +364,32 @@ def add_collision_options(parser: Any, help: str, srdf_help: str) -> None:
         help="with --scene: check the robot against the scene only",
     )
     parser.add_argument("--srdf", default=None, type=input_file, metavar="FILE", help=srdf_help)
+
+
+def check_collision_options(args: argparse.Namespace, srdf_also: str | None = None) -> None:
+    """Refuse :func:`add_collision_options`'s options where they modify nothing: before any
+    work, ``--no-self-collision`` without ``--scene``; ``--srdf`` without ``--scene`` (or
+    without the option ``srdf_also`` either, where that one may check collisions too, as
+    ``solve --goals`` does); ``--srdf`` with ``--no-self-collision``.
+
+    Raises:
+        InvalidArgumentError: one line naming the option.
+    """
+    srdf_users = [args.scene]
+    needs = "--scene"
+    if srdf_also is not None:
+        srdf_users.append(getattr(args, srdf_also[2:].replace("-", "_")))
+        needs = f"--scene or {srdf_also}"
+    for given, option, needed, other in (  # an option that modifies one not given
+        (args.no_self_collision, "--no-self-collision", args.scene, "--scene"),
+        (args.srdf, "--srdf", any(u is not None for u in srdf_users), needs),
+    ):
+        if given and not needed:
+            raise InvalidArgumentError(f"{option} applies to {other}, which was not given")
+    if args.srdf and args.no_self_collision:
+        raise InvalidArgumentError(
+            "--srdf names self-collision pairs, which --no-self-collision does not check"
+        )
 
 
 def non_negative_seconds(text: str) -> float:

@@ -36,9 +36,10 @@ from swarm_ik.cli._args import (
     add_lm_options,
     add_q0,
     add_scheduler,
+    check_collision_options,
     check_input_file,
     check_output_file,
-    robot_kwargs,
+    load_robot,
 )
 
 HELP = "solve many targets at once (vectorised, optionally on Dask)"
@@ -113,13 +114,7 @@ def run(args: argparse.Namespace) -> int:
     from swarm_ik.errors import InvalidArgumentError
 
     check_output_file(args.out, "--out", (".csv", ".npz"))  # before any work
-    for given, option in ((args.no_self_collision, "--no-self-collision"), (args.srdf, "--srdf")):
-        if given and args.scene is None:
-            raise InvalidArgumentError(f"{option} applies to --scene, which was not given")
-    if args.srdf and args.no_self_collision:
-        raise InvalidArgumentError(
-            "--srdf names self-collision pairs, which --no-self-collision does not check"
-        )
+    check_collision_options(args)
     if args.random is not None and not 1 <= args.random <= MAX_TARGETS:
         raise InvalidArgumentError(
             f"--random must be a count from 1 to {MAX_TARGETS} (swarm_ik.batch.MAX_TARGETS), "
@@ -127,9 +122,7 @@ def run(args: argparse.Namespace) -> int:
         )
     if args.targets is not None:
         check_input_file(args.targets, "--targets", None)
-    robot = swarm_ik.load_robot(
-        args.robot, ee_frame=args.frame, srdf=args.srdf, **robot_kwargs(args)
-    )
+    robot = load_robot(args, ee_frame=args.frame, srdf=args.srdf)
     goals = None
     if args.scene is not None:  # (the scene read before the targets are drawn)
         goals = [

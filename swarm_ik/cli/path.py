@@ -32,7 +32,7 @@ from swarm_ik.cli._args import (
     check_input_file,
     check_output_file,
     input_file,
-    robot_kwargs,
+    load_robot,
 )
 
 HELP = "a jump-free joint path through Cartesian waypoints"
@@ -120,7 +120,7 @@ def run(args: argparse.Namespace) -> int:
     if args.html is not None:
         _viewer.check_viewer(args, live=False)
     check_input_file(args.poses, "--poses", None)
-    robot = swarm_ik.load_robot(args.robot, ee_frame=args.frame, **robot_kwargs(args))
+    robot = load_robot(args, ee_frame=args.frame)
     if args.html is not None:
         _viewer.check_meshes(robot, "--html")
     poses = _read_poses(args.poses)

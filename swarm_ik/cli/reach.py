@@ -2,15 +2,17 @@
 written as ``.npz``, a PNG of three slices and (with meshcat installed) an HTML point cloud.
 
 Everything that can be refused is refused before the work: non-finite or inverted
-``--bounds``, a grid too large, missing extras, output files that cannot be written (each
-folder tried), meshes of the robot that cannot be found for the HTML page.  Exit codes: 0 the
-files are written, 2 bad input, 130 interrupted.
+``--bounds``, a grid too large, an output asked for by name (``--png FILE``, ``--html FILE``)
+whose extra is missing, output files that cannot be written (each folder tried), meshes of
+the robot that cannot be found for the HTML page.  A picture or page not asked for by name
+whose extra is missing (matplotlib, meshcat) is skipped, with one line on stderr saying so
+and what to install, printed when the checks are done.  Exit codes: 0 the files are
+written, 2 bad input, 130 interrupted.
 """
 
 from __future__ import annotations
 
 import argparse
-import importlib.util
 import math
 import sys
 from pathlib import Path
@@ -25,7 +27,7 @@ from swarm_ik.cli._args import (
     add_lm_options,
     add_scheduler,
     check_output_file,
-    robot_kwargs,
+    load_robot,
 )
 from swarm_ik.errors import InvalidArgumentError
 
@@ -33,8 +35,10 @@ HELP = "reachability map on a voxel grid (npz + PNG slices + HTML point cloud)"
 """One line for ``swarm-ik --help``."""
 DESCRIPTION = (
     "Reachability index per voxel: the fraction of K orientations solved at "
-    "its centre.  Writes the map (.npz), a PNG of three slices (needs [plot]) and, with "
-    "meshcat installed, an HTML point cloud; every output is checked before solving."
+    "its centre.  Writes the map (.npz), a PNG of three slices (needs [plot]) and an HTML "
+    "point cloud (needs [viz]); every output is checked before solving.  --png/--html FILE "
+    "without its extra is refused; by default a picture whose extra is missing is skipped "
+    "with a note."
 )
 """The top of ``swarm-ik reach --help``."""
 
@@ -74,15 +78,16 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
         "--png",
         type=Path,
         metavar="FILE.png",
-        help="slices picture (default: next to --out; needs [plot])",
+        help="slices picture (default: next to --out, skipped with a note without matplotlib; "
+        "needs [plot])",
     )
     parser.add_argument("--no-png", action="store_true", help="do not draw the slices picture")
     parser.add_argument(
         "--html",
         type=Path,
         metavar="FILE.html",
-        help="meshcat page: point cloud, robot, colour legend (default: next to --out, when "
-        "meshcat is installed)",
+        help="meshcat page: point cloud, robot, colour legend (default: next to --out, "
+        "skipped with a note without meshcat; needs [viz])",
     )
     parser.add_argument("--no-html", action="store_true", help="do not write the HTML page")
     argtypes.add_seed(parser, "seed of the orientations and restarts")
@@ -101,12 +106,54 @@ add_parser = RobotCommand("reach", add_arguments, HELP, DESCRIPTION)
 """Add ``reach`` to the ``swarm-ik`` sub-parsers."""
 
 
-def has_module(module: str) -> bool:
-    """Whether ``module`` can be imported (without importing it)."""
+EXTRAS = {
+    "--png": ("the slices picture", "matplotlib", "plot"),
+    "--html": ("the HTML page", "meshcat", "viz"),
+}
+"""Option of an output -> (what it writes, the module it needs, the extra that installs it)."""
+
+
+def has_extra(option: str) -> bool:
+    """Whether the modules that write the output of ``option`` (``--png``, ``--html``) import.
+
+    They are imported, as writing the file would import them: a package installed but
+    broken, or a submodule that does not import, counts as missing (looking for the package
+    alone let the command solve, then fail on writing).
+    """
     try:
-        return importlib.util.find_spec(module) is not None
-    except ValueError:  # pragma: no cover - a module without a spec
+        if option == "--png":
+            import matplotlib.pyplot  # noqa: F401  (what plot_slices draws with)
+        else:
+            from swarm_ik import viz
+
+            viz.require_meshcat()  # meshcat and the submodules export_html uses
+    except ImportError:  # (viz.VizUnavailableError is one)
         return False
+    return True
+
+
+def wanted(option: str, given: Path | None, skipped: list[str]) -> bool:
+    """Whether the output of ``option`` can be written: its extra imports (:func:`has_extra`).
+
+    When it does not, an output asked for by name (``given``) is refused; one written by
+    default is skipped, the reason appended to ``skipped`` (printed before the work).
+
+    Raises:
+        InvalidArgumentError: ``given`` and the extra is missing (one line naming it).
+    """
+    if has_extra(option):
+        return True
+    what, module, extra = EXTRAS[option]
+    install = f'pip install "swarm_ik[{extra}]"'
+    if given is not None:
+        raise InvalidArgumentError(
+            f"{option} needs {module}, which is not installed: {install} (or leave out {option})"
+        )
+    skipped.append(
+        f"{what} is skipped: it needs {module}, which is not installed ({install}; "
+        f"--no-{option[2:]} skips it without this note)"
+    )
+    return False
 
 
 def check_bounds(bounds: Any) -> tuple[list[float], list[float]]:
@@ -135,7 +182,6 @@ def run(args: argparse.Namespace) -> int:
     missing extras, output paths, a grid too large); returns 0 when the files are written."""
     import numpy as np
 
-    import swarm_ik
     from swarm_ik import _validate, reach
 
     if args.bounds is not None:
@@ -147,22 +193,16 @@ def run(args: argparse.Namespace) -> int:
         if option is not None and off:
             name = "--png" if option is args.png else "--html"
             raise InvalidArgumentError(f"{name} FILE and --no-{name[2:]} contradict: give one")
+    skipped: list[str] = []  # outputs left out for a missing extra (said before the work)
     png = None
-    if not args.no_png:
-        if not has_module("matplotlib"):
-            raise InvalidArgumentError(
-                'the slices picture needs matplotlib: pip install "swarm_ik[plot]" (or --no-png)'
-            )
+    if not args.no_png and wanted("--png", args.png, skipped):
         png = check_output_file(args.png or out.with_suffix(".png"), "--png", (".png",))
     html = None
-    if not args.no_html:
-        if has_module("meshcat"):
-            html = check_output_file(
-                args.html or out.with_suffix(".html"), "--html", _viewer.HTML_SUFFIXES
-            )
-        elif args.html is not None:
-            raise InvalidArgumentError('--html needs meshcat: pip install "swarm_ik[viz]"')
-    robot = swarm_ik.load_robot(args.robot, ee_frame=args.frame, **robot_kwargs(args))
+    if not args.no_html and wanted("--html", args.html, skipped):
+        html = check_output_file(
+            args.html or out.with_suffix(".html"), "--html", _viewer.HTML_SUFFIXES
+        )
+    robot = load_robot(args, ee_frame=args.frame)
     if html is not None:
         _viewer.check_meshes(robot, "reach --html (--no-html skips the page)")
     # the grid's size is checked before anything is allocated; default_bounds with the same
@@ -172,6 +212,9 @@ def run(args: argparse.Namespace) -> int:
     else:
         lo, hi = reach.default_bounds(robot, seed=args.seed)
     _validate.check_grid_size(lo, hi, args.resolution)
+    reach.check_grid_size(lo, hi, args.resolution, args.orientations, args.max_targets)
+    if skipped:  # every check passed: one line, then the work
+        print("swarm-ik reach: " + "; ".join(skipped), file=sys.stderr, flush=True)
     rmap = reach.reach_map(
         robot,
         resolution=args.resolution,

@@ -9,7 +9,7 @@ from typing import Any
 
 from swarm_ik import argtypes
 from swarm_ik.cli import _viewer
-from swarm_ik.cli._args import EXIT_NOT_REACHED, EXIT_OK, RobotCommand, add_pose, robot_kwargs
+from swarm_ik.cli._args import EXIT_NOT_REACHED, EXIT_OK, RobotCommand, add_pose, load_robot
 
 HELP = (
     "look at a robot configuration, or at several solutions of a target, in meshcat "
@@ -103,7 +103,7 @@ def run(args: argparse.Namespace) -> int:
             if value is not None:
                 raise InvalidArgumentError(f"{option} applies to a target solved, not to --q")
     _viewer.check_viewer(args, live=live)
-    robot = swarm_ik.load_robot(args.robot, ee_frame=args.frame, **robot_kwargs(args))
+    robot = load_robot(args, ee_frame=args.frame)
     _viewer.check_meshes(robot, "show")
     target = None
     if args.from_q is not None:

@@ -21,9 +21,10 @@ from swarm_ik.cli._args import (
     add_pose,
     add_q0,
     add_tolerances,
+    check_collision_options,
     check_goals_file,
+    load_robot,
     pose_target,
-    robot_kwargs,
     solve_kwargs,
 )
 from swarm_ik.errors import InvalidArgumentError
@@ -166,17 +167,9 @@ def run(args: argparse.Namespace) -> int:
 
     if args.solver is None:  # (the parser leaves the registry unloaded: see _solver_help)
         args.solver = DEFAULT_SOLVER
-    for given, option, needed, other in (  # an option that modifies one not given
-        (args.no_self_collision, "--no-self-collision", args.scene, "--scene"),
-        (args.srdf, "--srdf", args.scene or args.goals, "--scene or --goals"),
-        (args.show_wait is not None, "--show-wait", args.show, "--show"),
-    ):
-        if given and not needed:
-            raise InvalidArgumentError(f"{option} applies to {other}, which was not given")
-    if args.srdf and args.no_self_collision:
-        raise InvalidArgumentError(
-            "--srdf names self-collision pairs, which --no-self-collision does not check"
-        )
+    check_collision_options(args, srdf_also="--goals")  # (a goals file may avoid collisions)
+    if args.show_wait is not None and not args.show:
+        raise InvalidArgumentError("--show-wait applies to --show, which was not given")
     drawing = _viewer.wants_drawing(args)
     if drawing:  # refused before solving: meshcat missing, an unwritable page
         _viewer.check_viewer(args, live=bool(args.show))
@@ -184,7 +177,7 @@ def run(args: argparse.Namespace) -> int:
         check_goals_file(args.goals)
     pose = None if args.pose is None else pose_target(args.pose, args.position_only)
     frames = None if not args.frame else (args.frame[0] if len(args.frame) == 1 else args.frame)
-    robot = swarm_ik.load_robot(args.robot, ee_frame=frames, srdf=args.srdf, **robot_kwargs(args))
+    robot = load_robot(args, ee_frame=frames, srdf=args.srdf)
     if drawing:
         _viewer.check_meshes(robot, "--html" if args.html else "--show")
     goals = None
