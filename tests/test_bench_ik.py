@@ -154,6 +154,24 @@ def test_bench_ik_resumes_and_jobs_give_the_same_answers(tmp_path: Path) -> None
         assert one[k] == two[k] if k.endswith("|swarm") else one[k][-1] == two[k][-1]
 
 
+def test_report_only_names_the_run_it_reports_not_its_own_arguments(tmp_path: Path) -> None:
+    """``--report-only`` rebuilds the summary of the run recorded in the folder: its header
+    names that run's robots, peers and sizes (it named the defaults of the report-only
+    invocation: all robots, n 1000) and its tables hold its rows."""
+    out = tmp_path / "r"
+    assert ik.run(_args(*QUICK, "--peers", "swarm", "--out", str(out))) == 0
+    first = (out / "summary.md").read_text()
+    (out / "summary.md").unlink()
+    assert ik.run(_args("--report-only", "--no-progress", "--out", str(out))) == 0
+    text = (out / "summary.md").read_text()
+    assert "--robots ur5 --peers swarm --n 3 --budgets-ms 50" in text
+    assert "| swarm | 3 |" in text
+    assert (
+        text.split("## Results")[1].split("\n## ")[0]
+        == first.split("## Results")[1].split("\n## ")[0]
+    )
+
+
 def test_quick_never_writes_into_a_full_run(tmp_path: Path) -> None:
     out = tmp_path / "full"
     common.write_run_info(out, "ik", quick=False)

@@ -23,7 +23,9 @@ finish; rerun to resume), ``summary.md`` (from the CSV and ``templates/ik.md``) 
 from __future__ import annotations
 
 import argparse
+import dataclasses
 import functools
+import json
 import math
 import sys
 import time
@@ -365,6 +367,22 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     )
 
 
+def recorded_plan(out: Path) -> IKPlan | None:
+    """The plan a run recorded in ``out``'s :data:`~swarm_ik.bench.common.RUN_INFO` (what
+    ``--report-only`` reports, whatever its own arguments), or None where it recorded none."""
+    try:
+        rec = json.loads((Path(out) / common.RUN_INFO).read_text()).get("plan")
+        if not isinstance(rec, dict):
+            return None
+        return IKPlan(
+            robots=tuple(rec["robots"]), peers=tuple(rec["peers"]),
+            budgets_ms=tuple(float(b) for b in rec["budgets_ms"]), n=int(rec["n"]),
+            seed=int(rec["seed"]), tol=float(rec["tol"]), lenient_tol=float(rec["lenient_tol"]),
+        )  # fmt: skip
+    except (OSError, ValueError, KeyError, TypeError, InvalidArgumentError):
+        return None
+
+
 def plan_from_args(args: argparse.Namespace) -> tuple[IKPlan, bool]:
     """The plan of an invocation and whether it is ``--quick``.
 
@@ -410,10 +428,11 @@ def run(args: argparse.Namespace) -> int:
     out = common.resolve_out(args.out, COMMAND, quick)
     if args.report_only:
         common.require_results(out, [runner.csv_path(out, "peers")], COMMAND, quick)
+        plan = recorded_plan(out) or plan  # (the header names the run, not this invocation)
     else:  # (a .urdf path is only checked by loading it)
         common.check_robots([r for r in plan.robots if r.endswith(".urdf")])
+        common.write_run_info(out, COMMAND, quick, plan=dataclasses.asdict(plan))
     common.single_thread()
-    common.write_run_info(out, COMMAND, quick)
     missing = [p for p in plans.IK_PEERS if not peers.get(p).available()]
     if missing and not args.peers:
         print(f"not available here, skipped: {', '.join(missing)}", file=sys.stderr)
