@@ -297,6 +297,19 @@ def write_run_info(out: Path, command: str, quick: bool, **extra: Any) -> Path:
     return p
 
 
+def write_report(path: Path, text: str) -> int:
+    """Write a benchmark's Markdown report to ``path``, print it, and return exit code 0."""
+    Path(path).write_text(text)
+    print(text)
+    return 0
+
+
+def load_line() -> str:
+    """The machine's cores and load averages, for a report's machine line."""
+    la = os.getloadavg()
+    return f"{cpu_count()} cores, load average {la[0]:.1f} / {la[1]:.1f} / {la[2]:.1f} at the end"
+
+
 def render(template: str, **values: Any) -> str:
     """A report from a template file of :data:`TEMPLATES` (``string.Template`` syntax,
     ``$name`` / ``${name}``); every placeholder must be given.

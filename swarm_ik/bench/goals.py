@@ -181,10 +181,7 @@ def run(args: argparse.Namespace) -> int:
     rows += posture(n, budget, args.seed)
     common.write_csv(out / "goals.csv", FIELDS, rows)
     common.write_run_info(out, "goals", args.quick, n=n, budget_ms=args.budget_ms)
-    text = report(common.read_csv(out / "goals.csv"))
-    (out / "summary.md").write_text(text)
-    print(text)
-    return 0
+    return common.write_report(out / "summary.md", report(common.read_csv(out / "goals.csv")))
 
 
 main = common.module_main(add_arguments, run, "goals", HELP)

@@ -387,7 +387,6 @@ def check_arms(names: list[str]) -> None:
 
 def run(args: argparse.Namespace) -> int:
     """Run the experiment; returns the exit code."""
-    import os
 
     out = common.resolve_out(args.out, "many", False)  # checked, not made yet
     check_arms(args.arms)
@@ -400,14 +399,8 @@ def run(args: argparse.Namespace) -> int:
     spread = run_spread(args.n, args.n_targets, args.seed)
     _write_csv(out / "many.csv", rows)
     _write_csv(out / "spread.csv", spread)
-    la = os.getloadavg()
-    load = (
-        f"load average {la[0]:.1f} / {la[1]:.1f} / {la[2]:.1f} on {os.cpu_count()} cores at the end"
-    )
-    md = summarize(rows, spread, args.n, min(speed, machine_speed()), load)
-    (out / "many.md").write_text(md)
-    print(md)
-    return 0
+    md = summarize(rows, spread, args.n, min(speed, machine_speed()), common.load_line())
+    return common.write_report(out / "many.md", md)
 
 
 main = common.module_main(add_arguments, run, "many", __doc__)

@@ -32,7 +32,6 @@ Writes ``paths.csv`` (one row per path) and ``path.md`` into ``--out``.
 from __future__ import annotations
 
 import argparse
-import os
 import time
 from collections.abc import Iterator
 from pathlib import Path
@@ -442,10 +441,7 @@ def run(args: argparse.Namespace) -> int:
         args.n, args.waypoints = info.get("n", args.n), info.get("waypoints", args.waypoints)
         rows_read: list[dict[str, Any]] = list(common.read_csv(out / "paths.csv"))
         kept = (out / "path.md").read_text().split("Machine: ", 1)[-1].split(".\n", 1)[0]
-        md = summarize(rows_read, args, kept)
-        (out / "path.md").write_text(md)
-        print(md)
-        return 0
+        return common.write_report(out / "path.md", summarize(rows_read, args, kept))
     common.check_robots(args.arms)  # a bad name refused before the folder is made
     out.mkdir(parents=True, exist_ok=True)
     rows: list[dict[str, Any]] = []
@@ -453,16 +449,9 @@ def run(args: argparse.Namespace) -> int:
     for arm in args.arms:
         rows += run_arm(arm, args.kinds, args.n, args.waypoints, args.seed, not args.no_peers)
     common.write_csv(out / "paths.csv", FIELDS, rows)
-    la = os.getloadavg()
-    load = (
-        f"{common.cpu_count()} cores, load average {la[0]:.1f} / {la[1]:.1f} / {la[2]:.1f} at "
-        f"the end, {time.perf_counter() - t0:.0f} s in all"
-    )
-    md = summarize(rows, args, load)
-    (out / "path.md").write_text(md)
+    load = f"{common.load_line()}, {time.perf_counter() - t0:.0f} s in all"
     common.write_run_info(out, "path", args.quick, n=args.n, waypoints=args.waypoints)
-    print(md)
-    return 0
+    return common.write_report(out / "path.md", summarize(rows, args, load))
 
 
 main = common.module_main(add_arguments, run, "path", __doc__)

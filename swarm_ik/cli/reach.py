@@ -47,6 +47,13 @@ MAX_TARGETS = 5_000_000
 building the parser imports no numerics; a test keeps the two equal)."""
 
 
+EXTRAS = {
+    "--png": ("the slices picture", "matplotlib", "plot"),
+    "--html": ("the HTML page", "meshcat", "viz"),
+}
+"""Option of an output -> (what it writes, the module it needs, the extra that installs it)."""
+
+
 def add_arguments(parser: argparse.ArgumentParser) -> None:
     """The options of ``swarm-ik reach`` after the robot's (see :func:`run`)."""
     parser.add_argument(
@@ -74,22 +81,15 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
         metavar="FILE.npz",
         help="map file (default reach_<robot>.npz)",
     )
-    parser.add_argument(
-        "--png",
-        type=Path,
-        metavar="FILE.png",
-        help="slices picture (default: next to --out, skipped with a note without matplotlib; "
-        "needs [plot])",
-    )
-    parser.add_argument("--no-png", action="store_true", help="do not draw the slices picture")
-    parser.add_argument(
-        "--html",
-        type=Path,
-        metavar="FILE.html",
-        help="meshcat page: point cloud, robot, colour legend (default: next to --out, "
-        "skipped with a note without meshcat; needs [viz])",
-    )
-    parser.add_argument("--no-html", action="store_true", help="do not write the HTML page")
+    for option, (what, module, extra) in EXTRAS.items():  # --png, --html and their --no-…
+        parser.add_argument(
+            option,
+            type=Path,
+            metavar=f"FILE.{option[2:]}",
+            help=f"{what} (default: next to --out, skipped with a note without {module}; "
+            f"needs [{extra}])",
+        )
+        parser.add_argument(f"--no-{option[2:]}", action="store_true", help=f"do not write {what}")
     argtypes.add_seed(parser, "seed of the orientations and restarts")
     add_lm_options(parser, 16, "most LM starts per pose")
     parser.add_argument(
@@ -104,13 +104,6 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
 
 add_parser = RobotCommand("reach", add_arguments, HELP, DESCRIPTION)
 """Add ``reach`` to the ``swarm-ik`` sub-parsers."""
-
-
-EXTRAS = {
-    "--png": ("the slices picture", "matplotlib", "plot"),
-    "--html": ("the HTML page", "meshcat", "viz"),
-}
-"""Option of an output -> (what it writes, the module it needs, the extra that installs it)."""
 
 
 def has_extra(option: str) -> bool:
