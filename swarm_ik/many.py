@@ -13,7 +13,10 @@ one-dimensional self-motion manifolds.  :func:`solve_many` returns
 Two paths: ``method="analytic"`` uses eaik (:mod:`swarm_ik.solvers.analytic`) on the 6R
 chains it decomposes (UR, z1, spherical wrists), ``method="numerical"`` polishes starts with
 the compiled Levenberg–Marquardt kernel of ``swarm``, ``"auto"`` (default) takes the analytic
-path when it applies and eaik is installed, else the numerical one.
+path when it applies and eaik is installed, else the numerical one, and adds the numerical
+path's solutions where the closed form is known to miss some (a singular target with a
+continuum of solutions, as a UR wrist at ``q5 = 0``).  At such a target no path returns the
+whole set: the solutions returned are samples of the continuum.
 
 >>> import swarm_ik
 >>> robot = swarm_ik.load_robot("yumi_left")
@@ -283,9 +286,12 @@ def solve_many(
     checked with Pinocchio's FK at once (``time_limit`` covers that check; each compiled
     call is capped to the time left).  The search stops at ``n`` branches, at the chain's
     structural bound (8 for a 6R arm with three parallel axes or a spherical wrist, 16 for
-    another 6R arm: the set is then complete), when every hop start is spent and ``patience``
-    random starts in a row gave no new branch, or at the budget (``max_starts``,
-    ``max_evals``, ``time_limit``).
+    another 6R arm: the set is then complete, except at a singular target with a continuum of
+    solutions, e.g. a UR wrist at ``q5 = 0``, where the 8 are samples of it), when every hop
+    start is spent and ``patience`` random starts in a row gave no new branch, or at the
+    budget (``max_starts``, ``max_evals``, ``time_limit``).  At a target on a singularity
+    where two branches merge into one double root (a straight elbow) the polish may stop on
+    both sides of it, a few 1e-6 rad apart, and report it twice.
 
     **Redundant arms** (more joints than constrained pose coordinates: 7-joint arms, or a
     position-only problem with more than 3 joints): random starts are polished until
@@ -293,15 +299,23 @@ def solve_many(
     are picked by farthest-point selection in wrapped joint space, starting from the one
     nearest to ``q0`` / mid-range (:func:`swarm_ik.branches.spread_select`).
 
-    **Analytic path.** eaik's closed form (:func:`swarm_ik.solvers.analytic.solve_all`): the
-    complete set at once, verified with Pinocchio.
+    **Analytic path.** eaik's closed form (:func:`swarm_ik.solvers.analytic.closed_form_set`):
+    the complete set of a generic target at once, verified with Pinocchio.  eaik's
+    least-squares points are polished into solutions where they lead to one: at a singular
+    target eaik may return no exact solution at all (a UR wrist at ``q5 = 0``: ``q6`` is
+    free), and the set then holds the representatives the polish reached (near such a target,
+    ``q5 = 1e-9``, a point within the tolerances where the polish stalled above round-off)
+    and is marked incomplete.  With ``method="auto"`` the numerical path then runs as well (as with
+    ``method="numerical"``, its budget less the polish's evaluations) and the closed form's
+    solutions it did not find join its own: never fewer solutions than the numerical path
+    alone, up to ``n``.
 
     Args:
         problem: The IK problem.
         n: Most solutions (branches) returned, ``>= 1``.
-        method: ``"auto"`` (analytic when eaik is installed and decomposes the chain, else
-            numerical), ``"numerical"`` or ``"analytic"`` (refused with the reason when it does
-            not apply).
+        method: ``"auto"`` (analytic when eaik is installed and decomposes the chain, with the
+            numerical path added where the closed form is marked incomplete; else numerical),
+            ``"numerical"`` or ``"analytic"`` (refused with the reason when it does not apply).
         min_distance: Optional coarser filter (rad / m, ``> 0``): drop a solution closer than
             this to a kept one.  Default ``None``: branches only.
         q0: Optional reference and first start, shape ``(nq,)`` (clipped into the limits with a
@@ -309,7 +323,8 @@ def solve_many(
         tol_pos: Position tolerance [m] of every solution.
         tol_rot: Rotation tolerance [rad] of every solution.
         seed: Seed or Generator for the random starts.
-        max_evals: Most FK + Jacobian evaluations in total (numerical path).
+        max_evals: Most FK + Jacobian evaluations in total (numerical path; on ``"auto"``'s
+            fallback the closed form's polish counts against it).
         time_limit: Most wall-clock seconds, verification included (numerical path).
         batch: Starts polished per compiled call.
         max_starts: Most starts; default ``64 · n`` when neither ``max_evals`` nor
@@ -323,9 +338,10 @@ def solve_many(
     Returns:
         The solutions, nearest to the reference first, each verified with Pinocchio's FK
         (``success`` True).  ``n_evals`` and ``time_s`` are the totals spent when each was found
-        (0 evaluations on the analytic path).  ``solver`` is ``"swarm"`` (numerical) or
-        ``"analytic"``.  Empty when nothing was found.  :func:`windings_of` adds each
-        branch's other in-limit 2π copies.
+        (on the analytic path the evaluations of the polish of eaik's least-squares points, 0
+        where it returned none).  ``solver`` is ``"swarm"`` (numerical) or ``"analytic"``
+        (both on ``"auto"``'s fallback).  Empty when nothing was found.  :func:`windings_of`
+        adds each branch's other in-limit 2π copies.
 
     Raises:
         InvalidArgumentError: ``n``, ``min_distance``, ``batch``, ``patience``, a tolerance or
@@ -370,42 +386,105 @@ def solve_many(
     if not use_analytic:
         warm_up(Route(problem))  # compiled kernels loaded before the clock starts
         _warm_up()
+        return _numerical_results(
+            problem, int(n), ref, start_q, seed, min_distance, max_evals, time_limit, tol_pos,
+            tol_rot, batch, max_starts, max_iters, patience, time.perf_counter(), seed_label,
+        )  # fmt: skip
     t0 = time.perf_counter()
-    if use_analytic:
-        qs, dps, drs = analytic.solve_supported(problem, ref, tol_pos, tol_rot)
-        if min_distance is not None and qs.shape[0] > 1:
-            found = BranchSet(
-                periodic_mask(problem.robot, problem.lower, problem.upper), BRANCH_TOL,
-                min_distance,
-            )  # fmt: skip
-            keep = [i for i in range(qs.shape[0]) if found.add(qs[i])]
-            qs, dps, drs = qs[keep], dps[keep], drs[keep]
-        qs, dps, drs = qs[:n], dps[:n], drs[:n]  # already nearest to the reference first
-        fits = analytic.fitness_of_errors(problem, qs, dps, drs)
-        k = qs.shape[0]
-        elapsed = time.perf_counter() - t0
-        results = _results(qs, dps, drs, [0] * k, [elapsed] * k, fits, "analytic", seed_label)
-    else:  # (a Python goal's values at each point computed once: rows, errors, checks)
-        with reuse_goal_values(bool(problem.python_goals)):
-            reps = _numerical(
-                problem, int(n), ref, start_q, make_rng(seed), min_distance, max_evals,
-                time_limit, tol_pos, tol_rot, batch, max_starts, max_iters, patience, t0,
-            )  # fmt: skip
-            qs_all = np.array([r[0] for r in reps]).reshape(-1, problem.nq)
-            fit_all = problem.fitness(qs_all) if reps else np.empty(0)
-        order = np.argsort(
-            branch_distance(
-                qs_all, ref, periodic_mask(problem.robot, problem.lower, problem.upper)
-            ),
-            kind="stable",
+    cf = analytic.closed_form_set(problem, ref, tol_pos, tol_rot)
+    qs, dps, drs = cf.q, cf.position_error, cf.rotation_error
+    periodic = periodic_mask(problem.robot, problem.lower, problem.upper)
+    if min_distance is not None and qs.shape[0] > 1:
+        found = BranchSet(periodic, BRANCH_TOL, min_distance)
+        keep = [i for i in range(qs.shape[0]) if found.add(qs[i])]
+        qs, dps, drs = qs[keep], dps[keep], drs[keep]
+    qs, dps, drs = qs[:n], dps[:n], drs[:n]  # already nearest to the reference first
+    fits = analytic.fitness_of_errors(problem, qs, dps, drs)
+    k = qs.shape[0]
+    elapsed = time.perf_counter() - t0
+    results = _results(qs, dps, drs, [cf.evals] * k, [elapsed] * k, fits, "analytic", seed_label)
+    if method == "analytic" or not cf.incomplete:
+        return results
+    # auto, and the closed form is known to miss solutions (a singular target, e.g. a UR
+    # wrist at q5 = 0 with a continuum of them): the numerical search as method="numerical"
+    # runs it (its compiled kernels loaded off the clock; the closed form's time and polish
+    # evaluations count against the budget), and the closed form's solutions it did not find
+    # join its own
+    warm_up(Route(problem))
+    _warm_up()
+    left = None if max_evals is None else max(max_evals - cf.evals, 0)
+    numerical = _numerical_results(
+        problem, int(n), ref, start_q, seed, min_distance, left, time_limit, tol_pos, tol_rot,
+        batch, max_starts, max_iters, patience, time.perf_counter() - elapsed, seed_label,
+        cf.evals,
+    )  # fmt: skip
+    return _merged(numerical, results, periodic, min_distance, ref, int(n))
+
+
+def _numerical_results(
+    problem: IKProblem,
+    n: int,
+    ref: FloatArray,
+    start_q: FloatArray | None,
+    seed: int | np.random.Generator | None,
+    min_distance: float | None,
+    max_evals: int | None,
+    time_limit: float | None,
+    tol_pos: float,
+    tol_rot: float,
+    batch: int,
+    max_starts: int | None,
+    max_iters: int,
+    patience: int,
+    t0: float,
+    seed_label: int | None,
+    evals_before: int = 0,
+) -> list[Result]:
+    """The numerical path of :func:`solve_many` (its compiled kernels already loaded): the
+    search (:func:`_numerical`, its clock started at ``t0``), the solutions as results
+    nearest to the reference first, each one's ``n_evals`` counted from ``evals_before``
+    (evaluations spent before the search)."""
+    # (a Python goal's values at each point computed once: rows, errors, checks)
+    with reuse_goal_values(bool(problem.python_goals)):
+        reps = _numerical(
+            problem, n, ref, start_q, make_rng(seed), min_distance, max_evals, time_limit,
+            tol_pos, tol_rot, batch, max_starts, max_iters, patience, t0,
+        )  # fmt: skip
+        qs_all = np.array([r[0] for r in reps]).reshape(-1, problem.nq)
+        fit_all = problem.fitness(qs_all) if reps else np.empty(0)
+    order = np.argsort(
+        branch_distance(qs_all, ref, periodic_mask(problem.robot, problem.lower, problem.upper)),
+        kind="stable",
+    )
+    results = []
+    for i in order:
+        q_i, dp_i, dr_i, ev_i, t_i = reps[i]
+        fit_i = float(fit_all[i])
+        results.append(
+            _result(q_i, dp_i, dr_i, evals_before + ev_i, t_i, fit_i, SOLVER_NAME, seed_label)
         )
-        results = []
-        for i in order:
-            q_i, dp_i, dr_i, ev_i, t_i = reps[i]
-            results.append(
-                _result(q_i, dp_i, dr_i, ev_i, t_i, float(fit_all[i]), SOLVER_NAME, seed_label)
-            )
     return results
+
+
+def _merged(
+    first: list[Result],
+    extra: list[Result],
+    periodic: Any,
+    min_distance: float | None,
+    ref: FloatArray,
+    n: int,
+) -> list[Result]:
+    """``first`` (every one kept), then each of ``extra`` that is a new branch (and farther
+    than ``min_distance`` from those kept), nearest to the reference first, at most ``n`` (at
+    least ``min(n, len(first))``)."""
+    found = BranchSet(periodic, BRANCH_TOL, min_distance)
+    for r in first:
+        found.q.append(np.array(r.q, dtype=float))
+    out = list(first) + [r for r in extra if found.add(r.q)]
+    if not out:
+        return out
+    d = branch_distance(np.array([r.q for r in out]), ref, periodic)
+    return [out[i] for i in np.argsort(d, kind="stable")[:n]]
 
 
 def windings_of(problem: IKProblem, results: list[Result], q0: Any = None) -> list[list[Result]]:

@@ -568,7 +568,8 @@ def _all_solutions(
         max_starts=64 * n,
     )  # fmt: skip
     qs = np.array([r.q for r in results if r.success], dtype=float).reshape(-1, problem.nq)
-    closed = bool(results) and all(r.solver == "analytic" for r in results)
+    # (closed form: eaik's set, with the numerical search's added where it is incomplete)
+    closed = any(r.solver == "analytic" for r in results)
     return qs, closed
 
 
@@ -877,8 +878,10 @@ def _closed_form(ctx: _Context, i: int) -> tuple[FloatArray, bool, bool] | None:
     """Waypoint ``i``'s closed-form set with every in-limit 2π copy: ``(q, closed form used,
     certified complete)``; None when the waypoint has no end-effector pose.
 
-    eaik's least-squares solutions (``solve_many`` keeps only the exact ones) are probed:
-    each is polished (its own start only); a solution it leads to that is no known branch
+    eaik's least-squares solutions are probed (``solve_many`` polishes them as well, and adds
+    its numerical search where that finds a singular solution; this probe also decides the
+    certificate): each is polished (its own start only); a solution it leads to that is no
+    known branch
     (modulo 2π) was missed — at a singular pose a whole continuum of solutions (e.g. a UR
     wrist at ``q5 = 0``) comes back as one least-squares point — and joins the candidates.
 

@@ -13,12 +13,18 @@ product-of-exponentials form, read from the reduced Pinocchio model at ``q = 0``
 * ``R`` (3, 3): the end-effector orientation at ``q = 0``.
 
 eaik then checks which decomposition applies (``has_known_decomposition``).  Each of its
-solutions is kept when it is exact (not a least-squares one), brought into the limits by a
-2π shift (the in-limit copy nearest to ``q0``, else to the middle of the ranges) and verified
-with Pinocchio's FK against the tolerances; duplicates modulo 2π (branches that meet at a
-singularity) are merged.  Chains eaik cannot decompose (7 joints, prismatic joints, generic
-offsets) are refused with :class:`AnalyticUnsupportedError` naming the reason; without eaik
-installed with :class:`AnalyticUnavailableError` naming the extra.
+solutions is brought into the limits by a 2π shift (the in-limit copy nearest to ``q0``, else
+to the middle of the ranges) and kept when Pinocchio's FK meets the tolerances; duplicates
+modulo 2π (branches that meet at a singularity) are merged.  A point of eaik's that misses the
+pose (a least-squares one) is polished with the compiled Levenberg–Marquardt kernel, and
+joins the set if that leads to a new solution: at a singular target eaik may return nothing
+but such points (a UR wrist at ``q5 = 0`` has a continuum of solutions, ``q6`` free; eaik sets
+it to 0 and misses the pose), and the set is then marked incomplete
+(:attr:`ClosedFormSet.incomplete`; :func:`swarm_ik.solve_many` adds its numerical search
+there).  For a generic target the set is eaik's complete one.  Chains eaik cannot decompose
+(7 joints, prismatic joints, generic offsets) are refused with
+:class:`AnalyticUnsupportedError` naming the reason; without eaik installed with
+:class:`AnalyticUnavailableError` naming the extra.
 
 >>> import swarm_ik
 >>> from swarm_ik.solvers import analytic
@@ -35,17 +41,18 @@ import math
 import sys
 import weakref
 from dataclasses import dataclass
-from typing import TYPE_CHECKING, Any
+from typing import TYPE_CHECKING, Any, NamedTuple
 
 import numba
 import numpy as np
 import pinocchio as pin
 
 from swarm_ik._types import FloatArray
-from swarm_ik.branches import BRANCH_TOL, TWO_PI, pose_errors, pose_errors_of
+from swarm_ik.branches import BRANCH_TOL, ROUNDOFF_TOL, TWO_PI, pose_errors, pose_errors_of
 from swarm_ik.errors import SwarmIKError
 from swarm_ik.kernels.joints import wrapped
 from swarm_ik.solvers.base import Evaluator, register
+from swarm_ik.solvers.hybrid import Polisher
 
 if TYPE_CHECKING:
     from swarm_ik.problem import IKProblem
@@ -302,14 +309,19 @@ def solve_all(
     tol_pos: float = 1e-5,
     tol_rot: float = 1e-5,
 ) -> tuple[FloatArray, FloatArray, FloatArray]:
-    """Every branch of ``problem`` within its bounds, one in-limit representative each.
+    """The closed-form solutions of ``problem`` within its bounds, one in-limit representative
+    of each branch: every branch for a generic target.
 
-    eaik's exact solutions (not its least-squares ones) are brought into the limits as their
-    2π copies nearest to ``ref``, joint by joint; duplicates modulo 2π (two branches meeting at
-    a singularity, within :data:`~swarm_ik.branches.BRANCH_TOL`) are merged, and each one left
-    is verified with Pinocchio's own FK (``forwardKinematics`` + ``updateFramePlacement``,
-    ≈ 1.3 µs a solution) against the tolerances.  The folding, merging and sorting run in one
-    compiled call, the eaik robot is cached per :class:`~swarm_ik.robot.RobotModel`.
+    eaik's solutions (exact ones first) are brought into the limits as their 2π copies nearest
+    to ``ref``, joint by joint; duplicates modulo 2π (two branches meeting at a singularity,
+    within :data:`~swarm_ik.branches.BRANCH_TOL`) are merged, and each one left is verified
+    with Pinocchio's own FK (``forwardKinematics`` + ``updateFramePlacement``, ≈ 1.3 µs a
+    solution) against the tolerances.  The folding, merging and sorting run in one compiled
+    call, the eaik robot is cached per :class:`~swarm_ik.robot.RobotModel`.  eaik's points
+    that fail the check (its least-squares ones) are polished into solutions where they lead
+    to one (:func:`closed_form_set`): at a singular target with a continuum of solutions (a
+    UR wrist at ``q5 = 0``) eaik returns only such points, and the set then holds the
+    representatives the polish reached, not the whole continuum.
 
     Args:
         problem: A full-pose IK problem of a chain eaik decomposes.
@@ -326,37 +338,108 @@ def solve_all(
         AnalyticUnavailableError: eaik is not installed.
         AnalyticUnsupportedError: the chain or problem is not solvable analytically.
     """
+    cf = _checked_set(problem, ref, tol_pos, tol_rot)
+    return cf.q, cf.position_error, cf.rotation_error
+
+
+def _checked_set(problem: IKProblem, ref: Any, tol_pos: float, tol_rot: float) -> ClosedFormSet:
+    """:func:`closed_form_set` after :func:`support`'s check (``ref`` None: the middle of the
+    bounds)."""
     reason = support(problem)
     if reason:
         raise AnalyticUnsupportedError(f"no analytic IK for this problem: {reason}")
     lo, hi = problem.lower, problem.upper
     center = 0.5 * (lo + hi) if ref is None else np.asarray(ref, dtype=float)
-    return solve_supported(problem, center, tol_pos, tol_rot)
+    return closed_form_set(problem, center, tol_pos, tol_rot)
 
 
 def solve_supported(
     problem: IKProblem, ref: FloatArray, tol_pos: float, tol_rot: float
 ) -> tuple[FloatArray, FloatArray, FloatArray]:
-    """:func:`solve_all` without its checks, for a problem :func:`support` accepted (the
-    per-call path of :func:`swarm_ik.solve_many`); ``ref`` ``(nq,)`` is required."""
+    """:func:`solve_all` without its checks, for a problem :func:`support` accepted;
+    ``ref`` ``(nq,)`` is required.  :func:`closed_form_set` says more (whether the set is
+    known to miss solutions)."""
+    cf = closed_form_set(problem, ref, tol_pos, tol_rot)
+    return cf.q, cf.position_error, cf.rotation_error
+
+
+class ClosedFormSet(NamedTuple):
+    """What :func:`closed_form_set` returns.
+
+    Attributes:
+        q: The solutions, shape ``(k, nq)``, each an in-limit copy, nearest to the reference
+            first.
+        position_error: Their position errors with Pinocchio's FK [m], ``(k,)``.
+        rotation_error: Their rotation errors [rad], ``(k,)``.
+        incomplete: True when the set cannot be taken as complete: a point eaik returned as
+            a least-squares one (or an exact one that failed the check) was polished into a
+            solution eaik did not give, at a singular configuration (smallest Jacobian
+            singular value below :data:`SINGULAR_SIGMA`), as at a target with a continuum of
+            solutions (a UR wrist at ``q5 = 0`` or ``π``), of which the set then holds only
+            the representatives the polish reached.  False does not prove the set complete:
+            it is eaik's set (with any non-singular solution the polish recovered), complete
+            for a generic target.
+        evals: FK + Jacobian evaluations the polish spent (0 when eaik's points needed none).
+    """
+
+    q: FloatArray
+    position_error: FloatArray
+    rotation_error: FloatArray
+    incomplete: bool
+    evals: int
+
+
+SINGULAR_SIGMA = 1e-4
+"""A solution the polish found (one eaik missed) whose smallest Jacobian singular value is
+below this lies at a singularity, where a continuum of solutions may be: the set is then
+marked incomplete (:attr:`ClosedFormSet.incomplete`)."""
+POLISH_ITERS = 30
+"""Evaluations a polish of one of eaik's least-squares points may spend (:func:`closed_form_set`;
+those that reach a solution took 3–10 on UR5 targets, those of an unreachable branch stalled
+in 4–12)."""
+
+
+def closed_form_set(
+    problem: IKProblem, ref: FloatArray, tol_pos: float, tol_rot: float
+) -> ClosedFormSet:
+    """The closed-form set of a problem :func:`support` accepted (the per-call path of
+    :func:`solve_all` and :func:`swarm_ik.solve_many`); ``ref`` ``(nq,)`` is required.
+
+    eaik's solutions, exact ones first, are folded into the limits (their 2π copies nearest to
+    ``ref``), merged modulo 2π and checked with Pinocchio's FK against the tolerances.  Each of
+    eaik's points that is no solution so kept (a least-squares one, or an exact one that
+    failed the check) is then polished with the compiled Levenberg–Marquardt kernel towards
+    round-off (:data:`~swarm_ik.branches.ROUNDOFF_TOL`, at most :data:`POLISH_ITERS`
+    evaluations each): at a singular target eaik may return only least-squares points (a UR
+    wrist at ``q5 = 0``: ``q6`` is free, eaik sets it to 0 and the pose misses).  A polished
+    point that meets the tolerances (checked with Pinocchio as well; near a singular target,
+    ``q5 = 1e-9``, it may stall there above round-off) and is a new solution modulo 2π joins
+    the set, which is then marked ``incomplete`` if that solution is singular.  An unreachable
+    branch's least-squares point stalls within a few evaluations (the polish costs ≈ 45 µs
+    where eaik returns such points: about a quarter of random UR5 targets).
+
+    Returns:
+        A :class:`ClosedFormSet`; empty when the pose is out of reach or no solution fits the
+        limits.
+    """
     robot = problem.robot
     chain = _CACHE.get(robot) or analytic_chain(robot)
     lo, hi = problem.lower, problem.upper
     target = problem.target
     assert target is not None  # support() accepted the problem: one pose target
     sol = chain.solver.calculate_IK(target)
-    qs = sol.Q
-    k = qs.shape[0]
     nq = lo.shape[0]
+    qs = np.asarray(sol.Q, dtype=float).reshape(-1, nq)
+    k = qs.shape[0]
     if k == 0:
-        return np.empty((0, nq)), np.empty(0), np.empty(0)
+        return ClosedFormSet(np.empty((0, nq)), np.empty(0), np.empty(0), False, 0)
     out = np.empty((k, nq))
     key = np.empty(k)
     # eaik's exact solutions first, then its least-squares ones: at a singularity (UR5's
     # straight elbow, its home pose among them) two branches merge and eaik calls the exact
     # solution least squares (solve_many found none there); one that folds onto an exact
     # solution is its duplicate, and the check below drops those that miss the pose
-    order = np.argsort(np.asarray(sol.is_LS, dtype=bool), kind="stable")
+    order = np.argsort(np.asarray(sol.is_LS, dtype=bool).reshape(-1), kind="stable")
     c = _fold_unique(
         np.ascontiguousarray(qs[order]), lo, hi, ref, BRANCH_TOL * BRANCH_TOL, out, key
     )
@@ -364,9 +447,71 @@ def solve_supported(
     m = robot.fk_pinocchio_many(out[:c])
     dp, dr = pose_errors_of(m, problem.goals[0])  # bit for bit as swarm_ik.verify
     good = (dp <= tol_pos) & (dr <= tol_rot)
-    if c < k or not good.all():
-        return out[:c][good], dp[good], dr[good]
-    return out, dp, dr
+    if c == k and good.all():  # (the generic target: eaik's exact set, nothing to polish)
+        return ClosedFormSet(out, dp, dr, False, 0)
+    sols, dps, drs = out[:c][good], dp[good], dr[good]
+    # the polish's starts: the points that failed the check, and those with no in-limit copy
+    # (clipped into the limits: a continuum may reach into them elsewhere)
+    starts = out[:c][~good]
+    if c < k:
+        starts = np.vstack([starts, _clipped_misfits(qs, lo, hi, ref)])
+    if starts.shape[0] == 0:
+        return ClosedFormSet(sols, dps, drs, False, 0)
+    found, evals = _polish(problem, starts, tol_pos, tol_rot)
+    if found.shape[0] == 0:
+        return ClosedFormSet(sols, dps, drs, False, evals)
+    both = np.vstack([sols, found])
+    out2 = np.empty_like(both)
+    key2 = np.empty(both.shape[0])
+    c2 = _fold_unique(both, lo, hi, ref, BRANCH_TOL * BRANCH_TOL, out2, key2)
+    if c2 == sols.shape[0]:  # every polished point a known solution
+        return ClosedFormSet(sols, dps, drs, False, evals)
+    dp2, dr2 = pose_errors_of(robot.fk_pinocchio_many(out2[:c2]), problem.goals[0])
+    ok = (dp2 <= tol_pos) & (dr2 <= tol_rot)
+    qs2 = out2[:c2][ok]
+    incomplete = any(  # a new solution at a singular configuration (a continuum's sample?)
+        float(np.linalg.svd(robot.jacobian_pinocchio(q), compute_uv=False)[-1]) < SINGULAR_SIGMA
+        for q in qs2
+        if not _is_among(q, sols)
+    )
+    return ClosedFormSet(qs2, dp2[ok], dr2[ok], incomplete, evals)
+
+
+def _is_among(q: FloatArray, qs: FloatArray) -> bool:
+    """Whether ``q`` is a row of ``qs`` modulo 2π (within :data:`~swarm_ik.branches.BRANCH_TOL`)."""
+    if qs.shape[0] == 0:
+        return False
+    d = (qs - q + np.pi) % TWO_PI - np.pi
+    return bool(np.min(np.einsum("ij,ij->i", d, d)) < BRANCH_TOL * BRANCH_TOL)
+
+
+def _clipped_misfits(qs: FloatArray, lo: FloatArray, hi: FloatArray, ref: FloatArray) -> FloatArray:
+    """The rows of ``qs`` with no in-limit 2π copy (on some joint), each as its copy nearest
+    to ``ref`` clipped into the limits, ``(m, nq)``."""
+    m_min = np.ceil((lo - 1e-9 - qs) / TWO_PI)
+    m_max = np.floor((hi + 1e-9 - qs) / TWO_PI)
+    misfit = (m_min > m_max).any(axis=1)
+    if not misfit.any():
+        return np.empty((0, qs.shape[1]))
+    rows = qs[misfit]
+    return np.clip(rows + TWO_PI * np.round((ref - rows) / TWO_PI), lo, hi)
+
+
+def _polish(
+    problem: IKProblem, starts: FloatArray, tol_pos: float, tol_rot: float
+) -> tuple[FloatArray, int]:
+    """``starts`` ``(m, nq)`` polished towards round-off with the compiled LM kernel within
+    the problem's bounds: ``(the points that ended within the tolerances (k, nq), evaluations
+    spent)``.  Near a singular target a start may stall on the floor of a valley of tiny
+    residual above round-off (a UR wrist at ``q5 = 1e-9``), within the tolerances: such a
+    point is kept too (the caller checks each one with Pinocchio)."""
+    pol = Polisher.from_problem(
+        problem, tol_pos=ROUNDOFF_TOL, tol_rot=ROUNDOFF_TOL,
+        wrap=problem.robot.continuous_mask, max_iters=POLISH_ITERS,
+    )  # fmt: skip
+    res = pol.polish(starts, POLISH_ITERS * starts.shape[0], stop_first=False)
+    met = (res.position_error <= tol_pos) & (res.rotation_error <= tol_rot)
+    return np.ascontiguousarray(res.q[met]), int(res.used)
 
 
 def fitness_of_errors(
@@ -395,8 +540,9 @@ def solve_result(
 
     The answer is the branch nearest to ``q0`` (else to the middle of the bounds); its
     ``goal_errors`` come from :meth:`IKProblem.verify` (Pinocchio), ``n_evals`` is the number
-    of branches verified, as :func:`run` counts them.  With no branch in the limits the
-    result is the start, not successful, with reason ``"unreachable"`` or ``"local_minima"``.
+    of branches verified plus the polish's evaluations (:func:`closed_form_set`), as
+    :func:`run` counts them.  With no branch in the limits the result is the start, not
+    successful, with reason ``"unreachable"`` or ``"local_minima"``.
 
     Args:
         problem: A problem :func:`support` accepts.
@@ -417,7 +563,8 @@ def solve_result(
 
     t0 = time.perf_counter()
     ref = 0.5 * (problem.lower + problem.upper) if q0 is None else np.asarray(q0, dtype=float)
-    qs, dp, dr = solve_all(problem, ref=ref, tol_pos=tol_pos, tol_rot=tol_rot)
+    cf = _checked_set(problem, ref, tol_pos, tol_rot)
+    qs, dp, dr = cf.q, cf.position_error, cf.rotation_error
     q = qs[0].copy() if qs.shape[0] else ref.copy()
     fit = (
         fitness_of_errors(problem, qs[:1], dp[:1], dr[:1])[0]
@@ -438,7 +585,7 @@ def solve_result(
         fitness=float(fit),
         position_error=float(e_p),
         rotation_error=float(e_r),
-        n_evals=int(qs.shape[0]),
+        n_evals=int(qs.shape[0]) + cf.evals,
         time_s=elapsed,
         success=success,
         within_limits=within,
@@ -451,8 +598,10 @@ def solve_result(
 
 
 def run(ev: Evaluator, rng: np.random.Generator) -> None:
-    """Solver ``analytic``: all branches with eaik; the answer is the one nearest to ``q0``
-    (else to the middle of the bounds).  One evaluation per branch verified.
+    """Solver ``analytic``: the closed-form branches with eaik (:func:`closed_form_set`, its
+    least-squares points polished where they lead to a solution); the answer is the one
+    nearest to ``q0`` (else to the middle of the bounds).  One evaluation per branch verified,
+    plus the polish's (within the budget).
 
     Raises:
         AnalyticUnavailableError: eaik is not installed.
@@ -462,11 +611,13 @@ def run(ev: Evaluator, rng: np.random.Generator) -> None:
     if problem is None:
         raise AnalyticUnsupportedError("solver 'analytic' needs an IK problem, not an objective")
     tol_pos, tol_rot = ev.tolerance if ev.tolerance is not None else (1e-5, 1e-5)
-    qs, dp, dr = solve_all(problem, ref=ev.q0, tol_pos=tol_pos, tol_rot=tol_rot)
+    cf = _checked_set(problem, ev.q0, tol_pos, tol_rot)
+    qs, dp, dr = cf.q, cf.position_error, cf.rotation_error
     if qs.shape[0]:
         ev.record(qs[:1], np.array(fitness_of_errors(problem, qs[:1], dp[:1], dr[:1])))
-        if qs.shape[0] > 1 and ev.remaining > 0:
-            ev.add_evals(min(qs.shape[0] - 1, ev.remaining))
+    more = max(qs.shape[0] - 1, 0) + cf.evals
+    if more and ev.remaining > 0:
+        ev.add_evals(min(more, ev.remaining))
     ev.end_iteration()
 
 
