@@ -172,6 +172,12 @@ _W_ROT, _LAM, _MU, _ORTH_TOL = 1.0, 10.0, 1.0, ORTH_TOL
 """The defaults of :class:`IKProblem`'s options."""
 
 
+def _batch(q_batch: Any) -> FloatArray:
+    """Joint vectors as the kernels take them: float64, C-contiguous, writable (a
+    :class:`~swarm_ik.result.Result`'s read-only ``q`` copied), at least 2-D ``(pop, nq)``."""
+    return np.require(np.atleast_2d(q_batch), dtype=float, requirements=("C", "W"))
+
+
 class IKProblem:
     """Inverse kinematics of a set of goals.
 
@@ -487,7 +493,7 @@ class IKProblem:
     ) -> tuple[FloatArray, FloatArray]:
         """Errors of every goal ``(pop, ng, 2)`` and the secondary cost ``(pop,)``: the
         compiled goals through the kernels, Python goals on Pinocchio's state."""
-        q2 = np.ascontiguousarray(np.atleast_2d(q_batch), dtype=float)
+        q2 = _batch(q_batch)
         pop = q2.shape[0]
         err = np.empty((pop, len(self.goals), 2))
         cost2 = np.zeros(pop)
@@ -556,7 +562,7 @@ class IKProblem:
             ``q + pinv(jac) @ err`` is the Gauss–Newton step.  The compiled goals' rows come
             first, then the Python goals' (``−∂r/∂q`` of their ``jacobian``).
         """
-        q2 = np.ascontiguousarray(np.atleast_2d(q_batch), dtype=float)
+        q2 = _batch(q_batch)
         res, jac = self.stacked_rows(q2, primary, q0)
         return self.fitness(q2), res, jac
 
@@ -565,7 +571,7 @@ class IKProblem:
     ) -> tuple[FloatArray, FloatArray]:
         """The stacked residual and step Jacobian of :meth:`residual_jacobian` without the
         fitness (what the numpy polish steps with): ``(pop, rows)``, ``(pop, rows, nq)``."""
-        q2 = np.ascontiguousarray(np.atleast_2d(q_batch), dtype=float)
+        q2 = _batch(q_batch)
         tab = self.table(q0)
         pop, m = q2.shape[0], tab.rows_primary if primary else tab.rows_secondary
         res = np.zeros((pop, m))

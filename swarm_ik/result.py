@@ -17,6 +17,12 @@ class Result:
     The errors are recomputed with Pinocchio's own forward kinematics (not the solver's
     batched kernel), so they can be trusted independently of the solver.
 
+    The arrays ``q`` and ``history`` are read-only copies (float64) made at construction,
+    whatever route builds the Result (its constructor, :func:`dataclasses.replace`,
+    :mod:`copy`, :mod:`pickle`): a result cannot change after its errors were judged for its
+    ``q``.  ``r.q[0] = 1.0`` raises ``ValueError``, and a later change to the array given to
+    the constructor does not reach the result; ``r.q.copy()`` gives a writable copy.
+
     Attributes:
         q: Best joint vector found (rad / m, one value per joint), shape ``(nq,)``.
         fitness: Its fitness under the problem's fitness function.
@@ -63,6 +69,18 @@ class Result:
     goal_errors: tuple[Any, ...] = ()
     reason: str = ""
 
+    def __post_init__(self) -> None:
+        # (the arrays frozen, whatever the caller keeps doing with its own)
+        object.__setattr__(self, "q", _read_only(self.q))
+        object.__setattr__(self, "history", _read_only(self.history))
+
+    def __setstate__(self, state: dict[str, Any]) -> None:
+        # (pickle and copy restore the fields without __init__: read-only here too)
+        d = self.__dict__
+        d.update(state)
+        d["q"] = _read_only(d["q"])
+        d["history"] = _read_only(d["history"])
+
     def to_dict(self) -> dict[str, Any]:
         """JSON-ready dict (arrays as lists)."""
         d = {f.name: getattr(self, f.name) for f in fields(self)}
@@ -79,3 +97,13 @@ class Result:
             f"reason={self.reason!r}, "
             f"q={np.round(self.q, 6).tolist()})"
         )
+
+
+def _read_only(value: Any) -> FloatArray:
+    """A read-only float64 copy of ``value`` (an array or a sequence of numbers); an array
+    that is already one (``dataclasses.replace``, ``copy.copy``) is kept as it is."""
+    if isinstance(value, np.ndarray) and value.dtype == np.float64 and not value.flags.writeable:
+        return value
+    arr = np.array(value, dtype=float)
+    arr.setflags(write=False)
+    return arr

@@ -429,6 +429,20 @@ def _converted(
     return out
 
 
+def _unit(v: FloatArray, what: str) -> FloatArray:
+    """``v`` divided by its norm (computed on ``v`` over its largest entry first, so that
+    entries such as 1e200, whose squares overflow, normalise exactly).
+
+    Raises:
+        InvalidArgumentError: the norm is below 1e-9 (``what`` names the entries).
+    """
+    big = float(np.max(np.abs(v)))
+    scaled = v / big if big > 0.0 else v
+    if not big * float(np.linalg.norm(scaled)) >= 1e-9:
+        raise InvalidArgumentError(f"{what} has zero norm: {v.tolist()}")
+    return scaled / np.linalg.norm(scaled)
+
+
 @dataclass(frozen=True, eq=False)
 class RobotModel:
     """A URDF reduced to the joints between the root and its goal frames, with limits, joint
@@ -946,15 +960,60 @@ class RobotModel:
         return out
 
     def from_full_configuration(self, q_full: Any) -> FloatArray:
-        """The joint vector ``(nq,)`` of a configuration of :attr:`full_model` (the inverse of
-        :meth:`full_configuration` on the solved joints)."""
-        q_full = np.asarray(q_full, dtype=float).reshape(self.full_model.nq)
-        q_red = np.empty(self.model.nq)
+        """The joint vector of a configuration of :attr:`full_model`: the inverse of
+        :meth:`full_configuration` on the solved joints (the other joints' values are checked
+        to be finite, not read).
+
+        A floating base's quaternion is normalised first (any norm of at least 1e-9), as
+        :func:`swarm_ik.pose.quat_to_matrix` does for targets (Pinocchio itself would read a
+        non-unit quaternion as a scaled, non-rigid rotation); a continuous joint's
+        ``(cos θ, sin θ)`` pair gives its angle ``atan2(sin θ, cos θ)``, whatever its norm.
+
+        Args:
+            q_full: Pinocchio configuration of the whole URDF, shape ``(full_model.nq,)``
+                (rad / m; a floating base's ``[x y z qx qy qz qw]`` first, in metres and a
+                quaternion ``(x, y, z, w)``; a continuous joint as ``(cos θ, sin θ)``).
+
+        Returns:
+            Joint vector (rad / m), shape ``(nq,)``; a floating base's rotation as a rotation
+            vector [rad] of norm at most π.
+
+        Raises:
+            InvalidArgumentError: ``q_full`` is not real numbers (text, ragged nesting,
+                complex values), not of shape ``(full_model.nq,)``, holds a NaN or infinite
+                value, or a solved joint's quaternion or ``(cos, sin)`` pair has a norm below
+                1e-9 (no rotation to read).
+        """
         full = self.full_model
+        n_full = int(full.nq)
+        what = "q_full (a configuration of full_model)"
+        arr = floats_or(
+            q_full, lambda: f"{what} must be {n_full} numbers, got {reprlib.repr(q_full)}"
+        )
+        if arr.shape != (n_full,):
+            hint = (
+                f" (that is the length of a joint vector q: full_configuration(q) gives the "
+                f"{n_full} values)"
+                if arr.shape == (self.nq,)
+                else ""
+            )
+            raise InvalidArgumentError(
+                f"{what} must hold {n_full} values (full_model.nq); got shape {arr.shape}{hint}"
+            )
+        if not np.isfinite(arr).all():
+            raise InvalidArgumentError(f"{what} contains NaN or infinite values: {arr.tolist()}")
+        q_red = np.empty(self.model.nq)
         for j in range(1, self.model.njoints):
             jr = self.model.joints[j]
             jf = full.joints[full.getJointId(self.model.names[j])]
-            q_red[jr.idx_q : jr.idx_q + jr.nq] = q_full[jf.idx_q : jf.idx_q + jf.nq]
+            at, name = jf.idx_q, self.model.names[j]
+            seg = arr[at : at + jf.nq]
+            if jr.nq == 7:  # the free flyer: [x y z qx qy qz qw], the quaternion normalised
+                where = f"the quaternion of {name} (entries {at + 3} to {at + 6})"
+                seg = np.concatenate((seg[:3], _unit(seg[3:], f"{what}: {where}")))
+            elif jr.nq == 2:  # a continuous joint: (cos, sin), read by atan2
+                _unit(seg, f"{what}: the (cos, sin) pair of {name} (entries {at}, {at + 1})")
+            q_red[jr.idx_q : jr.idx_q + jr.nq] = seg
         return self.from_pinocchio(q_red)
 
     # ----------------------------------------------------------------- limits
