@@ -23,7 +23,7 @@ from typing import Any, NamedTuple
 import numpy as np
 
 from swarm_ik._types import FloatArray, IntArray
-from swarm_ik.goals.base import SLACK_SHARE, reuse_goal_values
+from swarm_ik.goals.base import reuse_goal_values
 from swarm_ik.kernels import lm
 from swarm_ik.kernels.lm import BUDGET, CONVERGED, ITER_CAP, LOCAL_MIN, NOT_RUN, LMSettings
 from swarm_ik.problem import IKProblem, pushed_out
@@ -74,18 +74,15 @@ class PythonPolisher(NamedTuple):
         return self.bounds.wrap
 
     def _within(self, err: FloatArray) -> bool:
-        """Every primary goal within the polish tolerances (a Python goal's own
-        ``tolerance`` scaled by the same margin, at least twice the slack its rows leave,
-        :data:`swarm_ik.goals.base.SLACK_SHARE`: the polish stops beyond where they vanish)."""
-        margin = self.kernel_tol_pos / max(self.cfg.tol_margin, 1e-300)
-        share = max(self.kernel_tol_pos / margin, 2.0 * SLACK_SHARE)
+        """Every primary goal within the polish tolerances; a Python goal with its own
+        ``tolerance`` within it (its errors here are the judge's, on Pinocchio's state: no
+        margin is needed, and its rows vanish within :data:`~swarm_ik.goals.base.SLACK_SHARE`
+        of it, so the polish must stop beyond that)."""
         for gl, e, prim in zip(self.problem.goals, err, self.problem.primary, strict=True):
             if not prim:
                 continue
-            tp = self.kernel_tol_pos
             own = gl.own_tolerance()
-            if own is not None:
-                tp = own * share
+            tp = self.kernel_tol_pos if own is None else own
             if e[0] > tp or e[1] > self.kernel_tol_rot or (np.isnan(e[0]) and np.isnan(e[1])):
                 return False
         return True
