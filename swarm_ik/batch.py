@@ -289,6 +289,10 @@ class BatchSettings:
         own_start: The first start of each target is the caller's ``q0`` (polished with
             ``lam0`` and ``stall_rel``), not the middle of the ranges (a guess, polished as
             a restart: :func:`_restarts`).
+        restart_share: With a ``deadline``: seconds per target of a chunk after which, counted
+            from the chunk's start, its targets start no more restarts (their first starts
+            run until the deadline), so that one chunk's hopeless targets do not spend the
+            limit of the chunks after it; 0: the deadline alone.  ``>= 0``.
     """
 
     tol_pos: float = 1e-5
@@ -305,6 +309,7 @@ class BatchSettings:
     deadline: float | None = None
     reserve: float = 0.0
     own_start: bool = False
+    restart_share: float = 0.0
 
     def __post_init__(self) -> None:
         for label in ("tol_pos", "tol_rot"):
@@ -334,9 +339,11 @@ class BatchSettings:
                 raise InvalidArgumentError(
                     f"deadline must be a positive time.time() value, got {d!r}"
                 )
-        r = self.reserve
-        if isinstance(r, bool) or not isinstance(r, (int, float)) or not (0.0 <= r < math.inf):
-            raise InvalidArgumentError(f"reserve must be a finite number >= 0 [s], got {r!r}")
+        for label in ("reserve", "restart_share"):
+            r = getattr(self, label)
+            bad = isinstance(r, bool) or not isinstance(r, (int, float))
+            if bad or not (0.0 <= r < math.inf):
+                raise InvalidArgumentError(f"{label} must be a finite number >= 0 [s], got {r!r}")
         self.lm_settings()  # validates lam0, max_step, stall_rel
 
     def lm_settings(self) -> lm.LMSettings:
@@ -993,7 +1000,12 @@ def _window_table(
 
 
 def _seed_table_restarts(
-    polish: Any, bc: BatchChain, targets: FloatArray, q_seed: FloatArray, settings: BatchSettings
+    polish: Any,
+    bc: BatchChain,
+    targets: FloatArray,
+    q_seed: FloatArray,
+    settings: BatchSettings,
+    later: BatchSettings | None = None,
 ) -> _Polished:
     """Every target polished from its seed; one that did not converge from up to
     :data:`TABLE_RESTARTS` of the restart table's configurations nearest to its pose
@@ -1011,12 +1023,15 @@ def _seed_table_restarts(
         targets: The chunk's poses ``(n, 4, 4)``.
         q_seed: Their first starts ``(n, nq)``.
         settings: The batch's settings.
+        later: The settings of the passes after the first (default ``settings``): the
+            chunk's own deadline for its restarts (:attr:`BatchSettings.restart_share`).
     """
     n = targets.shape[0]
     one = dataclasses.replace(settings, max_starts=1)
-    quick_one = _restarts(one)
-    first = one if settings.own_start else quick_one  # (the middle of the ranges: a guess)
+    first = one if settings.own_start else _restarts(one)  # (the middle of the ranges: a guess)
     q, evals, starts, conv = polish(np.arange(n), q_seed, first)
+    settings = settings if later is None else later
+    quick_one = _restarts(dataclasses.replace(settings, max_starts=1))
     redo = np.flatnonzero(~conv & (starts > 0))  # (one not started: the time limit is spent)
     after_seed = settings.max_starts - 1
     patient = min(after_seed, 1)  # the last start: the best point, polished patiently
@@ -1132,6 +1147,10 @@ def solve_chunk(
     """
     t0 = time.perf_counter()
     n = targets.shape[0]
+    later = settings  # (the passes after the first: up to the chunk's share of the limit)
+    if settings.deadline is not None and settings.restart_share > 0.0:
+        own = time.time() + settings.restart_share * n
+        later = dataclasses.replace(settings, deadline=min(settings.deadline, own))
     q_seed = np.ascontiguousarray(q_seed, dtype=float)
     index = np.arange(start, start + n, dtype=np.int64)
     bg = bc.goals
@@ -1151,7 +1170,7 @@ def solve_chunk(
                 bc.tree, table, bc.bounds, t_par[rows], cols, q_first, index[rows], s
             )
 
-        q, evals, starts, conv = _seed_table_restarts(polish, bc, targets, q_seed, settings)
+        q, evals, starts, conv = _seed_table_restarts(polish, bc, targets, q_seed, settings, later)
     else:  # the problem of the goals; with a collision goal, passes without it, each answer
         # tested by coal, and the sphere rows only where every pass ended in contact
         goals = bg
@@ -1162,12 +1181,12 @@ def solve_chunk(
                 goals, problem, targets[rows], q_first, q_seed[rows], index[rows], s
             )
 
-        q, evals, starts, conv = _seed_table_restarts(polish, bc, targets, q_seed, settings)
+        q, evals, starts, conv = _seed_table_restarts(polish, bc, targets, q_seed, settings, later)
     if bg is not None and bg.collision is not None:
         done = np.flatnonzero(conv)
         free[done] = ~bg.in_contact(q[done])
         redo = np.flatnonzero(conv & ~free)
-        one_start = dataclasses.replace(_restarts(settings), max_starts=1)  # (one start each)
+        one_start = dataclasses.replace(_restarts(later), max_starts=1)  # (one start each)
         near = np.empty((redo.size, 0), dtype=np.int64)
         if redo.size and FREE_TABLE_RETRIES:
             table_q, table_poses = bg.free_table(bc, settings.seed)
@@ -1190,7 +1209,7 @@ def solve_chunk(
             near = near[~free[redo]]
             redo = redo[~free[redo]]
         if redo.size:
-            rows = dataclasses.replace(settings, max_starts=min(settings.max_starts, ROWS_STARTS))
+            rows = dataclasses.replace(later, max_starts=min(settings.max_starts, ROWS_STARTS))
             q2, ev2, st2, conv2 = _polish_problem(
                 bg, bg.problem, targets[redo], q[redo], q_seed[redo], index[redo], rows
             )
@@ -1356,9 +1375,11 @@ started is not checked)."""
 
 FINISH_PER_STARTED = 2e-6
 """Seconds kept before the deadline per started target for the check of its answer (the
-batched FK and errors, :func:`pose_errors`: 1.1–1.9 µs measured, yumi_left); with a
-collision goal, twice coal's verdict at one configuration is added (measured per call in
-:func:`_with_deadline`: the contact test of the answer and the goals' check)."""
+batched FK and errors, :func:`pose_errors`: 1.1–1.9 µs measured, yumi_left); with goals, one
+call of their own check (:meth:`BatchGoals.judge`, Pinocchio) is added, and with a collision
+goal twice coal's verdict at one configuration (each measured in :func:`_with_deadline`: the
+contact test of the answer and the goals' check).  Without the goals' check, 3,000 Talos
+targets with a centre-of-mass goal at 0.05 s took 0.08–0.12 s."""
 
 
 def _with_deadline(
@@ -1382,12 +1403,21 @@ def _with_deadline(
     reserve = FINISH_PER_STARTED
     if poses.shape[0]:
         solve_chunk(bc, dataclasses.replace(settings, max_starts=1), 0, poses[:1], seeds[:1])
-        if bc.goals is not None and bc.goals.collision is not None:
+        bg = bc.goals
+        if bg is not None and bg.collision is not None:
             probe = np.repeat(seeds[:1], 8, axis=0)
-            bc.goals.in_contact(probe[:1])  # (the checker made for the scene: not timed)
+            bg.in_contact(probe[:1])  # (the checker made for the scene: not timed)
             t_probe = time.perf_counter()
-            bc.goals.in_contact(probe)
+            bg.in_contact(probe)
             reserve += 2.0 * (time.perf_counter() - t_probe) / probe.shape[0]
+        if bg is not None and len(bg.primary):  # the goals' own check of a solved target
+            # (Pinocchio: tens of µs with a centre of mass; timed after a first call)
+            args = (seeds[0], seeds[0], settings.tol_pos, settings.tol_rot, False)
+            bg.judge(*args)
+            t_judge = time.perf_counter()
+            for _ in range(4):
+                bg.judge(*args)
+            reserve += (time.perf_counter() - t_judge) / 4
     now = time.perf_counter()
     load, other = now - t_load, t_load - t0
     left = max(limit - other - load, 0.5 * limit - other)
@@ -1458,8 +1488,11 @@ def solve_batch(
             are reported unsolved (``n_starts`` 0, ``q`` their seed, errors NaN).  Checking
             the targets costs about 0.6 µs per target, so a limit shorter than that is
             overrun (a first call in a process also by loading the kernels, up to half the
-            limit).  Every target first gets its seed's start, then the
-            targets still open their restarts (one pass after another), so a target reached
+            limit).  Within a chunk every target first gets its seed's start, then the
+            targets still open their restarts (one pass after another); a chunk's restarts
+            stop at its share of the limit (its targets' share of what was left, counted
+            from its start: :attr:`BatchSettings.restart_share`), so hopeless targets of one
+            chunk leave time to the chunks after it.  A target reached
             may be left unsolved where a call without the limit would have restarted it;
             every success is the answer of a call without the limit.  Which targets are
             reached depends on the machine's speed.  The first batch of a process loads
@@ -1534,6 +1567,13 @@ def solve_batch(
         setup_s = time.perf_counter() - t_setup
         workers = distributed.n_workers(client)
         size = int(chunk_size) if chunk_size is not None else default_chunk_size(n, workers)
+        if limit is not None and n and settings.deadline is not None:
+            # each chunk's restarts get its share of what is left (its targets' share, the
+            # workers running chunks side by side), counted from the chunk's start: the first
+            # chunk's hopeless targets took a whole limit, later chunks never started
+            left = max(settings.deadline - time.time(), 0.0)
+            share = left * max(workers, 1) / n
+            settings = dataclasses.replace(settings, restart_share=share)
         items = [(s, poses[s : s + size], seeds[s : s + size]) for s in range(0, n, size)]
         func = functools.partial(_run_chunk, bc, settings)
         parts: list[ChunkResult] = []

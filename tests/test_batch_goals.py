@@ -211,6 +211,22 @@ def test_time_limit_reports_targets_not_reached_as_unsolved(panda):
     assert np.isfinite(cut.position_error[reached]).all()
 
 
+def test_time_limit_starts_every_target_before_restarting_hopeless_ones(panda):
+    """Targets out of reach at the head of a batch: with a limit that covers every target's
+    first start, each target is started, and the reachable ones are solved (with chunks of
+    500, the first chunk's hopeless targets spent the limit on their restarts and the rest
+    were never started)."""
+    rng = np.random.default_rng(11)
+    far = np.repeat(np.eye(4)[None], 200, axis=0)
+    far[:, 0, 3] = 3.0  # (3 m away: out of reach)
+    near = panda.fk(panda.random_q(rng, 1800))
+    targets = np.concatenate([far, near])
+    solve_batch(panda, targets[:5], time_limit=1.0)  # (kernels loaded)
+    res = solve_batch(panda, targets, seed=0, time_limit=0.5)
+    assert (res.n_starts > 0).all()
+    assert res.success[200:].mean() > 0.95 and not res.success[:200].any()
+
+
 @pytest.mark.parametrize("with_scene", [False, True])
 def test_time_limit_covers_a_large_batch(panda, with_scene):
     """100,000 targets at 0.1 s: the targets' checks (60 ms), the errors of the answers and,
