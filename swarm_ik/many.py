@@ -599,9 +599,12 @@ def _with_windings(problem: IKProblem, rep: Result, ref: FloatArray) -> list[Res
     return out
 
 
-def _redundant(problem: IKProblem) -> bool:
+def _redundant(problem: IKProblem, rows: int | None = None) -> bool:
+    """More joints than the pose constrains (7-joint arms; more than 3 joints, position
+    only), or than the ``rows`` of the primary goals (a 6-joint arm with a point and a one-row
+    goal: 4 rows; a self-motion, no isolated branches to hop between)."""
     task = 3 if problem.position_only else 6
-    return problem.nq > task
+    return problem.nq > task or (rows is not None and rows < problem.nq)
 
 
 @numba.njit(cache=True)
@@ -803,7 +806,21 @@ def _numerical(
     lower, upper = problem.lower, problem.upper
     periodic = periodic_mask(robot, lower, upper)
     revolute = revolute_mask(robot)
-    redundant = _redundant(problem)
+    if max_starts is None and max_evals is None and time_limit is None:
+        max_starts = 64 * n
+    pol = Polisher.from_problem(
+        problem, lower, upper, tol_pos=ROUNDOFF_TOL, tol_rot=ROUNDOFF_TOL,
+        wrap=robot.continuous_mask, max_iters=max_iters,
+    )  # fmt: skip
+    first = start_q if start_q is not None else 0.5 * (lower + upper)
+    used = 0
+    rows = None
+    if problem.python_goals:  # (their row counts: one evaluation, counted)
+        rows = int(pol.residual(first)[0].shape[0])
+        used += 1
+    elif problem.compiled_goals:
+        rows = int(problem.table(None).rows_primary)
+    redundant = _redundant(problem, rows)
     target_count = POOL_FACTOR * n if redundant else n
     hops = None if redundant else _hops_for(robot)
     bound = None
@@ -811,12 +828,6 @@ def _numerical(
         bound = hops.bound()
     if bound is not None:
         target_count = min(target_count, bound)
-    if max_starts is None and max_evals is None and time_limit is None:
-        max_starts = 64 * n
-    pol = Polisher.from_problem(
-        problem, lower, upper, tol_pos=ROUNDOFF_TOL, tol_rot=ROUNDOFF_TOL,
-        wrap=robot.continuous_mask, max_iters=max_iters,
-    )  # fmt: skip
     fold = _Folder(lower, upper, revolute, periodic, ref)
     merge = BRANCH_TOL if min_distance is None else max(BRANCH_TOL, float(min_distance))
     kept: list[tuple[FloatArray, float, float, int, float]] = []
@@ -824,11 +835,9 @@ def _numerical(
     tiers = [np.empty((0, nq)), np.empty((0, nq)), np.empty((0, nq))]
     walks = 0
     walked = np.empty((0, nq))  # points of the valleys walked so far
-    first = start_q if start_q is not None else 0.5 * (lower + upper)
     deadline = None
     if time_limit is not None:  # (what follows the rounds: the answers' results, a spread)
         deadline = t0 + time_limit - min(FINISH_PER_SOLUTION * n, 0.5 * time_limit)
-    used = 0
     n_starts = 0
     since_new = 0
     sec_per_eval = 3e-6

@@ -93,3 +93,44 @@ def test_auto_covers_numerical_near_straight_wrist(eps):
         if num:
             d = br.branch_distance(_qs(num)[:, None], _qs(auto)[None], wrap)
             assert (d < br.BRANCH_TOL).any(axis=1).all()
+
+
+def test_fewer_goal_rows_than_joints_is_a_self_motion_not_a_crash() -> None:
+    """UR5 with a point and a one-row goal written in Python (4 rows, 6 joints): the
+    solutions form a self-motion, solved as for a redundant arm (the valley walk of isolated
+    branches assumed a square Jacobian and raised numpy's matmul ValueError); solve_path
+    over such goal lists works too.  Found by a held-out review."""
+    import math
+    from dataclasses import dataclass
+
+    from swarm_ik.goals import Goal, Position
+
+    @dataclass(frozen=True)
+    class Tilt(Goal):
+        """The frame's z axis within ``alpha`` [rad] of straight down (one row)."""
+
+        frame: str
+        alpha: float = 0.1
+
+        def residual(self, state):
+            c = float(np.clip(-state.pose(self.frame)[2, 2], -1.0, 1.0))
+            return np.array([max(0.0, math.acos(c) - self.alpha)])
+
+        def jacobian(self, state):
+            z = state.pose(self.frame)[:3, 2]
+            c = float(np.clip(-z[2], -1.0, 1.0))
+            if math.acos(c) <= self.alpha:
+                return np.zeros((1, state.q.shape[0]))
+            dc = np.cross(z, [0.0, 0.0, -1.0]) @ state.jacobian(self.frame)[3:]
+            return (-dc / max(1e-12, math.sqrt(1.0 - c * c)))[None]
+
+    robot = swarm_ik.load_robot("ur5")
+    ee = robot.frames[0]
+    points = [[0.4, -0.2 + 0.04 * i, 0.3] for i in range(6)]
+    prob = swarm_ik.IKProblem(robot, goals=[Position(ee, points[5]), Tilt(ee)])
+    sols = swarm_ik.solve_many(prob, n=8, seed=0, max_starts=256)
+    assert sols and all(r.success for r in sols)
+    for r in sols:
+        assert all(e.met for e in prob.verify(r.q))
+    path = swarm_ik.solve_path(robot, None, goals=[[Position(ee, p), Tilt(ee)] for p in points])
+    assert path.success
