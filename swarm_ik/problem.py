@@ -436,7 +436,10 @@ class IKProblem:
         key = None if q0 is None else np.asarray(q0, dtype=float).tobytes()
         tab = self._table_cache.get(key)
         if tab is None:
-            enc = [self.encode(i, q0) for i in range(len(self.compiled_goals))]
+            enc = [
+                goals_base.checked_encoding(gl, lambda i=i: self.encode(i, q0))
+                for i, gl in enumerate(self.compiled_goals)
+            ]
             tab = lm.goal_table(
                 [kernel_slot(gl.kernel_of()) for gl in self.compiled_goals],
                 [gl.weight for gl in self.compiled_goals],

@@ -285,6 +285,47 @@ class Encoded(NamedTuple):
     rows: int
 
 
+def checked_encoding(goal: Goal, encode: Callable[[], Any]) -> Encoded:
+    """``encode()`` of a compiled ``goal``, checked once when a problem's goal table is made
+    (the per-call paths then read ``.par`` of the same goal's blocks): an :class:`Encoded`
+    of float parameters, integer parameters and rows; anything else (a plain tuple
+    included), or a goal with a kernel but no ``encode``, is refused naming the goal.
+
+    Raises:
+        InvalidArgumentError: no ``encode``, or a block that is not ``(par (P,) floats,
+            ipar (I,) integers, rows >= 1)``.
+    """
+    form = (
+        "encode(robot, q0) must return goals.base.Encoded(par, ipar, rows): float "
+        "parameters (P,), integer parameters (I,) and the number of residual rows "
+        "(docs/goals.md)"
+    )
+    try:
+        block = encode()
+    except NotImplementedError:
+        if type(goal).encode is Goal.encode:
+            raise InvalidArgumentError(
+                f"{goal.describe()} names a compiled kernel but defines no encode: {form}"
+            ) from None
+        raise
+    if not isinstance(block, Encoded):
+        raise InvalidArgumentError(f"{goal.describe()}: {form}, got {reprlib.repr(block)}")
+    par, ipar, rows = block
+    try:
+        par = np.ascontiguousarray(par, dtype=np.float64).reshape(-1)
+        ipar_arr = np.asarray(ipar)
+        if ipar_arr.size and not np.issubdtype(ipar_arr.dtype, np.integer):
+            raise TypeError("integer parameters that are not integers")
+        ipar = np.ascontiguousarray(ipar_arr, dtype=np.int64).reshape(-1)
+    except (TypeError, ValueError) as exc:
+        raise InvalidArgumentError(f"{goal.describe()}: {form} ({exc})") from None
+    if isinstance(rows, bool) or not isinstance(rows, (int, np.integer)) or rows < 1:
+        raise InvalidArgumentError(f"{goal.describe()}: {form}; rows = {rows!r}")
+    if block.par is par and block.ipar is ipar:
+        return block
+    return Encoded(par, ipar, int(rows))
+
+
 WEIGHT_RANGE = (1e-6, 1e6)
 """The weights a goal takes, and the nonzero ``w_rot`` of a problem: ``[1e-6, 1e6]``.
 Weights are relative (the default is 1); beyond this range the squared weighted residuals
@@ -480,7 +521,7 @@ class Goal:
     def rows(self, robot: RobotModel, state: State | None = None) -> int:
         """Number of residual rows (a Python goal: the length of its residual)."""
         if self.compiled:
-            return self.encode(robot, None).rows
+            return checked_encoding(self, lambda: self.encode(robot, None)).rows
         if state is None:
             state = State(robot, robot.mid_q())
         return int(np.size(self.residual(state)))
