@@ -13,6 +13,7 @@ True
 
 from __future__ import annotations
 
+import functools
 import math
 from collections.abc import Sequence
 from dataclasses import dataclass
@@ -437,7 +438,7 @@ class IKProblem:
         tab = self._table_cache.get(key)
         if tab is None:
             enc = [
-                goals_base.checked_encoding(gl, lambda i=i: self.encode(i, q0))
+                goals_base.checked_encoding(gl, functools.partial(self.encode, i, q0))
                 for i, gl in enumerate(self.compiled_goals)
             ]
             tab = lm.goal_table(
