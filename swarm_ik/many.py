@@ -33,6 +33,7 @@ import functools
 import math
 import time
 import weakref
+from collections.abc import Callable
 from typing import Any
 
 import numba
@@ -383,13 +384,18 @@ def solve_many(
     elif method == "auto" and analytic.eaik_available():
         use_analytic = not analytic.support(problem)
 
+    def search(evals: int | None, t0: float) -> list[tuple[FloatArray, float, float, int, float]]:
+        """The numerical search within ``evals``, its clock started at ``t0``."""
+        return _numerical(
+            problem, int(n), ref, start_q, make_rng(seed), min_distance, evals, time_limit,
+            tol_pos, tol_rot, batch, max_starts, max_iters, patience, t0,
+        )  # fmt: skip
+
     if not use_analytic:
         warm_up(Route(problem))  # compiled kernels loaded before the clock starts
         _warm_up()
-        return _numerical_results(
-            problem, int(n), ref, start_q, seed, min_distance, max_evals, time_limit, tol_pos,
-            tol_rot, batch, max_starts, max_iters, patience, time.perf_counter(), seed_label,
-        )  # fmt: skip
+        t_search = time.perf_counter()
+        return _numerical_results(problem, lambda: search(max_evals, t_search), ref, seed_label)
     t0 = time.perf_counter()
     cf = analytic.closed_form_set(problem, ref, tol_pos, tol_rot)
     qs, dps, drs = cf.q, cf.position_error, cf.rotation_error
@@ -413,43 +419,27 @@ def solve_many(
     warm_up(Route(problem))
     _warm_up()
     left = None if max_evals is None else max(max_evals - cf.evals, 0)
+    t_search = time.perf_counter() - elapsed
     numerical = _numerical_results(
-        problem, int(n), ref, start_q, seed, min_distance, left, time_limit, tol_pos, tol_rot,
-        batch, max_starts, max_iters, patience, time.perf_counter() - elapsed, seed_label,
-        cf.evals,
-    )  # fmt: skip
+        problem, lambda: search(left, t_search), ref, seed_label, cf.evals
+    )
     return _merged(numerical, results, periodic, min_distance, ref, int(n))
 
 
 def _numerical_results(
     problem: IKProblem,
-    n: int,
+    search: Callable[[], list[tuple[FloatArray, float, float, int, float]]],
     ref: FloatArray,
-    start_q: FloatArray | None,
-    seed: int | np.random.Generator | None,
-    min_distance: float | None,
-    max_evals: int | None,
-    time_limit: float | None,
-    tol_pos: float,
-    tol_rot: float,
-    batch: int,
-    max_starts: int | None,
-    max_iters: int,
-    patience: int,
-    t0: float,
     seed_label: int | None,
     evals_before: int = 0,
 ) -> list[Result]:
     """The numerical path of :func:`solve_many` (its compiled kernels already loaded): the
-    search (:func:`_numerical`, its clock started at ``t0``), the solutions as results
-    nearest to the reference first, each one's ``n_evals`` counted from ``evals_before``
-    (evaluations spent before the search)."""
+    ``search`` (:func:`_numerical`), the solutions as results nearest to the reference
+    first, each one's ``n_evals`` counted from ``evals_before`` (evaluations spent before
+    the search)."""
     # (a Python goal's values at each point computed once: rows, errors, checks)
     with reuse_goal_values(bool(problem.python_goals)):
-        reps = _numerical(
-            problem, n, ref, start_q, make_rng(seed), min_distance, max_evals, time_limit,
-            tol_pos, tol_rot, batch, max_starts, max_iters, patience, t0,
-        )  # fmt: skip
+        reps = search()
         qs_all = np.array([r[0] for r in reps]).reshape(-1, problem.nq)
         fit_all = problem.fitness(qs_all) if reps else np.empty(0)
     order = np.argsort(

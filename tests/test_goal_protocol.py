@@ -146,25 +146,26 @@ def test_a_compiled_kernel_of_another_signature_is_refused() -> None:
         G.kernel_slot(bad)
 
 
+@numba.njit(GOAL_SIGNATURE)
+def _height_kernel(par, ipar, q, f_pos, f_rot, f_jac, want_jac, res, jac, err, work):
+    f = ipar[0]
+    res[0] = par[0] - f_pos[f, 2]
+    if want_jac:
+        for j in range(q.shape[0]):
+            jac[0, j] = f_jac[f, 2, j]
+    err[0] = abs(res[0])
+    err[1] = np.nan
+
+
 def test_a_compiled_goal_written_outside_the_package_runs_through_its_slot() -> None:
     """A compiled goal of one's own: its kernel registered on first use, the LM kernel
     calling it by slot; checked against the same goal's numpy residual."""
-
-    @numba.njit(GOAL_SIGNATURE)
-    def height_kernel(par, ipar, q, f_pos, f_rot, f_jac, want_jac, res, jac, err, work):
-        f = ipar[0]
-        res[0] = par[0] - f_pos[f, 2]
-        if want_jac:
-            for j in range(q.shape[0]):
-                jac[0, j] = f_jac[f, 2, j]
-        err[0] = abs(res[0])
-        err[1] = np.nan
 
     @dataclass(frozen=True)
     class Height(G.Goal):
         frame: str
         z: float
-        kernel = height_kernel
+        kernel = _height_kernel
 
         def encode(self, robot, q0):
             frame = np.array([robot.frames.index(self.frame)], dtype=np.int64)
@@ -183,17 +184,6 @@ def test_a_compiled_goal_written_outside_the_package_runs_through_its_slot() -> 
     res = swarm_ik.solve(swarm_ik.IKProblem(r, goals=[goal]), seed=0, time_limit=2.0)
     assert res.success
     assert abs(r.fk_pinocchio(res.q)[2, 3] - z) < 1e-5
-
-
-@numba.njit(GOAL_SIGNATURE)
-def _height_kernel(par, ipar, q, f_pos, f_rot, f_jac, want_jac, res, jac, err, work):
-    f = ipar[0]
-    res[0] = par[0] - f_pos[f, 2]
-    if want_jac:
-        for j in range(q.shape[0]):
-            jac[0, j] = f_jac[f, 2, j]
-    err[0] = abs(res[0])
-    err[1] = np.nan
 
 
 @dataclass(frozen=True)
