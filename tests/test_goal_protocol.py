@@ -4,6 +4,7 @@ never met."""
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass
 
 import numba
@@ -147,49 +148,50 @@ def test_a_compiled_kernel_of_another_signature_is_refused() -> None:
 
 
 @numba.njit(GOAL_SIGNATURE)
-def _height_kernel(par, ipar, q, f_pos, f_rot, f_jac, want_jac, res, jac, err, work):
+def _xy_kernel(par, ipar, q, f_pos, f_rot, f_jac, want_jac, res, jac, err, work):
+    """The frame origin's x and y at ``par[0:2]`` [m]: two rows."""
     f = ipar[0]
-    res[0] = par[0] - f_pos[f, 2]
-    if want_jac:
-        for j in range(q.shape[0]):
-            jac[0, j] = f_jac[f, 2, j]
-    err[0] = abs(res[0])
+    for a in range(2):
+        res[a] = par[a] - f_pos[f, a]
+        if want_jac:
+            jac[a, :] = f_jac[f, a, :]
+    err[0] = math.hypot(res[0], res[1])
     err[1] = np.nan
 
 
 def test_a_compiled_goal_written_outside_the_package_runs_through_its_slot() -> None:
-    """A compiled goal of one's own: its kernel registered on first use, the LM kernel
-    calling it by slot; checked against the same goal's numpy residual."""
+    """A compiled goal of one's own (two rows): its kernel registered on first use, the LM
+    kernel calling it by slot; checked against the same goal's numpy residual."""
 
     @dataclass(frozen=True)
-    class Height(G.Goal):
+    class AtXY(G.Goal):
         frame: str
-        z: float
-        kernel = _height_kernel
+        xy: tuple
+        kernel = _xy_kernel
 
         def encode(self, robot, q0):
             frame = np.array([robot.frames.index(self.frame)], dtype=np.int64)
-            return G.Encoded(np.array([self.z]), frame, 1)
+            return G.Encoded(np.array(self.xy, dtype=float), frame, 2)
 
         def residual(self, state):
-            return np.array([self.z - state.pose(self.frame)[2, 3]])
+            return np.asarray(self.xy) - state.pose(self.frame)[:2, 3]
 
         def jacobian(self, state):
-            return -state.jacobian(self.frame)[2:3]
+            return -state.jacobian(self.frame)[:2]
 
     r = robot("panda")
-    z = float(r.fk(r.random_q(np.random.default_rng(5)))[2, 3])
-    goal = Height("panda_hand_tcp", z)
+    xy = tuple(r.fk(r.random_q(np.random.default_rng(5)))[:2, 3])
+    goal = AtXY("panda_hand_tcp", xy)
     assert goal.compiled
     res = swarm_ik.solve(swarm_ik.IKProblem(r, goals=[goal]), seed=0, time_limit=2.0)
     assert res.success
-    assert abs(r.fk_pinocchio(res.q)[2, 3] - z) < 1e-5
+    assert np.linalg.norm(r.fk_pinocchio(res.q)[:2, 3] - xy) < 1e-5
 
 
 @dataclass(frozen=True)
 class _NoEncode(G.Goal):
     frame: str = "panda_hand_tcp"
-    kernel = _height_kernel
+    kernel = _xy_kernel
 
     def residual(self, state):
         return np.zeros(1)
