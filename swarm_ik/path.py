@@ -32,7 +32,8 @@ such jumps (each one reported with its waypoint and size).
    its two waypoints (position lerp, rotation slerp) from the first configuration and on to
    the second; a step whose tracked chain loses the path or moves some joint, in total (out
    and back counts twice), by more than the bound counts as a jump, and the search is run
-   again without it.
+   again without it.  A step that stays put at a waypoint nothing meets (its stand-in: the
+   configuration before it) is no motion, and is not tracked.
 
 **Guarantees.**  ``success`` and the per-waypoint errors come from
 :meth:`swarm_ik.IKProblem.verify` (Pinocchio's FK, coal for collisions), never from the
@@ -43,7 +44,15 @@ that is not a known branch; no candidate with a Jacobian singular value below
 :data:`SINGULAR_SIGMA`, where a continuum of solutions or a pair about to merge could hide
 one) the dynamic programme is exhaustive: a path with jumps
 then proves that no jump-free sequence of IK solutions through these waypoints exists (the
-``reason`` says so, and ``exhaustive`` is True).  Otherwise the verdict is the best found.
+``reason`` says so, and ``exhaustive`` is True).  With other goals (collisions, …) each
+complete set is filtered by them, and stays complete; a waypoint whose branches they all
+reject is proven unreachable.  Otherwise the verdict is the best found.
+
+A waypoint that nothing meets holds stand-ins: the configurations of the waypoint before it
+(all of them, up to :data:`MAX_HELD`: staying put adds no jump) and the best failed
+attempts; the reason says why it is not met (beyond reach, no closed-form branch within the
+limits, or every branch rejected by the other goals: with a scene, "no collision-free IK
+solution", naming the obstacle that holds the target point).
 
 >>> import numpy as np, swarm_ik
 >>> from swarm_ik.path import solve_path
@@ -141,6 +150,37 @@ def _warm_up(robot: Any, frame: str | None) -> None:
     solve_path(robot, [pose, pose], q0=mid, frame=frame)
 
 
+def _warm_goals(robot: Any, wps: _Waypoints) -> None:
+    """Load what the waypoints' goals beyond a plain pose run, without solving: for each
+    distinct set of goal types, the compiled kernels of its solves (``"best"`` and
+    ``"nearest"``, :func:`swarm_ik.api.warm_up`: nothing once loaded, no Python goal called),
+    and for each scene the exact collision checker (coal's, made at its first check: 5 ms),
+    checked once at mid-range.  (The scene's sphere model is made with the problems.)"""
+    if wps.plain:
+        return
+    from swarm_ik import api
+    from swarm_ik.goals import AvoidCollisions
+
+    mid = robot.mid_q()
+    kinds: set[Any] = set()
+    scenes: dict[Any, Any] = {}
+    for i in range(wps.n if wps.goal_lists is not None else 1):
+        problem = wps.problem(i)
+        kind = (tuple(type(g) for g in problem.goals), problem.has_secondary)
+        if kind not in kinds:
+            kinds.add(kind)
+            for prefer in ("best", "nearest"):
+                settings = dict(max_evals=TRACK_EVALS, prefer=prefer)
+                api.warm_up(api.route_for(problem, api.DEFAULT_SOLVER, settings))
+        for g in problem.goals:
+            if isinstance(g, AvoidCollisions):
+                scenes.setdefault((id(g.scene), bool(g.self_collision)), g)
+    if scenes:
+        rc = robot.collision_model()
+        for g in scenes.values():
+            rc.collides(mid, g.scene, g.margin, bool(g.self_collision))
+
+
 def _check_path_size(n: int, densify: int) -> None:
     """Refuse a path of more than :data:`MAX_PATH_POSES` poses (``n`` waypoints, ``densify``
     poses between consecutive ones)."""
@@ -152,6 +192,9 @@ def _check_path_size(n: int, densify: int) -> None:
         )
 
 
+MAX_HELD = 256
+"""Most configurations of the waypoint before that stand in for a waypoint nothing meets (a
+UR5 closed-form layer has up to 8 × 32 = 256; more are picked by the running programme)."""
 DENSIFY_ROUNDS = 32
 """Most rounds of the densify check (each removes the failing steps and searches again)."""
 _STEP_SLACK = 1e-9
@@ -184,11 +227,14 @@ class PathResult:
         rotation_errors: Per waypoint, the largest angular error [rad], ``(N,)``.
         reached: Per waypoint, whether it is met, ``(N,)``.
         reason: One line: what was found and why it is (not) a success.
-        time_s: Wall-clock time [s].
+        time_s: Wall-clock time of the call, from entry to return (what it loaded first
+            included) [s].
         exhaustive: Every waypoint's candidate set was certified complete (closed form), so
             the jump verdict is exact: with jumps, no jump-free path through the waypoints
             exists (False when the jumps are only those the densify check found: that check
-            proves nothing).
+            proves nothing).  With other goals (a scene) a waypoint's set is its pose's
+            complete closed-form set filtered by them, so it still holds every solution: one
+            they empty is a proof that the waypoint has none (the reason says so).
         n_candidates: Candidates considered per waypoint, ``(N,)``.
         travel: Joint travel of the path, ``Σ_steps Σ_j |Δq_j|`` [rad / m].
         q_dense: With ``densify=k``: the checked path through the interpolated poses,
@@ -265,12 +311,18 @@ def solve_path(
             they hold the configuration before them and are reported not reached.  The
             reason says which of these happened.  Waypoint 0 always gets one solve, and the
             poses are validated and the answers checked in any case (about 45 µs per
-            waypoint), so a limit shorter than these is overrun.  The first timed path of a
-            robot in a process loads its kernels first (0.7–1 s from numba's cache, with an
-            untimed path of two waypoints), charged to the limit up to half of it, as a first
-            :func:`swarm_ik.solve`'s loading: such a call overruns by the loading and still
-            gets half its limit.  Results are deterministic for a seed only when the limit is
-            not reached.
+            waypoint), so a limit shorter than these is overrun.  What a call loads the
+            first time is loaded before the clock: the first timed path of a robot in a
+            process loads its kernels (0.7–1 s from numba's cache, with an untimed path of two
+            waypoints); a path with goals beyond the pose loads their kernels (tens of
+            milliseconds, no solve run) and, with a scene, its sphere model (made with the
+            waypoints' problems: 0.2–0.6 s for a robot's first scene, its own self-collision
+            pairs sampled; milliseconds for a later one) and coal's checker of it (about 5 ms).
+            All the call spent before the clock (that loading, and validating the waypoints)
+            is charged to the limit up to half of it, as a first :func:`swarm_ik.solve`'s
+            loading: such a call overruns by the loading and still gets half its limit;
+            ``time_s`` counts it.  Results are deterministic for a seed only when the limit
+            is not reached.
         seed: Seed (or Generator) of every random choice (the solvers' seeds are drawn from
             it): the same seed gives the same path.
         densify: Poses interpolated between consecutive waypoints (position lerp, rotation
@@ -314,19 +366,24 @@ def solve_path(
         raise InvalidArgumentError("densify needs poses (goal lists are not interpolated)")
     _check_path_size(wps.n, int(densify))
     deadline = limit = None
-    if time_limit is not None and not robot._cache.get("path_warm"):
-        # the first timed path of a robot in this process: its kernels loaded (0.7-1 s from
-        # numba's cache) before the clock, charged to the limit up to half of it, as a first
-        # solve's loading (the rest of the call keeps at least half)
-        _warm_up(robot, frame)
+    t_clock = t_start  # (when the time limit's clock starts; time_s counts from t_start)
+    if time_limit is not None:
+        # what the call loads the first time (a robot's kernels, 0.7-1 s from numba's cache;
+        # a scene's sphere model, made with the waypoints' problems above, 0.2-0.6 s for the
+        # robot's first; the goals' kernels and the scene's collision checker) is loaded
+        # before the clock, and what the call spent so far is charged to the limit up to half
+        # of it, as a first solve's loading (the rest of the call keeps at least half)
+        if not robot._cache.get("path_warm"):
+            _warm_up(robot, frame)
+        _warm_goals(robot, wps)
         spent = time.perf_counter() - t_start
         time_limit = max(float(time_limit) - spent, 0.5 * float(time_limit))
-        t_start = time.perf_counter()
+        t_clock = time.perf_counter()
     if time_limit is not None:  # (the search and the check at the end are inside the limit)
         per_waypoint = FINISH_PER_WAYPOINT + SEARCH_PER_LAYER
         reserve = min(per_waypoint * wps.n, 0.5 * float(time_limit))
-        limit = t_start + float(time_limit) - reserve
-        deadline = t_start + SEARCH_SHARE * (limit - t_start)
+        limit = t_clock + float(time_limit) - reserve
+        deadline = t_clock + SEARCH_SHARE * (limit - t_clock)
     ctx = _Context(robot, wps, step, float(tol_pos), float(tol_rot), rng, deadline, limit)
     graph = _build(ctx, start)
     rejected: Rejected = {}
@@ -822,7 +879,11 @@ def _relax_layer(
 @dataclass
 class _Graph:
     """Candidates per waypoint: ``layers[i] (k_i, nq)``, which meet the waypoint
-    (``valid[i]``), whether the set is certified complete (``certified[i]``)."""
+    (``valid[i]``), whether the set is certified complete (``certified[i]``: for a waypoint
+    with other goals, the closed-form set of its pose before they filtered it), and, where
+    the closed form gave the pose branches within the limits but the other goals rejected
+    every one, the indices of the goals they failed in its problem (``blocked[i]``; -1: its
+    bounds), else None."""
 
     layers: list[FloatArray]
     valid: list[NDArray[np.bool_]]
@@ -830,6 +891,7 @@ class _Graph:
     closed: list[bool]
     unreachable: list[int]
     repaired: int = 0
+    blocked: list[tuple[int, ...] | None] = field(default_factory=list)
 
     @property
     def exhaustive(self) -> bool:
@@ -874,9 +936,15 @@ def _pick(qs: FloatArray, r: Any, t: Any, k: int, ctx: _Context) -> FloatArray:
     return qs[chosen]
 
 
-def _closed_form(ctx: _Context, i: int) -> tuple[FloatArray, bool, bool] | None:
+def _closed_form(
+    ctx: _Context, i: int
+) -> tuple[FloatArray, bool, bool, tuple[int, ...] | None] | None:
     """Waypoint ``i``'s closed-form set with every in-limit 2π copy: ``(q, closed form used,
-    certified complete)``; None when the waypoint has no end-effector pose.
+    certified complete, blocked)``; None when the waypoint has no end-effector pose.  With
+    other goals (collisions, …) the pose's set is filtered by them; ``blocked``: where they
+    rejected every branch, the goals failed (:func:`_goal_filter`), else None.  The
+    certificate is the pose's set's, before the filter: a complete set filtered by a check
+    of each branch leaves every solution of the waypoint's problem.
 
     eaik's least-squares solutions are probed (``solve_many`` polishes them as well, and adds
     its numerical search where that finds a singular solution; this probe also decides the
@@ -896,7 +964,7 @@ def _closed_form(ctx: _Context, i: int) -> tuple[FloatArray, bool, bool] | None:
         pose_problem, CLOSED_FORM_N, ctx.seed(), ctx.tol_pos, ctx.tol_rot, ctx.deadline
     )
     if not closed:
-        return qs, False, False
+        return qs, False, False, None
     assert ctx.wps.poses is not None
     near = _least_squares_solutions(ctx.robot, ctx.wps.poses[i])
     certified = ctx.full_branches is not None and near is not None
@@ -914,10 +982,30 @@ def _closed_form(ctx: _Context, i: int) -> tuple[FloatArray, bool, bool] | None:
             if float(sigma[-1]) < SINGULAR_SIGMA:
                 certified = False
                 break
+    blocked = None
     if not ctx.wps.plain and qs.shape[0]:  # the other goals (collisions, …) filter the set
-        problem = ctx.wps.problem(i)
-        qs = qs[[k for k in range(qs.shape[0]) if _meets(problem, qs[k], ctx)]]
-    return _with_windings(qs, ctx.lower, ctx.upper, ctx.windings), True, certified
+        keep, failed = _goal_filter(ctx.wps.problem(i), qs, ctx)
+        blocked = None if keep.any() else failed
+        qs = qs[keep]
+    return _with_windings(qs, ctx.lower, ctx.upper, ctx.windings), True, certified, blocked
+
+
+def _goal_filter(
+    problem: Any, qs: FloatArray, ctx: _Context
+) -> tuple[NDArray[np.bool_], tuple[int, ...]]:
+    """Which rows of ``qs`` meet ``problem`` (:meth:`IKProblem.verify` and its bounds), and
+    the indices in ``problem.goals`` of the goals some row failed (-1: the bounds), sorted."""
+    primary = [k for k in range(len(problem.goals)) if problem.primary[k]]
+    keep = np.zeros(qs.shape[0], dtype=bool)
+    failed: set[int] = set()
+    for r in range(qs.shape[0]):
+        errs = problem.verify(qs[r], ctx.tol_pos, ctx.tol_rot)
+        missed = {k for k, e in zip(primary, errs, strict=True) if not e.met}
+        if not problem.within_bounds(qs[r]):
+            missed.add(-1)
+        keep[r] = not missed
+        failed |= missed
+    return keep, tuple(sorted(failed))
 
 
 def _missed_solutions(
@@ -1154,16 +1242,18 @@ def _build(ctx: _Context, start: FloatArray | None) -> _Graph:
             graph.valid.append(np.zeros(1, dtype=bool))
             graph.certified.append(False)
             graph.closed.append(False)
+            graph.blocked.append(None)
             values.append(None)
             continue
         qb = np.empty((0, nq))
         cert = used_closed = spread_done = False
+        blocked = None
         if closed_ok and not ctx.out_of_time():
             cf = _closed_form(ctx, i)
             if cf is None:
                 closed_ok = False
             elif cf[1]:
-                qb, used_closed, cert = cf[0], True, cf[2]
+                qb, used_closed, cert, blocked = cf[0], True, cf[2], cf[3]
             elif cf[0].shape[0]:  # numerical: no closed form for this arm
                 closed_ok = False
                 if ctx.wps.plain:  # (the pose problem is the waypoint's problem)
@@ -1216,21 +1306,28 @@ def _build(ctx: _Context, start: FloatArray | None) -> _Graph:
                     fresh = _fill(ctx, i, fresh)
                 qb = _merge(qb, fresh, ctx, merge_tol)
         ok_b = np.ones(qb.shape[0], dtype=bool)
-        if qb.shape[0] == 0:  # nothing meets the waypoint: the best attempts stand in, and
-            # the configurations they started from (staying put adds no jump)
-            stand = bad[:BEAM] + list(par[:BEAM])
-            if stand:
-                qb = np.array(stand).reshape(-1, nq)
+        if qb.shape[0] == 0 and i > 0:  # nothing meets the waypoint: every configuration of
+            # the waypoint before stands in (staying put adds no jump, whatever made that
+            # layer: closed form, tracking, stand-ins), with the best failed attempts
+            held = graph.layers[i - 1]
+            if held.shape[0] > MAX_HELD:  # (the best by the running programme)
+                held = _pick(held, *value(i - 1), MAX_HELD, ctx)
+            qb = _merge(held, np.array(bad[:BEAM]).reshape(-1, nq), ctx)
+            ok_b = np.zeros(qb.shape[0], dtype=bool)
+        elif qb.shape[0] == 0:  # the first waypoint: one solve stands in, valid if met, and
+            # q0 when it is not met (staying put adds no jump)
+            q, met = _stand_in(ctx, start)
+            qb, ok_b = q[None], np.array([met])
+            if not met and start is not None:
+                qb = _merge(qb, start[None], ctx)
                 ok_b = np.zeros(qb.shape[0], dtype=bool)
-            else:  # (the first waypoint, or out of time): one solve stands in, valid if met
-                q, met = _stand_in(ctx, i, graph.layers, start)
-                qb, ok_b = q[None], np.array([met])
         graph.layers.append(qb)
         if i > 0:
             ctx.built(graph.layers[i - 1].shape[0], qb.shape[0])
         graph.valid.append(ok_b)
         graph.certified.append(cert)
         graph.closed.append(used_closed)
+        graph.blocked.append(blocked if not ok_b.any() else None)
         values.append(None)
     if not graph.exhaustive and int(value(n - 1)[0].min()) > 0 and not ctx.out_of_time():
         _backward(ctx, graph)
@@ -1238,13 +1335,10 @@ def _build(ctx: _Context, start: FloatArray | None) -> _Graph:
     return graph
 
 
-def _stand_in(
-    ctx: _Context, i: int, layers: list[FloatArray], start: FloatArray | None
-) -> tuple[FloatArray, bool]:
-    """Waypoint ``i`` solved from the previous waypoint's first candidate (or ``q0``, or
-    mid-range): ``(q, met)``."""
-    ref = layers[i - 1][0] if i > 0 else (start if start is not None else ctx.robot.mid_q())
-    return ctx.track(ctx.wps.target(i), ref)
+def _stand_in(ctx: _Context, start: FloatArray | None) -> tuple[FloatArray, bool]:
+    """Waypoint 0 solved from ``q0`` (or mid-range): ``(q, met)``."""
+    ref = start if start is not None else ctx.robot.mid_q()
+    return ctx.track(ctx.wps.target(0), ref)
 
 
 def _backward(ctx: _Context, graph: _Graph) -> None:
@@ -1385,6 +1479,10 @@ def _densify(
             a, b = choice.index[i - 1], choice.index[i]
             qa, qb = graph.layers[i - 1][a], graph.layers[i][b]
             key = (i, a, b)
+            if key not in checked and not graph.valid[i][b] and np.array_equal(qa, qb):
+                # staying put at a waypoint nothing meets (its stand-in, the configuration
+                # before it): no motion, so nothing to track through (no jump)
+                checked[key] = (True, np.repeat(qb[None], k + 1, axis=0), 0.0)
             if key not in checked and ctx.out_of_time():  # the steps left: unchecked at once
                 rest = [graph.layers[j][choice.index[j]] for j in range(i - 1, ctx.wps.n)]
                 dense.append(_joint_space_chains(np.array(rest), k, ctx).reshape(-1, qa.size))
@@ -1572,13 +1670,21 @@ def _reason(
     if missed:
         where = ", ".join(str(i) for i in missed[:10]) + (" …" if len(missed) > 10 else "")
         beyond = [i for i in missed if _beyond_reach(ctx, i)]
+        blocked = [i for i in missed if i < len(graph.blocked) and graph.blocked[i] is not None]
         why = "no IK solution found"
+        if blocked:  # (the closed form's branches, every one rejected by the other goals)
+            why = _blocked_reason(ctx, graph, missed, blocked)
+        closed_none = not blocked and any(graph.closed) and ctx.wps.pose_only(missed[0]) is not None
         if beyond:
             why += f"; beyond the frame's reach: {beyond[:10]}"
-        elif any(graph.closed) and ctx.wps.pose_only(missed[0]) is not None:
+        elif closed_none:
             why += " (closed form: none meets it within the joint limits)"
+        why += _inside_reason(ctx, missed)
         plural = "s" if len(missed) > 1 else ""
-        proven = beyond or (any(graph.closed) and ctx.wps.pose_only(missed[0]) is not None)
+        proven = bool(beyond) or closed_none
+        proven = proven or (
+            len(blocked) == len(missed) and all(graph.certified[i] for i in blocked)
+        )
         if ctx.timed_out and not proven:  # (tracked with what the limit left: not a proof)
             parts.append(f"waypoint{plural} {where} not reached within the time limit")
         else:
@@ -1596,7 +1702,10 @@ def _reason(
                 f"is {nearest:.3g} times the bound away)"
             )
         if missed:
-            msg += "; next to a waypoint not reached the configuration is the best attempt"
+            msg += (
+                "; a waypoint not reached holds a stand-in (the configuration before it, "
+                "or the best attempt)"
+            )
         elif proof:
             origin = " from q0" if start is not None else ""
             msg += (
@@ -1629,6 +1738,76 @@ def _reason(
             f"({max_ratio:.2f} of the bound){checked}"
         )
     return "; ".join(parts)
+
+
+def _blocked_reason(ctx: _Context, graph: _Graph, missed: list[int], blocked: list[int]) -> str:
+    """Why the waypoints ``blocked`` (of ``missed``) are not reached: the closed form gave
+    their poses branches within the joint limits, and their other goals (collisions, …)
+    rejected every one; a proof where each set was certified complete."""
+    from swarm_ik.goals import AvoidCollisions
+
+    failed: dict[str, bool] = {}  # label → a collision goal
+    for i in blocked:
+        goals = ctx.wps.problem(i).goals
+        for k in graph.blocked[i] or ():
+            label = "the joint bounds" if k < 0 else goals[k].describe()
+            failed[label] = k >= 0 and isinstance(goals[k], AvoidCollisions)
+    collisions = all(failed.values())
+    what = (
+        "collision-free IK solution"
+        if collisions
+        else f"IK solution meeting {', '.join(sorted(failed))}"
+    )
+    fails = "collides" if collisions else "fails it" if len(failed) == 1 else "fails them"
+    listed = ", ".join(str(i) for i in blocked[:10]) + (" …" if len(blocked) > 10 else "")
+    complete = all(graph.certified[i] for i in blocked)
+    sets = "each set complete: a proof" if complete else "the sets not certified complete"
+    how = f"(closed form: every branch within the joint limits {fails}; {sets})"
+    if len(blocked) == len(missed):
+        why = f"no {what} {how}"
+    else:
+        why = f"no IK solution found; at {listed} no {what} {how}"
+    return why
+
+
+def _inside_reason(ctx: _Context, missed: list[int]) -> str:
+    """``"; the target point of waypoints … lies inside obstacle …"`` for the waypoints of
+    ``missed`` whose target point an obstacle of their collision goals holds, else ``""``."""
+    inside: dict[str, list[int]] = {}
+    for i in missed:
+        name = _inside_obstacle(ctx, i)
+        if name is not None:
+            inside.setdefault(name, []).append(i)
+    out = ""
+    for name, at in inside.items():
+        plural = "s" if len(at) > 1 else ""
+        where = ", ".join(str(i) for i in at[:10]) + (" …" if len(at) > 10 else "")
+        out += f"; the target point of waypoint{plural} {where} lies inside obstacle {name!r}"
+    return out
+
+
+def _inside_obstacle(ctx: _Context, i: int) -> str | None:
+    """The obstacle of waypoint ``i``'s collision goals whose inside holds its target point
+    (the pose's, or the point of a primary ``Pose``/``Position`` goal), if any
+    (:meth:`AvoidCollisions.obstacle_containing`)."""
+    from swarm_ik.goals import AvoidCollisions, Pose, Position
+
+    problem = ctx.wps.problem(i)
+    avoid = [g for g in problem.goals if isinstance(g, AvoidCollisions) and g.is_primary]
+    if not avoid:
+        return None
+    points = [ctx.wps.poses[i][:3, 3]] if ctx.wps.poses is not None else []
+    for g in problem.goals:
+        if g.is_primary and isinstance(g, Pose):
+            points.append(g.target[:3, 3])
+        elif g.is_primary and isinstance(g, Position):
+            points.append(g.point)
+    for av in avoid:
+        for point in points:
+            name = av.obstacle_containing(point)
+            if name is not None:
+                return str(name)
+    return None
 
 
 def _beyond_reach(ctx: _Context, i: int) -> bool:
