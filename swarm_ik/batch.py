@@ -1642,6 +1642,7 @@ def read_targets(path: str | Path, positions: bool = False) -> FloatArray:
         raise InvalidArgumentError(f"targets file not found: {str(p)!r}")
     suffix = p.suffix.lower()
     if suffix in (".npz", ".npy"):
+        _check_magic(p, suffix)
         if suffix == ".npy":  # (mapped: its shape is checked before it is read)
             return check_targets(np.load(p, allow_pickle=False, mmap_mode="r"), positions=positions)
         data = np.load(p, allow_pickle=False)
@@ -1652,7 +1653,8 @@ def read_targets(path: str | Path, positions: bool = False) -> FloatArray:
         if len(keys) == 1:
             return check_targets(data[keys[0]], positions=positions)
         raise InvalidArgumentError(
-            f"{p}: no array named 'targets' or 'poses'; arrays in the file: {', '.join(keys)}"
+            f"{p}: no array named 'targets' or 'poses'; arrays in the file: "
+            f"{', '.join(keys) or '(none)'}"
         )
     if suffix == ".csv":
         with p.open(newline="") as fh:
@@ -1695,6 +1697,38 @@ def read_targets(path: str | Path, positions: bool = False) -> FloatArray:
         f"cannot read targets from {str(p)!r}: unknown suffix {p.suffix!r}; valid suffixes: "
         ".csv, .npy, .npz"
     )
+
+
+_MAGIC = {".npy": (b"\x93NUMPY",), ".npz": (b"PK\x03\x04", b"PK\x05\x06")}
+"""The first bytes of numpy's ``.npy`` format and of a zip (``.npz``: a zip of ``.npy``
+files; an empty zip starts with its end record)."""
+
+
+def _check_magic(p: Path, suffix: str) -> None:
+    """Refuse a ``.npy`` / ``.npz`` file that does not start as numpy's format does (numpy
+    would try it as a pickle and say so), naming the file and what it looks like instead.
+
+    Raises:
+        InvalidArgumentError: not a ``.npy`` (``.npz``) file.
+    """
+    try:
+        with p.open("rb") as fh:
+            head = fh.read(64)
+    except OSError as exc:
+        raise InvalidArgumentError(
+            f"{p}: cannot read targets ({exc.strerror or type(exc).__name__})"
+        ) from None
+    if head.startswith(_MAGIC[suffix]):
+        return
+    fmt = "numpy's binary array format" if suffix == ".npy" else "numpy's zip of arrays"
+    text = head.decode("utf-8", "ignore")  # (a character cut at byte 64 dropped)
+    if not head:
+        seen = "it is empty"
+    elif len(text) >= len(head) - 3 and all(c.isprintable() or c in "\t\r\n" for c in text):
+        seen = "it holds text (a CSV file of targets is read when named .csv)"
+    else:
+        seen = f"it starts with {head[:8]!r}"
+    raise InvalidArgumentError(f"{p}: not a valid {suffix} file ({fmt}); {seen}")
 
 
 def _read_rows(p: Path, rows: Any, width: int) -> FloatArray:
@@ -1768,6 +1802,6 @@ def read_targets_file(path: str | os.PathLike[str], positions: bool = False) -> 
         KeyError,
     ) as exc:
         reason = " ".join(str(exc).split()) or type(exc).__name__
-        if "allow_pickle" in reason:
+        if "allow_pickle" in reason or "Python objects in dtype" in reason:
             reason = "an object array of Python objects, not numbers"
         raise InvalidArgumentError(f"{path}: cannot read targets ({reason})") from None

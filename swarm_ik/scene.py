@@ -13,7 +13,7 @@ and cylinders run along their local z axis, centred on the pose origin, as in UR
 [m] (URDF convention).  Every shape is a frozen dataclass validated on construction; bad
 values raise :class:`~swarm_ik.errors.InvalidArgumentError` (or
 :class:`SceneFileNotFoundError` for a mesh file that does not exist), one line naming the
-value.
+value; sizes and position coordinates are at most :data:`MAX_LENGTH` (10 km).
 
 Files (:meth:`Scene.load` / :meth:`Scene.save`, the layouts in ``docs/scenes.md``):
 
@@ -30,6 +30,10 @@ Files (:meth:`Scene.load` / :meth:`Scene.save`, the layouts in ``docs/scenes.md`
 * MoveIt's ``.scene`` text (both layouts: with and without the object pose line; read only).
 * a URDF of fixed obstacles (``.urdf``; every link's collision geometry at the zero
   configuration; read only).
+
+A file with no obstacles is refused (a URDF without ``<collision>`` elements, a MoveIt scene
+without shapes, an empty YAML file) unless it says so: the JSON ``{"obstacles": []}`` and the
+YAML ``{}`` that :meth:`Scene.save` writes for an empty scene are read back.
 """
 
 from __future__ import annotations
@@ -64,6 +68,15 @@ MAX_DEPTH = 32
 """Deepest nesting of lists and mappings in a JSON or YAML scene."""
 MAX_NODES = 5_000_000
 """Most values in a parsed JSON or YAML scene (YAML aliases counted at every use)."""
+MAX_LENGTH = 1e4
+"""Largest size (a radius, a length, a box edge) and largest coordinate of a position [m] of
+an obstacle: 10 km, in every format and in the shapes' constructors.  No robot's scene is that
+large (a factory floor, a ground plane of a kilometre fit well within it), so a larger value is
+a unit error or a stand-in for "infinite" (``1e308``), and such values break the collision
+checks: a sphere of radius 1e308 m made each solve print Eigen's "too many iterations in
+Jacobi transform" on stderr, a box 1e16 m away made coal's broadphase raise.  Within it,
+float64 still resolves positions to about 2e-12 m.  (A mesh's size is its file's times
+``scale``, bounded by :data:`MESH_SCALE`.)"""
 
 
 class SceneFileNotFoundError(SwarmIKError, FileNotFoundError):
@@ -117,6 +130,22 @@ def _float_array(value: Any, shape: tuple[int, ...]) -> FloatArray | None:
     return np.array(parts, dtype=float).reshape(shape)
 
 
+def _too_large(
+    kind: str, what: str, got: float | list[float], size: bool = True
+) -> InvalidArgumentError:
+    """The refusal of a size (``size``) or a position beyond :data:`MAX_LENGTH` (``got``: a
+    number or 3)."""
+    if size:
+        bound = f"at most {MAX_LENGTH:g} m" + ("" if isinstance(got, float) else " each")
+    else:
+        bound = f"within ±{MAX_LENGTH:g} m in each coordinate"
+    shown = f"{got:g}" if isinstance(got, float) else str(got)
+    return InvalidArgumentError(
+        f"{kind}: {what} must be {bound} (swarm_ik.scene.MAX_LENGTH: no robot's scene is that "
+        f"large; a unit error?), got {shown}"
+    )
+
+
 def _positive(kind: str, what: str, value: Any) -> float:
     if not _is_number(value):
         raise InvalidArgumentError(
@@ -125,10 +154,16 @@ def _positive(kind: str, what: str, value: Any) -> float:
     v = _as_float(value)
     if not (math.isfinite(v) and v > 0.0):
         raise InvalidArgumentError(f"{kind}: {what} must be a positive number [m], got {v}")
+    if v > MAX_LENGTH:
+        raise _too_large(kind, what, v)
     return v
 
 
-def _vector(kind: str, what: str, value: Any, positive: bool = False) -> tuple[float, ...]:
+def _vector(
+    kind: str, what: str, value: Any, positive: bool = False, bounded: bool = True
+) -> tuple[float, ...]:
+    """3 finite numbers (``positive``: each > 0; ``bounded``: each within ±:data:`MAX_LENGTH`,
+    a size or a position in metres)."""
     arr = _float_array(value, (3,))
     if arr is None or not np.all(np.isfinite(arr)):
         raise InvalidArgumentError(
@@ -138,6 +173,8 @@ def _vector(kind: str, what: str, value: Any, positive: bool = False) -> tuple[f
         raise InvalidArgumentError(
             f"{kind}: {what} must be 3 positive numbers [m], got {arr.tolist()}"
         )
+    if bounded and not np.all(np.abs(arr) <= MAX_LENGTH):
+        raise _too_large(kind, what, arr.tolist(), size=positive)
     return tuple(float(v) for v in arr)
 
 
@@ -168,6 +205,8 @@ def _pose(kind: str, value: Any) -> Matrix4:
             f"{kind}: pose is not a rigid transform (its 3x3 block must be a rotation and its "
             f"last row [0, 0, 0, 1]), got {arr.tolist()}"
         )
+    if not np.all(np.abs(arr[:3, 3]) <= MAX_LENGTH):
+        raise _too_large(kind, "pose position", arr[:3, 3].tolist(), size=False)
     return tuple(tuple(float(v) for v in row) for row in arr)
 
 
@@ -350,7 +389,9 @@ class Mesh:
         scale: Any = self.scale
         if _is_number(scale):
             scale = (scale, scale, scale)
-        object.__setattr__(self, "scale", _vector("mesh", "scale", scale, positive=True))
+        object.__setattr__(
+            self, "scale", _vector("mesh", "scale", scale, positive=True, bounded=False)
+        )
         if not all(MESH_SCALE[0] <= v <= MESH_SCALE[1] for v in self.scale):
             raise InvalidArgumentError(
                 f"mesh: scale must be in [{MESH_SCALE[0]:g}, {MESH_SCALE[1]:g}] "
@@ -570,7 +611,11 @@ class Scene:
         Raises:
             SceneFileNotFoundError: the file, or a mesh it names, does not exist.
             InvalidArgumentError: a file over :data:`MAX_FILE_BYTES`, unreadable, or a bad
-                obstacle (one line naming it and the problem).
+                obstacle (one line naming it and the problem); a file with no obstacles that
+                does not say so (a URDF without ``<collision>`` elements, a MoveIt scene
+                without shapes, an empty YAML file: an empty scene would turn collision
+                avoidance off unnoticed; the JSON ``{"obstacles": []}`` and YAML ``{}`` that
+                :meth:`save` writes for an empty scene are read).
             UnknownNameError: an unknown shape type (the valid ones listed).
             SceneDependencyError: a YAML file without PyYAML installed.
         """
@@ -1182,6 +1227,8 @@ def _from_curobo(data: Any, base_dir: Path, where: str) -> Scene:
 
 # ----------------------------------------------------------------------------- MoveIt
 _MOVEIT_SHAPES = ("box", "cylinder", "mesh", "sphere")
+_MOVEIT_TYPES = (*_MOVEIT_SHAPES, "cone", "plane")
+"""Every shape type line of MoveIt's format (cones and planes refused by name)."""
 _NUMBER = re.compile(r"[-+]?(?:[0-9]+\.?[0-9]*|\.[0-9]+)(?:[eE][-+]?[0-9]+)?")
 _TOKEN = re.compile(r"\s*(\S+)")
 
@@ -1218,6 +1265,11 @@ class _Stream:
             )
         self.pos = m.end()
         return m.group(1)
+
+    def peek(self) -> str | None:
+        """The next token, not consumed (None at the end of the file)."""
+        m = _TOKEN.match(self.text, self.pos)
+        return None if m is None else m.group(1)
 
     def rest_of_line(self) -> str:
         end = self.text.find("\n", self.pos)
@@ -1354,8 +1406,19 @@ def _from_moveit(text: str, where: str, mesh_dir: Path | None) -> list[Shape]:
             break
     s = _Stream(text, first + 1, where)
     shapes: list[Shape] = []
+    n_objects = 0
     while True:
         marker = s.token("an object ('* name') or the end line '.'")
+        if marker == "." and not shapes:  # (an empty scene would turn collision avoidance
+            # off unnoticed: MoveIt writes one for an empty planning scene)
+            held = (
+                f"its {n_objects} object{'s have' if n_objects > 1 else ' has'} no shapes"
+                if n_objects
+                else "no object"
+            )
+            raise InvalidArgumentError(
+                f"{where}: the scene holds no obstacles ({held} before the end line '.')"
+            )
         if marker == ".":
             return shapes
         if marker != "*":
@@ -1365,15 +1428,36 @@ def _from_moveit(text: str, where: str, mesh_dir: Path | None) -> list[Shape]:
         if not object_id:
             raise s.fail("an object ('*') without a name")
         s.context = f"object {object_id!r}: "
+        n_objects += 1
         obj_pose = s.pose("object pose") if new_format else np.eye(4)
+        count_line = s.next_line()
         n = s.count("number of shapes")
+        declared = f"{n} shape{'s' * (n != 1)} declared (line {count_line})"
         made: list[tuple[Callable[[FloatArray, str], Shape], FloatArray, int]] = []
         for k in range(n):
             line = s.next_line()
+            tok = s.peek()
+            if (
+                tok is None
+                or (k and tok not in _MOVEIT_TYPES)
+                or tok in ("*", ".")
+                or _NUMBER.fullmatch(tok)
+            ):  # (a shape count larger than the shapes given)
+                follows = (
+                    "the file ends (truncated?)" if tok is None else f"line {line} holds {tok!r}"
+                )
+                raise s.fail(
+                    f"{declared} but {k} given: {follows} where shape {k}'s type "
+                    f"({', '.join(_MOVEIT_SHAPES)}) was expected",
+                    line,
+                )
             build = _moveit_shape(s, mesh_dir)
             pose = obj_pose @ s.pose(f"shape {k} pose")
             s.row(f"shape {k} colour", "rgba")
             made.append((build, pose, line))
+        after = s.peek()
+        if after in _MOVEIT_TYPES:  # (where a subframe count or the next object was due)
+            raise s.fail(f"{declared}, but another shape follows: {after!r}", s.next_line())
         if new_format:
             for k in range(s.count("number of subframes")):
                 s.token(f"subframe {k} name")
@@ -1456,7 +1540,19 @@ def _from_urdf(p: Path) -> list[Shape]:
         model, info = load_urdf(p)
     except RobotModelError as exc:
         raise InvalidArgumentError(_one_line(exc)) from None
-    n_collision = _check_urdf_collisions(ET.fromstring(info.xml), str(p))
+    root = ET.fromstring(info.xml)
+    n_collision = _check_urdf_collisions(root, str(p))
+    if n_collision == 0:  # (an empty scene would turn collision avoidance off unnoticed)
+        n_visual = sum(len(link.findall("visual")) for link in root.findall("link"))
+        visuals = (
+            f"; <visual> elements ({n_visual} here) are drawn, never collided with"
+            if n_visual
+            else ""
+        )
+        raise InvalidArgumentError(
+            f"{p}: no link has a <collision> element, so the file holds no obstacles{visuals} "
+            "(give each obstacle a <collision> geometry)"
+        )
     error = None
     with captured_stderr() as said:
         try:

@@ -175,6 +175,7 @@ def run(args: argparse.Namespace) -> int:
         _viewer.check_viewer(args, live=bool(args.show))
     if args.goals is not None:
         check_goals_file(args.goals)
+    _check_dls_options(args)
     pose = None if args.pose is None else pose_target(args.pose, args.position_only)
     frames = None if not args.frame else (args.frame[0] if len(args.frame) == 1 else args.frame)
     robot = load_robot(args, ee_frame=frames, srdf=args.srdf)
@@ -202,6 +203,7 @@ def run(args: argparse.Namespace) -> int:
     problem = swarm_ik.IKProblem(
         robot, target, goals, args.fitness, w_rot=0.0 if args.position_only else 1.0
     )
+    _check_dls_problem(args, problem)
     res = swarm_ik.solve(problem, args.solver, **solve_kwargs(args), **dict(args.param))
     if args.json:
         _print_json(args, robot, res)
@@ -210,6 +212,58 @@ def run(args: argparse.Namespace) -> int:
     if args.show or args.animate or args.html or args.compare:
         _viewer.after_solve(args, problem, res)
     return EXIT_OK if res.success else EXIT_NOT_REACHED
+
+
+def _dls_options(args: argparse.Namespace) -> list[str]:
+    """The options that name the solver ``dls`` (``--solver dls``, ``--compare dls``)."""
+    return [
+        option
+        for option, name in (("--solver", args.solver), ("--compare", args.compare))
+        if name == "dls"
+    ]
+
+
+def _dls_refused(option: str, what: str) -> InvalidArgumentError:
+    """The one-line refusal of ``option dls`` for a problem it cannot take (``what``)."""
+    from swarm_ik.api import DEFAULT_SOLVER
+    from swarm_ik.solvers.dls import TAKES
+
+    instead = (
+        f"leave --solver out to use the default solver {DEFAULT_SOLVER}, which takes any goals"
+        if option == "--solver"
+        else "compare with another solver"
+    )
+    return InvalidArgumentError(f"{option} dls solves {TAKES}; it cannot take {what}: {instead}")
+
+
+def _check_dls_options(args: argparse.Namespace) -> None:
+    """Refuse ``--solver dls`` (or ``--compare dls``) with options that make a problem it
+    cannot solve (:func:`swarm_ik.solvers.dls.support`), before the robot is loaded:
+    ``--scene`` (a collision goal), ``--from-q`` with several ``--frame`` (a pose goal on
+    each)."""
+    for option in _dls_options(args):
+        if args.scene is not None:
+            raise _dls_refused(option, "--scene (obstacles to avoid: a collision goal)")
+        if args.from_q is not None and args.frame and len(args.frame) > 1:
+            raise _dls_refused(
+                option, f"--from-q with {len(args.frame)} --frame (a pose goal on each frame)"
+            )
+
+
+def _check_dls_problem(args: argparse.Namespace, problem: Any) -> None:
+    """Refuse ``--solver dls`` (or ``--compare dls``) for a problem it cannot solve (a
+    ``--goals`` file of other goals), before solving."""
+    options = _dls_options(args)
+    if not options:
+        return
+    from swarm_ik.solvers.dls import support
+
+    reason = support(problem)
+    if reason:
+        source = (
+            f"--goals {args.goals!r}, which holds" if args.goals is not None else "a problem of"
+        )
+        raise _dls_refused(options[0], f"{source} {reason}")
 
 
 def _measured(res: Any, field: str) -> bool:

@@ -86,12 +86,50 @@ def _init_fields(cls: type[Goal]) -> list[Field[Any]]:
     return sorted(init, key=lambda f: bool(f.kw_only))
 
 
-def goal_from_dict(data: Mapping[str, Any]) -> Goal:
+def _json_scene(value: Any, base_dir: str | os.PathLike[str] | None) -> Any:
+    """The ``scene`` of an ``AvoidCollisions`` goal's JSON form: a scene file's path (relative
+    to ``base_dir``, the goals file's folder, when given; ``~`` expanded) or null; a JSON
+    object or list (an inline scene) is refused in the schema's terms.  Anything else (a
+    :class:`~swarm_ik.scene.Scene`, a list of shapes, given from Python) is passed on."""
+    inline = isinstance(value, Mapping) or (
+        isinstance(value, (list, tuple)) and any(isinstance(v, Mapping) for v in value)
+    )
+    if inline or isinstance(value, (bool, int, float)):
+        got = "an object" if isinstance(value, Mapping) else (
+            "a list" if inline else reprlib.repr(value)
+        )  # fmt: skip
+        raise InvalidArgumentError(
+            'goal AvoidCollisions: "scene" must be a scene file\'s path (a string: .json, '
+            ".yml/.yaml, .scene or .urdf; docs/scenes.md) or null (self-collision only), got "
+            f'{got}: write the obstacles to a scene file (e.g. {{"obstacles": [...]}} as a '
+            ".json file) and give its path"
+        )
+    if isinstance(value, str) and value and base_dir is not None:
+        try:
+            path = Path(value).expanduser()
+        except RuntimeError:  # ("~nobody/…": the scene's reader says so)
+            return value
+        if not path.is_absolute():
+            return str(Path(base_dir) / path)
+    return value
+
+
+def goal_from_dict(
+    data: Mapping[str, Any], *, base_dir: str | os.PathLike[str] | None = None
+) -> Goal:
     """One goal from its JSON form ``{"type": "Pose", "frame": ..., ...}``.
+
+    Args:
+        data: The goal's JSON object.
+        base_dir: Folder against which a relative ``scene`` path of an ``AvoidCollisions``
+            goal is read (:func:`load_goals` gives the goals file's folder; default: the
+            working directory).
 
     Raises:
         UnknownNameError: unknown ``type`` (the goal types listed).
-        InvalidArgumentError: missing or unknown fields (the valid ones listed), bad values.
+        InvalidArgumentError: missing or unknown fields (the valid ones listed), bad values
+            (an ``AvoidCollisions`` ``scene`` given inline as a JSON object or list: it is a
+            scene file's path or null).
     """
     if not isinstance(data, Mapping):
         raise InvalidArgumentError(
@@ -128,6 +166,8 @@ def goal_from_dict(data: Mapping[str, Any]) -> Goal:
                 '{"position": [x, y, z], "quaternion": [qx, qy, qz, qw]}'
             )
         given["target"] = (t["position"], t["quaternion"])
+    if cls is AvoidCollisions and "scene" in given:
+        given["scene"] = _json_scene(given["scene"], base_dir)
     try:
         return cls(**given)
     except TypeError as exc:
@@ -160,6 +200,10 @@ def load_goals(source: str | os.PathLike[str] | Sequence[Mapping[str, Any]]) -> 
     """Goals from a JSON file (a list of goal objects, or ``{"goals": [...]}``) or from the
     already-parsed list.
 
+    The ``scene`` of an ``AvoidCollisions`` goal is a scene file's path or null; read from a
+    file, a relative path is taken from the goals file's folder (as a scene file's relative
+    mesh paths are from its own), from a parsed list from the working directory.
+
     Raises:
         InvalidArgumentError: not a regular file, larger than :data:`MAX_GOALS_FILE`,
             unreadable, nested too deeply, a key given twice in one object, not a list of goal
@@ -181,13 +225,15 @@ def load_goals(source: str | os.PathLike[str] | Sequence[Mapping[str, Any]]) -> 
             raise InvalidArgumentError(f"{p}: JSON nested too deeply") from None
         except (OSError, UnicodeDecodeError, json.JSONDecodeError) as exc:
             raise InvalidArgumentError(f"{p}: not a readable JSON goals file ({exc})") from None
+        base_dir: Path | None = p.resolve().parent
     else:
         data = source
+        base_dir = None
     if isinstance(data, Mapping) and "goals" in data:
         data = data["goals"]
     if not isinstance(data, Sequence) or isinstance(data, (str, bytes)) or not data:
         raise InvalidArgumentError("goals must be a non-empty JSON list of goal objects")
-    return [goal_from_dict(d) for d in data]
+    return [goal_from_dict(d, base_dir=base_dir) for d in data]
 
 
 __all__ = [

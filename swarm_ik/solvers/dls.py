@@ -6,15 +6,64 @@ the frame Jacobian ``J`` (``LOCAL``), the damped step ``v = Jᵀ (J Jᵀ + λ I)
 ``q ← integrate(q, step·v)``, then the joint limits enforced by clipping (continuous joints
 wrapped).  When the error stops decreasing or a restart has used its iterations, it restarts
 from a point drawn uniformly within the limits, until the budget ends or the tolerance is met.
+
+It solves one goal: an exact ``Pose`` or ``Position`` goal of any goal frame (the target
+of ``IKProblem(robot, target)`` is one; with ``w_rot=0`` its position alone).  Any other
+problem (a collision goal, several goals or frames, a tolerance band) is refused before the
+first step, with what it holds (:func:`support`); the default solver ``swarm`` takes any
+goal set.
 """
 
 from __future__ import annotations
+
+from typing import TYPE_CHECKING
 
 import numpy as np
 import pinocchio as pin
 
 from swarm_ik.errors import InvalidArgumentError
+from swarm_ik.goals import AvoidCollisions, Pose, Position
 from swarm_ik.solvers.base import Evaluator, register
+
+if TYPE_CHECKING:
+    from swarm_ik.problem import IKProblem
+
+TAKES = "one exact Pose or Position goal of one frame"
+"""What ``dls`` solves, for the messages that refuse other problems."""
+
+
+def support(problem: IKProblem | None) -> str:
+    """Why ``dls`` cannot solve ``problem``, in words naming what the problem holds (e.g.
+    ``"an AvoidCollisions goal"``); the empty string when it can: one exact ``Pose`` or
+    ``Position`` goal, on any goal frame (the target of ``IKProblem(robot, target)`` is one).
+
+    Args:
+        problem: The IK problem (``None``: a plain objective, as ``swarm_ik.optimize`` has).
+    """
+    if problem is None:
+        return "no IK problem (a plain objective), and dls steps along a frame's Jacobian"
+    goals = problem.goals
+    if any(isinstance(g, AvoidCollisions) for g in goals):
+        return "an AvoidCollisions goal (obstacles or self-collision)"
+    if len(goals) > 1:
+        return f"{len(goals)} goals ({', '.join(g.describe() for g in goals)})"
+    goal = goals[0]
+    if not isinstance(goal, (Pose, Position)):
+        return f"a {goal.describe()} goal, not a pose"
+    if not goal.exact:
+        return f"a {goal.describe()} goal with a tolerance band"
+    return ""
+
+
+def refusal(problem: IKProblem | None) -> InvalidArgumentError | None:
+    """The error ``dls`` raises for a problem it cannot solve (:func:`support`), or None."""
+    reason = support(problem)
+    if not reason:
+        return None
+    return InvalidArgumentError(
+        f"solver 'dls' solves {TAKES}, and this problem has {reason}; use the default solver "
+        "'swarm', which takes any goal set"
+    )
 
 
 def run(
@@ -35,7 +84,7 @@ def run(
     joint ranges (as TRAC-IK's benchmark does); later ones from uniform random points.
 
     Args:
-        ev: The evaluator (must wrap an IK problem).
+        ev: The evaluator (must wrap an IK problem that :func:`support` accepts).
         rng: Random generator (restart points).
         iterations: Total DLS iterations when no ``max_evals``/``time_limit`` is given.
         iters_per_restart: Iterations before a restart.
@@ -44,17 +93,29 @@ def run(
         step: Scale of the step ``v`` (1 = full damped Gauss–Newton step).
         stall_tol: A restart also happens when the fitness improves by less than this…
         stall_iters: …over this many consecutive iterations.
+
+    Raises:
+        InvalidArgumentError: a problem :func:`support` refuses (a collision goal, several
+            goals, a tolerance band…), before any evaluation; the message says what dls
+            solves and what the problem holds.
     """
     problem = ev.problem
-    if problem is None or problem.target is None:
-        raise InvalidArgumentError(
-            "dls needs an IK problem with one pose target (it uses the frame Jacobian)"
-        )
-    target = problem.target
+    refused = refusal(problem)
+    if refused is not None:  # (before the first step: nothing is evaluated)
+        raise refused
+    assert problem is not None  # (support's check)
+    goal = problem.goals[0]
+    by_pose = problem.target is not None  # (else a Position goal of a goal list)
+    if problem.target is not None:
+        target = problem.target
+    else:
+        assert isinstance(goal, Position)  # (support's check)
+        target = np.eye(4)
+        target[:3, 3] = np.asarray(goal.point, dtype=float)
     robot = problem.robot
     model = robot.model
     data = model.createData()
-    fid = robot.ee_frame_id
+    fid = robot.frame_ids[robot.frame_index(goal.frame_name())]  # (any goal frame)
     o_m_target = pin.SE3(target[:3, :3].copy(), target[:3, 3].copy())
     rows = slice(0, 3) if problem.position_only else slice(0, 6)
     q = ev.q0.copy() if ev.q0 is not None else 0.5 * (ev.lower + ev.upper)
@@ -68,7 +129,12 @@ def run(
         pin.forwardKinematics(model, data, q_pin)
         pin.updateFramePlacements(model, data)
         pose = data.oMf[fid]
-        f = ev.record(q[None], problem.fitness_of_poses(np.asarray(pose.homogeneous)[None]))[0]
+        fit = (
+            problem.fitness_of_poses(np.asarray(pose.homogeneous)[None])
+            if by_pose
+            else problem.fitness(q[None])
+        )
+        f = ev.record(q[None], fit)[0]
         ev.end_iteration()
         if ev.done:
             break
