@@ -7,13 +7,18 @@ numbers by :mod:`swarm_ik.bench.report`.  Each :class:`PublishedRow` names the a
 paper prints it and, when we implement it, the registry name of our solver.
 
 * [HLFOA], on the ABB YuMi IRB 14000 left arm: Table 2 (the given pose, 10 runs, population
-  100, 1000 iterations) and Table 4 (10 arbitrary reachable poses).
+  100, 1000 iterations) and Table 4 (10 arbitrary reachable poses); both print best / mean /
+  worst / standard deviation for every algorithm.
   Fitness: eq. 3, ``λ·(|Δpx|+|Δpy|+|Δpz|) + Σ|ΔR_ij|``, millimetres with ``λ = 1e-2`` (the
   same values as metres with ``λ = 10``, our ``"paper-l1"``).
 * [MGWO], on a mobile loading manipulator: Table 3 (benchmark functions F1–F4, 30 wolves,
-  200 iterations, 50 runs, means only) and Table 4 (IK of the target FK(x*), 50 runs; its
-  last column is the **variance**).  Fitness: eq. 15, ZYZ Euler
-  angles, ``μ = 1`` (our ``"euler-zyz"``).
+  200 iterations, 50 runs) and Table 4 (IK of the target FK(x*), 50 runs); both print mean /
+  best / worst / **variance**.  Fitness: eq. 15, ZYZ Euler angles, ``μ = 1`` (our
+  ``"euler-zyz"``).
+
+A statistic missing from a row's ``stats`` is one the paper does not print (the report shows
+"—" for it); printed values that look like typesetting slips are kept as printed and flagged
+where they are defined.
 """
 
 from __future__ import annotations
@@ -109,20 +114,42 @@ P000_TABLE2 = PublishedTable(
         ),
     ),
 )
-"""[HLFOA], Table 2: best / mean / worst / std of the fitness over 10 runs."""
+"""[HLFOA], Table 2: best / mean / worst / std of the fitness over 10 runs (the paper prints six
+significant digits; several values here are rounded to three or four)."""
 
 P000_TABLE4 = PublishedTable(
     "HLFOA",
     "Table 4",
     "YuMi left arm, 10 arbitrary reachable poses",
     (
-        PublishedRow("FOA", "foa", {"mean": 7.107}),
-        PublishedRow("LGMS-FOA", None, {"mean": 0.684}),
-        PublishedRow("AE-LGMS-FOA", None, {"mean": 0.296}),
-        PublishedRow("HLFOA", "hlfoa", {"best": 1.73e-16, "mean": 3.88e-16, "worst": 6.80e-16}),
+        PublishedRow(
+            "FOA", "foa", {"best": 3.12702, "mean": 7.10705, "worst": 9.80547, "std": 2.20799}
+        ),
+        PublishedRow(
+            "LGMS-FOA",
+            None,
+            {"best": 7.21645e-16, "mean": 6.83956e-1, "worst": 2.01518, "std": 6.23121e-1},
+        ),
+        PublishedRow(
+            "AE-LGMS-FOA",
+            None,
+            {"best": 2.64782e-12, "mean": 2.95665e-1, "worst": 8.66390e-1, "std": 3.03890e-1},
+        ),
+        PublishedRow(
+            "IFOA", None, {"best": 4.05356, "mean": 6.81130, "worst": 1.07144e1, "std": 1.74148}
+        ),
+        PublishedRow(
+            "SFOA", None, {"best": 3.10603, "mean": 8.82899, "worst": 1.40072e1, "std": 3.03113}
+        ),
+        PublishedRow(
+            "HLFOA",
+            "hlfoa",
+            {"best": 1.73472e-16, "mean": 3.87891e-16, "worst": 6.79526e-16, "std": 1.59873e-16},
+        ),
     ),
 )
-"""[HLFOA], Table 4: fitness over the 10 poses (HLFOA: best / mean / worst; others: mean)."""
+"""[HLFOA], Table 4: best / mean / worst / std of the fitness over the 10 poses, every value as
+printed (six significant digits)."""
 
 # --------------------------------------------------------------------------- [MGWO]
 P003_X_STAR = (np.pi / 4, np.pi / 6, np.pi / 4, 0.8, 1.0, 1.0, np.pi / 6, -np.pi / 4)
@@ -133,32 +160,74 @@ HARTMANN3_MIN = -3.86278214782076
 """Global minimum of Hartmann-3 (F4) to full precision (Dixon & Szegő's test set)."""
 
 
-def _table3(caption: str, gwo: float, mgwo: float, resolution: float = 0.0) -> PublishedTable:
-    """One function's part of [MGWO] Table 3 (means only)."""
-    rows = (PublishedRow("GWO", "gwo", {"mean": gwo}), PublishedRow("MGWO", "mgwo", {"mean": mgwo}))
+def _printed(mean: float, best: float, worst: float, var: float) -> dict[str, float]:
+    """One row of [MGWO] Table 3 or 4 in the paper's column order (平均值 mean, 最优值 best,
+    最差值 worst, 方差 variance)."""
+    return {"mean": mean, "best": best, "worst": worst, "var": var}
+
+
+def _table3(
+    caption: str, gwo: dict[str, float], mgwo: dict[str, float], resolution: float = 0.0
+) -> PublishedTable:
+    """One function's part of [MGWO] Table 3 (GWO's row, then MGWO's)."""
+    rows = (PublishedRow("GWO", "gwo", gwo), PublishedRow("MGWO", "mgwo", mgwo))
     return PublishedTable("MGWO", "Table 3", caption, rows, resolution)
 
 
+# [MGWO] Table 3 ("测试函数求解指标统计", test function solving index statistics): every value
+# exactly as printed (five significant digits; mean, best, worst, variance).  F4's worst is
+# printed as 0 for both algorithms, which the printed means rule out (see
+# F4_WORST_AS_PRINTED); kept as printed.
 P003_TABLE3: dict[str, PublishedTable] = {
-    "F1": _table3("F1 sphere (30-D)", 9.38e-9, 5.89e-14),
-    "F2": _table3("F2 Schwefel 2.22 (30-D)", 6.76e-6, 5.16e-9),
-    "F3": _table3("F3 Rastrigin (30-D)", 14.75, 1.30),
-    "F4": _table3("F4 Hartmann-3 (3-D)", -3.8609, -3.8628, resolution=5e-5),
+    "F1": _table3(
+        "F1 sphere (30-D)",
+        _printed(9.3846e-9, 6.8859e-10, 4.3676e-8, 8.7286e-17),
+        _printed(5.8941e-14, 1.0988e-14, 1.7557e-13, 1.3045e-27),
+    ),
+    "F2": _table3(
+        "F2 Schwefel 2.22 (30-D)",
+        _printed(6.7552e-6, 2.3777e-6, 1.8616e-5, 1.0811e-11),
+        _printed(5.1626e-9, 2.0102e-9, 7.9555e-9, 1.8047e-18),
+    ),
+    "F3": _table3(
+        "F3 Rastrigin (30-D)",
+        _printed(14.7479, 7.7676e-6, 33.4622, 60.4462),
+        _printed(1.3046, 1.6900e-10, 6.2076, 2.7221),
+    ),
+    "F4": _table3(
+        "F4 Hartmann-3 (3-D)",
+        _printed(-3.8609, -3.8628, 0.0, 7.1972e-6),
+        _printed(-3.8628, -3.8628, 0.0, 3.5927e-11),
+        resolution=5e-5,
+    ),
 }
-"""[MGWO], Table 3: mean best value over 50 runs (30 wolves, 200 iterations), per function.
-F4 is printed to four decimals, hence its resolution."""
+"""[MGWO], Table 3: mean / best / worst / variance of the best value over 50 runs (30 wolves,
+200 iterations), per function, as printed.  F4's mean and best are printed to four decimals,
+hence its resolution."""
+
+F4_WORST_AS_PRINTED = 0.0
+"""[MGWO] Table 3 prints 0 as F4's worst value for GWO and MGWO.  No run can go below
+:data:`HARTMANN3_MIN`, so a run at 0 among 50 would put the mean at or above
+``49/50 · HARTMANN3_MIN ≈ -3.7855``, above both printed means (-3.8609, -3.8628): the 0 is not
+the worst of the runs those means average.  The report shows it as printed, with this note."""
 
 P003_TABLE4 = PublishedTable(
     "MGWO",
     "Table 4",
     "loading manipulator, target FK(x*); 30 wolves, 200 iterations, 50 runs",
     (
-        PublishedRow("GWO", "gwo", {"mean": 0.4292, "best": 0.0115, "worst": 1.0613}),
-        PublishedRow("VAGWO", None, {"mean": 1.0043, "best": 8.04e-5, "worst": 6.2053}),
-        PublishedRow("PGWO", None, {"mean": 0.3986, "best": 0.0015, "worst": 2.5655}),
-        PublishedRow(
-            "MGWO", "mgwo", {"mean": 0.0122, "best": 0.0064, "worst": 0.0226, "var": 8.04e-5}
-        ),
+        PublishedRow("GWO", "gwo", _printed(0.4292, 0.0115, 1.0613, 1.0613)),
+        PublishedRow("VAGWO", None, _printed(1.0043, 8.0362e-5, 6.2053, 6.2053)),
+        PublishedRow("PGWO", None, _printed(0.3986, 0.0015, 2.5655, 2.5655)),
+        PublishedRow("MGWO", "mgwo", _printed(0.0122, 0.0064, 0.0226, 8.0362e-5)),
     ),
 )
-"""[MGWO], Table 4: mean / best / worst / variance of the fitness over 50 runs."""
+"""[MGWO], Table 4 ("各算法求解指标统计"): mean / best / worst / variance of the fitness over 50
+runs, every value as printed.  The variance column repeats the worst value for GWO, VAGWO and
+PGWO, and VAGWO's best has the digits of MGWO's variance (8.0362e-5): apparently typesetting
+slips, kept as printed (:data:`P003_TABLE4_REPEATED_VAR` names the rows; the report says so)."""
+
+P003_TABLE4_REPEATED_VAR = tuple(
+    r.algorithm for r in P003_TABLE4.rows if r.stats["var"] == r.stats["worst"]
+)
+"""Rows of [MGWO] Table 4 whose printed variance equals their printed worst value."""
