@@ -178,7 +178,7 @@ QUICK = Config(
     budget_seeds=1,
     budgets=(1_000, 10_000),
 )
-"""Reduced sizes of ``bench paper --quick`` (a few minutes on a quiet 2-core machine)."""
+"""Reduced sizes of ``bench paper --quick`` (about a minute on one core)."""
 
 
 def _flat(m: np.ndarray) -> tuple[float, ...]:
