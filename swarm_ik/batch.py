@@ -70,6 +70,7 @@ from swarm_ik.kernels.lm import CONVERGED, NOT_RUN
 from swarm_ik.kernels.search import sampling_window, splitmix64, uniform_in, uniforms, wall_clock
 from swarm_ik.pose import make_pose, matrix_to_quat
 from swarm_ik.problem import IKProblem
+from swarm_ik.result import freeze_arrays
 from swarm_ik.robot import RobotModel
 from swarm_ik.scene import Scene
 
@@ -623,7 +624,8 @@ class ChunkResult(_Rows):
 
 @dataclass(frozen=True)
 class BatchResult(_Rows):
-    """What :func:`solve_batch` returns: one row per target.
+    """What :func:`solve_batch` returns: one row per target (its arrays read-only, as
+    checked; ``.copy()`` gives a writable one).
 
     Attributes:
         q: Best joint vector per target (rad / m), shape ``(N, nq)``.
@@ -659,6 +661,9 @@ class BatchResult(_Rows):
     interrupted: bool = False
     goal_labels: tuple[str, ...] = ()
     goals_met: BoolArray | None = None
+
+    def __post_init__(self) -> None:
+        freeze_arrays(self)  # (the rows as checked: read-only)
 
     @classmethod
     def from_chunks(

@@ -79,6 +79,7 @@ from swarm_ik._validate import floats_or
 from swarm_ik.errors import InvalidArgumentError, InvalidTargetError
 from swarm_ik.kernels import joints
 from swarm_ik.optimize import make_rng
+from swarm_ik.result import freeze_arrays
 
 FloatArray = NDArray[np.float64]
 
@@ -207,7 +208,8 @@ class InvalidWaypointError(InvalidArgumentError, InvalidTargetError):
 
 @dataclass(frozen=True)
 class PathResult:
-    """What :func:`solve_path` returns.
+    """What :func:`solve_path` returns (its arrays read-only, as checked; ``.copy()`` gives a
+    writable one).
 
     Attributes:
         q: The joint path, shape ``(N, nq)`` (rad / m; continuous joints in ``[-π, π)``).
@@ -256,6 +258,9 @@ class PathResult:
     n_candidates: NDArray[np.int64] = field(default_factory=lambda: np.zeros(0, dtype=np.int64))
     travel: float = 0.0
     q_dense: FloatArray | None = None
+
+    def __post_init__(self) -> None:
+        freeze_arrays(self)  # (the path as checked: read-only)
 
     def __repr__(self) -> str:
         return (

@@ -107,3 +107,14 @@ def _read_only(value: Any) -> FloatArray:
     arr = np.array(value, dtype=float)
     arr.setflags(write=False)
     return arr
+
+
+def freeze_arrays(obj: Any) -> None:
+    """Mark every numpy array field of the dataclass ``obj`` read-only, in place (results
+    built from arrays of their own: :class:`swarm_ik.batch.BatchResult`,
+    :class:`swarm_ik.path.PathResult`), so that a frozen result's rows cannot change after
+    they were checked; ``arr.copy()`` gives a writable copy."""
+    for f in fields(obj):
+        value = getattr(obj, f.name)
+        if isinstance(value, np.ndarray):
+            value.flags.writeable = False

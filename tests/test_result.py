@@ -165,3 +165,22 @@ def test_a_results_q_feeds_the_problems_batched_functions() -> None:
     r = swarm_ik.solve(problem, seed=0)
     assert float(problem.fitness(r.q[None])[0]) == pytest.approx(r.fitness, abs=1e-12)
     assert problem.goal_errors(r.q[None]).shape == (1, 1, 2)
+
+
+def test_batch_and_path_results_are_read_only_too() -> None:
+    """The rows of a BatchResult and the path of a PathResult cannot change after their
+    check (frozen dataclasses whose arrays were writable)."""
+    robot = swarm_ik.load_robot("panda")
+    rng = np.random.default_rng(3)
+    q = robot.random_q(rng, 4)
+    batch = swarm_ik.solve_batch(robot, robot.fk(q))
+    for arr in (batch.q, batch.success, batch.position_error, batch.n_evals):
+        with pytest.raises(ValueError):
+            arr[0] = arr[1]
+    poses = [robot.fk(q[0]), robot.fk(q[0])]
+    path = swarm_ik.solve_path(robot, poses, q0=q[0])
+    with pytest.raises(ValueError):
+        path.q[0, 0] = 1.0
+    with pytest.raises(ValueError):
+        path.reached[0] = False
+    assert path.q.copy().flags.writeable
