@@ -592,7 +592,7 @@ class BatchChain:
         return self.tree.nq
 
 
-@dataclass(frozen=True)
+@dataclass(frozen=True, eq=False)
 class _Rows:
     """One row per target: the answers and their check (shared by :class:`ChunkResult` and
     :class:`BatchResult`; shapes ``(n, nq)`` and ``(n,)``)."""
@@ -622,7 +622,7 @@ class ChunkResult(_Rows):
     goals_met: BoolArray | None = None
 
 
-@dataclass(frozen=True)
+@dataclass(frozen=True, eq=False)
 class BatchResult(_Rows):
     """What :func:`solve_batch` returns: one row per target (its arrays read-only, as
     checked; ``.copy()`` gives a writable one).

@@ -206,7 +206,7 @@ class InvalidWaypointError(InvalidArgumentError, InvalidTargetError):
     """A waypoint that is not a finite rigid transform (caught as either parent class)."""
 
 
-@dataclass(frozen=True)
+@dataclass(frozen=True, eq=False)
 class PathResult:
     """What :func:`solve_path` returns (its arrays read-only, as checked; ``.copy()`` gives a
     writable one).

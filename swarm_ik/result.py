@@ -10,7 +10,7 @@ import numpy as np
 from swarm_ik._types import FloatArray
 
 
-@dataclass(frozen=True)
+@dataclass(frozen=True, eq=False)
 class Result:
     """What :func:`swarm_ik.solve` returns.
 
@@ -21,7 +21,8 @@ class Result:
     whatever route builds the Result (its constructor, :func:`dataclasses.replace`,
     :mod:`copy`, :mod:`pickle`): a result cannot change after its errors were judged for its
     ``q``.  ``r.q[0] = 1.0`` raises ``ValueError``, and a later change to the array given to
-    the constructor does not reach the result; ``r.q.copy()`` gives a writable copy.
+    the constructor does not reach the result; ``r.q.copy()`` gives a writable copy.  Results
+    compare and hash by identity (``==`` of the arrays field by field was ambiguous).
 
     Attributes:
         q: Best joint vector found (rad / m, one value per joint), shape ``(nq,)``.

@@ -184,3 +184,14 @@ def test_batch_and_path_results_are_read_only_too() -> None:
     with pytest.raises(ValueError):
         path.reached[0] = False
     assert path.q.copy().flags.writeable
+
+
+def test_results_compare_by_identity_and_hash() -> None:
+    """``r1 == r2`` raised numpy's ambiguous truth value and ``hash(r)`` a TypeError (the
+    generated dataclass equality over array fields)."""
+    robot = swarm_ik.load_robot("panda")
+    problem = swarm_ik.IKProblem.from_q(robot, robot.mid_q())
+    a, b = swarm_ik.solve(problem, seed=0), swarm_ik.solve(problem, seed=0)
+    assert a == a and a != b and len({a, b}) == 2
+    batch = swarm_ik.solve_batch(robot, robot.fk(robot.mid_q())[None])
+    assert batch == batch and hash(batch) == hash(batch)
