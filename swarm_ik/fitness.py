@@ -8,8 +8,11 @@ Positions in metres, angles in radians.  Lower is better, zero at the target.
   the same values.
 * ``"euler-zyz"``: eq. 15 of [MGWO], ``μ·(|Δx|+|Δy|+|Δz|) + |Δα|+|Δβ|+|Δγ|`` with
   ZYZ Euler angles, differences wrapped to ``(−π, π]``, ``μ = 1``.
-* ``"paper-pso"``: eqs. 3–5 of [PSO-IK], ``|Δp|² + (N·N* + O·O* + A·A* − 3)²`` (the printed
-  orientation term is garbled; this reading is zero when the frames agree).
+* ``"paper-pso"``: eqs. 3–5 of [PSO-IK], ``|Δp|² + (N·N* + O·O* + A·A* − 3)²``.  The paper
+  prints the orientation term legibly as ``(N·N* + O·O* + A·A* − 1)²`` (eq. 4, and its
+  derivative eq. 11), which is wrong: ``N·N* + O·O* + A·A* = 1 + 2·cos θ`` for a rotation
+  error ``θ``, so the printed term is zero at ``θ = 90°`` and 4 when the frames agree; ``− 3``
+  makes it zero when the frames agree.
 """
 
 from __future__ import annotations

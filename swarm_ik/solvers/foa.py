@@ -23,7 +23,7 @@ def _axis_unit(ev: Evaluator) -> FloatArray:
 def smell_candidates(
     x_axis: FloatArray, y_axis: FloatArray, scale: FloatArray, ev: Evaluator
 ) -> FloatArray:
-    """Candidate solutions ``S = 1/Dist`` of flies at axis positions (eqs. 5-6 of 000).
+    """Candidate solutions ``S = 1/Dist`` of flies at axis positions ([HLFOA] eqs. 5-6).
 
     Args:
         x_axis: X axis coordinates of the flies, dimensionless, shape ``(pop, n)``.
@@ -32,13 +32,17 @@ def smell_candidates(
         ev: The evaluator (for the bounds).
 
     Returns:
-        ``clip(s_j / sqrt(X² + Y²))``, shape ``(pop, n)``: always ``>= 0`` when the bounds allow
-        it (``+inf`` at ``Dist = 0`` is clipped to the upper bound).
+        ``min(max(s_j / sqrt(X² + Y²), l_j), u_j)``, shape ``(pop, n)``: always ``>= 0`` when
+        the bounds allow it (``l_j < 0 <= u_j`` or ``0 <= l_j``), and ``+inf`` at ``Dist = 0``
+        is clipped to the upper bound ``u_j``.  The clip is plain, with no wrapping of
+        continuous joints (unlike :meth:`~swarm_ik.solvers.base.Evaluator.clip`, which would
+        wrap ``S > π`` to a negative angle and ``+inf`` to NaN): a candidate is the paper's
+        positive ``S`` held within the limits.
     """
     dist = np.sqrt(x_axis * x_axis + y_axis * y_axis)
     with np.errstate(divide="ignore"):
-        s = scale / dist
-    return ev.clip(s)
+        s = scale / dist  # (scale > 0: Dist = 0 gives +inf, never NaN)
+    return np.clip(s, ev.lower, ev.upper)
 
 
 def run(
@@ -73,7 +77,11 @@ def run(
 
     ``S_ij > 0`` always: the algorithm never evaluates a negative joint value (unless a bound
     forces it) and so cannot reach optima with negative coordinates.  This is the weakness
-    [HLFOA] reports, reproduced on purpose.
+    [HLFOA] reports, reproduced on purpose.  It holds on continuous joints too: ``S`` is
+    clipped into the bounds without the wrap into ``[-π, π)`` the other solvers get, so an
+    ``S > π`` on a continuous joint is held at its upper bound rather than turned into a
+    negative angle (a wrap would let FOA reach negative values on those joints, which the
+    algorithm as published cannot).
 
     Evaluations: ``pop_size * iterations + 1`` ([HLFOA], section 2.2.5).  A starting point
     ``q0`` is ignored: a fly location cannot represent an arbitrary joint vector.
