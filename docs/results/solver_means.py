@@ -12,7 +12,17 @@ import numpy as np
 import swarm_ik
 from swarm_ik.testfunctions import FUNCTIONS
 
-SOLVERS = ["foa", "hlfoa", "hlfoa-batch", "gwo", "mgwo", "pso", "pso-improved", "cs"]
+SOLVERS = [
+    "foa",
+    "hlfoa",
+    "hlfoa-batch",
+    "gwo",
+    "mgwo",
+    "pso",
+    "pso-improved",
+    "pso-adaptive",
+    "cs",
+]
 
 
 def f_run(args):
@@ -43,7 +53,7 @@ if __name__ == "__main__":
                 yumi_run,
                 [
                     (s, seed)
-                    for s in ["hlfoa-batch", "pso-improved", "cs", "cs-newton"]
+                    for s in ["hlfoa-batch", "pso-improved", "pso-adaptive", "cs", "cs-newton"]
                     for seed in range(10)
                 ],
             )
@@ -56,7 +66,7 @@ if __name__ == "__main__":
         vals = [np.mean([v for (a, b, v) in out if a == s and b == fk]) for fk in FUNCTIONS]
         print(f"| {s} | " + " | ".join(f"{v:.6g}" for v in vals) + " |")
     print("\nYuMi left arm, target FK(q*), fitness paper-l1, 100,100 evaluations, full budget:\n")
-    for s in ["hlfoa-batch", "pso-improved", "cs", "cs-newton"]:
+    for s in ["hlfoa-batch", "pso-improved", "pso-adaptive", "cs", "cs-newton"]:
         v = [f for (a, f) in y if a == s]
         print(
             f"- {s}: YuMi FK(q*) mean {np.mean(v):.3g}, best {np.min(v):.3g}, worst {np.max(v):.3g}"
