@@ -310,6 +310,9 @@ def warm_up(route: Route) -> None:
                     tolerance=(route.tol_pos, route.tol_rot),
                 )  # fmt: skip
                 route.spec.run(ev, make_rng(0), **route.kwargs)
+            problem = plain
+        # the judge's first call (Pinocchio's check, the reasons' proofs: tens of ms once)
+        route.judge(problem, q, 0.0, 0, 0.0, np.zeros(0), None)
     finally:
         timer.cancel()
     _COMPILED.add(key)
@@ -461,6 +464,7 @@ class Route:
             The frozen :class:`~swarm_ik.result.Result`, judged with Pinocchio.
         """
         t_run = time.perf_counter()
+        t_start = t_run - spent  # (the call's entry: what time_s counts from)
         problem = self.problem if problem is None else problem
         seed = check_seed(seed)
         q_start = prepare_q0(problem, q0)
@@ -560,8 +564,9 @@ class Route:
             elapsed += first_s
         t_judge = time.perf_counter()
         result = self.judge(
-            problem, q, fit, n_evals, elapsed, history, seed_val, q_start, limit=search_limit
-        )
+            problem, q, fit, n_evals, elapsed, history, seed_val, q_start, limit=search_limit,
+            t_start=t_start,
+        )  # fmt: skip
         # what judging costs this route (rising at once, falling slowly): kept out of the
         # search's time limit, so that the whole call stays within it
         self._judge_s = max(time.perf_counter() - t_judge, 0.9 * self._judge_s)
@@ -639,11 +644,15 @@ class Route:
         seed: int | None,
         q_start: np.ndarray | None = None,
         limit: float | None = None,
+        t_start: float | None = None,
     ) -> Result:
         """The one judge: the answer's errors from Pinocchio, its limits, why it ended
-        (``limit``: the search's time limit, when it was given less than the route's).  A
-        Python goal is judged from the values the search kept for the answer
-        (:func:`swarm_ik.goals.base.reuse_goal_values`), each computed once."""
+        (``limit``: the search's time limit, when it was given less than the route's; the
+        reason reads the search's ``elapsed`` seconds against it).  A Python goal is judged
+        from the values the search kept for the answer
+        (:func:`swarm_ik.goals.base.reuse_goal_values`), each computed once.  ``time_s`` is
+        the call's wall time from ``t_start`` (``time.perf_counter()`` at the call's entry:
+        loading, search and this judge), else ``elapsed``."""
         scope = goals_base.reuse_goal_values(resume=True) if problem.python_goals else _NO_SCOPE
         with scope:  # (a slow goal: its values at q computed once, if not yet)
             goal_errors = problem.verify(q, self.tol_pos, self.tol_rot, q0=q_start)
@@ -656,30 +665,31 @@ class Route:
                     dp = e.position_error
                 if e.rotation_error > dr:
                     dr = e.rotation_error
+            reason = end_reason(
+                problem,
+                success,
+                n_evals,
+                self.max_evals,
+                elapsed,
+                self.time_limit if limit is None else limit,
+                self.tol_pos,
+                self.tol_rot,
+                q,
+            )
             return Result(
                 q=q,
                 fitness=float(fitness),
                 position_error=float(dp),
                 rotation_error=float(dr),
                 n_evals=int(n_evals),
-                time_s=float(elapsed),
+                time_s=float(elapsed if t_start is None else time.perf_counter() - t_start),
                 success=success,
                 within_limits=bool(within),
                 history=history,
                 solver=self.solver,
                 seed=seed,
                 goal_errors=goal_errors,
-                reason=end_reason(
-                    problem,
-                    success,
-                    n_evals,
-                    self.max_evals,
-                    elapsed,
-                    self.time_limit if limit is None else limit,
-                    self.tol_pos,
-                    self.tol_rot,
-                    q,
-                ),  # fmt: skip
+                reason=reason,
             )
 
 

@@ -37,7 +37,8 @@ class Result:
             the two apart (NaN where a goal has no such error), and the command line prints
             ``n/a`` (``null`` in ``--json``) with ``--position-only``.
         n_evals: Fitness evaluations spent (a Jacobian evaluation counts as one).
-        time_s: Wall-clock time of the solve [s].
+        time_s: Wall-clock time of the call [s], from its entry to the result (a first
+            call's kernel loading, the search and the judge included).
         success: Both errors within the tolerances given to ``solve`` (rotation ignored for
             position-only problems) and ``within_limits``.
         within_limits: ``q`` lies within the problem's bounds.
