@@ -464,7 +464,6 @@ class Route:
             The frozen :class:`~swarm_ik.result.Result`, judged with Pinocchio.
         """
         t_run = time.perf_counter()
-        t_start = t_run - spent  # (the call's entry: what time_s counts from)
         problem = self.problem if problem is None else problem
         seed = check_seed(seed)
         q_start = prepare_q0(problem, q0)
@@ -564,9 +563,8 @@ class Route:
             elapsed += first_s
         t_judge = time.perf_counter()
         result = self.judge(
-            problem, q, fit, n_evals, elapsed, history, seed_val, q_start, limit=search_limit,
-            t_start=t_start,
-        )  # fmt: skip
+            problem, q, fit, n_evals, elapsed, history, seed_val, q_start, limit=search_limit
+        )
         # what judging costs this route (rising at once, falling slowly): kept out of the
         # search's time limit, so that the whole call stays within it
         self._judge_s = max(time.perf_counter() - t_judge, 0.9 * self._judge_s)
@@ -644,15 +642,13 @@ class Route:
         seed: int | None,
         q_start: np.ndarray | None = None,
         limit: float | None = None,
-        t_start: float | None = None,
     ) -> Result:
         """The one judge: the answer's errors from Pinocchio, its limits, why it ended
         (``limit``: the search's time limit, when it was given less than the route's; the
         reason reads the search's ``elapsed`` seconds against it).  A Python goal is judged
         from the values the search kept for the answer
-        (:func:`swarm_ik.goals.base.reuse_goal_values`), each computed once.  ``time_s`` is
-        the call's wall time from ``t_start`` (``time.perf_counter()`` at the call's entry:
-        loading, search and this judge), else ``elapsed``."""
+        (:func:`swarm_ik.goals.base.reuse_goal_values`), each computed once; ``time_s`` is
+        the search's ``elapsed``."""
         scope = goals_base.reuse_goal_values(resume=True) if problem.python_goals else _NO_SCOPE
         with scope:  # (a slow goal: its values at q computed once, if not yet)
             goal_errors = problem.verify(q, self.tol_pos, self.tol_rot, q0=q_start)
@@ -682,7 +678,7 @@ class Route:
                 position_error=float(dp),
                 rotation_error=float(dr),
                 n_evals=int(n_evals),
-                time_s=float(elapsed if t_start is None else time.perf_counter() - t_start),
+                time_s=float(elapsed),
                 success=success,
                 within_limits=bool(within),
                 history=history,

@@ -37,8 +37,10 @@ class Result:
             the two apart (NaN where a goal has no such error), and the command line prints
             ``n/a`` (``null`` in ``--json``) with ``--position-only``.
         n_evals: Fitness evaluations spent (a Jacobian evaluation counts as one).
-        time_s: Wall-clock time of the call [s], from its entry to the result (a first
-            call's kernel loading, the search and the judge included).
+        time_s: Wall-clock seconds of the search, the solver's own time [s]: what the call
+            adds around it (the judge with Pinocchio, tens of µs; a first call's kernel
+            loading, charged to ``time_limit`` up to half of it) is not counted: time the
+            call for those.
         success: Both errors within the tolerances given to ``solve`` (rotation ignored for
             position-only problems) and ``within_limits``.
         within_limits: ``q`` lies within the problem's bounds.

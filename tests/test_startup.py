@@ -71,8 +71,8 @@ def test_first_solve_of_a_fresh_process_keeps_half_its_limit_for_the_search(call
 def test_first_solve_of_a_fresh_process_charges_the_loading_to_its_limit() -> None:
     """A first solve that cannot succeed (tolerances no answer meets) searches for its limit
     less the kernels' loading (at least half the limit), where it searched the whole limit
-    after the loading; its ``time_s`` is the call's wall time, loading and judge included
-    (it was the search's alone)."""
+    after the loading; the call itself stays within the limit (the judge's first call is
+    loaded with the kernels, off the clock)."""
     code = (
         "import time, swarm_ik, swarm_ik.api as api\n"
         "r = swarm_ik.load_robot('panda')\n"
@@ -91,7 +91,8 @@ def test_first_solve_of_a_fresh_process_charges_the_loading_to_its_limit() -> No
     loading = float(wall) - float(search_s)
     assert reason == "time_limit"
     assert float(search_s) <= max(0.6 - loading, 0.3) + 0.05, (wall, search_s)
-    assert abs(float(time_s) - float(wall)) < 0.01, (wall, time_s)
+    assert float(wall) <= max(0.6, loading + 0.3) + 0.05, (wall, loading)
+    assert abs(float(time_s) - float(search_s)) < 0.01  # (time_s: the search's own)
 
 
 def test_main_with_argv_leaves_the_collector_alone() -> None:
