@@ -3,7 +3,10 @@
 The geometry is the URDF's ``<collision>`` elements, loaded by Pinocchio's
 ``buildGeomFromUrdf`` (meshes and primitives become coal objects) on the full model and
 reduced with ``buildReducedModel`` to the solved chain, so every body follows the joint it
-is attached to after the off-chain joints are locked at ``robot.q_locked``.
+is attached to after the off-chain joints are locked at ``robot.q_locked``.  A mimic joint
+driven by a solved joint stays in that model wherever it is (``robot.model``, off the chain
+too), so the bodies it carries (a counterweight) move with their driver in the exact check
+and in the sphere model alike.
 
 Self-collision pairs are the pairs of links with collision geometry, minus
 

@@ -112,11 +112,16 @@ def _tree_joint(jid: int, shift: int) -> int:
 
 
 def _locked_values(
-    p: Path, full: Any, locked: Any, mimic: dict[str, tuple[str, float, float]]
+    p: Path,
+    full: Any,
+    locked: Any,
+    mimic: dict[str, tuple[str, float, float]],
+    renamed: Mapping[str, str] | None = None,
 ) -> dict[int, float]:
     """The joints to hold (``{joint id: value}``) from ``locked``: a dict name -> value (rad
     or m) or a list of names (held at their neutral value).  A locked mimic driver holds its
-    followers too.
+    followers too.  A joint renamed because a link has the same name (``renamed``: URDF name
+    -> model name, :attr:`swarm_ik.urdf.UrdfInfo.renamed`) is found under either name.
 
     Raises:
         UnknownNameError: a name is not a one-DoF joint of the URDF (the joints listed).
@@ -147,9 +152,16 @@ def _locked_values(
         return None if lo - 1e-9 <= v <= hi + 1e-9 else f"[{lo:g}, {hi:g}]"
 
     out: dict[int, float] = {}
-    for name, value in items:
+    given_as: dict[str, str] = {}
+    for given, value in items:
+        name = (renamed or {}).get(given, given) if isinstance(given, str) else given
         if not isinstance(name, str) or name not in names:
-            raise unknown("joint", name, names)
+            raise unknown("joint", given, names)
+        if given_as.setdefault(name, given) != given:
+            raise InvalidArgumentError(
+                f"locked joint {name!r} is given twice, as {given_as[name]!r} and {given!r} "
+                "(its URDF name and the name it was renamed to): give it once"
+            )
         if name in mimic:
             driver, a, b = mimic[name]
             raise InvalidArgumentError(
@@ -205,12 +217,24 @@ def _reduce(
     """Reduce ``full`` to the union of the root → frame paths of ``frames`` (a chain or a
     tree) and read the kinematic arrays off it.
 
-    A mimic follower on a path is kept and driven by its driver (which is then solved even if
-    it is on no path); its range narrows the driver's.  The joints of ``held`` (id -> value)
-    are locked at their values even on a path; every other joint off the paths at its
-    neutral value.  A free-flyer root joint (``full`` built with one) becomes four tree joints:
-    three prismatic ones along the world axes, bounded by ``± base_box`` [m], and a
-    ``BALL`` (its rotation vector bounded by ``±π``).
+    A mimic follower is kept and driven by its driver wherever that driver is solved: on a
+    path (its driver must be on a path too: a follower on a path whose driver is on none is
+    refused), and off the paths (a counterweight turning with a solved joint: the follower
+    and the links it carries then move with the driver, in :attr:`RobotModel.model`, the
+    collision bodies and the centre of mass); its range narrows the driver's.  A follower
+    whose driver is off the paths is locked at ``multiplier·driver + offset`` of the driver's
+    locked value, and one whose driver is held follows the held value.  The joints of
+    ``held`` (id -> value) are locked at their values even on a path; every other joint off
+    the paths at its neutral value.  A free-flyer root joint (``full`` built with one)
+    becomes four tree joints: three prismatic ones along the world axes, bounded by
+    ``± base_box`` [m], and a ``BALL`` (its rotation vector bounded by ``±π``).
+
+    Raises:
+        RobotModelError: no movable joint on a path, every one locked, too many degrees of
+            freedom; a kept mimic follower whose driver is missing, is itself a mimic joint
+            or is not solved; a kept follower or its driver continuous; a follower's range
+            that no value of its driver's range meets; an unsupported joint type; a reduction
+            Pinocchio refuses.
     """
     held = held or {}
     keep: set[int] = set()
@@ -224,6 +248,9 @@ def _reduce(
         keep.update(path_ids)
     keep -= set(held)
     jid = {full.names[j]: j for j in range(1, full.njoints)}
+    for follower, (driver, _, _) in mimic.items():  # off the paths, driven by a solved joint
+        if follower in jid and jid.get(driver) in keep and jid[follower] not in held:
+            keep.add(jid[follower])
     for j in sorted(keep):
         name = full.names[j]
         if name in mimic:
@@ -459,7 +486,8 @@ class RobotModel:
         urdf_path: The URDF file.
         ee_frame: The first goal frame (the end effector of single-frame problems).
         frames: Every goal frame, in the order given, shape ``(nf,)``.
-        model: Pinocchio model of the solved joints (other joints locked).
+        model: Pinocchio model of the solved joints and the mimic followers they drive (other
+            joints locked).
         full_model: Pinocchio model of the whole URDF.
         locked_joints: Names of the URDF joints locked.
         q_locked: Full-model configuration used for the locked joints.
@@ -470,8 +498,10 @@ class RobotModel:
         upper: Upper limits (rad or m), shape ``(nq,)``; ``+π`` for continuous joints.
         tree: The arrays behind the batched FK and Jacobian of every goal frame.
         frame_ids: Ids of the goal frames in ``model``, shape ``(nf,)``.
-        mimic: Mimic joints of ``model`` driven by a solved joint: follower name ->
-            ``(driver, multiplier, offset)``; the follower's value is ``multiplier·q + offset``.
+        mimic: Mimic joints of ``model`` driven by a solved joint (on a goal path or off
+            the paths: a counterweight turning with a solved joint moves with it): follower
+            name -> ``(driver, multiplier, offset)``; the follower's value is
+            ``multiplier·q + offset``.
         ee_frame_reason: Why ``ee_frame`` was chosen ("given", "the robot's usual tool
             frame", or the rule used for a file).
         srdf: SRDF of the self-collision pairs to disable (``None``: found next to the URDF,
@@ -563,7 +593,7 @@ class RobotModel:
         if dup:
             raise InvalidArgumentError(f"frame(s) {dup} given more than once")
         mimic = {k: (m.driver, m.multiplier, m.offset) for k, m in info.mimic.items()}
-        held = _locked_values(p, full, locked, mimic)
+        held = _locked_values(p, full, locked, mimic, info.renamed)
         red = _reduce(p, full, frames, mimic, held, box, bool(floating_base))
         return cls(
             name=full.name or p.stem,
@@ -943,6 +973,10 @@ class RobotModel:
         ``[x y z qx qy qz qw, joints…]`` when floating) for the solved joints at ``q``, the
         locked and off-path joints at their held values: anyone can check an answer with
         Pinocchio alone.
+
+        Every mimic follower reads ``multiplier·driver + offset`` of its driver's value: a
+        solved driver's value in ``q`` (followers on a goal path and off the paths alike,
+        :attr:`mimic`), a locked driver's held value otherwise.
 
         Args:
             q: Joint vector (rad / m), shape ``(nq,)``.

@@ -591,13 +591,22 @@ def default_ee_frame(model: Any, info: UrdfInfo | None = None) -> tuple[str, str
     """The end-effector frame a person would pick, and why.
 
     Rule: among the links (BODY frames), keep those whose chain from the root holds only
-    one-DoF joints and no gripper joint (a mimic joint, the driver of a mimic joint, or a
-    joint named like a finger: :func:`is_gripper_joint`); pick the one with the most movable
-    joints on its chain; among those, the best name (:func:`frame_name_score`: tcp > tool >
+    one-DoF joints, no gripper joint and no mimic joint the model cannot drive; pick the one
+    with the most solved joints on its chain (mimic followers, driven by their drivers, do not
+    count); among those, the best name (:func:`frame_name_score`: tcp > tool >
     ee/eef/end_effector > flange > hand/gripper/wrist > others > camera/sensor/ft/finger), then
     the one furthest along fixed joints from the last movable joint (the tip), then the first
     in the file.  When no link qualifies (a hand alone, a free-floating body), the rule falls
     back to the link on the deepest joint.
+
+    A gripper joint is a joint named like a finger (:func:`is_gripper_joint`), or a joint of
+    a mimic group (a driver and its followers) that carries no other arm joint: no movable
+    joint below it that is neither in a mimic group nor named like a finger (a gripper's
+    fingers, whatever their names).  A mimic joint inside an arm (a parallelogram's joint
+    driven by the shoulder, with the wrist beyond it) is an arm joint: it does not cut the
+    chain.  A chain is refused where :meth:`swarm_ik.robot.RobotModel.from_urdf` would refuse
+    it: a follower whose driver is not on the chain, a follower of a follower, a missing
+    driver, or a continuous or multi-DoF joint in a mimic group.
 
     Args:
         model: Full Pinocchio model.
@@ -610,16 +619,40 @@ def default_ee_frame(model: Any, info: UrdfInfo | None = None) -> tuple[str, str
     frames = list(model.frames)
     mimic = info.mimic if info is not None else {}
     child_link = info.child_link if info is not None else {}
-    drivers = {m.driver for m in mimic.values()}
+    names = list(model.names)
+    jid = {n: j for j, n in enumerate(names) if j > 0}
+    group = {m.driver: m.driver for m in mimic.values()}  # joint -> its group's driver
+    group.update({f: m.driver for f, m in mimic.items()})
+    finger = [
+        j > 0 and is_gripper_joint(names[j], child_link.get(names[j])) for j in range(len(names))
+    ]
+    unsupported = set()  # groups refused: a missing or mimic driver, a continuous joint
+    for f, m in mimic.items():
+        members = [n for n in (f, m.driver) if n in jid]
+        if (
+            m.driver not in jid
+            or m.driver in mimic
+            or any(model.joints[jid[n]].nq != 1 for n in members)
+        ):
+            unsupported.add(m.driver)
+            if m.driver in mimic:  # (a follower of a follower: its driver's group too)
+                unsupported.add(mimic[m.driver].driver)
     bad_joint = [False] * model.njoints
     for j in range(1, model.njoints):
-        jname = model.names[j]
-        bad_joint[j] = (
-            model.joints[j].nv != 1
-            or jname in mimic
-            or jname in drivers
-            or is_gripper_joint(jname, child_link.get(jname))
-        )
+        jname = names[j]
+        bad_joint[j] = model.joints[j].nv != 1 or finger[j]
+        if jname in group and not bad_joint[j]:
+            carries_arm = any(
+                model.joints[k].nv >= 1 and names[k] not in group and not finger[k]
+                for k in model.subtrees[j]
+                if k != j
+            )  # (a mimic group moving only itself and fingers: a gripper)
+            bad_joint[j] = group[jname] in unsupported or not carries_arm
+
+    def drivable(chain: list[int]) -> bool:
+        """Whether every mimic follower on ``chain`` has its driver on it too."""
+        on = {names[j] for j in chain}
+        return all(mimic[n].driver in on for n in on if n in mimic)
 
     def fixed_depth(i: int) -> int:
         d = 0
@@ -634,19 +667,22 @@ def default_ee_frame(model: Any, info: UrdfInfo | None = None) -> tuple[str, str
         if f.type != pin.FrameType.BODY:
             continue
         chain = [int(j) for j in model.supports[f.parentJoint] if j != 0]
-        if not chain or any(bad_joint[j] for j in chain):
+        if not chain or any(bad_joint[j] for j in chain) or not drivable(chain):
             continue
-        key = (len(chain), frame_name_score(f.name), fixed_depth(i), -i)
+        solved = sum(names[j] not in mimic for j in chain)
+        key = (solved, frame_name_score(f.name), fixed_depth(i), -i)
         if best is None or key > best:
             best, best_i = key, i
     if best is not None:
         f = frames[best_i]
         n = best[0]
         chain = [int(j) for j in model.supports[f.parentJoint] if j != 0]
+        k = len(chain) - n
+        driven = f" and {k} mimic joint{'s' if k != 1 else ''} they drive" if k else ""
         why = (
             f"default end-effector frame {f.name!r}: tip of the longest movable chain "
-            f"({n} joint{'s' if n != 1 else ''}, {model.names[chain[0]]} … "
-            f"{model.names[chain[-1]]}) without gripper or mimic joints"
+            f"({n} joint{'s' if n != 1 else ''}{driven}, {model.names[chain[0]]} … "
+            f"{model.names[chain[-1]]}) without gripper joints"
         )
         if best[1] > 0:
             why += ", preferred for its name"
@@ -656,7 +692,7 @@ def default_ee_frame(model: Any, info: UrdfInfo | None = None) -> tuple[str, str
     i = max(cand, key=lambda i: (depth[i], i))
     return frames[i].name, (
         f"default end-effector frame {frames[i].name!r}: the link on the deepest joint (no "
-        "chain without gripper, mimic or multi-DoF joints)"
+        "chain without gripper, unsupported mimic or multi-DoF joints)"
     )
 
 

@@ -133,3 +133,34 @@ def test_nearly_straight_wrist_solve_succeeds(eps):
         np.testing.assert_allclose(robot.fk_pinocchio(res.q), problem.target, atol=1e-5)
         qs, dp, dr = analytic.solve_all(problem)
         assert qs.shape[0] >= 1 and np.all(dp <= 1e-5) and np.all(dr <= 1e-5)
+
+
+def test_a_six_joint_arm_with_a_mimic_follower_takes_the_numerical_path(tmp_path) -> None:
+    """UR5 with a counterweight whose joint mimics the shoulder: seven joints in its model,
+    so eaik's 6R closed form does not apply; solve_many (auto) takes the numerical path (eaik
+    raised 'only 1-6R robots' before) and method='analytic' is refused with the reason."""
+    from pathlib import Path
+
+    from swarm_ik.solvers.analytic import AnalyticUnsupportedError
+
+    ur5 = swarm_ik.load_robot("ur5")
+    text = Path(ur5.urdf_path).read_text()
+    extra = (
+        '<link name="counterweight"><inertial><mass value="2"/><origin xyz="-0.2 0 0"/>'
+        '<inertia ixx="0.01" iyy="0.01" izz="0.01" ixy="0" ixz="0" iyz="0"/></inertial></link>'
+        '<joint name="cw_joint" type="revolute"><parent link="shoulder_link"/>'
+        '<child link="counterweight"/><origin xyz="0 0 0.1"/><axis xyz="0 1 0"/>'
+        '<limit lower="-6.28" upper="6.28" effort="1" velocity="1"/>'
+        '<mimic joint="shoulder_lift_joint" multiplier="1" offset="0"/></joint>'
+    )
+    path = tmp_path / "ur5_counterweight.urdf"
+    path.write_text(text.replace("</robot>", extra + "</robot>"))
+    robot = swarm_ik.load_robot(str(path), "tool0")
+    assert robot.nq == 6 and robot.mimic
+    q = np.array([0.4, -1.0, 1.2, -0.5, 1.1, 0.2])
+    problem = swarm_ik.IKProblem.from_q(robot, q)
+    assert "mimic" in analytic.support(problem)
+    with pytest.raises(AnalyticUnsupportedError, match="mimic"):
+        swarm_ik.solve_many(problem, method="analytic")
+    sols = swarm_ik.solve_many(problem, n=8, seed=0, max_starts=256)
+    assert sols and all(r.success and r.solver == "swarm" for r in sols)

@@ -149,10 +149,17 @@ def test_joint_named_like_a_link_is_renamed_in_memory(
     path = _write(tmp_path, text)
     robot = swarm_ik.load_robot(path, ee_frame="c")
     assert robot.joint_names == ("b_joint", "c_joint")
-    assert robot.locked_joints == ("f_joint",)
+    # f mimics b, a solved joint: kept off the chain, driven by b (nothing locked here)
+    assert robot.locked_joints == () and robot.mimic == {"f_joint": ("b_joint", 2.0, 0.1)}
     assert robot.ee_frame == "c"
     q = np.array([0.5, -0.4])
     np.testing.assert_allclose(robot.fk(q), robot.fk_pinocchio(q), atol=1e-12)
+    # goal b: c_joint is locked (buildReducedModel on renamed joints), f below it still follows b
+    short = swarm_ik.load_robot(path, ee_frame="b")
+    assert short.joint_names == ("b_joint",) and short.locked_joints == ("c_joint",)
+    assert short.mimic == {"f_joint": ("b_joint", 2.0, 0.1)}
+    qf = short.full_configuration([0.3])
+    assert qf[short.full_model.idx_qs[short.full_model.getJointId("f_joint")]] == 2.0 * 0.3 + 0.1
     _model, info = load_urdf(path)
     assert info.renamed == {"b": "b_joint", "c": "c_joint", "f": "f_joint"}
     assert info.joint_name("b") == "b_joint" and info.joint_name("b_joint") == "b_joint"

@@ -181,6 +181,16 @@ def analytic_chain(robot: RobotModel) -> AnalyticChain:
             empty,
             np.eye(3),
         )
+    elif robot.mimic or robot.model.nv != robot.nq:
+        chain = AnalyticChain(
+            None,
+            f"{robot.name} has mimic joints that follow its solved ones; the analytic path "
+            "solves chains of 6 independent joints (use solve_many's numerical path)",
+            "",
+            empty,
+            empty,
+            np.eye(3),
+        )
     else:
         axes, offsets, rot = chain_geometry(robot)
         solver = eaik_core.Robot(axes.T.copy(), offsets.T.copy(), rot, [], True)
