@@ -42,6 +42,11 @@ def main() -> None:
         help="write HTML pages into DIR instead of opening the live viewer",
     )
     args = parser.parse_args()
+    try:  # the example only draws: without meshcat, say so before solving anything
+        viz.require_meshcat()
+    except swarm_ik.SwarmIKError as exc:
+        print(f"viewer skipped: {exc}")
+        return
     if args.html is None and QUICK:
         with tempfile.TemporaryDirectory() as tmp:
             run(Path(tmp))

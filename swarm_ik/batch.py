@@ -49,6 +49,7 @@ import math
 import os
 import pickle
 import signal
+import threading
 import time
 import warnings
 import zipfile
@@ -1511,7 +1512,7 @@ def solve_batch(
         progress: Show a progress bar (tqdm) over the chunks.
         keep_on_interrupt: On Ctrl-C return the chunks finished so far (``interrupted``
             set) instead of raising ``KeyboardInterrupt``; chunks then go out in waves of two
-            per worker, and worker processes are started ignoring SIGINT (``swarm-ik batch``).
+            per worker, and worker processes are started with SIGINT blocked (``swarm-ik batch``).
 
     Returns:
         A :class:`BatchResult`, one row per target, in the order of ``targets``.
@@ -1567,8 +1568,20 @@ def solve_batch(
     interrupted = False
     with contextlib.ExitStack() as stack:
         t_setup = time.perf_counter()
-        with _workers_ignore_sigint() if keep_on_interrupt else contextlib.nullcontext():
-            client = stack.enter_context(distributed.connect(scheduler))
+        # (worker processes are started here for an embedded cluster only)
+        embedded = isinstance(scheduler, str) and scheduler == distributed.LOCAL
+        guard = _workers_ignore_sigint() if keep_on_interrupt and embedded else None
+        try:
+            with guard or contextlib.nullcontext():
+                client = stack.enter_context(distributed.connect(scheduler))
+        except KeyboardInterrupt:  # a Ctrl-C during the cluster's start-up, raised once it
+            if not keep_on_interrupt:  # is up (closed by the stack on the way out)
+                raise
+            logging.getLogger("distributed").setLevel(logging.CRITICAL)
+            return BatchResult.from_chunks(
+                [], robot, settings, time.perf_counter() - t0, time.perf_counter() - t_setup,
+                True, labels,
+            )  # fmt: skip
         setup_s = time.perf_counter() - t_setup
         workers = distributed.n_workers(client)
         size = int(chunk_size) if chunk_size is not None else default_chunk_size(n, workers)
@@ -1609,18 +1622,54 @@ def solve_batch(
 
 @contextlib.contextmanager
 def _workers_ignore_sigint() -> Iterator[None]:
-    """Ignore SIGINT while worker processes are started, so that they inherit the ignore
-    (Python keeps an inherited ignore) and Ctrl-C reaches this process only: no tracebacks
-    from every worker.  The handler is restored at once."""
-    try:
-        old = signal.signal(signal.SIGINT, signal.SIG_IGN)
-    except ValueError:  # not the main thread
+    """Start worker processes deaf to SIGINT without losing a Ctrl-C meant for this process.
+
+    While the body runs (an embedded cluster's start-up) SIGINT is *blocked* in this thread;
+    the threads it starts meanwhile and the processes they start (fork, spawn or forkserver:
+    the mask survives fork and exec) inherit the mask, so a Ctrl-C sent to the process group
+    later stays pending in the workers for good (no traceback from each) and reaches this
+    process only.  A Ctrl-C during the body is recorded (held pending by the mask, or caught
+    by a handler where a thread that does not block SIGINT takes it) and raised again at its
+    end, with the cluster in hand (the caller's exit closes it): not lost (the SIG_IGN used
+    before dropped it, and the whole batch then ran), not raised half-way through the
+    start-up.  The mask and the handler are restored at once.
+
+    multiprocessing's resource tracker is started first: the thread that starts it unblocks
+    SIGINT (bpo-33613), and would then start the workers with SIGINT unblocked.  Where masks
+    are not available (Windows) SIGINT is ignored during the body instead, as it was.
+    """
+    if (
+        threading.current_thread() is not threading.main_thread()
+        or signal.getsignal(signal.SIGINT) is None  # (a handler set from C: not restorable)
+    ):
         yield
         return
+    if not hasattr(signal, "pthread_sigmask"):  # pragma: no cover - Windows
+        old = signal.signal(signal.SIGINT, signal.SIG_IGN)
+        try:
+            yield
+        finally:
+            signal.signal(signal.SIGINT, old)
+        return
+    caught: list[int] = []
+
+    def record(signum: int, frame: Any) -> None:
+        caught.append(signum)
+
+    old_handler = signal.signal(signal.SIGINT, record)
     try:
-        yield
+        from multiprocessing import resource_tracker
+
+        resource_tracker.ensure_running()
+        old_mask = signal.pthread_sigmask(signal.SIG_BLOCK, {signal.SIGINT})
+        try:
+            yield
+        finally:  # (a Ctrl-C held pending is taken by `record` here)
+            signal.pthread_sigmask(signal.SIG_SETMASK, old_mask)
     finally:
-        signal.signal(signal.SIGINT, old)
+        signal.signal(signal.SIGINT, old_handler)
+        if caught:  # sent again, to the handler it was meant for (KeyboardInterrupt)
+            signal.raise_signal(signal.SIGINT)
 
 
 # --------------------------------------------------------------------------- files

@@ -128,7 +128,9 @@ def connect(
             processes=True,
             host="127.0.0.1",
             dashboard_address=None,
-            silence_logs=logging.ERROR,
+            # (what the worker processes print: an ERROR record too, e.g. a heartbeat cut by
+            # the scheduler closing on Ctrl-C, 30 lines; a task's error reaches the client)
+            silence_logs=logging.CRITICAL,
         )
         try:
             client = distributed.Client(cluster)

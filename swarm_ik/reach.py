@@ -233,22 +233,59 @@ def check_grid_size(
 
     Raises:
         InvalidArgumentError: the box holds more than ``max_targets`` poses (the message gives
-            the count, its memory, and a resolution that fits).
+            the count, its memory, and the finest resolution that fits; where even one
+            voxel's orientations are too many, fewer orientations or a larger cap).
     """
+    import math
+
     ext = np.asarray(upper, dtype=float).reshape(3) - np.asarray(lower, dtype=float).reshape(3)
     with np.errstate(over="ignore", divide="ignore"):
         per_axis = np.maximum(1.0, np.ceil(ext / float(resolution) - 1e-9))
         n_voxels = float(np.prod(per_axis))
-    poses = n_voxels * int(n_orientations)
-    if not np.isfinite(poses) or poses > max_targets:
-        fits = float((np.prod(ext) * n_orientations / max_targets) ** (1.0 / 3.0))
+    k = int(n_orientations)
+    poses = n_voxels * k
+    if np.isfinite(poses) and poses <= max_targets:
+        return int(n_voxels)
+    if k > max_targets:  # no resolution fits: one voxel is already too many poses
         raise InvalidArgumentError(
-            f"resolution {resolution!r} m gives a grid of {n_voxels:.3g} voxels × "
-            f"{n_orientations} orientations = {poses:.3g} poses (about {poses * 128 / 1e9:.3g} "
-            f"GB of targets), more than max_targets={max_targets}; use a coarser resolution "
-            f"(at least {fits:.3g} m for this box) or smaller bounds"
+            f"{k} orientations per voxel are more than max_targets={max_targets} poses even "
+            f"for a single voxel, so no resolution fits: use at most {max_targets} "
+            "orientations (--orientations, n_orientations) or raise the cap (--max-targets, "
+            "max_targets)"
         )
-    return int(n_voxels)
+    cap = max_targets // k  # voxels allowed
+    sizes = [float(e) for e in ext]
+
+    def voxels(r: float) -> float:  # (the count above, for edge r)
+        n = 1.0
+        for e in sizes:
+            per = e / r - 1e-9
+            if not math.isfinite(per):
+                return math.inf
+            n *= max(1, math.ceil(per))
+        return n
+
+    # the finest edge that fits, by bisection (the count falls as the edge grows), between
+    # the root of volume / cap (too fine: a box never has fewer voxels) and the longest side
+    # (one voxel); in logarithms, for boxes of 1e-300 or 1e300 m
+    sides = [e for e in sizes if e > 0.0]  # (the others are one voxel thick at any edge)
+    coarser = "a coarser resolution"
+    if sides and all(math.isfinite(e) for e in sizes):  # (else no edge to name)
+        lo = (sum(math.log(e) for e in sides) - math.log(cap)) / len(sides) - 1e-9
+        hi = math.log(max(sides))
+        for _ in range(200):
+            mid = 0.5 * (lo + hi)
+            lo, hi = (mid, hi) if voxels(math.exp(mid)) > cap else (lo, mid)
+        fits = math.exp(hi)
+        step = 10.0 ** (math.floor(math.log10(fits)) - 2)  # rounded up to 3 digits: it fits
+        fits = math.ceil(fits / step * (1 - 1e-12)) * step
+        coarser += f" (at least {fits:.3g} m for this box)"
+    raise InvalidArgumentError(
+        f"resolution {resolution!r} m gives a grid of {n_voxels:.3g} voxels × "
+        f"{n_orientations} orientations = {poses:.3g} poses (about {poses * 128 / 1e9:.3g} "
+        f"GB of targets), more than max_targets={max_targets}; use {coarser}, smaller "
+        "bounds or fewer orientations"
+    )
 
 
 def reach_map(

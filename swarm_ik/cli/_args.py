@@ -41,7 +41,10 @@ ROBOT_HELP = (
     "bundled or example-robot-data name (see `swarm-ik robots`), or a .urdf path "
     "(a .xacro must be expanded first)"
 )
-FRAME_HELP = "end-effector frame (default: the robot's tool frame)"
+FRAME_HELP = (
+    "goal frame; repeat for several: the model then spans the joints of every one (default: "
+    "the robot's tool frame(s))"
+)
 SCHEDULER_HELP = (
     "where to solve: 'none' (default: this process, no Dask), 'local' (an embedded Dask "
     "LocalCluster, one worker process per core; pip install 'swarm_ik[dask]'), or a Dask "
@@ -141,13 +144,41 @@ def robot_argument(text: str) -> str:
     return text
 
 
-def add_robot(parser: Any, *, frame: bool = True) -> None:
-    """``--robot NAME`` (required) and, with ``frame``, ``--frame NAME`` (one end-effector
-    frame; ``swarm-ik solve`` defines its own, repeatable); ``--floating-base``,
-    ``--base-box`` and ``--lock JOINT[=VALUE]`` (:func:`robot_kwargs`)."""
+def add_frame(parser: Any, help: str = FRAME_HELP) -> None:
+    """``--frame NAME``, repeatable, the one definition of every command that loads a robot
+    (``help``: what the command does with the frames): ``args.frame`` is ``None`` or the
+    names in the order given (:func:`robot_frames`).  A second ``--frame`` is never dropped:
+    the robot is loaded with every frame given."""
+    parser.add_argument("--frame", action="append", default=None, metavar="NAME", help=help)
+
+
+def target_frame_help(what: str) -> str:
+    """``--frame``'s help for a command that solves one frame's pose (``what``: its targets,
+    waypoints, map): the first frame given is that one; more widen the model, as in
+    ``swarm-ik solve``."""
+    return (
+        f"frame of {what} (default: the robot's tool frame); repeat --frame to load the robot "
+        "with several goal frames, as `swarm-ik solve` does: the model then spans the joints "
+        f"of every one and {what} are the first's"
+    )
+
+
+def robot_frames(args: argparse.Namespace) -> str | list[str] | None:
+    """``load_robot``'s ``ee_frame`` of :func:`add_frame`'s ``--frame``: ``None`` (not given:
+    the robot's own frames), the name given once, or the names given (the first is the
+    robot's ``ee_frame``)."""
+    frames = getattr(args, "frame", None)
+    if not frames:
+        return None
+    return frames[0] if len(frames) == 1 else list(frames)
+
+
+def add_robot(parser: Any, *, frame_help: str = FRAME_HELP) -> None:
+    """``--robot NAME`` (required), ``--frame NAME`` (repeatable, :func:`add_frame`, with
+    ``frame_help``), ``--floating-base``, ``--base-box`` and ``--lock JOINT[=VALUE]``
+    (:func:`robot_kwargs`)."""
     parser.add_argument("--robot", required=True, type=robot_argument, help=ROBOT_HELP)
-    if frame:
-        parser.add_argument("--frame", default=None, help=FRAME_HELP)
+    add_frame(parser, frame_help)
     parser.add_argument(
         "--floating-base",
         action="store_true",
@@ -185,21 +216,22 @@ class RobotCommand(NamedTuple):
         add_arguments: Adds the command's options (after the robot's) to its parser.
         help: One line for ``swarm-ik --help``.
         description: The paragraph of ``swarm-ik NAME --help``.
-        frame: Whether ``--robot`` comes with ``--frame`` (see :func:`add_robot`).
+        frame_help: The help of ``--frame`` (repeatable in every command: what the command
+            does with several frames; see :func:`add_frame`).
     """
 
     name: str
     add_arguments: Callable[[argparse.ArgumentParser], None]
     help: str
     description: str
-    frame: bool = True
+    frame_help: str = FRAME_HELP
 
     def __call__(self, subparsers: Any) -> argparse.ArgumentParser:
         """Add the sub-command to ``subparsers``; returns its parser."""
         parser: argparse.ArgumentParser = subparsers.add_parser(
             self.name, help=self.help, description=self.description
         )
-        add_robot(parser, frame=self.frame)
+        add_robot(parser, frame_help=self.frame_help)
         self.add_arguments(parser)
         return parser
 
@@ -242,7 +274,8 @@ def robot_kwargs(args: argparse.Namespace) -> dict[str, Any]:
 
 
 def load_robot(args: argparse.Namespace, **kwargs: Any) -> Any:
-    """``swarm_ik.load_robot(args.robot, **kwargs)`` with :func:`robot_kwargs`'s options: the
+    """``swarm_ik.load_robot(args.robot, **kwargs)`` with :func:`robot_kwargs`'s options and,
+    unless ``kwargs`` names it, ``ee_frame`` of every ``--frame`` (:func:`robot_frames`): the
     robot of a command line, a ``--lock`` outside its joint's limits refused in the words of
     the option (:func:`lock_refusal`), not of ``load_robot``'s ``locked=`` keyword.
 
@@ -252,6 +285,7 @@ def load_robot(args: argparse.Namespace, **kwargs: Any) -> Any:
     import swarm_ik
 
     model_kwargs = robot_kwargs(args)
+    kwargs.setdefault("ee_frame", robot_frames(args))
     try:
         return swarm_ik.load_robot(args.robot, **kwargs, **model_kwargs)
     except InvalidArgumentError:

@@ -40,6 +40,7 @@ from swarm_ik.cli._args import (
     check_input_file,
     check_output_file,
     load_robot,
+    target_frame_help,
 )
 
 HELP = "solve many targets at once (vectorised, optionally on Dask)"
@@ -101,7 +102,9 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("--no-progress", action="store_true", help="no progress bar")
 
 
-add_parser = RobotCommand("batch", add_arguments, HELP, DESCRIPTION)
+add_parser = RobotCommand(
+    "batch", add_arguments, HELP, DESCRIPTION, frame_help=target_frame_help("the targets")
+)
 """Add ``batch`` to the ``swarm-ik`` sub-parsers."""
 
 
@@ -122,7 +125,7 @@ def run(args: argparse.Namespace) -> int:
         )
     if args.targets is not None:
         check_input_file(args.targets, "--targets", None)
-    robot = load_robot(args, ee_frame=args.frame, srdf=args.srdf)
+    robot = load_robot(args, srdf=args.srdf)  # (every --frame; the targets: the first's)
     goals = None
     if args.scene is not None:  # (the scene read before the targets are drawn)
         goals = [

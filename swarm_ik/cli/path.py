@@ -33,6 +33,7 @@ from swarm_ik.cli._args import (
     check_output_file,
     input_file,
     load_robot,
+    target_frame_help,
 )
 
 HELP = "a jump-free joint path through Cartesian waypoints"
@@ -103,7 +104,9 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("--json", action="store_true", help="print one JSON object")
 
 
-add_parser = RobotCommand("path", add_arguments, HELP, DESCRIPTION)
+add_parser = RobotCommand(
+    "path", add_arguments, HELP, DESCRIPTION, frame_help=target_frame_help("the waypoints")
+)
 """Add ``path`` to the ``swarm-ik`` sub-parsers."""
 
 
@@ -120,7 +123,7 @@ def run(args: argparse.Namespace) -> int:
     if args.html is not None:
         _viewer.check_viewer(args, live=False)
     check_input_file(args.poses, "--poses", None)
-    robot = load_robot(args, ee_frame=args.frame)
+    robot = load_robot(args)  # (every --frame; the waypoints: the first's)
     if args.html is not None:
         _viewer.check_meshes(robot, "--html")
     poses = _read_poses(args.poses)

@@ -28,6 +28,7 @@ from swarm_ik.cli._args import (
     add_scheduler,
     check_output_file,
     load_robot,
+    target_frame_help,
 )
 from swarm_ik.errors import InvalidArgumentError
 
@@ -102,7 +103,9 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("--no-progress", action="store_true", help="no progress bar")
 
 
-add_parser = RobotCommand("reach", add_arguments, HELP, DESCRIPTION)
+add_parser = RobotCommand(
+    "reach", add_arguments, HELP, DESCRIPTION, frame_help=target_frame_help("the map's poses")
+)
 """Add ``reach`` to the ``swarm-ik`` sub-parsers."""
 
 
@@ -195,7 +198,7 @@ def run(args: argparse.Namespace) -> int:
         html = check_output_file(
             args.html or out.with_suffix(".html"), "--html", _viewer.HTML_SUFFIXES
         )
-    robot = load_robot(args, ee_frame=args.frame)
+    robot = load_robot(args)  # (every --frame; the map: the first's)
     if html is not None:
         _viewer.check_meshes(robot, "reach --html (--no-html skips the page)")
     # the grid's size is checked before anything is allocated; default_bounds with the same

@@ -78,7 +78,14 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("--open", action="store_true", help="open the live viewer in a web browser")
 
 
-add_parser = RobotCommand("show", add_arguments, HELP, DESCRIPTION)
+FRAME_HELP = (
+    "goal frame; repeat for several: the model then spans the joints of every one (--q gives "
+    "them all); --pose is the first's target, --from-q poses every frame, as in `swarm-ik "
+    "solve` (default: the robot's tool frame(s))"
+)
+"""``--frame``'s help in ``swarm-ik show``."""
+
+add_parser = RobotCommand("show", add_arguments, HELP, DESCRIPTION, frame_help=FRAME_HELP)
 """Add ``show`` to the ``swarm-ik`` sub-parsers."""
 
 
@@ -103,16 +110,20 @@ def run(args: argparse.Namespace) -> int:
             if value is not None:
                 raise InvalidArgumentError(f"{option} applies to a target solved, not to --q")
     _viewer.check_viewer(args, live=live)
-    robot = load_robot(args, ee_frame=args.frame)
+    robot = load_robot(args)  # (every --frame: robot_frames)
     _viewer.check_meshes(robot, "show")
     target = None
-    if args.from_q is not None:
+    goals = None  # (several frames and --from-q: a pose goal on each, as `swarm-ik solve`)
+    if args.from_q is not None and len(robot.frames) > 1:
+        poses = robot.fk_all(robot.check_q(args.from_q, "--from-q"))
+        goals = [swarm_ik.goals.Pose(f, t) for f, t in zip(robot.frames, poses, strict=True)]
+    elif args.from_q is not None:
         target = robot.fk(robot.check_q(args.from_q, "--from-q"))
     elif args.pose is not None:
         target = np.asarray(args.pose, dtype=float)
     if args.q:
         qs = [robot.check_q(q, "--q") for q in args.q]
-        if target is None:
+        if target is None and goals is None:
             lines = [f"{robot.name}: " + ", ".join(f"{v:.3f}" for v in q) for q in qs]
             scene = (
                 viz.show_pose(robot, qs[0], lines=lines)
@@ -121,12 +132,12 @@ def run(args: argparse.Namespace) -> int:
             )
             _viewer.present(scene, args, live=live)
             return EXIT_OK
-        problem = swarm_ik.IKProblem(robot, target)
+        problem = swarm_ik.IKProblem(robot, target, goals)
         results = [_as_result(problem, q) for q in qs]
     else:
-        if target is None:
+        if target is None and goals is None:
             raise InvalidArgumentError("show needs --q, or a target (--pose or --from-q)")
-        problem = swarm_ik.IKProblem(robot, target)
+        problem = swarm_ik.IKProblem(robot, target, goals)
         results = viz.several_solutions(
             problem,
             1 if args.solutions is None else args.solutions,

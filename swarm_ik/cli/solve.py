@@ -63,13 +63,6 @@ def _solver_help() -> str:
 
 def add_arguments(parser: argparse.ArgumentParser) -> None:
     """The options of ``swarm-ik solve`` after the robot's (see :func:`run`)."""
-    parser.add_argument(
-        "--frame",
-        action="append",
-        default=None,
-        help="goal frame; repeat for several (default: the robot's tool frame); --pose is for "
-        "the first, --from-q poses every frame",
-    )
     tgt = parser.add_mutually_exclusive_group(required=True)
     add_pose(tgt, position_only=True)
     tgt.add_argument(
@@ -154,8 +147,14 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     )
 
 
-add_parser = RobotCommand("solve", add_arguments, HELP, DESCRIPTION, frame=False)
-"""Add ``solve`` to the ``swarm-ik`` sub-parsers (``--frame``, repeatable, is its own)."""
+FRAME_HELP = (
+    "goal frame; repeat for several (default: the robot's tool frame); --pose is for the "
+    "first, --from-q poses every frame"
+)
+"""``--frame``'s help in ``swarm-ik solve``."""
+
+add_parser = RobotCommand("solve", add_arguments, HELP, DESCRIPTION, frame_help=FRAME_HELP)
+"""Add ``solve`` to the ``swarm-ik`` sub-parsers."""
 
 
 def run(args: argparse.Namespace) -> int:
@@ -177,8 +176,7 @@ def run(args: argparse.Namespace) -> int:
         check_goals_file(args.goals)
     _check_dls_options(args)
     pose = None if args.pose is None else pose_target(args.pose, args.position_only)
-    frames = None if not args.frame else (args.frame[0] if len(args.frame) == 1 else args.frame)
-    robot = load_robot(args, ee_frame=frames, srdf=args.srdf)
+    robot = load_robot(args, srdf=args.srdf)  # (every --frame: robot_frames)
     if drawing:
         _viewer.check_meshes(robot, "--html" if args.html else "--show")
     goals = None
