@@ -153,3 +153,15 @@ def test_collision_options_that_modify_nothing_are_refused_alike_by_solve_and_ba
     line = refused(command, "--robot", "yumi_left", *rest, *extra)
     assert expected in line
     assert not any(tmp_path.iterdir())
+
+
+def test_a_warning_is_one_line_without_the_package_source(capsys) -> None:
+    """A q0 outside the limits is clipped with a warning: on the command line one line,
+    ``swarm-ik: warning: …`` (it printed the package's file, line and source line)."""
+    q0 = ["0", "0", "0", "-2", "0", "2", "9"]  # (panda_joint7 beyond its limit)
+    rc = main(["solve", "--robot", "panda", "--from-q", *["0.1"] * 7, "--q0", *q0])
+    err = capsys.readouterr().err.strip().splitlines()
+    assert rc == 0
+    warn = [line for line in err if "q0 lies outside the joint limits" in line]
+    assert warn and warn[0].startswith("swarm-ik: warning: ")
+    assert not any(".py:" in line for line in err), err

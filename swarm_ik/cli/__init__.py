@@ -171,6 +171,19 @@ def _dispatch(args: argparse.Namespace) -> int:
     return int(module.run(args))
 
 
+def _one_line_warning(
+    message: Warning | str,
+    category: type[Warning],
+    filename: str,
+    lineno: int,
+    file: Any = None,
+    line: str | None = None,
+) -> None:
+    """A warning as the command line prints it: one line, ``swarm-ik: warning: …``, without
+    the package's file, line and source (a ``q0`` clipped into the limits, say)."""
+    print(f"swarm-ik: warning: {message}", file=sys.stderr if file is None else file)
+
+
 def main(argv: Sequence[str] | None = None) -> int:
     """Entry point of the ``swarm-ik`` console script; returns the exit code.
 
@@ -191,6 +204,7 @@ def main(argv: Sequence[str] | None = None) -> int:
             script = False  # a long command: collect, and exit the usual way
         with warnings.catch_warnings():
             warnings.simplefilter("default")
+            warnings.showwarning = _one_line_warning  # (restored with the filters)
             # Dask's start-up chatter (dashboard port taken, sockets) is not the user's concern
             warnings.filterwarnings("ignore", module=r"distributed(\.|$)")
             warnings.filterwarnings("ignore", category=ResourceWarning)
