@@ -666,6 +666,11 @@ class BatchResult(_Rows):
     def __post_init__(self) -> None:
         freeze_arrays(self)  # (the rows as checked: read-only)
 
+    def __setstate__(self, state: dict[str, Any]) -> None:
+        # (pickle and copy.deepcopy restore the fields without __post_init__)
+        self.__dict__.update(state)
+        freeze_arrays(self)
+
     @classmethod
     def from_chunks(
         cls,

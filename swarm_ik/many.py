@@ -811,6 +811,8 @@ def _numerical(
     elif problem.compiled_goals:
         rows = int(problem.table(None).rows_primary)
     redundant = _redundant(problem, rows)
+    # a Python goal with its own tolerance is met within it, not within tol_pos
+    own_tolerances = isinstance(problem.position_tolerances(tol_pos), np.ndarray)
     target_count = POOL_FACTOR * n if redundant else n
     hops = None if redundant else _hops_for(robot)
     bound = None
@@ -881,7 +883,10 @@ def _numerical(
         if fresh:
             qs = cand[fresh]
             dp, dr = pose_errors(problem, qs)  # Pinocchio's FK, as swarm_ik.verify reports it
-            good = (dp <= tol_pos) & ((dr <= tol_rot) | problem.position_only)
+            if own_tolerances:  # (a Python goal's own tolerance: each goal by its own)
+                good = np.array([problem.is_success(q, tol_pos, tol_rot) for q in qs])
+            else:
+                good = (dp <= tol_pos) & ((dr <= tol_rot) | problem.position_only)
             now = time.perf_counter() - t0
             took = np.flatnonzero(good)[: target_count - len(kept)]
             for i in took:  # (the kernel's check disagreeing with Pinocchio's: never reported)

@@ -262,6 +262,11 @@ class PathResult:
     def __post_init__(self) -> None:
         freeze_arrays(self)  # (the path as checked: read-only)
 
+    def __setstate__(self, state: dict[str, Any]) -> None:
+        # (pickle and copy.deepcopy restore the fields without __post_init__)
+        self.__dict__.update(state)
+        freeze_arrays(self)
+
     def __repr__(self) -> str:
         return (
             f"PathResult(success={self.success}, jump_free={self.jump_free}, "

@@ -248,9 +248,15 @@ def _reduce(
         keep.update(path_ids)
     keep -= set(held)
     jid = {full.names[j]: j for j in range(1, full.njoints)}
-    for follower, (driver, _, _) in mimic.items():  # off the paths, driven by a solved joint
-        if follower in jid and jid.get(driver) in keep and jid[follower] not in held:
-            keep.add(jid[follower])
+    grown = True
+    while grown:  # off the paths, driven by a solved joint (to a fixed point: a follower of
+        # a follower is met whatever the file's order, and refused below)
+        grown = False
+        for follower, (driver, _, _) in mimic.items():
+            fj = jid.get(follower)
+            if fj is not None and fj not in keep and fj not in held and jid.get(driver) in keep:
+                keep.add(fj)
+                grown = True
     for j in sorted(keep):
         name = full.names[j]
         if name in mimic:

@@ -399,6 +399,17 @@ class Mesh:
             )
         object.__setattr__(self, "pose", _pose("mesh", self.pose))
         object.__setattr__(self, "name", _name("mesh", self.name))
+        # its vertices as coal reads them, scaled: finite and within MAX_LENGTH (a NaN vertex
+        # printed Eigen's complaints on each solve and made every configuration "in contact")
+        vertices = np.asarray(coal_geometry(self).vertices(), dtype=float)
+        if not np.isfinite(vertices).all():
+            raise InvalidArgumentError(f"mesh {str(p)!r}: its vertices hold NaN or infinite values")
+        if vertices.size and float(np.abs(vertices).max()) > MAX_LENGTH:
+            raise InvalidArgumentError(
+                f"mesh {str(p)!r}: a vertex lies {float(np.abs(vertices).max()):g} m from its "
+                f"origin after scale {list(self.scale)}, beyond {MAX_LENGTH:g} m "
+                "(swarm_ik.scene.MAX_LENGTH; a unit error?)"
+            )
 
 
 MESH_SCALE = (1e-6, 1e6)

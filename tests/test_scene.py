@@ -191,6 +191,8 @@ def test_mesh_edges_refused_with_one_message(tmp_path) -> None:  # type: ignore[
     for scale in (1e300, 1e-300):
         with pytest.raises(InvalidArgumentError, match="MESH_SCALE"):
             Mesh(str(block), scale=scale)
-    huge = Scene([Mesh(str(block), scale=1e6, pose=np.eye(4))])
+    with pytest.raises(InvalidArgumentError, match="MAX_LENGTH"):  # (vertices 100 km out)
+        Mesh(str(block), scale=1e6, pose=np.eye(4))
+    huge = Scene([Mesh(str(block), scale=1e4, pose=np.eye(4))])
     with pytest.raises(InvalidArgumentError, match="MAX_FIT_TRIANGLES"):
         swarm_ik.IKProblem(robot, target, goals=[AvoidCollisions(huge)])

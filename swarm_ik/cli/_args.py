@@ -288,9 +288,9 @@ def load_robot(args: argparse.Namespace, **kwargs: Any) -> Any:
     kwargs.setdefault("ee_frame", robot_frames(args))
     try:
         return swarm_ik.load_robot(args.robot, **kwargs, **model_kwargs)
-    except InvalidArgumentError:
-        if not args.lock:
-            raise
+    except InvalidArgumentError as exc:
+        if not args.lock or "outside its limits" not in str(exc):  # (another refusal, e.g.
+            raise  # a locked mimic follower: the loader's own words)
         line = lock_refusal(args, {**kwargs, **model_kwargs})
         if line is None:
             raise

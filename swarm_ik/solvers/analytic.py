@@ -386,7 +386,9 @@ class ClosedFormSet(NamedTuple):
             solution eaik did not give, at a singular configuration (smallest Jacobian
             singular value below :data:`SINGULAR_SIGMA`), as at a target with a continuum of
             solutions (a UR wrist at ``q5 = 0`` or ``π``), of which the set then holds only
-            the representatives the polish reached.  False does not prove the set complete:
+            the representatives the polish reached; or such a point lay at a singular
+            configuration and the polish led it to no new solution (the joint limits of a
+            ``ur5_joint_limited_robot`` can hold it back).  False does not prove the set complete:
             it is eaik's set (with any non-singular solution the polish recovered), complete
             for a generic target.
         evals: FK + Jacobian evaluations the polish spent (0 when eaik's points needed none).
@@ -468,23 +470,33 @@ def closed_form_set(
     if starts.shape[0] == 0:
         return ClosedFormSet(sols, dps, drs, False, 0)
     found, evals = _polish(problem, starts, tol_pos, tol_rot)
+    # a point of eaik's at a singular configuration that the polish did not turn into a new
+    # solution (held back by the limits, say): a continuum may hide solutions there
+    missed = found.shape[0] < starts.shape[0] and any(
+        _sigma_min(robot, q) < SINGULAR_SIGMA for q in starts
+    )
     if found.shape[0] == 0:
-        return ClosedFormSet(sols, dps, drs, False, evals)
+        return ClosedFormSet(sols, dps, drs, missed, evals)
     both = np.vstack([sols, found])
     out2 = np.empty_like(both)
     key2 = np.empty(both.shape[0])
     c2 = _fold_unique(both, lo, hi, ref, BRANCH_TOL * BRANCH_TOL, out2, key2)
     if c2 == sols.shape[0]:  # every polished point a known solution
-        return ClosedFormSet(sols, dps, drs, False, evals)
+        return ClosedFormSet(sols, dps, drs, missed, evals)
     dp2, dr2 = pose_errors_of(robot.fk_pinocchio_many(out2[:c2]), problem.goals[0])
     ok = (dp2 <= tol_pos) & (dr2 <= tol_rot)
     qs2 = out2[:c2][ok]
-    incomplete = any(  # a new solution at a singular configuration (a continuum's sample?)
-        float(np.linalg.svd(robot.jacobian_pinocchio(q), compute_uv=False)[-1]) < SINGULAR_SIGMA
+    incomplete = missed or any(  # a new solution at a singular configuration (a sample of
+        _sigma_min(robot, q) < SINGULAR_SIGMA  # a continuum?)
         for q in qs2
         if not _is_among(q, sols)
     )
     return ClosedFormSet(qs2, dp2[ok], dr2[ok], incomplete, evals)
+
+
+def _sigma_min(robot: RobotModel, q: FloatArray) -> float:
+    """The smallest singular value of the frame Jacobian at ``q`` (Pinocchio)."""
+    return float(np.linalg.svd(robot.jacobian_pinocchio(q), compute_uv=False)[-1])
 
 
 def _is_among(q: FloatArray, qs: FloatArray) -> bool:
