@@ -71,7 +71,7 @@ from swarm_ik.kernels.lm import CONVERGED, NOT_RUN
 from swarm_ik.kernels.search import sampling_window, splitmix64, uniform_in, uniforms, wall_clock
 from swarm_ik.pose import make_pose, matrix_to_quat
 from swarm_ik.problem import IKProblem
-from swarm_ik.result import freeze_arrays
+from swarm_ik.result import FrozenArrays
 from swarm_ik.robot import RobotModel
 from swarm_ik.scene import Scene
 
@@ -624,7 +624,7 @@ class ChunkResult(_Rows):
 
 
 @dataclass(frozen=True, eq=False)
-class BatchResult(_Rows):
+class BatchResult(_Rows, FrozenArrays):
     """What :func:`solve_batch` returns: one row per target (its arrays read-only, as
     checked; ``.copy()`` gives a writable one).
 
@@ -662,14 +662,6 @@ class BatchResult(_Rows):
     interrupted: bool = False
     goal_labels: tuple[str, ...] = ()
     goals_met: BoolArray | None = None
-
-    def __post_init__(self) -> None:
-        freeze_arrays(self)  # (the rows as checked: read-only)
-
-    def __setstate__(self, state: dict[str, Any]) -> None:
-        # (pickle and copy.deepcopy restore the fields without __post_init__)
-        self.__dict__.update(state)
-        freeze_arrays(self)
 
     @classmethod
     def from_chunks(

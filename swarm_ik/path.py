@@ -79,7 +79,7 @@ from swarm_ik._validate import floats_or
 from swarm_ik.errors import InvalidArgumentError, InvalidTargetError
 from swarm_ik.kernels import joints
 from swarm_ik.optimize import make_rng
-from swarm_ik.result import freeze_arrays
+from swarm_ik.result import FrozenArrays
 
 FloatArray = NDArray[np.float64]
 
@@ -207,7 +207,7 @@ class InvalidWaypointError(InvalidArgumentError, InvalidTargetError):
 
 
 @dataclass(frozen=True, eq=False)
-class PathResult:
+class PathResult(FrozenArrays):
     """What :func:`solve_path` returns (its arrays read-only, as checked; ``.copy()`` gives a
     writable one).
 
@@ -258,14 +258,6 @@ class PathResult:
     n_candidates: NDArray[np.int64] = field(default_factory=lambda: np.zeros(0, dtype=np.int64))
     travel: float = 0.0
     q_dense: FloatArray | None = None
-
-    def __post_init__(self) -> None:
-        freeze_arrays(self)  # (the path as checked: read-only)
-
-    def __setstate__(self, state: dict[str, Any]) -> None:
-        # (pickle and copy.deepcopy restore the fields without __post_init__)
-        self.__dict__.update(state)
-        freeze_arrays(self)
 
     def __repr__(self) -> str:
         return (

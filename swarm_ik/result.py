@@ -122,3 +122,17 @@ def freeze_arrays(obj: Any) -> None:
         value = getattr(obj, f.name)
         if isinstance(value, np.ndarray):
             value.flags.writeable = False
+
+
+class FrozenArrays:
+    """A dataclass base whose numpy array fields are read-only once made, unpickled or
+    deep-copied (:func:`freeze_arrays`): :class:`swarm_ik.batch.BatchResult`,
+    :class:`swarm_ik.path.PathResult`."""
+
+    def __post_init__(self) -> None:
+        freeze_arrays(self)
+
+    def __setstate__(self, state: dict[str, Any]) -> None:
+        # (pickle and copy.deepcopy restore the fields without __post_init__)
+        self.__dict__.update(state)
+        freeze_arrays(self)

@@ -7,9 +7,11 @@ scenes refused in JSON terms, relative paths read from the goals file's folder).
 
 from __future__ import annotations
 
+import functools
 import json
 from collections.abc import Callable
 from pathlib import Path
+from typing import Any
 
 import numpy as np
 import pytest
@@ -33,6 +35,18 @@ def _one_line(exc: BaseException, *words: str) -> str:
     for w in words:
         assert w in msg, (w, msg)
     return msg
+
+
+def _load_refusal(path: Path, data: str | bytes, *words: str, read: Any = None) -> str:
+    """Write ``data`` to ``path``, read it (``Scene.load`` by default) and check the
+    refusal: one line naming the file and ``words``; returns the message."""
+    if isinstance(data, bytes):
+        path.write_bytes(data)
+    else:
+        path.write_text(data)
+    with pytest.raises(InvalidArgumentError) as info:
+        (read or Scene.load)(path)
+    return _one_line(info.value, str(path), *words)
 
 
 # ----------------------------------------------------------------------------- 1. dls
@@ -161,11 +175,8 @@ _URDF = '<robot name="cell"><link name="base"><collision>{}<geometry>{}</geometr
 def test_every_format_refuses_sizes_beyond_max_length(
     tmp_path: Path, name: str, text: str, words: list[str]
 ) -> None:
-    path = tmp_path / name
-    path.write_text(text)
-    with pytest.raises(InvalidArgumentError) as info:
-        Scene.load(path, mesh_dir=tmp_path)
-    _one_line(info.value, str(path), *words, "MAX_LENGTH")
+    read = functools.partial(Scene.load, mesh_dir=tmp_path)
+    _load_refusal(tmp_path / name, text, *words, "MAX_LENGTH", read=read)
 
 
 def test_cli_huge_sphere_is_one_line_before_solving(
@@ -196,11 +207,7 @@ def test_cli_huge_sphere_is_one_line_before_solving(
 def test_files_without_obstacles_are_refused(
     tmp_path: Path, name: str, text: str, words: list[str]
 ) -> None:
-    path = tmp_path / name
-    path.write_text(text)
-    with pytest.raises(InvalidArgumentError) as info:
-        Scene.load(path)
-    _one_line(info.value, str(path), *words)
+    _load_refusal(tmp_path / name, text, *words)
 
 
 @pytest.mark.parametrize("name", ["e.json", "e.yml"])
@@ -225,11 +232,7 @@ def test_an_empty_scene_saved_reads_back(tmp_path: Path, name: str) -> None:
 def test_a_file_named_npy_that_is_not_npy_says_so(
     tmp_path: Path, name: str, data: bytes, words: list[str]
 ) -> None:
-    path = tmp_path / name
-    path.write_bytes(data)
-    with pytest.raises(InvalidArgumentError) as info:
-        read_targets_file(path)
-    msg = _one_line(info.value, str(path), *words)
+    msg = _load_refusal(tmp_path / name, data, *words, read=read_targets_file)
     assert "object array" not in msg and "pickle" not in msg, msg
 
 
@@ -274,11 +277,7 @@ BOX = "box\n0.1 0.1 0.1\n0 0 0\n0 0 0 1\n0 0 0 0\n"
 def test_a_moveit_shape_count_that_disagrees_is_named(
     tmp_path: Path, text: str, words: list[str]
 ) -> None:
-    path = tmp_path / "count.scene"
-    path.write_text(text)
-    with pytest.raises(InvalidArgumentError) as info:
-        Scene.load(path)
-    msg = _one_line(info.value, str(path), *words)
+    msg = _load_refusal(tmp_path / "count.scene", text, *words)
     assert "unknown shape type" not in msg and "unknown marker" not in msg, msg
 
 

@@ -8,6 +8,7 @@ import warnings
 
 import numpy as np
 import pytest
+from test_solvers_foa_pso import Recorder
 
 import swarm_ik
 from swarm_ik import solvers
@@ -15,22 +16,6 @@ from swarm_ik.optimize import minimize
 from swarm_ik.solvers import foa
 from swarm_ik.solvers.base import Evaluator
 from swarm_ik.testfunctions import FUNCTIONS
-
-
-class Recorder:
-    """A batched objective that records every batch it is asked to evaluate."""
-
-    def __init__(self, fn):
-        self.fn = fn
-        self.batches: list[np.ndarray] = []
-
-    def __call__(self, x):
-        self.batches.append(np.array(x, copy=True))
-        return self.fn(x)
-
-    @property
-    def rows(self) -> np.ndarray:
-        return np.concatenate(self.batches)
 
 
 # ------------------------------------------------------------------ FOA, continuous joints

@@ -386,11 +386,11 @@ class ClosedFormSet(NamedTuple):
             solution eaik did not give, at a singular configuration (smallest Jacobian
             singular value below :data:`SINGULAR_SIGMA`), as at a target with a continuum of
             solutions (a UR wrist at ``q5 = 0`` or ``π``), of which the set then holds only
-            the representatives the polish reached; or such a point lay at a singular
-            configuration and the polish led it to no new solution (the joint limits of a
-            ``ur5_joint_limited_robot`` can hold it back).  False does not prove the set complete:
-            it is eaik's set (with any non-singular solution the polish recovered), complete
-            for a generic target.
+            the representatives the polish reached; or the set is empty while such a point
+            lay at a singular configuration (the joint limits of a
+            ``ur5_joint_limited_robot`` can hold its polish back).  False does not prove the
+            set complete: it is eaik's set (with any non-singular solution the polish
+            recovered), complete for a generic target.
         evals: FK + Jacobian evaluations the polish spent (0 when eaik's points needed none).
     """
 
@@ -470,10 +470,14 @@ def closed_form_set(
     if starts.shape[0] == 0:
         return ClosedFormSet(sols, dps, drs, False, 0)
     found, evals = _polish(problem, starts, tol_pos, tol_rot)
-    # a point of eaik's at a singular configuration that the polish did not turn into a new
-    # solution (held back by the limits, say): a continuum may hide solutions there
-    missed = found.shape[0] < starts.shape[0] and any(
-        _sigma_min(robot, q) < SINGULAR_SIGMA for q in starts
+    # no solution at all, and eaik's points at a singular configuration (held back by the
+    # limits, say): a continuum may hide solutions there (a generic target's least-squares
+    # points, its branches out of reach, often lie at the straight elbow too: they mark
+    # nothing while the set holds solutions)
+    missed = (
+        sols.shape[0] == 0
+        and found.shape[0] == 0
+        and any(_sigma_min(robot, q) < SINGULAR_SIGMA for q in starts)
     )
     if found.shape[0] == 0:
         return ClosedFormSet(sols, dps, drs, missed, evals)
