@@ -294,13 +294,15 @@ def test_free_table_holds_only_free_configurations_and_depends_on_the_seed(panda
 def test_a_first_batch_in_a_fresh_process_keeps_half_its_time_limit(tmp_path) -> None:
     """``swarm-ik batch --time-limit`` in a new process: loading the kernels is charged to
     the limit up to half of it, so targets are solved (all the limit went to the loading, and
-    none was), and the targets left are said to be not started."""
+    none was), and the targets left are said to be not started.  (30,000 targets: checking
+    100,000 took 0.1-0.2 s of the 0.3 s in a slow spell of the host, charged whole, and a
+    clean-clone CI then saw none solved.)"""
     import subprocess
     import sys
 
     out = subprocess.run(
         [sys.executable, "-m", "swarm_ik.cli", "batch", "--robot", "panda", "--random",
-         "100000", "--time-limit", "0.3", "--no-progress", "--out", str(tmp_path / "b.npz")],
+         "30000", "--time-limit", "0.3", "--no-progress", "--out", str(tmp_path / "b.npz")],
         capture_output=True, text=True, timeout=600,
     )  # fmt: skip
     assert out.returncode == 1, out.stderr  # (not every target reached: exit 1)
