@@ -1567,7 +1567,7 @@ def solve_batch(
         t_setup = time.perf_counter()
         # (worker processes are started here for an embedded cluster only)
         embedded = isinstance(scheduler, str) and scheduler == distributed.LOCAL
-        guard = _workers_ignore_sigint() if keep_on_interrupt and embedded else None
+        guard = _sigint_blocked_for_workers() if keep_on_interrupt and embedded else None
         try:
             with guard or contextlib.nullcontext():
                 client = stack.enter_context(distributed.connect(scheduler))
@@ -1618,7 +1618,7 @@ def solve_batch(
 
 
 @contextlib.contextmanager
-def _workers_ignore_sigint() -> Iterator[None]:
+def _sigint_blocked_for_workers() -> Iterator[None]:
     """Start worker processes deaf to SIGINT without losing a Ctrl-C meant for this process.
 
     While the body runs (an embedded cluster's start-up) SIGINT is *blocked* in this thread;

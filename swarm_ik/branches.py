@@ -55,6 +55,16 @@ ROUNDOFF_TOL = 1e-12
 """Pose error (m and rad) a solution is polished to before it is compared."""
 _LIMIT_SLACK = 1e-9
 """A copy counts as within the limits when it exceeds them by at most this (rad)."""
+SINGULAR_SIGMA = 1e-4
+"""A configuration whose frame Jacobian's smallest singular value (:func:`sigma_min`) is
+below this lies at a singularity, where a continuum of solutions may be: a closed-form set
+holding such a solution is not taken as complete (:mod:`swarm_ik.solvers.analytic`,
+:func:`swarm_ik.path.solve_path`'s certificate)."""
+
+
+def sigma_min(robot: RobotModel, q: Any) -> float:
+    """The smallest singular value of the first goal frame's Jacobian at ``q`` (Pinocchio)."""
+    return float(np.linalg.svd(robot.jacobian_pinocchio(q), compute_uv=False)[-1])
 
 
 def periodic_mask(robot: RobotModel, lower: Any = None, upper: Any = None) -> BoolArray:

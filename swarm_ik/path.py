@@ -76,6 +76,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from swarm_ik._validate import floats_or
+from swarm_ik.branches import SINGULAR_SIGMA, sigma_min
 from swarm_ik.errors import InvalidArgumentError, InvalidTargetError
 from swarm_ik.kernels import joints
 from swarm_ik.optimize import make_rng
@@ -111,9 +112,6 @@ tracks the remaining waypoints one solve each."""
 FULL_BRANCHES = 8
 """Branches (modulo 2π) of a generic pose of a 6R arm with three parallel axes or a
 spherical wrist: a closed-form set with this many is complete."""
-SINGULAR_SIGMA = 1e-4
-"""A candidate whose smallest Jacobian singular value is below this is near a singularity
-(where a continuum of solutions may exist): its waypoint's set is then not certified."""
 NEAR_SINGULAR = 1e-3
 """A closed-form candidate whose smallest Jacobian singular value is below this has the curve
 of solutions through it sampled (:func:`_fill`), as a 7-joint arm's self-motion."""
@@ -381,7 +379,7 @@ def solve_path(
         spent = time.perf_counter() - t_start
         time_limit = max(float(time_limit) - spent, 0.5 * float(time_limit))
         t_clock = time.perf_counter()
-    if time_limit is not None:  # (the search and the check at the end are inside the limit)
+        # (the search and the check at the end are inside the limit)
         per_waypoint = FINISH_PER_WAYPOINT + SEARCH_PER_LAYER
         reserve = min(per_waypoint * wps.n, 0.5 * float(time_limit))
         limit = t_clock + float(time_limit) - reserve
@@ -979,11 +977,7 @@ def _closed_form(
         assert ctx.full_branches is not None
         certified = 0 < qs.shape[0] <= ctx.full_branches
     if certified:  # no candidate near a singularity (a continuum, or a pair merging)
-        for q in qs:
-            sigma = np.linalg.svd(ctx.robot.jacobian_pinocchio(q), compute_uv=False)
-            if float(sigma[-1]) < SINGULAR_SIGMA:
-                certified = False
-                break
+        certified = all(sigma_min(ctx.robot, q) >= SINGULAR_SIGMA for q in qs)
     blocked = None
     if not ctx.wps.plain and qs.shape[0]:  # the other goals (collisions, …) filter the set
         keep, failed = _goal_filter(ctx.wps.problem(i), qs, ctx)

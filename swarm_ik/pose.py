@@ -37,6 +37,17 @@ def is_finite_nonneg(value: Any) -> bool:
     return bool(0.0 <= v < np.inf)
 
 
+def unit(v: FloatArray) -> FloatArray | None:
+    """``v`` (finite) divided by its norm, computed on ``v`` over its largest absolute entry
+    first, so that entries such as 1e200, whose squares overflow, normalise exactly; None
+    when the norm is below 1e-9 (no direction to read)."""
+    big = float(np.max(np.abs(v)))
+    scaled = v / big if big > 0.0 else v
+    if not big * float(np.linalg.norm(scaled)) >= 1e-9:
+        return None
+    return scaled / np.linalg.norm(scaled)
+
+
 def quat_to_matrix(quat_xyzw: Any) -> FloatArray:
     """Rotation matrix of a quaternion.
 
@@ -56,12 +67,10 @@ def quat_to_matrix(quat_xyzw: Any) -> FloatArray:
         raise InvalidTargetError(
             f"quaternion must be 4 finite numbers (x, y, z, w), got {q.tolist()}"
         )
-    big = float(np.max(np.abs(q)))
-    scaled = q / big if big > 0 else q
-    n = big * float(np.linalg.norm(scaled))
-    if not n >= 1e-9:
+    u = unit(q)
+    if u is None:
         raise InvalidTargetError(f"quaternion has zero norm: {q.tolist()}")
-    x, y, z, w = scaled / np.linalg.norm(scaled)
+    x, y, z, w = u
     return np.array(
         [
             [1 - 2 * (y * y + z * z), 2 * (x * y - z * w), 2 * (x * z + y * w)],

@@ -80,10 +80,8 @@ class Result:
 
     def __setstate__(self, state: dict[str, Any]) -> None:
         # (pickle and copy restore the fields without __init__: read-only here too)
-        d = self.__dict__
-        d.update(state)
-        d["q"] = _read_only(d["q"])
-        d["history"] = _read_only(d["history"])
+        self.__dict__.update(state)
+        self.__post_init__()
 
     def to_dict(self) -> dict[str, Any]:
         """JSON-ready dict (arrays as lists)."""

@@ -35,7 +35,7 @@ from swarm_ik.paths import (  # (the robot tables live there: no kernels to list
     example_robot_data_dir,
     example_robot_files,
 )
-from swarm_ik.pose import FLOAT64
+from swarm_ik.pose import FLOAT64, unit
 
 
 def _joint_kind_axis(jmodel: Any) -> tuple[int, FloatArray]:
@@ -463,17 +463,15 @@ def _converted(
 
 
 def _unit(v: FloatArray, what: str) -> FloatArray:
-    """``v`` divided by its norm (computed on ``v`` over its largest entry first, so that
-    entries such as 1e200, whose squares overflow, normalise exactly).
+    """``v`` normalised (:func:`swarm_ik.pose.unit`).
 
     Raises:
         InvalidArgumentError: the norm is below 1e-9 (``what`` names the entries).
     """
-    big = float(np.max(np.abs(v)))
-    scaled = v / big if big > 0.0 else v
-    if not big * float(np.linalg.norm(scaled)) >= 1e-9:
+    u = unit(v)
+    if u is None:
         raise InvalidArgumentError(f"{what} has zero norm: {v.tolist()}")
-    return scaled / np.linalg.norm(scaled)
+    return u
 
 
 @dataclass(frozen=True, eq=False)

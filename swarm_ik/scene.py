@@ -56,6 +56,7 @@ import numpy as np
 
 from swarm_ik._types import FloatArray
 from swarm_ik.errors import InvalidArgumentError, SwarmIKError, UnknownNameError
+from swarm_ik.pose import unit
 
 Matrix4 = tuple[tuple[float, ...], ...]
 """A 4x4 rigid transform as 4 rows of 4 numbers."""
@@ -228,12 +229,10 @@ def _quat_matrix(value: Any, order: str) -> FloatArray:
         raise InvalidArgumentError(
             f"quaternion must be 4 finite numbers ({', '.join(order)}), got {reprlib.repr(value)}"
         )
-    big = float(np.max(np.abs(q)))
-    scaled = q / big if big > 0.0 else q
-    if not big * float(np.linalg.norm(scaled)) >= 1e-9:
+    u = unit(q)
+    if u is None:
         raise InvalidArgumentError(f"quaternion ({', '.join(order)}) has zero norm: {q.tolist()}")
-    unit = scaled / np.linalg.norm(scaled)
-    w, x, y, z = unit if order == "wxyz" else unit[[3, 0, 1, 2]]
+    w, x, y, z = u if order == "wxyz" else u[[3, 0, 1, 2]]
     return np.array(
         [
             [1 - 2 * (y * y + z * z), 2 * (x * y - z * w), 2 * (x * z + y * w)],

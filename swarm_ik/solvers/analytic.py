@@ -48,7 +48,17 @@ import numpy as np
 import pinocchio as pin
 
 from swarm_ik._types import FloatArray
-from swarm_ik.branches import BRANCH_TOL, ROUNDOFF_TOL, TWO_PI, pose_errors, pose_errors_of
+from swarm_ik.branches import (
+    BRANCH_TOL,
+    ROUNDOFF_TOL,
+    SINGULAR_SIGMA,
+    TWO_PI,
+    branch_distance,
+    pose_errors,
+    pose_errors_of,
+    sigma_min,
+    winding_bounds,
+)
 from swarm_ik.errors import SwarmIKError
 from swarm_ik.kernels.joints import wrapped
 from swarm_ik.solvers.base import Evaluator, register
@@ -401,10 +411,6 @@ class ClosedFormSet(NamedTuple):
     evals: int
 
 
-SINGULAR_SIGMA = 1e-4
-"""A solution the polish found (one eaik missed) whose smallest Jacobian singular value is
-below this lies at a singularity, where a continuum of solutions may be: the set is then
-marked incomplete (:attr:`ClosedFormSet.incomplete`)."""
 POLISH_ITERS = 30
 """Evaluations a polish of one of eaik's least-squares points may spend (:func:`closed_form_set`;
 those that reach a solution took 3–10 on UR5 targets, those of an unreachable branch stalled
@@ -477,7 +483,7 @@ def closed_form_set(
     missed = (
         sols.shape[0] == 0
         and found.shape[0] == 0
-        and any(_sigma_min(robot, q) < SINGULAR_SIGMA for q in starts)
+        and any(sigma_min(robot, q) < SINGULAR_SIGMA for q in starts)
     )
     if found.shape[0] == 0:
         return ClosedFormSet(sols, dps, drs, missed, evals)
@@ -491,31 +497,24 @@ def closed_form_set(
     ok = (dp2 <= tol_pos) & (dr2 <= tol_rot)
     qs2 = out2[:c2][ok]
     incomplete = missed or any(  # a new solution at a singular configuration (a sample of
-        _sigma_min(robot, q) < SINGULAR_SIGMA  # a continuum?)
+        sigma_min(robot, q) < SINGULAR_SIGMA  # a continuum?)
         for q in qs2
         if not _is_among(q, sols)
     )
     return ClosedFormSet(qs2, dp2[ok], dr2[ok], incomplete, evals)
 
 
-def _sigma_min(robot: RobotModel, q: FloatArray) -> float:
-    """The smallest singular value of the frame Jacobian at ``q`` (Pinocchio)."""
-    return float(np.linalg.svd(robot.jacobian_pinocchio(q), compute_uv=False)[-1])
-
-
 def _is_among(q: FloatArray, qs: FloatArray) -> bool:
-    """Whether ``q`` is a row of ``qs`` modulo 2π (within :data:`~swarm_ik.branches.BRANCH_TOL`)."""
-    if qs.shape[0] == 0:
-        return False
-    d = (qs - q + np.pi) % TWO_PI - np.pi
-    return bool(np.min(np.einsum("ij,ij->i", d, d)) < BRANCH_TOL * BRANCH_TOL)
+    """Whether ``q`` is a row of ``qs`` modulo 2π on every joint (within
+    :data:`~swarm_ik.branches.BRANCH_TOL`)."""
+    every = np.ones(q.shape[0], dtype=bool)
+    return bool(qs.shape[0]) and float(branch_distance(qs, q, every).min()) < BRANCH_TOL
 
 
 def _clipped_misfits(qs: FloatArray, lo: FloatArray, hi: FloatArray, ref: FloatArray) -> FloatArray:
     """The rows of ``qs`` with no in-limit 2π copy (on some joint), each as its copy nearest
     to ``ref`` clipped into the limits, ``(m, nq)``."""
-    m_min = np.ceil((lo - 1e-9 - qs) / TWO_PI)
-    m_max = np.floor((hi + 1e-9 - qs) / TWO_PI)
+    m_min, m_max = winding_bounds(qs, lo, hi, np.ones(qs.shape[1], dtype=bool))  # (revolute)
     misfit = (m_min > m_max).any(axis=1)
     if not misfit.any():
         return np.empty((0, qs.shape[1]))
