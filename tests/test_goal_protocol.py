@@ -332,6 +332,14 @@ class NoJacobian(G.Goal):
             r"Misshapen\(panda_hand_tcp\)\.jacobian.*\(1, 7\).*\(1, 8\)",
         ),
         (Misshapen("panda_hand_tcp", rows=2), r"jacobian\(state\) must have shape \(1, 7\)"),
+        (
+            Misshapen("panda_hand_tcp", value=float("nan")),
+            r"Misshapen\(panda_hand_tcp\)\.residual\(state\) returned NaN or infinite values",
+        ),
+        (
+            Misshapen("panda_hand_tcp", value=float("inf")),
+            r"residual\(state\) returned NaN or infinite values at q = \[",
+        ),
     ],
 )
 def test_a_python_goal_returning_bad_arrays_is_refused_with_its_name(goal, match) -> None:
@@ -453,12 +461,13 @@ def test_the_dead_zone_of_an_own_tolerance_matches_finite_differences(m) -> None
 
 
 def test_a_python_goal_never_defined_is_never_met_and_a_row_jacobian_is_accepted() -> None:
-    """A residual that is NaN everywhere ends unsolved (never a vacuous success); a one-row
-    goal may give its Jacobian as a vector ``(nq,)``."""
+    """A residual that is NaN is never judged met (never a vacuous success: the search
+    refuses it, naming the goal, above); a one-row goal may give its Jacobian as a vector
+    ``(nq,)``."""
     r = robot("panda")
     nan_goal = Misshapen("panda_hand_tcp", value=float("nan"))
-    res = swarm_ik.solve(swarm_ik.IKProblem(r, goals=[nan_goal]), seed=0, max_evals=50)
-    assert not res.success
+    (err,) = swarm_ik.IKProblem(r, goals=[nan_goal]).verify(r.mid_q())
+    assert not err.met
 
     @dataclass(frozen=True)
     class Height(G.Goal):

@@ -586,9 +586,9 @@ def search_rows(
     its Jacobian as ``(nq,)``.
 
     Raises:
-        InvalidArgumentError: a Python goal without ``residual``/``jacobian``, or returning
+        InvalidArgumentError: a Python goal without ``residual``/``jacobian``, returning
             arrays of another shape than ``(m,)`` and ``(m, nq)`` (the goal and the shapes
-            named).
+            named), or NaN or infinite values (the goal and ``q`` named).
     """
     nq = state.q.shape[0]
     try:
@@ -619,6 +619,13 @@ def search_rows(
                 f"{goal.describe()}.jacobian(state) must have shape ({r.shape[0]}, {nq}) (one "
                 f"row per residual entry, one column per joint), got {jac.shape}"
             )
+    if not (np.isfinite(r).all() and (jac is None or np.isfinite(jac).all())):
+        which = "residual" if not np.isfinite(r).all() else "jacobian"
+        raise InvalidArgumentError(
+            f"{goal.describe()}.{which}(state) returned NaN or infinite values at "
+            f"q = {np.round(state.q, 6).tolist()}: a goal's rows must be finite wherever the "
+            "search may go (within the joint limits)"
+        )
     w = goal.weight
     own = goal.own_tolerance()
     if own is not None:
