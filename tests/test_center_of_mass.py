@@ -17,6 +17,10 @@ from swarm_ik.kernels import lm
 FRAMES = ["left_sole_link", "right_sole_link", "gripper_left_base_link", "gripper_right_base_link"]
 SQUARE = [[-0.1, -0.1], [0.1, -0.1], [0.1, 0.1], [-0.1, 0.1]]
 
+L_SHAPE = [[-0.1, -0.1], [2.0, -0.1], [2.0, 0.1], [0.1, 0.1], [0.1, 2.0], [-0.1, 2.0]]
+"""An L of arms 0.2 m wide: its largest inscribed circle (in the corner, touching both outer
+edges and the inner vertex) has radius 0.1·(1 + (√2 − 1)/(√2 + 1)) ≈ 0.117 m."""
+
 
 @pytest.fixture(scope="module")
 def talos() -> swarm_ik.RobotModel:
@@ -171,11 +175,31 @@ def test_json_round_trip() -> None:
         ({"point": [0, 0, 0], "axes": "xw"}, "axes"),
         ({"point": [0, 0, 0], "axes": "xx"}, "axes"),
         ({"support": SQUARE, "margin": -0.1}, "margin"),
+        ({"support": L_SHAPE, "margin": 0.15}, "more than the support polygon allows"),
+        ({"point": [2.0, 0.0, 0.0], "support": SQUARE}, r"outside the support polygon"),
+        ({"point": [0.0, 0.0, 0.0], "support": L_SHAPE, "margin": 0.11}, "less than the margin"),
     ],
 )
 def test_bad_input_refused(kwargs: dict, words: str) -> None:
     with pytest.raises(InvalidArgumentError, match=words):
         CenterOfMass(**kwargs)
+
+
+
+def test_the_deepest_point_bound_holds_and_a_feasible_margin_is_kept() -> None:
+    """The bound on the inscribed radius is never below the true one (a square of side 1:
+    0.5; the L's arms 0.2 wide: 0.1 at least) and not far above it; margins up to the true
+    radius are accepted."""
+    from swarm_ik.goals.center_of_mass import deepest_inside
+
+    sq = np.array(SQUARE, dtype=float)
+    side = float(np.ptp(sq[:, 0]))
+    assert side / 2 <= deepest_inside(sq) <= side / 2 + 0.02 * side
+    bound = deepest_inside(np.array(L_SHAPE))
+    assert 0.117 <= bound <= 0.16
+    CenterOfMass(support=SQUARE, margin=0.999 * side / 2)
+    CenterOfMass(support=L_SHAPE, margin=0.099)
+    CenterOfMass(point=[0.0, 1.0, 0.0], support=L_SHAPE, margin=0.099)
 
 
 def test_urdf_without_masses_is_refused(tmp_path) -> None:  # type: ignore[no-untyped-def]

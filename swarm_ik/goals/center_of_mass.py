@@ -166,6 +166,29 @@ def support_polygon(value: Any) -> FloatArray:
     return poly
 
 
+def deepest_inside(poly: FloatArray, n: int = 65) -> float:
+    """An upper bound [m] on how far inside the simple polygon ``poly`` ``(k, 2)`` a point
+    can lie (the radius of its largest inscribed circle): the largest depth on an ``n × n``
+    grid over its bounding box plus half a cell's diagonal (the distance to the boundary
+    changes by at most the step between points), so a margin beyond it is surely unmet."""
+    lo, hi = poly.min(axis=0), poly.max(axis=0)
+    gx, gy = np.meshgrid(np.linspace(lo[0], hi[0], n), np.linspace(lo[1], hi[1], n))
+    pts = np.stack([gx.ravel(), gy.ravel()], axis=1)  # (n², 2)
+    a, e = poly, np.roll(poly, -1, axis=0) - poly  # edges a + t·e, (k, 2)
+    t = np.clip(((pts[:, None, :] - a) * e).sum(-1) / (e * e).sum(-1), 0.0, 1.0)  # (n², k)
+    near = a + t[..., None] * e
+    dist = np.sqrt(((pts[:, None, :] - near) ** 2).sum(-1)).min(axis=1)
+    # crossing number (even-odd rule), as _polygon_distance
+    ay, ey, ax, ex = a[:, 1], e[:, 1], a[:, 0], e[:, 0]
+    crosses = (ay > pts[:, 1:2]) != (ay + ey > pts[:, 1:2])
+    with np.errstate(divide="ignore", invalid="ignore"):
+        left = pts[:, 0:1] < ax + (pts[:, 1:2] - ay) * ex / ey
+    inside = (crosses & left).sum(axis=1) % 2 == 1
+    depth = float(dist[inside].max()) if inside.any() else 0.0
+    step = (hi - lo) / (n - 1)
+    return depth + 0.5 * float(np.hypot(step[0], step[1]))
+
+
 @dataclass(frozen=True)
 class CenterOfMass(Goal):
     """The whole robot's centre of mass ``c = Σ m_b p_b / M`` (masses and centres from the
@@ -214,6 +237,26 @@ class CenterOfMass(Goal):
                 f"CenterOfMass.axes must be distinct letters of 'xyz', got {self.axes!r}"
             )
         object.__setattr__(self, "margin", non_negative(self.margin, "CenterOfMass.margin"))
+        if self.support is not None:
+            deepest = deepest_inside(self.support)
+            if self.margin > deepest:
+                raise InvalidArgumentError(
+                    f"CenterOfMass.margin {self.margin:g} m is more than the support polygon "
+                    f"allows: no point lies more than {deepest:.3g} m inside it"
+                )
+            if self.point is not None and "x" in self.axes and "y" in self.axes:
+                poly = self.support
+                d, _, _ = _polygon_distance(
+                    float(self.point[0]), float(self.point[1]),
+                    poly[:, 0].copy(), poly[:, 1].copy(),
+                )  # fmt: skip
+                if d + self.margin > 1e-9:
+                    where = f"{d:.3g} m outside" if d > 0 else f"only {-d:.3g} m inside"
+                    short = f", less than the margin {self.margin:g} m" if d <= 0 else ""
+                    raise InvalidArgumentError(
+                        f"CenterOfMass.point (x, y) = {self.point[:2].tolist()} lies {where} "
+                        f"the support polygon{short}: no centre of mass meets both"
+                    )
         super().__post_init__()
 
     def describe(self) -> str:
