@@ -185,7 +185,6 @@ def test_bad_input_refused(kwargs: dict, words: str) -> None:
         CenterOfMass(**kwargs)
 
 
-
 def test_the_deepest_point_bound_holds_and_a_feasible_margin_is_kept() -> None:
     """The bound on the inscribed radius is never below the true one (a square of side 1:
     0.5; the L's arms 0.2 wide: 0.1 at least) and not far above it; margins up to the true
