@@ -28,6 +28,7 @@ A script that uses ``"local"`` must guard its entry point with ``if __name__ == 
 from __future__ import annotations
 
 import logging
+import multiprocessing
 import os
 import re
 import socket
@@ -134,9 +135,14 @@ def connect(
         )
         try:
             client = distributed.Client(cluster)
+            _EMBEDDED[id(client)] = set(client.run(os.getpid).values())
             try:
                 yield client
+            except KeyboardInterrupt:
+                abandon(client)
+                raise
             finally:
+                _EMBEDDED.pop(id(client), None)
                 client.close()
         finally:
             cluster.close()
@@ -152,6 +158,23 @@ def connect(
         yield client
     finally:
         client.close()
+
+
+_EMBEDDED: dict[int, set[int]] = {}
+"""The worker processes' ids of each embedded cluster's client :func:`connect` made (by
+``id(client)``), for :func:`abandon`."""
+
+
+def abandon(client: Any) -> None:
+    """Kill at once the worker processes of an embedded cluster that :func:`connect` made for
+    ``client`` (after a Ctrl-C: their running chunks are dropped).  A graceful close waits for
+    the running tasks (a compiled chunk cannot be interrupted) and then kills them after
+    4 s; killed first, the cluster closes within a second.  Nothing is done for other
+    clients, and only this process's own children are touched."""
+    pids = _EMBEDDED.get(id(client), set())
+    for child in multiprocessing.active_children():
+        if child.pid in pids:
+            child.kill()
 
 
 def n_workers(client: Any) -> int:

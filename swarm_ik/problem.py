@@ -307,7 +307,10 @@ class IKProblem:
                     )
             terms.extend(gl for gl in goals if isinstance(gl, Goal))
         if not terms:
-            raise InvalidTargetError("give a target pose or a list of goals; got None")
+            raise InvalidTargetError(
+                "give a target pose or a list of goals; got "
+                + ("no target and an empty goal list" if goals is not None else "neither")
+            )
         if goals is not None and not any(gl.is_primary for gl in terms):  # (a target is)
             raise InvalidArgumentError(
                 "at least one goal must be primary (Posture, CenterJoints and "

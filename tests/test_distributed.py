@@ -247,3 +247,31 @@ def test_map_chunks_retried_after_a_failure_on_the_same_client():
                 0,
                 *(i * i for i in items),
             ]
+
+
+def _alive(pid: int) -> bool:
+    """Whether process ``pid`` still runs (a zombie counts as gone)."""
+    try:
+        state = Path(f"/proc/{pid}/stat").read_text().rsplit(")", 1)[1].split()[0]
+    except OSError:
+        return False
+    return state != "Z"
+
+
+@pytest.mark.skipif(not sys.platform.startswith("linux"), reason="reads /proc")
+def test_a_ctrl_c_kills_the_embedded_workers_instead_of_waiting_for_their_tasks() -> None:
+    """A Ctrl-C inside ``connect("local")`` while a worker runs a task that does not return
+    (a compiled chunk cannot be interrupted): its workers are killed, so the cluster closes
+    at once (a graceful close waited for the task, then killed it after 4 s); no worker is
+    left."""
+    t_sent = time.perf_counter()
+    with pytest.raises(KeyboardInterrupt):
+        with distributed.connect("local", n_workers=1) as client:
+            pids = set(client.run(os.getpid).values())
+            client.submit(time.sleep, 60, pure=False)
+            time.sleep(0.5)  # (the task under way)
+            t_sent = time.perf_counter()
+            raise KeyboardInterrupt
+    took = time.perf_counter() - t_sent
+    assert pids and not any(_alive(p) for p in pids)
+    assert took < 3.0, f"closing took {took:.1f} s"

@@ -354,6 +354,33 @@ def test_a_python_goal_without_a_jacobian_is_refused_when_the_problem_is_made() 
         swarm_ik.IKProblem(robot("panda"), goals=[NoJacobian("panda_hand_tcp")])
 
 
+@dataclass(frozen=True)
+class Complex(G.Goal):
+    frame: str
+
+    def residual(self, state):
+        return np.array([1j])
+
+    def jacobian(self, state):
+        return np.zeros((1, 7))
+
+
+def test_a_complex_residual_is_refused_not_cut_to_its_real_part() -> None:
+    """numpy dropped the imaginary part with a warning: the goal was judged met at 0."""
+    r = robot("panda")
+    prob = swarm_ik.IKProblem(r, goals=[Complex("panda_hand_tcp")])
+    with pytest.raises(
+        InvalidArgumentError,
+        match=r"Complex\(panda_hand_tcp\)\.residual\(state\) must return real numbers",
+    ):
+        swarm_ik.solve(prob, seed=0, max_evals=20)
+
+
+def test_an_empty_goal_list_is_named_as_such() -> None:
+    with pytest.raises(swarm_ik.errors.InvalidTargetError, match="an empty goal list"):
+        swarm_ik.IKProblem(robot("panda"), goals=[])
+
+
 def test_one_goal_instead_of_a_list_is_refused_in_one_line() -> None:
     r = robot("panda")
     with pytest.raises(InvalidArgumentError) as info:

@@ -329,3 +329,36 @@ def test_weight_and_primary_are_keyword_only_fields_of_every_goal() -> None:
         G.Axis(f, [0, 0, 1], [0, 0, 0])
     with pytest.raises(swarm_ik.InvalidArgumentError, match="weight must be a positive"):
         G.CenterJoints(weight=0.0)
+
+
+@pytest.mark.parametrize("bad", [-1.0, 1e200])
+def test_posture_joint_weights_outside_the_weight_range_are_refused(bad: float) -> None:
+    """A joint weight of 1e200 overflowed the stacked rows: a reachable primary Position then
+    failed (``stopped``) beside its secondary Posture; now refused as a goal weight is."""
+    r = robot("panda")
+    jw = np.ones(7)
+    jw[3] = bad
+    goals = [G.Position(r.ee_frame, r.fk(r.mid_q())[:3, 3]), G.Posture(r.mid_q(), joint_weights=jw)]
+    with pytest.raises(
+        swarm_ik.errors.InvalidArgumentError,
+        match=r"Posture\.joint_weights must be between 0 and 1e\+06",
+    ):
+        swarm_ik.IKProblem(r, goals=goals)
+
+
+def test_a_primary_joint_value_outside_the_limits_is_refused_and_a_secondary_one_kept() -> None:
+    """Panda's joint 1 spans ±2.90 rad: a primary JointValue at 10 rad searched a whole
+    5 s limit (3.4 million evaluations) and ended 'time_limit'; it is refused when the problem
+    is made.  A secondary one only pulls the joint and stays allowed."""
+    r = robot("panda")
+    point = G.Position(r.ee_frame, r.fk(r.mid_q())[:3, 3])
+    with pytest.raises(
+        swarm_ik.errors.InvalidArgumentError,
+        match=r"JointValue\(panda_joint1\): 10 is outside the joint's limits \[-2\.8973, 2\.8973\]",
+    ):
+        swarm_ik.IKProblem(r, goals=[point, G.JointValue("panda_joint1", 10.0)])
+    res = swarm_ik.solve(
+        swarm_ik.IKProblem(r, goals=[point, G.JointValue("panda_joint1", 10.0, primary=False)]),
+        seed=0,
+    )
+    assert res.success and res.q[0] == pytest.approx(r.upper[0], abs=1e-6)

@@ -191,16 +191,27 @@ def _kept(goal: Goal, state: State, kind: str, compute: Callable[[State], Any]) 
     return value
 
 
+def _real(goal: Goal, value: Any, what: str) -> FloatArray:
+    """``value`` returned by ``goal.<what>(state)`` as a float array; complex values are
+    refused naming the goal (numpy would drop their imaginary parts with a warning)."""
+    arr = np.asarray(value)
+    if np.iscomplexobj(arr):
+        raise InvalidArgumentError(
+            f"{goal.describe()}.{what}(state) must return real numbers, got complex values"
+        )
+    return np.array(arr, dtype=float)
+
+
 def residual_of(goal: Goal, state: State) -> Any:
     """``goal.residual(state)`` as a float array (computed once per point in a scope of
     :func:`reuse_goal_values`)."""
-    return _kept(goal, state, "r", lambda s: np.array(goal.residual(s), dtype=float))
+    return _kept(goal, state, "r", lambda s: _real(goal, goal.residual(s), "residual"))
 
 
 def jacobian_of(goal: Goal, state: State) -> Any:
     """``goal.jacobian(state)`` as a float array (computed once per point in a scope of
     :func:`reuse_goal_values`)."""
-    return _kept(goal, state, "j", lambda s: np.array(goal.jacobian(s), dtype=float))
+    return _kept(goal, state, "j", lambda s: _real(goal, goal.jacobian(s), "jacobian"))
 
 
 def errors_of(goal: Goal, state: State) -> tuple[float, float]:
@@ -599,6 +610,8 @@ def search_rows(
             f"{exc}: a goal written in Python defines residual(state) -> (m,) and "
             "jacobian(state) -> (m, nq) (docs/goals.md)"
         ) from None
+    except InvalidArgumentError:
+        raise  # (named already: complex values)
     except (TypeError, ValueError) as exc:
         if goal.compiled:
             raise

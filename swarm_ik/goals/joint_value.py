@@ -50,6 +50,14 @@ class JointValue(JointGoal):
         if self.joint not in robot.joint_names:
             raise unknown("joint", self.joint, robot.joint_names)
         j = robot.joint_names.index(self.joint)
+        lo, hi = float(robot.lower[j]), float(robot.upper[j])
+        continuous = bool(robot.continuous_mask[j])
+        if self.is_primary and not continuous and not lo - 1e-12 <= self.value <= hi + 1e-12:
+            raise InvalidArgumentError(
+                f"JointValue({self.joint}): {self.value:g} is outside the joint's limits "
+                f"[{lo:g}, {hi:g}], so no configuration meets it (primary=False pulls the "
+                "joint towards it instead)"
+            )
         ref = np.zeros(robot.nq)
         ref[j] = self.value
         jw = np.zeros(robot.nq)

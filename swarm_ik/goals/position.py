@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass, field
 from typing import TYPE_CHECKING, Any, ClassVar
 
@@ -92,7 +93,7 @@ class Position(Goal):
     def pose_errors(self, poses: FloatArray) -> tuple[FloatArray, FloatArray]:
         """The errors judged of poses ``(..., 4, 4)``: ``(distance [m], 0)`` each ``(...)``,
         the distance to the point, or beyond the ball with a radius."""
-        d = np.linalg.norm(np.asarray(poses, dtype=float)[..., :3, 3] - self.point, axis=-1)
+        d = np.hypot.reduce(np.asarray(poses, dtype=float)[..., :3, 3] - self.point, axis=-1)
         if self.radius is not None:
             d = np.maximum(d - self.radius, 0.0)
         return d, np.zeros_like(d)
@@ -118,4 +119,4 @@ class Position(Goal):
     def errors(self, state: State) -> tuple[float, float]:
         if self.radius is not None:
             return float(self.pose_errors(state.pose(self.frame))[0]), float("nan")
-        return float(np.linalg.norm(self.residual(state))), float("nan")
+        return math.hypot(*self.residual(state).tolist()), float("nan")  # (no overflow)

@@ -8,7 +8,7 @@ from typing import TYPE_CHECKING, Any
 import numpy as np
 
 from swarm_ik.errors import InvalidArgumentError
-from swarm_ik.goals.base import FloatArray
+from swarm_ik.goals.base import WEIGHT_RANGE, FloatArray
 from swarm_ik.goals.joint import JointGoal
 
 if TYPE_CHECKING:
@@ -38,6 +38,10 @@ class Posture(JointGoal):
             if self.joint_weights is None
             else robot.check_q(self.joint_weights, "Posture.joint_weights")
         )
-        if np.any(jw < 0):
-            raise InvalidArgumentError("Posture.joint_weights must be non-negative")
+        high = WEIGHT_RANGE[1]
+        if np.any(jw < 0) or np.any(jw > high):
+            raise InvalidArgumentError(
+                f"Posture.joint_weights must be between 0 and {high:g} (weights are relative, "
+                f"as a goal's weight), got {jw.tolist()}"
+            )
         return ref, jw
