@@ -15,18 +15,44 @@ would raise deep inside.  They are meant to be called at the door of the public 
 
 from __future__ import annotations
 
+import functools
+import inspect
 import math
 import os
 import reprlib
 from collections.abc import Callable
 from pathlib import Path
-from typing import Any
+from typing import Any, ParamSpec, TypeVar
 
 import numpy as np
 
 from swarm_ik._types import FloatArray
 from swarm_ik.argtypes import SEED_LIMIT
 from swarm_ik.errors import InvalidArgumentError, InvalidTargetError
+
+P = ParamSpec("P")
+R = TypeVar("R")
+
+
+def keywords_checked(func: Callable[P, R]) -> Callable[P, R]:
+    """``func`` whose arguments that do not fit its signature (an unknown keyword, a
+    missing or extra argument) are refused with :class:`InvalidArgumentError` naming them and
+    listing its arguments, as the solvers' own parameters are, instead of Python's bare
+    ``TypeError`` (which ``except SwarmIKError`` would miss).  A ``TypeError`` raised inside
+    ``func`` is left alone: only one raised by the call itself (no frame of ``func`` in its
+    traceback) is the signature's."""
+    names = [n for n in inspect.signature(func).parameters if n != "self"]
+
+    @functools.wraps(func)
+    def checked(*args: P.args, **kwargs: P.kwargs) -> R:
+        try:
+            return func(*args, **kwargs)
+        except TypeError as exc:
+            if exc.__traceback__ is None or exc.__traceback__.tb_next is not None:
+                raise  # (raised inside func)
+            raise InvalidArgumentError(f"{exc}; its arguments: {', '.join(names)}") from None
+
+    return checked
 
 
 def check_seed(seed: Any) -> int | np.random.Generator:

@@ -29,7 +29,7 @@ from typing import Any
 import numpy as np
 
 from swarm_ik import kernels
-from swarm_ik._validate import check_seed
+from swarm_ik._validate import check_seed, keywords_checked
 from swarm_ik.errors import InvalidArgumentError, unknown
 from swarm_ik.goals import AvoidCollisions, Axis, LookAt, Orientation, Pose, Position, Posture
 from swarm_ik.goals import base as goals_base
@@ -763,6 +763,11 @@ def solve(
         raise InvalidArgumentError("prefer='nearest' needs a starting point q0")
     if not isinstance(problem, IKProblem):
         raise InvalidArgumentError(f"problem must be an IKProblem, got {type(problem).__name__}")
+    if on_improvement is not None and not callable(on_improvement):
+        raise InvalidArgumentError(
+            "on_improvement must be None or a callable (q, fitness), got "
+            f"{type(on_improvement).__name__}"
+        )
     t_call = time.perf_counter()
     settings = dict(
         max_evals=max_evals, time_limit=time_limit, tol_pos=tol_pos, tol_rot=tol_rot,
@@ -878,6 +883,7 @@ class IKSolver:
         )  # fmt: skip
         return (_rebuild_ik_solver, (self.robot, self.solver, kwargs))
 
+    @keywords_checked
     def solve(
         self, target: Any, q0: Any = None, seed: int | np.random.Generator | None = 0
     ) -> Result:

@@ -62,7 +62,7 @@ import numba
 import numpy as np
 
 from swarm_ik._types import BoolArray, FloatArray, IntArray
-from swarm_ik._validate import check_seed
+from swarm_ik._validate import check_seed, keywords_checked
 from swarm_ik.errors import InvalidArgumentError, InvalidTargetError, SwarmIKError
 from swarm_ik.goals import AvoidCollisions, Goal, Pose, Position, State, kernel_slot, kernels
 from swarm_ik.kernels import lie, lm, loaded_despite_damage
@@ -1428,6 +1428,7 @@ def _with_deadline(
     return dataclasses.replace(settings, deadline=time.time() + left, reserve=reserve)
 
 
+@keywords_checked
 def solve_batch(
     robot: RobotModel,
     targets: Any,
@@ -1710,7 +1711,14 @@ def read_targets(path: str | Path, positions: bool = False) -> FloatArray:
         )
     if suffix == ".csv":
         with p.open(newline="") as fh:
-            rows = (r for r in csv.reader(fh) if r and not r[0].lstrip().startswith("#"))
+            # comma-separated, or separated by white space (np.savetxt's default) when the
+            # first row that is not a comment has no comma
+            data_line = next(
+                (ln for ln in fh if ln.strip() and not ln.lstrip().startswith("#")), ""
+            )
+            fh.seek(0)
+            split = csv.reader(fh) if "," in data_line else (ln.split() for ln in fh)
+            rows = (r for r in split if r and not r[0].lstrip().startswith("#"))
             first = next(rows, None)
             if first is None:
                 return np.empty((0, 4, 4))

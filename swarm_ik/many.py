@@ -41,7 +41,7 @@ import numpy as np
 import pinocchio as pin
 from numpy.typing import NDArray
 
-from swarm_ik._validate import check_seed
+from swarm_ik._validate import check_seed, keywords_checked
 from swarm_ik.api import Route, prepare_q0, warm_up
 from swarm_ik.branches import (
     BRANCH_TOL,
@@ -245,6 +245,7 @@ def _hops_for(robot: Any) -> _Hops:
 
 
 # ------------------------------------------------------------------------------ API
+@keywords_checked
 def solve_many(
     problem: IKProblem,
     n: int = 16,

@@ -75,7 +75,7 @@ import numba
 import numpy as np
 from numpy.typing import NDArray
 
-from swarm_ik._validate import floats_or
+from swarm_ik._validate import floats_or, keywords_checked
 from swarm_ik.branches import SINGULAR_SIGMA, sigma_min
 from swarm_ik.errors import InvalidArgumentError, InvalidTargetError
 from swarm_ik.kernels import joints
@@ -266,6 +266,7 @@ class PathResult(FrozenArrays):
 
 
 # ------------------------------------------------------------------------------- API
+@keywords_checked
 def solve_path(
     robot: Any,
     poses: Any = None,

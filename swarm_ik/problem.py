@@ -23,6 +23,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from swarm_ik._types import FloatArray
+from swarm_ik._validate import keywords_checked
 from swarm_ik.errors import InvalidArgumentError, InvalidTargetError, unknown
 from swarm_ik.fitness import FITNESS, get_fitness
 from swarm_ik.goals import AvoidCollisions, Goal, Pose, Position, State, kernel_slot, kernels
@@ -213,6 +214,7 @@ class IKProblem:
     upper: FloatArray
     _table_cache: dict[Any, lm.GoalTable]
 
+    @keywords_checked
     def __init__(
         self,
         robot: RobotModel,

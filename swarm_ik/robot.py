@@ -24,7 +24,7 @@ from numpy.typing import NDArray
 
 from swarm_ik import urdf
 from swarm_ik._types import FloatArray
-from swarm_ik._validate import floats_or
+from swarm_ik._validate import floats_or, keywords_checked
 from swarm_ik.errors import InvalidArgumentError, RobotFileNotFoundError, RobotModelError, unknown
 from swarm_ik.kernels import lie
 from swarm_ik.kernels.fk import BALL, CONTINUOUS, KIND_NAMES, PRISMATIC, REVOLUTE, TreeArrays
@@ -1156,6 +1156,7 @@ def resolve_robot_path(
     raise unknown("robot", s, [*BUNDLED, *EXAMPLE_ROBOTS, *files])
 
 
+@keywords_checked
 def load_robot(
     name_or_path: str | os.PathLike[str],
     ee_frame: str | Sequence[str] | None = None,

@@ -442,3 +442,14 @@ def test_nearest_table_poses_match_a_sort_of_every_distance(position_only: bool)
         got = batch._nearest_poses(table, targets, k, settings)
         np.testing.assert_array_equal(got, ref[:, : min(k, 200)])
     assert batch._nearest_poses(table[:0], targets, 8, settings).shape == (50, 0)
+
+
+def test_targets_separated_by_white_space_are_read_as_np_savetxt_writes_them(tmp_path) -> None:
+    """``np.savetxt``'s default (spaces, a '#' header) was refused as a bad header."""
+    rows = np.array([[0.4, 0.0, 0.3, 0.0, 0.0, 0.0, 1.0], [0.4, 0.1, 0.3, 1.0, 0.0, 0.0, 0.0]])
+    path = tmp_path / "t.csv"
+    np.savetxt(path, rows, header="x y z qx qy qz qw")
+    spaced = read_targets(path)
+    np.savetxt(path, rows, delimiter=",")
+    np.testing.assert_array_equal(spaced, read_targets(path))
+    assert spaced.shape == (2, 4, 4)

@@ -113,3 +113,25 @@ def test_goals_without_a_rotation_report_no_rotation_error(tmp_path, capsys) -> 
     assert main(["solve", "--robot", "panda", "--goals", str(f), "--json"]) == 0
     d = json.loads(capsys.readouterr().out)
     assert d["rotation_error"] is None and d["position_error"] < 1e-5
+
+
+def test_position_only_with_a_goals_file_is_refused(tmp_path, refused) -> None:
+    """The flag was ignored there: the file's Pose goals kept their rotation rows, and the
+    rotation error that made the solve fail printed as n/a."""
+    path = tmp_path / "g.json"
+    path.write_text('[{"type": "Position", "frame": "panda_hand_tcp", "point": [0.4, 0, 0.4]}]')
+    line = refused("solve", "--robot", "panda", "--goals", str(path), "--position-only")
+    assert "--position-only applies to --pose and --from-q" in line
+
+
+def test_position_only_with_from_q_on_several_frames_solves_positions(capsys) -> None:
+    from swarm_ik.cli import main
+
+    q = ["0.1", "-0.5", "0.2", "-2", "0.1", "1.5", "0.3"]
+    argv = ["solve", "--robot", "panda", "--frame", "panda_hand_tcp", "--frame", "panda_link4"]
+    assert main([*argv, "--from-q", *q, "--position-only", "--json"]) == 0
+    out = json.loads(capsys.readouterr().out)
+    assert [g["goal"] for g in out["goal_errors"]] == [
+        "Position(panda_hand_tcp)",
+        "Position(panda_link4)",
+    ]

@@ -165,3 +165,8 @@ def test_a_warning_is_one_line_without_the_package_source(capsys) -> None:
     warn = [line for line in err if "q0 lies outside the joint limits" in line]
     assert warn and warn[0].startswith("swarm-ik: warning: ")
     assert not any(".py:" in line for line in err), err
+
+
+def test_a_missing_waypoints_file_is_named_by_its_option(refused) -> None:
+    line = refused("path", "--robot", "ur5", "--poses", "missing.csv")
+    assert line == "swarm-ik: error: --poses file not found: 'missing.csv'"

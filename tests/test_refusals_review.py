@@ -167,3 +167,45 @@ def test_every_refusal_is_a_swarm_ik_error() -> None:
     ):
         with pytest.raises(SwarmIKError):
             make()
+
+
+@pytest.mark.parametrize(
+    "call",
+    [
+        lambda r, T, P: swarm_ik.load_robot("panda", foo=1),
+        lambda r, T, P: swarm_ik.IKProblem(r, T, foo=1),
+        lambda r, T, P: swarm_ik.IKSolver(r).solve(T, foo=1),
+        lambda r, T, P: swarm_ik.solve_many(P, foo=1),
+        lambda r, T, P: swarm_ik.solve_batch(r, [T], foo=1),
+        lambda r, T, P: swarm_ik.solve_path(r, [T, T], foo=1),
+    ],
+)
+def test_an_unknown_keyword_is_a_swarm_ik_error_at_every_entry_point(call) -> None:
+    """``solve`` refused an unknown keyword with InvalidArgumentError, the other entry points
+    with Python's bare TypeError (missed by ``except SwarmIKError``)."""
+    r = swarm_ik.load_robot("panda")
+    T = r.fk(r.mid_q())
+    with pytest.raises(
+        swarm_ik.errors.InvalidArgumentError,
+        match=r"unexpected keyword argument 'foo'; its arguments: ",
+    ):
+        call(r, T, swarm_ik.IKProblem(r, T))
+
+
+def test_a_type_error_inside_an_entry_point_is_not_taken_for_a_bad_keyword(monkeypatch) -> None:
+    from swarm_ik._validate import keywords_checked
+
+    @keywords_checked
+    def inner(x: int) -> int:
+        return x + "a"  # type: ignore[operator]
+
+    with pytest.raises(TypeError, match="unsupported operand"):
+        inner(1)
+
+
+def test_an_on_improvement_that_is_not_callable_is_refused_before_the_solve() -> None:
+    r = swarm_ik.load_robot("ur5")
+    with pytest.raises(
+        swarm_ik.errors.InvalidArgumentError, match="on_improvement must be None or a callable"
+    ):
+        swarm_ik.solve(swarm_ik.IKProblem(r, r.fk(r.mid_q())), on_improvement=5, max_evals=50)

@@ -35,6 +35,7 @@ from swarm_ik.cli._args import (
     load_robot,
     target_frame_help,
 )
+from swarm_ik.errors import InvalidArgumentError
 
 HELP = "a jump-free joint path through Cartesian waypoints"
 """One line for ``swarm-ik --help``."""
@@ -122,7 +123,8 @@ def run(args: argparse.Namespace) -> int:
         check_output_file(args.out, "--out", (".csv", ".npy"))  # before any work
     if args.html is not None:
         _viewer.check_viewer(args, live=False)
-    check_input_file(args.poses, "--poses", None)
+    if not check_input_file(args.poses, "--poses", None).exists():
+        raise InvalidArgumentError(f"--poses file not found: {str(args.poses)!r}")
     robot = load_robot(args)  # (every --frame; the waypoints: the first's)
     if args.html is not None:
         _viewer.check_meshes(robot, "--html")
@@ -167,17 +169,10 @@ run_cli = run
 
 
 def _read_poses(path: Path) -> Any:
-    """The waypoints of ``--poses``, read as ``swarm-ik batch --targets`` reads its file
-    (``read_targets_file``: in :mod:`swarm_ik.batch`, formerly :mod:`swarm_ik._validate`)."""
-    import importlib
+    """The waypoints of ``--poses``, read as ``swarm-ik batch --targets`` reads its file."""
+    from swarm_ik.batch import read_targets_file
 
-    for module in ("swarm_ik.batch", "swarm_ik._validate"):
-        reader = getattr(importlib.import_module(module), "read_targets_file", None)
-        if reader is not None:
-            return reader(path)
-    from swarm_ik.batch import read_targets
-
-    return read_targets(path)
+    return read_targets_file(path)
 
 
 def _write(path: Path, robot: Any, q: Any) -> None:

@@ -93,7 +93,8 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
         "--position-only",
         action="store_true",
         help="solve for the position of the target only (e.g. chains with fewer than six "
-        "joints): --pose X Y Z is enough, and no rotation error is reported",
+        "joints): --pose X Y Z is enough, and no rotation error is reported (with --from-q "
+        "and several --frame: each frame's position; refused with --goals)",
     )
     argtypes.add_seed(parser, "random seed")
     parser.add_argument("--max-evals", type=int, default=None, help="most fitness evaluations")
@@ -173,6 +174,11 @@ def run(args: argparse.Namespace) -> int:
     if drawing:  # refused before solving: meshcat missing, an unwritable page
         _viewer.check_viewer(args, live=bool(args.show))
     if args.goals is not None:
+        if args.position_only:
+            raise InvalidArgumentError(
+                "--position-only applies to --pose and --from-q; a --goals file states each "
+                "goal itself (write a Position goal where only the position matters)"
+            )
         check_goals_file(args.goals)
     _check_dls_options(args)
     pose = None if args.pose is None else pose_target(args.pose, args.position_only)
@@ -188,7 +194,12 @@ def run(args: argparse.Namespace) -> int:
             raise InvalidArgumentError(f"--goals {args.goals!r}: JSON nested too deep") from None
     elif args.from_q is not None and len(robot.frames) > 1:  # a Pose goal on every frame
         poses = robot.fk_all(robot.check_q(args.from_q, "--from-q"))
-        goals = [swarm_ik.goals.Pose(f, t) for f, t in zip(robot.frames, poses, strict=True)]
+        goals = [
+            swarm_ik.goals.Position(f, t[:3, 3])
+            if args.position_only
+            else swarm_ik.goals.Pose(f, t)
+            for f, t in zip(robot.frames, poses, strict=True)
+        ]
     elif args.from_q is not None:
         target = robot.fk_pinocchio(robot.check_q(args.from_q, "--from-q"))
     else:

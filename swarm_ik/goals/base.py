@@ -690,7 +690,7 @@ def frame_index(goal: Goal, robot: RobotModel) -> int:
         raise UnknownNameError(
             f"{goal.describe()}: {frame!r} is not a goal frame of this robot; goal frames: "
             f"{', '.join(robot.frames)} (load the robot with every goal frame: "
-            "load_robot(name, ee_frame=[...]))"
+            f"load_robot(name, ee_frame=[...]); on the command line, add --frame {frame})"
         )
     return robot.frames.index(frame)
 
