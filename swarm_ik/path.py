@@ -679,6 +679,11 @@ class _Context:
         candidates' share: the tracking after it is short of the limit) from now on."""
         self.search_s += SEARCH_PER_PAIR * k_before * k
 
+    def relaxed(self, k_before: int, k: int) -> None:
+        """A layer relaxed by the build (:attr:`_Graph.relaxed`): the search reuses it, so
+        its pairs' time is no longer kept out of the limit."""
+        self.search_s = max(self.search_s - SEARCH_PER_PAIR * k_before * k, 0.0)
+
     def out_of_time(self) -> bool:
         """Whether the candidates' share of the time limit is spent (tracking only)."""
         if self.deadline is not None and time.perf_counter() >= self.deadline:
@@ -893,6 +898,14 @@ class _Graph:
     unreachable: list[int]
     repaired: int = 0
     blocked: list[tuple[int, ...] | None] = field(default_factory=list)
+    relaxed: dict[int, tuple[Any, FloatArray, Any, FloatArray, Any]] = field(
+        default_factory=dict
+    )
+    """The dynamic programme's layers the build already relaxed (its tracking reads them):
+    waypoint ``i`` → ``(the layer before (or the start), the layer, jumps, travel,
+    parents)``, reused by :func:`_search` while the layers are those same arrays and no step
+    into them was rejected (relaxing 256 × 256 candidates a layer twice overran a UR5 path's
+    time limit by a fifth)."""
 
     @property
     def exhaustive(self) -> bool:
@@ -1216,12 +1229,18 @@ def _build(ctx: _Context, start: FloatArray | None) -> _Graph:
             layer = graph.layers[m]
             if m > 0:
                 ra, ta = values[m - 1]  # type: ignore[misc]
-                values[m] = _relax_layer(graph.layers[m - 1], ra, ta, layer, step, wrap)[:2]
+                prev = graph.layers[m - 1]
+                r, t, par = _relax_layer(prev, ra, ta, layer, step, wrap)
+                graph.relaxed[m] = (prev, layer, r, t, par)
+                values[m] = (r, t)
+                ctx.relaxed(prev.shape[0], layer.shape[0])
             elif start is None:
                 values[m] = (np.zeros(layer.shape[0], dtype=np.int64), _tie_break(layer, ctx))
             else:
                 z_r, z_t = np.zeros(1, dtype=np.int64), np.zeros(1)
-                values[m] = _relax_layer(start[None], z_r, z_t, layer, step, wrap)[:2]
+                r, t, par = _relax_layer(start[None], z_r, z_t, layer, step, wrap)
+                graph.relaxed[m] = (start, layer, r, t, par)
+                values[m] = (r, t)
         got = values[i]
         assert got is not None
         return got
@@ -1421,10 +1440,21 @@ def _search(graph: _Graph, start: FloatArray | None, ctx: _Context, rejected: Re
     parents: list[NDArray[np.int64]] = []
     first = graph.layers[0]
     k0 = first.shape[0]
+    same = True  # (every layer so far as the build relaxed it: its values still hold)
+
+    def kept(i: int, before: Any, layer: FloatArray, forbid: Any) -> Any:
+        entry = graph.relaxed.get(i)
+        if same and forbid is None and entry is not None:
+            if entry[0] is before and entry[1] is layer:
+                return entry[2:]
+        return None
+
     if start is not None:
         forbid0 = _forbid(rejected, 0, start[None], first, ctx)
+        got = kept(0, start, first, forbid0)
+        same = got is not None
         zero_r, zero_t = np.zeros(1, dtype=np.int64), np.zeros(1)
-        r, t, par = _relax_layer(start[None], zero_r, zero_t, first, step, wrap, forbid0)
+        r, t, par = got or _relax_layer(start[None], zero_r, zero_t, first, step, wrap, forbid0)
     else:
         r, par = np.zeros(k0, dtype=np.int64), np.zeros(k0, dtype=np.int64)
         t = _tie_break(first, ctx)
@@ -1432,7 +1462,9 @@ def _search(graph: _Graph, start: FloatArray | None, ctx: _Context, rejected: Re
     for i in range(1, n):
         qa, qb = graph.layers[i - 1], graph.layers[i]
         forbid = _forbid(rejected, i, qa, qb, ctx)
-        r, t, par = _relax_layer(qa, r, t, qb, step, wrap, forbid)
+        got = kept(i, qa, qb, forbid)
+        same = got is not None
+        r, t, par = got or _relax_layer(qa, r, t, qb, step, wrap, forbid)
         parents.append(par)
     best = int(np.lexsort((t, r))[0])
     idx = [best]
