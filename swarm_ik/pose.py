@@ -71,6 +71,12 @@ def quat_to_matrix(quat_xyzw: Any) -> FloatArray:
     if u is None:
         raise InvalidTargetError(f"quaternion has zero norm: {q.tolist()}")
     x, y, z, w = u
+    return unit_quaternion_matrix(x, y, z, w)
+
+
+def unit_quaternion_matrix(x: float, y: float, z: float, w: float) -> FloatArray:
+    """Rotation matrix ``(3, 3)`` of the unit quaternion ``w + xi + yj + zk`` (already
+    normalised: :func:`unit`)."""
     return np.array(
         [
             [1 - 2 * (y * y + z * z), 2 * (x * y - z * w), 2 * (x * z + y * w)],

@@ -56,7 +56,7 @@ import numpy as np
 
 from swarm_ik._types import FloatArray
 from swarm_ik.errors import InvalidArgumentError, SwarmIKError, UnknownNameError
-from swarm_ik.pose import unit
+from swarm_ik.pose import unit, unit_quaternion_matrix
 
 Matrix4 = tuple[tuple[float, ...], ...]
 """A 4x4 rigid transform as 4 rows of 4 numbers."""
@@ -233,13 +233,7 @@ def _quat_matrix(value: Any, order: str) -> FloatArray:
     if u is None:
         raise InvalidArgumentError(f"quaternion ({', '.join(order)}) has zero norm: {q.tolist()}")
     w, x, y, z = u if order == "wxyz" else u[[3, 0, 1, 2]]
-    return np.array(
-        [
-            [1 - 2 * (y * y + z * z), 2 * (x * y - z * w), 2 * (x * z + y * w)],
-            [2 * (x * y + z * w), 1 - 2 * (x * x + z * z), 2 * (y * z - x * w)],
-            [2 * (x * z - y * w), 2 * (y * z + x * w), 1 - 2 * (x * x + y * y)],
-        ]
-    )
+    return unit_quaternion_matrix(x, y, z, w)
 
 
 def _matrix_quat_wxyz(rot: Any) -> FloatArray:
