@@ -62,6 +62,9 @@ class ReachMap:
         tol_pos: Position tolerance [m]; ``tol_rot``: rotation tolerance [rad].
         max_starts: Starts per pose before it counts as unreachable.
         time_s: Wall-clock seconds of the computation.
+        urdf: The robot's URDF file (absolute path; empty in maps written before it was
+            kept), from which :func:`export_html` draws the robot: its name alone may name
+            another robot (a user's ``panda.urdf`` beside the bundled Panda).
     """
 
     robot: str
@@ -80,6 +83,7 @@ class ReachMap:
     tol_rot: float
     max_starts: int
     time_s: float
+    urdf: str = ""
 
     @property
     def centres(self) -> FloatArray:
@@ -119,6 +123,7 @@ class ReachMap:
             tol_rot=self.tol_rot,
             max_starts=self.max_starts,
             time_s=self.time_s,
+            urdf=self.urdf,
         )
         return p
 
@@ -143,6 +148,7 @@ class ReachMap:
             tol_rot=float(d["tol_rot"]),
             max_starts=int(d["max_starts"]),
             time_s=float(d["time_s"]),
+            urdf=str(d["urdf"]) if "urdf" in d.files else "",
         )
 
     def __repr__(self) -> str:
@@ -400,6 +406,7 @@ def reach_map(
         tol_rot=float(tol_rot),
         max_starts=int(max_starts),
         time_s=time.perf_counter() - t0,
+        urdf=str(robot.urdf_path),
     )
 
 
@@ -515,8 +522,9 @@ def export_html(
         rmap: The map.
         path: The ``.html`` file to write.
         point_size: Size of a point [m] (default 0.6 × the resolution).
-        robot: The robot to draw (default: loaded by the map's robot name and frame; left
-            out when that fails).
+        robot: The robot to draw (default: loaded from the map's URDF file and frame, or by
+            its robot name for a map without one; left out when that fails or the file is
+            gone).
 
     Raises:
         InvalidArgumentError: meshcat is not installed, or the path cannot be written.
@@ -536,9 +544,10 @@ def export_html(
         import swarm_ik
         from swarm_ik.errors import SwarmIKError
 
+        source = rmap.urdf or rmap.robot
         try:
-            robot = swarm_ik.load_robot(rmap.robot, ee_frame=rmap.ee_frame)
-        except SwarmIKError:
+            robot = swarm_ik.load_robot(source, ee_frame=rmap.ee_frame)
+        except SwarmIKError:  # (a URDF that has gone is not stood in for by a namesake)
             robot = None
     reach = rmap.index > 0
     pts = rmap.centres[reach].astype(np.float32)

@@ -51,18 +51,22 @@ def test_check_grid_size_counts_the_box() -> None:
         reach.check_grid_size([0, 0, 0], [1, 1, 1], 0.25, 2, 100)
 
 
-def test_html_is_the_scene_with_robot_and_legend(yumi: swarm_ik.RobotModel, tmp_path: Path) -> None:
-    pytest.importorskip("meshcat")
+def _objects(html: str) -> dict[str, Any]:
+    """The ``set_object`` commands of a page exported by meshcat, by path."""
     import umsgpack
 
-    rmap = reach.reach_map(yumi, resolution=0.25, n_orientations=2, max_starts=4)
-    html = reach.export_html(rmap, tmp_path / "m.html").read_text()
     page = html[html.index("new MeshCat.Viewer") :]
     cmds = [
         umsgpack.unpackb(base64.b64decode(b))
         for b in re.findall(r'base64,([A-Za-z0-9+/=]+)"', page)
     ]
-    objects = {c["path"]: c for c in cmds if c["type"] == "set_object"}
+    return {c["path"]: c for c in cmds if c["type"] == "set_object"}
+
+
+def test_html_is_the_scene_with_robot_and_legend(yumi: swarm_ik.RobotModel, tmp_path: Path) -> None:
+    pytest.importorskip("meshcat")
+    rmap = reach.reach_map(yumi, resolution=0.25, n_orientations=2, max_starts=4)
+    objects = _objects(reach.export_html(rmap, tmp_path / "m.html").read_text())
     cloud = objects["/meshcat/swarm_ik/reachability/voxels"]["object"]["geometries"][0]
     n_points = len(cloud["data"]["attributes"]["position"]["array"].data) // (4 * 3)
     assert n_points == int((rmap.index > 0).sum())
@@ -155,3 +159,26 @@ def test_cli_writes_map_picture_and_page(tmp_path: Path, capsys: Any) -> None:
     if reach_cli.has_extra("--html"):
         assert "MeshCat.Viewer" in out.with_suffix(".html").read_text()
     np.testing.assert_array_equal(rmap.index, rmap.hits.mean(axis=-1))
+
+
+def test_a_saved_map_keeps_its_urdf_and_draws_that_robot_not_a_namesake(
+    yumi: swarm_ik.RobotModel, tmp_path: Path, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    """The map kept only the robot's name: a map of a user's URDF was drawn with whatever
+    robot that name loads.  It keeps the URDF file and loads from it (a file gone: no
+    robot drawn, not a namesake)."""
+    rmap = reach.reach_map(yumi, resolution=0.25, n_orientations=2, max_starts=4)
+    assert rmap.urdf == str(yumi.urdf_path)
+    again = reach.ReachMap.load(rmap.save(tmp_path / "m.npz"))
+    assert again.urdf == rmap.urdf
+    asked: list[str] = []
+
+    def load_robot(source: Any, **kwargs: Any) -> Any:
+        asked.append(str(source))
+        raise swarm_ik.errors.RobotFileNotFoundError("gone")
+
+    pytest.importorskip("meshcat")
+    monkeypatch.setattr(swarm_ik, "load_robot", load_robot)
+    objects = _objects(reach.export_html(again, tmp_path / "m.html").read_text())
+    assert asked == [rmap.urdf]
+    assert not any("/robot/" in p for p in objects) and any("voxels" in p for p in objects)
