@@ -381,7 +381,11 @@ class Route:
         self.prefer = prefer
         self._lock = threading.Lock()
         self._warm = False  # (warm_up ran for this route)
-        self._judge_s = 0.0  # (seconds a judge takes on this route: see _search_limit)
+        # (seconds a judge takes on this route: see _search_limit; a new route starts from
+        # its robot's last one for problems of the same kind: a new scene's route overran a
+        # 20 ms limit by its first judge, coal's check, 1-1.5 ms)
+        self._judge_kind = (problem.collision_goal is not None, bool(problem.python_goals))
+        self._judge_s = problem.robot._cache.get("judge_s", {}).get(self._judge_kind, 0.0)
         # the first start without q0 when no Posture goal names one (the middle of the ranges)
         has_posture = any(isinstance(g, Posture) for g in problem.goals)
         self._mid = None if has_posture else hybrid.default_seed(problem)
@@ -568,6 +572,7 @@ class Route:
         # what judging costs this route (rising at once, falling slowly): kept out of the
         # search's time limit, so that the whole call stays within it
         self._judge_s = max(time.perf_counter() - t_judge, 0.9 * self._judge_s)
+        problem.robot._cache.setdefault("judge_s", {})[self._judge_kind] = self._judge_s
         return result
 
     def _search_limit(self, time_limit: float | None) -> float | None:

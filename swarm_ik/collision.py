@@ -49,6 +49,7 @@ from numpy.typing import NDArray
 
 from swarm_ik._types import FloatArray
 from swarm_ik.errors import InvalidArgumentError, RobotFileNotFoundError, RobotModelError
+from swarm_ik.kernels.mesh import enclosed_rows
 from swarm_ik.paths import cache_dir, package_dirs
 from swarm_ik.pose import is_finite_nonneg
 from swarm_ik.scene import Scene, as_scene
@@ -466,6 +467,24 @@ def _margin(value: Any) -> float:
     return float(value)
 
 
+def _triangles(mesh: Any) -> tuple[FloatArray, NDArray[np.int64]]:
+    """A coal mesh's vertices ``(nv, 3)`` and triangles ``(nt, 3)`` (indices)."""
+    verts = np.array(mesh.vertices(), dtype=float).reshape(-1, 3)
+    tris = [mesh.tri_indices(i) for i in range(mesh.num_tris)]
+    return verts, np.array([[t[0], t[1], t[2]] for t in tris], dtype=np.int64).reshape(-1, 3)
+
+
+def _inner_point(obj: Any) -> FloatArray:
+    """A world point inside a coal obstacle: a primitive's centre, a mesh's first vertex (an
+    obstacle wholly inside a body has all its points inside)."""
+    tf = obj.getTransform()
+    rot, pos = np.array(tf.getRotation()), np.array(tf.getTranslation())
+    geom = obj.collisionGeometry()
+    if hasattr(geom, "vertices") and int(getattr(geom, "num_vertices", 0) or 0) > 0:
+        return np.asarray(rot @ np.array(geom.vertex(0), dtype=float) + pos)
+    return np.asarray(pos)
+
+
 class _Checker:
     """The exact check of one (scene, self_collision) set of pairs, with per-thread data.
 
@@ -527,6 +546,38 @@ class _Checker:
         self.manager: Any = None
         self.body_manager: Any = None
         self._scene_broad: Any = None  # (built on the first verdict without margin)
+        # coal's meshes are surfaces: an obstacle wholly inside a body's mesh touches none of
+        # its triangles.  Each mesh body's triangles (in its own frame) and the obstacles
+        # small enough to fit inside one, with a point of each, for enclosed_pairs
+        # (an obstacle fits in a body only if its box's longest side is at most the body's
+        # diameter, at most its box's diagonal)
+        size = (self.obs_hi - self.obs_lo).max(axis=1) if self.obstacles else np.zeros(0)
+        self.solids: list[tuple[Any, ...]] = []
+        for b, (g, mesh) in enumerate(zip(gm.geometryObjects, is_mesh, strict=True)):
+            if not mesh:
+                continue  # (coal's primitives are solids)
+            verts, tris = _triangles(g.geometry)
+            lo, hi = verts.min(axis=0), verts.max(axis=0)
+            fit = np.flatnonzero(size <= float(np.linalg.norm(hi - lo)))
+            if fit.size:
+                self.solids.append((b, verts, tris, lo, hi, fit))
+        # one row per (body, obstacle that fits in it): the obstacle's inner point, the body's
+        # box in its own frame (enclosed_pairs tests every row at once)
+        rows = [(k, int(o)) for k, sd in enumerate(self.solids) for o in sd[5]]
+        self.small = bool(rows)
+        if rows:
+            self.row_solid = np.array([k for k, _ in rows], dtype=np.int64)
+            self.row_obstacle = np.array([o for _, o in rows])
+            self.row_point = np.array([_inner_point(self.obstacles[o]) for _, o in rows])
+            self.row_lo = np.array([self.solids[k][3] for k, _ in rows])
+            self.row_hi = np.array([self.solids[k][4] for k, _ in rows])
+            # every mesh's vertices and triangles, concatenated (triangles indexing the whole)
+            starts = np.cumsum([0] + [sd[1].shape[0] for sd in self.solids])
+            self.mesh_verts = np.concatenate([sd[1] for sd in self.solids])
+            self.mesh_tris = np.concatenate(
+                [sd[2] + starts[k] for k, sd in enumerate(self.solids)]
+            ).astype(np.int64)
+            self.mesh_tri0 = np.cumsum([0] + [sd[2].shape[0] for sd in self.solids])
         if self.obstacles:
             self.manager = coal.DynamicAABBTreeCollisionManager()
             for obj in self.obstacles:
@@ -584,14 +635,48 @@ class _Checker:
         return self._scene_broad
 
     def collide(self, q_pin: FloatArray, margin: float) -> bool:
-        """Whether any pair is in contact (stops at the first)."""
+        """Whether any pair is in contact (stops at the first), an obstacle inside a body's
+        mesh included (:meth:`enclosed_pairs`)."""
+        if self._touch(q_pin, margin):
+            return True
+        return self.small and bool(self.enclosed_pairs(q_pin, True, self._placed))
+
+    def enclosed_pairs(
+        self, q_pin: FloatArray, first: bool = False, placed: Any = None
+    ) -> list[tuple[int, int]]:
+        """``(body, obstacle)`` pairs where an obstacle lies inside a body's mesh (so touches
+        none of its triangles: coal's narrow phase finds no contact), at ``q_pin``: for each
+        obstacle that fits in a body, its inner point's generalised winding number about the
+        body's closed mesh is above a half (Jacobson et al. 2013: robust to small holes).
+        ``first``: stop at the first; ``placed``: a geometry data whose first bodies are
+        placed at ``q_pin`` already (else they are placed here)."""
+        if placed is None:
+            pin.forwardKinematics(self.model, self.data, q_pin)
+            pin.updateGeometryPlacements(self.model, self.data, self.gm, self.gd)
+            placed = self.gd
+        oMg = placed.oMg
+        rows = enclosed_rows(
+            np.array([oMg[sd[0]].homogeneous for sd in self.solids]), self.row_solid,
+            self.row_point, self.row_lo, self.row_hi, self.mesh_verts, self.mesh_tris,
+            self.mesh_tri0, bool(first),
+        )  # fmt: skip
+        return [
+            (int(self.solids[self.row_solid[r]][0]), int(self.row_obstacle[r]))
+            for r in rows.tolist()
+        ]
+
+    def _touch(self, q_pin: FloatArray, margin: float) -> bool:
+        """Whether any pair's surfaces come within ``margin`` (stops at the first)."""
+        self._placed: Any = None  # (the geometry data placed at q_pin: enclosed_pairs)
         if not self.labels and self.manager is None:
             return False
         self._set_margin(margin)
         if margin == 0.0 and self.manager is not None:  # a small scene: one C++ call
             broad = self._scene_manager()
-            if broad is not None:
+            if broad is not None:  # (its bodies come first, placed by the call)
+                self._placed = self._scene_gd
                 return bool(pin.computeCollisions(self.model, self._scene_data, broad, q_pin, True))
+        self._placed = self.gd  # (each way below places the bodies in self.gd)
         if margin == 0.0 and self.self_broad is not None:  # (its boxes ignore a margin)
             if pin.computeCollisions(self.model, self.data, self.self_broad, q_pin, True):
                 return True
@@ -654,6 +739,8 @@ class _Checker:
         for b, o in np.argwhere(gaps <= margin).tolist():  # (the narrow phase where boxes meet)
             if coal.collide(self.bodies[b], self.obstacles[o], request, coal.CollisionResult()):
                 obs_hits.append((b, o))
+        enclosed = self.enclosed_pairs(q_pin, placed=gd) if self.small else []
+        obs_hits += [pair for pair in enclosed if pair not in obs_hits]
         best, best_label = float("inf"), None
         if self_hits or obs_hits:
             for k in self_hits:
@@ -663,6 +750,8 @@ class _Checker:
                     best, best_label = d, self.labels[k]
             for b, o in obs_hits:
                 d = self._obstacle_distance(b, o)
+                if (b, o) in enclosed:  # (inside: the distance out to the surface, negated)
+                    d = -abs(d)
                 if d < best:
                     best, best_label = d, (self.body_links[b], self.obstacle_names[o])
             if margin == 0.0:

@@ -898,9 +898,7 @@ class _Graph:
     unreachable: list[int]
     repaired: int = 0
     blocked: list[tuple[int, ...] | None] = field(default_factory=list)
-    relaxed: dict[int, tuple[Any, FloatArray, Any, FloatArray, Any]] = field(
-        default_factory=dict
-    )
+    relaxed: dict[int, tuple[Any, FloatArray, Any, FloatArray, Any]] = field(default_factory=dict)
     """The dynamic programme's layers the build already relaxed (its tracking reads them):
     waypoint ``i`` → ``(the layer before (or the start), the layer, jumps, travel,
     parents)``, reused by :func:`_search` while the layers are those same arrays and no step

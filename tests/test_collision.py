@@ -190,3 +190,39 @@ def test_bad_margins_are_refused_by_every_check(margin: object) -> None:
     ):
         with pytest.raises(InvalidArgumentError, match="margin must be a finite number >= 0"):
             call()
+
+
+@pytest.mark.parametrize("shape", ["sphere", "box"])
+def test_an_obstacle_wholly_inside_a_link_mesh_is_in_contact(shape: str) -> None:
+    """coal's meshes are surfaces: a 2 cm ball or a 4 cm cube at the middle of Panda's
+    link 5 touched none of its triangles and was called collision-free (clearance > 0), so a
+    solve among it reported success; the winding number of the closed mesh now finds it
+    inside, in the fast test, the report, and the solve's verdict."""
+    import pinocchio as pin
+
+    import swarm_ik
+    from swarm_ik.goals import AvoidCollisions
+    from swarm_ik.scene import Box, Scene, Sphere
+
+    robot = swarm_ik.load_robot("panda")
+    rc = robot.collision_model()
+    q = robot.mid_q()
+    data, gd = robot.model.createData(), pin.GeometryData(rc.geom_model)
+    pin.forwardKinematics(robot.model, data, robot.to_pinocchio(q))
+    pin.updateGeometryPlacements(robot.model, data, rc.geom_model, gd)
+    k = [g.name for g in rc.geom_model.geometryObjects].index("panda_link5_0")
+    verts = np.array(rc.geom_model.geometryObjects[k].geometry.vertices())
+    centre = gd.oMg[k].act(0.5 * (verts.min(axis=0) + verts.max(axis=0)))
+    obstacle = Sphere(0.01, list(centre)) if shape == "sphere" else Box([0.03] * 3, list(centre))
+    scene = Scene([obstacle])
+    report = rc.check(q, scene)
+    assert not report.collision_free and report.clearance < 0
+    assert rc.collides(q, scene)
+    away = Scene([Sphere(0.01, list(centre + [0.0, 0.0, 2.0]))])
+    assert rc.check(q, away).collision_free and not rc.collides(q, away)
+    res = swarm_ik.solve(
+        swarm_ik.IKProblem(robot, robot.fk(q), goals=[AvoidCollisions(scene)]),
+        q0=q, seed=0, max_evals=5000,
+    )  # fmt: skip
+    assert not res.success or rc.check(res.q, scene).collision_free
+    assert not np.allclose(res.q, q)  # (the start, inside the obstacle, is not the answer)
