@@ -376,6 +376,8 @@ class Mesh:
                 f"mesh: path must be a file path (a string), got {reprlib.repr(raw)}"
             )
         p = _expanded(os.fsdecode(raw), "mesh path")
+        if p.is_dir():
+            raise InvalidArgumentError(f"mesh: path {str(p)!r} is a folder, not a mesh file")
         if not p.is_file():
             raise SceneFileNotFoundError(f"mesh: file not found: {str(p)!r}")
         object.__setattr__(self, "path", str(p.resolve()))
@@ -1166,7 +1168,7 @@ def _curobo_shape(section: str, name: str, d: Mapping[str, Any], base_dir: Path)
     path = _expanded(raw, "mesh file_path")
     if not path.is_absolute():
         path = base_dir / path
-        if not path.is_file():
+        if not path.is_file() and not path.is_dir():
             raise SceneFileNotFoundError(
                 f"mesh file not found: {str(path)!r} (a relative file_path is read from the "
                 "YAML's folder, not from cuRobo's assets folder: give an absolute path)"

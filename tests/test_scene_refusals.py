@@ -322,3 +322,13 @@ def test_a_relative_scene_path_is_read_from_the_goals_files_folder(
         G.load_goals(data)
     monkeypatch.chdir(folder)
     assert G.load_goals(data)[1].scene.names == ("table",)
+
+
+def test_a_mesh_path_naming_a_folder_is_called_a_folder(tmp_path: Path) -> None:
+    from swarm_ik.errors import InvalidArgumentError
+    from swarm_ik.scene import Scene
+
+    path = tmp_path / "s.json"
+    path.write_text(json.dumps({"obstacles": [{"type": "Mesh", "path": str(tmp_path)}]}))
+    with pytest.raises(InvalidArgumentError, match="is a folder, not a mesh file"):
+        Scene.load(path)
