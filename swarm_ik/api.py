@@ -28,7 +28,7 @@ from typing import Any
 
 import numpy as np
 
-from swarm_ik import kernels
+from swarm_ik import collision, kernels
 from swarm_ik._validate import check_seed, keywords_checked
 from swarm_ik.errors import InvalidArgumentError, unknown
 from swarm_ik.goals import AvoidCollisions, Axis, LookAt, Orientation, Pose, Position, Posture
@@ -279,6 +279,7 @@ def warm_up(route: Route) -> None:
         route.solver,
         route.problem.has_secondary,
         bool(route.problem.python_goals),
+        route.problem.collision_goal is not None,
     )
     if key in _COMPILED:
         return
@@ -311,6 +312,8 @@ def warm_up(route: Route) -> None:
                 )  # fmt: skip
                 route.spec.run(ev, make_rng(0), **route.kwargs)
             problem = plain
+        if route.problem.collision_goal is not None:  # (the exact check's own kernel)
+            collision.load_kernels()
         # the judge's first call (Pinocchio's check, the reasons' proofs: tens of ms once)
         route.judge(problem, q, 0.0, 0, 0.0, np.zeros(0), None)
     finally:

@@ -1116,10 +1116,23 @@ def report(
                   f"{ok} of {len(unreach)} targets placed at the centre of an obstacle (random "
                   f"orientation) reported `reason == \"unreachable\"` by `ours+goal` "
                   f"(median {t.median:.1f} ms, max {t.max:.1f} ms)."]  # fmt: skip
-        bad = [r for r in unreach if r["reason"] != "unreachable" or r["success"] != "0"]
-        for r in bad:
-            lines.append(f"- {r['robot']} {r['scene']} {r['obstacle']} #{r['index']}: "
-                         f"success {r['success']}, reason {r['reason']!r}")  # fmt: skip
+        claimed = sum(r["success"] != "0" for r in unreach)
+        lines[-1] += f" {claimed} reported a success."
+        others: dict[tuple[str, str], int] = {}
+        for r in unreach:
+            if r["reason"] != "unreachable" or r["success"] != "0":
+                key = (r["robot"], r["reason"])
+                others[key] = others.get(key, 0) + 1
+        if others:
+            lines.append(
+                "The others, by robot and reason: "
+                + ", ".join(f"{rb} `{why}` {k}" for (rb, why), k in sorted(others.items()))
+                + ". A target is proven `unreachable` only where the goal frame lies on the "
+                "robot's own collision geometry (within 1 mm of its bodies), so that the body "
+                "is in contact wherever the frame meets the point; a frame off the bodies (a "
+                "grasp point, a flange face such as UR5's `tool0`) may lie inside an obstacle "
+                "without contact, and such targets end with the budget's reason."
+            )
     if diag:
         lines += ["", "## Diagnosis of ours+goal", "",
                   "`q_true_sphere_contact`: the generating q (exact check: free) is in contact "
