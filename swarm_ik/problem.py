@@ -311,7 +311,7 @@ class IKProblem:
         if not terms:
             raise InvalidTargetError(
                 "give a target pose or a list of goals; got "
-                + ("no target and an empty goal list" if goals is not None else "neither")
+                + ("no target and an empty goal list" if goals is not None else "None")
             )
         if goals is not None and not any(gl.is_primary for gl in terms):  # (a target is)
             raise InvalidArgumentError(
