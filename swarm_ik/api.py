@@ -94,14 +94,20 @@ UNREACHABLE_PYTHON_EVALS = 300
 on a target 3 m beyond a UR5's reach; the best point is found in far fewer)."""
 
 
-def unreachable_goal(problem: IKProblem) -> str | None:
+def unreachable_goal(
+    problem: IKProblem, tol_pos: float = 1e-5, tol_rot: float = 1e-5
+) -> str | None:
     """A primary goal point beyond its frame's reach (:meth:`RobotModel.reach_radius`), or
-    inside an obstacle of a collision goal, if any: no joint vector can meet it.  Returns its
-    label."""
+    inside an obstacle of a collision goal, or a primary goal that says it cannot be met
+    within the tolerances (:meth:`swarm_ik.goals.Goal.infeasible`), if any: no joint vector
+    can meet it.  Returns its label (or the goal's reason)."""
     avoid = [gl for gl in problem.goals if isinstance(gl, AvoidCollisions) and gl.is_primary]
     for gl in problem.goals:
         if not gl.is_primary:
             continue
+        why = gl.infeasible(problem.robot, tol_pos, tol_rot)
+        if why is not None:
+            return why
         if isinstance(gl, Pose):
             point = gl.target[:3, 3]
         elif isinstance(gl, Position):
@@ -221,7 +227,7 @@ def end_reason(
     goals pulling against each other (:meth:`IKProblem.opposing_goals`) are looked for."""
     if success:
         return "converged"
-    if unreachable_goal(problem) is not None:
+    if unreachable_goal(problem, tol_pos, tol_rot) is not None:
         return "unreachable"
     if conflicting_goals(problem, tol_pos, tol_rot) is not None:
         return "conflicting_goals"
@@ -493,7 +499,7 @@ class Route:
             or (time_limit is None and max_evals is None)
         )
         if over and (
-            unreachable_goal(problem) is not None
+            unreachable_goal(problem, self.tol_pos, self.tol_rot) is not None
             or conflicting_goals(problem, self.tol_pos, self.tol_rot) is not None
         ):  # proven unreachable or contradictory: a large budget would buy nothing (no time
             # limit where none was given: a budget of evaluations stays deterministic)

@@ -49,7 +49,7 @@ from numpy.typing import NDArray
 
 from swarm_ik._types import FloatArray
 from swarm_ik.errors import InvalidArgumentError, RobotFileNotFoundError, RobotModelError
-from swarm_ik.kernels.mesh import enclosed_rows
+from swarm_ik.kernels.mesh import enclosed_points
 from swarm_ik.paths import cache_dir, package_dirs
 from swarm_ik.pose import is_finite_nonneg
 from swarm_ik.scene import Scene, as_scene
@@ -243,6 +243,7 @@ class RobotCollision:
     disabled: dict[str, list[tuple[str, str]]]
     coarse_rule: dict[float, Any] = field(default_factory=dict, repr=False)
     _local: threading.local = field(default_factory=threading.local, repr=False)
+    _solids: Any = field(default=None, repr=False)
 
     @classmethod
     def from_robot(
@@ -413,6 +414,12 @@ class RobotCollision:
             self.robot.to_pinocchio(q), margin
         )
 
+    def solids(self) -> Solids:
+        """The robot's mesh bodies as solids (:class:`Solids`), read once per robot."""
+        if self._solids is None:  # (two threads at once would each make the same)
+            self._solids = Solids.of(self.geom_model)
+        return self._solids  # type: ignore[no-any-return]
+
     def collides(
         self, q: Any, scene: Scene | None = None, margin: float = 0.0, self_collision: bool = True
     ) -> bool:
@@ -471,11 +478,59 @@ def load_kernels() -> None:
     """Load the exact check's compiled kernel (numba's cache) before a clock starts: its first
     call in a process takes about 10 ms."""
     empty = np.zeros((0, 3))
-    none = np.zeros(0, dtype=np.int64)
-    enclosed_rows(
-        np.zeros((0, 4, 4)), none, empty, empty, empty, empty, np.zeros((0, 3), dtype=np.int64),
-        np.zeros(1, dtype=np.int64), True,
+    enclosed_points(
+        np.zeros((0, 4, 4)), empty, empty, np.zeros(0), empty, np.zeros(0), empty,
+        np.zeros((0, 3), dtype=np.int64), np.zeros(1, dtype=np.int64), True,
     )  # fmt: skip
+
+
+@dataclass(frozen=True)
+class Solids:
+    """The robot's mesh bodies, taken as solids by the exact check (coal's meshes are
+    surfaces), as :func:`swarm_ik.kernels.mesh.enclosed_points` reads them.
+
+    Attributes:
+        bodies: Index of each mesh body in the geometry model.
+        lo, hi: Each one's box in its own frame [m], ``(ns, 3)``.
+        reach: Each one's box diagonal [m], ``(ns,)``: no larger obstacle fits inside.
+        verts, tris, tri0: Every mesh's vertices and triangles, concatenated (triangles
+            indexing the whole), mesh ``s`` at triangles ``tri0[s]:tri0[s + 1]``.
+    """
+
+    bodies: list[int]
+    lo: FloatArray
+    hi: FloatArray
+    reach: FloatArray
+    verts: FloatArray
+    tris: NDArray[np.int64]
+    tri0: NDArray[np.int64]
+
+    @classmethod
+    def of(cls, geom_model: Any) -> Solids:
+        import coal
+
+        meshes = [
+            (b, _triangles(g.geometry))
+            for b, g in enumerate(geom_model.geometryObjects)
+            if isinstance(g.geometry, coal.BVHModelBase)
+        ]
+        verts = [v for _, (v, _) in meshes]
+        lo = np.array([v.min(axis=0) for v in verts]).reshape(-1, 3)
+        hi = np.array([v.max(axis=0) for v in verts]).reshape(-1, 3)
+        start = np.cumsum([0] + [v.shape[0] for v in verts])
+        return cls(
+            bodies=[b for b, _ in meshes],
+            lo=lo,
+            hi=hi,
+            reach=np.linalg.norm(hi - lo, axis=1),
+            verts=np.concatenate(verts) if verts else np.zeros((0, 3)),
+            tris=(
+                np.concatenate([t + start[k] for k, (_, (_, t)) in enumerate(meshes)])
+                if meshes
+                else np.zeros((0, 3), dtype=np.int64)
+            ),
+            tri0=np.cumsum([0] + [t.shape[0] for _, (_, t) in meshes]).astype(np.int64),
+        )
 
 
 def _triangles(mesh: Any) -> tuple[FloatArray, NDArray[np.int64]]:
@@ -560,35 +615,20 @@ class _Checker:
         # coal's meshes are surfaces: an obstacle wholly inside a body's mesh touches none of
         # its triangles.  Each mesh body's triangles (in its own frame) and the obstacles
         # small enough to fit inside one, with a point of each, for enclosed_pairs
-        # (an obstacle fits in a body only if its box's longest side is at most the body's
-        # diameter, at most its box's diagonal)
+        # the robot's mesh bodies as solids (enclosed_pairs), and the obstacles small enough
+        # to fit in one (an obstacle's box's longest side is at most a body's diameter, at
+        # most the diagonal of the body's box): a point of each, sorted by x
+        self.solids = rc.solids()
         size = (self.obs_hi - self.obs_lo).max(axis=1) if self.obstacles else np.zeros(0)
-        self.solids: list[tuple[Any, ...]] = []
-        for b, (g, mesh) in enumerate(zip(gm.geometryObjects, is_mesh, strict=True)):
-            if not mesh:
-                continue  # (coal's primitives are solids)
-            verts, tris = _triangles(g.geometry)
-            lo, hi = verts.min(axis=0), verts.max(axis=0)
-            fit = np.flatnonzero(size <= float(np.linalg.norm(hi - lo)))
-            if fit.size:
-                self.solids.append((b, verts, tris, lo, hi, fit))
-        # one row per (body, obstacle that fits in it): the obstacle's inner point, the body's
-        # box in its own frame (enclosed_pairs tests every row at once)
-        rows = [(k, int(o)) for k, sd in enumerate(self.solids) for o in sd[5]]
-        self.small = bool(rows)
-        if rows:
-            self.row_solid = np.array([k for k, _ in rows], dtype=np.int64)
-            self.row_obstacle = np.array([o for _, o in rows])
-            self.row_point = np.array([_inner_point(self.obstacles[o]) for _, o in rows])
-            self.row_lo = np.array([self.solids[k][3] for k, _ in rows])
-            self.row_hi = np.array([self.solids[k][4] for k, _ in rows])
-            # every mesh's vertices and triangles, concatenated (triangles indexing the whole)
-            starts = np.cumsum([0] + [sd[1].shape[0] for sd in self.solids])
-            self.mesh_verts = np.concatenate([sd[1] for sd in self.solids])
-            self.mesh_tris = np.concatenate(
-                [sd[2] + starts[k] for k, sd in enumerate(self.solids)]
-            ).astype(np.int64)
-            self.mesh_tri0 = np.cumsum([0] + [sd[2].shape[0] for sd in self.solids])
+        reach = float(self.solids.reach.max()) if len(self.solids.bodies) else -1.0
+        small = np.flatnonzero(size <= reach)
+        self.small = bool(small.size)
+        if self.small:
+            points = np.array([_inner_point(self.obstacles[o]) for o in small.tolist()])
+            order = np.argsort(points[:, 0], kind="stable")
+            self.small_points = np.ascontiguousarray(points[order])
+            self.small_sizes = np.ascontiguousarray(size[small][order])
+            self.small_obstacles = small[order]
         if self.obstacles:
             self.manager = coal.DynamicAABBTreeCollisionManager()
             for obj in self.obstacles:
@@ -665,16 +705,12 @@ class _Checker:
             pin.forwardKinematics(self.model, self.data, q_pin)
             pin.updateGeometryPlacements(self.model, self.data, self.gm, self.gd)
             placed = self.gd
-        oMg = placed.oMg
-        rows = enclosed_rows(
-            np.array([oMg[sd[0]].homogeneous for sd in self.solids]), self.row_solid,
-            self.row_point, self.row_lo, self.row_hi, self.mesh_verts, self.mesh_tris,
-            self.mesh_tri0, bool(first),
+        oMg, sd = placed.oMg, self.solids
+        pairs = enclosed_points(
+            np.array([oMg[b].homogeneous for b in sd.bodies]), sd.lo, sd.hi, sd.reach,
+            self.small_points, self.small_sizes, sd.verts, sd.tris, sd.tri0, bool(first),
         )  # fmt: skip
-        return [
-            (int(self.solids[self.row_solid[r]][0]), int(self.row_obstacle[r]))
-            for r in rows.tolist()
-        ]
+        return [(sd.bodies[s], int(self.small_obstacles[i])) for s, i in pairs.tolist()]
 
     def _touch(self, q_pin: FloatArray, margin: float) -> bool:
         """Whether any pair's surfaces come within ``margin`` (stops at the first)."""

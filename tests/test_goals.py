@@ -346,19 +346,25 @@ def test_posture_joint_weights_outside_the_weight_range_are_refused(bad: float) 
         swarm_ik.IKProblem(r, goals=goals)
 
 
-def test_a_primary_joint_value_outside_the_limits_is_refused_and_a_secondary_one_kept() -> None:
+def test_a_primary_joint_value_beyond_the_limits_ends_unreachable_at_once() -> None:
     """Panda's joint 1 spans ±2.90 rad: a primary JointValue at 10 rad searched a whole
-    5 s limit (3.4 million evaluations) and ended 'time_limit'; it is refused when the problem
-    is made.  A secondary one only pulls the joint and stays allowed."""
+    5 s limit (3.4 million evaluations) and ended 'time_limit'; it ends 'unreachable' within
+    the cap for such goals.  Within the tolerance of a limit it is met; a secondary one only
+    pulls the joint."""
+    import time
+
     r = robot("panda")
     point = G.Position(r.ee_frame, r.fk(r.mid_q())[:3, 3])
-    with pytest.raises(
-        swarm_ik.errors.InvalidArgumentError,
-        match=r"JointValue\(panda_joint1\): 10 is outside the joint's limits \[-2\.8973, 2\.8973\]",
-    ):
-        swarm_ik.IKProblem(r, goals=[point, G.JointValue("panda_joint1", 10.0)])
+    t0 = time.perf_counter()
     res = swarm_ik.solve(
-        swarm_ik.IKProblem(r, goals=[point, G.JointValue("panda_joint1", 10.0, primary=False)]),
-        seed=0,
-    )
+        swarm_ik.IKProblem(r, goals=[point, G.JointValue("panda_joint1", 10.0)]),
+        seed=0, time_limit=5.0,
+    )  # fmt: skip
+    assert not res.success and res.reason == "unreachable"
+    assert time.perf_counter() - t0 < 2.0
+    near = G.JointValue("panda_joint1", float(r.upper[0]) + 2e-6)
+    res = swarm_ik.solve(swarm_ik.IKProblem(r, goals=[point, near]), seed=0)
+    assert res.success
+    soft = G.JointValue("panda_joint1", 10.0, primary=False)
+    res = swarm_ik.solve(swarm_ik.IKProblem(r, goals=[point, soft]), seed=0)
     assert res.success and res.q[0] == pytest.approx(r.upper[0], abs=1e-6)

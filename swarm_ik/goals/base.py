@@ -507,6 +507,14 @@ class Goal:
             met = False  # nothing measured: never a vacuous success
         return float(dp), float(dr), bool(met), None
 
+    def infeasible(self, robot: RobotModel, tol_pos: float, tol_rot: float) -> str | None:
+        """Why no configuration of ``robot`` can meet this goal within the tolerances, found
+        from the goal's data alone before any search (a joint value beyond the joint's
+        limits, a centre-of-mass margin deeper than its polygon), or None when that is not
+        known.  A primary goal that says so ends its solve ``"unreachable"`` at once
+        (:func:`swarm_ik.api.unreachable_goal`); a goal that is not primary is never asked."""
+        return None
+
     def own_tolerance(self) -> float | None:
         """A Python goal's own position tolerance (its ``tolerance`` attribute), which
         replaces the solve's ``tol_pos`` wherever this goal is judged; None for a goal without

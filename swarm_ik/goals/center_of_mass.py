@@ -237,30 +237,39 @@ class CenterOfMass(Goal):
                 f"CenterOfMass.axes must be distinct letters of 'xyz', got {self.axes!r}"
             )
         object.__setattr__(self, "margin", non_negative(self.margin, "CenterOfMass.margin"))
-        if self.support is not None:
-            deepest = deepest_inside(self.support)
-            if self.margin > deepest:
-                raise InvalidArgumentError(
-                    f"CenterOfMass.margin {self.margin:g} m is more than the support polygon "
-                    f"allows: no point lies more than {deepest:.3g} m inside it"
-                )
-            if self.point is not None and "x" in self.axes and "y" in self.axes:
-                poly = self.support
-                d, _, _ = _polygon_distance(
-                    float(self.point[0]), float(self.point[1]),
-                    poly[:, 0].copy(), poly[:, 1].copy(),
-                )  # fmt: skip
-                if d + self.margin > 1e-9:
-                    where = f"{d:.3g} m outside" if d > 0 else f"only {-d:.3g} m inside"
-                    short = f", less than the margin {self.margin:g} m" if d <= 0 else ""
-                    raise InvalidArgumentError(
-                        f"CenterOfMass.point (x, y) = {self.point[:2].tolist()} lies {where} "
-                        f"the support polygon{short}: no centre of mass meets both"
-                    )
         super().__post_init__()
 
     def describe(self) -> str:
         return "CenterOfMass"
+
+    def infeasible(self, robot: RobotModel, tol_pos: float, tol_rot: float) -> str | None:
+        """A support polygon no centre of mass can be ``margin`` inside (deeper than its
+        inscribed radius, :func:`deepest_inside`, plus ``tol_pos``), or a ground point
+        (``axes`` with x and y) outside the polygon, or less than ``margin`` inside it, by
+        more than ``2·tol_pos`` (the rows are judged together: the point's rows and the
+        support row may each take up to the tolerance)."""
+        if self.support is None:
+            return None
+        deepest = deepest_inside(self.support)
+        if self.margin > deepest + tol_pos:
+            return (
+                f"CenterOfMass margin {self.margin:g} m deeper than its support polygon allows "
+                f"(no point lies more than {deepest:.3g} m inside it)"
+            )
+        if self.point is None or "x" not in self.axes or "y" not in self.axes:
+            return None
+        poly = self.support
+        d, _, _ = _polygon_distance(
+            float(self.point[0]), float(self.point[1]), poly[:, 0].copy(), poly[:, 1].copy()
+        )
+        if d + self.margin <= 2 * tol_pos:
+            return None
+        where = f"{d:.3g} m outside" if d > 0 else f"only {-d:.3g} m inside"
+        short = f", less than the margin {self.margin:g} m" if d <= 0 else ""
+        return (
+            f"CenterOfMass point (x, y) = {self.point[:2].tolist()} {where} its support "
+            f"polygon{short}"
+        )
 
     def _axis_ids(self) -> list[int]:
         return [AXES[a] for a in self.axes] if self.point is not None else []

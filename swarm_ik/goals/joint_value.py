@@ -46,18 +46,21 @@ class JointValue(JointGoal):
     def describe(self) -> str:
         return f"JointValue({self.joint})"
 
+    def infeasible(self, robot: RobotModel, tol_pos: float, tol_rot: float) -> str | None:
+        """A value beyond the joint's limits by more than ``tol_pos`` (the tolerance its error
+        is judged by; continuous joints wrap: never)."""
+        if self.joint not in robot.joint_names:
+            return None  # (refused by name when the problem is made)
+        j = robot.joint_names.index(self.joint)
+        lo, hi = float(robot.lower[j]), float(robot.upper[j])
+        if bool(robot.continuous_mask[j]) or lo - tol_pos <= self.value <= hi + tol_pos:
+            return None
+        return f"JointValue({self.joint}) at {self.value:g} beyond the limits [{lo:g}, {hi:g}]"
+
     def reference(self, robot: RobotModel, q0: FloatArray | None) -> tuple[FloatArray, FloatArray]:
         if self.joint not in robot.joint_names:
             raise unknown("joint", self.joint, robot.joint_names)
         j = robot.joint_names.index(self.joint)
-        lo, hi = float(robot.lower[j]), float(robot.upper[j])
-        continuous = bool(robot.continuous_mask[j])
-        if self.is_primary and not continuous and not lo - 1e-12 <= self.value <= hi + 1e-12:
-            raise InvalidArgumentError(
-                f"JointValue({self.joint}): {self.value:g} is outside the joint's limits "
-                f"[{lo:g}, {hi:g}], so no configuration meets it (primary=False pulls the "
-                "joint towards it instead)"
-            )
         ref = np.zeros(robot.nq)
         ref[j] = self.value
         jw = np.zeros(robot.nq)

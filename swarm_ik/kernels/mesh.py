@@ -49,56 +49,81 @@ def winding_number(
 
 
 @numba.njit(cache=True)
-def enclosed_rows(
+def enclosed_points(
     placements: FloatArray,
-    row_solid: IntArray,
-    row_point: FloatArray,
-    row_lo: FloatArray,
-    row_hi: FloatArray,
+    lo: FloatArray,
+    hi: FloatArray,
+    reach: FloatArray,
+    points: FloatArray,
+    sizes: FloatArray,
     verts: FloatArray,
     tris: IntArray,
     tri0: IntArray,
     first: bool,
 ) -> IntArray:  # pragma: no cover - compiled
-    """The rows whose point lies inside their mesh: for each row ``r`` (a point and a mesh),
-    the point in the mesh's frame (``placements[row_solid[r]]``, ``(4, 4)`` world poses of the
-    meshes), a test against the mesh's box ``[row_lo[r], row_hi[r]]`` in that frame, then its
-    :func:`winding_number` above a half.
+    """The ``(mesh, point)`` pairs where a point lies inside a closed mesh.
+
+    Each mesh's box (``[lo, hi]`` in its own frame) is placed in the world and bounded there by
+    an axis-aligned box; the points are sorted by x, so a mesh looks only at the points of its
+    slab (a binary search), then at those within its world box and no larger than ``reach``
+    (``sizes``: the largest side of each point's obstacle), then tests the point in its own
+    frame against its box and by :func:`winding_number` (above a half: inside).
 
     Args:
         placements: World poses of the meshes, ``(ns, 4, 4)``.
-        row_solid: Mesh of each row, ``(R,)``.
-        row_point: World point of each row [m], ``(R, 3)``.
-        row_lo, row_hi: The mesh's box in its own frame, per row, ``(R, 3)``.
-        verts: Every mesh's vertices, concatenated ``(nv, 3)`` (indices in ``tris`` are into
-            it).
-        tris: Every mesh's triangles, concatenated ``(nt, 3)``; mesh ``s`` has rows
+        lo, hi: Each mesh's box in its own frame, ``(ns, 3)``.
+        reach: The largest obstacle each mesh can hold (its box's diagonal) [m], ``(ns,)``.
+        points: A point of each obstacle [m], ``(m, 3)``, sorted by x.
+        sizes: Each obstacle's largest box side [m], ``(m,)``.
+        verts: Every mesh's vertices, concatenated ``(nv, 3)`` (``tris`` index into it).
+        tris: Every mesh's triangles, concatenated ``(nt, 3)``; mesh ``s`` has the rows
             ``tri0[s]:tri0[s + 1]``.
         tri0: Offsets ``(ns + 1,)``.
-        first: Stop at the first row inside.
+        first: Stop at the first pair found.
 
     Returns:
-        The rows inside, ``(k,)``.
+        The pairs ``(k, 2)``: mesh index, point index.
     """
-    out = np.empty(row_solid.shape[0], dtype=np.int64)
+    ns = placements.shape[0]
+    m = points.shape[0]
+    out = np.empty((8, 2), dtype=np.int64)  # (grown when full)
     k = 0
-    for r in range(row_solid.shape[0]):
-        s = row_solid[r]
-        dx = row_point[r, 0] - placements[s, 0, 3]
-        dy = row_point[r, 1] - placements[s, 1, 3]
-        dz = row_point[r, 2] - placements[s, 2, 3]
-        local = np.empty(3)
-        inside_box = True
-        for a in range(3):  # R^T d
-            v = placements[s, 0, a] * dx + placements[s, 1, a] * dy + placements[s, 2, a] * dz
-            local[a] = v
-            if v < row_lo[r, a] or v > row_hi[r, a]:
-                inside_box = False
-        if not inside_box:
-            continue
-        if winding_number(verts, tris[tri0[s] : tri0[s + 1]], local[0], local[1], local[2]) > 0.5:
-            out[k] = r
-            k += 1
-            if first:
-                break
+    for s in range(ns):
+        wlo = np.empty(3)
+        whi = np.empty(3)
+        for a in range(3):  # the world box of the mesh's box: |R| (hi − lo) / 2 about its centre
+            c = placements[s, a, 3]
+            half = 0.0
+            for b in range(3):
+                mid = 0.5 * (lo[s, b] + hi[s, b])
+                c += placements[s, a, b] * mid
+                half += abs(placements[s, a, b]) * 0.5 * (hi[s, b] - lo[s, b])
+            wlo[a] = c - half
+            whi[a] = c + half
+        i = np.searchsorted(points[:, 0], wlo[0])
+        while i < m and points[i, 0] <= whi[0]:
+            px, py, pz = points[i, 0], points[i, 1], points[i, 2]
+            if sizes[i] <= reach[s] and wlo[1] <= py <= whi[1] and wlo[2] <= pz <= whi[2]:
+                dx = px - placements[s, 0, 3]
+                dy = py - placements[s, 1, 3]
+                dz = pz - placements[s, 2, 3]
+                lx = placements[s, 0, 0] * dx + placements[s, 1, 0] * dy + placements[s, 2, 0] * dz
+                ly = placements[s, 0, 1] * dx + placements[s, 1, 1] * dy + placements[s, 2, 1] * dz
+                lz = placements[s, 0, 2] * dx + placements[s, 1, 2] * dy + placements[s, 2, 2] * dz
+                if (
+                    lo[s, 0] <= lx <= hi[s, 0]
+                    and lo[s, 1] <= ly <= hi[s, 1]
+                    and lo[s, 2] <= lz <= hi[s, 2]
+                    and winding_number(verts, tris[tri0[s] : tri0[s + 1]], lx, ly, lz) > 0.5
+                ):
+                    if k == out.shape[0]:
+                        more = np.empty((2 * k, 2), dtype=np.int64)
+                        more[:k] = out
+                        out = more
+                    out[k, 0] = s
+                    out[k, 1] = i
+                    k += 1
+                    if first:
+                        return out[:k]
+            i += 1
     return out[:k]

@@ -604,7 +604,11 @@ def solve_result(
     if success:
         reason = "converged"
     else:
-        reason = "unreachable" if unreachable_goal(problem) is not None else "local_minima"
+        reason = (
+            "unreachable"
+            if unreachable_goal(problem, tol_pos, tol_rot) is not None
+            else "local_minima"
+        )
     return Result(
         q=q,
         fitness=float(fit),
