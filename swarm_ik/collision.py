@@ -491,19 +491,16 @@ class Solids:
 
     Attributes:
         bodies: Index of each mesh body in the geometry model.
-        lo, hi: Each one's box in its own frame [m], ``(ns, 3)``.
+        box: Each one's box in its own frame [m], ``(ns, 2, 3)``: lowest and highest corner.
         reach: Each one's box diagonal [m], ``(ns,)``: no larger obstacle fits inside.
-        verts, tris, tri0: Every mesh's vertices and triangles, concatenated (triangles
-            indexing the whole), mesh ``s`` at triangles ``tri0[s]:tri0[s + 1]``.
+        mesh: ``(verts, tris, tri0)``: every mesh's vertices and triangles, concatenated
+            (triangles indexing the whole), mesh ``s`` at triangles ``tri0[s]:tri0[s + 1]``.
     """
 
     bodies: list[int]
-    lo: FloatArray
-    hi: FloatArray
+    box: FloatArray
     reach: FloatArray
-    verts: FloatArray
-    tris: NDArray[np.int64]
-    tri0: NDArray[np.int64]
+    mesh: tuple[FloatArray, NDArray[np.int64], NDArray[np.int64]]
 
     @classmethod
     def of(cls, geom_model: Any) -> Solids:
@@ -515,21 +512,18 @@ class Solids:
             if isinstance(g.geometry, coal.BVHModelBase)
         ]
         verts = [v for _, (v, _) in meshes]
-        lo = np.array([v.min(axis=0) for v in verts]).reshape(-1, 3)
-        hi = np.array([v.max(axis=0) for v in verts]).reshape(-1, 3)
+        box = np.array([[v.min(axis=0), v.max(axis=0)] for v in verts]).reshape(-1, 2, 3)
         start = np.cumsum([0] + [v.shape[0] for v in verts])
+        tris = [t + start[k] for k, (_, (_, t)) in enumerate(meshes)]
         return cls(
             bodies=[b for b, _ in meshes],
-            lo=lo,
-            hi=hi,
-            reach=np.linalg.norm(hi - lo, axis=1),
-            verts=np.concatenate(verts) if verts else np.zeros((0, 3)),
-            tris=(
-                np.concatenate([t + start[k] for k, (_, (_, t)) in enumerate(meshes)])
-                if meshes
-                else np.zeros((0, 3), dtype=np.int64)
+            box=box,
+            reach=np.linalg.norm(box[:, 1] - box[:, 0], axis=1),
+            mesh=(
+                np.concatenate(verts) if verts else np.zeros((0, 3)),
+                np.concatenate(tris) if tris else np.zeros((0, 3), dtype=np.int64),
+                np.cumsum([0] + [t.shape[0] for t in tris]).astype(np.int64),
             ),
-            tri0=np.cumsum([0] + [t.shape[0] for _, (_, t) in meshes]).astype(np.int64),
         )
 
 
@@ -619,6 +613,8 @@ class _Checker:
         # to fit in one (an obstacle's box's longest side is at most a body's diameter, at
         # most the diagonal of the body's box): a point of each, sorted by x
         self.solids = rc.solids()
+        self.solid_lo = np.ascontiguousarray(self.solids.box[:, 0])
+        self.solid_hi = np.ascontiguousarray(self.solids.box[:, 1])
         size = (self.obs_hi - self.obs_lo).max(axis=1) if self.obstacles else np.zeros(0)
         reach = float(self.solids.reach.max()) if len(self.solids.bodies) else -1.0
         small = np.flatnonzero(size <= reach)
@@ -707,8 +703,8 @@ class _Checker:
             placed = self.gd
         oMg, sd = placed.oMg, self.solids
         pairs = enclosed_points(
-            np.array([oMg[b].homogeneous for b in sd.bodies]), sd.lo, sd.hi, sd.reach,
-            self.small_points, self.small_sizes, sd.verts, sd.tris, sd.tri0, bool(first),
+            np.array([oMg[b].homogeneous for b in sd.bodies]), self.solid_lo, self.solid_hi,
+            sd.reach, self.small_points, self.small_sizes, *sd.mesh, bool(first),
         )  # fmt: skip
         return [(sd.bodies[s], int(self.small_obstacles[i])) for s, i in pairs.tolist()]
 

@@ -48,6 +48,9 @@ class ReachMap:
     Attributes:
         robot: Robot name.
         ee_frame: End-effector frame.
+        urdf: The robot's URDF file (absolute path; empty in maps written before it was
+            kept), from which :func:`export_html` draws the robot: its name alone may name
+            another robot (a user's ``panda.urdf`` beside the bundled Panda).
         x: Voxel centres along x [m], shape ``(nx,)``.
         y: Voxel centres along y [m], shape ``(ny,)``.
         z: Voxel centres along z [m], shape ``(nz,)``.
@@ -62,13 +65,11 @@ class ReachMap:
         tol_pos: Position tolerance [m]; ``tol_rot``: rotation tolerance [rad].
         max_starts: Starts per pose before it counts as unreachable.
         time_s: Wall-clock seconds of the computation.
-        urdf: The robot's URDF file (absolute path; empty in maps written before it was
-            kept), from which :func:`export_html` draws the robot: its name alone may name
-            another robot (a user's ``panda.urdf`` beside the bundled Panda).
     """
 
     robot: str
     ee_frame: str
+    urdf: str
     x: FloatArray
     y: FloatArray
     z: FloatArray
@@ -83,7 +84,6 @@ class ReachMap:
     tol_rot: float
     max_starts: int
     time_s: float
-    urdf: str = ""
 
     @property
     def centres(self) -> FloatArray:
