@@ -98,6 +98,11 @@ FINISH_PER_WAYPOINT = 2e-5
 """Seconds per waypoint that :func:`solve_path` keeps out of a ``time_limit`` for the check
 of the path at its end (Pinocchio's FK and each waypoint's goals: 15–25 µs per waypoint
 measured, Panda), with :data:`SEARCH_PER_LAYER` up to half the limit."""
+FINISH_PER_WAYPOINT_SCENE = 5e-4
+"""Seconds per waypoint more for the check at the end among obstacles: coal's verdict of each
+waypoint, and its distances where a waypoint is left in contact (0.25–0.5 ms measured,
+Panda among a box and a sphere: a 60-waypoint path's check took 15–32 ms, and overran a
+50 ms limit by 30 ms with the scene-free reserve)."""
 SEARCH_PER_LAYER = 5e-6
 """Seconds per waypoint kept for the search through the candidates (one compiled call per
 layer: 2.5–3.5 µs measured), besides :data:`SEARCH_PER_PAIR`."""
@@ -218,9 +223,11 @@ class PathResult(FrozenArrays):
             chain through the interpolated poses too (each pose met, each joint's travel
             within the bound).
         reconfigurations: ``(index, size)`` per step beyond the bound: ``index`` is the
-            waypoint the step arrives at (0: the step from ``q0``), ``size`` the largest
-            joint change of that step [rad / m] (a step failing the densify check: the
-            largest joint travel along its tracked chain).
+            waypoint the step arrives at (0: the step from ``q0``), ``size`` the change of
+            the joint furthest beyond its bound in that step (the largest ``|Δq_j| /
+            max_joint_step_j``; with one bound for every joint, the largest change)
+            [rad / m] (a step failing the densify check: the largest joint travel along its
+            tracked chain).
         max_step: Largest joint change between consecutive configurations [rad / m].
         max_step_ratio: Largest ``|Δq_j| / max_joint_step_j`` (≤ 1 when jump-free).
         position_errors: Per waypoint, the largest position error of its goals [m], ``(N,)``.
@@ -382,6 +389,8 @@ def solve_path(
         t_clock = time.perf_counter()
         # (the search and the check at the end are inside the limit)
         per_waypoint = FINISH_PER_WAYPOINT + SEARCH_PER_LAYER
+        if wps.problem(0).collision_goal is not None:  # (coal's check of each waypoint)
+            per_waypoint += FINISH_PER_WAYPOINT_SCENE
         reserve = min(per_waypoint * wps.n, 0.5 * float(time_limit))
         limit = t_clock + float(time_limit) - reserve
         deadline = t_clock + SEARCH_SHARE * (limit - t_clock)
@@ -1622,7 +1631,7 @@ def _finish(
     for s in range(d.shape[0]):
         i = s + off
         if float(ratio[s].max()) > 1.0 + _STEP_SLACK:
-            jumps.append((i, float(d[s].max())))
+            jumps.append((i, float(d[s][int(np.argmax(ratio[s]))])))  # (the joint most over)
         elif i > 0 and rejected.get(i):
             size = _rejected_size(rejected, i, prev[s], prev[s + 1], ctx)
             if size is not None:

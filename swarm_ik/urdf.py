@@ -311,6 +311,11 @@ def check_urdf_xml(root: ET.Element, where: str = "URDF") -> dict[str, MimicJoin
                 raise RobotModelError(
                     f"{where}: joint {name!r} has lower limit {lo} > upper limit {hi}"
                 )
+    for follower, m in mimic.items():
+        if m.driver not in joint_list:  # (whatever frames are loaded: on or off the chain)
+            raise RobotModelError(
+                f"{where}: joint {follower!r} mimics joint {m.driver!r}, which is not in the file"
+            )
     roots = links - children
     if len(roots) != 1:
         raise RobotModelError(

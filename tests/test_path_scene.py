@@ -145,3 +145,24 @@ def test_branches_rejected_by_other_goals_are_named_with_them() -> None:
     assert "fails it; each set complete: a proof" in res.reason
     assert "none meets it within the joint limits" not in res.reason
     assert res.exhaustive
+
+
+def test_a_path_among_obstacles_ends_within_its_time_limit() -> None:
+    """The check at the end verifies each waypoint with coal (with distances where one is left
+    in contact): 15-32 ms for 60 waypoints, kept out of the limit at 20 µs a waypoint, so a
+    50 ms limit took 80 ms."""
+    import time
+
+    from swarm_ik.path import solve_path
+    from swarm_ik.scene import Box, Scene, Sphere
+
+    r = swarm_ik.load_robot("panda")
+    t = r.fk(r.mid_q())
+    poses = np.repeat(t[None], 60, 0)
+    poses[:, :3, 3] += np.linspace(0, 1, 60)[:, None] * [0.6, -0.5, 0.3]
+    scene = Scene([Box([0.3] * 3, [0.5, 0.3, 0.3]), Sphere(0.1, t[:3, 3] + [0.1, -0.1, 0.05])])
+    solve_path(r, poses[:2], time_limit=10, scene=scene)  # (the scene and kernels loaded)
+    for limit in (0.05, 0.1):
+        t0 = time.perf_counter()
+        solve_path(r, poses, time_limit=limit, scene=scene)
+        assert time.perf_counter() - t0 <= limit + 0.01

@@ -375,3 +375,15 @@ def test_too_many_degrees_of_freedom_refused_naming_the_limit(tmp_path: Path) ->
         swarm_ik.load_robot(path, "l300")
     robot = swarm_ik.load_robot(path, "l300", locked=[f"j{i}" for i in range(160)])
     assert robot.nq == 140
+
+
+def test_a_mimic_of_a_joint_not_in_the_file_is_refused_whatever_the_frame(tmp_path: Path) -> None:
+    """With the default frame the follower was dropped without a word (a 1-joint chain); with
+    its frame named, the same file was refused."""
+    text = _arm().replace(
+        f"{LIMIT}</joint></robot>", f'{LIMIT}<mimic joint="nope"/></joint></robot>'
+    )
+    path = _write(tmp_path, text)
+    for frames in (None, "c"):
+        with pytest.raises(RobotModelError, match=r"joint 'j2' mimics joint 'nope', which is not"):
+            swarm_ik.load_robot(path, frames)
