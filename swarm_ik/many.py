@@ -333,7 +333,8 @@ def solve_many(
             ``time_limit`` is given, else unlimited.
         max_iters: Evaluations per start before it is abandoned.
         patience: Random starts in a row without a new branch that end the search once the
-            hop starts are spent (default :data:`PATIENCE` = 48: with it the numerical path
+            hop starts are spent (not on a redundant arm, whose solutions are a continuum:
+            there the budget ends it) (default :data:`PATIENCE` = 48: with it the numerical path
             found every one of eaik's branches on 50 + 150 + 150 targets each of UR5, UR10
             and z1 in ``swarm-ik bench many`` and its seeds 7 and 11).
 
@@ -857,7 +858,9 @@ def _numerical(
                     n_hop = starts.shape[0]
                     break
         if starts is None:
-            if kept and since_new >= patience:
+            if kept and since_new >= patience and not redundant:  # (a redundant arm's set
+                # is a continuum: starts that do not converge are no sign that it is found;
+                # its search ends at 4·n solutions or at the budget, as documented)
                 break
             k = min(batch, room)
             starts = rng.uniform(lower, upper, size=(k, nq))

@@ -51,6 +51,10 @@ IntArray = NDArray[np.int64]
 _KERNELS: list[Any] = []
 _SLOTS: dict[int, int] = {}
 _LIST: list[Any] = []
+_REGISTRY = threading.Lock()
+"""Held while a kernel is registered and while the typed list is made: threads that first
+meet a goal type together raced for its slot (two kernels in one slot, or a list made
+before the last registration: IndexError inside the compiled search, for good)."""
 
 
 def kernel_slot(kernel: Any) -> int:
@@ -66,7 +70,12 @@ def kernel_slot(kernel: Any) -> int:
             that signature.
     """
     slot = _SLOTS.get(id(kernel))
-    if slot is None:
+    if slot is not None:
+        return slot
+    with _REGISTRY:
+        slot = _SLOTS.get(id(kernel))  # (registered by another thread meanwhile)
+        if slot is not None:
+            return slot
         if not callable(getattr(kernel, "py_func", None)):
             raise InvalidArgumentError(
                 "a compiled goal's kernel must be a numba.njit function of the arguments of "
@@ -96,16 +105,17 @@ def kernel_slot(kernel: Any) -> int:
             ) from None
         slot = len(_KERNELS)
         _KERNELS.append(typed)
-        _SLOTS[id(kernel)] = slot
         _LIST.clear()
-    return slot
+        _SLOTS[id(kernel)] = slot  # (last: a thread that reads it finds the kernel listed)
+        return slot
 
 
 def kernels() -> Any:
     """The typed list of every registered goal kernel (made again after a registration)."""
-    if not _LIST:  # (its builder is a compiled call too: a cache damaged inside, removed)
-        _LIST.append(loaded_despite_damage(lambda: kernel_list(_KERNELS)))
-    return _LIST[0]
+    with _REGISTRY:
+        if not _LIST:  # (its builder is a compiled call too: a cache damaged inside, removed)
+            _LIST.append(loaded_despite_damage(lambda: kernel_list(list(_KERNELS))))
+        return _LIST[0]
 
 
 # --------------------------------------------------------------------------- kept values
