@@ -166,27 +166,33 @@ def support_polygon(value: Any) -> FloatArray:
     return poly
 
 
+@numba.njit(cache=True)
+def _deepest_on_grid(
+    vx: FloatArray, vy: FloatArray, xs: FloatArray, ys: FloatArray
+) -> float:  # pragma: no cover - compiled
+    """The largest depth inside the polygon (``vx``, ``vy``) of the grid points ``xs × ys``
+    (:func:`_polygon_distance`, negative inside), 0 when none is inside."""
+    deepest = 0.0
+    for x in xs:
+        for y in ys:
+            d = -_polygon_distance(x, y, vx, vy)[0]
+            if d > deepest:
+                deepest = d
+    return deepest
+
+
 def deepest_inside(poly: FloatArray, n: int = 65) -> float:
     """An upper bound [m] on how far inside the simple polygon ``poly`` ``(k, 2)`` a point
     can lie (the radius of its largest inscribed circle): the largest depth on an ``n × n``
     grid over its bounding box plus half a cell's diagonal (the distance to the boundary
     changes by at most the step between points), so a margin beyond it is surely unmet."""
     lo, hi = poly.min(axis=0), poly.max(axis=0)
-    gx, gy = np.meshgrid(np.linspace(lo[0], hi[0], n), np.linspace(lo[1], hi[1], n))
-    pts = np.stack([gx.ravel(), gy.ravel()], axis=1)  # (n², 2)
-    a, e = poly, np.roll(poly, -1, axis=0) - poly  # edges a + t·e, (k, 2)
-    t = np.clip(((pts[:, None, :] - a) * e).sum(-1) / (e * e).sum(-1), 0.0, 1.0)  # (n², k)
-    near = a + t[..., None] * e
-    dist = np.sqrt(((pts[:, None, :] - near) ** 2).sum(-1)).min(axis=1)
-    # crossing number (even-odd rule), as _polygon_distance
-    ay, ey, ax, ex = a[:, 1], e[:, 1], a[:, 0], e[:, 0]
-    crosses = (ay > pts[:, 1:2]) != (ay + ey > pts[:, 1:2])
-    with np.errstate(divide="ignore", invalid="ignore"):
-        left = pts[:, 0:1] < ax + (pts[:, 1:2] - ay) * ex / ey
-    inside = (crosses & left).sum(axis=1) % 2 == 1
-    depth = float(dist[inside].max()) if inside.any() else 0.0
+    depth = _deepest_on_grid(
+        np.ascontiguousarray(poly[:, 0]), np.ascontiguousarray(poly[:, 1]),
+        np.linspace(lo[0], hi[0], n), np.linspace(lo[1], hi[1], n),
+    )  # fmt: skip
     step = (hi - lo) / (n - 1)
-    return depth + 0.5 * float(np.hypot(step[0], step[1]))
+    return float(depth) + 0.5 * float(np.hypot(step[0], step[1]))
 
 
 @dataclass(frozen=True)
@@ -250,7 +256,10 @@ class CenterOfMass(Goal):
         support row may each take up to the tolerance)."""
         if self.support is None:
             return None
-        deepest = deepest_inside(self.support)
+        deepest = self.__dict__.get("_deepest")  # (the polygon's, found once per goal)
+        if deepest is None:
+            deepest = deepest_inside(self.support)
+            object.__setattr__(self, "_deepest", deepest)
         if self.margin > deepest + tol_pos:
             return (
                 f"CenterOfMass margin {self.margin:g} m deeper than its support polygon allows "
