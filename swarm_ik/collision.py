@@ -607,11 +607,10 @@ class _Checker:
         self.body_manager: Any = None
         self._scene_broad: Any = None  # (built on the first verdict without margin)
         # coal's meshes are surfaces: an obstacle wholly inside a body's mesh touches none of
-        # its triangles.  Each mesh body's triangles (in its own frame) and the obstacles
-        # small enough to fit inside one, with a point of each, for enclosed_pairs
-        # the robot's mesh bodies as solids (enclosed_pairs), and the obstacles small enough
-        # to fit in one (an obstacle's box's longest side is at most a body's diameter, at
-        # most the diagonal of the body's box): a point of each, sorted by x
+        # its triangles.  The robot's mesh bodies as solids (enclosed_pairs), and the
+        # obstacles small enough to fit in one (an obstacle's box's longest side is at most a
+        # body's diameter, at most the diagonal of the body's box): a point of each, sorted
+        # by x
         self.solids = rc.solids()
         self.solid_lo = np.ascontiguousarray(self.solids.box[:, 0])
         self.solid_hi = np.ascontiguousarray(self.solids.box[:, 1])

@@ -88,9 +88,9 @@ def enclosed_points(
     m = points.shape[0]
     out = np.empty((8, 2), dtype=np.int64)  # (grown when full)
     k = 0
+    wlo = np.empty(3)
+    whi = np.empty(3)
     for s in range(ns):
-        wlo = np.empty(3)
-        whi = np.empty(3)
         for a in range(3):  # the world box of the mesh's box: |R| (hi − lo) / 2 about its centre
             c = placements[s, a, 3]
             half = 0.0
