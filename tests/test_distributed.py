@@ -82,12 +82,20 @@ def test_local_cluster_of_two_workers_gives_identical_results(get_robot):
         np.testing.assert_array_equal(res.n_evals, ref.n_evals)
 
 
-def _free_port() -> int:
-    import socket
-
-    with socket.socket() as s:
-        s.bind(("127.0.0.1", 0))
-        return int(s.getsockname()[1])
+def _client_when_up(scheduler_file: str, scheduler: subprocess.Popen, log: Path):
+    """A client of the scheduler started with ``--scheduler-file``, once it has written its
+    address and answers (a loaded machine takes seconds to start one): tried for 120 s."""
+    deadline = time.monotonic() + 120
+    while True:
+        assert scheduler.poll() is None, f"the scheduler exited: {log.read_text()[-2000:]}"
+        if os.path.exists(scheduler_file):
+            try:
+                return dask_distributed.Client(scheduler_file=scheduler_file, timeout=30)
+            except (OSError, ValueError) as exc:  # CommClosedError is an OSError
+                if time.monotonic() > deadline:
+                    raise AssertionError(f"no scheduler: {exc}; {log.read_text()[-2000:]}") from exc
+        assert time.monotonic() < deadline, f"no scheduler file: {log.read_text()[-2000:]}"
+        time.sleep(0.2)
 
 
 def _dask_cli() -> list[str]:
@@ -123,8 +131,9 @@ def test_killed_worker_chunks_are_recomputed(get_robot, tmp_path):
     func = functools.partial(_run_chunk, bc, settings)  # importable on the workers
     ref = [func(it) for it in items]
 
-    port = _free_port()
-    address = f"tcp://127.0.0.1:{port}"
+    # the scheduler picks its own port and writes its address to a file the workers and the
+    # client read: no race for a port chosen here, and no connection before it listens
+    scheduler_file = str(tmp_path / "scheduler.json")
     env = {**os.environ, "DASK_DISTRIBUTED__WORKER__DAEMON": "False"}
     log = (tmp_path / "dask.log").open("w")
     procs: list[subprocess.Popen] = []
@@ -138,8 +147,10 @@ def test_killed_worker_chunks_are_recomputed(get_robot, tmp_path):
                     "--host",
                     "127.0.0.1",
                     "--port",
-                    str(port),
+                    "0",
                     "--no-dashboard",
+                    "--scheduler-file",
+                    scheduler_file,
                 ],
                 stdout=log,
                 stderr=log,
@@ -152,7 +163,8 @@ def test_killed_worker_chunks_are_recomputed(get_robot, tmp_path):
                     [
                         *_dask_cli(),
                         "worker",
-                        address,
+                        "--scheduler-file",
+                        scheduler_file,
                         "--host",
                         "127.0.0.1",
                         "--nthreads",
@@ -169,8 +181,8 @@ def test_killed_worker_chunks_are_recomputed(get_robot, tmp_path):
                     env=env,
                 )
             )
-        client = dask_distributed.Client(address, timeout=30)
-        client.wait_for_workers(2, timeout=45)
+        client = _client_when_up(scheduler_file, procs[0], tmp_path / "dask.log")
+        client.wait_for_workers(2, timeout=120)
         victim = procs[1]
         victim_addr = [w for w, pid in client.run(os.getpid).items() if pid == victim.pid]
         assert len(victim_addr) == 1
@@ -178,7 +190,7 @@ def test_killed_worker_chunks_are_recomputed(get_robot, tmp_path):
         futures = [
             client.submit(func, it, key=f"chunk-{i}", pure=True) for i, it in enumerate(items)
         ]
-        deadline = time.monotonic() + 30
+        deadline = time.monotonic() + 120
         while True:  # kill the victim while it holds unfinished work
             busy = client.processing(workers=victim_addr).get(victim_addr[0], ())
             done = sum(f.done() for f in futures)
