@@ -164,3 +164,20 @@ def test_a_six_joint_arm_with_a_mimic_follower_takes_the_numerical_path(tmp_path
         swarm_ik.solve_many(problem, method="analytic")
     sols = swarm_ik.solve_many(problem, n=8, seed=0, max_starts=256)
     assert sols and all(r.success and r.solver == "swarm" for r in sols)
+
+
+def test_a_joint_limited_straight_wrist_is_solved_along_its_self_motion():
+    """On ``ur5_joint_limited_robot`` (every joint within ±π) eaik's least-squares points at
+    this straight wrist polish into no solution within the limits: solver 'analytic' ended
+    'local_minima' at q = 0, 1.6 m off.  The polish from points along the self-motion (joints
+    4 and 6 turned against each other) reaches the continuum within the limits."""
+    robot = swarm_ik.load_robot("ur5_joint_limited_robot")
+    q = np.array([1.11, -2.76, 0.349, -1.436, 0.0, -2.738])
+    problem = swarm_ik.IKProblem.from_q(robot, q)
+    res = swarm_ik.solve(problem, "analytic")
+    assert res.success and res.reason == "converged"
+    np.testing.assert_allclose(robot.fk_pinocchio(res.q), problem.target, atol=1e-9)
+    assert np.all(res.q >= robot.lower) and np.all(res.q <= robot.upper)
+    cf = analytic.closed_form_set(problem, 0.5 * (robot.lower + robot.upper), 1e-5, 1e-5)
+    assert cf.incomplete  # samples of a continuum, never a complete set
+    _check_solutions(robot, problem, cf.q, cf.position_error, cf.rotation_error)

@@ -396,11 +396,12 @@ class ClosedFormSet(NamedTuple):
             solution eaik did not give, at a singular configuration (smallest Jacobian
             singular value below :data:`SINGULAR_SIGMA`), as at a target with a continuum of
             solutions (a UR wrist at ``q5 = 0`` or ``π``), of which the set then holds only
-            the representatives the polish reached; or the set is empty while such a point
-            lay at a singular configuration (the joint limits of a
-            ``ur5_joint_limited_robot`` can hold its polish back).  False does not prove the
-            set complete: it is eaik's set (with any non-singular solution the polish
-            recovered), complete for a generic target.
+            the representatives the polish reached; or none of eaik's points polished into
+            a solution while one lay at a singular configuration (the joint limits of a
+            ``ur5_joint_limited_robot`` can hold its polish back: the set then holds what
+            the polish from points along the self-motion reached, if anything).  False
+            does not prove the set complete: it is eaik's set (with any non-singular
+            solution the polish recovered), complete for a generic target.
         evals: FK + Jacobian evaluations the polish spent (0 when eaik's points needed none).
     """
 
@@ -485,6 +486,11 @@ def closed_form_set(
         and found.shape[0] == 0
         and any(sigma_min(robot, q) < SINGULAR_SIGMA for q in starts)
     )
+    if missed:  # the polish again from points along each singular start's self-motion
+        moved = _self_motion_starts(robot, starts, lo, hi, ref)
+        if moved.shape[0]:
+            found, more = _polish(problem, moved, tol_pos, tol_rot)
+            evals += more
     if found.shape[0] == 0:
         return ClosedFormSet(sols, dps, drs, missed, evals)
     both = np.vstack([sols, found])
@@ -502,6 +508,39 @@ def closed_form_set(
         if not _is_among(q, sols)
     )
     return ClosedFormSet(qs2, dp2[ok], dr2[ok], incomplete, evals)
+
+
+SELF_MOTION_SHIFTS = (-1.5, -1.0, -0.5, 0.5, 1.0, 1.5)
+"""Shifts [π rad on the joint that moves most] along a singular start's self-motion from
+which :func:`closed_form_set` polishes again when no start led to a solution."""
+
+
+def _self_motion_starts(
+    robot: Any, starts: FloatArray, lo: FloatArray, hi: FloatArray, ref: FloatArray
+) -> FloatArray:
+    """Starts moved along the self-motion of each singular start: ``q + t·π·n`` for ``t`` in
+    :data:`SELF_MOTION_SHIFTS`, ``n`` the right singular vector of the frame Jacobian's
+    smallest singular value (below :data:`SINGULAR_SIGMA`), scaled to a largest entry of 1,
+    each folded into the limits as its 2π copy nearest ``ref`` (or clipped where it has
+    none), duplicates merged: ``(m, nq)``.
+
+    At a straight UR wrist (``q5 = 0``) ``n`` turns joints 4 and 6 against each other, the
+    continuum of solutions; eaik sets ``q6 = 0`` there and the polish from that point can be
+    held back by the limits (``ur5_joint_limited_robot``: every start stalled, where a point
+    of the continuum half a turn away lies within them)."""
+    moved: list[FloatArray] = []
+    for q in starts:
+        _, sv, vt = np.linalg.svd(robot.jacobian_pinocchio(q))
+        if sv[-1] >= SINGULAR_SIGMA:
+            continue
+        n = vt[-1] / np.abs(vt[-1]).max()
+        moved.extend(q + (t * math.pi) * n for t in SELF_MOTION_SHIFTS)
+    if not moved:
+        return np.empty((0, lo.shape[0]))
+    qs = np.ascontiguousarray(moved)
+    out = np.empty_like(qs)
+    c = _fold_unique(qs, lo, hi, ref, BRANCH_TOL * BRANCH_TOL, out, np.empty(qs.shape[0]))
+    return np.ascontiguousarray(np.vstack([out[:c], _clipped_misfits(qs, lo, hi, ref)]))
 
 
 def _is_among(q: FloatArray, qs: FloatArray) -> bool:
