@@ -117,17 +117,15 @@ def test_missing_eaik_message(monkeypatch):
     assert res and res[0].solver == "swarm"
 
 
-def test_solve_result_equals_solve():
+def test_solve_analytic_answers_and_says_unreachable():
     robot = swarm_ik.load_robot("ur10")
     problem = swarm_ik.IKProblem.from_q(robot, [0.1, -1.2, 1.0, 0.4, -0.9, 2.0])
     q0 = np.array([0.0, -1.0, 1.0, 0.0, -1.0, 1.5])
     for start in (None, q0):
         a = swarm_ik.solve(problem, "analytic", q0=start)
-        b = analytic.solve_result(problem, q0=start)
-        assert np.allclose(a.q, b.q, atol=1e-12) and b.success and a.success
-        assert a.goal_errors == b.goal_errors and a.reason == b.reason == "converged"
-        assert a.n_evals == b.n_evals and a.fitness == pytest.approx(b.fitness, abs=1e-12)
+        assert a.success and a.reason == "converged"
+        np.testing.assert_allclose(robot.fk_pinocchio(a.q), problem.target, atol=1e-9)
     far = np.eye(4)
     far[:3, 3] = [5.0, 0.0, 0.0]
-    r = analytic.solve_result(swarm_ik.IKProblem(robot, far))
+    r = swarm_ik.solve(swarm_ik.IKProblem(robot, far), "analytic")
     assert not r.success and r.reason == "unreachable"

@@ -74,14 +74,13 @@ def test_straight_wrist_set_is_verified_and_marked_incomplete(name):
         np.testing.assert_array_equal(qs, cf.q)
 
 
-def test_solve_result_equals_solve_at_straight_wrist():
+def test_solve_at_straight_wrist_counts_the_polish():
     robot = swarm_ik.load_robot("ur5")
     problem = swarm_ik.IKProblem.from_q(robot, REVIEW_Q)
     a = swarm_ik.solve(problem, "analytic")
-    b = analytic.solve_result(problem)
-    assert a.success and b.success and a.reason == b.reason == "converged"
-    assert np.allclose(a.q, b.q, atol=1e-12)
-    assert a.n_evals == b.n_evals > 1  # the branch verified and the polish's evaluations
+    assert a.success and a.reason == "converged"
+    np.testing.assert_allclose(robot.fk_pinocchio(a.q), problem.target, atol=1e-9)
+    assert a.n_evals > 1  # the branch verified and the polish's evaluations
 
 
 def test_generic_target_is_eaiks_set_unpolished():

@@ -130,7 +130,6 @@ def _analytic_costs(problem: Any, ref: np.ndarray, n: int) -> dict[str, float]:
             lambda: swarm_ik.solve_many(problem, n=n, method="analytic"), 20
         ),
         "solver_analytic_us": _per_call_us(lambda: swarm_ik.solve(problem, "analytic"), 10),
-        "solve_result_us": _per_call_us(lambda: analytic.solve_result(problem), 10),
     }
 
 
@@ -317,12 +316,11 @@ def summarize(
         ("solve_all_us", "`analytic.solve_all`"),
         ("solve_many_analytic_us", "`solve_many(method='analytic')`"),
         ("solver_analytic_us", "`swarm_ik.solve(problem, 'analytic')`"),
-        ("solve_result_us", "`analytic.solve_result` (same Result)"),
     ]
     lines += [
         "",
         "## Analytic path, µs per pose (median over the targets of the best of 15 blocks of "
-        "20 calls, 10 for the last two)",
+        "20 calls, 10 for the last one)",
         "",
         "| arm | " + " | ".join(label for _, label in keys) + " |",
         "|---|" + "---|" * len(keys),
