@@ -48,6 +48,7 @@ import numpy as np
 
 from swarm_ik._types import FloatArray, IntArray
 from swarm_ik.errors import InvalidArgumentError
+from swarm_ik.kernels.mesh import triangle_owners, winding_numbers
 from swarm_ik.kernels.spheres import (
     BOX,
     CAPSULE,
@@ -69,28 +70,8 @@ _FIT_VERSION = 1
 
 
 # ============================================================================ fitting
-def _winding(points: FloatArray, tris: FloatArray) -> FloatArray:
-    """Generalised winding number of each point (m, 3) w.r.t. triangles (nt, 3, 3)."""
-    out = np.zeros(len(points))
-    chunk = max(1, 2_000_000 // max(1, len(tris)))
-    for s in range(0, len(points), chunk):
-        x = points[s : s + chunk, None, None, :]
-        d = tris[None, :, :, :] - x  # (m, nt, 3, 3)
-        a, b, c = d[:, :, 0], d[:, :, 1], d[:, :, 2]
-        la, lb, lc = (np.linalg.norm(v, axis=-1) for v in (a, b, c))
-        num = np.einsum("mti,mti->mt", a, np.cross(b, c))
-        den = (
-            la * lb * lc
-            + np.einsum("mti,mti->mt", a, b) * lc
-            + np.einsum("mti,mti->mt", a, c) * lb
-            + np.einsum("mti,mti->mt", b, c) * la
-        )
-        out[s : s + chunk] = np.sum(2.0 * np.arctan2(num, den), axis=1) / (4.0 * np.pi)
-    return out
-
-
 WINDING_PAIRS = 2e7
-"""Most point–triangle pairs of the inside test of a fit (about 7 s of numpy): a mesh of more
+"""Most point–triangle pairs of the inside test of a fit (about 0.5 s compiled): a mesh of more
 than 10,000 triangles gets a coarser grid of interior candidate centres (the surface points
 remain candidates, so the cover stays complete; a 327,680-triangle ball took 250 s)."""
 
@@ -141,7 +122,9 @@ def fit_mesh(
     axes = [np.arange(lo[i] + 0.5 * pitch, hi[i], pitch) for i in range(3)]
     grid = np.stack(np.meshgrid(*axes, indexing="ij"), axis=-1).reshape(-1, 3)
     if len(grid):
-        grid = grid[np.abs(_winding(grid, V[F])) > 0.5]
+        inside = np.empty(len(grid))
+        winding_numbers(V, np.ascontiguousarray(F), np.ascontiguousarray(grid), inside)
+        grid = grid[inside > 0.5]
     cand = np.vstack([grid, pts]) if len(grid) else pts.copy()
     rho = dense.query(cand)[0]
     reach = rho + tolerance
@@ -168,16 +151,9 @@ def fit_mesh(
         gain -= np.bincount(hit, minlength=len(cand))
     centres = cand[chosen]
     nominal = reach[chosen]
-    tri = V2[F2]  # (nt, 3, 3)
-    owner = np.empty(len(tri), dtype=np.int64)
-    need_own = np.empty(len(tri))
-    step = max(1, 1_000_000 // (9 * len(centres)))
-    for s0 in range(0, len(tri), step):
-        t = tri[s0 : s0 + step]
-        d = np.sqrt(((t[:, None, :, :] - centres[None, :, None, :]) ** 2).sum(axis=-1)).max(axis=2)
-        o = np.argmin(d - nominal[None, :], axis=1)
-        owner[s0 : s0 + step] = o
-        need_own[s0 : s0 + step] = d[np.arange(len(t)), o]
+    owner = np.empty(len(F2), dtype=np.int64)
+    need_own = np.empty(len(F2))
+    triangle_owners(np.ascontiguousarray(V2[F2]), centres, nominal, owner, need_own)
     radii = np.zeros(len(centres))
     np.maximum.at(radii, owner, need_own)
     keep = np.isin(np.arange(len(centres)), owner)

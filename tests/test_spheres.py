@@ -292,3 +292,24 @@ def test_ur5_ee_link_box_is_a_coarse_pair(get_robot) -> None:
     sm = model(get_robot, "ur5")
     assert {frozenset(p) for p in sm.coarse_pairs} == {frozenset(("ee_link", "wrist_2_link"))}
     assert model(get_robot, "panda").coarse_pairs == ()
+
+
+def test_triangle_owners_is_the_least_growth_sphere_of_each_triangle() -> None:
+    """The compiled owner of each triangle against the brute-force numpy argmin over every
+    sphere of ``max_v |v − c| − nominal_c`` (the first on ties, as ``np.argmin``)."""
+    from swarm_ik.kernels.mesh import triangle_owners
+
+    rng = np.random.default_rng(7)
+    tri = rng.uniform(-1.0, 1.0, (400, 3, 3))
+    centres = rng.uniform(-1.0, 1.0, (60, 3))
+    nominal = rng.uniform(0.0, 0.5, 60)
+    nominal[7] = nominal[3]
+    centres[7] = centres[3]  # a tie: the first sphere keeps the triangle
+    owner = np.empty(len(tri), dtype=np.int64)
+    need = np.empty(len(tri))
+    triangle_owners(tri, centres, nominal, owner, need)
+    d = np.sqrt(((tri[:, None, :, :] - centres[None, :, None, :]) ** 2).sum(axis=-1)).max(axis=2)
+    want = np.argmin(d - nominal[None, :], axis=1)
+    np.testing.assert_array_equal(owner, want)
+    np.testing.assert_array_equal(need, d[np.arange(len(tri)), want])
+    assert 7 not in owner

@@ -1,6 +1,8 @@
-"""Compiled mesh query of the exact collision check: whether a point lies inside a closed
-triangle mesh (:func:`winding_number`), for obstacles wholly inside a robot body's mesh,
-which coal's narrow phase (surfaces) does not see."""
+"""Compiled mesh queries: whether a point lies inside a closed triangle mesh
+(:func:`winding_number`), for the exact collision check's obstacles wholly inside a robot body's
+mesh, which coal's narrow phase (surfaces) does not see, and for the interior candidates of a
+sphere cover (:func:`winding_numbers`); which sphere of a cover takes each triangle
+(:func:`triangle_owners`)."""
 
 from __future__ import annotations
 
@@ -46,6 +48,57 @@ def winding_number(
         )
         total += math.atan2(num, den)
     return abs(total) / (2.0 * math.pi)
+
+
+@numba.njit(cache=True)
+def winding_numbers(
+    verts: FloatArray, tris: IntArray, points: FloatArray, out: FloatArray
+) -> None:  # pragma: no cover - compiled
+    """:func:`winding_number` of each point ``(m, 3)`` into ``out`` ``(m,)``."""
+    for i in range(points.shape[0]):
+        out[i] = winding_number(verts, tris, points[i, 0], points[i, 1], points[i, 2])
+
+
+@numba.njit(cache=True)
+def triangle_owners(
+    tri: FloatArray, centres: FloatArray, nominal: FloatArray, owner: IntArray, need: FloatArray
+) -> None:  # pragma: no cover - compiled
+    """The sphere of a cover that needs the least growth to contain each triangle.
+
+    For triangle ``t`` (corners ``v``) the owner is ``argmin_c (max_v |v − c| − nominal_c)``,
+    the first such ``c`` on ties, and ``need[t]`` its ``max_v |v − c|``: the radius sphere ``c``
+    needs to contain the triangle.  A centre is left as soon as one corner shows it cannot do
+    better than the best so far (``|v − c| − nominal_c`` is a lower bound).
+
+    Args:
+        tri: Triangles ``(nt, 3, 3)`` [m] (corner, axis).
+        centres: Sphere centres ``(k, 3)`` [m].
+        nominal: Their radii before growth ``(k,)`` [m].
+        owner: Out, the owner of each triangle ``(nt,)``.
+        need: Out, the owner's radius that contains the triangle ``(nt,)`` [m].
+    """
+    for t in range(tri.shape[0]):
+        best = np.inf
+        best_d = 0.0
+        best_c = 0
+        for c in range(centres.shape[0]):
+            far = 0.0
+            for v in range(3):
+                dx = tri[t, v, 0] - centres[c, 0]
+                dy = tri[t, v, 1] - centres[c, 1]
+                dz = tri[t, v, 2] - centres[c, 2]
+                d = math.sqrt(dx * dx + dy * dy + dz * dz)
+                if d - nominal[c] >= best:
+                    far = -1.0
+                    break
+                if d > far:
+                    far = d
+            if far >= 0.0:
+                best = far - nominal[c]
+                best_d = far
+                best_c = c
+        owner[t] = best_c
+        need[t] = best_d
 
 
 @numba.njit(cache=True)
