@@ -14,9 +14,11 @@ def add_parser(subparsers: Any) -> argparse.ArgumentParser:
         "warmup",
         help="compile the kernels now (a container image, a CI cache)",
         description="Compile (or load from numba's cache) the kernels of every solve path — "
-        "the compiled search, the solvers' loops with secondary goals, the batch and the "
-        "branch search — so that no later command waits for a compile.  The kernels do not "
-        "depend on the robot: one warm-up serves every robot.  Prints one line per step.",
+        "the compiled search, the solvers' loops with secondary goals, the batch, collision "
+        "goals (solve and batch) and the branch search — so that no later command waits for "
+        "a compile.  The kernels do not depend on the robot: one warm-up serves every robot "
+        "(the collision step fits and caches the spheres of this robot's links, or of "
+        "Panda's when it has no collision geometry).  Prints one line per step.",
     )
     p.add_argument(
         "--robot",
@@ -32,10 +34,22 @@ def run(args: argparse.Namespace) -> int:
 
     import swarm_ik
     from swarm_ik import goals
+    from swarm_ik.errors import RobotModelError
+    from swarm_ik.scene import Box, Scene
 
     robot = swarm_ik.load_robot(args.robot)
     q = robot.mid_q()
     target = robot.fk(q)
+    # the collision kernels on a robot with collision geometry (this one's, else Panda's: its
+    # link spheres are fitted and cached too), against a box out of its reach
+    body = robot
+    try:
+        body.collision_model()
+    except RobotModelError:  # (no <collision> elements, meshes not found)
+        body = swarm_ik.load_robot("panda")
+    away = ((1.0, 0.0, 0.0, 5.0), (0.0, 1.0, 0.0, 0.0), (0.0, 0.0, 1.0, 0.0), (0.0, 0.0, 0.0, 1.0))
+    avoid = goals.AvoidCollisions(Scene([Box((0.1, 0.1, 0.1), away)]))
+    body_target = body.fk(body.mid_q())
     steps = [
         (
             "compiled search (solve, IKSolver)",
@@ -55,6 +69,15 @@ def run(args: argparse.Namespace) -> int:
             lambda: swarm_ik.solve(swarm_ik.IKProblem(robot, target), "gwo", max_evals=40),
         ),
         ("batch", lambda: swarm_ik.solve_batch(robot, np.stack([target, target]))),
+        (
+            "collision goal (solve, batch)",
+            lambda: (
+                swarm_ik.solve(
+                    swarm_ik.IKProblem(body, goals=[goals.Pose(body.ee_frame, body_target), avoid])
+                ),
+                swarm_ik.solve_batch(body, np.stack([body_target] * 2), goals=[avoid]),
+            ),
+        ),
         (
             "branch search (solve_many)",
             lambda: swarm_ik.solve_many(
