@@ -114,7 +114,16 @@ def test_warmup_command_prepares_every_solve_path() -> None:
     )
     assert out.returncode == 0, out.stderr
     assert out.stdout.startswith("kernels ready")
-    for step in ("compiled search", "secondary goal", "batch", "collision goal", "solve_many"):
+    for step in (
+        "compiled search",
+        "secondary goal",
+        "batch",
+        "collision goal",
+        "goal's kernel",
+        "balance",
+        "solve_path",
+        "solve_many",
+    ):
         assert step in out.stderr, out.stderr
 
 

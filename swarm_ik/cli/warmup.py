@@ -78,6 +78,9 @@ def run(args: argparse.Namespace) -> int:
                 swarm_ik.solve_batch(body, np.stack([body_target] * 2), goals=[avoid]),
             ),
         ),
+        ("every built-in goal's kernel", lambda: _goal_kernels(robot, target)),
+        ("floating base and balance", lambda: _whole_body(args.robot)),
+        ("jump-free path (solve_path)", lambda: _paths(robot, q, target)),
         (
             "branch search (solve_many)",
             lambda: swarm_ik.solve_many(
@@ -92,3 +95,46 @@ def run(args: argparse.Namespace) -> int:
         print(f"{label}: {time.perf_counter() - t0:.1f} s", file=sys.stderr, flush=True)
     print(f"kernels ready ({time.perf_counter() - t_all:.1f} s)")
     return 0
+
+
+def _goal_kernels(robot: Any, target: Any) -> None:
+    """Compile (or load) the kernel of every registered compiled goal type, and of the
+    bounded form of a pose (the other kernel a goal of the package names per instance)."""
+    from swarm_ik import goals
+
+    for cls in goals.GOALS.values():
+        if cls.kernel is not None:
+            goals.kernel_slot(cls.kernel)
+    bounded = goals.Pose(robot.ee_frame, target, tolerance=(0.01, 0.01, 0.01, 0.1, 0.1, 0.1))
+    goals.kernel_slot(bounded.kernel_of())
+    goals.kernels()
+
+
+def _whole_body(name: str) -> None:
+    """One solve of the robot on a floating base with a balance goal: the rotation vector's
+    helpers and the support polygon's compiled distances."""
+    import swarm_ik
+    from swarm_ik import goals
+
+    robot = swarm_ik.load_robot(name, floating_base=True)
+    q = robot.mid_q()
+    square = [(-1.0, -1.0), (1.0, -1.0), (1.0, 1.0), (-1.0, 1.0)]
+    balance = goals.CenterOfMass(support=square, margin=0.01)
+    problem = swarm_ik.IKProblem(robot, goals=[goals.Pose(robot.ee_frame, robot.fk(q)), balance])
+    swarm_ik.solve(problem, q0=q, max_evals=50)
+    balance.infeasible(robot, 1e-5, 1e-5)  # (the test a large budget runs first)
+    robot.jacobian_pinocchio(q)  # (the free flyer's velocity as the rotation vector's rate)
+
+
+def _paths(robot: Any, q: Any, target: Any) -> None:
+    """A two-waypoint path of the robot, and of UR5 when eaik (extra ``analytic``) is installed:
+    its candidates are the closed-form branches."""
+    import importlib.util
+
+    import swarm_ik
+
+    swarm_ik.solve_path(robot, [target, target], q0=q)
+    if importlib.util.find_spec("eaik") is not None:
+        ur5 = swarm_ik.load_robot("ur5")
+        pose = ur5.fk(ur5.mid_q())
+        swarm_ik.solve_path(ur5, [pose, pose])
