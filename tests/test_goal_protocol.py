@@ -595,3 +595,79 @@ def test_a_compiled_goal_typed_at_a_prompt_compiles_without_a_cache() -> None:
     )  # fmt: skip
     assert proc.returncode == 0, proc.stderr
     assert proc.stdout.strip().splitlines()[-1] == "True converged"
+
+
+@dataclass(frozen=True)
+class _HeightByDifferences(G.Goal):
+    """A frame's height, its Jacobian by central differences of States at q ± h."""
+
+    frame: str
+    height: float = 0.3
+
+    def residual(self, state: G.State) -> np.ndarray:
+        return np.array([state.pose(self.frame)[2, 3] - self.height])
+
+    def jacobian(self, state: G.State) -> np.ndarray:
+        h = 1e-6
+        jac = np.zeros((1, state.q.shape[0]))
+        for j in range(state.q.shape[0]):
+            e = np.zeros_like(state.q)
+            e[j] = h
+            up = G.State(state.robot, state.q + e).pose(self.frame)[2, 3]
+            down = G.State(state.robot, state.q - e).pose(self.frame)[2, 3]
+            jac[0, j] = (up - down) / (2 * h)
+        return jac
+
+
+def test_a_state_keeps_its_own_kinematics_when_another_is_made() -> None:
+    """States share one Pinocchio Data per thread: a second State (at q ± h, for a finite
+    difference) made the first read the second's kinematics."""
+    panda = robot("panda")
+    ee = panda.ee_frame
+    q = panda.mid_q()
+    first = G.State(panda, q)
+    first.jacobian(ee)
+    G.State(panda, q + 0.1).jacobian(ee)
+    np.testing.assert_array_equal(first.pose(ee), panda.fk_pinocchio(q))
+    np.testing.assert_allclose(first.jacobian(ee), panda.jacobian_pinocchio(q), atol=1e-12)
+    goal = _HeightByDifferences(ee)
+    state = G.State(panda, q)
+    jac = goal.jacobian(state)  # (States made inside)
+    assert goal.residual(state)[0] == pytest.approx(panda.fk_pinocchio(q)[2, 3] - 0.3, abs=1e-15)
+    np.testing.assert_allclose(jac[0], panda.jacobian_pinocchio(q)[2], atol=1e-8)
+    target = panda.fk(panda.random_q(np.random.default_rng(3)))
+    height = _HeightByDifferences(ee, float(target[2, 3]))
+    res = swarm_ik.solve(
+        swarm_ik.IKProblem(panda, goals=[G.Orientation(ee, target[:3, :3]), height]),
+        max_evals=400,
+    )
+    assert res.success
+    assert panda.fk_pinocchio(res.q)[2, 3] == pytest.approx(target[2, 3], abs=1e-5)
+
+
+@dataclass(frozen=True)
+class _Raises(G.Goal):
+    def residual(self, state: G.State) -> np.ndarray:
+        return np.array([1.0 / 0.0])
+
+    def jacobian(self, state: G.State) -> np.ndarray:
+        return np.zeros((1, state.q.shape[0]))
+
+
+@dataclass(frozen=True)
+class _ReturnsNone(G.Goal):
+    def residual(self, state: G.State) -> None:
+        return None
+
+    def jacobian(self, state: G.State) -> np.ndarray:
+        return np.zeros((1, state.q.shape[0]))
+
+
+def test_a_python_goals_own_errors_and_a_none_residual_are_named() -> None:
+    """An exception raised inside a goal's method came out bare (ZeroDivisionError); a
+    residual of None was reported as NaN values."""
+    panda = robot("panda")
+    with pytest.raises(InvalidArgumentError, match=r"_Raises.*residual\(state\) raised Zero"):
+        swarm_ik.solve(swarm_ik.IKProblem(panda, goals=[_Raises()]), max_evals=20)
+    with pytest.raises(InvalidArgumentError, match="must return an array of numbers, got None"):
+        swarm_ik.solve(swarm_ik.IKProblem(panda, goals=[_ReturnsNone()]), max_evals=20)

@@ -36,7 +36,7 @@ import pinocchio as pin
 from numpy.typing import NDArray
 
 from swarm_ik._validate import floats_or
-from swarm_ik.errors import InvalidArgumentError, UnknownNameError
+from swarm_ik.errors import InvalidArgumentError, SwarmIKError, UnknownNameError
 from swarm_ik.kernels import loaded_despite_damage
 from swarm_ik.kernels.lm import GOAL_SIGNATURE, kernel_list
 
@@ -201,13 +201,32 @@ def _kept(goal: Goal, state: State, kind: str, compute: Callable[[State], Any]) 
     return value
 
 
-def _real(goal: Goal, value: Any, what: str) -> FloatArray:
-    """``value`` returned by ``goal.<what>(state)`` as a float array; complex values are
-    refused naming the goal (numpy would drop their imaginary parts with a warning)."""
+def _real(goal: Goal, state: State, what: str) -> FloatArray:
+    """What ``goal.<what>(state)`` returns, as a float array.  An exception raised inside a
+    Python goal's method is reported naming the goal and the method
+    (:class:`~swarm_ik.errors.InvalidArgumentError`, the goal's own exception chained);
+    anything but real numbers (complex values, which numpy would cut to their real parts
+    with a warning; ``None``, text) is refused naming the goal."""
+    try:
+        value = getattr(goal, what)(state)
+    except (NotImplementedError, SwarmIKError):
+        raise
+    except Exception as exc:  # (the user's code: any error it raises)
+        if goal.compiled:
+            raise
+        raise InvalidArgumentError(
+            f"{goal.describe()}.{what}(state) raised {type(exc).__name__}: "
+            f"{reprlib.repr(str(exc))} at q = {np.round(state.q, 6).tolist()}"
+        ) from exc
     arr = np.asarray(value)
     if np.iscomplexobj(arr):
         raise InvalidArgumentError(
             f"{goal.describe()}.{what}(state) must return real numbers, got complex values"
+        )
+    if arr.dtype.kind not in "biuf":
+        raise InvalidArgumentError(
+            f"{goal.describe()}.{what}(state) must return an array of numbers, got "
+            f"{reprlib.repr(value)}"
         )
     return np.array(arr, dtype=float)
 
@@ -215,13 +234,13 @@ def _real(goal: Goal, value: Any, what: str) -> FloatArray:
 def residual_of(goal: Goal, state: State) -> Any:
     """``goal.residual(state)`` as a float array (computed once per point in a scope of
     :func:`reuse_goal_values`)."""
-    return _kept(goal, state, "r", lambda s: _real(goal, goal.residual(s), "residual"))
+    return _kept(goal, state, "r", lambda s: _real(goal, s, "residual"))
 
 
 def jacobian_of(goal: Goal, state: State) -> Any:
     """``goal.jacobian(state)`` as a float array (computed once per point in a scope of
     :func:`reuse_goal_values`)."""
-    return _kept(goal, state, "j", lambda s: _real(goal, goal.jacobian(s), "jacobian"))
+    return _kept(goal, state, "j", lambda s: _real(goal, s, "jacobian"))
 
 
 def errors_of(goal: Goal, state: State) -> tuple[float, float]:
@@ -231,12 +250,25 @@ def errors_of(goal: Goal, state: State) -> tuple[float, float]:
 
 
 # --------------------------------------------------------------------------- state
+class _Holders(threading.local):
+    """Per thread: which :class:`State` each shared ``Data`` (by ``id``) holds the kinematics
+    of."""
+
+    def __init__(self) -> None:
+        self.of: dict[int, Any] = {}
+
+
+_STATE_HOLDER = _Holders()
+
+
 class State:
     """What a Python goal sees: the joint vector and Pinocchio's kinematics at it.
 
     Read it while the goal is evaluated (it reuses a Pinocchio ``Data`` of the robot and the
     calling thread kept for states, so a goal may run Pinocchio's FK at other joint values,
-    e.g. through :meth:`RobotModel.fk_pinocchio`, without changing what the state reads).
+    e.g. through :meth:`RobotModel.fk_pinocchio`, without changing what the state reads; a
+    second state made meanwhile, at ``q ± h`` for a finite difference say, takes that
+    ``Data`` over, and this one computes its kinematics again when it is next read).
 
     Attributes:
         robot: The robot.
@@ -251,8 +283,18 @@ class State:
         self._q_pin = robot.to_pinocchio(self.q, copy=False)  # (read only)
         self._data = robot._data("state")  # (one Data per thread for states, reused)
         self._values = _values_at(robot, self.q, self.q0)  # (the Python goals' values here)
-        pin.forwardKinematics(robot.model, self._data, self._q_pin)  # (frames: as asked)
         self._jacobians = False
+        self._hold()
+
+    def _hold(self) -> Any:
+        """The shared ``Data``, holding this state's kinematics (computed again when another
+        state of the thread computed its own there since)."""
+        data = self._data
+        if _STATE_HOLDER.of.get(id(data)) is not self:
+            pin.forwardKinematics(self.robot.model, data, self._q_pin)  # (frames: as asked)
+            _STATE_HOLDER.of[id(data)] = self
+            self._jacobians = False
+        return data
 
     def frame_id(self, frame: str) -> int:
         """Pinocchio's id of a frame of the robot's (reduced) model.
@@ -274,7 +316,7 @@ class State:
 
     def pose(self, frame: str) -> FloatArray:
         """World pose of ``frame``, ``(4, 4)`` [m]."""
-        placement = pin.updateFramePlacement(self.robot.model, self._data, self.frame_id(frame))
+        placement = pin.updateFramePlacement(self.robot.model, self._hold(), self.frame_id(frame))
         return placement.homogeneous  # type: ignore[no-any-return]  # (a new array)
 
     def jacobian(self, frame: str) -> FloatArray:
@@ -282,11 +324,12 @@ class State:
         then angular; columns in the order of ``q`` (mimic columns summed into their
         drivers')."""
         robot = self.robot
+        data = self._hold()
         if not self._jacobians:
-            pin.computeJointJacobians(robot.model, self._data, self._q_pin)
+            pin.computeJointJacobians(robot.model, data, self._q_pin)
             self._jacobians = True
         jac = pin.getFrameJacobian(
-            robot.model, self._data, self.frame_id(frame), pin.ReferenceFrame.LOCAL_WORLD_ALIGNED
+            robot.model, data, self.frame_id(frame), pin.ReferenceFrame.LOCAL_WORLD_ALIGNED
         )
         return robot.velocity_to_q(np.array(jac).reshape(6, robot.model.nv), self.q)
 
@@ -528,7 +571,9 @@ class Goal:
     def own_tolerance(self) -> float | None:
         """A Python goal's own position tolerance (its ``tolerance`` attribute), which
         replaces the solve's ``tol_pos`` wherever this goal is judged; None for a goal without
-        one and for compiled goals (their tolerance shapes their rows instead).
+        one and for compiled goals (their kernel's rows say how far they may be off, as a
+        bounded :class:`~swarm_ik.goals.Pose`'s do; a field of that name means what the goal
+        says, :class:`~swarm_ik.goals.AvoidCollisions`'s is its sphere fit's).
 
         Raises:
             InvalidArgumentError: a tolerance that is not a positive finite number (NaN would
