@@ -386,18 +386,32 @@ def solve_many(
     elif method == "auto" and analytic.eaik_available():
         use_analytic = not analytic.support(problem)
 
-    def search(evals: int | None, t0: float) -> list[tuple[FloatArray, float, float, int, float]]:
-        """The numerical search within ``evals``, its clock started at ``t0``."""
+    def search(
+        evals: int | None, t0: float, limit: float | None
+    ) -> list[tuple[FloatArray, float, float, int, float]]:
+        """The numerical search within ``evals`` and ``limit`` seconds from ``t0``."""
         return _numerical(
-            problem, int(n), ref, start_q, make_rng(seed), min_distance, evals, time_limit,
+            problem, int(n), ref, start_q, make_rng(seed), min_distance, evals, limit,
             tol_pos, tol_rot, batch, max_starts, max_iters, patience, t0,
         )  # fmt: skip
 
-    if not use_analytic:
-        warm_up(Route(problem))  # compiled kernels loaded before the clock starts
+    def loaded() -> float | None:
+        """The compiled kernels loaded (a first call's compile or cache load), and the time
+        limit left for the search: less the loading, up to half of it (as :func:`solve`
+        charges a first call's loading)."""
+        t_load = time.perf_counter()
+        warm_up(Route(problem))
         _warm_up()
+        if time_limit is None:
+            return None
+        return max(time_limit - (time.perf_counter() - t_load), 0.5 * time_limit)
+
+    if not use_analytic:
+        limit = loaded()
         t_search = time.perf_counter()
-        return _numerical_results(problem, lambda: search(max_evals, t_search), ref, seed_label)
+        return _numerical_results(
+            problem, lambda: search(max_evals, t_search, limit), ref, seed_label
+        )
     t0 = time.perf_counter()
     cf = analytic.closed_form_set(problem, ref, tol_pos, tol_rot)
     qs, dps, drs = cf.q, cf.position_error, cf.rotation_error
@@ -418,12 +432,11 @@ def solve_many(
     # runs it (its compiled kernels loaded off the clock; the closed form's time and polish
     # evaluations count against the budget), and the closed form's solutions it did not find
     # join its own
-    warm_up(Route(problem))
-    _warm_up()
+    limit = loaded()
     left = None if max_evals is None else max(max_evals - cf.evals, 0)
     t_search = time.perf_counter() - elapsed
     numerical = _numerical_results(
-        problem, lambda: search(left, t_search), ref, seed_label, cf.evals
+        problem, lambda: search(left, t_search, limit), ref, seed_label, cf.evals
     )
     return _merged(numerical, results, periodic, min_distance, ref, int(n))
 
