@@ -764,8 +764,8 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
         help="where the runs execute: 'none' (default: no Dask, the local process pool of "
         "--jobs, as without this option), 'local' (an embedded Dask LocalCluster, one worker "
         "process per core; --jobs is then ignored) or the address of an existing Dask "
-        "scheduler (its workers need swarm_ik installed). The default is 'none', unlike "
-        "'swarm-ik batch', because on one machine a LocalCluster is no faster than the pool; "
+        "scheduler (its workers need swarm_ik installed). The default is 'none' "
+        "because on one machine a LocalCluster is no faster than the pool; "
         "the results are the same either way (only time_s differs)",
     )
     common.add_out(parser, "paper", type=Path)
