@@ -93,12 +93,9 @@ def triangle_owners(
                     break
                 if d > far:
                     far = d
-            if far >= 0.0:
-                best = far - nominal[c]
-                best_d = far
-                best_c = c
-        owner[t] = best_c
-        need[t] = best_d
+            if far >= 0.0:  # (every corner within reach: the best so far)
+                best, best_d, best_c = far - nominal[c], far, c
+        owner[t], need[t] = best_c, best_d
 
 
 @numba.njit(cache=True)
