@@ -461,6 +461,7 @@ class Route:
         seed: int | np.random.Generator | None = 0,
         on_improvement: Callable[[np.ndarray, float], Any] | None = None,
         spent: float = 0.0,
+        budget: tuple[int | None, float | None] | None = None,
     ) -> Result:
         """Search and judge.
 
@@ -472,6 +473,8 @@ class Route:
             on_improvement: Optional callback ``(q (nq,), fitness)`` at each improvement.
             spent: Seconds the call spent before this run (the route made, its kernels
                 loaded), charged to ``time_limit`` with the run's own up to half of it.
+            budget: ``(max_evals, time_limit)`` of this run in place of the route's (a
+                route shared by runs of different budgets, each checked by the caller).
 
         Returns:
             The frozen :class:`~swarm_ik.result.Result`, judged with Pinocchio.
@@ -480,7 +483,9 @@ class Route:
         problem = self.problem if problem is None else problem
         seed = check_seed(seed)
         q_start = prepare_q0(problem, q0)
-        max_evals, time_limit = self.max_evals, self.time_limit
+        if budget is None:
+            budget = (self.max_evals, self.time_limit)
+        max_evals, time_limit = budget
         if not self._warm:  # (the first run of a route: its kernels loaded, or compiled)
             warm_up(self)
             self._warm = True
@@ -576,8 +581,9 @@ class Route:
             elapsed += first_s
         t_judge = time.perf_counter()
         result = self.judge(
-            problem, q, fit, n_evals, elapsed, history, seed_val, q_start, limit=search_limit
-        )
+            problem, q, fit, n_evals, elapsed, history, seed_val, q_start,
+            limit=search_limit, max_evals=budget[0],
+        )  # fmt: skip
         # what judging costs this route (rising at once, falling slowly): kept out of the
         # search's time limit, so that the whole call stays within it
         self._judge_s = max(time.perf_counter() - t_judge, 0.9 * self._judge_s)
@@ -618,11 +624,13 @@ class Route:
         share = None if time_limit is None else 0.5 * time_limit
         half = None if max_evals is None else max(max_evals // 2, 1)
         settings = dict(
-            max_evals=half, time_limit=share, tol_pos=self.tol_pos,
+            max_evals=None, time_limit=None, tol_pos=self.tol_pos,
             tol_rot=self.tol_rot, stop_on_success=True, prefer="best", params=self.params,
         )  # fmt: skip
+        # (one route per robot and goal types, whatever the budget: each try is given what is
+        # left of the half; a route keyed by that budget was made again on every call)
         route = route_for(free, self.solver, settings)
-        rng = np.random.default_rng(seed)
+        rng = None  # (the random starts' stream, made when a second try needs one)
         col = problem.collision_goal
         collides = problem.robot.collision_model().collides
         evals = 0
@@ -632,8 +640,14 @@ class Route:
                 break
             if half is not None and evals >= half:
                 break
-            start = q_start if k == 0 else rng.uniform(problem.lower, problem.upper)
-            res = route.run(free, start, None if seed is None else seed + k)
+            if k > 0 and rng is None:
+                rng = np.random.default_rng(seed)
+            start = q_start if rng is None else rng.uniform(problem.lower, problem.upper)
+            left = (
+                None if half is None else half - evals,
+                None if share is None else share - (time.perf_counter() - t0),
+            )
+            res = route.run(free, start, None if seed is None else seed + k, budget=left)
             evals += res.n_evals
             k += 1
             if res.success and not collides(res.q, col.scene, col.margin, bool(col.self_collision)):
@@ -657,6 +671,7 @@ class Route:
         seed: int | None,
         q_start: np.ndarray | None = None,
         limit: float | None = None,
+        max_evals: int | None = None,
     ) -> Result:
         """The one judge: the answer's errors from Pinocchio, its limits, why it ended
         (``limit``: the search's time limit, when it was given less than the route's; the
@@ -680,7 +695,7 @@ class Route:
                 problem,
                 success,
                 n_evals,
-                self.max_evals,
+                self.max_evals if max_evals is None else max_evals,
                 elapsed,
                 self.time_limit if limit is None else limit,
                 self.tol_pos,

@@ -597,6 +597,9 @@ class _Checker:
             [not (is_mesh[cp.first] or is_mesh[cp.second]) for cp in gm.collisionPairs], dtype=bool
         )
         self.margin = 0.0
+        # the last verdict of collide, keyed by its configuration and margin: a solve checks
+        # its answer before judging it, and the judge asks again (scenes are immutable)
+        self._last: tuple[Any, bool] = (None, False)
         # the obstacles: coal objects (fixed in the world) in the broad phase's tree
         self.body_links = rc.body_links
         self.bodies = [coal.CollisionObject(g.geometry) for g in gm.geometryObjects]
@@ -683,9 +686,14 @@ class _Checker:
     def collide(self, q_pin: FloatArray, margin: float) -> bool:
         """Whether any pair is in contact (stops at the first), an obstacle inside a body's
         mesh included (:meth:`enclosed_pairs`)."""
-        if self._touch(q_pin, margin):
-            return True
-        return self.small and bool(self.enclosed_pairs(q_pin, True, self._placed))
+        key = (q_pin.tobytes(), margin)
+        if self._last[0] == key:
+            return self._last[1]
+        out = self._touch(q_pin, margin) or (
+            self.small and bool(self.enclosed_pairs(q_pin, True, self._placed))
+        )
+        self._last = (key, out)
+        return out
 
     def enclosed_pairs(
         self, q_pin: FloatArray, first: bool = False, placed: Any = None
