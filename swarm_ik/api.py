@@ -37,7 +37,7 @@ from swarm_ik.goals.axis import angle_between
 from swarm_ik.kernels import search
 from swarm_ik.kernels.lie import angle
 from swarm_ik.optimize import check_budget, make_rng
-from swarm_ik.pose import is_finite_nonneg
+from swarm_ik.pose import check_tolerances
 from swarm_ik.problem import GoalError, IKProblem
 from swarm_ik.result import Result
 from swarm_ik.robot import RobotModel
@@ -60,7 +60,8 @@ def verify(
     :meth:`IKProblem.verify`).
 
     Raises:
-        InvalidArgumentError: not a problem, or ``q`` of the wrong length or not finite.
+        InvalidArgumentError: not a problem, ``q`` of the wrong length or not finite, or a
+            tolerance that is not a positive number.
     """
     if not isinstance(problem, IKProblem):
         raise InvalidArgumentError(f"problem must be an IKProblem, got {type(problem).__name__}")
@@ -378,9 +379,7 @@ class Route:
             params["prefer"] = prefer
         self.kwargs = self.spec.resolve(params, dim=problem.nq)
         check_budget(max_evals, time_limit)
-        for label, tol in (("tol_pos", tol_pos), ("tol_rot", tol_rot)):
-            if isinstance(tol, bool) or not (is_finite_nonneg(tol) and float(tol) > 0):
-                raise InvalidArgumentError(f"{label} must be a positive number, got {tol!r}")
+        check_tolerances(tol_pos, tol_rot)
         self.problem = problem
         self.solver = solver
         self.max_evals = None if max_evals is None else int(max_evals)
@@ -636,7 +635,8 @@ class Route:
         evals = 0
         k = 0
         while share is not None or k < COLLISION_FIRST_TRIES:
-            if share is not None and time.perf_counter() - t0 >= share:
+            spent = time.perf_counter() - t0
+            if share is not None and spent >= share:
                 break
             if half is not None and evals >= half:
                 break
@@ -645,7 +645,7 @@ class Route:
             start = q_start if rng is None else rng.uniform(problem.lower, problem.upper)
             left = (
                 None if half is None else half - evals,
-                None if share is None else share - (time.perf_counter() - t0),
+                None if share is None else share - spent,  # (> 0: tested above)
             )
             res = route.run(free, start, None if seed is None else seed + k, budget=left)
             evals += res.n_evals
@@ -815,8 +815,10 @@ _ROUTE_SETTINGS = frozenset(
 
 def _route_key(problem: IKProblem, solver: str, settings: dict[str, Any]) -> Any:
     """What a route bound to another problem must share with ``problem`` to run it (the
-    solver, every setting, the goal types, frames, weights and priorities, the bounds and the
-    tree), or None when a setting cannot be a key (then a route is made for this call)."""
+    solver, every setting, the goal types, frames, weights and priorities, the bounds, the
+    tree, and each compiled goal's block sizes and integer parameters: a route rewrites only
+    the floats), or None when a setting cannot be a key (then a route is made for this
+    call)."""
     part = problem.__dict__.get("_route_key_part")
     if part is None:  # (the problem's share, made once per problem and kept by its retargeted
         # copies, with which it shares all of it: IKProblem.with_target)
@@ -830,7 +832,7 @@ def _route_key(problem: IKProblem, solver: str, settings: dict[str, Any]) -> Any
         part = problem.__dict__["_route_key_part"] = (
             goals, adding, problem.fitness_name, problem.w_rot, problem.position_only,
             problem.lower.tobytes(), problem.upper.tobytes(), id(problem.tree),
-            problem.python_goals == (),
+            problem.python_goals == (), problem.__dict__.get("_blocks"),
         )  # fmt: skip
     if not settings.keys() <= _ROUTE_SETTINGS:  # (a setting the key below does not name)
         return None

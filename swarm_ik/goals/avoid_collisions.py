@@ -213,10 +213,21 @@ class AvoidCollisions(Goal):
     ) -> Encoded:
         """The sphere model as the goal's parameter block; its bodies are the frames from
         ``frame0`` on (default: right after the robot's goal frames; :meth:`extra_frames`,
-        appended by the problem)."""
-        sm = self.spheres(robot)
+        appended by the problem; made once per robot, scene and settings, read-only: each
+        problem of the goal encodes it, and a goal table copies it)."""
         body0 = len(robot.frames) if frame0 is None else frame0
-        return pack(sm.arrays, body0, float(self.margin), self.max_rows)
+        key = (self.scene, bool(self.self_collision), self.tolerance, body0, self.margin,
+               self.max_rows)  # fmt: skip
+        packed = robot._cache.setdefault("packed", {})
+        enc = packed.get(key)
+        if enc is None:
+            enc = pack(self.spheres(robot).arrays, body0, float(self.margin), self.max_rows)
+            enc.par.flags.writeable = False
+            enc.ipar.flags.writeable = False
+            if len(packed) >= 32:  # (many scenes: keep memory bounded)
+                packed.clear()
+            packed[key] = enc
+        return enc
 
     def met(self, state: State, tol_pos: float, tol_rot: float) -> tuple[float, float, bool, Any]:
         """The exact check with coal: met only without contact closer than ``margin``; the

@@ -329,7 +329,7 @@ def compiled_search(
         float(tol_pos) if stop else -1.0, float(tol_rot) if stop else -1.0, float(w_rot),
         int(pop_size), int(n_swarm), int(iterations), max_evals is None and time_limit is None,
         int(min(remaining, 2**62)), -1 if max_evals is None else int(max_evals),
-        int(evals_before), search.NO_LIMIT if time_limit is None else float(time_limit),
+        int(evals_before), search.NO_LIMIT if time_limit is None else max(float(time_limit), 0.0),
         float(t0), key, out_q,
     )  # fmt: skip
     return SearchOutcome(out_q, float(f), float(dp), float(dr), int(used), bool(stopped), hist)
