@@ -37,6 +37,17 @@ def is_finite_nonneg(value: Any) -> bool:
     return bool(0.0 <= v < np.inf)
 
 
+def check_tolerances(tol_pos: Any, tol_rot: Any) -> None:
+    """Refuse success tolerances that are not positive finite numbers.
+
+    Raises:
+        InvalidArgumentError: ``tol_pos`` [m] or ``tol_rot`` [rad] named, with its value.
+    """
+    for label, tol in (("tol_pos", tol_pos), ("tol_rot", tol_rot)):
+        if isinstance(tol, bool) or not (is_finite_nonneg(tol) and float(tol) > 0):
+            raise InvalidArgumentError(f"{label} must be a positive number, got {tol!r}")
+
+
 def unit(v: FloatArray) -> FloatArray | None:
     """``v`` (finite) divided by its norm, computed on ``v`` over its largest absolute entry
     first, so that entries such as 1e200, whose squares overflow, normalise exactly; None

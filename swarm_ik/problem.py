@@ -29,7 +29,7 @@ from swarm_ik.fitness import FITNESS, get_fitness
 from swarm_ik.goals import AvoidCollisions, Goal, Pose, Position, State, kernel_slot, kernels
 from swarm_ik.goals import base as goals_base
 from swarm_ik.kernels import joints, lm
-from swarm_ik.pose import ORTH_TOL, as_pose, is_finite_nonneg
+from swarm_ik.pose import ORTH_TOL, as_pose, check_tolerances, is_finite_nonneg
 from swarm_ik.robot import RobotModel
 
 SECONDARY_WEIGHT = 1e-3
@@ -420,7 +420,17 @@ class IKProblem:
                 )
             self.bounds = cached
         if not (target is not None and goals is None):  # (the target's Pose is valid as made)
-            self.table(None)  # validate every goal against the robot now
+            # every goal checked against the robot now (its kernel and parameter block); the
+            # goal table is made when first asked for (a route bound to another problem of
+            # the same goals writes these blocks into its own)
+            blocks = []
+            for i, gl in enumerate(self.compiled_goals):
+                enc = goals_base.checked_encoding(gl, functools.partial(self.encode, i, None))
+                kernel_slot(gl.kernel_of())
+                blocks.append((enc.par.shape[0], enc.ipar.tobytes()))
+            # (the blocks' form: a route rewrites only the floats of another problem's goals,
+            # so problems whose integer parameters or block sizes differ take other routes)
+            self._blocks = tuple(blocks)
 
     def __getstate__(self) -> dict[str, Any]:
         """Pickled without its goal tables (their kernel slots are this process's: the
@@ -709,7 +719,17 @@ class IKProblem:
         self, q: Any, tol_pos: float = 1e-5, tol_rot: float = 1e-5, q0: FloatArray | None = None
     ) -> tuple[GoalError, ...]:
         """Errors of every primary goal at ``q`` computed with Pinocchio's own FK (and coal
-        for collisions), not the compiled kernels, judged against the tolerances."""
+        for collisions), not the compiled kernels, judged against the tolerances.
+
+        Raises:
+            InvalidArgumentError: ``q`` of the wrong length or not finite, or a tolerance
+                that is not a positive number.
+        """
+        if not (
+            type(tol_pos) is float and type(tol_rot) is float
+            and 0.0 < tol_pos < math.inf and 0.0 < tol_rot < math.inf
+        ):  # fmt: skip
+            check_tolerances(tol_pos, tol_rot)  # (anything else is refused there)
         qv = q if self.robot.is_q(q) else self.robot.check_q(q, "q")
         state = State(self.robot, qv, q0)
         out = []

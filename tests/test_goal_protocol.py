@@ -15,6 +15,7 @@ from conftest import robot
 import swarm_ik
 from swarm_ik import goals as G
 from swarm_ik.errors import InvalidArgumentError, UnknownNameError
+from swarm_ik.goals.base import State, frame_index
 from swarm_ik.kernels.lm import GOAL_SIGNATURE
 
 
@@ -671,3 +672,139 @@ def test_a_python_goals_own_errors_and_a_none_residual_are_named() -> None:
         swarm_ik.solve(swarm_ik.IKProblem(panda, goals=[_Raises()]), max_evals=20)
     with pytest.raises(InvalidArgumentError, match="must return an array of numbers, got None"):
         swarm_ik.solve(swarm_ik.IKProblem(panda, goals=[_ReturnsNone()]), max_evals=20)
+
+
+@numba.njit(GOAL_SIGNATURE)
+def _axis_z_kernel(par, ipar, q, f_pos, f_rot, f_jac, want_jac, res, jac, err, work):
+    """The world z component of the frame's axis ``ipar[1]`` at ``par[0]``: one row (as the
+    kernels' rows go, ``r = target − value`` and ``jac = ∂value/∂q``: ``r(q + δ) ≈ r − Jδ``)."""
+    f, k = ipar[0], ipar[1]
+    res[0] = par[0] - f_rot[f, 2, k]
+    if want_jac:  # d(R e_k)/dq = ω × (R e_k): its z component
+        for j in range(jac.shape[1]):
+            jac[0, j] = f_jac[f, 3, j] * f_rot[f, 1, k] - f_jac[f, 4, j] * f_rot[f, 0, k]
+    err[0] = abs(res[0])
+    err[1] = np.nan
+
+
+@dataclass(frozen=True)
+class AxisHeight(G.Goal):
+    """The world z component of one axis (``axis`` 0, 1, 2: x, y, z) of a frame, an integer
+    parameter of the kernel."""
+
+    frame: str
+    axis: int
+    value: float
+    kernel = _axis_z_kernel
+
+    def encode(self, robot, q0):
+        f = frame_index(self, robot)
+        return G.Encoded(np.array([self.value]), np.array([f, self.axis], dtype=np.int64), 1)
+
+    def residual(self, state):
+        return np.array([state.pose(self.frame)[2, self.axis] - self.value])
+
+    def jacobian(self, state):
+        r = state.pose(self.frame)[:3, self.axis]
+        w = state.jacobian(self.frame)[3:]
+        return (w[0] * r[1] - w[1] * r[0])[None]
+
+
+def test_problems_that_differ_in_a_compiled_goals_integer_parameters_are_both_solved() -> None:
+    """Two problems of the same goal types and frames whose compiled goal differs only in an
+    integer parameter (the axis): each is solved on its own parameters, in either order (a
+    shared route rewrote only the floats: the second problem was searched with the first's
+    axis and ended local_minima; a held-out review)."""
+    r = robot("panda")
+    q = r.random_q(np.random.default_rng(8))
+    pose = r.fk_pinocchio(q)
+    for order in ((0, 2), (2, 0)):
+        for axis in order:
+            goals = [
+                G.Position("panda_hand_tcp", pose[:3, 3]),
+                AxisHeight("panda_hand_tcp", axis, float(pose[2, axis])),
+            ]
+            res = swarm_ik.solve(swarm_ik.IKProblem(r, goals=goals), seed=1, time_limit=2.0)
+            assert res.success, (order, axis, res.reason)
+            assert abs(r.fk_pinocchio(res.q)[2, axis] - pose[2, axis]) < 1e-5
+            swarm_ik.IKSolver(r)  # (another route of the robot made between the two)
+
+
+def test_verify_refuses_tolerances_that_are_not_positive_numbers() -> None:
+    r = robot("panda")
+    prob = swarm_ik.IKProblem(r, r.fk(r.mid_q()))
+    for bad in (float("nan"), -1.0, 0.0, float("inf"), "abc", None, True):
+        with pytest.raises(InvalidArgumentError, match="tol_pos must be a positive number"):
+            swarm_ik.verify(prob, r.mid_q(), tol_pos=bad)
+        with pytest.raises(InvalidArgumentError, match="tol_rot must be a positive number"):
+            prob.verify(r.mid_q(), 1e-5, bad)
+    assert all(e.met for e in prob.verify(r.mid_q(), 1e-5, 1e-5))
+
+
+@dataclass(frozen=True)
+class _ReadsFrame(G.Goal):
+    other: str = "nope"
+
+    def residual(self, state):
+        return state.pose(self.other)[:1, 3]
+
+    def jacobian(self, state):
+        return state.jacobian(self.other)[:1]
+
+
+@dataclass(frozen=True)
+class _NoRows(G.Goal):
+    def residual(self, state):
+        return np.zeros(0)
+
+    def jacobian(self, state):
+        return np.zeros((0, state.q.shape[0]))
+
+
+def test_an_unknown_frame_read_inside_a_python_goal_names_the_goal_and_method() -> None:
+    r = robot("panda")
+    with pytest.raises(UnknownNameError, match=r"_ReadsFrame.residual\(state\): unknown frame"):
+        swarm_ik.solve(swarm_ik.IKProblem(r, goals=[_ReadsFrame()]), max_evals=10)
+
+
+def test_an_unknown_frame_on_a_robot_of_many_frames_names_the_closest() -> None:
+    r = swarm_ik.load_robot("talos")
+    state = State(r, r.mid_q())
+    with pytest.raises(UnknownNameError) as info:
+        state.pose("arm_left_7_linkk")
+    text = str(info.value)
+    assert "arm_left_7_link" in text and len(text) < 400
+
+
+def test_a_python_goal_without_rows_is_refused() -> None:
+    r = robot("panda")
+    prob = swarm_ik.IKProblem(r, goals=[_NoRows(), G.Position("panda_hand_tcp", [0.4, 0, 0.4])])
+    with pytest.raises(InvalidArgumentError, match="returned no rows"):
+        swarm_ik.solve(prob, seed=0, max_evals=20)
+
+
+@dataclass(frozen=True)
+class _RaisingEncode(_NoEncode):
+    def encode(self, robot, q0):
+        return G.Encoded(np.array([float("a")]), np.array([0], dtype=np.int64), 1)
+
+
+@dataclass(frozen=True)
+class _SecondFrame(_NoEncode):
+    other: str = "panda_link0"
+
+    def encode(self, robot, q0):
+        f = [frame_index(self, robot), frame_index(self, robot, self.other)]
+        return G.Encoded(np.array([0.3]), np.array(f, dtype=np.int64), 1)
+
+
+def test_an_exception_in_encode_and_an_unknown_second_frame_name_the_goal() -> None:
+    with pytest.raises(InvalidArgumentError, match=r"_RaisingEncode.*encode\(robot, q0\) raised"):
+        swarm_ik.IKProblem(robot("panda"), goals=[_RaisingEncode()])
+    with pytest.raises(UnknownNameError, match="'panda_link0' is not a goal frame"):
+        swarm_ik.IKProblem(robot("panda"), goals=[_SecondFrame()])
+
+
+def test_a_compiled_goal_given_nan_is_refused_when_the_problem_is_made() -> None:
+    with pytest.raises(InvalidArgumentError, match=r"AxisHeight.*NaN parameters"):
+        swarm_ik.IKProblem(robot("panda"), goals=[AxisHeight("panda_hand_tcp", 2, math.nan)])

@@ -22,6 +22,7 @@ of every answer).  ``docs/goals.md`` writes a Python goal step by step.
 from __future__ import annotations
 
 import contextlib
+import difflib
 import math
 import os
 import reprlib
@@ -209,8 +210,17 @@ def _real(goal: Goal, state: State, what: str) -> FloatArray:
     with a warning; ``None``, text) is refused naming the goal."""
     try:
         value = getattr(goal, what)(state)
-    except (NotImplementedError, SwarmIKError):
+    except NotImplementedError:
         raise
+    except SwarmIKError as exc:  # (a state's own refusal, say an unknown frame: its class
+        # kept, the goal and the method named)
+        if goal.compiled:
+            raise
+        try:
+            named = type(exc)(f"{goal.describe()}.{what}(state): {exc}")
+        except Exception:  # (a subclass that takes other arguments)
+            named = InvalidArgumentError(f"{goal.describe()}.{what}(state): {exc}")
+        raise named from exc
     except Exception as exc:  # (the user's code: any error it raises)
         if goal.compiled:
             raise
@@ -247,6 +257,17 @@ def errors_of(goal: Goal, state: State) -> tuple[float, float]:
     """``goal.errors(state)`` (computed once per point in a scope of
     :func:`reuse_goal_values`)."""
     return _kept(goal, state, "e", goal.errors)  # type: ignore[no-any-return]
+
+
+def _frames_hint(frame: Any, names: list[str], most: int = 40) -> str:
+    """The frames of a robot for a message about an unknown ``frame``: all of them when few,
+    else the closest names and how to list them all."""
+    if len(names) <= most:
+        return f"frames of this robot: {', '.join(names)}"
+    close = difflib.get_close_matches(str(frame), names, n=5, cutoff=0.5)
+    return (
+        f"closest frames: {', '.join(close)}; " if close else ""
+    ) + f"the robot has {len(names)} frames ([f.name for f in robot.model.frames])"
 
 
 # --------------------------------------------------------------------------- state
@@ -308,9 +329,7 @@ class State:
             model = self.robot.model
             if not isinstance(frame, str) or not model.existFrame(frame):
                 names = [f.name for f in model.frames]
-                raise UnknownNameError(
-                    f"unknown frame {frame!r}; frames of this robot: {', '.join(names)}"
-                )
+                raise UnknownNameError(f"unknown frame {frame!r}; " + _frames_hint(frame, names))
             fid = ids[frame] = int(model.getFrameId(frame))
         return int(fid)
 
@@ -372,6 +391,13 @@ def checked_encoding(goal: Goal, encode: Callable[[], Any]) -> Encoded:
                 f"{goal.describe()} names a compiled kernel but defines no encode: {form}"
             ) from None
         raise
+    except SwarmIKError:
+        raise
+    except Exception as exc:  # (the goal's own code: any error it raises)
+        raise InvalidArgumentError(
+            f"{goal.describe()}.encode(robot, q0) raised {type(exc).__name__}: "
+            f"{reprlib.repr(str(exc))}"
+        ) from exc
     if not isinstance(block, Encoded):
         raise InvalidArgumentError(f"{goal.describe()}: {form}, got {reprlib.repr(block)}")
     par, ipar, rows = block
@@ -385,6 +411,11 @@ def checked_encoding(goal: Goal, encode: Callable[[], Any]) -> Encoded:
         raise InvalidArgumentError(f"{goal.describe()}: {form} ({exc})") from None
     if isinstance(rows, bool) or not isinstance(rows, (int, np.integer)) or rows < 1:
         raise InvalidArgumentError(f"{goal.describe()}: {form}; rows = {rows!r}")
+    if np.isnan(par).any():  # (a field given as NaN: the search would run its whole budget)
+        raise InvalidArgumentError(
+            f"{goal.describe()}: encode(robot, q0) gave NaN parameters "
+            f"{reprlib.repr(par.tolist())}: a goal's numbers must be numbers"
+        )
     if block.par is par and block.ipar is ipar:
         return block
     return Encoded(par, ipar, int(rows))
@@ -687,6 +718,11 @@ def search_rows(
             f"{goal.describe()}.residual(state) must have shape (m,), got {r.shape}"
         )
     r = np.atleast_1d(r)
+    if r.shape[0] == 0:
+        raise InvalidArgumentError(
+            f"{goal.describe()}.residual(state) returned no rows: a goal measures at least one "
+            "number (zero when it is met)"
+        )
     if jac is not None and jac.shape != (r.shape[0], nq):
         if jac.shape == (nq,) and r.shape[0] == 1:
             jac = jac[None]
@@ -742,13 +778,14 @@ def dead_zone(
     return scale * r, scale * jac + (slack / norm**3) * np.outer(r, r @ jac)
 
 
-def frame_index(goal: Goal, robot: RobotModel) -> int:
-    """Index of the goal's frame among the robot's goal frames (the tree's frames).
+def frame_index(goal: Goal, robot: RobotModel, frame: str | None = None) -> int:
+    """Index of the goal's frame (or of ``frame``, a second frame the goal names) among the
+    robot's goal frames (the tree's frames).
 
     Raises:
         UnknownNameError: not a goal frame of the robot (they are listed).
     """
-    frame = goal.frame_name()
+    frame = goal.frame_name() if frame is None else frame
     if frame not in robot.frames:
         raise UnknownNameError(
             f"{goal.describe()}: {frame!r} is not a goal frame of this robot; goal frames: "
