@@ -1129,8 +1129,9 @@ def solve_chunk(
 
     With a collision goal the targets first go through the problem without it (the polish of
     the pose and the other goals, as the plain batch), the converged answers then tested by
-    coal; those in contact are polished again without the goal, up to :data:`FREE_RETRIES`
-    times, from the scene's free configurations nearest to their target
+    coal; those in contact are polished again without the goal, up to
+    :data:`FREE_RETRIES_PER_START` × ``max_starts`` times, from the scene's free
+    configurations nearest to their target
     (:meth:`BatchGoals.free_table`), then from random starts of their own
     (:func:`_retry_starts`), each answer tested by coal;
     only those still in contact go through the kernel with the collision goal's sphere rows,
@@ -1194,7 +1195,8 @@ def solve_chunk(
         if redo.size and FREE_TABLE_RETRIES:
             table_q, table_poses = bg.free_table(bc, settings.seed)
             near = _nearest_poses(table_poses, targets[redo], FREE_TABLE_RETRIES, settings)
-        for k in range(FREE_RETRIES):  # another branch: from the table's free configurations
+        for k in range(FREE_RETRIES_PER_START * settings.max_starts):  # another branch: from
+            # the table's free configurations
             if not redo.size:  # nearest to the target, then from random starts
                 break
             if k < near.shape[1]:
@@ -1248,21 +1250,25 @@ def solve_chunk(
     )  # fmt: skip
 
 
-FREE_RETRIES = 48
-"""Passes without the collision goal that a batch target whose answer coal finds in contact
-gets before the pass with the goal's sphere rows (one solve makes
-:data:`swarm_ik.api.COLLISION_FIRST_TRIES`): the first :data:`FREE_TABLE_RETRIES` start from
-the scene's free configurations nearest to the target (:meth:`BatchGoals.free_table`), the
-rest from random starts of the target's own; each pass polishes one start (no restarts
-inside it: 3,670 -> 5,200 poses/s per core among 40 boxes, the same targets solved).  Each
-costs a polish (tens of µs) and coal's
-verdict (about 35 µs among 40 boxes), the sphere rows about 60 µs per evaluation.  Each pass
-runs only the targets still in contact."""
+FREE_RETRIES_PER_START = 4
+"""Passes without the collision goal per ``max_starts`` (512 by default) that a batch target
+whose answer coal finds in contact gets before the pass with the goal's sphere rows (one
+solve without a time limit makes :data:`swarm_ik.api.COLLISION_FIRST_TRIES`): the first
+:data:`FREE_TABLE_RETRIES` start from the scene's free configurations nearest to the target
+(:meth:`BatchGoals.free_table`), the rest from random starts of the target's own; each pass
+polishes one start (no restarts inside it: 3,670 -> 5,200 poses/s per core among 40 boxes,
+the same targets solved).  Each costs a polish (tens of µs) and coal's verdict (about 35 µs
+among 40 boxes), the sphere rows about 60 µs per evaluation.  Each pass runs only the targets
+still in contact.  Measured on 300 FK targets of free configurations among 50 boxes (a
+held-out scene, boxes from 0.15 m of the base axis): 48 passes solved 274 (0.42 s), 128
+passes 287, 256 passes 295, 512 passes 297 (0.30 s: fewer targets left to the sphere rows),
+1,024 297; a solve of each (no time limit) 294."""
 
 ROWS_STARTS = 16
 """Most starts of the last pass, with the collision goal's sphere rows (an evaluation there
 costs about 60 µs among 40 boxes, 40 times a plain one): the few targets still in contact
-after :data:`FREE_RETRIES` retries.  With ``max_starts`` (128) there, two targets of 2,000
+after the retries (:data:`FREE_RETRIES_PER_START`).  With ``max_starts`` (128) there, two
+targets of 2,000
 took a fifth of the batch's time among 40 boxes; with 16, 4,000 targets among 60 boxes went
 from 4,420 to 5,830 poses/s per core for one more target unsolved (99.90 % solved)."""
 
@@ -1462,10 +1468,12 @@ def solve_batch(
     tolerance, the kernel converged on every primary goal, and each primary goal of ``goals``
     passes the independent check of :meth:`IKProblem.verify` (:attr:`BatchResult.goals_met`;
     ``AvoidCollisions``: coal finds no contact).  With a collision goal each target is first
-    solved without it, from its start and then from up to :data:`FREE_RETRIES` other starts
-    (the scene's free configurations nearest to the target, then random ones) while coal
-    finds the answer in contact; only answers still in contact are polished again
-    with the goal's sphere rows, from where they are (see :func:`solve_chunk`).
+    solved without it, from its start and then from up to
+    :data:`FREE_RETRIES_PER_START` × ``max_starts`` other starts (the scene's free
+    configurations nearest to the target, then random ones) while coal finds the answer in
+    contact; only answers still in contact are polished again with the goal's sphere rows,
+    from where they are, up to ``min(max_starts, ROWS_STARTS)`` starts (see
+    :func:`solve_chunk`).
 
     Args:
         robot: The robot.
@@ -1481,9 +1489,13 @@ def solve_batch(
         goals: Goals applied to every target besides its pose (compiled goals only; goal
             frames other than the first need the robot loaded with them).  None or empty: the
             pose alone (the plain batch).
-        max_starts: Most starts per target (the seed start included); unreachable targets
-            cost this many polishes.  The last is a patient polish of the best point found
-            (up to ``PATIENT_ITERS × max_iters`` evaluations, no verdict on slow steps).
+        max_starts: Most starts per target's search (the seed start included); unreachable
+            targets cost this many polishes.  The last is a patient polish of the best point
+            found (up to ``PATIENT_ITERS × max_iters`` evaluations, no verdict on slow
+            steps).  With a collision goal, an answer coal finds in contact gets up to
+            :data:`FREE_RETRIES_PER_START` × ``max_starts`` one-start searches without the
+            goal, then one search with its sphere rows of up to ``min(max_starts,``
+            :data:`ROWS_STARTS` ``)`` starts: more ``max_starts`` buys more of both.
         max_iters: Most FK + Jacobian evaluations per start.
         time_limit: Seconds for the whole call: no target (nor restart block) starts after
             them, less what reading and checking the targets took, :data:`FINISH_PER_TARGET`

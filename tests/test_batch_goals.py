@@ -263,10 +263,30 @@ def test_answers_in_contact_are_retried_without_the_sphere_rows(panda, monkeypat
     assert all(not rc.collides(q, scene) for q in res.q[res.success])
     again = solve_batch(panda, targets, seed=0, goals=goals, chunk_size=11)
     np.testing.assert_array_equal(again.q, res.q)
-    monkeypatch.setattr(batch, "FREE_RETRIES", 0)
+    monkeypatch.setattr(batch, "FREE_RETRIES_PER_START", 0)
     rows_only = solve_batch(panda, targets, seed=0, goals=goals)
     assert res.success.sum() >= rows_only.success.sum()
     assert res.success_rate >= 0.95
+
+
+def test_max_starts_bounds_and_buys_the_retries_of_a_collision_goal(panda):
+    """With a collision goal ``max_starts`` bounds every search of a target: its own starts,
+    the retries without the goal (FREE_RETRIES_PER_START per start) and the sphere rows'
+    starts (at most ROWS_STARTS); more of it solves at least as many targets (it bought
+    nothing beyond 48 retries before; a held-out review)."""
+    from swarm_ik import batch
+    from swarm_ik.bench.throughput import box_scene, collision_free_targets
+
+    scene = box_scene(panda, 40, 3)
+    _, targets = collision_free_targets(panda, scene, 40, 3)
+    goals = [G.AvoidCollisions(scene)]
+    solved = []
+    for m in (1, 4, 32):
+        res = solve_batch(panda, targets, seed=0, goals=goals, max_starts=m)
+        bound = m + batch.FREE_RETRIES_PER_START * m + min(m, batch.ROWS_STARTS)
+        assert int(res.n_starts.max()) <= bound, (m, int(res.n_starts.max()), bound)
+        solved.append(int(res.success.sum()))
+    assert solved == sorted(solved), solved
 
 
 def test_free_table_holds_only_free_configurations_and_depends_on_the_seed(panda):
