@@ -202,9 +202,12 @@ def _pose(kind: str, value: Any) -> Matrix4:
         or np.linalg.det(rot) < 0.0
         or not np.allclose(arr[3], [0.0, 0.0, 0.0, 1.0])
     ):
+        off = float(np.abs(rot.T @ rot - np.eye(3)).max())
         raise InvalidArgumentError(
-            f"{kind}: pose is not a rigid transform (its 3x3 block must be a rotation and its "
-            f"last row [0, 0, 0, 1]), got {arr.tolist()}"
+            f"{kind}: pose is not a rigid transform (its 3x3 block must be a rotation, "
+            f"orthonormal within 1e-6: it is off by {off:.1g}, determinant "
+            f"{np.linalg.det(rot):.6g}; and its last row [0, 0, 0, 1]): give the rotation with "
+            f"more digits, or the pose as a position and a quaternion, got {arr.tolist()}"
         )
     if not np.all(np.abs(arr[:3, 3]) <= MAX_LENGTH):
         raise _too_large(kind, "pose position", arr[:3, 3].tolist(), size=False)
@@ -1353,13 +1356,13 @@ def _moveit_shape(s: _Stream, mesh_dir: Path | None) -> Callable[[FloatArray, st
     """Read one shape's type line and dimensions; returns its builder from (pose, name)."""
     kind = s.token("a shape type")
     if kind == "box":
-        size = [s.number(f"box size {c}") for c in "xyz"]
+        size = s.row("box size", "xyz")  # (one line, as MoveIt writes it)
         return lambda pose, name: Box(_v3(size), _m4(pose), name=name)
     if kind == "sphere":
-        r = s.number("sphere radius")
+        (r,) = s.row("sphere", ("radius",))
         return lambda pose, name: Sphere(r, _v3(pose[:3, 3]), name=name)
     if kind == "cylinder":
-        r, length = s.number("cylinder radius"), s.number("cylinder length")
+        r, length = s.row("cylinder", ("radius", "length"))
         return lambda pose, name: Cylinder(r, length, _m4(pose), name=name)
     if kind == "mesh":
         line = s.line()

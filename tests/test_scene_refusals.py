@@ -332,3 +332,20 @@ def test_a_mesh_path_naming_a_folder_is_called_a_folder(tmp_path: Path) -> None:
     path.write_text(json.dumps({"obstacles": [{"type": "Mesh", "path": str(tmp_path)}]}))
     with pytest.raises(InvalidArgumentError, match="is a folder, not a mesh file"):
         Scene.load(path)
+
+
+def test_a_moveit_box_with_two_sizes_names_its_own_line(tmp_path: Path) -> None:
+    """A box's sizes are one line, as MoveIt writes them: two numbers are refused on their
+    own line (the next line's position was taken as the third, and that line blamed)."""
+    text = "x\n* a\n0 0 0\n0 0 0 1\n1\nbox\n0.1 0.2\n0 0 0\n0 0 0 1\n0 0 0 0\n0\n.\n"
+    msg = _load_refusal(tmp_path / "b.scene", text, "line 7", "box size must be 3 numbers")
+    assert "line 8" not in msg, msg
+
+
+def test_a_rotation_given_with_few_digits_is_refused_with_how_far_off_and_what_to_do() -> None:
+    pose = [[0.866, -0.5, 0, 0], [0.5, 0.866, 0, 0], [0, 0, 1, 0], [0, 0, 0, 1]]
+    with pytest.raises(InvalidArgumentError) as info:
+        Box([0.1, 0.1, 0.1], pose)
+    _one_line(info.value, "off by 4e-05", "more digits", "quaternion")
+    c, s = np.cos(np.pi / 6), np.sin(np.pi / 6)
+    Box([0.1, 0.1, 0.1], [[c, -s, 0, 0], [s, c, 0, 0], [0, 0, 1, 0], [0, 0, 0, 1]])
