@@ -123,16 +123,22 @@ def connect(
         return
     distributed = _import_distributed()
     if scheduler == LOCAL:
-        cluster = distributed.LocalCluster(
-            n_workers=n_workers or available_cores(),
-            threads_per_worker=1,
-            processes=True,
-            host="127.0.0.1",
-            dashboard_address=None,
-            # (what the worker processes print: an ERROR record too, e.g. a heartbeat cut by
-            # the scheduler closing on Ctrl-C, 30 lines; a task's error reaches the client)
-            silence_logs=logging.CRITICAL,
-        )
+        try:
+            cluster = distributed.LocalCluster(
+                n_workers=n_workers or available_cores(),
+                threads_per_worker=1,
+                processes=True,
+                host="127.0.0.1",
+                dashboard_address=None,
+                # (what the worker processes print: an ERROR record too, e.g. a heartbeat cut
+                # by the scheduler closing on Ctrl-C, 30 lines; a task's error reaches the
+                # client)
+                silence_logs=logging.CRITICAL,
+            )
+        except RuntimeError as exc:  # (a worker that failed to start)
+            raise InvalidArgumentError(
+                f"scheduler='local' could not start its worker processes ({exc}); " + _MAIN_GUARD
+            ) from None
         try:
             client = distributed.Client(cluster)
             _EMBEDDED[id(client)] = set(client.run(os.getpid).values())
@@ -159,6 +165,12 @@ def connect(
     finally:
         client.close()
 
+
+_MAIN_GUARD = (
+    "the workers of scheduler='local' are new Python processes that import the calling "
+    'script again: a script must make the call under `if __name__ == "__main__":`'
+)
+"""Why an embedded cluster's workers fail in a script without Python's main guard."""
 
 _EMBEDDED: dict[int, set[int]] = {}
 """The worker processes' ids of each embedded cluster's client :func:`connect` made (by

@@ -287,3 +287,24 @@ def test_a_ctrl_c_kills_the_embedded_workers_instead_of_waiting_for_their_tasks(
     took = time.perf_counter() - t_sent
     assert pids and not any(_alive(p) for p in pids)
     assert took < 3.0, f"closing took {took:.1f} s"
+
+
+def test_a_script_without_a_main_guard_is_told_to_add_one(tmp_path: Path) -> None:
+    """scheduler='local' in a script without ``if __name__ == "__main__":``: the worker
+    processes import the script again and cannot start; the call ends with a SwarmIKError
+    saying so (a 300-line Dask traceback before; a held-out review)."""
+    script = tmp_path / "noguard.py"
+    script.write_text(
+        "import numpy as np, swarm_ik\n"
+        "r = swarm_ik.load_robot('panda')\n"
+        "t = np.array([r.fk(r.mid_q())] * 4)\n"
+        "swarm_ik.solve_batch(r, t, scheduler='local')\n"
+    )
+    out = subprocess.run(
+        [sys.executable, str(script)], capture_output=True, text=True, timeout=180,
+        cwd=tmp_path,
+    )  # fmt: skip
+    assert out.returncode == 1
+    last = out.stderr.strip().splitlines()[-1]
+    assert last.startswith("swarm_ik.errors.InvalidArgumentError"), last
+    assert 'if __name__ == "__main__":' in last, last
