@@ -116,6 +116,8 @@ def _solve_targets(
     tol_pos: float,
     tol_rot: float,
     max_starts: int,
+    max_evals: int,
+    spent: IntArray,
     seed: int,
     secondary_evals: int,
     deadline: float,
@@ -140,6 +142,10 @@ def _solve_targets(
         bounds: Joint bounds; ``cfg``: LM settings (:data:`swarm_ik.kernels.lm.DEFAULT_LM`).
         tol_pos, tol_rot: Tolerances the polish stops at [m], [rad].
         max_starts: Most starts per target (the seed included).
+        max_evals: Most evaluations per target over the whole batch (``-1``: none).
+        spent: Evaluations each target spent in earlier passes, ``(N,)``: a target starts
+            only while ``spent + its evaluations here < max_evals``, each polish within the
+            rest.
         seed: Seed of the restart streams, ``0 <= seed < 2**63``.
         secondary_evals: Evaluations of the null-space descent of the secondary goals after a
             target converged (:func:`swarm_ik.kernels.lm.secondary_descent`; none without
@@ -174,7 +180,8 @@ def _solve_targets(
             late = wall_clock() > deadline - reserve * i
         elif not timed and i % INTERRUPT_EVERY == INTERRUPT_EVERY - 1:
             wall_clock()  # (entering Python: where a pending Ctrl-C raises KeyboardInterrupt)
-        if late:  # out of time: not started
+        cap = max_evals - spent[i] if max_evals >= 0 else np.iinfo(np.int64).max
+        if late or cap <= 0:  # out of time or of evaluations: not started
             for j in range(n):
                 out_q[i, j] = q_seed[i, j]
             out_evals[i] = 0
@@ -195,8 +202,9 @@ def _solve_targets(
         converged = False
         while True:
             used = lm.lm_run(
-                starts[:k], tree, goals, ks, bounds, cfg, tol_pos, tol_rot, k * cfg.max_iters,
-                True, pq[:k], pdp[:k], pdr[:k], pst[:k], pev[:k], work,
+                starts[:k], tree, goals, ks, bounds, cfg, tol_pos, tol_rot,
+                min(k * cfg.max_iters, cap - evals), True, pq[:k], pdp[:k], pdr[:k], pst[:k],
+                pev[:k], work,
             )  # fmt: skip
             evals += used
             for s in range(k):
@@ -211,7 +219,7 @@ def _solve_targets(
                 if pst[s] == CONVERGED:
                     converged = True
                     break
-            if converged or done >= max_starts:
+            if converged or done >= max_starts or evals >= cap:
                 break
             if timed:
                 late = wall_clock() > deadline - reserve * (i + 1)
@@ -222,11 +230,12 @@ def _solve_targets(
                 for j in range(n):
                     counter += np.uint64(1)
                     starts[s, j] = uniform_in(s_lo[j], s_hi[j], key, counter)
-        if converged and goals.rows_secondary > 0 and secondary_evals > 0:
+        descent = min(secondary_evals, cap - evals)
+        if converged and goals.rows_secondary > 0 and descent > 0:
             for j in range(n):
                 q_in[j] = out_q[i, j]
             evals += lm.secondary_descent(
-                q_in, tree, goals, ks, bounds, tol_pos, tol_rot, secondary_evals, q_sec
+                q_in, tree, goals, ks, bounds, tol_pos, tol_rot, descent, q_sec
             )
             for j in range(n):
                 out_q[i, j] = q_sec[j]
@@ -295,6 +304,8 @@ class BatchSettings:
             from the chunk's start, its targets start no more restarts (their first starts
             run until the deadline), so that one chunk's hopeless targets do not spend the
             limit of the chunks after it; 0: the deadline alone.  ``>= 0``.
+        max_evals: Most FK + Jacobian evaluations per target over all its passes (None: the
+            starts alone bound them), as ``swarm_ik.solve``'s ``max_evals`` bounds one solve.
     """
 
     tol_pos: float = 1e-5
@@ -312,6 +323,7 @@ class BatchSettings:
     reserve: float = 0.0
     own_start: bool = False
     restart_share: float = 0.0
+    max_evals: int | None = None
 
     def __post_init__(self) -> None:
         for label in ("tol_pos", "tol_rot"):
@@ -327,6 +339,9 @@ class BatchSettings:
                 f"max_starts must be at most {MAX_STARTS} (swarm_ik.batch.MAX_STARTS; "
                 f"time_limit bounds the whole call), got {self.max_starts!r}"
             )
+        m = self.max_evals
+        if m is not None and (isinstance(m, bool) or not isinstance(m, (int, np.integer)) or m < 1):
+            raise InvalidArgumentError(f"max_evals must be a positive integer or None, got {m!r}")
         if not isinstance(self.own_start, bool):
             raise InvalidArgumentError(f"own_start must be a bool, got {self.own_start!r}")
         if self.seed is None or isinstance(self.seed, np.random.Generator):
@@ -946,10 +961,13 @@ def _polish_targets(
     q_seed: FloatArray,
     index: IntArray,
     settings: BatchSettings,
+    spent: IntArray | None = None,
 ) -> tuple[FloatArray, IntArray, IntArray, BoolArray]:
     """:func:`_solve_targets` on ``n`` targets: ``(q (n, nq), evaluations, starts,
-    converged)``."""
+    converged)``; ``spent``: the evaluations each spent in earlier passes (default none),
+    against ``settings.max_evals``."""
     n, nq = q_seed.shape
+    spent = np.zeros(n, dtype=np.int64) if spent is None else np.ascontiguousarray(spent)
     q = np.empty((n, nq))
     evals = np.zeros(n, dtype=np.int64)
     starts = np.zeros(n, dtype=np.int64)
@@ -961,6 +979,7 @@ def _polish_targets(
                 t_par, cols, seeds, index, tree, goals, kernels(), bounds,
                 settings.lm_settings(), settings.tol_pos * settings.tol_margin,
                 settings.tol_rot * settings.tol_margin, int(settings.max_starts),
+                -1 if settings.max_evals is None else int(settings.max_evals), spent,
                 int(settings.seed), SECONDARY_EVALS,
                 NO_DEADLINE if settings.deadline is None else float(settings.deadline),
                 float(settings.reserve),
@@ -1020,8 +1039,9 @@ def _seed_table_restarts(
     answer depends only on its seed, index, target and start (not on the chunking).
 
     Args:
-        polish: ``(rows (m,), first starts (m, nq), settings) -> (q, evals, starts, conv)`` of
-            those targets (:func:`_polish_targets` or :func:`_polish_problem`).
+        polish: ``(rows (m,), first starts (m, nq), settings, evaluations spent (m,) or None)
+            -> (q, evals, starts, conv)`` of those targets (:func:`_polish_targets` or
+            :func:`_polish_problem`).
         bc: The chain and bounds (the table's FK).
         targets: The chunk's poses ``(n, 4, 4)``.
         q_seed: Their first starts ``(n, nq)``.
@@ -1032,7 +1052,7 @@ def _seed_table_restarts(
     n = targets.shape[0]
     one = dataclasses.replace(settings, max_starts=1)
     first = one if settings.own_start else _restarts(one)  # (the middle of the ranges: a guess)
-    q, evals, starts, conv = polish(np.arange(n), q_seed, first)
+    q, evals, starts, conv = polish(np.arange(n), q_seed, first, None)
     settings = settings if later is None else later
     quick_one = _restarts(dataclasses.replace(settings, max_starts=1))
     redo = np.flatnonzero(~conv & (starts > 0))  # (one not started: the time limit is spent)
@@ -1045,7 +1065,7 @@ def _seed_table_restarts(
         for k in range(near.shape[1]):
             if not redo.size:
                 break
-            qk, evk, stk, convk = polish(redo, table_q[near[:, k]], quick_one)
+            qk, evk, stk, convk = polish(redo, table_q[near[:, k]], quick_one, evals[redo])
             evals[redo] += evk
             starts[redo] += stk
             q[redo[convk]], conv[redo[convk]] = qk[convk], True
@@ -1054,13 +1074,15 @@ def _seed_table_restarts(
     if redo.size and left > 0:  # the kernel's random restarts, after a start from the best
         # point found (a local minimum: it stalls in a few evaluations)
         rest = dataclasses.replace(_restarts(settings), max_starts=left)
-        q2, ev2, st2, conv2 = polish(redo, np.ascontiguousarray(q[redo]), rest)
+        q2, ev2, st2, conv2 = polish(redo, np.ascontiguousarray(q[redo]), rest, evals[redo])
         evals[redo] += ev2
         starts[redo] += st2
         q[redo], conv[redo] = q2, conv2
         redo = redo[~conv2 & (st2 > 0)]
     if redo.size and patient:
-        q2, ev2, st2, conv2 = polish(redo, np.ascontiguousarray(q[redo]), _patient(settings))
+        q2, ev2, st2, conv2 = polish(
+            redo, np.ascontiguousarray(q[redo]), _patient(settings), evals[redo]
+        )
         evals[redo] += ev2
         starts[redo] += st2
         q[redo[conv2]], conv[redo[conv2]] = q2[conv2], True
@@ -1101,6 +1123,7 @@ def _polish_problem(
     q_seed: FloatArray,
     index: IntArray,
     settings: BatchSettings,
+    spent: IntArray | None = None,
 ) -> tuple[FloatArray, IntArray, IntArray, BoolArray]:
     """:func:`_polish_targets` from ``q_first`` on ``problem``'s tree, goal table (a copy of
     its floats: the kernel rewrites them per target) and bounds; ``q_seed``: the targets' own
@@ -1109,12 +1132,12 @@ def _polish_problem(
     if not len(targets):
         return _polish_targets(
             problem.tree, tab, problem.bounds, np.zeros((0, 0)), np.zeros(0, dtype=np.int64),
-            q_first, index, settings,
+            q_first, index, settings, spent,
         )  # fmt: skip
     t_par, cols = bg.target_params(problem, targets, q_seed)
     return _polish_targets(
         problem.tree, tab._replace(par=tab.par.copy()), problem.bounds, t_par, cols, q_first,
-        index, settings,
+        index, settings, spent,
     )  # fmt: skip
 
 
@@ -1169,9 +1192,11 @@ def solve_chunk(
         )  # fmt: skip
         cols = np.arange(t_par.shape[1], dtype=np.int64)
 
-        def polish(rows: IntArray, q_first: FloatArray, s: BatchSettings) -> _Polished:
+        def polish(
+            rows: IntArray, q_first: FloatArray, s: BatchSettings, spent: IntArray | None
+        ) -> _Polished:
             return _polish_targets(
-                bc.tree, table, bc.bounds, t_par[rows], cols, q_first, index[rows], s
+                bc.tree, table, bc.bounds, t_par[rows], cols, q_first, index[rows], s, spent
             )
 
         q, evals, starts, conv = _seed_table_restarts(polish, bc, targets, q_seed, settings, later)
@@ -1180,9 +1205,11 @@ def solve_chunk(
         goals = bg
         problem = bg.problem if bg.collision is None else bg.free_problem
 
-        def polish(rows: IntArray, q_first: FloatArray, s: BatchSettings) -> _Polished:
+        def polish(
+            rows: IntArray, q_first: FloatArray, s: BatchSettings, spent: IntArray | None
+        ) -> _Polished:
             return _polish_problem(
-                goals, problem, targets[rows], q_first, q_seed[rows], index[rows], s
+                goals, problem, targets[rows], q_first, q_seed[rows], index[rows], s, spent
             )
 
         q, evals, starts, conv = _seed_table_restarts(polish, bc, targets, q_seed, settings, later)
@@ -1205,7 +1232,7 @@ def solve_chunk(
                 q_k = _retry_starts(
                     bc.bounds.lower, bc.bounds.upper, q_seed[redo], settings.seed, index[redo], k
                 )
-            qk, evk, stk, convk = polish(redo, q_k, one_start)
+            qk, evk, stk, convk = polish(redo, q_k, one_start, evals[redo])
             evals[redo] += evk
             starts[redo] += stk
             ok = np.flatnonzero(convk)
@@ -1216,7 +1243,14 @@ def solve_chunk(
         if redo.size:
             rows = dataclasses.replace(later, max_starts=min(settings.max_starts, ROWS_STARTS))
             q2, ev2, st2, conv2 = _polish_problem(
-                bg, bg.problem, targets[redo], q[redo], q_seed[redo], index[redo], rows
+                bg,
+                bg.problem,
+                targets[redo],
+                q[redo],
+                q_seed[redo],
+                index[redo],
+                rows,
+                evals[redo],
             )
             q[redo], conv[redo] = q2, conv2
             evals[redo] += ev2
@@ -1447,6 +1481,7 @@ def solve_batch(
     goals: Any = None,
     max_starts: int = 128,
     max_iters: int = BATCH_MAX_ITERS,
+    max_evals: int | None = None,
     time_limit: float | None = None,
     scheduler: Any = None,
     chunk_size: int | None = None,
@@ -1497,6 +1532,9 @@ def solve_batch(
             goal, then one search with its sphere rows of up to ``min(max_starts,``
             :data:`ROWS_STARTS` ``)`` starts: more ``max_starts`` buys more of both.
         max_iters: Most FK + Jacobian evaluations per start.
+        max_evals: Most FK + Jacobian evaluations per target over all its starts and passes
+            (as :func:`swarm_ik.solve`'s ``max_evals`` bounds one solve; None: ``max_starts``
+            and ``max_iters`` alone bound them); ``BatchResult.n_evals`` never exceeds it.
         time_limit: Seconds for the whole call: no target (nor restart block) starts after
             them, less what reading and checking the targets took, :data:`FINISH_PER_TARGET`
             per target kept for the end of the call and :data:`FINISH_PER_STARTED` per target
@@ -1556,6 +1594,7 @@ def solve_batch(
         max_iters=max_iters,
         seed=seed,
         own_start=q0 is not None,
+        max_evals=max_evals,
     )
     poses = check_targets(targets, positions=settings.position_only)
     n = poses.shape[0]

@@ -132,6 +132,32 @@ def test_max_starts_bounds_every_target_with_the_restart_table(get_robot, max_st
     assert res.success[3:].mean() >= {1: 0.6, 2: 0.75, 3: 0.9, 12: 0.97}[max_starts]
 
 
+@pytest.mark.parametrize("max_evals", [3, 40, 500])
+def test_max_evals_bounds_every_target_over_all_its_passes(get_robot, max_evals):
+    """``max_evals`` bounds each target's evaluations over all its starts and passes, as
+    ``solve``'s bounds one solve: unreachable targets stop at it, and every success is still
+    an answer Pinocchio checks (with a goal of the batch too)."""
+    robot = get_robot("panda")
+    _, targets = fk_targets(robot, 150, seed=7)
+    targets[:3, :3, 3] += 5.0  # out of reach
+    for goals in (None, [swarm_ik.goals.CenterJoints(weight=0.1)]):
+        res = solve_batch(robot, targets, seed=0, max_evals=max_evals, goals=goals)
+        assert int(res.n_evals.max()) <= max_evals
+        assert not res.success[:3].any()
+        if max_evals >= 40:
+            np.testing.assert_array_equal(res.n_evals[:3], [max_evals] * 3)
+        for i in np.flatnonzero(res.success):
+            assert np.linalg.norm(robot.fk_pinocchio(res.q[i])[:3, 3] - targets[i, :3, 3]) < 1e-5
+    plain = solve_batch(robot, targets, seed=0)
+    assert plain.success.sum() >= solve_batch(robot, targets, seed=0, max_evals=40).success.sum()
+
+
+@pytest.mark.parametrize("bad", [0, -5, 2.5, True, "10"])
+def test_a_bad_max_evals_is_refused(get_robot, bad):
+    with pytest.raises(InvalidArgumentError, match="max_evals must be a positive integer"):
+        solve_batch(get_robot("panda"), np.eye(4)[None], max_evals=bad)
+
+
 def test_the_last_start_polishes_the_best_point_patiently(get_robot):
     """With two starts, the second polishes the first's end point with up to
     ``PATIENT_ITERS × max_iters`` evaluations and no verdict on slow steps: it solves targets

@@ -287,6 +287,10 @@ def test_max_starts_bounds_and_buys_the_retries_of_a_collision_goal(panda):
         assert int(res.n_starts.max()) <= bound, (m, int(res.n_starts.max()), bound)
         solved.append(int(res.success.sum()))
     assert solved == sorted(solved), solved
+    capped = solve_batch(panda, targets, seed=0, goals=goals, max_evals=100)
+    assert int(capped.n_evals.max()) <= 100
+    rc = panda.collision_model()
+    assert all(not rc.collides(q, scene) for q in capped.q[capped.success])
 
 
 def test_free_table_holds_only_free_configurations_and_depends_on_the_seed(panda):

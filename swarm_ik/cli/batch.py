@@ -87,6 +87,13 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     argtypes.add_seed(parser, "seed of the restarts (and of sampled targets)")
     add_lm_options(parser, 128, "most LM starts per target, the seed included")
     parser.add_argument(
+        "--max-evals",
+        type=int,
+        default=None,
+        help="most FK + Jacobian evaluations per target, over all its starts (default: the "
+        "starts alone bound them)",
+    )
+    parser.add_argument(
         "--time-limit",
         type=argtypes.positive_number,
         default=None,
@@ -158,6 +165,7 @@ def run(args: argparse.Namespace) -> int:
         position_only=args.position_only,
         max_starts=args.max_starts,
         max_iters=args.max_iters,
+        max_evals=args.max_evals,
         time_limit=args.time_limit,
         scheduler=args.scheduler,
         chunk_size=args.chunk_size,
