@@ -308,29 +308,27 @@ def solve_path(
         scene: Obstacles (a :class:`swarm_ik.scene.Scene`, shapes, or a scene JSON file):
             shortcut for adding ``AvoidCollisions(scene)`` at every waypoint.
         frame: The goal frame of ``poses`` (default ``robot.ee_frame``).
-        time_limit: Most wall-clock seconds for the whole call [s].  After
-            :data:`SEARCH_SHARE` of it (less what the search through the candidates and the
-            final check will take: :data:`FINISH_PER_WAYPOINT` and :data:`SEARCH_PER_LAYER`
-            per waypoint, up to half the limit, and :data:`SEARCH_PER_PAIR` per pair of
-            candidates built) no more candidates are built: the remaining waypoints are
-            only tracked (one solve each, 0.1–1 ms) and the remaining interpolated poses are
-            not solved (the path through them is filled in joint space and reported
-            unchecked, not as jumps).  Waypoints not tracked by the limit are not solved:
-            they hold the configuration before them and are reported not reached.  The
-            reason says which of these happened.  Waypoint 0 always gets one solve, and the
-            poses are validated and the answers checked in any case (about 45 µs per
-            waypoint), so a limit shorter than these is overrun.  What a call loads the
-            first time is loaded before the clock: the first timed path of a robot in a
-            process loads its kernels (0.7–1 s from numba's cache, with an untimed path of two
-            waypoints); a path with goals beyond the pose loads their kernels (tens of
-            milliseconds, no solve run) and, with a scene, its sphere model (made with the
-            waypoints' problems: 0.2–0.6 s for a robot's first scene, its own self-collision
-            pairs sampled; milliseconds for a later one) and coal's checker of it (about 5 ms).
-            All the call spent before the clock (that loading, and validating the waypoints)
-            is charged to the limit up to half of it, as a first :func:`swarm_ik.solve`'s
-            loading: such a call overruns by the loading and still gets half its limit;
-            ``time_s`` counts it.  Results are deterministic for a seed only when the limit
-            is not reached.
+        time_limit: Most wall-clock seconds for the whole call [s].  After :data:`SEARCH_SHARE` of
+            it (less what the search through the candidates and the final check will take:
+            :data:`FINISH_PER_WAYPOINT` and :data:`SEARCH_PER_LAYER` per waypoint, up to half the
+            limit, and :data:`SEARCH_PER_PAIR` per pair of candidates built) no more candidates are
+            built, unless the waypoints left, each at the mean building time of those built, fit
+            before the limit: the remaining waypoints are only tracked (one solve each, 0.1–1 ms)
+            and the remaining interpolated poses are not solved (the path through them is filled in
+            joint space and reported unchecked, not as jumps).  Waypoints not tracked by the limit
+            are not solved: they hold the configuration before them and are reported not reached.
+            The reason says which of these happened.  Waypoint 0 always gets one solve, and the
+            poses are validated and the answers checked in any case (about 45 µs per waypoint), so a
+            limit shorter than these is overrun.  What a call loads the first time is loaded before
+            the clock: the first timed path of a robot in a process loads its kernels (0.7–1 s from
+            numba's cache, with an untimed path of two waypoints); a path with goals beyond the pose
+            loads their kernels (tens of milliseconds, no solve run) and, with a scene, its sphere
+            model (made with the waypoints' problems: 0.2–0.6 s for a robot's first scene, its own
+            self-collision pairs sampled; milliseconds for a later one) and coal's checker of it
+            (about 5 ms). All the call spent before the clock (that loading, and validating the
+            waypoints) is charged to the limit up to half of it, as a first :func:`swarm_ik.solve`'s
+            loading: such a call overruns by the loading and still gets half its limit; ``time_s``
+            counts it.  Results are deterministic for a seed only when the limit is not reached.
         seed: Seed (or Generator) of every random choice (the solvers' seeds are drawn from
             it): the same seed gives the same path.
         densify: Poses interpolated between consecutive waypoints (position lerp, rotation
@@ -678,6 +676,8 @@ class _Context:
         self.timed_out = False
         self.cut: int | None = None  # the first waypoint left unsolved at the limit
         self.search_s = 0.0  # what searching the candidates built so far will take [s]
+        self.layer = 0  # the waypoint whose candidates are being built
+        self.t_build: float | None = None  # when the first layer's building began
 
     def seed(self) -> int:
         return int(self.rng.integers(2**31))
@@ -693,10 +693,31 @@ class _Context:
         its pairs' time is no longer kept out of the limit."""
         self.search_s = max(self.search_s - SEARCH_PER_PAIR * k_before * k, 0.0)
 
+    def begin(self, i: int) -> None:
+        """Building the candidates of waypoint ``i`` begins (layers are built in order)."""
+        if self.t_build is None:
+            self.t_build = time.perf_counter()
+        self.layer = i
+
     def out_of_time(self) -> bool:
-        """Whether the candidates' share of the time limit is spent (tracking only)."""
-        if self.deadline is not None and time.perf_counter() >= self.deadline:
-            self.timed_out = True
+        """Whether the candidates' share of the time limit is spent (tracking only): past
+        :data:`SEARCH_SHARE` of it, unless the waypoints left, each built in the mean time of
+        those built so far (a tracking solve costs less than building a layer), still fit
+        before the limit (a path that builds every layer in 0.55 of its limit used to stop
+        at half of it and track the rest one solve each, jumping where the layers would not
+        have)."""
+        if self.timed_out or self.deadline is None:
+            return self.timed_out
+        now = time.perf_counter()
+        if now >= self.deadline:
+            i, t0 = self.layer, self.t_build
+            fits = (
+                i > 0
+                and t0 is not None
+                and self.limit is not None
+                and now + (self.wps.n - i) * (now - t0) / i < self.limit - self.search_s
+            )
+            self.timed_out = not fits
         return self.timed_out
 
     def past_limit(self) -> bool:
@@ -1268,6 +1289,7 @@ def _build(ctx: _Context, start: FloatArray | None) -> _Graph:
             graph.blocked.append(None)
             values.append(None)
             continue
+        ctx.begin(i)
         qb = np.empty((0, nq))
         cert = used_closed = spread_done = False
         blocked = None
@@ -1761,7 +1783,7 @@ def _reason(
         parts.append(msg)
     if ctx.timed_out:
         unchecked = "; the interpolated poses of the later steps were not checked" if k else ""
-        msg = "time_limit reached: after half of it the later waypoints were only tracked"
+        msg = "time_limit reached: the later waypoints were only tracked (no time to build them)"
         if ctx.cut is not None:
             last = q.shape[0] - 1
             held = f"waypoints {ctx.cut}–{last}" if ctx.cut < last else f"waypoint {last}"

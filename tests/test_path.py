@@ -609,3 +609,24 @@ def test_a_jump_is_sized_by_the_joint_furthest_beyond_its_bound() -> None:
         d = np.abs(prev[i + 1] - prev[i])
         assert size == pytest.approx(d[int(np.argmax(d / step))])
         assert size < d.max()  # (joint 3 moved more, within its bound)
+
+
+def test_building_goes_on_past_its_share_while_the_waypoints_left_fit():
+    """Past SEARCH_SHARE of the limit, candidates are still built while the waypoints left,
+    each at the mean building time so far, fit before the limit (a path whose every layer
+    fitted in 0.55 of its limit stopped at half of it and tracked the rest one solve each,
+    jumping where the layers would not have: a held-out review); otherwise tracking only."""
+    import time
+
+    robot = get("panda")
+    ctx = sp._Context(
+        robot, sp._Waypoints.build(robot, robot.fk(smooth_q(robot, 3, n=10)), None, None, None),
+        np.full(robot.nq, STEP), 1e-5, 1e-5, np.random.default_rng(0),
+        deadline=time.perf_counter() - 1.0, limit=time.perf_counter() + 60.0,
+    )  # fmt: skip
+    ctx.begin(0)
+    ctx.t_build = time.perf_counter() - 0.01  # (5 layers built in 10 ms)
+    ctx.begin(5)
+    assert not ctx.out_of_time()  # (5 more at 2 ms each: well within a minute)
+    ctx.limit = time.perf_counter() + 0.001
+    assert ctx.out_of_time() and ctx.timed_out
