@@ -1124,7 +1124,7 @@ def _polish_problem(
     index: IntArray,
     settings: BatchSettings,
     spent: IntArray | None = None,
-) -> tuple[FloatArray, IntArray, IntArray, BoolArray]:
+) -> _Polished:
     """:func:`_polish_targets` from ``q_first`` on ``problem``'s tree, goal table (a copy of
     its floats: the kernel rewrites them per target) and bounds; ``q_seed``: the targets' own
     starts (what goals such as ``MinimalDisplacement`` are encoded from)."""

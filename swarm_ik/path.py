@@ -113,7 +113,11 @@ waypoints has 8 million pairs, a 58 ms search), so that a ``time_limit`` stops b
 candidates early enough for the search and the check to end within it."""
 SEARCH_SHARE = 0.5
 """Share of a ``time_limit`` (after the check's reserve) for building candidates; the rest
-tracks the remaining waypoints one solve each."""
+tracks the remaining waypoints one solve each (unless the waypoints left fit: see
+:meth:`_Context.out_of_time`)."""
+TRACK_SHARE = 0.2
+"""Share of a ``time_limit`` (after the check's reserve) that building candidates past
+:data:`SEARCH_SHARE` always leaves to the tracking of the waypoints left."""
 FULL_BRANCHES = 8
 """Branches (modulo 2π) of a generic pose of a 6R arm with three parallel axes or a
 spherical wrist: a closed-form set with this many is complete."""
@@ -393,6 +397,8 @@ def solve_path(
         limit = t_clock + float(time_limit) - reserve
         deadline = t_clock + SEARCH_SHARE * (limit - t_clock)
     ctx = _Context(robot, wps, step, float(tol_pos), float(tol_rot), rng, deadline, limit)
+    if limit is not None:
+        ctx.keep = TRACK_SHARE * (limit - t_clock)
     graph = _build(ctx, start)
     rejected: Rejected = {}
     choice = _search(graph, start, ctx, rejected)
@@ -677,6 +683,7 @@ class _Context:
         self.cut: int | None = None  # the first waypoint left unsolved at the limit
         self.search_s = 0.0  # what searching the candidates built so far will take [s]
         self.layer = 0  # the waypoint whose candidates are being built
+        self.keep = 0.0  # seconds before the limit that building always leaves to tracking
         self.t_build: float | None = None  # when the first layer's building began
 
     def seed(self) -> int:
@@ -703,9 +710,9 @@ class _Context:
         """Whether the candidates' share of the time limit is spent (tracking only): past
         :data:`SEARCH_SHARE` of it, unless the waypoints left, each built in the mean time of
         those built so far (a tracking solve costs less than building a layer), still fit
-        before the limit (a path that builds every layer in 0.55 of its limit used to stop
-        at half of it and track the rest one solve each, jumping where the layers would not
-        have)."""
+        before the limit less :attr:`keep` (a path that builds every layer in 0.55 of its
+        limit used to stop at half of it and track the rest one solve each, jumping where the
+        layers would not have)."""
         if self.timed_out or self.deadline is None:
             return self.timed_out
         now = time.perf_counter()
@@ -715,7 +722,7 @@ class _Context:
                 i > 0
                 and t0 is not None
                 and self.limit is not None
-                and now + (self.wps.n - i) * (now - t0) / i < self.limit - self.search_s
+                and now + (self.wps.n - i) * (now - t0) / i < self.limit - self.search_s - self.keep
             )
             self.timed_out = not fits
         return self.timed_out
