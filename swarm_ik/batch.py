@@ -1226,6 +1226,8 @@ def solve_chunk(
             # the table's free configurations
             if not redo.size:  # nearest to the target, then from random starts
                 break
+            if later.deadline is not None and time.time() > later.deadline:
+                break  # (past the chunk's time: no retry would start)
             if k < near.shape[1]:
                 q_k = table_q[near[:, k]]
             else:
