@@ -125,6 +125,62 @@ def _tree_with_frames(
     return hit[0], dict(hit[1])
 
 
+TWIN_RTOL = 1e-6
+"""Relative tolerance of :func:`_check_kernel_twin` (rows and Jacobian entries, against
+``1 +`` their size)."""
+
+
+def _check_kernel_twin(robot: RobotModel, goal: Goal) -> None:
+    """A compiled goal written outside swarm_ik, checked once per class and robot: its
+    kernel's rows and step Jacobian at one configuration against its own numpy
+    ``residual``/``jacobian`` (when it defines them) on Pinocchio's state.  The kernel writes
+    ``r`` as ``residual`` does and the step Jacobian ``J = −∂r/∂q`` (``r(q + δ) ≈ r − Jδ``);
+    a kernel of the other sign, or one disagreeing with its twin, would end every solve with
+    the budget's reason and no word why.
+
+    Raises:
+        InvalidArgumentError: the two disagree (both named, with the configuration).
+    """
+    cls = type(goal)
+    if str(cls.__module__).startswith("swarm_ik.") or cls.residual is Goal.residual:
+        return
+    checked = robot._cache.setdefault("twins_checked", set())
+    if cls in checked:
+        return
+    checked.add(cls)  # (before the problem below, which would check it again)
+    lo, hi = np.asarray(robot.lower, dtype=float), np.asarray(robot.upper, dtype=float)
+    q = np.clip(0.5 * (lo + hi) + 0.1, lo, hi)  # (off the middle: no symmetric zeros)
+    try:
+        res, jac = IKProblem(robot, goals=[goal]).stacked_rows(q[None])
+        r_np, j_np = goals_base.search_rows(goal, State(robot, q))
+    except BaseException:
+        checked.discard(cls)
+        raise
+    res, jac = res[0], jac[0]
+
+    def close(a: FloatArray, b: FloatArray) -> bool:
+        return a.shape == b.shape and bool(np.all(np.abs(a - b) <= TWIN_RTOL * (1.0 + np.abs(b))))
+
+    # r may be the residual or its negative (only |r| is judged), its step Jacobian then
+    # −∂r/∂q: +jacobian(state) for −residual, −jacobian(state) for +residual
+    sign = 1.0 if close(res, r_np) else -1.0 if close(res, -r_np) else 0.0
+    if sign == 0.0:
+        checked.discard(cls)
+        raise InvalidArgumentError(
+            f"{goal.describe()}: its kernel's rows {np.round(res, 9).tolist()} differ from its "
+            f"residual(state) {np.round(r_np, 9).tolist()} at q = {np.round(q, 6).tolist()} "
+            "(the kernel writes the residual's rows, weighted alike; docs/goals.md)"
+        )
+    if j_np is not None and not close(jac, -sign * j_np):
+        checked.discard(cls)
+        flipped = " (it has the other sign)" if close(jac, sign * j_np) else ""
+        raise InvalidArgumentError(
+            f"{goal.describe()}: its kernel's step Jacobian is not −∂r/∂q of its rows at q = "
+            f"{np.round(q, 6).tolist()}{flipped}: the kernel's rows satisfy r(q + δ) ≈ r − Jδ "
+            "(docs/goals.md)"
+        )
+
+
 def judge(
     errors: FloatArray,
     primary: Sequence[bool] | NDArray[Any],
@@ -428,6 +484,7 @@ class IKProblem:
                 enc = goals_base.checked_encoding(gl, functools.partial(self.encode, i, None))
                 kernel_slot(gl.kernel_of())
                 blocks.append((enc.par.shape[0], enc.ipar.tobytes()))
+                _check_kernel_twin(robot, gl)
             # (the blocks' form: a route rewrites only the floats of another problem's goals,
             # so problems whose integer parameters or block sizes differ take other routes)
             self._blocks = tuple(blocks)

@@ -808,3 +808,38 @@ def test_an_exception_in_encode_and_an_unknown_second_frame_name_the_goal() -> N
 def test_a_compiled_goal_given_nan_is_refused_when_the_problem_is_made() -> None:
     with pytest.raises(InvalidArgumentError, match=r"AxisHeight.*NaN parameters"):
         swarm_ik.IKProblem(robot("panda"), goals=[AxisHeight("panda_hand_tcp", 2, math.nan)])
+
+
+@numba.njit(GOAL_SIGNATURE)
+def _axis_z_kernel_wrong_sign(par, ipar, q, f_pos, f_rot, f_jac, want_jac, res, jac, err, work):
+    """_axis_z_kernel with ∂r/∂q as its Jacobian (the step Jacobian's sign flipped)."""
+    f, k = ipar[0], ipar[1]
+    res[0] = par[0] - f_rot[f, 2, k]
+    if want_jac:
+        for j in range(jac.shape[1]):
+            jac[0, j] = -(f_jac[f, 3, j] * f_rot[f, 1, k] - f_jac[f, 4, j] * f_rot[f, 0, k])
+    err[0] = abs(res[0])
+    err[1] = np.nan
+
+
+@dataclass(frozen=True)
+class AxisHeightWrongSign(AxisHeight):
+    kernel = _axis_z_kernel_wrong_sign
+
+
+@dataclass(frozen=True)
+class AxisHeightOtherRows(AxisHeight):
+    def residual(self, state):  # (a twin of another quantity than the kernel's)
+        return np.array([state.pose(self.frame)[1, self.axis] - self.value])
+
+
+def test_a_compiled_goal_whose_kernel_disagrees_with_its_twin_is_refused() -> None:
+    """A kernel whose step Jacobian has the wrong sign, or whose rows are not its numpy
+    residual's, is refused naming the goal when a problem is made (it ran the whole budget
+    and ended time_limit; a held-out review); the right one (either sign of r) is accepted."""
+    r = robot("panda")
+    with pytest.raises(InvalidArgumentError, match=r"AxisHeightWrongSign.*other sign"):
+        swarm_ik.IKProblem(r, goals=[AxisHeightWrongSign("panda_hand_tcp", 2, 0.5)])
+    with pytest.raises(InvalidArgumentError, match=r"AxisHeightOtherRows.*differ from its"):
+        swarm_ik.IKProblem(r, goals=[AxisHeightOtherRows("panda_hand_tcp", 2, 0.5)])
+    swarm_ik.IKProblem(r, goals=[AxisHeight("panda_hand_tcp", 2, 0.5)])
