@@ -843,3 +843,14 @@ def test_a_compiled_goal_whose_kernel_disagrees_with_its_twin_is_refused() -> No
     with pytest.raises(InvalidArgumentError, match=r"AxisHeightOtherRows.*differ from its"):
         swarm_ik.IKProblem(r, goals=[AxisHeightOtherRows("panda_hand_tcp", 2, 0.5)])
     swarm_ik.IKProblem(r, goals=[AxisHeight("panda_hand_tcp", 2, 0.5)])
+
+
+@dataclass(frozen=True)
+class AxisHeightNoJacobianTwin(AxisHeight):
+    jacobian = G.Goal.jacobian  # (a twin of the rows alone)
+
+
+def test_a_compiled_goal_with_a_residual_twin_only_is_checked_on_its_rows() -> None:
+    r = robot("panda")
+    prob = swarm_ik.IKProblem(r, goals=[AxisHeightNoJacobianTwin("panda_hand_tcp", 0, 0.2)])
+    assert prob.compiled_goals
