@@ -69,6 +69,7 @@ from swarm_ik.kernels import lie, lm, loaded_despite_damage
 from swarm_ik.kernels.fk import TreeArrays
 from swarm_ik.kernels.lm import CONVERGED, NOT_RUN
 from swarm_ik.kernels.search import sampling_window, splitmix64, uniform_in, uniforms, wall_clock
+from swarm_ik.optimize import check_budget
 from swarm_ik.pose import make_pose, matrix_to_quat
 from swarm_ik.problem import IKProblem
 from swarm_ik.result import FrozenArrays
@@ -339,9 +340,7 @@ class BatchSettings:
                 f"max_starts must be at most {MAX_STARTS} (swarm_ik.batch.MAX_STARTS; "
                 f"time_limit bounds the whole call), got {self.max_starts!r}"
             )
-        m = self.max_evals
-        if m is not None and (isinstance(m, bool) or not isinstance(m, (int, np.integer)) or m < 1):
-            raise InvalidArgumentError(f"max_evals must be a positive integer or None, got {m!r}")
+        check_budget(self.max_evals, None)  # (a positive integer up to 2**62, or None)
         if not isinstance(self.own_start, bool):
             raise InvalidArgumentError(f"own_start must be a bool, got {self.own_start!r}")
         if self.seed is None or isinstance(self.seed, np.random.Generator):
@@ -1240,8 +1239,9 @@ def solve_chunk(
             ok = np.flatnonzero(convk)
             ok = ok[~bg.in_contact(qk[ok])]
             q[redo[ok]], free[redo[ok]] = qk[ok], True
-            near = near[~free[redo]]
-            redo = redo[~free[redo]]
+            keep = ~free[redo] & (stk > 0)  # (one not started: its evaluations are spent)
+            near = near[keep]
+            redo = redo[keep]
         if redo.size:
             rows = dataclasses.replace(later, max_starts=min(settings.max_starts, ROWS_STARTS))
             q2, ev2, st2, conv2 = _polish_problem(

@@ -13,6 +13,7 @@ True
 
 from __future__ import annotations
 
+import dataclasses
 import functools
 import math
 from collections.abc import Sequence
@@ -149,11 +150,20 @@ def _check_kernel_twin(robot: RobotModel, goal: Goal) -> None:
         return
     checked.add(cls)  # (before the problem below, which would check it again)
     lo, hi = np.asarray(robot.lower, dtype=float), np.asarray(robot.upper, dtype=float)
-    q = np.clip(0.5 * (lo + hi) + 0.1, lo, hi)  # (off the middle: no symmetric zeros)
+    # a configuration with no two joints alike (a residual that vanishes where joints are
+    # equal, or at the middle, would tell neither sign)
+    frac = 0.25 + 0.5 * ((0.6180339887 * np.arange(1, lo.shape[0] + 1)) % 1.0)
+    finite = np.isfinite(lo) & np.isfinite(hi)
+    q = np.where(finite, lo + frac * np.where(finite, hi - lo, 0.0), frac - 0.5)
+    q = np.clip(q, lo, hi)
+    try:  # (probed as a primary goal: a secondary one alone makes no problem)
+        probe = dataclasses.replace(goal, primary=True) if not goal.is_primary else goal
+    except (TypeError, ValueError):
+        return
     try:
-        res, jac = IKProblem(robot, goals=[goal]).stacked_rows(q[None])
+        res, jac = IKProblem(robot, goals=[probe]).stacked_rows(q[None])
         r_np, j_np = goals_base.search_rows(
-            goal, State(robot, q), want_jac=cls.jacobian is not Goal.jacobian
+            probe, State(robot, q), want_jac=cls.jacobian is not Goal.jacobian
         )
     except BaseException:
         checked.discard(cls)
@@ -166,6 +176,8 @@ def _check_kernel_twin(robot: RobotModel, goal: Goal) -> None:
     # r may be the residual or its negative (only |r| is judged), its step Jacobian then
     # −∂r/∂q: +jacobian(state) for −residual, −jacobian(state) for +residual
     sign = 1.0 if close(res, r_np) else -1.0 if close(res, -r_np) else 0.0
+    if sign != 0.0 and close(res, -r_np):  # (rows of zero: either sign)
+        sign = -1.0 if j_np is not None and close(jac, j_np) else sign
     if sign == 0.0:
         checked.discard(cls)
         raise InvalidArgumentError(

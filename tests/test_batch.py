@@ -152,9 +152,9 @@ def test_max_evals_bounds_every_target_over_all_its_passes(get_robot, max_evals)
     assert plain.success.sum() >= solve_batch(robot, targets, seed=0, max_evals=40).success.sum()
 
 
-@pytest.mark.parametrize("bad", [0, -5, 2.5, True, "10"])
+@pytest.mark.parametrize("bad", [0, -5, 2.5, True, "10", 2**63, 10**30])
 def test_a_bad_max_evals_is_refused(get_robot, bad):
-    with pytest.raises(InvalidArgumentError, match="max_evals must be a positive integer"):
+    with pytest.raises(InvalidArgumentError, match="max_evals must be"):
         solve_batch(get_robot("panda"), np.eye(4)[None], max_evals=bad)
 
 

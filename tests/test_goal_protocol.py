@@ -854,3 +854,54 @@ def test_a_compiled_goal_with_a_residual_twin_only_is_checked_on_its_rows() -> N
     r = robot("panda")
     prob = swarm_ik.IKProblem(r, goals=[AxisHeightNoJacobianTwin("panda_hand_tcp", 0, 0.2)])
     assert prob.compiled_goals
+
+
+@numba.njit(GOAL_SIGNATURE)
+def _joints_apart_kernel(par, ipar, q, f_pos, f_rot, f_jac, want_jac, res, jac, err, work):
+    """``q[b] − q[a]``: the negative of its twin's residual, with the matching step
+    Jacobian (``+∂(q[a] − q[b])/∂q``)."""
+    a, b = ipar[0], ipar[1]
+    res[0] = q[b] - q[a]
+    if want_jac:
+        for j in range(jac.shape[1]):
+            jac[0, j] = 0.0
+        jac[0, a] = 1.0
+        jac[0, b] = -1.0
+    err[0] = abs(res[0])
+    err[1] = np.nan
+
+
+@dataclass(frozen=True)
+class JointsEqual(G.Goal):
+    a: int = 0
+    b: int = 2
+    kernel = _joints_apart_kernel
+
+    def encode(self, robot, q0):
+        return G.Encoded(np.zeros(1), np.array([self.a, self.b], dtype=np.int64), 1)
+
+    def residual(self, state):
+        return np.array([state.q[self.a] - state.q[self.b]])
+
+    def jacobian(self, state):
+        jac = np.zeros((1, state.q.shape[0]))
+        jac[0, self.a], jac[0, self.b] = 1.0, -1.0
+        return jac
+
+
+def test_the_twin_check_accepts_negated_rows_where_joints_are_alike_and_secondary_goals() -> None:
+    """The twin check's configuration has no two joints alike (at the middle of equal ranges
+    a correct kernel of negated rows was refused as of the other sign), and a secondary
+    compiled goal is probed as a primary one (it was refused: 'at least one goal must be
+    primary'; a held-out review)."""
+    r = robot("panda")
+    pos = G.Position("panda_hand_tcp", [0.4, 0.1, 0.4])
+    res = swarm_ik.solve(swarm_ik.IKProblem(r, goals=[pos, JointsEqual(0, 1)]), seed=0)
+    assert res.success and abs(res.q[0] - res.q[1]) < 1e-5
+    secondary = AxisHeightSecondary("panda_hand_tcp", 1, 0.3, primary=False)
+    swarm_ik.IKProblem(r, goals=[pos, secondary])
+
+
+@dataclass(frozen=True)
+class AxisHeightSecondary(AxisHeight):
+    """(A class of its own: the twin check runs once per class and robot.)"""
