@@ -168,7 +168,8 @@ def connect(
 
 _MAIN_GUARD = (
     "the workers of scheduler='local' are new Python processes that import the calling "
-    'script again: a script must make the call under `if __name__ == "__main__":`'
+    "script again, so a script must make the call under "
+    '`if __name__ == "__main__":` (the usual cause)'
 )
 """Why an embedded cluster's workers fail in a script without Python's main guard."""
 

@@ -684,6 +684,7 @@ class _Context:
         self.search_s = 0.0  # what searching the candidates built so far will take [s]
         self.layer = 0  # the waypoint whose candidates are being built
         self.keep = 0.0  # seconds before the limit that building always leaves to tracking
+        self.stopped_at: int | None = None  # the layer being built when building stopped
         self.t_build: float | None = None  # when the first layer's building began
 
     def seed(self) -> int:
@@ -725,6 +726,8 @@ class _Context:
                 and now + (self.wps.n - i) * (now - t0) / i < self.limit - self.search_s - self.keep
             )
             self.timed_out = not fits
+            if self.timed_out:
+                self.stopped_at = i
         return self.timed_out
 
     def past_limit(self) -> bool:
@@ -1791,6 +1794,8 @@ def _reason(
     if ctx.timed_out:
         unchecked = "; the interpolated poses of the later steps were not checked" if k else ""
         msg = "time_limit reached: the later waypoints were only tracked (no time to build them)"
+        if ctx.cut is None and ctx.stopped_at is not None and ctx.stopped_at >= q.shape[0] - 1:
+            msg = "time_limit reached: every waypoint built, the refinement after it cut short"
         if ctx.cut is not None:
             last = q.shape[0] - 1
             held = f"waypoints {ctx.cut}–{last}" if ctx.cut < last else f"waypoint {last}"
