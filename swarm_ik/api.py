@@ -31,7 +31,7 @@ import numpy as np
 from swarm_ik import collision, kernels
 from swarm_ik._validate import check_seed, keywords_checked
 from swarm_ik.errors import InvalidArgumentError, unknown
-from swarm_ik.goals import AvoidCollisions, Axis, LookAt, Orientation, Pose, Position, Posture
+from swarm_ik.goals import Posture
 from swarm_ik.goals import base as goals_base
 from swarm_ik.goals.axis import angle_between
 from swarm_ik.kernels import search
@@ -68,18 +68,6 @@ def verify(
     return problem.verify(q, tol_pos, tol_rot)
 
 
-def _slack(goal: Any) -> tuple[float, float]:
-    """How far a bounded goal's region reaches from its point [m] and rotation [rad]: a
-    ``Pose.tolerance`` box's half-diagonal and the norm of its rotation bounds (at most π), a
-    ``Position.radius``; ``(0, 0)`` for an exact goal."""
-    tol = getattr(goal, "tolerance", None) if isinstance(goal, Pose) else None
-    if tol is not None:
-        t = np.asarray(tol, dtype=float)
-        return float(np.linalg.norm(t[:3])), min(float(np.linalg.norm(t[3:])), float(np.pi))
-    radius = getattr(goal, "radius", None) if isinstance(goal, Position) else None
-    return (0.0 if radius is None else float(radius)), 0.0
-
-
 UNREACHABLE_BUDGET = (0.05, 3000)
 """``(seconds, evaluations)`` a solve spends at most on a problem :func:`unreachable_goal`
 proves unreachable or :func:`conflicting_goals` proves contradictory, whatever budget it was
@@ -102,31 +90,27 @@ def unreachable_goal(
     inside an obstacle of a collision goal, or a primary goal that says it cannot be met
     within the tolerances (:meth:`swarm_ik.goals.Goal.infeasible`), if any: no joint vector
     can meet it.  Returns its label (or the goal's reason)."""
-    avoid = [gl for gl in problem.goals if isinstance(gl, AvoidCollisions) and gl.is_primary]
+    avoid = problem.collision_goal
     for gl in problem.goals:
         if not gl.is_primary:
             continue
         why = gl.infeasible(problem.robot, tol_pos, tol_rot)
         if why is not None:
             return why
-        if isinstance(gl, Pose):
-            point = gl.target[:3, 3]
-        elif isinstance(gl, Position):
-            point = gl.point
-        else:
+        held = gl.pin()
+        if held is None or held.point is None:
             continue
-        slack = _slack(gl)[0]  # (a bounded goal's region reaches this much nearer)
+        point, slack = held.point, held.point_slack  # (a region reaches this much nearer)
         far = math.hypot(*(float(v) for v in point)) - slack  # (no overflow at 1e300 m)
-        if far > problem.robot.reach_radius(gl.frame) * (1 + 1e-9):
+        if far > problem.robot.reach_radius(held.frame) * (1 + 1e-9):
             return gl.describe()
-        if slack > 0.0:
+        if slack > 0.0 or avoid is None:
             continue  # (a region, not a point: it may reach out of an obstacle)
-        if avoid and not _origin_in_body(problem.robot, gl.frame):
+        if not _origin_in_body(problem.robot, held.frame):
             continue  # (a frame off the robot's bodies, a grasp point, may lie in an obstacle)
-        for av in avoid:  # a goal point inside an obstacle: the robot would be in contact
-            inside = av.obstacle_containing(point, ORIGIN_REACH)
-            if inside is not None:
-                return f"{gl.describe()} inside obstacle {inside!r}"
+        inside = avoid.obstacle_containing(point, ORIGIN_REACH)  # (the robot in contact)
+        if inside is not None:
+            return f"{gl.describe()} inside obstacle {inside!r}"
     return None
 
 
@@ -152,50 +136,49 @@ def _origin_in_body(robot: RobotModel, frame: str) -> bool:
 def conflicting_goals(problem: IKProblem, tol_pos: float, tol_rot: float) -> str | None:
     """Two primary goals on one frame that no pose can meet together, if any: their labels.
 
-    Found from the goals' data alone, before any search:
+    Found from what each goal holds its frame to (:meth:`swarm_ik.goals.Goal.pin`) alone,
+    before any search, without knowing the goals' types:
 
-    * two points (``Position``, ``Pose``) farther apart than ``2·tol_pos`` plus their regions;
-    * two orientations (``Orientation``, ``Pose``) further apart than ``2·tol_rot`` plus their
-      bounds;
-    * an orientation ``R`` and a frame axis ``a`` held along a world direction ``d``
-      (``Axis``; ``LookAt`` when a point goal holds the frame's origin ``p``: ``d`` the unit
-      vector from ``p`` to the point looked at) with ``∠(R·a, d) > 2·tol_rot``;
+    * two points farther apart than ``2·tol_pos`` plus their regions' reach;
+    * two rotations further apart than ``2·tol_rot`` plus their regions' reach;
+    * a rotation ``R`` and a frame axis ``a`` held along a world direction ``d`` (or towards
+      a world point ``t`` when a point goal holds the frame's origin ``p``: ``d`` the unit
+      vector from ``p`` to ``t``) with ``∠(R·a, d) > 2·tol_rot``;
     * two such axes, ``(a₁, d₁)`` and ``(a₂, d₂)``: a rotation keeps angles, so
       ``|∠(a₁, a₂) − ∠(d₁, d₂)| > 2·tol_rot`` cannot be met (the same axis along two
       directions, say).
 
-    The angular allowances also hold the regions' bounds (a ``Pose.tolerance``, a
-    ``Position.radius`` seen from the point looked at)."""
+    The angular allowances also hold the regions' reach (a bounded pose's rotation bounds, a
+    point's ball seen from the point looked at)."""
     points: dict[str, list[tuple[Any, Any, float]]] = {}
     rots: dict[str, list[tuple[Any, Any, float]]] = {}
     axes: dict[str, list[tuple[Any, Any, Any, float]]] = {}
-    looks: list[Any] = []
+    looks: list[tuple[Any, Any]] = []
     for gl in problem.goals:
-        if not gl.is_primary:
+        held = gl.pin() if gl.is_primary else None
+        if held is None:
             continue
-        if isinstance(gl, Pose):
-            points.setdefault(gl.frame, []).append((gl, gl.target[:3, 3], _slack(gl)[0]))
-            rots.setdefault(gl.frame, []).append((gl, gl.target[:3, :3], _slack(gl)[1]))
-        elif isinstance(gl, Position):
-            points.setdefault(gl.frame, []).append((gl, gl.point, _slack(gl)[0]))
-        elif isinstance(gl, Orientation):
-            rots.setdefault(gl.frame, []).append((gl, gl.rotation, 0.0))
-        elif isinstance(gl, Axis):
-            axes.setdefault(gl.frame, []).append((gl, gl.axis, gl.direction, 0.0))
-        elif isinstance(gl, LookAt):
-            looks.append(gl)
+        if held.point is not None:
+            points.setdefault(held.frame, []).append((gl, held.point, held.point_slack))
+        if held.rotation is not None:
+            rots.setdefault(held.frame, []).append((gl, held.rotation, held.rotation_slack))
+        if held.axis is not None and held.direction is not None:
+            axes.setdefault(held.frame, []).append((gl, held.axis, held.direction, 0.0))
+        elif held.axis is not None and held.look_at is not None:
+            looks.append((gl, held))
     for items in points.values():
         for i, (a, pa, sa) in enumerate(items):
             for b, pb, sb in items[i + 1 :]:
                 if float(np.linalg.norm(pa - pb)) > 2 * tol_pos + sa + sb:
                     return f"{a.describe()} and {b.describe()}"
-    for gl in looks:  # (a LookAt is an axis along a known direction where its origin is held)
-        for _, p, s in points.get(gl.frame, [])[:1]:
-            e = np.asarray(gl.point, dtype=float) - p
+    for gl, held in looks:  # (an axis towards a point is one along a known direction where
+        # the frame's origin is held)
+        for _, p, s in points.get(held.frame, [])[:1]:
+            e = np.asarray(held.look_at, dtype=float) - p
             dist = float(np.linalg.norm(e))
             if dist > 2 * (s + tol_pos):  # (the direction known to within asin((s+tol)/dist))
                 wobble = float(np.arcsin(min((s + tol_pos) / dist, 1.0)))
-                axes.setdefault(gl.frame, []).append((gl, gl.axis, e / dist, wobble))
+                axes.setdefault(held.frame, []).append((gl, held.axis, e / dist, wobble))
     allow = 2 * tol_rot
     for frame, items in rots.items():
         for i, (a, ra, sa) in enumerate(items):
@@ -205,9 +188,9 @@ def conflicting_goals(problem: IKProblem, tol_pos: float, tol_rot: float) -> str
             for b, ax, d, sb in axes.get(frame, []):
                 if angle_between(ra @ ax, d) > allow + sa + sb:
                     return f"{a.describe()} and {b.describe()}"
-    for held in axes.values():
-        for i, (a, a1, d1, sa) in enumerate(held):
-            for b, a2, d2, sb in held[i + 1 :]:
+    for held_axes in axes.values():
+        for i, (a, a1, d1, sa) in enumerate(held_axes):
+            for b, a2, d2, sb in held_axes[i + 1 :]:
                 if abs(angle_between(a1, a2) - angle_between(d1, d2)) > allow + sa + sb:
                     return f"{a.describe()} and {b.describe()}"
     return None

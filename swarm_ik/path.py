@@ -1858,25 +1858,21 @@ def _inside_reason(ctx: _Context, missed: list[int]) -> str:
 
 def _inside_obstacle(ctx: _Context, i: int) -> str | None:
     """The obstacle of waypoint ``i``'s collision goals whose inside holds its target point
-    (the pose's, or the point of a primary ``Pose``/``Position`` goal), if any
-    (:meth:`AvoidCollisions.obstacle_containing`)."""
-    from swarm_ik.goals import AvoidCollisions, Pose, Position
-
+    (the pose's, or the point a primary goal holds its frame's origin to:
+    :meth:`swarm_ik.goals.Goal.pin`), if any (:meth:`AvoidCollisions.obstacle_containing`)."""
     problem = ctx.wps.problem(i)
-    avoid = [g for g in problem.goals if isinstance(g, AvoidCollisions) and g.is_primary]
-    if not avoid:
+    avoid = problem.collision_goal
+    if avoid is None:
         return None
     points = [ctx.wps.poses[i][:3, 3]] if ctx.wps.poses is not None else []
     for g in problem.goals:
-        if g.is_primary and isinstance(g, Pose):
-            points.append(g.target[:3, 3])
-        elif g.is_primary and isinstance(g, Position):
-            points.append(g.point)
-    for av in avoid:
-        for point in points:
-            name = av.obstacle_containing(point)
-            if name is not None:
-                return str(name)
+        held = g.pin() if g.is_primary else None
+        if held is not None and held.point is not None:
+            points.append(held.point)
+    for point in points:
+        name = avoid.obstacle_containing(point)
+        if name is not None:
+            return str(name)
     return None
 
 

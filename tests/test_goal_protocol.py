@@ -290,6 +290,50 @@ def test_contradictory_python_goals_end_with_conflicting_goals() -> None:
     assert prob.opposing_goals(res.q) == "OnSphere(panda_hand_tcp) and OnSphere(panda_hand_tcp)"
 
 
+@dataclass(frozen=True)
+class AtPoint(G.Goal):
+    """A user's point goal that says what it holds its frame to (:meth:`Goal.pin`)."""
+
+    frame: str
+    point: tuple = (0.4, 0.0, 0.4)
+
+    def residual(self, state):
+        return np.asarray(self.point) - state.pose(self.frame)[:3, 3]
+
+    def jacobian(self, state):
+        return -state.jacobian(self.frame)[:3]
+
+    def pin(self):
+        return G.Pin(self.frame, point=np.asarray(self.point, dtype=float))
+
+
+def test_a_user_goals_pin_proves_unreachable_and_conflicting_goals_before_the_search() -> None:
+    """A pin 5 m away ends the solve "unreachable", and a pin 0.2 m from a built-in
+    ``Position`` of the same frame "conflicting_goals", each within the capped budget
+    whatever the time limit; without the pin the far point searches its whole budget."""
+    import time
+
+    r = robot("panda")
+    far = AtPoint("panda_hand_tcp", (5.0, 0.0, 0.4))
+    assert swarm_ik.api.unreachable_goal(swarm_ik.IKProblem(r, goals=[far])) is not None
+    t0 = time.perf_counter()
+    res = swarm_ik.solve(swarm_ik.IKProblem(r, goals=[far]), seed=0, time_limit=30.0)
+    assert time.perf_counter() - t0 < 10.0 and res.reason == "unreachable"
+    assert res.n_evals <= swarm_ik.api.UNREACHABLE_PYTHON_EVALS
+    both = [AtPoint("panda_hand_tcp"), G.Position("panda_hand_tcp", [0.4, 0.2, 0.4])]
+    prob = swarm_ik.IKProblem(r, goals=both)
+    assert swarm_ik.api.conflicting_goals(prob, 1e-5, 1e-5) == (
+        "AtPoint(panda_hand_tcp) and Position(panda_hand_tcp)"
+    )
+    res = swarm_ik.solve(prob, seed=0, max_evals=10**6)
+    assert not res.success and res.reason == "conflicting_goals"
+    assert res.n_evals <= swarm_ik.api.UNREACHABLE_PYTHON_EVALS
+    near = [AtPoint("panda_hand_tcp"), G.Position("panda_hand_tcp", [0.4, 0.0, 0.4])]
+    assert swarm_ik.api.conflicting_goals(swarm_ik.IKProblem(r, goals=near), 1e-5, 1e-5) is None
+    unpinned = OnSphere("panda_hand_tcp", center=(5.0, 0.0, 0.4), radius=0.01)
+    assert swarm_ik.api.unreachable_goal(swarm_ik.IKProblem(r, goals=[unpinned])) is None
+
+
 def test_goals_on_separate_chains_cut_short_are_not_called_conflicting() -> None:
     """Reachable goals of two arms stopped by the budget: their pulls act on different joints
     and cannot cancel, so the reason is the budget."""

@@ -38,7 +38,7 @@ import numpy as np
 from swarm_ik.errors import InvalidArgumentError, InvalidTargetError, unknown
 from swarm_ik.goals.avoid_collisions import AvoidCollisions
 from swarm_ik.goals.axis import Axis
-from swarm_ik.goals.base import Encoded, Goal, State, kernel_slot, kernels
+from swarm_ik.goals.base import Encoded, Goal, Pin, State, kernel_slot, kernels
 from swarm_ik.goals.center_joints import CenterJoints
 from swarm_ik.goals.center_of_mass import CenterOfMass
 from swarm_ik.goals.joint import JointGoal
@@ -249,6 +249,7 @@ __all__ = [
     "LookAt",
     "MinimalDisplacement",
     "Orientation",
+    "Pin",
     "Pose",
     "Position",
     "Posture",

@@ -8,7 +8,7 @@ from typing import TYPE_CHECKING, Any, ClassVar
 import numba
 import numpy as np
 
-from swarm_ik.goals.base import Encoded, FloatArray, Goal, State, frame_index, skew
+from swarm_ik.goals.base import Encoded, FloatArray, Goal, Pin, State, frame_index, skew
 from swarm_ik.kernels.rows import direction_rows
 
 if TYPE_CHECKING:
@@ -66,6 +66,10 @@ class Axis(FrameAxis):
 
     direction: Any
     units: ClassVar[tuple[str, ...]] = ("axis", "direction")
+
+    def pin(self) -> Pin:
+        """The axis along the direction."""
+        return Pin(self.frame, axis=self.axis, direction=self.direction)
 
     def encode(self, robot: RobotModel, q0: FloatArray | None) -> Encoded:
         return self._encode(robot, self.direction, at_point=False)

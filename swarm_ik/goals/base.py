@@ -354,6 +354,34 @@ class State:
 
 
 # --------------------------------------------------------------------------- goals
+class Pin(NamedTuple):
+    """What a goal holds its frame to, for the proofs made before a search
+    (:func:`swarm_ik.api.unreachable_goal`, :func:`swarm_ik.api.conflicting_goals`): a point
+    beyond the frame's reach, or two goals that no pose meets together, end a solve at once
+    without knowing either goal's type.  Every field but ``frame`` may be None.
+
+    Attributes:
+        frame: The goal's frame.
+        point: Its origin held at this world point ``(3,)`` [m]…
+        point_slack: …to within this distance [m] (a bounded goal's region; 0: exact).
+        rotation: Its rotation held at this world rotation ``(3, 3)``…
+        rotation_slack: …to within this angle [rad].
+        axis: A unit axis of the frame ``(3,)``, held along ``direction`` (a unit world
+            vector ``(3,)``) or towards the world point ``look_at`` [m] from the origin.
+        direction: See ``axis``.
+        look_at: See ``axis``.
+    """
+
+    frame: str
+    point: FloatArray | None = None
+    point_slack: float = 0.0
+    rotation: FloatArray | None = None
+    rotation_slack: float = 0.0
+    axis: FloatArray | None = None
+    direction: FloatArray | None = None
+    look_at: FloatArray | None = None
+
+
 class Encoded(NamedTuple):
     """A compiled goal as the table holds it.
 
@@ -590,6 +618,12 @@ class Goal:
         if math.isnan(dp) and math.isnan(dr):
             met = False  # nothing measured: never a vacuous success
         return float(dp), float(dr), bool(met), None
+
+    def pin(self) -> Pin | None:
+        """What this goal holds its frame to (:class:`Pin`), for the proofs before a search;
+        None (the default) when it says nothing of the kind (such a goal is still solved and
+        judged; only those early proofs cannot see it)."""
+        return None
 
     def infeasible(self, robot: RobotModel, tol_pos: float, tol_rot: float) -> str | None:
         """Why no configuration of ``robot`` can meet this goal within the tolerances, found

@@ -8,7 +8,7 @@ from typing import TYPE_CHECKING, Any, ClassVar
 import numpy as np
 
 from swarm_ik.goals.axis import FrameAxis, angle_between
-from swarm_ik.goals.base import Encoded, FloatArray, State, skew
+from swarm_ik.goals.base import Encoded, FloatArray, Pin, State, skew
 
 if TYPE_CHECKING:
     from swarm_ik.robot import RobotModel
@@ -29,6 +29,10 @@ class LookAt(FrameAxis):
 
     point: Any
     vectors: ClassVar[tuple[str, ...]] = ("point",)
+
+    def pin(self) -> Pin:
+        """The axis towards the point."""
+        return Pin(self.frame, axis=self.axis, look_at=np.asarray(self.point, dtype=float))
 
     def encode(self, robot: RobotModel, q0: FloatArray | None) -> Encoded:
         return self._encode(robot, self.point, at_point=True)

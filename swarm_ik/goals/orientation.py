@@ -8,7 +8,7 @@ from typing import TYPE_CHECKING, Any, ClassVar
 import numba
 import numpy as np
 
-from swarm_ik.goals.base import Encoded, FloatArray, Goal, State, frame_index
+from swarm_ik.goals.base import Encoded, FloatArray, Goal, Pin, State, frame_index
 from swarm_ik.kernels import lie
 from swarm_ik.kernels.rows import rotation_rows
 from swarm_ik.pose import as_pose
@@ -60,6 +60,10 @@ class Orientation(Goal):
             rot = as_pose((np.zeros(3), self.rotation), orth_tol=self.orth_tol)[:3, :3]
         object.__setattr__(self, "rotation", rot)
         super().__post_init__()
+
+    def pin(self) -> Pin:
+        """The rotation."""
+        return Pin(self.frame, rotation=self.rotation)
 
     def encode(self, robot: RobotModel, q0: FloatArray | None) -> Encoded:
         ipar = np.array([frame_index(self, robot)], dtype=np.int64)

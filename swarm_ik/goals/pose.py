@@ -11,7 +11,7 @@ import numpy as np
 
 from swarm_ik._validate import nonnegative
 from swarm_ik.errors import InvalidArgumentError
-from swarm_ik.goals.base import Encoded, FloatArray, Goal, State, frame_index
+from swarm_ik.goals.base import Encoded, FloatArray, Goal, Pin, State, frame_index
 from swarm_ik.kernels import lie
 from swarm_ik.kernels.rows import (
     box_position_rows,
@@ -146,6 +146,19 @@ class Pose(Goal):
 
     def kernel_of(self) -> Any:
         return pose_kernel if self.tolerance is None else pose_bounded_kernel
+
+    def pin(self) -> Pin:
+        """The target's point and rotation; a bounded goal's region reaches its box's
+        half-diagonal and the norm of its rotation bounds (at most π) from them."""
+        slack_p = slack_r = 0.0
+        if self.tolerance is not None:
+            t = np.asarray(self.tolerance, dtype=float)
+            slack_p = float(np.linalg.norm(t[:3]))
+            slack_r = min(float(np.linalg.norm(t[3:])), math.pi)
+        return Pin(
+            self.frame, point=self.target[:3, 3], point_slack=slack_p,
+            rotation=self.target[:3, :3], rotation_slack=slack_r,
+        )  # fmt: skip
 
     def encode(self, robot: RobotModel, q0: FloatArray | None) -> Encoded:
         f = frame_index(self, robot)

@@ -10,7 +10,7 @@ import numba
 import numpy as np
 
 from swarm_ik._validate import nonnegative
-from swarm_ik.goals.base import Encoded, FloatArray, Goal, State, frame_index
+from swarm_ik.goals.base import Encoded, FloatArray, Goal, Pin, State, frame_index
 from swarm_ik.kernels.rows import ball_rows, position_rows
 
 if TYPE_CHECKING:
@@ -82,6 +82,11 @@ class Position(Goal):
     @property
     def exact(self) -> bool:
         return self.radius is None
+
+    def pin(self) -> Pin:
+        """The point (within the ball's radius)."""
+        slack = 0.0 if self.radius is None else float(self.radius)
+        return Pin(self.frame, point=np.asarray(self.point, dtype=float), point_slack=slack)
 
     def encode(self, robot: RobotModel, q0: FloatArray | None) -> Encoded:
         f = frame_index(self, robot)
