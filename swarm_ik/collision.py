@@ -24,9 +24,13 @@ Self-collision pairs are the pairs of links with collision geometry, minus
   :func:`cache_dir`.
 
 The exact check (:meth:`RobotCollision.check`) runs coal's ``collide`` (with the margin as
-security margin) and ``distance`` on every enabled pair: self pairs and every robot body
-against every obstacle of a :class:`~swarm_ik.scene.Scene` (the obstacles in coal's dynamic
-AABB tree, its broad phase, so thousands of obstacles cost little).
+security margin) and ``distance`` on every enabled pair: self pairs and every robot body that
+a joint moves against every obstacle of a :class:`~swarm_ik.scene.Scene` (the obstacles in
+coal's dynamic AABB tree, its broad phase, so thousands of obstacles cost little).  A body
+fixed to the world (a base link) is paired with no obstacle: its contacts do not depend on
+``q`` (the rigid pairs' reason), and a base standing on the table of its scene (cuRobo's
+``collision_table.yml`` under a Panda, whose base mesh dips 3e-5 m below its origin) made
+every solve fail; one warning per scene names such a body in contact.
 """
 
 from __future__ import annotations
@@ -603,6 +607,9 @@ class _Checker:
         # the obstacles: coal objects (fixed in the world) in the broad phase's tree
         self.body_links = rc.body_links
         self.bodies = [coal.CollisionObject(g.geometry) for g in gm.geometryObjects]
+        # bodies that no joint moves (fixed to the world) are left out of the obstacle pairs:
+        # their contacts do not depend on q (a base standing on the table of its scene)
+        self.moving = np.asarray(rc.body_joint) != 0
         self.obstacles = [obj for _, obj in scene.coal_objects()]
         self.obstacle_names = [name for name, _ in scene.coal_objects()]
         self.obs_lo, self.obs_hi = scene.boxes()  # (computes each object's box)
@@ -617,8 +624,10 @@ class _Checker:
         self.solids = rc.solids()
         self.solid_lo = np.ascontiguousarray(self.solids.box[:, 0])
         self.solid_hi = np.ascontiguousarray(self.solids.box[:, 1])
+        # (a fixed body's solid holds no obstacle: its reach below any obstacle's size)
+        self.solid_reach = np.where(self.moving[self.solids.bodies], self.solids.reach, -1.0)
         size = (self.obs_hi - self.obs_lo).max(axis=1) if self.obstacles else np.zeros(0)
-        reach = float(self.solids.reach.max()) if len(self.solids.bodies) else -1.0
+        reach = float(self.solid_reach.max()) if len(self.solids.bodies) else -1.0
         small = np.flatnonzero(size <= reach)
         self.small = bool(small.size)
         if self.small:
@@ -634,9 +643,11 @@ class _Checker:
             self.manager.setup()
             # the bodies in a tree of their own: one query of tree against tree
             self.body_manager = coal.DynamicAABBTreeCollisionManager()
-            for obj in self.bodies:
-                self.body_manager.registerObject(obj)
+            for obj, moving in zip(self.bodies, self.moving.tolist(), strict=True):
+                if moving:
+                    self.body_manager.registerObject(obj)
             self.body_manager.setup()
+            self._warn_fixed_contacts(rc, scene)
 
     def _set_margin(self, margin: float) -> None:
         if margin != self.margin:
@@ -674,7 +685,7 @@ class _Checker:
             pair_map = np.zeros((n, n), dtype=bool)
             for cp in self.gm.collisionPairs:
                 pair_map[cp.first, cp.second] = True
-            pair_map[:nb, nb:] = True
+            pair_map[np.flatnonzero(self.moving), nb:] = True
             gm.setCollisionPairs(pair_map, True)
             self._scene_data = self.model.createData()
             self._scene_gm, self._scene_gd = gm, pin.GeometryData(gm)  # (kept alive)
@@ -711,7 +722,7 @@ class _Checker:
         oMg, sd = placed.oMg, self.solids
         pairs = enclosed_points(
             np.array([oMg[b].homogeneous for b in sd.bodies]), self.solid_lo, self.solid_hi,
-            sd.reach, self.small_points, self.small_sizes, *sd.mesh, bool(first),
+            self.solid_reach, self.small_points, self.small_sizes, *sd.mesh, bool(first),
         )  # fmt: skip
         return [(sd.bodies[s], int(self.small_obstacles[i])) for s, i in pairs.tolist()]
 
@@ -760,7 +771,31 @@ class _Checker:
             np.maximum(lo[:, None, :] - self.obs_hi[None], self.obs_lo[None] - hi[:, None, :]),
             0.0,
         )
-        return np.asarray(np.sqrt((gap * gap).sum(-1)))
+        out = np.sqrt((gap * gap).sum(-1))
+        out[~self.moving] = np.inf  # (bodies fixed to the world: no obstacle pairs)
+        return np.asarray(out)
+
+    def _warn_fixed_contacts(self, rc: RobotCollision, scene: Scene) -> None:
+        """One warning naming the bodies fixed to the world that touch an obstacle (whatever
+        the joints, so left out of the check like every pair of such a body)."""
+        coal = self._coal
+        data = self.model.createData()
+        pin.forwardKinematics(self.model, data, rc.robot.to_pinocchio(rc.robot.mid_q()))
+        gd = pin.GeometryData(self.gm)
+        pin.updateGeometryPlacements(self.model, data, self.gm, gd)
+        touching = []
+        for b in np.flatnonzero(~self.moving).tolist():
+            body = coal.CollisionObject(self.gm.geometryObjects[b].geometry)
+            body.setTransform(gd.oMg[b])
+            for name, obj in zip(self.obstacle_names, self.obstacles, strict=True):
+                if coal.collide(body, obj, coal.CollisionRequest(), coal.CollisionResult()):
+                    touching.append(f"{rc.body_links[b]}–{name}")
+        if touching:
+            warnings.warn(
+                f"{', '.join(sorted(set(touching)))}: fixed to the world, in contact whatever "
+                "the joints; such pairs are left out of the collision check",
+                stacklevel=2,
+            )
 
     def _obstacle_distance(self, b: int, o: int) -> float:
         coal = self._coal

@@ -29,10 +29,10 @@ spheres as above.
 **Residual** (:func:`penetration`): one row ``max(0, margin + r_i + r_j − |c_i − c_j|)`` per
 active sphere pair of an enabled body pair and ``max(0, margin + r_i − sdf_k(c_i))`` per
 active sphere–obstacle pair (spheres of the bodies that ``q`` moves; a body fixed to the
-world is left to the exact check), with its Jacobian.  Body pairs (and body–obstacle pairs) are
-culled first with each body's bounding sphere.  The centre ``c = R c_local + p`` of a sphere
-moves with the body Jacobian ``J`` (LOCAL_WORLD_ALIGNED at the body origin, rows ``[v; ω]``)
-as ``J_c = J_v − [R c_local]× J_ω``.
+world is left out, as the exact check leaves it), with its Jacobian.  Body pairs (and
+body–obstacle pairs) are culled first with each body's bounding sphere.  The centre
+``c = R c_local + p`` of a sphere moves with the body Jacobian ``J`` (LOCAL_WORLD_ALIGNED at
+the body origin, rows ``[v; ω]``) as ``J_c = J_v − [R c_local]× J_ω``.
 """
 
 from __future__ import annotations

@@ -72,7 +72,8 @@ def _world_tf(rc: RobotCollision, data, k: int):
 
 
 def _reference(rc: RobotCollision, q, scene: Scene, margin: float):
-    """Contact pairs and smallest distance from coal.collide / coal.distance, pair by pair."""
+    """Contact pairs and smallest distance from coal.collide / coal.distance, pair by pair
+    (the bodies no joint moves against no obstacle: their contacts do not depend on q)."""
     robot = rc.robot
     data = robot.model.createData()
     pin.forwardKinematics(robot.model, data, robot.to_pinocchio(q))
@@ -84,6 +85,8 @@ def _reference(rc: RobotCollision, q, scene: Scene, margin: float):
     ]
     for name, obj in scene.coal_objects():
         for k in range(rc.nb):
+            if rc.geom_model.geometryObjects[k].parentJoint == 0:
+                continue
             pairs.append(
                 (
                     geoms[k],
@@ -226,3 +229,30 @@ def test_an_obstacle_wholly_inside_a_link_mesh_is_in_contact(shape: str) -> None
     )  # fmt: skip
     assert not res.success or rc.check(res.q, scene).collision_free
     assert not np.allclose(res.q, q)  # (the start, inside the obstacle, is not the answer)
+
+
+def test_a_body_fixed_to_the_world_touching_an_obstacle_is_named_once_and_left_out() -> None:
+    """cuRobo's own table (its top at z = 0) touches the Panda's base mesh (3e-5 m below
+    z = 0) whatever the joints: one warning names the pair, the check leaves it out (every
+    solve failed "local_minima" on it), and a link the joints move still touches the table."""
+    import warnings
+
+    import swarm_ik
+    from swarm_ik.goals import AvoidCollisions
+    from swarm_ik.scene import Box
+
+    r = swarm_ik.load_robot("panda")
+    rc = r.collision_model()
+    table = Scene([Box((5.0, 5.0, 0.2), (0.0, 0.0, -0.1), name="table")])
+    with pytest.warns(UserWarning, match="panda_link0–table: fixed to the world"):
+        rep = rc.check(r.mid_q(), table)
+    assert rep.collision_free and "panda_link0" not in str(rep.closest_pair)
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")  # (once per scene: not again)
+        q_low = r.mid_q().copy()
+        q_low[1], q_low[3] = 1.7, -0.1  # (the arm reached down through the table top)
+        assert rc.collides(q_low, table)
+    q_true = np.array([0.3, -0.4, 0.1, -2.0, 0.1, 1.8, 0.7])
+    prob = swarm_ik.IKProblem(r, r.fk(q_true), goals=[AvoidCollisions(table)])
+    res = swarm_ik.solve(prob, seed=0)
+    assert res.success and not rc.collides(res.q, table)
