@@ -193,12 +193,13 @@ def test_result_files_hold_the_goal_checks(tmp_path, avoid_result):
 def test_time_limit_reports_targets_not_reached_as_unsolved(panda):
     targets = panda.fk(panda.random_q(np.random.default_rng(5), 3000))
     full = solve_batch(panda, targets, seed=0)
-    for limit in (0.01, 0.03, 0.1):  # (a loaded machine may reach none in the first)
+    for limit in (0.005, 0.01, 0.02, 0.04, 0.08):  # (some reached, not all: the limit that
+        # does it depends on the machine's speed and load)
         cut = solve_batch(panda, targets, seed=0, time_limit=limit)
         reached = cut.n_starts > 0
-        if reached.any():
+        if reached.any() and not reached.all():
             break
-    assert not reached.all()  # 3000 targets take longer than 10 ms
+    assert reached.any() and not reached.all()
     assert not cut.success[~reached].any()
     np.testing.assert_array_equal(cut.q[~reached], np.tile(panda.mid_q(), ((~reached).sum(), 1)))
     # the seeds' starts come first, restarts in later passes: a success within the limit is
