@@ -30,7 +30,7 @@ import numpy as np
 
 from swarm_ik import collision, kernels
 from swarm_ik._validate import check_seed, keywords_checked
-from swarm_ik.errors import InvalidArgumentError, unknown
+from swarm_ik.errors import InvalidArgumentError, SwarmIKError, unknown
 from swarm_ik.goals import Posture
 from swarm_ik.goals import base as goals_base
 from swarm_ik.goals.axis import angle_between
@@ -94,10 +94,10 @@ def unreachable_goal(
     for gl in problem.goals:
         if not gl.is_primary:
             continue
-        why = gl.infeasible(problem.robot, tol_pos, tol_rot)
+        why = goals_base.infeasible_of(gl, problem.robot, tol_pos, tol_rot)
         if why is not None:
             return why
-        held = gl.pin()
+        held = goals_base.pin_of(gl)
         if held is None or held.point is None:
             continue
         point, slack = held.point, held.point_slack  # (a region reaches this much nearer)
@@ -155,7 +155,7 @@ def conflicting_goals(problem: IKProblem, tol_pos: float, tol_rot: float) -> str
     axes: dict[str, list[tuple[Any, Any, Any, float]]] = {}
     looks: list[tuple[Any, Any]] = []
     for gl in problem.goals:
-        held = gl.pin() if gl.is_primary else None
+        held = goals_base.pin_of(gl) if gl.is_primary else None
         if held is None:
             continue
         if held.point is not None:
@@ -224,6 +224,23 @@ def end_reason(
     if max_evals is None and time_limit is None:
         return "local_minima"
     return "stopped"
+
+
+def _kernel_raised(problem: IKProblem, exc: Exception) -> Exception:
+    """What an exception raised inside the compiled search becomes: with compiled goals
+    written outside swarm_ik (whose kernels may raise), an :class:`InvalidArgumentError`
+    naming them; else the exception itself (a defect of swarm_ik's)."""
+    users = [
+        gl.describe()
+        for gl in problem.compiled_goals
+        if not str(type(gl).__module__).startswith("swarm_ik.")
+    ]
+    if not users:
+        return exc
+    return InvalidArgumentError(
+        f"a compiled goal's kernel raised {type(exc).__name__}: {str(exc)[:200]!r} during the "
+        f"search (goals written outside swarm_ik: {', '.join(users)})"
+    )
 
 
 def prepare_q0(problem: IKProblem, q0: Any) -> np.ndarray | None:
@@ -530,7 +547,15 @@ class Route:
             with self._lock:  # (the bound table and scratch serve one run at a time)
                 self._rebind(problem, q_start)
                 t0 = time.perf_counter()
-                out = self._search(seed_q, key, max_evals, search_limit)
+                try:
+                    out = self._search(seed_q, key, max_evals, search_limit)
+                except SwarmIKError:
+                    raise
+                except Exception as exc:  # (a compiled goal's own kernel raised)
+                    named = _kernel_raised(problem, exc)
+                    if named is exc:
+                        raise
+                    raise named from exc
                 elapsed = time.perf_counter() - t0
             q, fit, n_evals, history = out.q, out.fitness, out.used, out.history
             n_evals += first_evals

@@ -78,6 +78,7 @@ from numpy.typing import NDArray
 from swarm_ik._validate import floats_or, keywords_checked
 from swarm_ik.branches import SINGULAR_SIGMA, sigma_min
 from swarm_ik.errors import InvalidArgumentError, InvalidTargetError
+from swarm_ik.goals import base as goals_base
 from swarm_ik.kernels import joints
 from swarm_ik.optimize import make_rng
 from swarm_ik.result import FrozenArrays
@@ -1866,7 +1867,7 @@ def _inside_obstacle(ctx: _Context, i: int) -> str | None:
         return None
     points = [ctx.wps.poses[i][:3, 3]] if ctx.wps.poses is not None else []
     for g in problem.goals:
-        held = g.pin() if g.is_primary else None
+        held = goals_base.pin_of(g) if g.is_primary else None
         if held is not None and held.point is not None:
             points.append(held.point)
     for point in points:

@@ -16,6 +16,7 @@ from __future__ import annotations
 import dataclasses
 import functools
 import math
+import reprlib
 from collections.abc import Sequence
 from dataclasses import dataclass
 from typing import Any
@@ -25,7 +26,7 @@ from numpy.typing import NDArray
 
 from swarm_ik._types import FloatArray
 from swarm_ik._validate import keywords_checked
-from swarm_ik.errors import InvalidArgumentError, InvalidTargetError, unknown
+from swarm_ik.errors import InvalidArgumentError, InvalidTargetError, SwarmIKError, unknown
 from swarm_ik.fitness import FITNESS, get_fitness
 from swarm_ik.goals import AvoidCollisions, Goal, Pose, Position, State, kernel_slot, kernels
 from swarm_ik.goals import base as goals_base
@@ -131,6 +132,85 @@ TWIN_RTOL = 1e-6
 ``1 +`` their size)."""
 
 
+def _probe_q(robot: RobotModel) -> FloatArray:
+    """The configuration the goals' checks probe: no two joints alike (a residual that
+    vanishes where joints are equal, or at the middle of the ranges, would tell neither
+    sign), inside the limits."""
+    lo, hi = np.asarray(robot.lower, dtype=float), np.asarray(robot.upper, dtype=float)
+    frac = 0.25 + 0.5 * ((0.6180339887 * np.arange(1, lo.shape[0] + 1)) % 1.0)
+    finite = np.isfinite(lo) & np.isfinite(hi)
+    q = np.where(finite, lo + frac * np.where(finite, hi - lo, 0.0), frac - 0.5)
+    return np.asarray(np.clip(q, lo, hi))
+
+
+JACOBIAN_STEP = 1e-6
+"""Step [rad, m] of the central difference :func:`_check_python_jacobian` compares a Python
+goal's ``jacobian`` with."""
+
+JACOBIAN_RTOL = 0.5
+"""A Python goal's ``jacobian`` along the probe direction may differ from the central
+difference of its ``residual`` by this share of the difference's size (an approximate
+Jacobian still steers the search; one of the other sign, or zero, never does)."""
+
+
+def _check_python_jacobian(robot: RobotModel, goal: Goal) -> None:
+    """A goal written in Python, checked once per class and robot: its ``jacobian`` along
+    one direction at one configuration against the central difference of its ``residual``
+    (three residual calls and one Jacobian call, when the first problem of the class is made:
+    not under any solve's clock).  A Jacobian of the other sign (the
+    kernels' step convention ``−∂r/∂q`` where the protocol asks ``+∂r/∂q``) or zero where the
+    residual changes sent the search the wrong way and ended every solve with the budget's
+    reason and no word why.  Where the residual does not change along the direction (a
+    dead zone, a hinge at rest) nothing can be told and nothing is refused.
+
+    Raises:
+        InvalidArgumentError: the Jacobian disagrees (the goal, ``q`` and the two
+            derivatives named).
+    """
+    cls = type(goal)
+    checked = robot._cache.setdefault("jacobians_checked", set())
+    if cls in checked:
+        return
+    checked.add(cls)
+    q = _probe_q(robot)
+    span = np.where(np.isfinite(robot.upper - robot.lower), robot.upper - robot.lower, 1.0)
+    v = span * np.where(np.arange(q.shape[0]) % 2 == 0, 1.0, -0.7)  # (every joint moves)
+    v /= float(np.linalg.norm(v))
+    h = JACOBIAN_STEP
+    try:
+        r_np, j_np = goals_base.search_rows(goal, State(robot, q), want_jac=True)
+        r_hi = goals_base.search_rows(goal, State(robot, q + h * v), want_jac=False)[0]
+        r_lo = goals_base.search_rows(goal, State(robot, q - h * v), want_jac=False)[0]
+    except InvalidArgumentError:  # (rows of the wrong shape, NaN, an exception of the goal's:
+        # refused by the search where it meets them, with their own messages)
+        checked.discard(cls)
+        return
+    except BaseException:
+        checked.discard(cls)
+        raise
+    if j_np is None or r_hi.shape != r_np.shape or r_lo.shape != r_np.shape:
+        return  # (a goal whose rows change in number: nothing to compare)
+    fd = (r_hi - r_lo) / (2.0 * h)
+    along = j_np @ v
+    size = float(np.linalg.norm(fd))
+    if size <= 1e-6 * (1.0 + float(np.linalg.norm(r_np))):
+        return
+    if float(np.linalg.norm(along - fd)) <= JACOBIAN_RTOL * size:
+        return
+    checked.discard(cls)
+    if float(np.linalg.norm(along + fd)) <= JACOBIAN_RTOL * size:
+        what = "has the other sign (jacobian(state) is +∂residual/∂q)"
+    elif float(np.linalg.norm(along)) <= 1e-3 * size:
+        what = "is zero where the residual changes"
+    else:
+        what = "differs from the residual's derivative"
+    raise InvalidArgumentError(
+        f"{goal.describe()}.jacobian(state) {what} at q = {np.round(q, 6).tolist()}: along "
+        f"a direction it gives {np.round(along, 9).tolist()} where the residual changes by "
+        f"{np.round(fd, 9).tolist()} (docs/goals.md)"
+    )
+
+
 def _check_kernel_twin(robot: RobotModel, goal: Goal) -> None:
     """A compiled goal written outside swarm_ik, checked once per class and robot: its
     kernel's rows and step Jacobian at one configuration against its own numpy
@@ -149,19 +229,21 @@ def _check_kernel_twin(robot: RobotModel, goal: Goal) -> None:
     if cls in checked:
         return
     checked.add(cls)  # (before the problem below, which would check it again)
-    lo, hi = np.asarray(robot.lower, dtype=float), np.asarray(robot.upper, dtype=float)
-    # a configuration with no two joints alike (a residual that vanishes where joints are
-    # equal, or at the middle, would tell neither sign)
-    frac = 0.25 + 0.5 * ((0.6180339887 * np.arange(1, lo.shape[0] + 1)) % 1.0)
-    finite = np.isfinite(lo) & np.isfinite(hi)
-    q = np.where(finite, lo + frac * np.where(finite, hi - lo, 0.0), frac - 0.5)
-    q = np.clip(q, lo, hi)
+    q = _probe_q(robot)
     try:  # (probed as a primary goal: a secondary one alone makes no problem)
         probe = dataclasses.replace(goal, primary=True) if not goal.is_primary else goal
     except (TypeError, ValueError):
         return
     try:
-        res, jac = IKProblem(robot, goals=[probe]).stacked_rows(q[None])
+        try:
+            res, jac = IKProblem(robot, goals=[probe]).stacked_rows(q[None])
+        except SwarmIKError:
+            raise
+        except Exception as exc:  # (raised inside the compiled kernel)
+            raise InvalidArgumentError(
+                f"{goal.describe()}: its kernel raised {type(exc).__name__}: "
+                f"{reprlib.repr(str(exc))} at q = {np.round(q, 6).tolist()}"
+            ) from exc
         r_np, j_np = goals_base.search_rows(
             probe, State(robot, q), want_jac=cls.jacobian is not Goal.jacobian
         )
@@ -459,6 +541,7 @@ class IKProblem:
                     "(docs/goals.md)"
                 )
             gl.own_tolerance()  # (a bad tolerance refused now, not judged as met later)
+            _check_python_jacobian(robot, gl)
         self._frame0: dict[int, int] = {}
         """Index of the first frame each frame-adding goal owns (by position in
         ``compiled_goals``)."""

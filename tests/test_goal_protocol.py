@@ -949,3 +949,129 @@ def test_the_twin_check_accepts_negated_rows_where_joints_are_alike_and_secondar
 @dataclass(frozen=True)
 class AxisHeightSecondary(AxisHeight):
     """(A class of its own: the twin check runs once per class and robot.)"""
+
+
+@dataclass(frozen=True)
+class _Flipped(OnPlane):
+    """OnPlane with the kernels' step sign (``−∂r/∂q``) where the protocol asks ``+∂r/∂q``."""
+
+    def jacobian(self, state):
+        return -OnPlane.jacobian(self, state)
+
+
+@dataclass(frozen=True)
+class _Frozen(OnPlane):
+    """OnPlane with a Jacobian of zeros."""
+
+    def jacobian(self, state):
+        return np.zeros((1, state.q.shape[0]))
+
+
+@dataclass(frozen=True)
+class _Rough(OnPlane):
+    """OnPlane with a Jacobian 20 % too large: approximate, still a descent direction."""
+
+    def jacobian(self, state):
+        return 1.2 * OnPlane.jacobian(self, state)
+
+
+@pytest.mark.parametrize(
+    ("cls", "words"), [(_Flipped, "has the other sign"), (_Frozen, "is zero where")]
+)
+def test_a_python_goals_wrong_jacobian_is_refused_when_the_problem_is_made(cls, words) -> None:
+    """A Jacobian of the other sign or of zeros ran the whole budget and ended local_minima or
+    time_limit with no word why (a held-out review); once per class and robot its
+    derivative along one direction is compared with the residual's central difference."""
+    r = robot("ur5")
+    with pytest.raises(InvalidArgumentError, match=words) as info:
+        swarm_ik.IKProblem(r, goals=[cls("tool0", height=0.3)])
+    assert f"{cls.__name__}(tool0).jacobian(state)" in str(info.value)
+    with pytest.raises(InvalidArgumentError, match=words):  # (and again: not marked checked)
+        swarm_ik.IKProblem(r, goals=[cls("tool0", height=0.3)])
+
+
+def test_an_approximate_python_jacobian_is_accepted_and_solves() -> None:
+    r = robot("ur5")
+    q = r.random_q(np.random.default_rng(4))
+    height = float(r.fk(q)[2, 3])
+    res = swarm_ik.solve(swarm_ik.IKProblem(r, goals=[_Rough("tool0", height=height)]), seed=0)
+    assert res.success and abs(r.fk_pinocchio(res.q)[2, 3] - height) < 1e-5
+
+
+@numba.njit(GOAL_SIGNATURE)
+def _raising_kernel(par, ipar, q, f_pos, f_rot, f_jac, want_jac, res, jac, err, work):
+    """Raises where the frame's x passes ``par[0]`` (everywhere, with a low ``par[0]``)."""
+    f = ipar[0]
+    if f_pos[f, 0] > par[0]:
+        raise ValueError("x beyond the wall")
+    res[0] = par[0] - f_pos[f, 0]
+    if want_jac:
+        jac[0, :] = f_jac[f, 0, :]
+    err[0] = abs(res[0])
+    err[1] = np.nan
+
+
+@dataclass(frozen=True)
+class _Wall(G.Goal):
+    frame: str = "panda_hand_tcp"
+    x: float = -10.0
+    kernel = _raising_kernel
+
+    def encode(self, robot, q0):
+        return G.Encoded(np.array([self.x]), np.array([frame_index(self, robot)]), 1)
+
+
+def test_a_compiled_kernel_that_raises_is_named() -> None:
+    """A numba ``raise`` inside a user's kernel came out as a bare ValueError: with a numpy
+    twin it is named when the problem is made (the twin check runs the kernel), without one
+    when the search meets it."""
+    r = robot("panda")
+    with pytest.raises(
+        InvalidArgumentError,
+        match=r"kernel raised ValueError: 'x beyond the wall' during the search \(goals written "
+        r"outside swarm_ik: _Wall\(panda_hand_tcp\)\)",
+    ):
+        swarm_ik.solve(swarm_ik.IKProblem(r, goals=[_Wall()]), seed=0)
+
+    @dataclass(frozen=True)
+    class _WallWithTwin(_Wall):
+        def residual(self, state):
+            return np.array([self.x - state.pose(self.frame)[0, 3]])
+
+    with pytest.raises(InvalidArgumentError, match=r"_WallWithTwin\(panda_hand_tcp\): its "
+                       r"kernel raised ValueError: 'x beyond the wall' at q = \["):  # fmt: skip
+        swarm_ik.IKProblem(r, goals=[_WallWithTwin()])
+
+
+@dataclass(frozen=True)
+class _BadHooks(OnPlane):
+    infeasible_value: object = None
+    pin_value: object = None
+
+    def infeasible(self, robot, tol_pos, tol_rot):
+        if self.infeasible_value == "raise":
+            return 1 / 0
+        return self.infeasible_value
+
+    def pin(self):
+        return self.pin_value
+
+
+@pytest.mark.parametrize(
+    ("kw", "words"),
+    [
+        ({"infeasible_value": "raise"}, r"infeasible\(\) raised ZeroDivisionError"),
+        ({"infeasible_value": 42}, r"infeasible\(\) must return None or a text"),
+        ({"pin_value": (0.0, 0.0, 1.0)}, r"pin\(\) must return None or a swarm_ik.goals.Pin"),
+        ({"pin_value": G.Pin("panda_hand_tcp", point=np.zeros(2))}, r"pin\(\) must return"),
+        ({"pin_value": G.Pin("panda_hand_tcp", point_slack=-1.0)}, r"pin\(\) must return"),
+    ],
+)
+def test_a_python_goals_bad_infeasible_or_pin_is_refused_naming_it(kw, words) -> None:
+    """``infeasible`` and ``pin`` are the user's code too: an exception or a wrong value is
+    one error naming the goal and the method (a bare ZeroDivisionError came out of the proof
+    before the search)."""
+    r = robot("panda")
+    prob = swarm_ik.IKProblem(r, goals=[_BadHooks("panda_hand_tcp", height=0.3, **kw)])
+    with pytest.raises(InvalidArgumentError, match=r"_BadHooks\(panda_hand_tcp\)\." + words):
+        swarm_ik.solve(prob, seed=0, max_evals=10**6)

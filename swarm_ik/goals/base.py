@@ -40,6 +40,7 @@ from swarm_ik._validate import floats_or
 from swarm_ik.errors import InvalidArgumentError, SwarmIKError, UnknownNameError
 from swarm_ik.kernels import loaded_despite_damage
 from swarm_ik.kernels.lm import GOAL_SIGNATURE, kernel_list
+from swarm_ik.pose import is_finite_nonneg
 
 if TYPE_CHECKING:
     from swarm_ik.robot import RobotModel
@@ -251,6 +252,77 @@ def jacobian_of(goal: Goal, state: State) -> Any:
     """``goal.jacobian(state)`` as a float array (computed once per point in a scope of
     :func:`reuse_goal_values`)."""
     return _kept(goal, state, "j", lambda s: _real(goal, s, "jacobian"))
+
+
+def _users(goal: Goal, what: str, call: Callable[[], Any]) -> Any:
+    """``call()`` of a goal's optional method ``what`` (``infeasible``, ``pin``): an
+    exception of a goal written outside swarm_ik reported naming the goal and the method
+    (:class:`~swarm_ik.errors.InvalidArgumentError`, its own exception chained)."""
+    try:
+        return call()
+    except SwarmIKError:
+        raise
+    except Exception as exc:
+        if str(type(goal).__module__).startswith("swarm_ik."):
+            raise
+        raise InvalidArgumentError(
+            f"{goal.describe()}.{what} raised {type(exc).__name__}: {reprlib.repr(str(exc))}"
+        ) from exc
+
+
+def infeasible_of(goal: Goal, robot: RobotModel, tol_pos: float, tol_rot: float) -> str | None:
+    """``goal.infeasible(robot, tol_pos, tol_rot)``, checked: None or a text.
+
+    Raises:
+        InvalidArgumentError: the method raised, or returned anything else (the goal named).
+    """
+    why = _users(goal, "infeasible()", lambda: goal.infeasible(robot, tol_pos, tol_rot))
+    if why is not None and not isinstance(why, str):
+        raise InvalidArgumentError(
+            f"{goal.describe()}.infeasible() must return None or a text (why no configuration "
+            f"meets the goal), got {reprlib.repr(why)}"
+        )
+    return why
+
+
+def pin_of(goal: Goal) -> Pin | None:
+    """``goal.pin()``, checked: None or a :class:`Pin` of finite arrays of the right shapes.
+
+    Raises:
+        InvalidArgumentError: the method raised, or returned anything else (the goal named).
+    """
+    held = _users(goal, "pin()", goal.pin)
+    if held is None:
+        return None
+    shapes = {"point": (3,), "rotation": (3, 3), "axis": (3,), "direction": (3,), "look_at": (3,)}
+    ok = isinstance(held, Pin) and isinstance(held.frame, str)
+    fixed = {}
+    for name, shape in shapes.items():
+        value = getattr(held, name, None) if ok else None
+        if value is None:
+            continue
+        arr = np.asarray(value, dtype=float) if _numbers(value) else None
+        if arr is None or arr.shape != shape or not np.isfinite(arr).all():
+            ok = False
+            break
+        fixed[name] = arr
+    slacks = (held.point_slack, held.rotation_slack) if ok else ()
+    if not ok or not all(is_finite_nonneg(s) for s in slacks):
+        raise InvalidArgumentError(
+            f"{goal.describe()}.pin() must return None or a swarm_ik.goals.Pin (a frame name, "
+            "finite points and directions (3,), a rotation (3, 3), slacks >= 0), got "
+            f"{reprlib.repr(held)}"
+        )
+    return held._replace(**fixed)
+
+
+def _numbers(value: Any) -> bool:
+    """Whether ``value`` reads as an array of real numbers."""
+    try:
+        arr = np.asarray(value)
+    except Exception:
+        return False
+    return arr.dtype.kind in "biuf"
 
 
 def errors_of(goal: Goal, state: State) -> tuple[float, float]:
