@@ -1024,9 +1024,10 @@ _CUROBO: dict[str, tuple[tuple[str, ...], tuple[str, ...]]] = {
     "sphere": (("radius",), ("pose", "position")),
     "capsule": (("radius", "base", "tip", "pose"), ()),
     "cylinder": (("radius", "height", "pose"), ()),
-    "mesh": (("file_path", "pose"), ("scale",)),
+    "mesh": (("file_path", "pose"), ("scale", "urdf_path")),
 }
-"""cuRobo world sections: required and optional fields of their obstacles."""
+"""cuRobo world sections: required and optional fields of their obstacles (a mesh's
+``urdf_path``, which cuRobo hands to its simulator, is accepted and ignored)."""
 
 
 def _yaml(where: str | None = None) -> Any:
@@ -1201,7 +1202,7 @@ def _from_curobo(data: Any, base_dir: Path, where: str) -> Scene:
                 f"supported; valid sections: {', '.join(_CUROBO)}"
             )
         if not isinstance(section, str) or section not in _CUROBO:
-            raise InvalidArgumentError(
+            raise UnknownNameError(
                 f"{where}: unknown section {reprlib.repr(section)}; valid sections: "
                 f"{', '.join(_CUROBO)}"
             )
@@ -1404,6 +1405,8 @@ def _from_moveit(text: str, where: str, mesh_dir: Path | None) -> list[Shape]:
     parts are the newer layout, told as MoveIt does by the line after the first ``*``: three
     numbers (a position) rather than one (a shape count)."""
     first = text.find("\n")
+    if not text.strip():
+        raise InvalidArgumentError(f"{where}: the file is empty (a MoveIt scene file was expected)")
     if first < 0:
         raise InvalidArgumentError(f"{where}: the file ends after its name line (truncated?)")
     lines = text[first + 1 :].split("\n")
@@ -1414,11 +1417,17 @@ def _from_moveit(text: str, where: str, mesh_dir: Path | None) -> list[Shape]:
             new_format = len(nxt.split()) > 1
             break
     s = _Stream(text, first + 1, where)
-    shapes: list[Shape] = []
+    # each object's shapes, built once every object id is known (an object of several shapes
+    # names them <id>#k; one such name taken by another object's id gets a further suffix)
+    pending: list[
+        tuple[str, int, list[tuple[Callable[[FloatArray, str], Shape], FloatArray, int]]]
+    ] = []
     n_objects = 0
     while True:
         marker = s.token("an object ('* name') or the end line '.'")
-        if marker == "." and not shapes:  # (an empty scene would turn collision avoidance
+        if marker == "." and not any(
+            made for _, _, made in pending
+        ):  # (an empty scene would turn collision avoidance
             # off unnoticed: MoveIt writes one for an empty planning scene)
             held = (
                 f"its {n_objects} object{'s have' if n_objects > 1 else ' has'} no shapes"
@@ -1429,7 +1438,7 @@ def _from_moveit(text: str, where: str, mesh_dir: Path | None) -> list[Shape]:
                 f"{where}: the scene holds no obstacles ({held} before the end line '.')"
             )
         if marker == ".":
-            return shapes
+            return _moveit_shapes(pending, s)
         if marker != "*":
             raise s.fail(f"unknown marker {marker!r}; expected '*' (an object) or '.' (the end)")
         s.context = ""
@@ -1471,9 +1480,31 @@ def _from_moveit(text: str, where: str, mesh_dir: Path | None) -> list[Shape]:
             for k in range(s.count("number of subframes")):
                 s.token(f"subframe {k} name")
                 s.pose(f"subframe {k} pose")
+        pending.append((object_id, n, made))
+
+
+def _moveit_shapes(
+    pending: list[
+        tuple[str, int, list[tuple[Callable[[FloatArray, str], Shape], FloatArray, int]]]
+    ],
+    s: _Stream,
+) -> list[Shape]:
+    """The shapes of :func:`_from_moveit`'s objects, named: an object of one shape by its id,
+    of several ``<id>#k`` (``<id>#k.m`` where another object's id is ``<id>#k``)."""
+    ids = {object_id for object_id, _, _ in pending}
+    shapes: list[Shape] = []
+    for object_id, n, made in pending:
         for k, (build, pose, line) in enumerate(made):
+            name = object_id
+            if n != 1:
+                name = f"{object_id}#{k}"
+                m = 0
+                while name in ids:
+                    m += 1
+                    name = f"{object_id}#{k}.{m}"
             with _context(s.at(line).rstrip(": ")):
-                shapes.append(build(pose, object_id if n == 1 else f"{object_id}#{k}"))
+                shapes.append(build(pose, name))
+    return shapes
 
 
 # ------------------------------------------------------------------------------- URDF
@@ -1516,7 +1547,12 @@ def _check_urdf_collisions(root: Any, where: str) -> int:
                     _urdf_numbers(at, origin, attr, 3, required=False)
             geo = col.find("geometry")
             kinds = [g.tag for g in geo] if geo is not None else []
-            if len(kinds) != 1 or kinds[0] not in _URDF_GEOMETRY:
+            if len(kinds) == 1 and kinds[0] not in _URDF_GEOMETRY:  # (an unknown shape)
+                raise UnknownNameError(
+                    f"{at}: a collision geometry must be one of {', '.join(_URDF_GEOMETRY)} "
+                    f"(URDF has no other), got {kinds}"
+                )
+            if len(kinds) != 1:
                 raise InvalidArgumentError(
                     f"{at}: a collision geometry must be one of {', '.join(_URDF_GEOMETRY)} "
                     f"(URDF has no other), got {kinds}"
@@ -1529,6 +1565,29 @@ def _check_urdf_collisions(root: Any, where: str) -> int:
                 raise InvalidArgumentError(f"{at}: <mesh> needs a filename")
             count += 1
     return count
+
+
+def _check_zero_within_limits(model: Any, p: Path) -> None:
+    """A scene URDF's moving joints stand at 0 (:func:`_from_urdf`): one whose limits leave
+    out 0 is refused, naming it (its obstacles were placed where the joint never is).
+
+    Raises:
+        InvalidArgumentError: such a joint.
+    """
+    import pinocchio as pin
+
+    zero = pin.neutral(model)
+    lo, hi = np.asarray(model.lowerPositionLimit), np.asarray(model.upperPositionLimit)
+    for j in range(1, model.njoints):
+        a, n = model.idx_qs[j], model.nqs[j]
+        part_lo, part_hi, part = lo[a : a + n], hi[a : a + n], zero[a : a + n]
+        limited = np.isfinite(part_lo) & np.isfinite(part_hi) & (part_lo < part_hi)
+        if np.any(limited & ((part < part_lo - 1e-12) | (part > part_hi + 1e-12))):
+            raise InvalidArgumentError(
+                f"{p}: joint {model.names[j]!r} has limits [{part_lo[0]:g}, {part_hi[0]:g}] "
+                "that leave out 0, where a scene URDF places its moving joints (every joint "
+                "at 0): make it a fixed joint with the origin where its obstacles stand"
+            )
 
 
 def _from_urdf(p: Path) -> list[Shape]:
@@ -1549,6 +1608,7 @@ def _from_urdf(p: Path) -> list[Shape]:
         model, info = load_urdf(p)
     except RobotModelError as exc:
         raise InvalidArgumentError(_one_line(exc)) from None
+    _check_zero_within_limits(model, p)
     root = ET.fromstring(info.xml)
     n_collision = _check_urdf_collisions(root, str(p))
     if n_collision == 0:  # (an empty scene would turn collision avoidance off unnoticed)

@@ -290,7 +290,8 @@ def test_bad_json_is_refused_with_one_line(tmp_path: Path, text: str, exc, words
 YAML_BAD = [
     ("cuboid:\n  t: {dims: [1, 1, 1], pose: [0, 0, 0, 1, 0, 0, 0], mass: 2}\n", J,
      ["cuboid 't'", "unknown field(s) ['mass']", "valid fields: dims, pose, color"]),
-    ("cube:\n  t: {dims: [1, 1, 1]}\n", J, ["unknown section 'cube'", "cuboid, sphere, capsule"]),
+    ("cube:\n  t: {dims: [1, 1, 1]}\n", UnknownNameError,
+     ["unknown section 'cube'", "cuboid, sphere, capsule"]),
     ("voxel:\n  v: {dims: [1, 1, 1]}\n", J, ["'voxel'", "not supported"]),
     ("cuboid:\n  t: {dims: [1, 1, 1]}\n", J, ["missing field(s) ['pose']"]),
     ("cuboid:\n  t: {dims: [1, 0, 1], pose: [0, 0, 0, 1, 0, 0, 0]}\n", J, ["size", "positive"]),
@@ -347,6 +348,7 @@ MOVEIT_BAD = [
     ("s\n* a\n1\ntorus\n1\n0 0 0\n0 0 0 1\n0 0 0 0\n.\n", UnknownNameError,
      ["'torus'", "box, cylinder, mesh, sphere"]),
     ("s\n" + GOOD_OBJECT, J, ["file ends", "truncated"]),
+    ("", J, ["the file is empty"]),
     ("s\n* a\n1\nbox\n1 1\n", J, ["file ends", "truncated"]),
     ("s\n* a\n1\nbox\n1 1 1\n0 0 0\n0 0 0 1\n", J, ["colour", "truncated"]),
     ("s\n* a\n1\nbox\n1 -1 1\n0 0 0\n0 0 0 1\n0 0 0 0\n.\n", J,
@@ -405,8 +407,13 @@ URDF_BAD = [
            '<child link="base"/></joint>'), J, ["a loop"]),
     (_urdf('<link name="c"><collision><geometry><capsule radius="1" length="1"/></geometry>'
            '</collision></link><joint name="j" type="fixed"><parent link="base"/>'
-           '<child link="c"/></joint>'), J, ["link 'c'", "box, cylinder, mesh, sphere",
-                                             "['capsule']"]),
+           '<child link="c"/></joint>'), UnknownNameError,
+     ["link 'c'", "box, cylinder, mesh, sphere", "['capsule']"]),
+    (_urdf('<link name="c"><collision><geometry><box size="1 1 1"/></geometry>'
+           '</collision></link><joint name="door" type="revolute"><parent link="base"/>'
+           '<child link="c"/><axis xyz="0 0 1"/><limit lower="0.5" upper="1" effort="1" '
+           'velocity="1"/></joint>'), J, ["joint 'door'", "[0.5, 1]", "leave out 0",
+                                           "make it a fixed joint"]),
     (_urdf('<link name="c"><collision><geometry><mesh filename="gone.stl"/></geometry>'
            '</collision></link><joint name="j" type="fixed"><parent link="base"/>'
            '<child link="c"/></joint>'), SceneFileNotFoundError, ["gone.stl"]),
@@ -583,3 +590,24 @@ def test_an_xml_urdf_in_another_encoding_is_read(tmp_path: Path) -> None:
     for ext in (".urdf", ".xml"):
         (tmp_path / f"o{ext}").write_bytes(body.encode("latin-1"))
         assert Scene.load(tmp_path / f"o{ext}").names == ("a_0",)
+
+
+def test_moveit_shape_names_never_take_another_objects_id(tmp_path: Path) -> None:
+    """An object of two shapes names them ``shelf#0``, ``shelf#1``; where another object is
+    itself called ``shelf#0`` the generated name takes a further suffix (the file was
+    refused: "obstacle name(s) ['shelf#0'] used more than once")."""
+    board = "box\n1 1 0.02\n0 0 0\n0 0 0 1\n0 0 0 0\n"
+    text = f"s\n* shelf\n2\n{board}{board}* shelf#0\n1\n{board}.\n"
+    (tmp_path / "s.scene").write_text(text)
+    assert Scene.load(tmp_path / "s.scene").names == ("shelf#0.1", "shelf#1", "shelf#0")
+    (tmp_path / "d.scene").write_text(f"s\n* a\n1\n{board}* a\n1\n{board}.\n")
+    _refused(tmp_path / "d.scene", J, ["['a'] used more than once"])  # (two objects 'a')
+
+
+def test_a_curobo_mesh_urdf_path_is_accepted_and_ignored(tmp_path: Path) -> None:
+    (tmp_path / "w.yml").write_text(
+        f"mesh:\n  m: {{file_path: {DATA / 'block.obj'}, pose: [0, 0, 0, 1, 0, 0, 0], "
+        "urdf_path: cell.urdf}\n"
+    )
+    (mesh,) = Scene.load(tmp_path / "w.yml")
+    assert isinstance(mesh, Mesh) and mesh.path == str((DATA / "block.obj").resolve())
