@@ -211,6 +211,48 @@ def _check_python_jacobian(robot: RobotModel, goal: Goal) -> None:
     )
 
 
+_PAD, _SENTINEL = 4, 1.2345678901e300
+"""Rows (and goal entries) past a kernel's own that :func:`_kernel_rows` fills with the
+sentinel, to find a kernel writing beyond them."""
+
+
+def _kernel_rows(robot: RobotModel, goal: Goal, q: FloatArray) -> tuple[FloatArray, FloatArray]:
+    """The rows ``(m,)`` and step Jacobian ``(m, nq)`` a compiled goal's kernel writes at
+    ``q``, run with :data:`_PAD` rows and a goal entry past its own holding a sentinel.
+
+    Raises:
+        InvalidArgumentError: the kernel raised, or wrote past the rows its ``encode``
+            declares or past its two errors (which corrupts the rows of the goal after it, or
+            memory: an abort at exit).
+    """
+    prob = IKProblem(robot, goals=[goal])
+    tab = prob.table(None)
+    m, nq = tab.rows_primary, robot.nq
+    res = np.full((1, m + _PAD), _SENTINEL)
+    jac = np.full((1, m + _PAD, nq), _SENTINEL)
+    err = np.full((1, 2, 2), _SENTINEL)
+    try:
+        lm.residuals_batch(q[None], prob.tree, tab, kernels(), prob.bounds, True, res, jac, err)
+    except SwarmIKError:
+        raise
+    except Exception as exc:  # (raised inside the compiled kernel)
+        raise InvalidArgumentError(
+            f"{goal.describe()}: its kernel raised {type(exc).__name__}: "
+            f"{reprlib.repr(str(exc))} at q = {np.round(q, 6).tolist()}"
+        ) from exc
+    if (
+        np.any(res[0, m:] != _SENTINEL)
+        or np.any(jac[0, m:] != _SENTINEL)
+        or np.any(err[0, 1] != _SENTINEL)
+    ):
+        raise InvalidArgumentError(
+            f"{goal.describe()}: its kernel writes past its {m} row{'s' * (m != 1)} (the rows "
+            "its encode() declares) or past its two errors: declare every row it writes "
+            "(docs/goals.md)"
+        )
+    return res[0, :m], jac[0, :m]
+
+
 def _check_kernel_twin(robot: RobotModel, goal: Goal) -> None:
     """A compiled goal written outside swarm_ik, checked once per class and robot: its
     kernel's rows and step Jacobian at one configuration against its own numpy
@@ -223,7 +265,7 @@ def _check_kernel_twin(robot: RobotModel, goal: Goal) -> None:
         InvalidArgumentError: the two disagree (both named, with the configuration).
     """
     cls = type(goal)
-    if str(cls.__module__).startswith("swarm_ik.") or cls.residual is Goal.residual:
+    if str(cls.__module__).startswith("swarm_ik."):
         return
     checked = robot._cache.setdefault("twins_checked", set())
     if cls in checked:
@@ -235,22 +277,15 @@ def _check_kernel_twin(robot: RobotModel, goal: Goal) -> None:
     except (TypeError, ValueError):
         return
     try:
-        try:
-            res, jac = IKProblem(robot, goals=[probe]).stacked_rows(q[None])
-        except SwarmIKError:
-            raise
-        except Exception as exc:  # (raised inside the compiled kernel)
-            raise InvalidArgumentError(
-                f"{goal.describe()}: its kernel raised {type(exc).__name__}: "
-                f"{reprlib.repr(str(exc))} at q = {np.round(q, 6).tolist()}"
-            ) from exc
+        res, jac = _kernel_rows(robot, probe, q)
+        if cls.residual is Goal.residual:  # (no numpy twin to compare with)
+            return
         r_np, j_np = goals_base.search_rows(
             probe, State(robot, q), want_jac=cls.jacobian is not Goal.jacobian
         )
     except BaseException:
         checked.discard(cls)
         raise
-    res, jac = res[0], jac[0]
 
     def close(a: FloatArray, b: FloatArray) -> bool:
         return a.shape == b.shape and bool(np.all(np.abs(a - b) <= TWIN_RTOL * (1.0 + np.abs(b))))

@@ -1022,25 +1022,57 @@ class _Wall(G.Goal):
 
 
 def test_a_compiled_kernel_that_raises_is_named() -> None:
-    """A numba ``raise`` inside a user's kernel came out as a bare ValueError: with a numpy
-    twin it is named when the problem is made (the twin check runs the kernel), without one
-    when the search meets it."""
+    """A numba ``raise`` inside a user's kernel came out as a bare ValueError: it is named
+    when the problem is made (the kernel is run once at a probe configuration), or when the
+    search meets it elsewhere."""
+    from swarm_ik.problem import _probe_q
+
     r = robot("panda")
+    with pytest.raises(InvalidArgumentError, match=r"_Wall\(panda_hand_tcp\): its kernel raised "
+                       r"ValueError: 'x beyond the wall' at q = \["):  # fmt: skip
+        swarm_ik.IKProblem(r, goals=[_Wall()])
+
+    @dataclass(frozen=True)
+    class _FarWall(_Wall):
+        pass
+
+    wall = float(r.fk(_probe_q(r))[0, 3]) + 0.01  # (the probe stands before it)
+    point = r.fk(_probe_q(r))[:3, 3] + [0.3, 0.0, 0.0]  # (beyond it: the search crosses it)
+    prob = swarm_ik.IKProblem(r, goals=[G.Position("panda_hand_tcp", point), _FarWall(x=wall)])
     with pytest.raises(
         InvalidArgumentError,
         match=r"kernel raised ValueError: 'x beyond the wall' during the search \(goals written "
-        r"outside swarm_ik: _Wall\(panda_hand_tcp\)\)",
+        r"outside swarm_ik: _FarWall\(panda_hand_tcp\)\)",
     ):
-        swarm_ik.solve(swarm_ik.IKProblem(r, goals=[_Wall()]), seed=0)
+        swarm_ik.solve(prob, seed=0)
 
-    @dataclass(frozen=True)
-    class _WallWithTwin(_Wall):
-        def residual(self, state):
-            return np.array([self.x - state.pose(self.frame)[0, 3]])
 
-    with pytest.raises(InvalidArgumentError, match=r"_WallWithTwin\(panda_hand_tcp\): its "
-                       r"kernel raised ValueError: 'x beyond the wall' at q = \["):  # fmt: skip
-        swarm_ik.IKProblem(r, goals=[_WallWithTwin()])
+@numba.njit(GOAL_SIGNATURE)
+def _overrun_kernel(par, ipar, q, f_pos, f_rot, f_jac, want_jac, res, jac, err, work):
+    """Writes two rows where its goal declares one."""
+    f = ipar[0]
+    for a in range(2):
+        res[a] = par[0] - f_pos[f, a]
+    err[0] = abs(res[0])
+    err[1] = np.nan
+
+
+@dataclass(frozen=True)
+class _Overrun(G.Goal):
+    frame: str = "panda_hand_tcp"
+    kernel = _overrun_kernel
+
+    def encode(self, robot, q0):
+        return G.Encoded(np.array([0.3]), np.array([frame_index(self, robot)]), 1)
+
+
+def test_a_compiled_kernel_writing_past_its_rows_is_refused() -> None:
+    """Writing a row its encode() does not declare solved "successfully" and sometimes
+    aborted the process at exit (a held-out review): the kernel is run once with sentinel
+    rows after its own."""
+    with pytest.raises(InvalidArgumentError, match=r"_Overrun\(panda_hand_tcp\): its kernel "
+                       r"writes past its 1 row"):  # fmt: skip
+        swarm_ik.IKProblem(robot("panda"), goals=[_Overrun()])
 
 
 @dataclass(frozen=True)
