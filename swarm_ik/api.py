@@ -30,7 +30,7 @@ import numpy as np
 
 from swarm_ik import collision, kernels
 from swarm_ik._validate import check_seed, keywords_checked
-from swarm_ik.errors import InvalidArgumentError, SwarmIKError, unknown
+from swarm_ik.errors import InvalidArgumentError, SwarmIKError, UnknownNameError, unknown
 from swarm_ik.goals import Posture
 from swarm_ik.goals import base as goals_base
 from swarm_ik.goals.axis import angle_between
@@ -102,7 +102,11 @@ def unreachable_goal(
             continue
         point, slack = held.point, held.point_slack  # (a region reaches this much nearer)
         far = math.hypot(*(float(v) for v in point)) - slack  # (no overflow at 1e300 m)
-        if far > problem.robot.reach_radius(held.frame) * (1 + 1e-9):
+        try:
+            radius = problem.robot.reach_radius(held.frame)
+        except UnknownNameError:  # (a frame of the model that no goal frame's path holds: a
+            continue  # Python goal's; no bound on its reach is known here)
+        if far > radius * (1 + 1e-9):
             return gl.describe()
         if slack > 0.0 or avoid is None:
             continue  # (a region, not a point: it may reach out of an obstacle)
@@ -224,23 +228,6 @@ def end_reason(
     if max_evals is None and time_limit is None:
         return "local_minima"
     return "stopped"
-
-
-def _kernel_raised(problem: IKProblem, exc: Exception) -> Exception:
-    """What an exception raised inside the compiled search becomes: with compiled goals
-    written outside swarm_ik (whose kernels may raise), an :class:`InvalidArgumentError`
-    naming them; else the exception itself (a defect of swarm_ik's)."""
-    users = [
-        gl.describe()
-        for gl in problem.compiled_goals
-        if not str(type(gl).__module__).startswith("swarm_ik.")
-    ]
-    if not users:
-        return exc
-    return InvalidArgumentError(
-        f"a compiled goal's kernel raised {type(exc).__name__}: {str(exc)[:200]!r} during the "
-        f"search (goals written outside swarm_ik: {', '.join(users)})"
-    )
 
 
 def prepare_q0(problem: IKProblem, q0: Any) -> np.ndarray | None:
@@ -552,7 +539,7 @@ class Route:
                 except SwarmIKError:
                     raise
                 except Exception as exc:  # (a compiled goal's own kernel raised)
-                    named = _kernel_raised(problem, exc)
+                    named = goals_base.kernel_error(list(problem.compiled_goals), exc)
                     if named is exc:
                         raise
                     raise named from exc

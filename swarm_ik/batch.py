@@ -65,6 +65,7 @@ from swarm_ik._types import BoolArray, FloatArray, IntArray
 from swarm_ik._validate import check_seed, keywords_checked
 from swarm_ik.errors import InvalidArgumentError, InvalidTargetError, SwarmIKError
 from swarm_ik.goals import AvoidCollisions, Goal, Pose, Position, State, kernel_slot, kernels
+from swarm_ik.goals import base as goals_base
 from swarm_ik.kernels import lie, lm, loaded_despite_damage
 from swarm_ik.kernels.fk import TreeArrays
 from swarm_ik.kernels.lm import CONVERGED, NOT_RUN
@@ -1470,6 +1471,7 @@ def _with_deadline(
     return dataclasses.replace(settings, deadline=time.time() + left, reserve=reserve)
 
 
+@goals_base.names_kernel_errors(lambda *a, **kw: kw.get("goals"))
 @keywords_checked
 def solve_batch(
     robot: RobotModel,

@@ -787,9 +787,14 @@ class _Checker:
         for b in np.flatnonzero(~self.moving).tolist():
             body = coal.CollisionObject(self.gm.geometryObjects[b].geometry)
             body.setTransform(gd.oMg[b])
-            for name, obj in zip(self.obstacle_names, self.obstacles, strict=True):
+            body.computeAABB()
+            box = body.getAABB()
+            lo, hi = np.array(box.min_), np.array(box.max_)
+            near = np.all((self.obs_lo <= hi) & (self.obs_hi >= lo), axis=1)  # (boxes meet)
+            for o in np.flatnonzero(near).tolist():
+                obj = self.obstacles[o]
                 if coal.collide(body, obj, coal.CollisionRequest(), coal.CollisionResult()):
-                    touching.append(f"{rc.body_links[b]}–{name}")
+                    touching.append(f"{rc.body_links[b]}–{self.obstacle_names[o]}")
         if touching:
             warnings.warn(
                 f"{', '.join(sorted(set(touching)))}: fixed to the world, in contact whatever "

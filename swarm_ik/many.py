@@ -59,6 +59,7 @@ from swarm_ik.branches import (
     windings as _windings,
 )
 from swarm_ik.errors import InvalidArgumentError, unknown
+from swarm_ik.goals import base as goals_base
 from swarm_ik.goals.base import reuse_goal_values
 from swarm_ik.kernels import joints
 from swarm_ik.optimize import check_budget, make_rng
@@ -245,6 +246,9 @@ def _hops_for(robot: Any) -> _Hops:
 
 
 # ------------------------------------------------------------------------------ API
+@goals_base.names_kernel_errors(
+    lambda *a, **kw: list((a[0] if a else kw["problem"]).compiled_goals)
+)
 @keywords_checked
 def solve_many(
     problem: IKProblem,

@@ -147,11 +147,6 @@ JACOBIAN_STEP = 1e-6
 """Step [rad, m] of the central difference :func:`_check_python_jacobian` compares a Python
 goal's ``jacobian`` with."""
 
-JACOBIAN_RTOL = 0.5
-"""A Python goal's ``jacobian`` along the probe direction may differ from the central
-difference of its ``residual`` by this share of the difference's size (an approximate
-Jacobian still steers the search; one of the other sign, or zero, never does)."""
-
 
 def _check_python_jacobian(robot: RobotModel, goal: Goal) -> None:
     """A goal written in Python, checked once per class and robot: its ``jacobian`` along
@@ -160,8 +155,12 @@ def _check_python_jacobian(robot: RobotModel, goal: Goal) -> None:
     not under any solve's clock).  A Jacobian of the other sign (the
     kernels' step convention ``−∂r/∂q`` where the protocol asks ``+∂r/∂q``) or zero where the
     residual changes sent the search the wrong way and ended every solve with the budget's
-    reason and no word why.  Where the residual does not change along the direction (a
-    dead zone, a hinge at rest) nothing can be told and nothing is refused.
+    reason and no word why.  Only the rows the direction changes are compared (a row at rest
+    in a dead zone may keep its Jacobian, as a bounded ``Pose`` does), and only the sign:
+    their derivative along the direction must not point against the residual's change (a
+    negative inner product) nor vanish; an approximate Jacobian (a rotation error's
+    first-order one far from the target) still steers the search and is accepted.  Where
+    the residual does not change along the direction nothing can be told.
 
     Raises:
         InvalidArgumentError: the Jacobian disagrees (the goal, ``q`` and the two
@@ -192,18 +191,20 @@ def _check_python_jacobian(robot: RobotModel, goal: Goal) -> None:
         return  # (a goal whose rows change in number: nothing to compare)
     fd = (r_hi - r_lo) / (2.0 * h)
     along = j_np @ v
+    # only the rows the direction changes (a row at rest in a dead zone may keep a Jacobian)
+    moving = np.abs(fd) > 1e-9 * (1.0 + np.abs(r_np))
+    fd, along = fd[moving], along[moving]
     size = float(np.linalg.norm(fd))
     if size <= 1e-6 * (1.0 + float(np.linalg.norm(r_np))):
         return
-    if float(np.linalg.norm(along - fd)) <= JACOBIAN_RTOL * size:
+    dot = float(fd @ along)
+    if float(np.linalg.norm(along)) <= 1e-3 * size:
+        what = "is zero where the residual changes"
+    elif dot < 0.0:
+        what = "has the other sign (jacobian(state) is +∂residual/∂q)"
+    else:  # (an approximate Jacobian still steers the search)
         return
     checked.discard(cls)
-    if float(np.linalg.norm(along + fd)) <= JACOBIAN_RTOL * size:
-        what = "has the other sign (jacobian(state) is +∂residual/∂q)"
-    elif float(np.linalg.norm(along)) <= 1e-3 * size:
-        what = "is zero where the residual changes"
-    else:
-        what = "differs from the residual's derivative"
     raise InvalidArgumentError(
         f"{goal.describe()}.jacobian(state) {what} at q = {np.round(q, 6).tolist()}: along "
         f"a direction it gives {np.round(along, 9).tolist()} where the residual changes by "
@@ -228,9 +229,10 @@ def _kernel_rows(robot: RobotModel, goal: Goal, q: FloatArray) -> tuple[FloatArr
     prob = IKProblem(robot, goals=[goal])
     tab = prob.table(None)
     m, nq = tab.rows_primary, robot.nq
-    res = np.full((1, m + _PAD), _SENTINEL)
-    jac = np.full((1, m + _PAD, nq), _SENTINEL)
-    err = np.full((1, 2, 2), _SENTINEL)
+    res = np.zeros((1, m + _PAD))  # (its own rows start at zero, as the search's do)
+    jac = np.zeros((1, m + _PAD, nq))
+    err = np.full((1, 2, 2), np.nan)
+    res[0, m:], jac[0, m:], err[0, 1] = _SENTINEL, _SENTINEL, _SENTINEL
     try:
         lm.residuals_batch(q[None], prob.tree, tab, kernels(), prob.bounds, True, res, jac, err)
     except SwarmIKError:
@@ -256,8 +258,9 @@ def _kernel_rows(robot: RobotModel, goal: Goal, q: FloatArray) -> tuple[FloatArr
 def _check_kernel_twin(robot: RobotModel, goal: Goal) -> None:
     """A compiled goal written outside swarm_ik, checked once per class and robot: its
     kernel's rows and step Jacobian at one configuration against its own numpy
-    ``residual``/``jacobian`` (when it defines them) on Pinocchio's state.  The kernel writes
-    ``r`` as ``residual`` does and the step Jacobian ``J = −∂r/∂q`` (``r(q + δ) ≈ r − Jδ``);
+    ``residual``/``jacobian`` on Pinocchio's state (the Jacobian when it defines one).  The
+    kernel writes ``r`` as ``residual`` does and the step Jacobian ``J = −∂r/∂q``
+    (``r(q + δ) ≈ r − Jδ``);
     a kernel of the other sign, or one disagreeing with its twin, would end every solve with
     the budget's reason and no word why.
 
@@ -616,6 +619,13 @@ class IKProblem:
                 enc = goals_base.checked_encoding(gl, functools.partial(self.encode, i, None))
                 kernel_slot(gl.kernel_of())
                 blocks.append((enc.par.shape[0], enc.ipar.tobytes()))
+                cls = type(gl)
+                if cls.residual is Goal.residual and cls.errors is Goal.errors:
+                    raise InvalidArgumentError(
+                        f"{gl.describe()} defines no residual(state) (nor errors(state)): the "
+                        "judge checks every answer with them on Pinocchio's state, not with the "
+                        "kernel (docs/goals.md)"
+                    )
                 _check_kernel_twin(robot, gl)
             # (the blocks' form: a route rewrites only the floats of another problem's goals,
             # so problems whose integer parameters or block sizes differ take other routes)

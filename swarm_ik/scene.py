@@ -1581,7 +1581,7 @@ def _check_zero_within_limits(model: Any, p: Path) -> None:
     for j in range(1, model.njoints):
         a, n = model.idx_qs[j], model.nqs[j]
         part_lo, part_hi, part = lo[a : a + n], hi[a : a + n], zero[a : a + n]
-        limited = np.isfinite(part_lo) & np.isfinite(part_hi) & (part_lo < part_hi)
+        limited = np.isfinite(part_lo) & np.isfinite(part_hi) & (part_lo <= part_hi)
         if np.any(limited & ((part < part_lo - 1e-12) | (part > part_hi + 1e-12))):
             raise InvalidArgumentError(
                 f"{p}: joint {model.names[j]!r} has limits [{part_lo[0]:g}, {part_hi[0]:g}] "

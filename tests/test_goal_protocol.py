@@ -1020,6 +1020,9 @@ class _Wall(G.Goal):
     def encode(self, robot, q0):
         return G.Encoded(np.array([self.x]), np.array([frame_index(self, robot)]), 1)
 
+    def residual(self, state):
+        return np.array([self.x - state.pose(self.frame)[0, 3]])
+
 
 def test_a_compiled_kernel_that_raises_is_named() -> None:
     """A numba ``raise`` inside a user's kernel came out as a bare ValueError: it is named
@@ -1041,10 +1044,14 @@ def test_a_compiled_kernel_that_raises_is_named() -> None:
     prob = swarm_ik.IKProblem(r, goals=[G.Position("panda_hand_tcp", point), _FarWall(x=wall)])
     with pytest.raises(
         InvalidArgumentError,
-        match=r"kernel raised ValueError: 'x beyond the wall' during the search \(goals written "
-        r"outside swarm_ik: _FarWall\(panda_hand_tcp\)\)",
+        match=r"kernel raised ValueError: 'x beyond the wall' \(goals written outside "
+        r"swarm_ik: _FarWall\(panda_hand_tcp\)\)",
     ):
         swarm_ik.solve(prob, seed=0)
+    with pytest.raises(InvalidArgumentError, match=r"kernel raised ValueError"):
+        swarm_ik.solve_many(prob, n=2, seed=0, max_evals=2000)
+    with pytest.raises(InvalidArgumentError, match=r"kernel raised ValueError.*_FarWall"):
+        swarm_ik.solve_batch(r, np.array([r.fk(r.mid_q())]), goals=[_FarWall(x=-10.0)])
 
 
 @numba.njit(GOAL_SIGNATURE)
@@ -1064,6 +1071,9 @@ class _Overrun(G.Goal):
 
     def encode(self, robot, q0):
         return G.Encoded(np.array([0.3]), np.array([frame_index(self, robot)]), 1)
+
+    def residual(self, state):
+        return np.array([0.3 - state.pose(self.frame)[0, 3]])
 
 
 def test_a_compiled_kernel_writing_past_its_rows_is_refused() -> None:
@@ -1107,3 +1117,20 @@ def test_a_python_goals_bad_infeasible_or_pin_is_refused_naming_it(kw, words) ->
     prob = swarm_ik.IKProblem(r, goals=[_BadHooks("panda_hand_tcp", height=0.3, **kw)])
     with pytest.raises(InvalidArgumentError, match=r"_BadHooks\(panda_hand_tcp\)\." + words):
         swarm_ik.solve(prob, seed=0, max_evals=10**6)
+
+
+@dataclass(frozen=True)
+class _NoTwin(G.Goal):
+    frame: str = "panda_hand_tcp"
+    kernel = _raising_kernel
+
+    def encode(self, robot, q0):
+        return G.Encoded(np.array([10.0]), np.array([frame_index(self, robot)]), 1)
+
+
+def test_a_compiled_goal_without_a_numpy_residual_is_refused_when_the_problem_is_made() -> None:
+    """The judge checks answers on Pinocchio's state through ``residual`` (or ``errors``): a
+    compiled goal without either ended its solve with a bare NotImplementedError."""
+    with pytest.raises(InvalidArgumentError, match=r"_NoTwin\(panda_hand_tcp\) defines no "
+                       r"residual\(state\) \(nor errors\(state\)\)"):  # fmt: skip
+        swarm_ik.IKProblem(robot("panda"), goals=[_NoTwin()])

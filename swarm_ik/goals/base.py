@@ -23,6 +23,7 @@ from __future__ import annotations
 
 import contextlib
 import difflib
+import functools
 import math
 import os
 import reprlib
@@ -270,6 +271,50 @@ def _users(goal: Goal, what: str, call: Callable[[], Any]) -> Any:
         ) from exc
 
 
+def kernel_error(goals: Any, exc: Exception) -> Exception:
+    """What an exception raised inside a compiled call becomes: with compiled goals written
+    outside swarm_ik among ``goals`` (whose kernels may raise: numba's ``raise``), an
+    :class:`~swarm_ik.errors.InvalidArgumentError` naming them, the exception chained by the
+    caller; else the exception itself (a defect of swarm_ik's)."""
+    listed = goals if isinstance(goals, (list, tuple)) else []
+    users = [
+        gl.describe()
+        for gl in listed
+        if isinstance(gl, Goal) and gl.compiled and not type(gl).__module__.startswith("swarm_ik.")
+    ]
+    if isinstance(exc, SwarmIKError) or not users:
+        return exc
+    return InvalidArgumentError(
+        f"a compiled goal's kernel raised {type(exc).__name__}: {str(exc)[:200]!r} (goals "
+        f"written outside swarm_ik: {', '.join(users)})"
+    )
+
+
+def names_kernel_errors(goals_of: Callable[..., Any]) -> Callable[[Any], Any]:
+    """Decorator of an entry point that runs compiled goals: an exception a user's kernel
+    raises inside it is named (:func:`kernel_error`); ``goals_of(*args, **kwargs)`` gives the
+    call's goals (read only when something was raised)."""
+
+    def wrap(func: Any) -> Any:
+        @functools.wraps(func)
+        def named(*args: Any, **kwargs: Any) -> Any:
+            try:
+                return func(*args, **kwargs)
+            except Exception as exc:
+                try:
+                    goals = goals_of(*args, **kwargs)
+                except Exception:
+                    goals = None
+                err = kernel_error(goals, exc)
+                if err is exc:
+                    raise
+                raise err from exc
+
+        return named
+
+    return wrap
+
+
 def infeasible_of(goal: Goal, robot: RobotModel, tol_pos: float, tol_rot: float) -> str | None:
     """``goal.infeasible(robot, tol_pos, tol_rot)``, checked: None or a text.
 
@@ -306,11 +351,20 @@ def pin_of(goal: Goal) -> Pin | None:
             ok = False
             break
         fixed[name] = arr
+    for name in ("axis", "direction"):  # (unit vectors; a zero one says nothing)
+        if ok and name in fixed:
+            norm = float(np.linalg.norm(fixed[name]))
+            ok = norm > 1e-12
+            fixed[name] = fixed[name] / norm if ok else fixed[name]
+    rot = fixed.get("rotation")
+    if ok and rot is not None:
+        ok = bool(np.abs(rot.T @ rot - np.eye(3)).max() <= 1e-6 and np.linalg.det(rot) > 0)
     slacks = (held.point_slack, held.rotation_slack) if ok else ()
     if not ok or not all(is_finite_nonneg(s) for s in slacks):
         raise InvalidArgumentError(
             f"{goal.describe()}.pin() must return None or a swarm_ik.goals.Pin (a frame name, "
-            "finite points and directions (3,), a rotation (3, 3), slacks >= 0), got "
+            "finite points and non-zero directions (3,), a rotation matrix (3, 3), slacks "
+            ">= 0), got "
             f"{reprlib.repr(held)}"
         )
     return held._replace(**fixed)
