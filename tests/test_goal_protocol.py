@@ -1107,6 +1107,11 @@ class _BadHooks(OnPlane):
         ({"pin_value": (0.0, 0.0, 1.0)}, r"pin\(\) must return None or a swarm_ik.goals.Pin"),
         ({"pin_value": G.Pin("panda_hand_tcp", point=np.zeros(2))}, r"pin\(\) must return"),
         ({"pin_value": G.Pin("panda_hand_tcp", point_slack=-1.0)}, r"pin\(\) must return"),
+        (
+            {"pin_value": G.Pin("panda_hand_tcp", axis=np.zeros(3), direction=np.ones(3))},
+            r"pin\(\) must return",
+        ),
+        ({"pin_value": G.Pin("panda_hand_tcp", rotation=2 * np.eye(3))}, r"pin\(\) must return"),
     ],
 )
 def test_a_python_goals_bad_infeasible_or_pin_is_refused_naming_it(kw, words) -> None:
@@ -1134,3 +1139,34 @@ def test_a_compiled_goal_without_a_numpy_residual_is_refused_when_the_problem_is
     with pytest.raises(InvalidArgumentError, match=r"_NoTwin\(panda_hand_tcp\) defines no "
                        r"residual\(state\) \(nor errors\(state\)\)"):  # fmt: skip
         swarm_ik.IKProblem(robot("panda"), goals=[_NoTwin()])
+
+
+@dataclass(frozen=True)
+class _InBox(G.Goal):
+    """The frame origin within ``half`` of ``center`` per axis: a dead zone per row whose
+    Jacobian keeps its value inside the bounds (as a bounded ``Pose``'s rows do)."""
+
+    frame: str
+    center: tuple
+    half: float = 0.05
+
+    def residual(self, state):
+        e = state.pose(self.frame)[:3, 3] - np.asarray(self.center)
+        return np.sign(e) * np.maximum(np.abs(e) - self.half, 0.0)
+
+    def jacobian(self, state):
+        return state.jacobian(self.frame)[:3]
+
+
+def test_a_dead_zone_jacobian_that_keeps_its_value_at_rest_is_accepted() -> None:
+    """The Jacobian check compares only the rows the probe direction changes (this goal was
+    refused, "differs from the residual's derivative", when its active row was not the
+    largest), and the goal solves."""
+    from swarm_ik.problem import _probe_q
+
+    r = robot("panda")
+    p = r.fk(_probe_q(r))[:3, 3]
+    goal = _InBox("panda_hand_tcp", (p[0] + 0.12, p[1] + 0.01, p[2]))  # (one row active)
+    res = swarm_ik.solve(swarm_ik.IKProblem(r, goals=[goal]), seed=0)
+    assert res.success
+    assert np.all(np.abs(r.fk_pinocchio(res.q)[:3, 3] - goal.center) <= 0.05 + 1e-5)

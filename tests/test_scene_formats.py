@@ -414,6 +414,10 @@ URDF_BAD = [
            '<child link="c"/><axis xyz="0 0 1"/><limit lower="0.5" upper="1" effort="1" '
            'velocity="1"/></joint>'), J, ["joint 'door'", "[0.5, 1]", "leave out 0",
                                            "make it a fixed joint"]),
+    (_urdf('<link name="c"><collision><geometry><box size="1 1 1"/></geometry>'
+           '</collision></link><joint name="rail" type="prismatic"><parent link="base"/>'
+           '<child link="c"/><axis xyz="1 0 0"/><limit lower="0.3" upper="0.3" effort="1" '
+           'velocity="1"/></joint>'), J, ["joint 'rail'", "[0.3, 0.3]", "leave out 0"]),
     (_urdf('<link name="c"><collision><geometry><mesh filename="gone.stl"/></geometry>'
            '</collision></link><joint name="j" type="fixed"><parent link="base"/>'
            '<child link="c"/></joint>'), SceneFileNotFoundError, ["gone.stl"]),
