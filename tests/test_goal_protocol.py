@@ -1012,13 +1012,20 @@ def _raising_kernel(par, ipar, q, f_pos, f_rot, f_jac, want_jac, res, jac, err, 
 
 
 @dataclass(frozen=True)
-class _Wall(G.Goal):
+class _NoTwin(G.Goal):
+    """A compiled goal without a numpy residual."""
+
     frame: str = "panda_hand_tcp"
-    x: float = -10.0
+    x: float = 10.0
     kernel = _raising_kernel
 
     def encode(self, robot, q0):
         return G.Encoded(np.array([self.x]), np.array([frame_index(self, robot)]), 1)
+
+
+@dataclass(frozen=True)
+class _Wall(_NoTwin):
+    x: float = -10.0
 
     def residual(self, state):
         return np.array([self.x - state.pose(self.frame)[0, 3]])
@@ -1122,15 +1129,6 @@ def test_a_python_goals_bad_infeasible_or_pin_is_refused_naming_it(kw, words) ->
     prob = swarm_ik.IKProblem(r, goals=[_BadHooks("panda_hand_tcp", height=0.3, **kw)])
     with pytest.raises(InvalidArgumentError, match=r"_BadHooks\(panda_hand_tcp\)\." + words):
         swarm_ik.solve(prob, seed=0, max_evals=10**6)
-
-
-@dataclass(frozen=True)
-class _NoTwin(G.Goal):
-    frame: str = "panda_hand_tcp"
-    kernel = _raising_kernel
-
-    def encode(self, robot, q0):
-        return G.Encoded(np.array([10.0]), np.array([frame_index(self, robot)]), 1)
 
 
 def test_a_compiled_goal_without_a_numpy_residual_is_refused_when_the_problem_is_made() -> None:

@@ -393,6 +393,16 @@ def _urdf(body: str) -> str:
     return f'<?xml version="1.0"?><robot name="r"><link name="base"/>{body}</robot>'
 
 
+def _moving(joint: str, kind: str, lower: float, upper: float) -> str:
+    """A box on a moving joint of the given limits."""
+    return _urdf(
+        '<link name="c"><collision><geometry><box size="1 1 1"/></geometry></collision></link>'
+        f'<joint name="{joint}" type="{kind}"><parent link="base"/><child link="c"/>'
+        f'<axis xyz="0 0 1"/><limit lower="{lower}" upper="{upper}" effort="1" velocity="1"/>'
+        "</joint>"
+    )
+
+
 URDF_BAD = [
     ("<robot", J, ["not a valid XML file"]),
     ("<world/>", J, ["root element is <world>", "expected <robot>"]),
@@ -409,15 +419,9 @@ URDF_BAD = [
            '</collision></link><joint name="j" type="fixed"><parent link="base"/>'
            '<child link="c"/></joint>'), UnknownNameError,
      ["link 'c'", "box, cylinder, mesh, sphere", "['capsule']"]),
-    (_urdf('<link name="c"><collision><geometry><box size="1 1 1"/></geometry>'
-           '</collision></link><joint name="door" type="revolute"><parent link="base"/>'
-           '<child link="c"/><axis xyz="0 0 1"/><limit lower="0.5" upper="1" effort="1" '
-           'velocity="1"/></joint>'), J, ["joint 'door'", "[0.5, 1]", "leave out 0",
-                                           "make it a fixed joint"]),
-    (_urdf('<link name="c"><collision><geometry><box size="1 1 1"/></geometry>'
-           '</collision></link><joint name="rail" type="prismatic"><parent link="base"/>'
-           '<child link="c"/><axis xyz="1 0 0"/><limit lower="0.3" upper="0.3" effort="1" '
-           'velocity="1"/></joint>'), J, ["joint 'rail'", "[0.3, 0.3]", "leave out 0"]),
+    (_moving("door", "revolute", 0.5, 1), J, ["joint 'door'", "[0.5, 1]", "leave out 0",
+                                              "make it a fixed joint"]),
+    (_moving("rail", "prismatic", 0.3, 0.3), J, ["joint 'rail'", "[0.3, 0.3]", "leave out 0"]),
     (_urdf('<link name="c"><collision><geometry><mesh filename="gone.stl"/></geometry>'
            '</collision></link><joint name="j" type="fixed"><parent link="base"/>'
            '<child link="c"/></joint>'), SceneFileNotFoundError, ["gone.stl"]),
