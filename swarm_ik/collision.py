@@ -37,6 +37,7 @@ from __future__ import annotations
 
 import contextlib
 import hashlib
+import inspect
 import json
 import os
 import threading
@@ -799,7 +800,7 @@ class _Checker:
             warnings.warn(
                 f"{', '.join(sorted(set(touching)))}: fixed to the world, in contact whatever "
                 "the joints; such pairs are left out of the collision check",
-                stacklevel=2,
+                stacklevel=_user_stacklevel(),
             )
 
     def _obstacle_distance(self, b: int, o: int) -> float:
@@ -874,6 +875,18 @@ class _Checker:
             if d < best:
                 best, best_label = d, label
         return CollisionReport(True, best, [], best_label)
+
+
+def _user_stacklevel() -> int:
+    """The ``stacklevel`` that makes a warning of the calling function name the first frame
+    outside swarm_ik (the user's line, not a line of the package)."""
+    frame = inspect.currentframe()
+    frame = frame.f_back if frame is not None else None  # (the function that warns)
+    level = 1
+    while frame is not None and str(frame.f_globals.get("__name__", "")).startswith("swarm_ik"):
+        frame = frame.f_back
+        level += 1
+    return level
 
 
 # ---------------------------------------------------------------------- sampling rule
