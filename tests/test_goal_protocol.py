@@ -1168,3 +1168,69 @@ def test_a_dead_zone_jacobian_that_keeps_its_value_at_rest_is_accepted() -> None
     res = swarm_ik.solve(swarm_ik.IKProblem(r, goals=[goal]), seed=0)
     assert res.success
     assert np.all(np.abs(r.fk_pinocchio(res.q)[:3, 3] - goal.center) <= 0.05 + 1e-5)
+
+
+@numba.njit(GOAL_SIGNATURE)
+def _band_kernel(par, ipar, q, f_pos, f_rot, f_jac, want_jac, res, jac, err, work):
+    """The frame's height within ``[par[0], par[1]]``: its Jacobian written only while the
+    row is active (scale ``ipar[1] / 10``: 10 exact, 12 a fifth too large)."""
+    f = ipar[0]
+    z = f_pos[f, 2]
+    r = 0.0
+    if z < par[0]:
+        r = par[0] - z
+    elif z > par[1]:
+        r = par[1] - z
+    res[0] = r
+    if want_jac and r != 0.0:
+        for j in range(q.shape[0]):
+            jac[0, j] = 0.1 * ipar[1] * f_jac[f, 2, j]
+    err[0] = abs(r)
+    err[1] = np.nan
+
+
+@dataclass(frozen=True)
+class _Band(G.Goal):
+    frame: str
+    lo: float
+    hi: float
+    scale: int = 10
+    kernel = _band_kernel
+
+    def encode(self, robot, q0):
+        ipar = np.array([frame_index(self, robot), self.scale], dtype=np.int64)
+        return G.Encoded(np.array([self.lo, self.hi]), ipar, 1)
+
+    def residual(self, state):
+        z = state.pose(self.frame)[2, 3]
+        return np.array([min(max(z, self.lo), self.hi) - z])
+
+    def jacobian(self, state):
+        z = state.pose(self.frame)[2, 3]
+        inside = self.lo <= z <= self.hi
+        return np.zeros((1, state.q.shape[0])) if inside else -state.jacobian(self.frame)[2:3]
+
+
+@dataclass(frozen=True)
+class _RoughBand(_Band):
+    scale: int = 12
+
+
+@pytest.mark.parametrize("cls", [_Band, _RoughBand])
+def test_a_kernel_writing_its_jacobian_only_while_active_solves_at_any_weight(cls) -> None:
+    """Each call of a goal kernel starts from zero rows: the weight multiplied the entries a
+    kernel left from an earlier call again on every call (weight 100: 3 million evaluations,
+    time_limit); a kernel's step Jacobian a fifth too large beside an exact numpy twin is
+    accepted (only its sign is judged, a held-out review)."""
+    from swarm_ik.problem import _probe_q
+
+    r = robot("panda")
+    q = r.random_q(np.random.default_rng(8))
+    p = r.fk(q)[:3, 3]
+    z0 = float(r.fk(_probe_q(r))[2, 3])
+    lo = z0 + 0.05  # (the probe below the band: its row active there)
+    band = cls("panda_hand_tcp", lo, lo + 0.02, weight=100.0)
+    goals = [band, G.Position("panda_hand_tcp", [p[0], p[1], lo + 0.01])]
+    res = swarm_ik.solve(swarm_ik.IKProblem(r, goals=goals), seed=0, max_evals=20_000)
+    assert res.success, res.reason
+    assert lo - 1e-5 <= r.fk_pinocchio(res.q)[2, 3] <= lo + 0.02 + 1e-5

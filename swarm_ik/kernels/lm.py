@@ -351,6 +351,11 @@ def stack_rows(
             continue
         r0 = row0[i]
         r1 = r0 + nrows[i]
+        for a in range(r0, r1):  # (each call starts from zero rows: a kernel may write only
+            res[a] = 0.0  # its non-zero entries, and the weight below must not compound on
+            if want_jac:  # an entry it left from an earlier call)
+                for j in range(nq):
+                    jac[a, j] = 0.0
         fn = fns[kind[i]]
         fn(
             par[p0[i] : p0[i + 1]], ipar[i0[i] : i0[i + 1]], q, f_pos, f_rot, f_jac, want_jac,
