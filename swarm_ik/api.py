@@ -30,7 +30,7 @@ import numpy as np
 
 from swarm_ik import collision, kernels
 from swarm_ik._validate import check_seed, keywords_checked
-from swarm_ik.errors import InvalidArgumentError, SwarmIKError, UnknownNameError, unknown
+from swarm_ik.errors import InvalidArgumentError, UnknownNameError, unknown
 from swarm_ik.goals import Posture
 from swarm_ik.goals import base as goals_base
 from swarm_ik.goals.axis import angle_between
@@ -534,15 +534,8 @@ class Route:
             with self._lock:  # (the bound table and scratch serve one run at a time)
                 self._rebind(problem, q_start)
                 t0 = time.perf_counter()
-                try:
+                with goals_base.kernel_errors_named(lambda: list(problem.compiled_goals)):
                     out = self._search(seed_q, key, max_evals, search_limit)
-                except SwarmIKError:
-                    raise
-                except Exception as exc:  # (a compiled goal's own kernel raised)
-                    named = goals_base.kernel_error(list(problem.compiled_goals), exc)
-                    if named is exc:
-                        raise
-                    raise named from exc
                 elapsed = time.perf_counter() - t0
             q, fit, n_evals, history = out.q, out.fitness, out.used, out.history
             n_evals += first_evals

@@ -780,15 +780,10 @@ class _Checker:
         """One warning naming the bodies fixed to the world that touch an obstacle (whatever
         the joints, so left out of the check like every pair of such a body)."""
         coal = self._coal
-        data = self.model.createData()
-        pin.forwardKinematics(self.model, data, rc.robot.to_pinocchio(rc.robot.mid_q()))
-        gd = pin.GeometryData(self.gm)
-        pin.updateGeometryPlacements(self.model, data, self.gm, gd)
+        self._place(rc.robot.to_pinocchio(rc.robot.mid_q()))  # (the bodies' coal objects)
         touching = []
         for b in np.flatnonzero(~self.moving).tolist():
-            body = coal.CollisionObject(self.gm.geometryObjects[b].geometry)
-            body.setTransform(gd.oMg[b])
-            body.computeAABB()
+            body = self.bodies[b]
             box = body.getAABB()
             lo, hi = np.array(box.min_), np.array(box.max_)
             near = np.all((self.obs_lo <= hi) & (self.obs_hi >= lo), axis=1)  # (boxes meet)

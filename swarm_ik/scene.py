@@ -1239,6 +1239,9 @@ def _from_curobo(data: Any, base_dir: Path, where: str) -> Scene:
 _MOVEIT_SHAPES = ("box", "cylinder", "mesh", "sphere")
 _MOVEIT_TYPES = (*_MOVEIT_SHAPES, "cone", "plane")
 """Every shape type line of MoveIt's format (cones and planes refused by name)."""
+_MoveitObject = tuple[str, list[tuple[Callable[[FloatArray, str], Shape], FloatArray, int]]]
+"""An object of a MoveIt scene as :func:`_from_moveit` reads it: its id and, per shape, the
+shape's maker, world pose and line."""
 _NUMBER = re.compile(r"[-+]?(?:[0-9]+\.?[0-9]*|\.[0-9]+)(?:[eE][-+]?[0-9]+)?")
 _TOKEN = re.compile(r"\s*(\S+)")
 
@@ -1419,16 +1422,12 @@ def _from_moveit(text: str, where: str, mesh_dir: Path | None) -> list[Shape]:
     s = _Stream(text, first + 1, where)
     # each object's shapes, built once every object id is known (an object of several shapes
     # names them <id>#k; one such name taken by another object's id gets a further suffix)
-    pending: list[
-        tuple[str, int, list[tuple[Callable[[FloatArray, str], Shape], FloatArray, int]]]
-    ] = []
+    pending: list[_MoveitObject] = []
     n_objects = 0
     while True:
         marker = s.token("an object ('* name') or the end line '.'")
-        if marker == "." and not any(
-            made for _, _, made in pending
-        ):  # (an empty scene would turn collision avoidance
-            # off unnoticed: MoveIt writes one for an empty planning scene)
+        if marker == "." and not any(made for _, made in pending):  # (an empty scene would
+            # turn collision avoidance off unnoticed: MoveIt writes one for an empty scene)
             held = (
                 f"its {n_objects} object{'s have' if n_objects > 1 else ' has'} no shapes"
                 if n_objects
@@ -1480,23 +1479,18 @@ def _from_moveit(text: str, where: str, mesh_dir: Path | None) -> list[Shape]:
             for k in range(s.count("number of subframes")):
                 s.token(f"subframe {k} name")
                 s.pose(f"subframe {k} pose")
-        pending.append((object_id, n, made))
+        pending.append((object_id, made))
 
 
-def _moveit_shapes(
-    pending: list[
-        tuple[str, int, list[tuple[Callable[[FloatArray, str], Shape], FloatArray, int]]]
-    ],
-    s: _Stream,
-) -> list[Shape]:
+def _moveit_shapes(pending: list[_MoveitObject], s: _Stream) -> list[Shape]:
     """The shapes of :func:`_from_moveit`'s objects, named: an object of one shape by its id,
     of several ``<id>#k`` (``<id>#k.m`` where another object's id is ``<id>#k``)."""
-    ids = {object_id for object_id, _, _ in pending}
+    ids = {object_id for object_id, _ in pending}
     shapes: list[Shape] = []
-    for object_id, n, made in pending:
+    for object_id, made in pending:
         for k, (build, pose, line) in enumerate(made):
             name = object_id
-            if n != 1:
+            if len(made) != 1:
                 name = f"{object_id}#{k}"
                 m = 0
                 while name in ids:
@@ -1547,13 +1541,9 @@ def _check_urdf_collisions(root: Any, where: str) -> int:
                     _urdf_numbers(at, origin, attr, 3, required=False)
             geo = col.find("geometry")
             kinds = [g.tag for g in geo] if geo is not None else []
-            if len(kinds) == 1 and kinds[0] not in _URDF_GEOMETRY:  # (an unknown shape)
-                raise UnknownNameError(
-                    f"{at}: a collision geometry must be one of {', '.join(_URDF_GEOMETRY)} "
-                    f"(URDF has no other), got {kinds}"
-                )
-            if len(kinds) != 1:
-                raise InvalidArgumentError(
+            if len(kinds) != 1 or kinds[0] not in _URDF_GEOMETRY:
+                unknown_shape = len(kinds) == 1  # (one geometry of a type URDF does not have)
+                raise (UnknownNameError if unknown_shape else InvalidArgumentError)(
                     f"{at}: a collision geometry must be one of {', '.join(_URDF_GEOMETRY)} "
                     f"(URDF has no other), got {kinds}"
                 )

@@ -290,25 +290,33 @@ def kernel_error(goals: Any, exc: Exception) -> Exception:
     )
 
 
+@contextlib.contextmanager
+def kernel_errors_named(goals_of: Callable[[], Any]) -> Iterator[None]:
+    """An exception a user's compiled kernel raises in the body, named
+    (:func:`kernel_error`, the exception chained); ``goals_of()`` gives the goals that ran
+    (read only when something was raised)."""
+    try:
+        yield
+    except Exception as exc:
+        try:
+            goals = goals_of()
+        except Exception:
+            goals = None
+        err = kernel_error(goals, exc)
+        if err is exc:
+            raise
+        raise err from exc
+
+
 def names_kernel_errors(goals_of: Callable[..., Any]) -> Callable[[Any], Any]:
-    """Decorator of an entry point that runs compiled goals: an exception a user's kernel
-    raises inside it is named (:func:`kernel_error`); ``goals_of(*args, **kwargs)`` gives the
-    call's goals (read only when something was raised)."""
+    """Decorator of an entry point that runs compiled goals: :func:`kernel_errors_named`
+    around it, ``goals_of(*args, **kwargs)`` giving the call's goals."""
 
     def wrap(func: Any) -> Any:
         @functools.wraps(func)
         def named(*args: Any, **kwargs: Any) -> Any:
-            try:
+            with kernel_errors_named(lambda: goals_of(*args, **kwargs)):
                 return func(*args, **kwargs)
-            except Exception as exc:
-                try:
-                    goals = goals_of(*args, **kwargs)
-                except Exception:
-                    goals = None
-                err = kernel_error(goals, exc)
-                if err is exc:
-                    raise
-                raise err from exc
 
         return named
 
