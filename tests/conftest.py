@@ -111,6 +111,33 @@ def rng() -> np.random.Generator:
     return np.random.default_rng(12345)
 
 
+# ----------------------------------------------------------------------- wall-clock bounds
+def timed(tries: int = 3) -> Callable[[Callable[..., None]], Callable[..., None]]:
+    """Run a test that bounds a wall-clock time up to ``tries`` times; it passes if one run does.
+
+    A bound such as "a 50 ms limit ends within 60 ms" holds on a quiet machine but a shared CI
+    host can stall any process for tens of milliseconds (CI failed stop 48 on a 110 ms call
+    bounded at 110 ms). A solver that ignores its limit misses the bound every time, so the
+    test still fails on it; one stall does not fail it. The last run's failure is the one
+    reported.
+    """
+
+    def wrap(test: Callable[..., None]) -> Callable[..., None]:
+        @functools.wraps(test)
+        def run(*args: object, **kwargs: object) -> None:
+            for attempt in range(tries):
+                try:
+                    test(*args, **kwargs)
+                    return
+                except AssertionError:
+                    if attempt == tries - 1:
+                        raise
+
+        return run
+
+    return wrap
+
+
 # ----------------------------------------------------------------------- the command line
 FROM_Q = ["--from-q", "0.1", "-0.5", "0.2", "0.3", "-0.2", "0.4", "0.1"]
 """``swarm-ik solve``'s target as the forward kinematics of a yumi_left configuration."""

@@ -9,7 +9,7 @@ from dataclasses import dataclass
 
 import numpy as np
 import pytest
-from conftest import robot
+from conftest import robot, timed
 
 import swarm_ik
 from swarm_ik import goals as G
@@ -229,6 +229,7 @@ def test_time_limit_starts_every_target_before_restarting_hopeless_ones(panda):
 
 
 @pytest.mark.parametrize("with_scene", [False, True])
+@timed()
 def test_time_limit_covers_a_large_batch(panda, with_scene):
     """100,000 targets at 0.1 s: the targets' checks (60 ms), the errors of the answers and,
     among obstacles, coal's verdicts are inside the limit (0.18-0.26 s before: the errors of

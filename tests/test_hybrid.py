@@ -9,7 +9,7 @@ from pathlib import Path
 import numpy as np
 import pinocchio as pin
 import pytest
-from conftest import robot
+from conftest import robot, timed
 
 import swarm_ik
 from swarm_ik.kernels.lie import log3_nb as _log3
@@ -134,6 +134,7 @@ def test_position_only_problem() -> None:
     assert res.success and res.position_error <= 1e-5
 
 
+@timed()
 def test_budget_time_limit_determinism_and_unreachable_target() -> None:
     r = robot("ur5")
     target = np.eye(4)

@@ -4,6 +4,7 @@ import time
 
 import numpy as np
 import pytest
+from conftest import timed
 
 import swarm_ik
 from swarm_ik import branches as br
@@ -71,6 +72,7 @@ def test_min_distance_filter_coarser():
     assert np.min(d[~np.eye(len(qs), dtype=bool)], initial=np.inf) >= 4.0
 
 
+@timed()
 def test_time_limit_includes_verification():
     robot = swarm_ik.load_robot("panda")
     problem = swarm_ik.IKProblem.from_q(robot, robot.mid_q() + 0.2)

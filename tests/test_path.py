@@ -7,6 +7,7 @@ import json
 import numpy as np
 import pytest
 from conftest import robot as get
+from conftest import timed
 
 import swarm_ik
 from swarm_ik import path as sp
@@ -166,6 +167,7 @@ def test_time_limit_reached_holds_the_waypoints_not_solved():
     assert res.jump_free  # (holding still is no jump)
 
 
+@timed()
 def test_time_limit_covers_the_whole_call():
     """Candidates until half the limit, then tracking, then the waypoints left unsolved: the
     call returns within about the limit (1.3 s unbounded for this path) with a path whose
@@ -184,6 +186,7 @@ def test_time_limit_covers_the_whole_call():
     assert f"waypoints {cut}–199 not solved" in res.reason
 
 
+@timed()
 def test_the_search_through_many_candidates_is_inside_the_time_limit():
     """A UR5 circle: eight closed-form branches and their 2π copies per waypoint, millions
     of candidate pairs (a 58 ms search unbounded). The time kept for the search grows with
@@ -445,6 +448,7 @@ def test_a_densify_step_cut_by_the_time_limit_is_filled_the_short_way_round() ->
     assert np.all(np.abs(chain[:, 0]) <= np.pi)
 
 
+@timed()
 def test_a_long_densified_path_keeps_its_time_limit() -> None:
     """3,000 waypoints with 16 poses between each: the steps the time limit leaves are filled
     in joint space at once (one by one, that fill overran a 0.2 s limit to 0.4–0.8 s), and the

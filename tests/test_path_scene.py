@@ -8,6 +8,7 @@ import time
 import numpy as np
 import pytest
 from conftest import robot as get
+from conftest import timed
 
 import swarm_ik
 from swarm_ik.path import PathResult, solve_path
@@ -100,6 +101,7 @@ def _box(poses: np.ndarray, dz: float) -> Scene:
     return Scene([Box((0.05, 0.05, 0.05), tuple(poses[0, :3, 3] + [0.1, 0.2, dz]), name="b")])
 
 
+@timed()
 def test_time_s_of_a_first_timed_path_with_a_scene_is_its_wall_time() -> None:
     """A robot's first timed path, with a scene: its kernels, the scene's sphere model (the
     robot's self-collision pairs sampled) and coal's checker are loaded before the clock and
@@ -115,6 +117,7 @@ def test_time_s_of_a_first_timed_path_with_a_scene_is_its_wall_time() -> None:
     assert res.reached[0]
 
 
+@timed()
 def test_a_new_scene_is_loaded_before_the_clock() -> None:
     """The robot's path kernels loaded, then a path with its first scene: the sphere model
     (0.2–0.6 s) is made before the clock and charged up to half the limit, so the path gets
@@ -147,6 +150,7 @@ def test_branches_rejected_by_other_goals_are_named_with_them() -> None:
     assert res.exhaustive
 
 
+@timed()
 def test_a_path_among_obstacles_ends_within_its_time_limit() -> None:
     """The check at the end verifies each waypoint with coal (with distances where one is left
     in contact): 15-32 ms for 60 waypoints, kept out of the limit at 20 µs a waypoint, so a

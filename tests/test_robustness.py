@@ -14,7 +14,7 @@ from pathlib import Path
 
 import numpy as np
 import pytest
-from conftest import FROM_Q, cli_error, cli_json, urdf_joint, urdf_text
+from conftest import FROM_Q, cli_error, cli_json, timed, urdf_joint, urdf_text
 from conftest import URDF_LIMIT as LIMIT
 
 import swarm_ik
@@ -500,6 +500,7 @@ class _SlowProblem(IKProblem):
 
 
 @pytest.mark.parametrize("name", SOLVERS)
+@timed()
 def test_time_limit_is_honoured_within_ten_percent_on_a_slow_fitness(
     name: str, yumi: swarm_ik.RobotModel
 ) -> None:

@@ -6,6 +6,7 @@ import time
 
 import numpy as np
 import pytest
+from conftest import timed
 
 import swarm_ik
 from swarm_ik.kernels import search
@@ -121,6 +122,7 @@ def test_budget_never_exceeded_and_history_one_entry_per_generation() -> None:
     assert ev.n_evals == 500 and len(ev.history) >= 1
 
 
+@timed()
 def test_time_limit_is_honoured_inside_the_compiled_loop() -> None:
     robot = swarm_ik.load_robot("panda")
     # unreachable: the search runs until the clock stops it

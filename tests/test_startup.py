@@ -7,6 +7,7 @@ import subprocess
 import sys
 
 import pytest
+from conftest import timed
 
 HEAVY = ("dask", "matplotlib", "meshcat", "yourdfpy", "trimesh", "swarm_ik.bench")
 """Optional dependencies kept off the solve path.  (``coal`` is not listed: Pinocchio itself
@@ -68,6 +69,7 @@ def test_first_solve_of_a_fresh_process_keeps_half_its_limit_for_the_search(call
     assert ok == "True", reason
 
 
+@timed()
 def test_first_solve_of_a_fresh_process_charges_the_loading_to_its_limit() -> None:
     """A first solve that cannot succeed (tolerances no answer meets) searches for its limit
     less the kernels' loading (at least half the limit), where it searched the whole limit
@@ -95,6 +97,7 @@ def test_first_solve_of_a_fresh_process_charges_the_loading_to_its_limit() -> No
     assert abs(float(time_s) - float(search_s)) < 0.01  # (time_s: the search's own)
 
 
+@timed()
 def test_first_solve_many_of_a_fresh_process_charges_the_loading_to_its_limit() -> None:
     """solve_many loads its kernels off the clock, as solve does, and charges that to its
     limit up to half of it: a first call with contradictory goals ran its whole limit after
