@@ -62,6 +62,8 @@ def check_seed(seed: Any) -> int | np.random.Generator:
     Raises:
         InvalidArgumentError: the seed is negative, too large, or not an integer.
     """
+    if type(seed) is int and 0 <= seed < SEED_LIMIT:  # (the common case, first)
+        return seed
     if isinstance(seed, np.random.Generator):
         return seed
     if seed is None:

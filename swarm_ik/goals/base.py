@@ -290,22 +290,30 @@ def kernel_error(goals: Any, exc: Exception) -> Exception:
     )
 
 
-@contextlib.contextmanager
-def kernel_errors_named(goals_of: Callable[[], Any]) -> Iterator[None]:
-    """An exception a user's compiled kernel raises in the body, named
+class kernel_errors_named:  # noqa: N801 (used as a function: ``with kernel_errors_named(...)``)
+    """Context manager: an exception a user's compiled kernel raises in the body, named
     (:func:`kernel_error`, the exception chained); ``goals_of()`` gives the goals that ran
-    (read only when something was raised)."""
-    try:
-        yield
-    except Exception as exc:
+    (read only when something was raised).  A class rather than a generator: it wraps every
+    search, and entering it costs no generator."""
+
+    __slots__ = ("goals_of",)
+
+    def __init__(self, goals_of: Callable[[], Any]) -> None:
+        self.goals_of = goals_of
+
+    def __enter__(self) -> None:
+        return None
+
+    def __exit__(self, kind: Any, exc: BaseException | None, tb: Any) -> None:
+        if not isinstance(exc, Exception):
+            return  # (nothing raised, or KeyboardInterrupt and the like: passed on)
         try:
-            goals = goals_of()
+            goals = self.goals_of()
         except Exception:
             goals = None
         err = kernel_error(goals, exc)
-        if err is exc:
-            raise
-        raise err from exc
+        if err is not exc:
+            raise err from exc
 
 
 def names_kernel_errors(goals_of: Callable[..., Any]) -> Callable[[Any], Any]:
