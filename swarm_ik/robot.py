@@ -1174,7 +1174,9 @@ def load_robot(
             :func:`robot_names`), or a path to a ``.urdf`` file.
         ee_frame: Goal frame, or a list of goal frames (the model is then the union of the
             root → frame paths, a tree); default: the robot's usual tool frame(s) for named
-            robots, the tip of the deepest chain for a file.
+            robots, the tip of the deepest chain for a file.  A link and a joint of the same
+            name (``so100``'s ``gripper``) name the link; the joint's frame is its child
+            link's.
         srdf: SRDF whose ``disable_collisions`` pairs the collision goal skips (default: the
             one next to the URDF, if any; ``False``: none).
         floating_base: Give the root link a free flyer (a humanoid, a mobile base): six more

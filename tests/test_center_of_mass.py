@@ -204,22 +204,39 @@ def test_a_centre_of_mass_goal_no_configuration_meets_is_known_before_the_search
 
 
 def test_the_deepest_point_bound_holds_and_a_feasible_margin_is_kept() -> None:
-    """The bound on the inscribed radius is never below the true one (a square of side 0.2:
-    0.1; the L's arms 0.2 wide: 0.117 in the corner) and not far above it; margins up to
-    the true radius are not called infeasible."""
+    """The bound on the inscribed radius is never below the true one and at most 1e-5 m
+    above it (a square: half its side; a 3-4-5 triangle: 1; a 2 m × 0.1 m rectangle, whose
+    deepest points fill a segment: 0.05; the L: its corner circle); margins
+    up to the true radius are not called infeasible."""
     from swarm_ik.goals.center_of_mass import deepest_inside
 
     sq = np.array(SQUARE, dtype=float)
     side = float(np.ptp(sq[:, 0]))
-    assert side / 2 <= deepest_inside(sq) <= side / 2 + 0.02 * side
-    bound = deepest_inside(np.array(L_SHAPE))
-    assert 0.117 <= bound <= 0.16
+    cases = [
+        (sq, side / 2),
+        (np.array([[0, 0], [3, 0], [0, 4]], dtype=float), 1.0),
+        (np.array([[0, 0], [2, 0], [2, 0.1], [0, 0.1]], dtype=float), 0.05),
+    ]
+    for poly, radius in cases:
+        assert radius <= deepest_inside(poly) <= radius + 1e-5, poly
+    corner = 0.1 * (1 + (2**0.5 - 1) / (2**0.5 + 1))  # (L_SHAPE's docstring)
+    assert corner <= deepest_inside(np.array(L_SHAPE, dtype=float)) <= corner + 1e-5
     for goal in (
         CenterOfMass(support=SQUARE, margin=0.999 * side / 2),
         CenterOfMass(support=L_SHAPE, margin=0.099),
         CenterOfMass(point=[0.0, 1.0, 0.0], support=L_SHAPE, margin=0.099),
     ):
         assert goal.infeasible(None, 1e-5, 1e-5) is None  # type: ignore[arg-type]
+
+
+def test_a_margin_just_beyond_the_inscribed_radius_is_infeasible() -> None:
+    """An L whose arms are 0.1 m wide holds no point deeper than about 0.0586 m: a margin of
+    0.06 is refused before any search (the grid bound said 0.062 and let the search run its
+    whole time limit)."""
+    corner = [[0, 0], [0.4, 0], [0.4, 0.1], [0.1, 0.1], [0.1, 0.4], [0, 0.4]]
+    why = CenterOfMass(support=corner, margin=0.06).infeasible(None, 1e-5, 1e-5)  # type: ignore[arg-type]
+    assert why is not None and "deeper than its support polygon allows" in why
+    assert CenterOfMass(support=corner, margin=0.058).infeasible(None, 1e-5, 1e-5) is None  # type: ignore[arg-type]
 
 
 def test_urdf_without_masses_is_refused(tmp_path) -> None:  # type: ignore[no-untyped-def]

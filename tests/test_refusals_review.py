@@ -209,3 +209,13 @@ def test_an_on_improvement_that_is_not_callable_is_refused_before_the_solve() ->
         swarm_ik.errors.InvalidArgumentError, match="on_improvement must be None or a callable"
     ):
         swarm_ik.solve(swarm_ik.IKProblem(r, r.fk(r.mid_q())), on_improvement=5, max_evals=50)
+
+
+@pytest.mark.parametrize("shape", [(4, 4), (2, 3)])
+def test_orientation_given_a_matrix_not_3x3_says_so(shape: tuple[int, int]) -> None:
+    """A 4×4 pose given to Orientation was refused as "quaternion must be 4 numbers, got 16
+    numbers"; the message now names the matrix (and Pose, for a 4×4)."""
+    with pytest.raises(swarm_ik.errors.InvalidTargetError, match=r"\(3, 3\) rotation matrix") as e:
+        G.Orientation("panda_hand", np.eye(*shape))
+    assert ("use Pose" in str(e.value)) == (shape == (4, 4))
+    assert G.Orientation("panda_hand", [[0.0, 0.0, 0.0, 1.0]]).rotation.shape == (3, 3)

@@ -167,32 +167,79 @@ def support_polygon(value: Any) -> FloatArray:
 
 
 @numba.njit(cache=True)
-def _deepest_on_grid(
-    vx: FloatArray, vy: FloatArray, xs: FloatArray, ys: FloatArray
+def _deepest_bound(
+    vx: FloatArray,
+    vy: FloatArray,
+    lo: FloatArray,
+    hi: FloatArray,
+    n: int,
+    tol: float,
+    max_cells: int,
 ) -> float:  # pragma: no cover - compiled
-    """The largest depth inside the polygon (``vx``, ``vy``) of the grid points ``xs × ys``
-    (:func:`_polygon_distance`, negative inside), 0 when none is inside."""
-    deepest = 0.0
-    for x in xs:
-        for y in ys:
-            d = -_polygon_distance(x, y, vx, vy)[0]
-            if d > deepest:
-                deepest = d
-    return deepest
+    """Branch and bound on the depth ``−d`` inside the polygon (``vx``, ``vy``)
+    (:func:`_polygon_distance`): the bounding box ``lo``–``hi`` cut into square cells, ``n``
+    along its longer side, each
+    cell bounded by the depth at its centre plus its half diagonal (the distance changes by at
+    most the distance moved); cells that may hold a point deeper than the deepest centre seen
+    by more than ``tol`` are split in four, the others dropped.  Returns an upper bound on the
+    depth of every point, within ``tol`` of the true largest depth, or the bound of the cells
+    left when ``max_cells`` would be exceeded."""
+    h = 0.5 * max(hi[0] - lo[0], hi[1] - lo[1]) / n  # (square cells)
+    ni = int(math.ceil(0.5 * (hi[0] - lo[0]) / h))
+    nj = int(math.ceil(0.5 * (hi[1] - lo[1]) / h))
+    hx, hy = h, h
+    cx = np.empty(ni * nj)
+    cy = np.empty(ni * nj)
+    for i in range(ni):
+        for j in range(nj):
+            cx[i * nj + j] = lo[0] + (2 * i + 1) * h
+            cy[i * nj + j] = lo[1] + (2 * j + 1) * h
+    best = 0.0  # (depth 0: a point of the boundary)
+    while True:
+        m = cx.shape[0]
+        depth = np.empty(m)
+        for c in range(m):
+            depth[c] = -_polygon_distance(cx[c], cy[c], vx, vy)[0]
+            best = max(best, depth[c])
+        r = math.sqrt(hx * hx + hy * hy)
+        keep = depth + r > best + tol
+        k = int(keep.sum())
+        if k == 0:
+            return best + tol
+        if 4 * k > max_cells:
+            return max(best + tol, float(np.max(depth[keep])) + r)
+        hx, hy = 0.5 * hx, 0.5 * hy
+        nx = np.empty(4 * k)
+        ny = np.empty(4 * k)
+        o = 0
+        for c in range(m):
+            if keep[c]:
+                for sx in (-1.0, 1.0):
+                    for sy in (-1.0, 1.0):
+                        nx[o] = cx[c] + sx * hx
+                        ny[o] = cy[c] + sy * hy
+                        o += 1
+        cx, cy = nx, ny
 
 
-def deepest_inside(poly: FloatArray, n: int = 65) -> float:
+DEEPEST_TOL = 1e-6
+"""How far above the true inscribed radius [m] :func:`deepest_inside`'s bound may lie."""
+
+
+def deepest_inside(poly: FloatArray, n: int = 32, max_cells: int = 1 << 18) -> float:
     """An upper bound [m] on how far inside the simple polygon ``poly`` ``(k, 2)`` a point
-    can lie (the radius of its largest inscribed circle): the largest depth on an ``n × n``
-    grid over its bounding box plus half a cell's diagonal (the distance to the boundary
-    changes by at most the step between points), so a margin beyond it is surely unmet."""
+    can lie (the radius of its largest inscribed circle), so that a margin beyond it is
+    surely unmet: within :data:`DEEPEST_TOL` of the radius (:func:`_deepest_bound`, square
+    cells, ``n`` along the longer side, split where they may hold the deepest point), except
+    for a polygon whose deepest points fill a segment (a rectangle's), whose cells reach
+    ``max_cells`` first: there within about ``1e-5`` of the segment's length."""
     lo, hi = poly.min(axis=0), poly.max(axis=0)
-    depth = _deepest_on_grid(
-        np.ascontiguousarray(poly[:, 0]), np.ascontiguousarray(poly[:, 1]),
-        np.linspace(lo[0], hi[0], n), np.linspace(lo[1], hi[1], n),
+    return float(
+        _deepest_bound(
+            np.ascontiguousarray(poly[:, 0]), np.ascontiguousarray(poly[:, 1]),
+            np.asarray(lo, dtype=float), np.asarray(hi, dtype=float), n, DEEPEST_TOL, max_cells,
+        )
     )  # fmt: skip
-    step = (hi - lo) / (n - 1)
-    return float(depth) + 0.5 * float(np.hypot(step[0], step[1]))
 
 
 @dataclass(frozen=True)

@@ -8,6 +8,7 @@ from typing import TYPE_CHECKING, Any, ClassVar
 import numba
 import numpy as np
 
+from swarm_ik.errors import InvalidTargetError
 from swarm_ik.goals.base import Encoded, FloatArray, Goal, Pin, State, frame_index
 from swarm_ik.kernels import lie
 from swarm_ik.kernels.rows import rotation_rows
@@ -52,6 +53,12 @@ class Orientation(Goal):
 
     def __post_init__(self) -> None:
         r = np.asarray(self.rotation, dtype=float) if _is_array(self.rotation) else None
+        if r is not None and r.ndim == 2 and min(r.shape) > 1 and r.shape != (3, 3):
+            raise InvalidTargetError(
+                f"Orientation.rotation must be a (3, 3) rotation matrix or a quaternion "
+                f"(x, y, z, w), got a {r.shape[0]}×{r.shape[1]} matrix"
+                + (" (a pose: use Pose, or its [:3, :3])" if r.shape == (4, 4) else "")
+            )
         if r is not None and r.shape == (3, 3):
             pose = np.eye(4)
             pose[:3, :3] = r
