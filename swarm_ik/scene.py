@@ -48,7 +48,7 @@ import re
 import reprlib
 from collections.abc import Callable, Iterable, Iterator, Mapping, Sequence
 from contextlib import contextmanager
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any, ClassVar
 
@@ -370,6 +370,10 @@ class Mesh:
     pose: Matrix4 = None  # type: ignore[assignment]  # validated in __post_init__
     scale: tuple[float, float, float] = (1.0, 1.0, 1.0)
     name: str | None = None
+    digest: str = field(default="", init=False, repr=False)
+    """SHA-256 of the file's bytes when the mesh was made: two meshes of one path are equal
+    only if the file did not change between them (a file rewritten in place was judged by
+    the collision model cached for its old content)."""
     kind: ClassVar[str] = "mesh"
 
     def __post_init__(self) -> None:
@@ -384,6 +388,7 @@ class Mesh:
         if not p.is_file():
             raise SceneFileNotFoundError(f"mesh: file not found: {str(p)!r}")
         object.__setattr__(self, "path", str(p.resolve()))
+        object.__setattr__(self, "digest", hashlib.sha256(p.read_bytes()).hexdigest())
         scale: Any = self.scale
         if _is_number(scale):
             scale = (scale, scale, scale)

@@ -196,3 +196,34 @@ def test_mesh_edges_refused_with_one_message(tmp_path) -> None:  # type: ignore[
     huge = Scene([Mesh(str(block), scale=1e4, pose=np.eye(4))])
     with pytest.raises(InvalidArgumentError, match="MAX_FIT_TRIANGLES"):
         swarm_ik.IKProblem(robot, target, goals=[AvoidCollisions(huge)])
+
+
+def _box_obj(path, lo, hi) -> None:  # type: ignore[no-untyped-def]
+    """A closed box ``lo``–``hi`` [m] written as an OBJ file."""
+    v = [[x, y, z] for x in (lo[0], hi[0]) for y in (lo[1], hi[1]) for z in (lo[2], hi[2])]
+    f = [(1, 3, 2), (2, 3, 4), (5, 6, 7), (6, 8, 7), (1, 2, 5), (2, 6, 5),
+         (3, 7, 4), (4, 7, 8), (1, 5, 3), (3, 5, 7), (2, 4, 6), (4, 8, 6)]  # fmt: skip
+    lines = [f"v {x:g} {y:g} {z:g}" for x, y, z in v] + [f"f {a} {b} {c}" for a, b, c in f]
+    path.write_text("\n".join(lines) + "\n")
+
+
+def test_a_mesh_file_rewritten_in_place_is_a_new_obstacle(tmp_path) -> None:  # type: ignore[no-untyped-def]
+    """Two meshes of one path are equal only while the file's bytes are: a file rewritten
+    between two scenes was judged by the collision model cached for its old content (40 of
+    99 batch successes in contact with the new block)."""
+    import swarm_ik
+    from swarm_ik.goals import AvoidCollisions
+
+    path = tmp_path / "m.obj"
+    robot = swarm_ik.load_robot("panda")
+    targets = robot.fk(robot.random_q(np.random.default_rng(2), 40))
+    _box_obj(path, [5, 5, 5], [5.1, 5.1, 5.1])  # far away
+    far = Scene([Mesh(str(path), name="m")])
+    swarm_ik.solve_batch(robot, targets, goals=[AvoidCollisions(far)])
+    _box_obj(path, [0.2, -0.6, 0.0], [0.8, 0.6, 0.5])  # a block in the workspace
+    near = Scene([Mesh(str(path), name="m")])
+    assert near != far
+    res = swarm_ik.solve_batch(robot, targets, goals=[AvoidCollisions(near)])
+    model = robot.collision_model()
+    hits = [model.collides(q, near, 0.0, True) for q in res.q[res.success]]
+    assert res.success.any() and not any(hits)
