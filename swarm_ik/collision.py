@@ -439,6 +439,25 @@ class RobotCollision:
         ck = self._checker(as_scene(scene), bool(self_collision))
         return ck.collide(self.robot.to_pinocchio(q), m)
 
+    def pairs_always_in_contact(
+        self, scene: Scene | None = None, margin: float = 0.0, self_collision: bool = True
+    ) -> list[tuple[str, str]]:
+        """Pairs closer than ``margin`` [m] at each of :data:`ALWAYS_SAMPLES` configurations
+        drawn uniformly within the limits (seed 0), sorted: a collision goal they are part
+        of may have no answer (a UR5's ``ee_link`` and ``wrist_2_link`` are 0.0198 m apart
+        whatever the joints: a margin of 0.02 m failed every solve, silently).  Empty as soon
+        as one sample is free of contact (the common case: one :meth:`collides_many`)."""
+        qs = self.robot.random_q(np.random.default_rng(0), ALWAYS_SAMPLES)
+        if not self.collides_many(qs, scene, margin, self_collision).all():
+            return []
+        common: set[tuple[str, str]] | None = None
+        for q in qs:
+            pairs = set(self.check(q, scene, margin, self_collision).pairs_in_contact)
+            common = pairs if common is None else common & pairs
+            if not common:
+                return []
+        return sorted(common or ())
+
     def collides_many(
         self, qs: Any, scene: Scene | None = None, margin: float = 0.0, self_collision: bool = True
     ) -> NDArray[np.bool_]:
@@ -795,7 +814,7 @@ class _Checker:
             warnings.warn(
                 f"{', '.join(sorted(set(touching)))}: fixed to the world, in contact whatever "
                 "the joints; such pairs are left out of the collision check",
-                stacklevel=_user_stacklevel(),
+                stacklevel=user_stacklevel(),
             )
 
     def _obstacle_distance(self, b: int, o: int) -> float:
@@ -872,7 +891,11 @@ class _Checker:
         return CollisionReport(True, best, [], best_label)
 
 
-def _user_stacklevel() -> int:
+ALWAYS_SAMPLES = 16
+"""Random configurations :meth:`RobotCollision.pairs_always_in_contact` checks."""
+
+
+def user_stacklevel() -> int:
     """The ``stacklevel`` that makes a warning of the calling function name the first frame
     outside swarm_ik (the user's line, not a line of the package)."""
     frame = inspect.currentframe()

@@ -214,3 +214,30 @@ def test_a_goal_point_in_an_obstacle_is_unreachable_only_where_the_body_is() -> 
         )
         verdict = unreachable_goal(problem)
         assert (verdict is not None and "inside obstacle" in verdict) == proven, (name, verdict)
+
+
+def test_a_pair_in_contact_whatever_the_joints_is_named_in_a_warning() -> None:
+    """The UR5's ee_link and wrist_2_link are 0.0198 m apart whatever the joints: a margin of
+    0.02 m failed every target with no word why; a capsule through the Panda's first link
+    the same.  One warning names the pair; a reachable margin says nothing."""
+    import warnings
+
+    from swarm_ik.scene import Capsule
+
+    ur5 = robot("ur5")
+    targets = ur5.fk(ur5.random_q(np.random.default_rng(1), 5))
+    far = Scene([Box([0.1] * 3, [1.0, 1.0, 1.0])])
+    with pytest.warns(UserWarning, match=r"ee_link–wrist_2_link closer than the margin"):
+        swarm_ik.solve_batch(ur5, targets, goals=[G.AvoidCollisions(far, margin=0.02)])
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        res = swarm_ik.solve_batch(ur5, targets, goals=[G.AvoidCollisions(far, margin=0.005)])
+    assert res.success.all()
+    panda = robot("panda")
+    rod = np.array([[1, 0, 0, 0], [0, 0, -1, 0], [0, 1, 0, 0.25], [0, 0, 0, 1]], dtype=float)
+    scene = Scene([Capsule(0.02, 1.0, rod, name="rod")])
+    pose = G.Pose(panda.ee_frame, panda.fk(panda.mid_q()))
+    with pytest.warns(UserWarning, match=r"panda_link1–rod in contact in each of"):
+        swarm_ik.solve(
+            swarm_ik.IKProblem(panda, goals=[pose, G.AvoidCollisions(scene)]), max_evals=50
+        )

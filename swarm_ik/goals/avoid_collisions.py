@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import warnings
 from dataclasses import dataclass, field
 from typing import TYPE_CHECKING, Any, ClassVar
 
@@ -221,6 +222,7 @@ class AvoidCollisions(Goal):
         packed = robot._cache.setdefault("packed", {})
         enc = packed.get(key)
         if enc is None:
+            self._warn_always_in_contact(robot)
             enc = pack(self.spheres(robot).arrays, body0, float(self.margin), self.max_rows)
             enc.par.flags.writeable = False
             enc.ipar.flags.writeable = False
@@ -228,6 +230,32 @@ class AvoidCollisions(Goal):
                 packed.clear()
             packed[key] = enc
         return enc
+
+    def _warn_always_in_contact(self, robot: RobotModel) -> None:
+        """One warning per robot, scene and margin naming the pairs closer than the margin in
+        every sampled configuration
+        (:meth:`~swarm_ik.collision.RobotCollision.pairs_always_in_contact`): solves that
+        cannot meet this goal otherwise end without saying why."""
+        from swarm_ik.collision import ALWAYS_SAMPLES, user_stacklevel
+
+        key = (self.scene, bool(self.self_collision), self.margin)
+        seen = robot._cache.setdefault("always_in_contact", set())
+        if key in seen:
+            return
+        seen.add(key)
+        pairs = robot.collision_model().pairs_always_in_contact(
+            self.scene, self.margin, bool(self.self_collision)
+        )
+        if pairs:
+            near = "closer than the margin" if self.margin > 0 else "in contact"
+            warnings.warn(
+                f"AvoidCollisions(margin={self.margin:g} m): "
+                f"{', '.join(f'{a}–{b}' for a, b in pairs)} {near} in each of "
+                f"{ALWAYS_SAMPLES} random configurations: no answer may be free of contact "
+                "(lower the margin, disable a self pair in the robot's SRDF, or move the "
+                "obstacle)",
+                stacklevel=user_stacklevel(),
+            )
 
     def met(self, state: State, tol_pos: float, tol_rot: float) -> tuple[float, float, bool, Any]:
         """The exact check with coal: met only without contact closer than ``margin``; the
