@@ -335,6 +335,7 @@ def test_a_first_batch_in_a_fresh_process_keeps_half_its_time_limit(tmp_path) ->
     solved = int(out.stdout.split("solved ")[1].split("/")[0])
     assert solved > 0
     assert "targets not started before --time-limit" in out.stdout
+    assert "targets started per s" in out.stdout  # (not poses/s: the unstarted counted none)
 
 
 def test_cli_batch_with_a_scene_gives_collision_free_answers(panda, tmp_path, capsys):

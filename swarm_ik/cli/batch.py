@@ -186,10 +186,17 @@ def run(args: argparse.Namespace) -> int:
     rot = "" if args.position_only else f" / {args.tol_rot:g} rad"
     if goals is not None:
         rot += f", clear of {args.scene} (coal's check)"
+    not_started = int((res.n_starts == 0).sum())
+    rate = (  # (a target the time limit left unstarted is no pose solved per second)
+        f"{res.poses_per_s:.0f} poses/s"
+        if not not_started
+        else f"{(res.n - not_started) / res.time_s if res.time_s > 0 else 0.0:.0f} targets "
+        "started per s"
+    )
     print(
         f"solved {n_ok}/{res.n} ({100 * res.success_rate:.2f} %) within "
         f"{args.tol_pos:g} m{rot} in {res.time_s:.3f} s "
-        f"({res.poses_per_s:.0f} poses/s, scheduler {args.scheduler}"
+        f"({rate}, scheduler {args.scheduler}"
         + (f", of which {res.setup_s:.2f} s cluster start-up)" if res.setup_s > 0.01 else ")")
     )
     if res.n:
@@ -197,7 +204,6 @@ def run(args: argparse.Namespace) -> int:
             f"LM evaluations per target: mean {res.n_evals.mean():.1f}, starts per target: "
             f"mean {res.n_starts.mean():.2f}"
         )
-        not_started = int((res.n_starts == 0).sum())
         if not_started:
             print(f"{not_started} targets not started before --time-limit (counted unsolved)")
     print(f"wrote {args.out}")
