@@ -1443,16 +1443,19 @@ def _with_deadline(
     seeds: FloatArray,
     limit: float,
     t0: float,
+    goals_s: float = 0.0,
 ) -> BatchSettings:
     """``settings`` with the deadline of a ``time_limit`` of ``limit`` seconds begun at ``t0``
     (``time.perf_counter()``) and the ``reserve`` per started target (:data:`FINISH_PER_STARTED`
     and, with a collision goal, coal's verdicts timed here).  This process's kernels are loaded
     first (the first target solved from its seed: a process's first batch loads or compiles
-    them), charged to the limit up to half of it (as a first solve's loading: the targets keep
-    at least half, less what follows); what the call spent reading and checking the targets
-    is charged whole (it grows with their number: 60 ms for 10⁵ poses), and
-    :data:`FINISH_PER_TARGET` per target is kept for the end of the call (at most half of what
-    is left)."""
+    them); they and the ``goals_s`` seconds the call spent loading its goals (a robot's first
+    scene: its sphere model, 0.2–0.6 s, more with an empty cache or a large mesh) are charged
+    to the limit up to half of it (as a first solve's loading: the targets keep at least half,
+    less what follows; a scene made on an empty cache took the whole limit, and no target
+    started); what the call spent reading and checking the targets is charged whole (it grows
+    with their number: 60 ms for 10⁵ poses), and :data:`FINISH_PER_TARGET` per target is kept
+    for the end of the call (at most half of what is left)."""
     t_load = time.perf_counter()
     reserve = FINISH_PER_STARTED
     if poses.shape[0]:
@@ -1473,7 +1476,7 @@ def _with_deadline(
                 bg.judge(*args)
             reserve += (time.perf_counter() - t_judge) / 4
     now = time.perf_counter()
-    load, other = now - t_load, t_load - t0
+    load, other = now - t_load + goals_s, t_load - t0 - goals_s
     left = max(limit - other - load, 0.5 * limit - other)
     left -= min(FINISH_PER_TARGET * poses.shape[0], 0.5 * max(left, 0.0))
     return dataclasses.replace(settings, deadline=time.time() + left, reserve=reserve)
@@ -1553,9 +1556,10 @@ def solve_batch(
             started (with a collision goal, coal's verdicts too), and the targets not reached
             are reported unsolved (``n_starts`` 0, ``q`` their seed, errors NaN).  Checking
             the targets costs about 0.6 µs per target, so a limit shorter than that is
-            overrun (a first call in a process also by loading the kernels, up to half the
-            limit).  Within a chunk every target first gets its seed's start, then the
-            targets still open their restarts (one pass after another); a chunk's restarts
+            overrun (a first call in a process also by loading the kernels, and any call
+            by loading its goals, a robot's first scene's sphere model included: together
+            up to half the limit).  Within a chunk every target first gets its seed's start,
+            then the targets still open their restarts (one pass after another); a chunk's restarts
             stop at its share of the limit (its targets' share of what was left, counted
             from its start: :attr:`BatchSettings.restart_share`), so hopeless targets of one
             chunk leave time to the chunks after it.  A target reached
@@ -1612,14 +1616,17 @@ def solve_batch(
     n = poses.shape[0]
     bc = BatchChain.from_robot(robot)
     labels = None
+    goals_s = 0.0  # (loading the goals: a scene's sphere model and checker, their kernels)
     if goals is not None and (not isinstance(goals, (list, tuple)) or len(goals)):
+        t_goals = time.perf_counter()
         first = poses[0] if n else robot.fk(robot.mid_q())
         bgoals = BatchGoals(robot, goals, settings.position_only, first)
         bc = dataclasses.replace(bc, goals=bgoals)
         labels = bgoals.labels
+        goals_s = time.perf_counter() - t_goals
     seeds = _seed_starts(bc, q0, n)
     if limit is not None:
-        settings = _with_deadline(bc, settings, poses, seeds, limit, t0)
+        settings = _with_deadline(bc, settings, poses, seeds, limit, t0, goals_s)
     if chunk_size is not None and (
         isinstance(chunk_size, bool)
         or not isinstance(chunk_size, (int, np.integer))
