@@ -1443,14 +1443,15 @@ def _with_deadline(
     seeds: FloatArray,
     limit: float,
     t0: float,
-    goals_s: float = 0.0,
+    loaded: float = 0.0,
 ) -> BatchSettings:
     """``settings`` with the deadline of a ``time_limit`` of ``limit`` seconds begun at ``t0``
     (``time.perf_counter()``) and the ``reserve`` per started target (:data:`FINISH_PER_STARTED`
     and, with a collision goal, coal's verdicts timed here).  This process's kernels are loaded
     first (the first target solved from its seed: a process's first batch loads or compiles
-    them); they and the ``goals_s`` seconds the call spent loading its goals (a robot's first
-    scene: its sphere model, 0.2–0.6 s, more with an empty cache or a large mesh) are charged
+    them); they and the ``loaded`` seconds the call spent loading its goals (a robot's first
+    scene: its sphere model, 0.2–0.6 s, more with an empty cache or a large mesh) and starting
+    a Dask cluster and loading its workers are charged
     to the limit up to half of it (as a first solve's loading: the targets keep at least half,
     less what follows; a scene made on an empty cache took the whole limit, and no target
     started); what the call spent reading and checking the targets is charged whole (it grows
@@ -1476,7 +1477,7 @@ def _with_deadline(
                 bg.judge(*args)
             reserve += (time.perf_counter() - t_judge) / 4
     now = time.perf_counter()
-    load, other = now - t_load + goals_s, t_load - t0 - goals_s
+    load, other = now - t_load + loaded, t_load - t0 - loaded
     left = max(limit - other - load, 0.5 * limit - other)
     left -= min(FINISH_PER_TARGET * poses.shape[0], 0.5 * max(left, 0.0))
     return dataclasses.replace(settings, deadline=time.time() + left, reserve=reserve)
@@ -1557,8 +1558,9 @@ def solve_batch(
             are reported unsolved (``n_starts`` 0, ``q`` their seed, errors NaN).  Checking
             the targets costs about 0.6 µs per target, so a limit shorter than that is
             overrun (a first call in a process also by loading the kernels, and any call
-            by loading its goals, a robot's first scene's sphere model included: together
-            up to half the limit).  Within a chunk every target first gets its seed's start,
+            by loading its goals, a robot's first scene's sphere model included, and by
+            starting a Dask cluster and loading its workers, one target each: together up
+            to half the limit).  Within a chunk every target first gets its seed's start,
             then the targets still open their restarts (one pass after another); a chunk's restarts
             stop at its share of the limit (its targets' share of what was left, counted
             from its start: :attr:`BatchSettings.restart_share`), so hopeless targets of one
@@ -1625,8 +1627,6 @@ def solve_batch(
         labels = bgoals.labels
         goals_s = time.perf_counter() - t_goals
     seeds = _seed_starts(bc, q0, n)
-    if limit is not None:
-        settings = _with_deadline(bc, settings, poses, seeds, limit, t0, goals_s)
     if chunk_size is not None and (
         isinstance(chunk_size, bool)
         or not isinstance(chunk_size, (int, np.integer))
@@ -1651,6 +1651,25 @@ def solve_batch(
                 True, labels,
             )  # fmt: skip
         setup_s = time.perf_counter() - t_setup
+        if limit is not None:  # (a cluster's start-up, and its workers' loading of the
+            # kernels and goals, one target each, charged as this process's loading)
+            if n and client is not None:
+                warm = dataclasses.replace(settings, max_starts=1)
+                try:
+                    distributed.on_every_worker(
+                        client, functools.partial(_run_chunk, bc, warm),
+                        (0, poses[:1], seeds[:1]), name="swarm-ik-batch",
+                    )  # fmt: skip
+                except KeyboardInterrupt:
+                    if not keep_on_interrupt:
+                        raise
+                    logging.getLogger("distributed").setLevel(logging.CRITICAL)
+                    distributed.abandon(client)
+                    return BatchResult.from_chunks(
+                        [], robot, settings, time.perf_counter() - t0, setup_s, True, labels
+                    )
+            loaded = goals_s + time.perf_counter() - t_setup
+            settings = _with_deadline(bc, settings, poses, seeds, limit, t0, loaded)
         workers = distributed.n_workers(client)
         size = int(chunk_size) if chunk_size is not None else default_chunk_size(n, workers)
         if limit is not None and n and settings.deadline is not None:

@@ -217,6 +217,25 @@ def progress_bar(enabled: bool, total: int, desc: str | None, unit: str) -> Any:
     return tqdm(total=total, desc=desc, disable=not enabled, unit=unit, dynamic_ncols=True)
 
 
+def on_every_worker(client: Any, func: Callable[[T], R], item: T, name: str = "swarm-ik") -> None:
+    """``func(item)`` once on each worker behind ``client`` (nothing for ``None``), waited for:
+    what the workers load the first time (the kernels from numba's cache, a scene's sphere
+    model) loaded before a caller's clock starts."""
+    if client is None:
+        return
+    call = uuid.uuid4().hex[:16]
+    workers = list(client.scheduler_info().get("workers", {}))
+    futures = [
+        client.submit(func, item, key=f"{name}-warm-{call}-{i}", workers=[w], pure=False)
+        for i, w in enumerate(workers)
+    ]
+    try:
+        client.gather(futures)
+    except BaseException:
+        client.cancel(futures)
+        raise
+
+
 def map_chunks(
     func: Callable[[T], R],
     items: Sequence[T],

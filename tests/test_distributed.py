@@ -12,6 +12,7 @@ from pathlib import Path
 
 import numpy as np
 import pytest
+from conftest import timed
 
 from swarm_ik import distributed
 from swarm_ik.batch import BatchChain, BatchSettings, _run_chunk, solve_batch
@@ -80,6 +81,23 @@ def test_local_cluster_of_two_workers_gives_identical_results(get_robot):
         np.testing.assert_array_equal(res.q, ref.q)
         np.testing.assert_array_equal(res.success, ref.success)
         np.testing.assert_array_equal(res.n_evals, ref.n_evals)
+
+
+@timed(2)  # (a kernel compiled in a chunk, on a cold numba cache, is inside the limit)
+def test_fresh_workers_load_before_the_time_limit_starts(get_robot):
+    """Fresh workers load the kernels and the scene (seconds) before a batch's clock: with a
+    1 s limit on a new local cluster the workers started no target (2,000 among 200 boxes:
+    0 solved in 4.7 s); their loading is charged as this process's, up to half the limit."""
+    from swarm_ik.goals import AvoidCollisions
+    from swarm_ik.scene import Box, Scene
+
+    robot = get_robot("panda")
+    targets = _targets(robot, 300, seed=5)
+    scene = Scene([Box([0.05, 0.05, 0.05], [0.6, 0.6, 0.9])])
+    goals = [AvoidCollisions(scene)]
+    with distributed.connect("local", n_workers=2) as client:
+        res = solve_batch(robot, targets, goals=goals, scheduler=client, time_limit=1.0)
+    assert int((res.n_starts > 0).sum()) == 300 and res.success.sum() > 250
 
 
 def _client_when_up(scheduler_file: str, scheduler: subprocess.Popen, log: Path):
