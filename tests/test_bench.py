@@ -374,6 +374,20 @@ def test_cli_runs_an_experiment_and_writes_report(tmp_path: Path) -> None:
     assert len(read_rows(runner.csv_path(tmp_path, "003-table3"))) == 8
 
 
+@pytest.mark.parametrize("experiment", ["000-table2", "000-table4"])
+def test_the_quick_run_of_each_ik_experiment_of_the_printed_target_ends(
+    experiment: str, tmp_path: Path
+) -> None:
+    """[HLFOA]'s experiments solve its printed (rounded) target: the pin check before the
+    search refused it, and ``bench paper --quick`` exited 2."""
+    from swarm_ik.cli import main
+
+    argv = ["bench", "paper", "--quick", "--experiments", experiment, "--runs", "1", "--jobs",
+            "1", "--out", str(tmp_path), "--no-progress"]  # fmt: skip
+    assert main(argv) == 0
+    assert read_rows(runner.csv_path(tmp_path, experiment))
+
+
 def test_unknown_experiment_lists_valid_ones(tmp_path: Path) -> None:
     import argparse
 

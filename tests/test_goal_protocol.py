@@ -1234,3 +1234,27 @@ def test_a_kernel_writing_its_jacobian_only_while_active_solves_at_any_weight(cl
     res = swarm_ik.solve(swarm_ik.IKProblem(r, goals=goals), seed=0, max_evals=20_000)
     assert res.success, res.reason
     assert lo - 1e-5 <= r.fk_pinocchio(res.q)[2, 3] <= lo + 0.02 + 1e-5
+
+
+def test_a_rounded_target_accepted_with_orth_tol_is_solved() -> None:
+    """[HLFOA]'s printed target (its rotation 1.1e-5 from orthonormal, accepted with
+    ``orth_tol=1e-4``) was refused by the pin check before the search: ``swarm-ik bench
+    paper`` exited 2.  Its pin holds the nearest rotation; a goal accepted with a far looser
+    ``orth_tol`` gives no pin (no proof), and still solves."""
+    from swarm_ik.bench.plans import printed_target
+    from swarm_ik.goals.base import pin_of
+
+    robot = swarm_ik.load_robot("yumi_left")
+    target = printed_target()
+    problem = swarm_ik.IKProblem(robot, target, orth_tol=1e-4)
+    pin = pin_of(problem.goals[0])
+    assert pin is not None
+    np.testing.assert_allclose(pin.rotation.T @ pin.rotation, np.eye(3), atol=1e-12)
+    assert np.abs(pin.rotation - target[:3, :3]).max() < 1e-4
+    res = swarm_ik.solve(problem, max_evals=3000, tol_pos=1e-3, tol_rot=1e-3)
+    assert res.reason != "unreachable"
+    skewed = target.copy()
+    skewed[0, :3] *= 1.01
+    loose = swarm_ik.IKProblem(robot, skewed, orth_tol=0.1)
+    assert pin_of(loose.goals[0]) is None
+    swarm_ik.solve(loose, max_evals=200)  # (no refusal)
