@@ -19,7 +19,6 @@ from __future__ import annotations
 import contextlib
 import dataclasses
 import math
-import sys
 import threading
 import time
 import warnings
@@ -245,24 +244,6 @@ def prepare_q0(problem: IKProblem, q0: Any) -> np.ndarray | None:
 
 
 _COMPILED: set[Any] = set()
-_NOTICE_AFTER = 1.0
-"""Seconds of loading the compiled kernels after which one line on stderr says so."""
-
-
-def _say_preparing() -> None:
-    """The one line on stderr while kernels load (once per process: a warm-up of several
-    routes, as ``swarm-ik warmup`` runs, says it once)."""
-    if not _SAID:
-        _SAID.append(True)
-        print(
-            "swarm_ik: preparing the compiled kernels (compiled once, then loaded from "
-            "numba's cache)…",
-            file=sys.stderr,
-            flush=True,
-        )
-
-
-_SAID: list[bool] = []
 
 
 def warm_up(route: Route) -> None:
@@ -277,10 +258,7 @@ def warm_up(route: Route) -> None:
     )
     if key in _COMPILED:
         return
-    timer = threading.Timer(_NOTICE_AFTER, _say_preparing)
-    timer.daemon = True
-    timer.start()
-    try:
+    with kernels.announced():
         problem = route.problem
         q = np.ascontiguousarray(problem.robot.mid_q()).clip(problem.lower, problem.upper)
         problem.within_bounds(q)  # (the judge's bounds test, compiled)
@@ -310,8 +288,6 @@ def warm_up(route: Route) -> None:
             collision.load_kernels()
         # the judge's first call (Pinocchio's check, the reasons' proofs: tens of ms once)
         route.judge(problem, q, 0.0, 0, 0.0, np.zeros(0), None)
-    finally:
-        timer.cancel()
     _COMPILED.add(key)
 
 

@@ -66,7 +66,7 @@ from swarm_ik._validate import check_seed, keywords_checked
 from swarm_ik.errors import InvalidArgumentError, InvalidTargetError, SwarmIKError
 from swarm_ik.goals import AvoidCollisions, Goal, Pose, Position, State, kernel_slot, kernels
 from swarm_ik.goals import base as goals_base
-from swarm_ik.kernels import lie, lm, loaded_despite_damage
+from swarm_ik.kernels import announced, lie, lm, loaded_despite_damage
 from swarm_ik.kernels.fk import TreeArrays
 from swarm_ik.kernels.lm import CONVERGED, NOT_RUN
 from swarm_ik.kernels.search import sampling_window, splitmix64, uniform_in, uniforms, wall_clock
@@ -1436,6 +1436,29 @@ contact test of the answer and the goals' check).  Without the goals' check, 3,0
 targets with a centre-of-mass goal at 0.05 s took 0.08–0.12 s."""
 
 
+_LOADED: set[tuple[bool, bool]] = set()
+"""Kinds of batch (plain, with goals, with a collision goal) whose kernels this process has
+loaded (:func:`_load_kernels`)."""
+
+
+def _load_kernels(
+    bc: BatchChain, settings: BatchSettings, poses: FloatArray, seeds: FloatArray
+) -> float:
+    """This process's kernels for the batch's kind of goals loaded from numba's cache (or
+    compiled, on a cold one) on its first target, once per kind, with the line on stderr
+    that a slow loading gives (:func:`swarm_ik.kernels.announced`: a cold ``swarm-ik batch``
+    compiled for 50 s in silence); the seconds it took (charged as loading)."""
+    bg = bc.goals
+    key = (bg is None, bg is not None and bg.collision is not None)
+    if key in _LOADED or not poses.shape[0]:
+        return 0.0
+    t = time.perf_counter()
+    with announced():
+        solve_chunk(bc, dataclasses.replace(settings, max_starts=1), 0, poses[:1], seeds[:1])
+    _LOADED.add(key)
+    return time.perf_counter() - t
+
+
 def _with_deadline(
     bc: BatchChain,
     settings: BatchSettings,
@@ -1627,6 +1650,7 @@ def solve_batch(
         labels = bgoals.labels
         goals_s = time.perf_counter() - t_goals
     seeds = _seed_starts(bc, q0, n)
+    goals_s += _load_kernels(bc, settings, poses, seeds)  # (before any clock; said when slow)
     if chunk_size is not None and (
         isinstance(chunk_size, bool)
         or not isinstance(chunk_size, (int, np.integer))

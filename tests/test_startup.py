@@ -155,8 +155,8 @@ def test_the_loading_line_is_said_once_per_process() -> None:
     """Routes of several kinds loading their kernels in one process (as ``swarm-ik warmup``
     does) print the one line once."""
     code = (
-        "import swarm_ik, swarm_ik.api as a\n"
-        "a._NOTICE_AFTER = 0.0\n"
+        "import swarm_ik, swarm_ik.api as a, swarm_ik.kernels as k\n"
+        "k.NOTICE_AFTER = 0.0\n"
         "r = swarm_ik.load_robot('panda')\n"
         "p = swarm_ik.IKProblem(r, r.fk(r.mid_q()))\n"
         "for solver in ('swarm', 'dls', 'gwo'):\n"
@@ -167,6 +167,23 @@ def test_the_loading_line_is_said_once_per_process() -> None:
         [sys.executable, "-c", code], capture_output=True, text=True, timeout=600, check=True
     )
     assert out.stdout.strip() == "3"
+    assert out.stderr.count("preparing the compiled kernels") == 1, out.stderr
+
+
+def test_a_batch_says_it_loads_its_kernels_and_a_solve_after_it_does_not_again() -> None:
+    """A cold ``swarm-ik batch`` compiled for 50 s in silence: the batch's first loading of
+    its kernels says so as a solve's does (here with the notice's delay set to 0), and the
+    line comes once per process."""
+    code = (
+        "import numpy as np, swarm_ik, swarm_ik.kernels as k\n"
+        "k.NOTICE_AFTER = 0.0\n"
+        "r = swarm_ik.load_robot('panda')\n"
+        "swarm_ik.solve_batch(r, r.fk(r.random_q(np.random.default_rng(0), 3)))\n"
+        "swarm_ik.solve(swarm_ik.IKProblem(r, r.fk(r.mid_q())))\n"
+    )
+    out = subprocess.run(
+        [sys.executable, "-c", code], capture_output=True, text=True, timeout=600, check=True
+    )
     assert out.stderr.count("preparing the compiled kernels") == 1, out.stderr
 
 

@@ -20,10 +20,12 @@ fail to load on every run.  docs/robustness.md, "Real installs".
 
 from __future__ import annotations
 
+import contextlib
 import hashlib
 import os
 import shutil
 import sys
+import threading
 from collections.abc import Callable, Iterable, Iterator
 from typing import IO, TypeVar
 
@@ -257,6 +259,39 @@ def _interrupted(exc: BaseException) -> bool:
         seen.add(id(e))
         e = e.__cause__ or e.__context__
     return False
+
+
+NOTICE_AFTER = 1.0
+"""Seconds of loading the compiled kernels after which one line on stderr says so."""
+
+_SAID: list[bool] = []
+
+
+def say_preparing() -> None:
+    """The one line on stderr while kernels load (once per process: a warm-up of several
+    routes, as ``swarm-ik warmup`` runs, or a solve and then a batch, say it once)."""
+    if not _SAID:
+        _SAID.append(True)
+        print(
+            "swarm_ik: preparing the compiled kernels (compiled once, then loaded from "
+            "numba's cache)…",
+            file=sys.stderr,
+            flush=True,
+        )
+
+
+@contextlib.contextmanager
+def announced() -> Iterator[None]:
+    """The body loads compiled kernels (numba's cache, or a compile on a cold one): when it
+    takes longer than :data:`NOTICE_AFTER` seconds, :func:`say_preparing` says so (TTY or
+    not), so that a first run never waits in silence."""
+    timer = threading.Timer(NOTICE_AFTER, say_preparing)
+    timer.daemon = True
+    timer.start()
+    try:
+        yield
+    finally:
+        timer.cancel()
 
 
 def loaded_despite_damage(load: Callable[[], T]) -> T:
