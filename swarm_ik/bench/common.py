@@ -34,6 +34,7 @@ from typing import Any, Protocol
 
 import numpy as np
 
+from swarm_ik.bench.sizes import check_sizes
 from swarm_ik.errors import InvalidArgumentError
 
 THREAD_VARIABLES = (
@@ -68,14 +69,17 @@ def module_main(
 ) -> ModuleMain:
     """The ``main(argv=None) -> int`` of the benchmark module ``swarm_ik.bench.NAME``, run as
     ``python -m swarm_ik.bench.NAME``: a parser with the module's options, the same as
-    ``swarm-ik bench NAME``'s (``add_arguments``), then ``run`` on the parsed options."""
+    ``swarm-ik bench NAME``'s (``add_arguments``), then ``run`` on the parsed options (their
+    sizes checked first: :func:`swarm_ik.bench.sizes.check_sizes`)."""
 
     def main(argv: Sequence[str] | None = None) -> int:
         parser = argparse.ArgumentParser(
             prog=f"python -m swarm_ik.bench.{name}", description=description
         )
         add_arguments(parser)
-        return run(parser.parse_args(argv))
+        args = parser.parse_args(argv)
+        check_sizes(name, args)  # sizes above their caps refused, as by `swarm-ik bench`
+        return run(args)
 
     main.__doc__ = f"``python -m swarm_ik.bench.{name} [options]``."
     return main

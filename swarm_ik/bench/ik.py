@@ -307,7 +307,7 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
         nargs="+",
         default=None,
         metavar="PEER",
-        help=f"peer adapters (default: those installed among {' '.join(plans.IK_PEERS)}; "
+        help=f"peer adapters (default: those installed among {', '.join(plans.IK_PEERS)}; "
         "optional ones need pip install 'swarm_ik[bench]')",
     )
     parser.add_argument(

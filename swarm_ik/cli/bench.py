@@ -3,7 +3,11 @@
 ``python -m swarm_ik.bench.NAME``).
 
 The output folder (``--out``, or the benchmark's default) is checked before any work: a
-file, or a folder where nothing can be written, exits 2 with one line.
+file, or a folder where nothing can be written, exits 2 with one line.  So is every size or
+count option (:data:`swarm_ik.bench.sizes.SIZE_OPTIONS`): a value above its cap exits 2 with
+one line naming the option, its value and the cap, before a robot is loaded or anything is
+computed (:func:`swarm_ik.bench.sizes.check_sizes`; ``python -m swarm_ik.bench.NAME`` checks
+the same).
 """
 
 from __future__ import annotations
@@ -13,6 +17,7 @@ import importlib
 from pathlib import Path
 from typing import Any
 
+from swarm_ik.bench.sizes import check_sizes
 from swarm_ik.cli._args import UsageError, check_output_folder
 
 BENCHMARKS = {
@@ -74,6 +79,7 @@ def run(args: argparse.Namespace) -> int:
     missing = getattr(args, "_missing", None)
     if missing:
         raise UsageError(f"swarm-ik: error: benchmark module {missing} is not available")
+    check_sizes(args.bench, args)  # before the module runs anything
     module = importlib.import_module(BENCHMARKS[args.bench])
     check_output_folder(_out_folder(args), "--out")
     return int(module.run(args))
