@@ -170,3 +170,27 @@ def test_a_warning_is_one_line_without_the_package_source(capsys) -> None:
 def test_a_missing_waypoints_file_is_named_by_its_option(refused) -> None:
     line = refused("path", "--robot", "ur5", "--poses", "missing.csv")
     assert line == "swarm-ik: error: --poses file not found: 'missing.csv'"
+
+
+@pytest.mark.parametrize(
+    ("command", "option", "suffix"),
+    [("batch", "--targets", ".csv"), ("path", "--poses", ".csv")],
+)
+def test_out_naming_the_input_file_is_refused_and_the_input_kept(
+    command: str,
+    option: str,
+    suffix: str,
+    tmp_path: Path,
+    refused: Callable[..., str],
+    monkeypatch: pytest.MonkeyPatch,
+) -> None:
+    """``batch --targets t.csv --out t.csv`` replaced the targets with the answers (exit 0);
+    the same file under another spelling too.  Refused before any work, the input intact."""
+    given = tmp_path / f"in{suffix}"
+    text = "x,y,z,qx,qy,qz,qw\n0.4,0.1,0.5,1,0,0,0\n0.4,0.2,0.5,1,0,0,0\n"
+    given.write_text(text)
+    monkeypatch.chdir(tmp_path)
+    for out in (str(given), f"./{given.name}"):
+        line = refused(command, "--robot", "panda", option, str(given), "--out", out)
+        assert f"is the file given to {option}" in line
+    assert given.read_text() == text

@@ -577,13 +577,17 @@ def _probe(folder: Path) -> str | None:
 
 
 def check_output_file(
-    path: str | os.PathLike[str], what: str, suffixes: tuple[str, ...] | None = None
+    path: str | os.PathLike[str],
+    what: str,
+    suffixes: tuple[str, ...] | None = None,
+    inputs: tuple[tuple[str, Any], ...] = (),
 ) -> Path:
     """Refuse an output file that cannot be written, before any work: a folder, a wrong
     suffix, a missing folder (:func:`swarm_ik._validate.check_output_path`), an existing
-    file that does not open for writing, or, for a new file, a folder where no file can be
-    created (tried, not guessed from permission bits, which do not stop root or tell a
-    read-only mount).
+    file that does not open for writing, one of the command's input files (``inputs``:
+    ``(option, path or None)``; ``batch --targets t.csv --out t.csv`` replaced its targets
+    with the answers), or, for a new file, a folder where no file can be created (tried, not
+    guessed from permission bits, which do not stop root or tell a read-only mount).
 
     Returns:
         The path.
@@ -597,6 +601,12 @@ def check_output_file(
     if p.exists():  # overwritten in place: it must open for writing
         if not p.is_file():
             raise InvalidArgumentError(f"{what} {str(p)!r} is {_kind(p.stat().st_mode)}")
+        for option, given in inputs:
+            if given is not None and Path(given).is_file() and os.path.samefile(p, given):
+                raise InvalidArgumentError(
+                    f"{what} {str(p)!r} is the file given to {option}: writing the answers "
+                    "would replace it; name another file"
+                )
         try:
             with open(p, "ab"):  # opened for writing, not truncated
                 pass

@@ -123,7 +123,8 @@ def run(args: argparse.Namespace) -> int:
     from swarm_ik.batch import BLOCK, MAX_TARGETS, read_targets_file, solve_batch
     from swarm_ik.errors import InvalidArgumentError
 
-    check_output_file(args.out, "--out", (".csv", ".npz"))  # before any work
+    inputs = (("--targets", args.targets), ("--scene", args.scene))
+    check_output_file(args.out, "--out", (".csv", ".npz"), inputs)  # before any work
     check_collision_options(args)
     if args.random is not None and not 1 <= args.random <= MAX_TARGETS:
         raise InvalidArgumentError(

@@ -120,7 +120,8 @@ def run(args: argparse.Namespace) -> int:
     from swarm_ik.path import solve_path
 
     if args.out is not None:
-        check_output_file(args.out, "--out", (".csv", ".npy"))  # before any work
+        inputs = (("--poses", args.poses), ("--scene", args.scene))
+        check_output_file(args.out, "--out", (".csv", ".npy"), inputs)  # before any work
     if args.html is not None:
         _viewer.check_viewer(args, live=False)
     if not check_input_file(args.poses, "--poses", None).exists():
