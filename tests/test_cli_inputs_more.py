@@ -194,3 +194,14 @@ def test_out_naming_the_input_file_is_refused_and_the_input_kept(
         line = refused(command, "--robot", "panda", option, str(given), "--out", out)
         assert f"is the file given to {option}" in line
     assert given.read_text() == text
+
+
+def test_an_unknown_compare_solver_is_refused_before_the_solve(
+    refused: Callable[..., str], tmp_path: Path
+) -> None:
+    """``solve --compare nope`` printed the whole solve, then refused the name."""
+    line = refused(
+        "solve", "--robot", "panda", "--pose", "0.4", "0.1", "0.5", "1", "0", "0", "0",
+        "--compare", "nope", "--html", str(tmp_path / "x.html"),
+    )  # fmt: skip
+    assert "unknown solver 'nope'" in line

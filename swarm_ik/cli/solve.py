@@ -167,6 +167,10 @@ def run(args: argparse.Namespace) -> int:
 
     if args.solver is None:  # (the parser leaves the registry unloaded: see _solver_help)
         args.solver = DEFAULT_SOLVER
+    if args.compare is not None:  # (refused before the solve it would follow)
+        from swarm_ik.solvers import base
+
+        base.get(args.compare)
     check_collision_options(args, srdf_also="--goals")  # (a goals file may avoid collisions)
     if args.show_wait is not None and not args.show:
         raise InvalidArgumentError("--show-wait applies to --show, which was not given")
