@@ -7,6 +7,8 @@
 True
 """
 
+# (first: in the console script, a Ctrl-C while these modules load is one line, exit 130)
+import swarm_ik._startup  # noqa: F401  # isort: skip
 from typing import TYPE_CHECKING, Any
 
 # numba's cache folder is settled before any swarm_ik module imports numba (a read-only

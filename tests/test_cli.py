@@ -630,3 +630,33 @@ def test_options_that_modify_nothing_or_contradict_are_refused(
     line = cli_error(capsys, *argv)
     assert said in line and argv[-1 if argv[-1].startswith("--") else -2] in line
     assert not any(tmp_path.iterdir())
+
+
+def test_a_ctrl_c_while_the_command_imports_its_modules_is_one_line(tmp_path: Path) -> None:
+    """A Ctrl-C 30-70 ms into ``swarm-ik robots``, while the sub-command modules were being
+    imported (before ``main`` runs), printed a traceback of the imports.  Here an import hook
+    holds the import of ``swarm_ik.cli.batch`` for 2 s, and the Ctrl-C lands inside it."""
+    flag = str(tmp_path / "importing")
+    (tmp_path / "sitecustomize.py").write_text(
+        "import sys, time\n"
+        "class _Slow:\n"
+        "    def find_spec(self, name, path=None, target=None):\n"
+        "        if name == 'swarm_ik.cli.batch':\n"
+        f"            open({flag!r}, 'w').close()\n"
+        "            time.sleep(2.0)\n"
+        "        return None\n"
+        "sys.meta_path.insert(0, _Slow())\n"
+    )
+    env = {**os.environ, "PYTHONPATH": f"{tmp_path}{os.pathsep}{os.environ.get('PYTHONPATH', '')}"}
+    proc = subprocess.Popen(
+        [sys.executable, "-m", "swarm_ik.cli", "robots"], env=env,
+        stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True,
+    )  # fmt: skip
+    deadline = time.monotonic() + 60
+    while not (tmp_path / "importing").exists():
+        assert proc.poll() is None and time.monotonic() < deadline
+        time.sleep(0.01)
+    proc.send_signal(signal.SIGINT)
+    out, err = proc.communicate(timeout=60)
+    assert proc.returncode == 130, err
+    assert err.strip() == "swarm-ik: interrupted", err

@@ -16,8 +16,9 @@ into an exit code and one line:
 Numbers may be negative in any notation (``--from-q -1e-3 0.5 -2``): the parser does not take
 ``-1e-3`` for an option.  Usage errors are one line too, naming the sub-command's ``--help``.
 
-Importing this package loads only the standard library (the sub-command modules import what
-they need when they run), so that a Ctrl-C during start-up is caught by :func:`main` too.
+Importing this package loads the sub-command modules, which import what they need when they
+run.  In the console script (or ``python -m swarm_ik.cli``) a Ctrl-C during these imports,
+before :func:`main` runs, is one line and 130 too (:mod:`swarm_ik._startup`).
 """
 
 from __future__ import annotations
