@@ -205,3 +205,15 @@ def test_an_unknown_compare_solver_is_refused_before_the_solve(
         "--compare", "nope", "--html", str(tmp_path / "x.html"),
     )  # fmt: skip
     assert "unknown solver 'nope'" in line
+
+
+@pytest.mark.parametrize("n", ["0", "65", "1000000"])
+def test_show_solutions_beyond_its_cap_is_refused(n: str, refused: Callable[..., str]) -> None:
+    """``show --solutions 1000000`` searched for minutes with no output."""
+    line = refused(
+        "show", "--robot", "panda", "--from-q", "0", "0", "0", "-1", "0", "1", "0",
+        "--solutions", n, "--html", "s.html",
+    )  # fmt: skip
+    assert (
+        f"--solutions must be a count from 1 to 64 (swarm_ik.cli.show.MAX_SHOWN), got {n}" in line
+    )

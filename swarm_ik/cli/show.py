@@ -25,6 +25,11 @@ DESCRIPTION = (
 """The top of ``swarm-ik show --help``."""
 
 
+MAX_SHOWN = 64
+"""Most solutions ``swarm-ik show --solutions`` finds and draws (one robot each, side by side):
+``--solutions 1000000`` searched without end, and no page shows a million robots."""
+
+
 def add_arguments(parser: argparse.ArgumentParser) -> None:
     """The options of ``swarm-ik show`` after the robot's (see :func:`run`)."""
     parser.add_argument(
@@ -46,7 +51,8 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
         type=int,
         default=None,
         metavar="N",
-        help="with a target and no --q: how many distinct solutions to find and show (default 1)",
+        help="with a target and no --q: how many distinct solutions to find and show (default 1, "
+        f"at most {MAX_SHOWN})",
     )
     parser.add_argument(
         "--min-distance",
@@ -109,6 +115,11 @@ def run(args: argparse.Namespace) -> int:
         ):
             if value is not None:
                 raise InvalidArgumentError(f"{option} applies to a target solved, not to --q")
+    if args.solutions is not None and not 1 <= args.solutions <= MAX_SHOWN:
+        raise InvalidArgumentError(
+            f"--solutions must be a count from 1 to {MAX_SHOWN} (swarm_ik.cli.show.MAX_SHOWN), "
+            f"got {args.solutions}"
+        )
     _viewer.check_viewer(args, live=live)
     robot = load_robot(args)  # (every --frame: robot_frames)
     _viewer.check_meshes(robot, "show")
