@@ -660,3 +660,20 @@ def test_a_ctrl_c_while_the_command_imports_its_modules_is_one_line(tmp_path: Pa
     out, err = proc.communicate(timeout=60)
     assert proc.returncode == 130, err
     assert err.strip() == "swarm-ik: interrupted", err
+
+
+@pytest.mark.skipif(not os.path.exists("/dev/full"), reason="no /dev/full here")
+@pytest.mark.parametrize(
+    "argv",
+    [["robots"], ["solve", "--robot", "panda", "--pose", "0.4", "0.1", "0.5", "1", "0", "0", "0"]],
+)
+def test_a_full_output_is_one_line_and_exit_74(argv: list[str]) -> None:
+    """``swarm-ik … > /dev/full`` was "internal error (OSError …); please report it", exit 3:
+    the environment's failure, one line and exit 74, nothing else on stderr."""
+    with open("/dev/full", "w") as full:
+        out = subprocess.run(
+            [sys.executable, "-m", "swarm_ik.cli", *argv], stdout=full, stderr=subprocess.PIPE,
+            text=True, timeout=600,
+        )  # fmt: skip
+    assert out.returncode == 74, out.stderr
+    assert out.stderr.strip() == "swarm-ik: cannot write the output (No space left on device)"

@@ -10,6 +10,7 @@ into an exit code and one line:
   ``{"error": …, "exit_code": 2, …}`` on stdout instead);
 * 3 an unexpected error inside swarm_ik (one line; set ``SWARM_IK_DEBUG=1`` to see the
   traceback);
+* 74 the output could not be written (a full disk, ``> /dev/full``: one line);
 * 130 interrupted (Ctrl-C, at any point of the command);
 * 141 the reader of the output went away (``swarm-ik … | head``), without a traceback.
 
@@ -25,6 +26,7 @@ from __future__ import annotations
 
 import _thread
 import argparse
+import errno
 import gc
 import json
 import os
@@ -45,6 +47,7 @@ from swarm_ik.cli._args import (
     EXIT_INTERRUPTED,
     EXIT_NOT_REACHED,
     EXIT_OK,
+    EXIT_OUTPUT_FAILED,
     UsageError,
 )
 from swarm_ik.cli.bench import BENCHMARKS
@@ -214,7 +217,9 @@ def main(argv: Sequence[str] | None = None) -> int:
             warnings.filterwarnings("ignore", message="First-class function type feature")
             # (a numba cache damaged inside its files, met by any compiled call of the
             # command: the files removed, the command run again, compiling anew)
-            return kernels.loaded_despite_damage(lambda: _dispatch(args))
+            code = kernels.loaded_despite_damage(lambda: _dispatch(args))
+            sys.stdout.flush()  # (a full disk is met here, not after main returns)
+            return code
     except UsageError as exc:
         return _fail(str(exc), EXIT_BAD_INPUT, as_json, "UsageError")
     except SwarmIKError as exc:
@@ -222,25 +227,50 @@ def main(argv: Sequence[str] | None = None) -> int:
     except KeyboardInterrupt:
         return _interrupted(as_json)
     except BrokenPipeError:  # the reader went away (`swarm-ik … | head`): no traceback
-        devnull = os.open(os.devnull, os.O_WRONLY)
-        os.dup2(devnull, sys.stdout.fileno())  # (so that the exit's flush fails quietly)
+        _quiet_stdout()
         return EXIT_BROKEN_PIPE
-    except Exception as exc:
-        if _SIGINTS[0]:  # (a Ctrl-C that cut a C routine short: SystemError and the like)
-            return _interrupted(as_json)
-        if os.environ.get("SWARM_IK_DEBUG"):
-            raise
-        what = "out of memory" if isinstance(exc, MemoryError) else f"{type(exc).__name__}: {exc}"
+    except OSError as exc:
+        if exc.errno not in _OUTPUT_ERRNOS:
+            return _unexpected(exc, as_json)
+        _quiet_stdout()
         return _fail(
-            f"swarm-ik: internal error ({what}); please report it, with the command line "
-            "(set SWARM_IK_DEBUG=1 for the traceback)",
-            EXIT_INTERNAL,
-            as_json,
+            f"swarm-ik: cannot write the output ({exc.strerror})", EXIT_OUTPUT_FAILED, False,
             type(exc).__name__,
-        )
+        )  # fmt: skip
+    except Exception as exc:
+        return _unexpected(exc, as_json)
     finally:
         if script:  # shutdown then skips the ~10^6 objects numba made (~0.25 s): a short
             gc.freeze()  # command only (extensions that report leaks at exit stay quiet)
+
+
+_OUTPUT_ERRNOS = (errno.ENOSPC, errno.EIO, errno.EFBIG, errno.EDQUOT)
+"""Errors of a write that the environment causes (a full disk, ``> /dev/full``): exit
+:data:`EXIT_OUTPUT_FAILED` with one line, not an internal error."""
+
+
+def _quiet_stdout() -> None:
+    """Point standard output at the null device, so that the exit's flush of what could not
+    be written fails quietly (no "Exception ignored" lines)."""
+    devnull = os.open(os.devnull, os.O_WRONLY)
+    os.dup2(devnull, sys.stdout.fileno())
+
+
+def _unexpected(exc: Exception, as_json: bool) -> int:
+    """Exit 3 and one line for an error inside swarm_ik (or 130 for one that a Ctrl-C
+    caused); ``SWARM_IK_DEBUG=1`` raises it again."""
+    if _SIGINTS[0]:  # (a Ctrl-C that cut a C routine short: SystemError and the like)
+        return _interrupted(as_json)
+    if os.environ.get("SWARM_IK_DEBUG"):
+        raise exc
+    what = "out of memory" if isinstance(exc, MemoryError) else f"{type(exc).__name__}: {exc}"
+    return _fail(
+        f"swarm-ik: internal error ({what}); please report it, with the command line "
+        "(set SWARM_IK_DEBUG=1 for the traceback)",
+        EXIT_INTERNAL,
+        as_json,
+        type(exc).__name__,
+    )
 
 
 def _interrupted(as_json: bool) -> int:

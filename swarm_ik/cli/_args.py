@@ -23,6 +23,7 @@ EXIT_OK = 0
 EXIT_NOT_REACHED = 1
 EXIT_BAD_INPUT = 2
 EXIT_INTERNAL = 3
+EXIT_OUTPUT_FAILED = 74
 EXIT_INTERRUPTED = 130
 EXIT_BROKEN_PIPE = 141
 """The reader of the output went away (128 + SIGPIPE, as a shell reports it)."""
