@@ -413,8 +413,13 @@ def test_problem_must_be_an_ikproblem(yumi: swarm_ik.RobotModel) -> None:
 def test_population_below_four_is_refused_for_every_population_solver(
     name: str, problem: IKProblem
 ) -> None:
-    for bad in (3, 0, -1, 4.5, "8", True):
+    for bad in (3, 0, -1):
         with pytest.raises(errors.InvalidArgumentError, match=rf"pop_size must be >= 4 .*{name!r}"):
+            swarm_ik.solve(problem, name, pop_size=bad, max_evals=50)
+    for bad in (4.5, 1e9, "8", True):  # (1e9 was "must be >= 4": it is; it is not an integer)
+        with pytest.raises(
+            errors.InvalidArgumentError, match=rf"pop_size must be an integer .*{name!r}, got"
+        ):
             swarm_ik.solve(problem, name, pop_size=bad, max_evals=50)
     res = swarm_ik.solve(problem, name, pop_size=4, max_evals=50)  # the smallest one runs
     assert 0 < res.n_evals <= 50 and res.within_limits
@@ -422,11 +427,15 @@ def test_population_below_four_is_refused_for_every_population_solver(
 
 @pytest.mark.parametrize("name", ITER_SOLVERS)
 def test_non_positive_iterations_are_refused(name: str, problem: IKProblem) -> None:
-    for bad in (0, -3, 2.5):
+    for bad in (0, -3):
         with pytest.raises(
             errors.InvalidArgumentError, match=rf"iterations must be >= 1 .*{name!r}"
         ):
             swarm_ik.solve(problem, name, iterations=bad)
+    with pytest.raises(
+        errors.InvalidArgumentError, match=rf"iterations must be an integer .*{name!r}"
+    ):
+        swarm_ik.solve(problem, name, iterations=2.5)
 
 
 @pytest.mark.parametrize("name", SOLVERS)

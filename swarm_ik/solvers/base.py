@@ -642,7 +642,12 @@ class SolverSpec:
             if key not in out:
                 continue
             v = out[key]
-            if isinstance(v, bool) or not isinstance(v, (int, np.integer)) or v < least:
+            if isinstance(v, bool) or not isinstance(v, (int, np.integer)):
+                raise InvalidArgumentError(
+                    f"{key} must be an integer for solver {self.name!r}, got {v!r} "
+                    f"({type(v).__name__})"
+                )
+            if v < least:
                 raise InvalidArgumentError(
                     f"{key} must be >= {least} (an integer) for solver {self.name!r}, got {v!r}"
                 )
