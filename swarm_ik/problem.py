@@ -498,7 +498,7 @@ class IKProblem:
             if self.w_rot == 0.0:
                 terms.append(Position(robot.ee_frame, self.target[:3, 3]))
             else:
-                terms.append(Pose.checked(robot.ee_frame, self.target))
+                terms.append(Pose.checked(robot.ee_frame, self.target, self.orth_tol))
         if goals is not None:
             if not isinstance(goals, Sequence):
                 raise InvalidArgumentError(
@@ -708,7 +708,7 @@ class IKProblem:
         if isinstance(self.goals[0], Position):
             new.goals = (Position(self.robot.ee_frame, new.target[:3, 3]),)
         else:
-            new.goals = (Pose.checked(self.robot.ee_frame, new.target),)
+            new.goals = (Pose.checked(self.robot.ee_frame, new.target, orth_tol),)
         new.compiled_goals = new.goals
         new._table_cache = {}
         new._free = []

@@ -676,4 +676,33 @@ def test_a_full_output_is_one_line_and_exit_74(argv: list[str]) -> None:
             text=True, timeout=600,
         )  # fmt: skip
     assert out.returncode == 74, out.stderr
-    assert out.stderr.strip() == "swarm-ik: cannot write the output (No space left on device)"
+    assert out.stderr.strip() == "swarm-ik: cannot write (No space left on device)"
+
+
+def test_an_io_error_that_is_not_the_outputs_is_not_reported_as_one(
+    monkeypatch: pytest.MonkeyPatch, capsys: pytest.CaptureFixture[str]
+) -> None:
+    """An input/output error reading a file (here: loading the robot) was "cannot write the
+    output", exit 74, and the host process lost its standard output; a full disk while a
+    file of the command is written is 74 and names the file, the JSON object still printed."""
+    import errno
+
+    from swarm_ik.cli import solve as solve_cli
+
+    def failing_read(*args: Any, **kwargs: Any) -> None:
+        raise OSError(errno.EIO, "Input/output error")
+
+    monkeypatch.setattr(solve_cli, "load_robot", failing_read)
+    argv = ["solve", "--robot", "panda", "--pose", "0.4", "0.1", "0.5", "1", "0", "0", "0"]
+    assert cli.main([*argv, "--json"]) == 3
+    assert json.loads(capsys.readouterr().out)["exit_code"] == 3
+
+    def full_disk(*args: Any, **kwargs: Any) -> None:
+        raise OSError(errno.ENOSPC, "No space left on device", "answers.csv")
+
+    monkeypatch.setattr(solve_cli, "load_robot", full_disk)
+    assert cli.main([*argv, "--json"]) == 74
+    out = json.loads(capsys.readouterr().out)
+    assert out["exit_code"] == 74 and "cannot write 'answers.csv'" in out["error"]
+    print("still here")
+    assert capsys.readouterr().out == "still here\n"

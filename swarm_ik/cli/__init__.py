@@ -161,10 +161,13 @@ def _fail(message: str, code: int, as_json: bool, kind: str) -> int:
     """Report an error as one line on stderr (or one JSON object on stdout); returns ``code``."""
     message = " ".join(str(message).split())
     if as_json:
-        print(json.dumps({"error": message, "kind": kind, "exit_code": code}), flush=True)
-    else:
-        prefix = "" if message.startswith("swarm-ik") else "swarm-ik: error: "
-        print(prefix + message, file=sys.stderr, flush=True)
+        try:
+            print(json.dumps({"error": message, "kind": kind, "exit_code": code}), flush=True)
+            return code
+        except OSError:  # (standard output cannot be written: the line on stderr instead)
+            pass
+    prefix = "" if message.startswith("swarm-ik") else "swarm-ik: error: "
+    print(prefix + message, file=sys.stderr, flush=True)
     return code
 
 
@@ -230,13 +233,9 @@ def main(argv: Sequence[str] | None = None) -> int:
         _quiet_stdout()
         return EXIT_BROKEN_PIPE
     except OSError as exc:
-        if exc.errno not in _OUTPUT_ERRNOS:
-            return _unexpected(exc, as_json)
-        _quiet_stdout()
-        return _fail(
-            f"swarm-ik: cannot write the output ({exc.strerror})", EXIT_OUTPUT_FAILED, False,
-            type(exc).__name__,
-        )  # fmt: skip
+        if exc.errno in _FULL_ERRNOS or (exc.errno == errno.EIO and _stdout_fails()):
+            return _cannot_write(exc, as_json, script)
+        return _unexpected(exc, as_json)
     except Exception as exc:
         return _unexpected(exc, as_json)
     finally:
@@ -244,9 +243,36 @@ def main(argv: Sequence[str] | None = None) -> int:
             gc.freeze()  # command only (extensions that report leaks at exit stay quiet)
 
 
-_OUTPUT_ERRNOS = (errno.ENOSPC, errno.EIO, errno.EFBIG, errno.EDQUOT)
-"""Errors of a write that the environment causes (a full disk, ``> /dev/full``): exit
-:data:`EXIT_OUTPUT_FAILED` with one line, not an internal error."""
+_FULL_ERRNOS = (errno.ENOSPC, errno.EFBIG, errno.EDQUOT)
+"""Errors of a write on a full disk or past a quota (``> /dev/full``, ``--out`` on a full
+disk): exit :data:`EXIT_OUTPUT_FAILED` with one line, not an internal error; so is an
+input/output error of standard output itself (:func:`_stdout_fails`)."""
+
+
+def _stdout_fails() -> bool:
+    """Whether writing standard output fails now (an input/output error met elsewhere, reading
+    a file on a failing disk, is not the output's)."""
+    try:
+        sys.stdout.flush()
+    except OSError:
+        return True
+    return False
+
+
+def _cannot_write(exc: OSError, as_json: bool, script: bool) -> int:
+    """Exit :data:`EXIT_OUTPUT_FAILED` with one line naming the file when known (with
+    ``--json``, the JSON object when standard output still takes it: :func:`_fail`); the
+    console script's standard output then points at the null device, so that
+    the exit's flush of what could not be written fails quietly."""
+    where = f" {exc.filename!r}" if exc.filename else ""
+    try:
+        return _fail(
+            f"swarm-ik: cannot write{where} ({exc.strerror})", EXIT_OUTPUT_FAILED, as_json,
+            type(exc).__name__,
+        )  # fmt: skip
+    finally:
+        if script:
+            _quiet_stdout()
 
 
 def _quiet_stdout() -> None:

@@ -356,7 +356,8 @@ def pin_of(goal: Goal) -> Pin | None:
     its rotation the nearest proper rotation to the one given (a target rounded to a few
     digits, as [HLFOA] prints it, passed ``IKProblem(..., orth_tol=1e-4)`` and was then
     refused here: ``swarm-ik bench paper`` failed); None for a rotation further than
-    :data:`PIN_ORTH_TOL` from one.
+    :data:`PIN_ORTH_TOL` from one that the goal's own ``orth_tol`` accepted; refused further
+    than both.
 
     Raises:
         InvalidArgumentError: the method raised, or returned anything else (the goal named).
@@ -383,8 +384,9 @@ def pin_of(goal: Goal) -> Pin | None:
             fixed[name] = fixed[name] / norm if ok else fixed[name]
     rot = fixed.get("rotation")
     if ok and rot is not None:
-        ok = bool(np.linalg.det(rot) > 0)
         off = float(np.abs(rot.T @ rot - np.eye(3)).max())
+        accepted = getattr(goal, "orth_tol", 0.0)  # (what the goal itself took as a rotation)
+        ok = bool(np.linalg.det(rot) > 0) and off <= max(PIN_ORTH_TOL, float(accepted))
         if ok and off > PIN_ORTH_TOL:  # (a rotation block accepted with a loose orth_tol
             return None  # says too little for a proof: none is drawn from this goal)
         if ok and off > 0.0:  # (a rounded rotation, as a paper prints it: the nearest one)

@@ -125,12 +125,14 @@ class Pose(Goal):
         super().__post_init__()
 
     @classmethod
-    def checked(cls, frame: str, target: FloatArray) -> Pose:
-        """An exact Pose of a target already validated by :func:`swarm_ik.pose.as_pose`."""
+    def checked(cls, frame: str, target: FloatArray, orth_tol: float = 1e-6) -> Pose:
+        """An exact Pose of a target already validated by :func:`swarm_ik.pose.as_pose` (with
+        ``orth_tol``)."""
         goal = object.__new__(cls)
         goal.__dict__.update(
-            frame=frame, target=target, weight=1.0, primary=True, orth_tol=1e-6, tolerance=None
-        )
+            frame=frame, target=target, weight=1.0, primary=True, orth_tol=orth_tol,
+            tolerance=None,
+        )  # fmt: skip
         return goal
 
     @staticmethod

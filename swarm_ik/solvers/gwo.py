@@ -107,7 +107,7 @@ def update_leaders(
 
     def before(slot: int, offered: FloatArray) -> FloatArray:
         """The slot's value before each wolf, given the values it may take."""
-        return np.fmin.accumulate(np.concatenate([lf[slot : slot + 1], offered]))[:-1]
+        return np.minimum.accumulate(np.concatenate([lf[slot : slot + 1], offered]))[:-1]
 
     offered_a = np.where(np.isnan(f), np.inf, f)
     fa = before(0, offered_a)
