@@ -10,15 +10,23 @@ import os
 import signal
 import sys
 
+_OPTIONS_WITH_VALUE = ("-X", "-W")
+"""The interpreter's options that take the next word as their value."""
+
 
 def console_script() -> bool:
-    """Whether this process is the ``swarm-ik`` console script or ``python -m swarm_ik.cli``
-    (read from ``sys.orig_argv``, the interpreter's own command line)."""
+    """Whether this process is the ``swarm-ik`` console script or ``python -m swarm_ik.cli``:
+    read from ``sys.orig_argv``, the interpreter's own command line, up to what it runs (its
+    options skipped; ``python x.py -m swarm_ik.cli`` is ``x.py``'s process, not ours)."""
     argv = list(getattr(sys, "orig_argv", []))
-    script = len(argv) > 1 and os.path.basename(argv[1]) in ("swarm-ik", "swarm-ik.exe")
-    return script or any(
-        a == "-m" and b == "swarm_ik.cli" for a, b in zip(argv, argv[1:], strict=False)
-    )
+    k = 1
+    while k < len(argv) and argv[k].startswith("-") and argv[k] not in ("-m", "-c", "-"):
+        k += 2 if argv[k] in _OPTIONS_WITH_VALUE else 1
+    if k >= len(argv):
+        return False
+    if argv[k] == "-m":
+        return argv[k + 1 : k + 2] == ["swarm_ik.cli"]
+    return os.path.basename(argv[k]) in ("swarm-ik", "swarm-ik.exe")
 
 
 def _interrupted_at_start(signum: int, frame: object) -> None:

@@ -7,6 +7,7 @@ from __future__ import annotations
 
 import argparse
 import importlib
+import re
 from pathlib import Path
 
 import pytest
@@ -14,7 +15,6 @@ from conftest import never
 
 from swarm_ik.bench import sizes
 from swarm_ik.cli import bench
-from swarm_ik.errors import InvalidArgumentError
 
 CASES = [
     (name, option, lowest, cap, cap_name)
@@ -124,12 +124,20 @@ def test_a_list_of_sizes_is_refused_at_its_first_value_above_the_cap(refused, tm
     ],
 )
 def test_python_m_bench_module_refuses_the_same(name: str, argv: list[str], tmp_path) -> None:
-    """``python -m swarm_ik.bench.NAME`` (the module's ``main``) checks the same caps before
-    its ``run``."""
-    module = _module(name)
+    """``python -m swarm_ik.bench.NAME`` checks the same caps before its ``run``: one line on
+    stderr and exit 2 (the refusal raised through ``main``: a traceback and exit 1)."""
+    import subprocess
+    import sys
+
+    _module(name)
     out = tmp_path / "out"
-    with pytest.raises(InvalidArgumentError, match=r"must be a count from \d+ to \d+ "):
-        module.main([*argv, "--out", str(out)])
+    done = subprocess.run(
+        [sys.executable, "-m", f"swarm_ik.bench.{name}", *argv, "--out", str(out)],
+        capture_output=True, text=True, timeout=600,
+    )  # fmt: skip
+    assert done.returncode == 2, done.stderr
+    lines = done.stderr.strip().splitlines()
+    assert len(lines) == 1 and re.search(r"must be a count from \d+ to \d+ ", lines[0]), lines
     assert not out.exists()
 
 

@@ -706,3 +706,27 @@ def test_an_io_error_that_is_not_the_outputs_is_not_reported_as_one(
     assert out["exit_code"] == 74 and "cannot write 'answers.csv'" in out["error"]
     print("still here")
     assert capsys.readouterr().out == "still here\n"
+
+
+@pytest.mark.parametrize(
+    ("argv", "ours"),
+    [
+        (["python", "/venv/bin/swarm-ik", "solve"], True),
+        (["python", "-X", "dev", "/venv/bin/swarm-ik"], True),
+        (["python", "-X", "importtime", "-m", "swarm_ik.cli", "robots"], True),
+        (["python", "-u", "-B", "C:\\venv\\Scripts\\swarm-ik.exe"], os.sep == "\\"),
+        (["python", "x.py", "-m", "swarm_ik.cli"], False),
+        (["python", "-c", "import swarm_ik", "-m", "swarm_ik.cli"], False),
+        (["python", "-m", "pytest", "-m", "swarm_ik.cli"], False),
+        (["python"], False),
+    ],
+)
+def test_only_the_console_script_gets_the_start_up_ctrl_c_handler(
+    argv: list[str], ours: bool, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    """``python x.py -m swarm_ik.cli`` was taken for the console script (its process then
+    exited 130 on any Ctrl-C, with no clean-up); ``python -X dev swarm-ik`` was not."""
+    from swarm_ik import _startup
+
+    monkeypatch.setattr(sys, "orig_argv", argv)
+    assert _startup.console_script() == ours

@@ -35,7 +35,7 @@ from typing import Any, Protocol
 import numpy as np
 
 from swarm_ik.bench.sizes import check_sizes
-from swarm_ik.errors import InvalidArgumentError
+from swarm_ik.errors import InvalidArgumentError, SwarmIKError
 
 THREAD_VARIABLES = (
     "OMP_NUM_THREADS",
@@ -70,7 +70,8 @@ def module_main(
     """The ``main(argv=None) -> int`` of the benchmark module ``swarm_ik.bench.NAME``, run as
     ``python -m swarm_ik.bench.NAME``: a parser with the module's options, the same as
     ``swarm-ik bench NAME``'s (``add_arguments``), then ``run`` on the parsed options (their
-    sizes checked first: :func:`swarm_ik.bench.sizes.check_sizes`)."""
+    sizes checked first: :func:`swarm_ik.bench.sizes.check_sizes`); bad input is one line on
+    stderr and exit 2."""
 
     def main(argv: Sequence[str] | None = None) -> int:
         parser = argparse.ArgumentParser(
@@ -78,8 +79,12 @@ def module_main(
         )
         add_arguments(parser)
         args = parser.parse_args(argv)
-        check_sizes(name, args)  # sizes above their caps refused, as by `swarm-ik bench`
-        return run(args)
+        try:
+            check_sizes(name, args)  # sizes above their caps refused, as by `swarm-ik bench`
+            return run(args)
+        except SwarmIKError as exc:  # bad input: one line and exit 2, as `swarm-ik bench`
+            print(f"{parser.prog}: error: {exc}", file=sys.stderr)
+            return 2
 
     main.__doc__ = f"``python -m swarm_ik.bench.{name} [options]``."
     return main
