@@ -1057,6 +1057,13 @@ def _goal_filter(
     return keep, tuple(sorted(failed))
 
 
+NEAR_LS_STARTS = 16
+"""Starts scattered around each of eaik's least-squares points (:func:`_missed_solutions`)."""
+
+NEAR_LS_SPREAD = 0.7
+"""Half-width [rad] of the box the starts around a least-squares point are drawn in."""
+
+
 def _missed_solutions(
     ctx: _Context, pose: FloatArray, known: FloatArray, near: FloatArray
 ) -> FloatArray:
@@ -1065,7 +1072,16 @@ def _missed_solutions(
     :func:`swarm_ik.solve_batch` call), judged by its check, brought within the limits."""
     import swarm_ik
 
-    starts = np.clip(near, ctx.lower, ctx.upper)
+    # each point and NEAR_LS_STARTS starts scattered around it: at a singular pose eaik's
+    # point may lie centimetres from its branch's solutions (a UR wrist at q5 = 0 gave one
+    # 5 cm off, which its polish alone did not bring back: a jump-free path was "proven"
+    # impossible)
+    rng = np.random.default_rng(ctx.seed())
+    scatter = rng.uniform(
+        -NEAR_LS_SPREAD, NEAR_LS_SPREAD, (near.shape[0], NEAR_LS_STARTS, near.shape[1])
+    )
+    starts = np.concatenate([near, (near[:, None, :] + scatter).reshape(-1, near.shape[1])])
+    starts = np.clip(starts, ctx.lower, ctx.upper)
     res = swarm_ik.solve_batch(
         ctx.robot, np.repeat(np.asarray(pose)[None], starts.shape[0], axis=0),
         q0=np.ascontiguousarray(starts), seed=ctx.seed(), tol_pos=ctx.tol_pos,
