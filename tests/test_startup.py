@@ -151,20 +151,24 @@ def test_warmup_command_prepares_every_solve_path() -> None:
         assert step in out.stderr, out.stderr
 
 
+def _with_the_notice_at_once(body: str) -> subprocess.CompletedProcess[str]:
+    """``body`` run in a fresh process whose loading notice comes at once (its delay 0)."""
+    code = "import numpy as np, swarm_ik, swarm_ik.kernels as k\nk.NOTICE_AFTER = 0.0\n" + body
+    return subprocess.run(
+        [sys.executable, "-c", code], capture_output=True, text=True, timeout=600, check=True
+    )
+
+
 def test_the_loading_line_is_said_once_per_process() -> None:
     """Routes of several kinds loading their kernels in one process (as ``swarm-ik warmup``
     does) print the one line once."""
-    code = (
-        "import swarm_ik, swarm_ik.api as a, swarm_ik.kernels as k\n"
-        "k.NOTICE_AFTER = 0.0\n"
+    out = _with_the_notice_at_once(
+        "import swarm_ik.api as a\n"
         "r = swarm_ik.load_robot('panda')\n"
         "p = swarm_ik.IKProblem(r, r.fk(r.mid_q()))\n"
         "for solver in ('swarm', 'dls', 'gwo'):\n"
         "    a.warm_up(a.Route(p, solver))\n"
         "print(len(a._COMPILED))\n"
-    )
-    out = subprocess.run(
-        [sys.executable, "-c", code], capture_output=True, text=True, timeout=600, check=True
     )
     assert out.stdout.strip() == "3"
     assert out.stderr.count("preparing the compiled kernels") == 1, out.stderr
@@ -172,17 +176,11 @@ def test_the_loading_line_is_said_once_per_process() -> None:
 
 def test_a_batch_says_it_loads_its_kernels_and_a_solve_after_it_does_not_again() -> None:
     """A cold ``swarm-ik batch`` compiled for 50 s in silence: the batch's first loading of
-    its kernels says so as a solve's does (here with the notice's delay set to 0), and the
-    line comes once per process."""
-    code = (
-        "import numpy as np, swarm_ik, swarm_ik.kernels as k\n"
-        "k.NOTICE_AFTER = 0.0\n"
+    its kernels says so as a solve's does, and the line comes once per process."""
+    out = _with_the_notice_at_once(
         "r = swarm_ik.load_robot('panda')\n"
         "swarm_ik.solve_batch(r, r.fk(r.random_q(np.random.default_rng(0), 3)))\n"
         "swarm_ik.solve(swarm_ik.IKProblem(r, r.fk(r.mid_q())))\n"
-    )
-    out = subprocess.run(
-        [sys.executable, "-c", code], capture_output=True, text=True, timeout=600, check=True
     )
     assert out.stderr.count("preparing the compiled kernels") == 1, out.stderr
 

@@ -50,27 +50,31 @@ MAX_JOBS = 256
 of the largest single machines; each is a spawned interpreter with its own compiled kernels
 (about 100 MB or more), and the pool starts up to one per queued run."""
 
+_CAPPED = {
+    "MAX_TARGETS": (
+        "ik --n", "goals --n", "many --n-targets", "collision --n", "collision --batch-n",
+        "collision --diagnose", "collision --ablation-n", "wholebody --n", "wholebody --chunk",
+    ),
+    "MAX_BATCH": ("throughput --sizes", "throughput --loop-max"),
+    "MAX_MANY_N": ("many --n",),
+    "MAX_RUNS": ("paper --runs",),
+    "MAX_REPEAT": ("throughput --repeat",),
+    "MAX_BOXES": ("throughput --boxes",),
+    "MAX_JOBS": ("paper --jobs", "ik --jobs"),
+}  # fmt: skip
+"""Each cap's name -> the ``"benchmark --option"`` it bounds."""
+
+_ZERO_ALLOWED = ("throughput --loop-max", "collision --diagnose")
+"""The capped options whose lowest value is 0 (the others': 1)."""
+
 SIZE_OPTIONS: dict[str, tuple[tuple[str, int, int, str], ...]] = {
-    "paper": (("--runs", 1, MAX_RUNS, "MAX_RUNS"), ("--jobs", 1, MAX_JOBS, "MAX_JOBS")),
-    "ik": (("--n", 1, MAX_TARGETS, "MAX_TARGETS"), ("--jobs", 1, MAX_JOBS, "MAX_JOBS")),
-    "throughput": (
-        ("--sizes", 1, MAX_BATCH, "MAX_BATCH"),
-        ("--loop-max", 0, MAX_BATCH, "MAX_BATCH"),
-        ("--repeat", 1, MAX_REPEAT, "MAX_REPEAT"),
-        ("--boxes", 1, MAX_BOXES, "MAX_BOXES"),
-    ),
-    "goals": (("--n", 1, MAX_TARGETS, "MAX_TARGETS"),),
-    "many": (("--n-targets", 1, MAX_TARGETS, "MAX_TARGETS"), ("--n", 1, MAX_MANY_N, "MAX_MANY_N")),
-    "collision": (
-        ("--n", 1, MAX_TARGETS, "MAX_TARGETS"),
-        ("--batch-n", 1, MAX_TARGETS, "MAX_TARGETS"),
-        ("--diagnose", 0, MAX_TARGETS, "MAX_TARGETS"),
-        ("--ablation-n", 1, MAX_TARGETS, "MAX_TARGETS"),
-    ),
-    "wholebody": (
-        ("--n", 1, MAX_TARGETS, "MAX_TARGETS"),
-        ("--chunk", 1, MAX_TARGETS, "MAX_TARGETS"),
-    ),
+    bench: tuple(
+        (option, 0 if f"{bench} {option}" in _ZERO_ALLOWED else 1, globals()[cap], cap)
+        for cap, where in _CAPPED.items()
+        for b, option in (w.split() for w in where)
+        if b == bench
+    )
+    for bench in ("paper", "ik", "throughput", "goals", "many", "collision", "wholebody")
 }
 """Benchmark name -> its size and count options: ``(option, lowest, cap, cap's name)``; each
 option holds an integer, a list of them (``--sizes``, ``--boxes``) or None (not given)."""

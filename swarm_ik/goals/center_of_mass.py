@@ -168,13 +168,7 @@ def support_polygon(value: Any) -> FloatArray:
 
 @numba.njit(cache=True)
 def _deepest_bound(
-    vx: FloatArray,
-    vy: FloatArray,
-    lo: FloatArray,
-    hi: FloatArray,
-    n: int,
-    tol: float,
-    max_cells: int,
+    vx: FloatArray, vy: FloatArray, lo: FloatArray, hi: FloatArray, n: int, tol: float, cap: int
 ) -> float:  # pragma: no cover - compiled
     """Branch and bound on the depth ``−d`` inside the polygon (``vx``, ``vy``)
     (:func:`_polygon_distance`): the bounding box ``lo``–``hi`` cut into square cells, ``n``
@@ -183,7 +177,7 @@ def _deepest_bound(
     most the distance moved); cells that may hold a point deeper than the deepest centre seen
     by more than ``tol`` are split in four, the others dropped.  Returns an upper bound on the
     depth of every point, within ``tol`` of the true largest depth, or the bound of the cells
-    left when ``max_cells`` would be exceeded."""
+    left when ``cap`` cells would be exceeded."""
     h = 0.5 * max(hi[0] - lo[0], hi[1] - lo[1]) / n  # (square cells)
     ni = int(math.ceil(0.5 * (hi[0] - lo[0]) / h))
     nj = int(math.ceil(0.5 * (hi[1] - lo[1]) / h))
@@ -206,7 +200,7 @@ def _deepest_bound(
         k = int(keep.sum())
         if k == 0:
             return best + tol
-        if 4 * k > max_cells:
+        if 4 * k > cap:
             return max(best + tol, float(np.max(depth[keep])) + r)
         hx, hy = 0.5 * hx, 0.5 * hy
         nx = np.empty(4 * k)
