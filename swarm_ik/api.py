@@ -30,7 +30,6 @@ import numpy as np
 from swarm_ik import collision, kernels
 from swarm_ik._validate import check_seed, keywords_checked
 from swarm_ik.errors import InvalidArgumentError, UnknownNameError, unknown
-from swarm_ik.goals import Posture
 from swarm_ik.goals import base as goals_base
 from swarm_ik.goals.axis import angle_between
 from swarm_ik.kernels import search
@@ -357,9 +356,9 @@ class Route:
         # 20 ms limit by its first judge, coal's check, 1-1.5 ms)
         self._judge_kind = (problem.collision_goal is not None, bool(problem.python_goals))
         self._judge_s = problem.robot._cache.get("judge_s", {}).get(self._judge_kind, 0.0)
-        # the first start without q0 when no Posture goal names one (the middle of the ranges)
-        has_posture = any(isinstance(g, Posture) for g in problem.goals)
-        self._mid = None if has_posture else hybrid.default_seed(problem)
+        # the first start without q0 when no goal names one (the middle of the ranges)
+        named = any(g.preferred_start(problem.robot) is not None for g in problem.goals)
+        self._mid = None if named else hybrid.default_seed(problem)
         self.compiled = (
             solver == "swarm" and self.stop_on_success and hybrid.compiled_ok(problem, prefer)
         )

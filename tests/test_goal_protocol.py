@@ -1258,3 +1258,33 @@ def test_a_rounded_target_accepted_with_orth_tol_is_solved() -> None:
     loose = swarm_ik.IKProblem(robot, skewed, orth_tol=0.1)
     assert pin_of(loose.goals[0]) is None
     swarm_ik.solve(loose, max_evals=200)  # (no refusal)
+
+
+@dataclass(frozen=True)
+class _PlaneFrom(OnPlane):
+    """OnPlane with a start of its own for searches without q0."""
+
+    start: tuple[float, ...] = ()
+
+    def preferred_start(self, robot):  # type: ignore[no-untyped-def]
+        return np.asarray(self.start)
+
+
+def test_a_goal_names_the_first_start_without_the_solver_knowing_its_class() -> None:
+    """The first start without q0 came from ``Posture.q_ref`` by name in the solve route;
+    any goal names one through ``Goal.preferred_start`` (a Posture's is its reference): a
+    budget of one evaluation answers the start itself."""
+    from swarm_ik.solvers.hybrid import default_seed
+
+    panda = robot("panda")
+    start = panda.random_q(np.random.default_rng(3))
+    plane = _PlaneFrom("panda_hand_tcp", (0.0, 0.0, 1.0), 0.4, start=tuple(start))
+    for goal in (plane, G.Posture(start)):
+        problem = swarm_ik.IKProblem(
+            panda, goals=[G.Position("panda_hand_tcp", [0.4, 0.1, 0.5]), goal]
+        )
+        np.testing.assert_allclose(default_seed(problem), start)
+    problem = swarm_ik.IKProblem(panda, goals=[plane])
+    np.testing.assert_allclose(swarm_ik.solve(problem, max_evals=1).q, start)
+    bare = swarm_ik.IKProblem(panda, goals=[G.Position("panda_hand_tcp", [0.4, 0.1, 0.5])])
+    np.testing.assert_allclose(default_seed(bare), panda.mid_q())

@@ -779,6 +779,12 @@ class Goal:
             met = False  # nothing measured: never a vacuous success
         return float(dp), float(dr), bool(met), None
 
+    def preferred_start(self, robot: RobotModel) -> Any:
+        """A configuration ``(nq,)`` the search may start from when the solve has no ``q0``
+        (``Posture``: its reference), or None (the default: no opinion; the first goal that
+        names one is used, else the middle of the ranges)."""
+        return None
+
     def pin(self) -> Pin | None:
         """What this goal holds its frame to (:class:`Pin`), for the proofs before a search;
         None (the default) when it says nothing of the kind (such a goal is still solved and

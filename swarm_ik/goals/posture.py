@@ -31,6 +31,10 @@ class Posture(JointGoal):
     q_ref: Any
     joint_weights: Any = field(default=None, kw_only=True)
 
+    def preferred_start(self, robot: RobotModel) -> Any:
+        """The reference posture: a search without ``q0`` starts there."""
+        return self.q_ref
+
     def reference(self, robot: RobotModel, q0: FloatArray | None) -> tuple[FloatArray, FloatArray]:
         ref = robot.check_q(self.q_ref, "Posture.q_ref")
         jw = (

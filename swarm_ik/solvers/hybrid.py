@@ -53,7 +53,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from swarm_ik.errors import InvalidArgumentError, unknown
-from swarm_ik.goals import Posture, kernels
+from swarm_ik.goals import kernels
 from swarm_ik.kernels import lm, search
 from swarm_ik.kernels.lm import BUDGET, CONVERGED, ITER_CAP, LOCAL_MIN, NOT_RUN, LMSettings
 from swarm_ik.problem import REPLACEABLE, IKProblem
@@ -377,13 +377,16 @@ def check_params(
 def default_seed(
     problem: IKProblem, lower: FloatArray | None = None, upper: FloatArray | None = None
 ) -> FloatArray:
-    """The first start without ``q0``: the reference of the first Posture goal (clipped into
-    the bounds) when there is one, else the middle of the ranges (TRAC-IK's seed)."""
+    """The first start without ``q0``: the first goal's preferred start
+    (:meth:`~swarm_ik.goals.Goal.preferred_start`, a Posture's reference; clipped into the
+    bounds) when one names it, else the middle of the ranges (TRAC-IK's seed)."""
     lo = problem.lower if lower is None else lower
     hi = problem.upper if upper is None else upper
+    robot = problem.robot
     for gl in problem.goals:
-        if isinstance(gl, Posture):
-            ref = problem.robot.wrap(problem.robot.check_q(gl.q_ref, "Posture.q_ref"))
+        q = gl.preferred_start(robot)
+        if q is not None:
+            ref = robot.wrap(robot.check_q(q, f"{gl.describe()}.preferred_start()"))
             return np.clip(ref, lo, hi)
     return 0.5 * (lo + hi)
 
