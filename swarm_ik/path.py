@@ -76,6 +76,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from swarm_ik._validate import floats_or, keywords_checked
+from swarm_ik.api import conflicting_goals
 from swarm_ik.branches import SINGULAR_SIGMA, sigma_min
 from swarm_ik.errors import InvalidArgumentError, InvalidTargetError
 from swarm_ik.goals import base as goals_base
@@ -1743,6 +1744,18 @@ def _unwind(rows: FloatArray, start: FloatArray | None, ctx: _Context) -> FloatA
     return out
 
 
+def _conflicts(ctx: _Context, missed: list[int]) -> str:
+    """Where the goals of a waypoint not reached conflict (:func:`swarm_ik.api.conflicting_goals`:
+    what they hold their frames to, before any search), as ``solve`` says it: the first such
+    waypoint and its goals (goal lists of a path were "no IK solution found" where ``solve``
+    of the same goals said ``conflicting_goals``); empty when none is found."""
+    for i in missed:
+        why = conflicting_goals(ctx.wps.problem(i), ctx.tol_pos, ctx.tol_rot)
+        if why is not None:
+            return f"; the goals of waypoint {i} conflict: {why}"
+    return ""
+
+
 def _reason(
     ctx: _Context, graph: _Graph, start: FloatArray | None, q: FloatArray, reached: Any,
     jumps: list[tuple[int, float]], proof: bool, densify_ok: bool, max_step: float,
@@ -1765,8 +1778,10 @@ def _reason(
         elif closed_none:
             why += " (closed form: none meets it within the joint limits)"
         why += _inside_reason(ctx, missed)
+        conflicts = _conflicts(ctx, missed)
+        why += conflicts
         plural = "s" if len(missed) > 1 else ""
-        proven = bool(beyond) or closed_none
+        proven = bool(beyond) or closed_none or bool(conflicts)
         proven = proven or (
             len(blocked) == len(missed) and all(graph.certified[i] for i in blocked)
         )

@@ -666,3 +666,17 @@ def test_a_waypoint_at_the_wrist_singularity_is_no_false_proof(name: str, qs: li
     res = solve_path(robot, poses, max_joint_step=0.2)
     assert res.jump_free, res.reason
     assert not (res.exhaustive and res.reconfigurations)
+
+
+def test_a_waypoint_whose_goals_conflict_says_so_as_solve_does() -> None:
+    """Goal lists that no pose meets together: ``solve`` says ``conflicting_goals``, the path
+    said only "no IK solution found"; it names the waypoint and its goals now."""
+    from swarm_ik import goals as G
+
+    robot = get("panda")
+    p = robot.fk(robot.mid_q())[:3, 3]
+    frame = robot.ee_frame
+    lists = [[G.Position(frame, p), G.Position(frame, p + [0.1, 0.0, 0.0])], [G.Position(frame, p)]]
+    res = solve_path(robot, goals=lists)
+    assert not res.reached[0] and res.reached[1]
+    assert "the goals of waypoint 0 conflict: Position(panda_hand_tcp) and Position(" in res.reason
