@@ -402,3 +402,23 @@ def test_a_scene_made_on_an_empty_cache_leaves_the_batch_half_its_limit(tmp_path
     assert out.returncode == 0, out.stderr
     started, solved = map(int, out.stdout.split())
     assert started == 300 and solved > 0, out.stdout
+
+
+@timed()
+def test_a_first_batch_with_a_short_limit_starts_its_targets() -> None:
+    """The first clock read of a process (numba's bridge to Python, 40-70 ms) was charged
+    whole to the limit: 100 targets with 50 ms started none.  It is loading, charged up to
+    half the limit."""
+    import subprocess
+    import sys
+
+    code = (
+        "import numpy as np, swarm_ik\n"
+        "r = swarm_ik.load_robot('panda')\n"
+        "T = r.fk(r.random_q(np.random.default_rng(0), 100))\n"
+        "res = swarm_ik.solve_batch(r, T, time_limit=0.05)\n"
+        "print(int((res.n_starts > 0).sum()))\n"
+    )
+    out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, timeout=600)
+    assert out.returncode == 0, out.stderr
+    assert int(out.stdout) == 100, out.stdout

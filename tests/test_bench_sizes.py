@@ -19,19 +19,21 @@ from swarm_ik.cli import bench
 CASES = [
     (name, option, lowest, cap, cap_name)
     for name, options in sizes.SIZE_OPTIONS.items()
+    if name in bench.BENCHMARKS  # (``path`` runs as ``python -m swarm_ik.bench.path`` only)
     for option, lowest, cap, cap_name in options
 ]
-"""Every capped option: ``(benchmark, option, lowest, cap, cap's name)``."""
+"""Every capped option of ``swarm-ik bench``: ``(benchmark, option, lowest, cap, cap's name)``."""
 
 IDS = [f"{name} {option}" for name, option, *_ in CASES]
 
 
 def _module(name: str):
     """The benchmark module of ``name`` (skipped where an optional dependency is missing)."""
+    module = bench.BENCHMARKS.get(name, f"swarm_ik.bench.{name}")
     try:
-        return importlib.import_module(bench.BENCHMARKS[name])
+        return importlib.import_module(module)
     except ModuleNotFoundError as exc:  # pragma: no cover - every module imports here
-        pytest.skip(f"{bench.BENCHMARKS[name]} needs {exc.name}")
+        pytest.skip(f"{module} needs {exc.name}")
 
 
 def _bench_parsers() -> dict[str, argparse.ArgumentParser]:
@@ -121,6 +123,8 @@ def test_a_list_of_sizes_is_refused_at_its_first_value_above_the_cap(refused, tm
         ("ik", ["--n", str(10**12)]),
         ("paper", ["--runs", str(10**11)]),
         ("many", ["--n", str(10**9), "--n-targets", "1"]),
+        ("path", ["--n", str(10**12)]),
+        ("path", ["--waypoints", str(10**9)]),
     ],
 )
 def test_python_m_bench_module_refuses_the_same(name: str, argv: list[str], tmp_path) -> None:

@@ -54,7 +54,9 @@ _CAPPED = {
     "MAX_TARGETS": (
         "ik --n", "goals --n", "many --n-targets", "collision --n", "collision --batch-n",
         "collision --diagnose", "collision --ablation-n", "wholebody --n", "wholebody --chunk",
+        "path --n",
     ),
+    "MAX_WAYPOINTS": ("path --waypoints",),
     "MAX_BATCH": ("throughput --sizes", "throughput --loop-max"),
     "MAX_MANY_N": ("many --n",),
     "MAX_RUNS": ("paper --runs",),
@@ -67,6 +69,10 @@ _CAPPED = {
 _ZERO_ALLOWED = ("throughput --loop-max", "collision --diagnose")
 """The capped options whose lowest value is 0 (the others': 1)."""
 
+MAX_WAYPOINTS = 10_000
+"""Most waypoints per path of ``python -m swarm_ik.bench.path`` (``--waypoints``, default
+40): each path is planned whole, its candidate graph growing with the waypoints."""
+
 SIZE_OPTIONS: dict[str, tuple[tuple[str, int, int, str], ...]] = {
     bench: tuple(
         (option, 0 if f"{bench} {option}" in _ZERO_ALLOWED else 1, globals()[cap], cap)
@@ -74,7 +80,7 @@ SIZE_OPTIONS: dict[str, tuple[tuple[str, int, int, str], ...]] = {
         for b, option in (w.split() for w in where)
         if b == bench
     )
-    for bench in ("paper", "ik", "throughput", "goals", "many", "collision", "wholebody")
+    for bench in ("paper", "ik", "throughput", "goals", "many", "collision", "wholebody", "path")
 }
 """Benchmark name -> its size and count options: ``(option, lowest, cap, cap's name)``; each
 option holds an integer, a list of them (``--sizes``, ``--boxes``) or None (not given)."""

@@ -135,7 +135,8 @@ class Parser(argparse.ArgumentParser):
 EPILOG = (
     "exit codes: 0 success, 1 target not reached (the best found is printed), 2 bad input "
     "(one line on stderr), 3 internal error (one line; SWARM_IK_DEBUG=1 shows the "
-    "traceback), 130 interrupted (Ctrl-C), 141 output pipe closed.  `swarm-ik COMMAND "
+    "traceback), 74 output could not be written (a full disk), 130 interrupted (Ctrl-C), "
+    "141 output pipe closed.  `swarm-ik COMMAND "
     "--help` describes a command."
 )
 

@@ -77,7 +77,7 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
         required=True,
         metavar="FILE",
         help="result file: .npz (q, errors, success, ...) or .csv; its folder must exist and "
-        "be writable (checked before solving)",
+        "be writable, and it may not be --targets or --scene (checked before solving)",
     )
     add_q0(parser, "first start for every target (one value per joint); default mid-range")
     parser.add_argument(
@@ -98,7 +98,8 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
         type=argtypes.positive_number,
         default=None,
         metavar="SECONDS",
-        help="seconds for the whole batch: targets not reached by then are reported unsolved",
+        help="seconds for the whole batch: targets not reached by then are reported unsolved "
+        "(loading the kernels, a scene and a Dask cluster is charged to it up to half of it)",
     )
     add_collision_options(
         parser,

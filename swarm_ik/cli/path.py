@@ -93,7 +93,11 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     )
     add_tolerances(parser)
     parser.add_argument(
-        "--out", type=Path, default=None, metavar="FILE", help="joint path: .csv or .npy"
+        "--out",
+        type=Path,
+        default=None,
+        metavar="FILE",
+        help="joint path: .csv or .npy (not --poses or --scene)",
     )
     parser.add_argument(
         "--html",

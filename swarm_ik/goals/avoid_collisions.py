@@ -118,7 +118,8 @@ class AvoidCollisions(Goal):
     (obstacles: their exact signed distance) with its Jacobian, up to ``max_rows`` rows (the
     deepest first).  The answer is judged by the exact check with coal on the URDF's collision
     geometry (:meth:`swarm_ik.collision.RobotCollision.check`): success only without contact
-    closer than ``margin``; ``Result.collision`` gives the clearance and the pairs in contact.
+    closer than ``margin``; ``Result.goal_errors[i].details`` (a
+    :class:`~swarm_ik.collision.CollisionReport`) gives the clearance and the pairs in contact.
     At most one per problem.
 
     Args:
