@@ -71,6 +71,7 @@ from swarm_ik.kernels.fk import TreeArrays
 from swarm_ik.kernels.lm import CONVERGED, NOT_RUN
 from swarm_ik.kernels.search import sampling_window, splitmix64, uniform_in, uniforms, wall_clock
 from swarm_ik.optimize import check_budget
+from swarm_ik.paths import written_in_place_of
 from swarm_ik.pose import make_pose, matrix_to_quat
 from swarm_ik.problem import IKProblem
 from swarm_ik.result import FrozenArrays
@@ -756,15 +757,8 @@ class BatchResult(_Rows, FrozenArrays):
                 f"cannot write results to {str(p)!r}: unknown suffix {p.suffix!r}; "
                 "valid suffixes: .csv, .npz"
             )
-        # written beside and renamed into place: an interruption (Ctrl-C, a full disk) leaves
-        # the file as it was, never a partial one
-        part = p.with_name(f"{p.name}.{os.getpid()}.part")
-        try:
+        with written_in_place_of(p) as part:  # (never a partial file)
             self._write(part, suffix, targets)
-            os.replace(part, p)
-        except BaseException:
-            part.unlink(missing_ok=True)
-            raise
         return p
 
     def _write(self, p: Path, suffix: str, targets: FloatArray | None) -> None:

@@ -5,10 +5,12 @@ it, and ``swarm-ik robots`` lists the robots without loading the kernels.)"""
 
 from __future__ import annotations
 
+import contextlib
 import os
 import stat
 import sys
 import tempfile
+from collections.abc import Iterator
 from importlib import resources
 from pathlib import Path
 
@@ -202,3 +204,20 @@ def robot_names() -> dict[str, list[str]]:
         "bundled": sorted(BUNDLED),
         "example-robot-data": sorted(set(EXAMPLE_ROBOTS) | set(example_robot_files())),
     }
+
+
+@contextlib.contextmanager
+def written_in_place_of(path: str | os.PathLike[str]) -> Iterator[Path]:
+    """A path beside ``path`` for the body to write, renamed onto ``path`` when the body ends
+    (removed if it raises): an interruption (Ctrl-C, a full disk) leaves ``path`` as it was,
+    never a partial file (a full disk truncated a reachability map's page in place).  The
+    temporary name keeps the suffix, so writers that add one (``numpy.savez``, matplotlib)
+    keep the name."""
+    p = Path(path)
+    part = p.with_name(f".{p.stem}.{os.getpid()}.part{p.suffix}")
+    try:
+        yield part
+        os.replace(part, p)
+    except BaseException:
+        part.unlink(missing_ok=True)
+        raise

@@ -32,6 +32,7 @@ from numpy.typing import NDArray
 
 from swarm_ik.batch import solve_batch
 from swarm_ik.errors import InvalidArgumentError
+from swarm_ik.paths import written_in_place_of
 from swarm_ik.robot import RobotModel
 
 FloatArray = NDArray[np.float64]
@@ -104,8 +105,14 @@ class ReachMap:
             raise InvalidArgumentError(
                 f"reachability maps are written as .npz; got {str(p)!r} (valid suffix: .npz)"
             )
+        with written_in_place_of(p) as part, part.open("wb") as fb:  # (never a partial file)
+            self._write(fb)
+        return p
+
+    def _write(self, fb: Any) -> None:
+        """The arrays of :meth:`save` into the open file ``fb``."""
         np.savez_compressed(
-            p,
+            fb,
             robot=self.robot,
             ee_frame=self.ee_frame,
             x=self.x,
@@ -125,7 +132,6 @@ class ReachMap:
             time_s=self.time_s,
             urdf=self.urdf,
         )
-        return p
 
     @classmethod
     def load(cls, path: str | Path) -> ReachMap:
@@ -456,7 +462,8 @@ def plot_slices(rmap: ReachMap, path: str | Path, dpi: int = 120) -> Path:
         f"tolerance {rmap.tol_pos:g} m / {rmap.tol_rot:g} rad"
     )
     p = Path(path)
-    fig.savefig(p, dpi=dpi)
+    with written_in_place_of(p) as part:  # (never a partial file)
+        fig.savefig(part, dpi=dpi)
     plt.close(fig)
     return p
 

@@ -56,6 +56,7 @@ import numpy as np
 
 from swarm_ik._types import FloatArray
 from swarm_ik.errors import InvalidArgumentError, SwarmIKError, UnknownNameError
+from swarm_ik.paths import written_in_place_of
 from swarm_ik.pose import unit, unit_quaternion_matrix
 
 Matrix4 = tuple[tuple[float, ...], ...]
@@ -1071,7 +1072,8 @@ def _expanded(path: str | os.PathLike[str], what: str) -> Path:
 def _write_text(p: Path, text: str) -> None:
     """Write ``text`` to ``p``, an unwritable place refused in one line."""
     try:
-        p.write_text(text)
+        with written_in_place_of(p) as part:  # (never a partial file)
+            part.write_text(text)
     except OSError as exc:
         raise InvalidArgumentError(
             f"cannot write the scene to {str(p)!r}: {exc.strerror or exc}"

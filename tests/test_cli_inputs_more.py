@@ -217,3 +217,53 @@ def test_show_solutions_beyond_its_cap_is_refused(n: str, refused: Callable[...,
     assert (
         f"--solutions must be a count from 1 to 64 (swarm_ik.cli.show.MAX_SHOWN), got {n}" in line
     )
+
+
+def test_an_output_that_fails_midway_leaves_the_old_file(tmp_path: Path) -> None:
+    """Outputs are written beside and renamed into place (``paths.written_in_place_of``): a
+    full disk left a reachability map's page and a solve's page truncated in place.  Here a
+    write that fails midway (the body raises) keeps the old file and leaves nothing beside
+    it, and one that ends replaces it whole."""
+    from swarm_ik.paths import written_in_place_of
+
+    out = tmp_path / "page.html"
+    out.write_text("OLD")
+    with pytest.raises(OSError), written_in_place_of(out) as part:
+        part.write_text("NEW, half")
+        raise OSError(28, "No space left on device")
+    assert out.read_text() == "OLD" and sorted(p.name for p in tmp_path.iterdir()) == ["page.html"]
+    with written_in_place_of(out) as part:
+        assert part.suffix == ".html" and part.parent == out.parent
+        part.write_text("NEW")
+    assert out.read_text() == "NEW" and sorted(p.name for p in tmp_path.iterdir()) == ["page.html"]
+
+
+@pytest.mark.skipif(not hasattr(os, "fork"), reason="resource limits of a child: POSIX")
+def test_a_path_written_past_the_file_size_limit_keeps_the_old_output(tmp_path: Path) -> None:
+    """``swarm-ik path --out`` under a file-size limit (a full disk): exit 74, one line, and
+    the old output kept whole."""
+    import resource
+    import subprocess
+    import sys
+
+    poses = tmp_path / "line.csv"
+    rows = ["x,y,z,qx,qy,qz,qw"] + [f"{0.4 + 0.01 * k},0.1,0.5,1,0,0,0" for k in range(8)]
+    poses.write_text("\n".join(rows) + "\n")
+    out = tmp_path / "q.csv"
+    out.write_text("OLD\n")
+
+    def small_files() -> None:
+        resource.setrlimit(resource.RLIMIT_FSIZE, (100, 100))
+
+    argv = [sys.executable, "-m", "swarm_ik.cli", "path", "--robot", "panda", "--poses",
+            str(poses), "--out"]  # fmt: skip
+    warm = tmp_path / "warm" / "q.csv"  # (numba's cache filled first: its files are large)
+    warm.parent.mkdir()
+    subprocess.run([*argv, str(warm)], capture_output=True, timeout=600, check=True)
+    done = subprocess.run(
+        [*argv, str(out)], capture_output=True, text=True, timeout=600, preexec_fn=small_files
+    )
+    assert done.returncode == 74, done.stderr
+    assert done.stderr.strip().startswith("swarm-ik: cannot write"), done.stderr
+    assert out.read_text() == "OLD\n"
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["line.csv", "q.csv", "warm"]

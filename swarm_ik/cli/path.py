@@ -184,10 +184,13 @@ def _write(path: Path, robot: Any, q: Any) -> None:
     """The joint path as ``.npy`` or ``.csv`` (a header of joint names)."""
     import numpy as np
 
-    if path.suffix.lower() == ".npy":
-        np.save(path, q)
-    else:
-        np.savetxt(path, q, delimiter=",", header=",".join(robot.joint_names), comments="")
+    from swarm_ik.paths import written_in_place_of
+
+    with written_in_place_of(path) as part:  # (never a partial file)
+        if path.suffix.lower() == ".npy":
+            np.save(part, q)
+        else:
+            np.savetxt(part, q, delimiter=",", header=",".join(robot.joint_names), comments="")
 
 
 def _as_dict(robot: Any, res: Any, out: Path | None) -> dict[str, Any]:

@@ -22,6 +22,7 @@ import pinocchio as pin
 
 from swarm_ik._types import FloatArray
 from swarm_ik.errors import SwarmIKError
+from swarm_ik.paths import written_in_place_of
 from swarm_ik.robot import RobotModel
 from swarm_ik.viz.export import CommandLog, check_output_path, static_html
 from swarm_ik.viz.geometry import full_configuration, rgb_int, shape_loader, visual_model
@@ -446,7 +447,8 @@ class Scene:
                 another suffix.
         """
         p = check_output_path(path, "HTML file", (".html", ".htm"))
-        p.write_text(self.to_html(title), encoding="utf-8")
+        with written_in_place_of(p) as part:  # (never a partial page)
+            part.write_text(self.to_html(title), encoding="utf-8")
         return p
 
     def publish(
