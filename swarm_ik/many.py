@@ -935,7 +935,10 @@ def _numerical(
                 if walked.shape[0] and np.min(branch_distance(walked, qv, periodic)) < _WALK_NEAR:
                     continue
                 used += 1
-                if np.linalg.svd(pol.residual(qv)[1], compute_uv=False)[-1] >= _WALK_SIGMA:
+                jac = pol.residual(qv)[1]
+                if jac.shape[0] != jac.shape[1]:  # (the walk follows the one-dimensional valley
+                    continue  # of a square problem: a 3-joint arm's pose is not one, and crashed)
+                if np.linalg.svd(jac, compute_uv=False)[-1] >= _WALK_SIGMA:
                     continue  # an ordinary local minimum
                 roots, curve, evals = _valley_roots(pol, qv, lower, upper, deadline, room_evals - 1)
                 used += evals

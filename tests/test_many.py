@@ -257,3 +257,39 @@ def test_a_redundant_arm_is_not_stopped_by_the_patience_of_the_branch_search() -
     target = robot.fk(robot.random_q(np.random.default_rng(0), 4))[0]
     out = swarm_ik.solve_many(swarm_ik.IKProblem(robot, target), n=16)
     assert len(out) == 16 and all(r.success for r in out)
+
+
+def test_a_pose_of_an_arm_of_fewer_than_six_joints_has_its_branches(tmp_path) -> None:  # type: ignore[no-untyped-def]
+    """A planar 3-joint arm's pose (six rows, three joints): the valley walk of a stalled
+    start assumed a square Jacobian and crashed (``swarm-ik warmup --robot FILE`` with such
+    an arm: "operands could not be broadcast"); both elbow branches are found."""
+    from conftest import urdf_joint, urdf_text
+
+    limit = '<limit lower="-3" upper="3" effort="1" velocity="1"/>'
+    path = tmp_path / "planar3.urdf"
+    path.write_text(
+        urdf_text(
+            "base l1 l2 tip",
+            urdf_joint("j1", "base", "l1", xyz="0 0 0.1", limit=limit),
+            urdf_joint("j2", "l1", "l2", xyz="0.3 0 0", limit=limit),
+            urdf_joint("j3", "l2", "tip", xyz="0.3 0 0", limit=limit),
+            name="planar3",
+        )
+    )
+    robot = swarm_ik.load_robot(path)
+    target = robot.fk(np.array([0.4, 1.1, -0.3]))
+    found = swarm_ik.solve_many(swarm_ik.IKProblem(robot, target), n=4, method="numerical")
+    assert len(found) == 2 and all(r.success for r in found)
+    assert sorted(round(float(r.q[1]), 6) for r in found) == [-1.1, 1.1]
+    straight = robot.fk(np.zeros(3))  # (the arm stretched: singular, where the walk began)
+    path = swarm_ik.solve_path(robot, [straight, straight], q0=np.zeros(3))
+    assert path.success, path.reason
+
+
+def test_warmup_runs_on_a_urdf_without_masses(planar2_urdf: str, capsys) -> None:  # type: ignore[no-untyped-def]
+    """``swarm-ik warmup --robot FILE`` stopped with exit 2 at its balance step on a URDF
+    without inertials (plain IK needs none): that step falls back to a bundled robot."""
+    from swarm_ik.cli import main
+
+    assert main(["warmup", "--robot", planar2_urdf]) == 0
+    assert "kernels ready" in capsys.readouterr().out

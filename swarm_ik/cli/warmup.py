@@ -112,11 +112,17 @@ def _goal_kernels(robot: Any, target: Any) -> None:
 
 def _whole_body(name: str) -> None:
     """One solve of the robot on a floating base with a balance goal: the rotation vector's
-    helpers and the support polygon's compiled distances."""
+    helpers and the support polygon's compiled distances (this robot's, else YuMi's arm's
+    when its URDF gives no masses: the kernels are the same)."""
     import swarm_ik
     from swarm_ik import goals
+    from swarm_ik.errors import RobotModelError
 
     robot = swarm_ik.load_robot(name, floating_base=True)
+    try:
+        robot.mass_frames()
+    except RobotModelError:  # (a URDF without inertials: `warmup --robot FILE` stopped here)
+        robot = swarm_ik.load_robot("yumi_left", floating_base=True)
     q = robot.mid_q()
     square = [(-1.0, -1.0), (1.0, -1.0), (1.0, 1.0), (-1.0, 1.0)]
     balance = goals.CenterOfMass(support=square, margin=0.01)
