@@ -267,3 +267,23 @@ def test_a_path_written_past_the_file_size_limit_keeps_the_old_output(tmp_path: 
     assert done.stderr.strip().startswith("swarm-ik: cannot write"), done.stderr
     assert out.read_text() == "OLD\n"
     assert sorted(p.name for p in tmp_path.iterdir()) == ["line.csv", "q.csv", "warm"]
+
+
+def test_compare_analytic_on_a_problem_it_cannot_solve_is_refused_before_the_solve(
+    capsys: pytest.CaptureFixture[str], monkeypatch: pytest.MonkeyPatch, tmp_path: Path
+) -> None:
+    """``--compare analytic`` on a 7-joint arm printed the whole solve, then the refusal (two
+    JSON objects with ``--json``); refused before solving now, one object."""
+    pytest.importorskip("eaik")
+    import json
+
+    from conftest import never
+
+    import swarm_ik
+
+    monkeypatch.setattr(swarm_ik, "solve", never)
+    argv = ["solve", "--robot", "yumi_left", *FROM_Q, "--compare", "analytic", "--html",
+            str(tmp_path / "a.html"), "--json"]  # fmt: skip
+    assert main(argv) == 2
+    out = capsys.readouterr().out.strip().splitlines()
+    assert len(out) == 1 and "--compare analytic: no analytic IK" in json.loads(out[0])["error"]

@@ -217,6 +217,7 @@ def run(args: argparse.Namespace) -> int:
         robot, target, goals, args.fitness, w_rot=0.0 if args.position_only else 1.0
     )
     _check_dls_problem(args, problem)
+    _check_closed_form_compare(args, problem)
     res = swarm_ik.solve(problem, args.solver, **solve_kwargs(args), **dict(args.param))
     if args.json:
         _print_json(args, robot, res)
@@ -277,6 +278,23 @@ def _check_dls_problem(args: argparse.Namespace, problem: Any) -> None:
             f"--goals {args.goals!r}, which holds" if args.goals is not None else "a problem of"
         )
         raise _dls_refused(options[0], f"{source} {reason}")
+
+
+def _check_closed_form_compare(args: argparse.Namespace, problem: Any) -> None:
+    """Refuse ``--compare`` naming a closed-form solver (``analytic``) for a problem it cannot
+    solve, before the solve it would follow (it printed the whole solve, then the refusal:
+    two JSON objects with ``--json``).  ``--solver`` itself is refused by ``solve`` before
+    any work."""
+    if args.compare is None:
+        return
+    from swarm_ik.solvers import analytic, base
+
+    if base.get(args.compare).closed_form:
+        reason = analytic.support(problem)
+        if reason:
+            raise analytic.AnalyticUnsupportedError(
+                f"--compare {args.compare}: no analytic IK for this problem: {reason}"
+            )
 
 
 def _measured(res: Any, field: str) -> bool:
