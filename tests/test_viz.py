@@ -452,3 +452,16 @@ def test_collision_view_draws_obstacles_and_contacts(tmp_path: Path) -> None:
     assert any(p.startswith(base + "contacts/") and "hand" in p for p in colour)
     path = scene.save_html(tmp_path / "contacts.html")
     assert path.stat().st_size > 0
+
+
+@pytest.mark.parametrize("bad", [np.zeros((3, 3)), "abc", np.full((4, 4), np.nan)])
+def test_show_pose_refuses_a_bad_target_and_takes_seven_numbers(bad: Any) -> None:
+    """``viz.show_pose(target=...)`` read any array: a 3×3 or 7 numbers raised IndexError, a
+    NaN pose was drawn; it takes what ``IKProblem`` takes, and refuses the rest in one line."""
+    from swarm_ik import viz
+    from swarm_ik.errors import InvalidTargetError
+
+    robot = swarm_ik.load_robot("panda")
+    with pytest.raises(InvalidTargetError, match="target"):
+        viz.show_pose(robot, robot.mid_q(), target=bad)
+    viz.show_pose(robot, robot.mid_q(), target=[0.3, 0.0, 0.4, 0.0, 0.0, 0.0, 1.0])

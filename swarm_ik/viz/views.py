@@ -12,6 +12,7 @@ import pinocchio as pin
 
 from swarm_ik._types import FloatArray
 from swarm_ik.errors import InvalidArgumentError, unknown
+from swarm_ik.pose import as_pose
 from swarm_ik.problem import IKProblem
 from swarm_ik.result import Result
 from swarm_ik.robot import RobotModel
@@ -64,7 +65,8 @@ def show_pose(
     Args:
         robot: The robot.
         q: Joint vector (rad / m), shape ``(nq,)``.
-        target: Optional target pose (4x4, metres); drawn as a larger triad with a yellow ball.
+        target: Optional target pose (4x4 [m], or any form ``IKProblem`` takes: 7 numbers,
+            ``(position, quaternion)``); drawn as a larger triad with a yellow ball.
         lines: Text shown on a sign beside the robot (e.g. the errors).
         ghost_q: Optional second configuration drawn ghosted (translucent orange), e.g. another
             solver's answer to the same target.
@@ -84,8 +86,8 @@ def show_pose(
         scene.add_robot(robot, ghost_q, name="ghost", color=GHOST_COLOR)
         scene.add_triad("ghost_reached", robot.fk(ghost_q), length=0.8 * length, opacity=0.5)
         q_list.append(ghost_q)
-    if target is not None:
-        target = np.asarray(target, dtype=float)
+    if target is not None:  # (any pose form the solvers take; a bad one refused in one line)
+        target = as_pose(target)
         scene.add_triad(
             "target", target, length=length, radius=length / 18, sphere=(1.0, 0.85, 0.1, 0.45)
         )
