@@ -465,3 +465,16 @@ def test_show_pose_refuses_a_bad_target_and_takes_seven_numbers(bad: Any) -> Non
     with pytest.raises(InvalidTargetError, match="target"):
         viz.show_pose(robot, robot.mid_q(), target=bad)
     viz.show_pose(robot, robot.mid_q(), target=[0.3, 0.0, 0.4, 0.0, 0.0, 0.0, 1.0])
+
+
+def test_show_q_outside_the_limits_is_drawn_with_a_note(tmp_path: Path, capsys: Any) -> None:
+    """``show --q`` outside the limits was drawn with no word (``solve --q0`` warns and
+    clips): one note names the joints, and the configuration is drawn as given."""
+    q = list(map(str, Q_YUMI))
+    q[0] = "9"
+    assert (
+        cli.main(["show", "--robot", "yumi_left", "--q", *q, "--html", str(tmp_path / "s.html")])
+        == 0
+    )
+    err = capsys.readouterr().err
+    assert "--q #1 lies outside the joint limits at ['yumi_joint_1']; drawn as given" in err

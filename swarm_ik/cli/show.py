@@ -5,6 +5,7 @@ long the live viewer stays up."""
 from __future__ import annotations
 
 import argparse
+import sys
 from typing import Any
 
 from swarm_ik import argtypes
@@ -134,6 +135,15 @@ def run(args: argparse.Namespace) -> int:
         target = np.asarray(args.pose, dtype=float)
     if args.q:
         qs = [robot.check_q(q, "--q") for q in args.q]
+        for k, q in enumerate(qs):  # (drawn as given, as `solve --q0` would clip it: said)
+            outside = np.flatnonzero((q < robot.lower) | (q > robot.upper))
+            if outside.size:
+                names = [robot.joint_names[i] for i in outside.tolist()]
+                print(
+                    f"swarm-ik: note: --q #{k + 1} lies outside the joint limits at {names}; "
+                    "drawn as given",
+                    file=sys.stderr,
+                )
         if target is None and goals is None:
             lines = [f"{robot.name}: " + ", ".join(f"{v:.3f}" for v in q) for q in qs]
             scene = (
