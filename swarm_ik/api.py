@@ -356,9 +356,9 @@ class Route:
         # 20 ms limit by its first judge, coal's check, 1-1.5 ms)
         self._judge_kind = (problem.collision_goal is not None, bool(problem.python_goals))
         self._judge_s = problem.robot._cache.get("judge_s", {}).get(self._judge_kind, 0.0)
-        # the first start without q0 when no goal names one (the middle of the ranges)
-        named = any(g.preferred_start(problem.robot) is not None for g in problem.goals)
-        self._mid = None if named else hybrid.default_seed(problem)
+        # the first start without q0 when no goal names one (the middle of the ranges), found
+        # at the first run without q0 (a goal's preferred_start is not asked when q0 is given)
+        self._mid: Any = _NOT_YET
         self.compiled = (
             solver == "swarm" and self.stop_on_success and hybrid.compiled_ok(problem, prefer)
         )
@@ -501,6 +501,9 @@ class Route:
                 key = search.stream_key(seed)  # type: ignore[arg-type]
             seed_q = q_start  # (prepare_q0's copy: float64, contiguous)
             if seed_q is None:
+                if self._mid is _NOT_YET:
+                    named = goals_base.preferred_start_of(self.problem.goals, self.problem.robot)
+                    self._mid = None if named is not None else hybrid.default_seed(self.problem)
                 mid, bound = self._mid, self.problem
                 # (one Bounds per robot for its own limits: see IKProblem)
                 same_box = problem.bounds is bound.bounds
@@ -681,6 +684,9 @@ class Route:
                 reason=reason,
             )
 
+
+_NOT_YET = object()
+"""A value a route finds when first needed (:attr:`Route._mid`)."""
 
 _NO_SCOPE = contextlib.nullcontext()
 """The judge's scope for a problem without Python goals (nothing kept)."""

@@ -206,16 +206,41 @@ def robot_names() -> dict[str, list[str]]:
     }
 
 
+def _umask() -> int:
+    """This process's umask (read once: setting it back and forth is not thread-safe)."""
+    mask = os.umask(0o022)
+    os.umask(mask)
+    return mask
+
+
+_UMASK = _umask()
+
+
 @contextlib.contextmanager
 def written_in_place_of(path: str | os.PathLike[str]) -> Iterator[Path]:
-    """A path beside ``path`` for the body to write, renamed onto ``path`` when the body ends
-    (removed if it raises): an interruption (Ctrl-C, a full disk) leaves ``path`` as it was,
-    never a partial file (a full disk truncated a reachability map's page in place).  The
-    temporary name keeps the suffix, so writers that add one (``numpy.savez``, matplotlib)
-    keep the name."""
-    p = Path(path)
-    part = p.with_name(f".{p.stem}.{os.getpid()}.part{p.suffix}")
+    """A new file beside ``path`` for the body to write, renamed onto ``path`` when the body
+    ends (removed if it raises): an interruption (Ctrl-C, a full disk) leaves ``path`` as it
+    was, never a partial file (a full disk truncated a reachability map's page in place).
+
+    The temporary file has a name of its own per call (two writers of one path do not share
+    it), ends in ``.part`` (a writer that adds a suffix to a name without its own must be given
+    a file object or a format), and gets the mode of the file it replaces (else the umask's).
+    A symbolic link is followed: the file it points to is replaced, the link kept.  Where no
+    file can be made beside ``path`` (a folder that is not writable, holding a writable file)
+    the body writes ``path`` itself, as a plain write would.  The replaced file's other hard
+    links keep its old content.
+    """
+    p = Path(os.path.realpath(path))
     try:
+        fd, name = tempfile.mkstemp(dir=p.parent, prefix=f".{p.name[:40]}.", suffix=".part")
+    except OSError:
+        yield p
+        return
+    os.close(fd)
+    part = Path(name)
+    try:
+        mode = stat.S_IMODE(p.stat().st_mode) if p.exists() else 0o666 & ~_UMASK
+        os.chmod(part, mode)
         yield part
         os.replace(part, p)
     except BaseException:

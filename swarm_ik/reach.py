@@ -462,8 +462,10 @@ def plot_slices(rmap: ReachMap, path: str | Path, dpi: int = 120) -> Path:
         f"tolerance {rmap.tol_pos:g} m / {rmap.tol_rot:g} rad"
     )
     p = Path(path)
+    if not p.suffix:  # (as matplotlib names a file without a suffix)
+        p = p.with_suffix(".png")
     with written_in_place_of(p) as part:  # (never a partial file)
-        fig.savefig(part, dpi=dpi)
+        fig.savefig(part, dpi=dpi, format=p.suffix[1:].lower())
     plt.close(fig)
     return p
 

@@ -221,21 +221,42 @@ def test_show_solutions_beyond_its_cap_is_refused(n: str, refused: Callable[...,
 
 def test_an_output_that_fails_midway_leaves_the_old_file(tmp_path: Path) -> None:
     """Outputs are written beside and renamed into place (``paths.written_in_place_of``): a
-    full disk left a reachability map's page and a solve's page truncated in place.  Here a
-    write that fails midway (the body raises) keeps the old file and leaves nothing beside
-    it, and one that ends replaces it whole."""
+    full disk left a reachability map's page and a solve's page truncated in place.  A write
+    that fails midway keeps the old file and leaves nothing beside it; one that ends replaces
+    it whole, with the old file's mode, through a symbolic link (the link kept); two writers
+    of one path at once each get a file of their own (they shared one name, and mixed)."""
     from swarm_ik.paths import written_in_place_of
 
     out = tmp_path / "page.html"
     out.write_text("OLD")
+    os.chmod(out, 0o600)
     with pytest.raises(OSError), written_in_place_of(out) as part:
         part.write_text("NEW, half")
         raise OSError(28, "No space left on device")
     assert out.read_text() == "OLD" and sorted(p.name for p in tmp_path.iterdir()) == ["page.html"]
-    with written_in_place_of(out) as part:
-        assert part.suffix == ".html" and part.parent == out.parent
+    with written_in_place_of(out) as one, written_in_place_of(out) as two:
+        assert one != two
+        one.write_text("ONE")
+        two.write_text("TWO")
+    assert out.read_text() == "ONE" and (out.stat().st_mode & 0o777) == 0o600
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["page.html"]
+    link = tmp_path / "link.html"
+    link.symlink_to(out)
+    with written_in_place_of(link) as part:
         part.write_text("NEW")
-    assert out.read_text() == "NEW" and sorted(p.name for p in tmp_path.iterdir()) == ["page.html"]
+    assert link.is_symlink() and out.read_text() == "NEW"
+
+
+def test_a_reach_picture_without_a_suffix_is_a_png(tmp_path: Path) -> None:
+    """``plot_slices(rmap, "slices")`` writes ``slices.png`` (the temporary file's ``.part``
+    was taken for the format)."""
+    pytest.importorskip("matplotlib")
+    import swarm_ik
+    from swarm_ik.reach import plot_slices, reach_map
+
+    rmap = reach_map(swarm_ik.load_robot("ur5"), resolution=0.4, n_orientations=1)
+    written = plot_slices(rmap, tmp_path / "slices")
+    assert written == tmp_path / "slices.png" and written.stat().st_size > 1000
 
 
 @pytest.mark.skipif(not hasattr(os, "fork"), reason="resource limits of a child: POSIX")

@@ -1288,3 +1288,23 @@ def test_a_goal_names_the_first_start_without_the_solver_knowing_its_class() -> 
     np.testing.assert_allclose(swarm_ik.solve(problem, max_evals=1).q, start)
     bare = swarm_ik.IKProblem(panda, goals=[G.Position("panda_hand_tcp", [0.4, 0.1, 0.5])])
     np.testing.assert_allclose(default_seed(bare), panda.mid_q())
+
+
+@dataclass(frozen=True)
+class _StartRaises(OnPlane):
+    def preferred_start(self, robot):  # type: ignore[no-untyped-def]
+        raise RuntimeError("no start here")
+
+
+def test_a_goals_preferred_start_is_asked_only_without_q0_and_named_when_it_raises() -> None:
+    """A goal's ``preferred_start`` was called by every solve, ``q0`` given or not, and an
+    exception in it left the solve unnamed (exit 3 on the command line)."""
+    panda = robot("panda")
+    goals = [G.Position("panda_hand_tcp", [0.4, 0.1, 0.5]), _StartRaises("panda_hand_tcp")]
+    problem = swarm_ik.IKProblem(panda, goals=goals)
+    swarm_ik.solve(problem, q0=panda.mid_q(), max_evals=20)  # (not asked)
+    with pytest.raises(
+        InvalidArgumentError,
+        match=r"_StartRaises\(panda_hand_tcp\)\.preferred_start\(\) raised RuntimeError",
+    ):
+        swarm_ik.solve(problem, max_evals=20)

@@ -462,9 +462,18 @@ def test_show_pose_refuses_a_bad_target_and_takes_seven_numbers(bad: Any) -> Non
     from swarm_ik.errors import InvalidTargetError
 
     robot = swarm_ik.load_robot("panda")
+    q = robot.mid_q()
+    seven = [0.3, 0.0, 0.4, 0.0, 0.0, 0.0, 1.0]
     with pytest.raises(InvalidTargetError, match="target"):
-        viz.show_pose(robot, robot.mid_q(), target=bad)
-    viz.show_pose(robot, robot.mid_q(), target=[0.3, 0.0, 0.4, 0.0, 0.0, 0.0, 1.0])
+        viz.show_pose(robot, q, target=bad)
+    with pytest.raises(InvalidTargetError, match="target"):
+        viz.show_configurations(robot, [q, q], target=bad)  # (the side layout's own drawing)
+    viz.show_pose(robot, q, target=seven)
+    viz.show_configurations(robot, [q, q], target=seven)
+    skewed = robot.fk(q)
+    skewed[0, :3] *= 1.01  # (a problem of a loose orth_tol is drawn as it was given)
+    problem = swarm_ik.IKProblem(robot, skewed, orth_tol=0.1)
+    viz.show_result(problem, swarm_ik.solve(problem, max_evals=100))
 
 
 def test_show_q_outside_the_limits_is_drawn_with_a_note(tmp_path: Path, capsys: Any) -> None:

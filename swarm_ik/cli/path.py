@@ -188,7 +188,8 @@ def _write(path: Path, robot: Any, q: Any) -> None:
 
     with written_in_place_of(path) as part:  # (never a partial file)
         if path.suffix.lower() == ".npy":
-            np.save(part, q)
+            with part.open("wb") as f:  # (a file object: numpy adds no suffix to it)
+                np.save(f, q)
         else:
             np.savetxt(part, q, delimiter=",", header=",".join(robot.joint_names), comments="")
 

@@ -271,6 +271,17 @@ def _users(goal: Goal, what: str, call: Callable[[], Any]) -> Any:
         ) from exc
 
 
+def preferred_start_of(goals: Any, robot: RobotModel) -> Any:
+    """The first start a solve without ``q0`` takes from its goals: the first
+    :meth:`Goal.preferred_start` that is not None (an exception of a goal written outside
+    swarm_ik named with its goal), or None."""
+    for goal in goals:
+        q = _users(goal, "preferred_start()", functools.partial(goal.preferred_start, robot))
+        if q is not None:
+            return goal, q
+    return None
+
+
 def kernel_error(goals: Any, exc: Exception) -> Exception:
     """What an exception raised inside a compiled call becomes: with compiled goals written
     outside swarm_ik among ``goals`` (whose kernels may raise: numba's ``raise``), an

@@ -53,6 +53,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from swarm_ik.errors import InvalidArgumentError, unknown
+from swarm_ik.goals import base as goals_base
 from swarm_ik.goals import kernels
 from swarm_ik.kernels import lm, search
 from swarm_ik.kernels.lm import BUDGET, CONVERGED, ITER_CAP, LOCAL_MIN, NOT_RUN, LMSettings
@@ -383,11 +384,11 @@ def default_seed(
     lo = problem.lower if lower is None else lower
     hi = problem.upper if upper is None else upper
     robot = problem.robot
-    for gl in problem.goals:
-        q = gl.preferred_start(robot)
-        if q is not None:
-            ref = robot.wrap(robot.check_q(q, f"{gl.describe()}.preferred_start()"))
-            return np.clip(ref, lo, hi)
+    named = goals_base.preferred_start_of(problem.goals, robot)
+    if named is not None:
+        goal, q = named
+        ref = robot.wrap(robot.check_q(q, f"{goal.describe()}.preferred_start()"))
+        return np.clip(ref, lo, hi)
     return 0.5 * (lo + hi)
 
 

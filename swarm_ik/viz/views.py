@@ -51,6 +51,18 @@ def _triad_length(robot: RobotModel) -> float:
     return 0.12 * reach_length(robot)
 
 
+DRAWN_ORTH_TOL = 1.0
+"""How far from a rotation a target's rotation block may be and still be drawn (a problem
+accepted with a loose ``orth_tol`` is drawn as it was given)."""
+
+
+def _drawn_target(target: Any) -> FloatArray | None:
+    """A target to draw, in any pose form the solvers take (4×4, 7 numbers, ``(position,
+    quaternion)``), checked for its shape and finite values (one line otherwise: a 3×3 or 7
+    numbers raised ``IndexError``, a NaN pose was drawn); its rotation block as given."""
+    return None if target is None else as_pose(target, orth_tol=DRAWN_ORTH_TOL)
+
+
 def show_pose(
     robot: RobotModel,
     q: Any,
@@ -86,8 +98,8 @@ def show_pose(
         scene.add_robot(robot, ghost_q, name="ghost", color=GHOST_COLOR)
         scene.add_triad("ghost_reached", robot.fk(ghost_q), length=0.8 * length, opacity=0.5)
         q_list.append(ghost_q)
-    if target is not None:  # (any pose form the solvers take; a bad one refused in one line)
-        target = as_pose(target)
+    target = _drawn_target(target)
+    if target is not None:
         scene.add_triad(
             "target", target, length=length, radius=length / 18, sphere=(1.0, 0.85, 0.1, 0.45)
         )
@@ -246,6 +258,7 @@ def show_configurations(
     if len(qs) == 0:
         raise InvalidArgumentError("show_configurations needs at least one configuration")
     qs = [robot.check_q(q, f"configuration #{k + 1}") for k, q in enumerate(qs)]
+    target = _drawn_target(target)
     if layout == "steps":
         scene = show_pose(robot, qs[0], target=target, lines=lines, scene=scene)
         fps = 10
