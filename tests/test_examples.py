@@ -77,10 +77,13 @@ def test_example_05_shows_nearest_and_best_differ(tmp_path: Path) -> None:
     proc = _run("05", cwd=tmp_path)
     assert proc.returncode == 0, proc.stderr
     first: dict[str, list[float]] = {}
+    along: dict[str, list[float]] = {}
     for line in proc.stdout.splitlines():
         for label in ("nearest", "best, seeded", "best, no seed"):
             if f" {label} " in line:
                 first.setdefault(label, []).append(float(line.split("first step")[1].split()[0]))
+                along.setdefault(label, []).append(float(line.split("along")[1].split()[0]))
     assert len(first["nearest"]) == len(first["best, no seed"]) == 2
     assert all(f < 0.5 for f in first["nearest"])
+    assert all(a < 10.0 for a in along["nearest"])  # (seeded, nearest: no jump along the path)
     assert all(f > 10.0 for f in first["best, no seed"])
