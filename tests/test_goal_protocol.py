@@ -6,6 +6,7 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass
+from typing import Any, ClassVar
 
 import numba
 import numpy as np
@@ -1308,3 +1309,59 @@ def test_a_goals_preferred_start_is_asked_only_without_q0_and_named_when_it_rais
         match=r"_StartRaises\(panda_hand_tcp\)\.preferred_start\(\) raised RuntimeError",
     ):
         swarm_ik.solve(problem, max_evals=20)
+
+
+def test_a_goal_kernel_whose_cache_cannot_be_written_is_compiled_in_memory(
+    monkeypatch: pytest.MonkeyPatch,
+) -> None:
+    """A full disk while numba wrote a goal kernel's cache stopped the solve ("goal kernel
+    'pose_kernel' does not compile ...: [Errno 27] File too large"); the kernel is compiled
+    again without its cache."""
+    import errno
+
+    from swarm_ik.goals import base
+
+    @numba.njit
+    def lift_rows(par, ipar, q, f_pos, f_rot, f_jac, want_jac, res, jac, err, work):  # type: ignore[no-untyped-def]
+        res[0] = par[0] - f_pos[ipar[0], 2]
+        if want_jac:
+            for j in range(q.shape[0]):
+                jac[0, j] = f_jac[ipar[0], 2, j]
+        err[0] = abs(res[0])
+        err[1] = math.nan
+
+    real = numba.njit
+
+    def njit(*args, **kwargs):  # type: ignore[no-untyped-def]
+        if kwargs.get("cache"):
+
+            def fail(func):  # type: ignore[no-untyped-def]
+                raise OSError(errno.ENOSPC, "No space left on device")
+
+            return fail
+        return real(*args, **kwargs)
+
+    monkeypatch.setattr(base.numba, "njit", njit)
+    monkeypatch.setattr(base.os.path, "isfile", lambda path: True)  # (as a kernel of a file)
+    base.kernel_slot(lift_rows)  # (registered: compiled without its cache)
+    monkeypatch.undo()
+
+    @dataclass(frozen=True)
+    class Lift(G.Goal):
+        frame: str
+        height: float = 0.0
+        kernel: ClassVar[Any] = lift_rows
+
+        def encode(self, robot, q0):  # type: ignore[no-untyped-def]
+            idx = np.array([frame_index(self, robot)], dtype=np.int64)
+            return G.Encoded(np.array([self.height]), idx, 1)
+
+        def residual(self, state):  # type: ignore[no-untyped-def]
+            return np.array([self.height - state.pose(self.frame)[2, 3]])
+
+        def jacobian(self, state):  # type: ignore[no-untyped-def]
+            return -state.jacobian(self.frame)[2:3]
+
+    panda = robot("panda")
+    goals = [Lift("panda_hand_tcp", 0.3), G.Position("panda_hand_tcp", [0.5, 0.1, 0.3])]
+    assert swarm_ik.solve(swarm_ik.IKProblem(panda, goals=goals), seed=0).success

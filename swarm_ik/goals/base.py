@@ -94,7 +94,12 @@ def kernel_slot(kernel: Any) -> int:
             cache = os.path.isfile(source)
 
             def compiled() -> Any:
-                return numba.njit(GOAL_SIGNATURE, cache=cache)(kernel.py_func)
+                try:
+                    return numba.njit(GOAL_SIGNATURE, cache=cache)(kernel.py_func)
+                except OSError:  # numba's cache could not be written (a full disk): the
+                    if not cache:  # kernel compiled again and kept in memory only, so that
+                        raise  # a broken cache never stops a solve
+                    return numba.njit(GOAL_SIGNATURE, cache=False)(kernel.py_func)
 
             ours = str(getattr(kernel.py_func, "__module__", "")).startswith("swarm_ik.")
             # (a damaged cache of swarm_ik's own kernels is removed and compiled again; a
