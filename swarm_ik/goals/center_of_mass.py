@@ -168,7 +168,7 @@ def support_polygon(value: Any) -> FloatArray:
 
 @numba.njit(cache=True)
 def _deepest_bound(
-    vx: FloatArray, vy: FloatArray, lo: FloatArray, hi: FloatArray, n: int, tol: float, cap: int
+    vx: FloatArray, vy: FloatArray, box: FloatArray, n: int, tol: float, cap: int, enough: float
 ) -> float:  # pragma: no cover - compiled
     """Branch and bound on the depth ``−d`` inside the polygon (``vx``, ``vy``)
     (:func:`_polygon_distance`): the bounding box ``lo``–``hi`` cut into square cells, ``n``
@@ -177,7 +177,10 @@ def _deepest_bound(
     most the distance moved); cells that may hold a point deeper than the deepest centre seen
     by more than ``tol`` are split in four, the others dropped.  Returns an upper bound on the
     depth of every point, within ``tol`` of the true largest depth, or the bound of the cells
-    left when ``cap`` cells would be exceeded."""
+    left when ``cap`` cells would be exceeded; or, as soon as a centre at least ``enough``
+    deep is found, its depth (the question "is any point that deep?" answered: yes).  ``box``:
+    the bounding box, rows ``lo``, ``hi``."""
+    lo, hi = box[0], box[1]
     h = 0.5 * max(hi[0] - lo[0], hi[1] - lo[1]) / n  # (square cells)
     ni = int(math.ceil(0.5 * (hi[0] - lo[0]) / h))
     nj = int(math.ceil(0.5 * (hi[1] - lo[1]) / h))
@@ -195,6 +198,8 @@ def _deepest_bound(
         for c in range(m):
             depth[c] = -_polygon_distance(cx[c], cy[c], vx, vy)[0]
             best = max(best, depth[c])
+        if best >= enough:
+            return best
         r = math.sqrt(hx * hx + hy * hy)
         keep = depth + r > best + tol
         k = int(keep.sum())
@@ -220,18 +225,23 @@ DEEPEST_TOL = 1e-6
 """How far above the true inscribed radius [m] :func:`deepest_inside`'s bound may lie."""
 
 
-def deepest_inside(poly: FloatArray, n: int = 32, max_cells: int = 1 << 18) -> float:
+def deepest_inside(
+    poly: FloatArray, n: int = 32, max_cells: int = 1 << 18, enough: float = math.inf
+) -> float:
     """An upper bound [m] on how far inside the simple polygon ``poly`` ``(k, 2)`` a point
     can lie (the radius of its largest inscribed circle), so that a margin beyond it is
     surely unmet: within :data:`DEEPEST_TOL` of the radius (:func:`_deepest_bound`, square
     cells, ``n`` along the longer side, split where they may hold the deepest point), except
     for a polygon whose deepest points fill a segment (a rectangle's), whose cells reach
-    ``max_cells`` first: there within about ``1e-5`` of the segment's length."""
-    lo, hi = poly.min(axis=0), poly.max(axis=0)
+    ``max_cells`` first: there within about ``1e-5`` of the segment's length.  With
+    ``enough``: the depth of a point at least that deep as soon as one is found (the usual
+    margin is met by one of the first cells: tens of µs, where the whole bound of a foot's
+    rectangle takes milliseconds, once per solve of a new goal)."""
+    box = np.stack([poly.min(axis=0), poly.max(axis=0)]).astype(float)
     return float(
         _deepest_bound(
-            np.ascontiguousarray(poly[:, 0]), np.ascontiguousarray(poly[:, 1]),
-            np.asarray(lo, dtype=float), np.asarray(hi, dtype=float), n, DEEPEST_TOL, max_cells,
+            np.ascontiguousarray(poly[:, 0]), np.ascontiguousarray(poly[:, 1]), box, n,
+            DEEPEST_TOL, max_cells, float(enough),
         )
     )  # fmt: skip
 
@@ -297,10 +307,7 @@ class CenterOfMass(Goal):
         support row may each take up to the tolerance)."""
         if self.support is None:
             return None
-        deepest = self.__dict__.get("_deepest")  # (the polygon's, found once per goal)
-        if deepest is None:
-            deepest = deepest_inside(self.support)
-            object.__setattr__(self, "_deepest", deepest)
+        deepest = deepest_inside(self.support, enough=self.margin + tol_pos)
         if self.margin > deepest + tol_pos:
             return (
                 f"CenterOfMass margin {self.margin:g} m deeper than its support polygon allows "
