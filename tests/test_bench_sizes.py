@@ -164,3 +164,24 @@ def test_a_quick_bench_run_still_works(tmp_path: Path, capsys) -> None:
     argv = ["bench", "many", "--n", "2", "--n-targets", "1", "--arms", "ur5", "--out", str(out)]
     assert main(argv) == 0, capsys.readouterr().err
     assert (out / "many.csv").exists()
+
+
+def test_a_ctrl_c_in_python_m_bench_path_is_one_line(tmp_path) -> None:  # type: ignore[no-untyped-def]
+    """``python -m swarm_ik.bench.path`` printed a 25-line traceback on Ctrl-C; it is one
+    line and exit 130, as ``swarm-ik bench``."""
+    import signal
+    import subprocess
+    import sys
+    import time
+
+    proc = subprocess.Popen(
+        [sys.executable, "-m", "swarm_ik.bench.path", "--n", "50", "--out", str(tmp_path / "p")],
+        stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True,
+    )  # fmt: skip
+    time.sleep(4.0)
+    proc.send_signal(signal.SIGINT)
+    _, err = proc.communicate(timeout=120)
+    assert proc.returncode == 130, err
+    assert "Traceback" not in err and err.strip().endswith(
+        "python -m swarm_ik.bench.path: interrupted"
+    )

@@ -85,6 +85,9 @@ def module_main(
         except SwarmIKError as exc:  # bad input: one line and exit 2, as `swarm-ik bench`
             print(f"{parser.prog}: error: {exc}", file=sys.stderr)
             return 2
+        except KeyboardInterrupt:  # Ctrl-C: one line and 130, as `swarm-ik bench`
+            print(f"{parser.prog}: interrupted", file=sys.stderr)
+            return 130
 
     main.__doc__ = f"``python -m swarm_ik.bench.{name} [options]``."
     return main
