@@ -1464,9 +1464,9 @@ def _with_deadline(
 ) -> BatchSettings:
     """``settings`` with the deadline of a ``time_limit`` of ``limit`` seconds begun at ``t0``
     (``time.perf_counter()``) and the ``reserve`` per started target (:data:`FINISH_PER_STARTED`
-    and, with a collision goal, coal's verdicts timed here).  This process's kernels are loaded
-    first (the first target solved from its seed: a process's first batch loads or compiles
-    them); they and the ``loaded`` seconds the call spent loading its goals (a robot's first
+    and, with a collision goal, coal's verdicts timed here).  The ``loaded`` seconds the call
+    spent loading this process's kernels (:func:`_load_kernels`: a process's first batch loads
+    or compiles them), its goals (a robot's first
     scene: its sphere model, 0.2–0.6 s, more with an empty cache or a large mesh) and starting
     a Dask cluster and loading its workers are charged
     to the limit up to half of it (as a first solve's loading: the targets keep at least half,
@@ -1476,8 +1476,7 @@ def _with_deadline(
     for the end of the call (at most half of what is left)."""
     t_load = time.perf_counter()
     reserve = FINISH_PER_STARTED
-    if poses.shape[0]:
-        solve_chunk(bc, dataclasses.replace(settings, max_starts=1), 0, poses[:1], seeds[:1])
+    if poses.shape[0]:  # (the kernels are loaded already: _load_kernels)
         bg = bc.goals
         if bg is not None and bg.collision is not None:
             probe = np.repeat(seeds[:1], 8, axis=0)
@@ -1616,13 +1615,13 @@ def solve_batch(
 
     t0 = time.perf_counter()
     limit = None
-    goals_s = 0.0  # (loading: the clock's bridge, the goals: charged up to half the limit)
+    loading_s = 0.0  # (the clock's bridge, the goals, the kernels: charged up to half the limit)
     if time_limit is not None:
         limit = positive_float(time_limit, "time_limit")
         wall_clock()  # (its first call in a process loads numba's bridge to Python, 40-70 ms:
         # charged as loading, up to half the limit; it was charged whole, and a first call
         # with a 50 ms limit started no target)
-        goals_s = time.perf_counter() - t0
+        loading_s = time.perf_counter() - t0
     targets = float_array(targets, "targets")
     settings = BatchSettings(
         tol_pos=positive_float(tol_pos, "tol_pos"),
@@ -1644,9 +1643,9 @@ def solve_batch(
         bgoals = BatchGoals(robot, goals, settings.position_only, first)
         bc = dataclasses.replace(bc, goals=bgoals)
         labels = bgoals.labels
-        goals_s += time.perf_counter() - t_goals  # (a scene's sphere model and checker)
+        loading_s += time.perf_counter() - t_goals  # (a scene's sphere model and checker)
     seeds = _seed_starts(bc, q0, n)
-    goals_s += _load_kernels(bc, settings, poses, seeds)  # (before any clock; said when slow)
+    loading_s += _load_kernels(bc, settings, poses, seeds)  # (before any clock; said when slow)
     if chunk_size is not None and (
         isinstance(chunk_size, bool)
         or not isinstance(chunk_size, (int, np.integer))
@@ -1688,7 +1687,7 @@ def solve_batch(
                     return BatchResult.from_chunks(
                         [], robot, settings, time.perf_counter() - t0, setup_s, True, labels
                     )
-            loaded = goals_s + time.perf_counter() - t_setup
+            loaded = loading_s + time.perf_counter() - t_setup
             settings = _with_deadline(bc, settings, poses, seeds, limit, t0, loaded)
         workers = distributed.n_workers(client)
         size = int(chunk_size) if chunk_size is not None else default_chunk_size(n, workers)
