@@ -563,14 +563,14 @@ def test_a_users_goal_kernel_that_cannot_be_cached_removes_nothing(tmp_path: Pat
 def test_an_interruption_is_no_damaged_cache() -> None:
     """What a Ctrl-C leaves while kernels load (a ``SystemError`` of a C routine cut short, an
     error raised while a ``KeyboardInterrupt`` was handled) never has the cache removed."""
-    from swarm_ik.kernels import _interrupted
+    from swarm_ik.kernels import cut_by_ctrl_c
 
-    assert _interrupted(SystemError("null argument to internal routine"))
+    assert cut_by_ctrl_c(SystemError("null argument to internal routine"))
     try:
         try:
             raise KeyboardInterrupt
         except KeyboardInterrupt:
             raise RuntimeError("LLVM bitcode parsing error") from None
     except RuntimeError as exc:
-        assert _interrupted(exc)  # (its context, though not its cause, is the interruption)
-    assert not _interrupted(RuntimeError("LLVM bitcode parsing error"))
+        assert cut_by_ctrl_c(exc)  # (its context, though not its cause, is the interruption)
+    assert not cut_by_ctrl_c(RuntimeError("LLVM bitcode parsing error"))

@@ -36,6 +36,7 @@ import numpy as np
 
 from swarm_ik.bench.sizes import check_sizes
 from swarm_ik.errors import InvalidArgumentError, SwarmIKError
+from swarm_ik.kernels import cut_by_ctrl_c
 
 THREAD_VARIABLES = (
     "OMP_NUM_THREADS",
@@ -85,7 +86,10 @@ def module_main(
         except SwarmIKError as exc:  # bad input: one line and exit 2, as `swarm-ik bench`
             print(f"{parser.prog}: error: {exc}", file=sys.stderr)
             return 2
-        except KeyboardInterrupt:  # Ctrl-C: one line and 130, as `swarm-ik bench`
+        except (KeyboardInterrupt, Exception) as exc:  # Ctrl-C: one line and 130, as
+            # `swarm-ik bench` (also when it cut a compiled call short: a SystemError)
+            if not cut_by_ctrl_c(exc):
+                raise
             print(f"{parser.prog}: interrupted", file=sys.stderr)
             return 130
 

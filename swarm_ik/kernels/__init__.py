@@ -247,7 +247,7 @@ def _raised_loading_a_cache(exc: BaseException) -> bool:
     return False
 
 
-def _interrupted(exc: BaseException) -> bool:
+def cut_by_ctrl_c(exc: BaseException) -> bool:
     """Whether ``exc`` is what a Ctrl-C leaves when it cuts a C routine short (a
     ``SystemError``, or an error raised while a ``KeyboardInterrupt`` was handled): an
     interruption, not a damaged cache (whose files would all be removed for nothing)."""
@@ -306,7 +306,7 @@ def loaded_despite_damage(load: Callable[[], T]) -> T:
     except (KeyboardInterrupt, SwarmIKError):
         raise
     except Exception as exc:
-        if not _raised_loading_a_cache(exc) or _interrupted(exc):
+        if not _raised_loading_a_cache(exc) or cut_by_ctrl_c(exc):
             raise
         removed = drop_cache_files(cache_folders(_SETTLED[0]))
         if not removed:
