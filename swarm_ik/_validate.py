@@ -83,13 +83,33 @@ def floats_or(
     joint vectors, goal vectors, polygons and step bounds (the message made only on a
     refusal); complex values are refused too (numpy would drop their imaginary parts with a
     warning)."""
-    dtype = getattr(value, "dtype", None)
-    if dtype is not None and getattr(dtype, "kind", "") == "c":
-        raise cls(f"{message()} (got complex values)")
     try:
-        return np.array(value, dtype=float)
-    except (TypeError, ValueError):
+        raw = np.asarray(value)
+    except (TypeError, ValueError, OverflowError):  # (ragged nesting)
         raise cls(message()) from None
+    kind = not_numbers(raw)
+    if kind is not None:
+        raise cls(f"{message()} (got {kind})")
+    try:
+        return np.array(raw, dtype=float)
+    except (TypeError, ValueError, OverflowError):  # (None, other objects)
+        raise cls(message()) from None
+
+
+def not_numbers(raw: np.ndarray) -> str | None:
+    """What ``raw`` holds when it is not real numbers (``"complex values"``, ``"text"``,
+    ``"booleans"``), else None: numpy would read ``"0.4"`` as 0.4, ``True`` as 1.0 and drop
+    an imaginary part with a warning, where a number was due."""
+    kind = raw.dtype.kind
+    if kind == "O":  # (a list mixing numbers and other objects)
+        if any(isinstance(v, (str, bytes)) for v in raw.flat):
+            return "text"
+        if any(isinstance(v, (bool, np.bool_)) for v in raw.flat):
+            return "booleans"
+        if any(isinstance(v, complex) for v in raw.flat):
+            return "complex values"
+        return None
+    return {"c": "complex values", "U": "text", "S": "text", "b": "booleans"}.get(kind)
 
 
 def nonnegative(
@@ -135,25 +155,60 @@ def float_array(value: Any, what: str = "targets", *, target: bool = True) -> Fl
     cls = InvalidTargetError if target else InvalidArgumentError
     if value is None or isinstance(value, (str, bytes)):
         raise cls(f"{what} must be an array of numbers, got {reprlib.repr(value)}")
-    try:
-        is_complex = np.iscomplexobj(value)
-    except (TypeError, ValueError):  # (ragged nesting: refused below)
-        is_complex = False
-    if is_complex:  # (numpy would drop the imaginary part with a warning)
-        raise cls(f"{what} must be real numbers, got complex values")
-    try:
-        arr = np.asarray(value, dtype=float)
-    except (TypeError, ValueError, OverflowError):
-        raise cls(f"{what} must be an array of numbers, got {reprlib.repr(value)}") from None
-    return arr
+    if isinstance(value, np.ndarray) and value.dtype == np.float64:
+        return value  # (the common case: no copy)
+    return floats_or(value, lambda: f"{what} must be an array of numbers", cls)
 
 
-def positive_float(value: Any, what: str) -> float:
-    """``value`` as a positive finite float (booleans, strings, NaN, ≤ 0 refused).
+INT_PARAM_MAX = 2**31 - 1
+"""The largest count or iteration number a parameter takes (the compiled kernels' integers
+hold far more; a larger one is a typo, and one beyond 64 bits would reach numba's typing)."""
+
+
+def plain_number(value: Any) -> Any:
+    """A 0-d numpy array of real numbers as its Python number (``np.array(1.0)`` is taken where
+    ``1.0`` is), anything else as it is."""
+    if isinstance(value, np.ndarray) and value.ndim == 0 and value.dtype.kind in "iuf":
+        return value.item()
+    return value
+
+
+def count(value: Any, what: str, lo: int = 1, hi: int = INT_PARAM_MAX) -> int:
+    """``value`` as an ``int`` in ``[lo, hi]`` (booleans, floats, strings refused).
+
+    Raises:
+        InvalidArgumentError: naming ``what``, the range and the value.
+    """
+    value = plain_number(value)
+    if isinstance(value, (bool, np.bool_)) or not isinstance(value, (int, np.integer)):
+        raise InvalidArgumentError(
+            f"{what} must be an integer in [{lo}, {hi}], got {reprlib.repr(value)}"
+        )
+    if not lo <= value <= hi:
+        raise InvalidArgumentError(f"{what} must be an integer in [{lo}, {hi}], got {value}")
+    return int(value)
+
+
+def flag(value: Any, what: str) -> bool:
+    """``value`` as a ``bool``: True or False (numpy's too); anything else (``"False"``, 1,
+    None) refused, never read by its truthiness.
 
     Raises:
         InvalidArgumentError: naming ``what`` and the value.
     """
+    if isinstance(value, (bool, np.bool_)):
+        return bool(value)
+    raise InvalidArgumentError(f"{what} must be True or False, got {reprlib.repr(value)}")
+
+
+def positive_float(value: Any, what: str) -> float:
+    """``value`` as a positive finite float (booleans, strings, NaN, ≤ 0 refused; a 0-d
+    array is its number).
+
+    Raises:
+        InvalidArgumentError: naming ``what`` and the value.
+    """
+    value = plain_number(value)
     if not isinstance(value, (bool, np.bool_)) and isinstance(
         value, (int, float, np.integer, np.floating)
     ):

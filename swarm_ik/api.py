@@ -50,20 +50,33 @@ PREFER = ("best", "nearest")
 _LM_KEYS = ("max_iters", "lam0", "max_step", "stall_rel", "stall_iters", "tol_margin")
 
 
+@keywords_checked
 def verify(
-    problem: IKProblem, q: Any, tol_pos: float = 1e-5, tol_rot: float = 1e-5
+    problem: IKProblem,
+    q: Any,
+    tol_pos: float = 1e-5,
+    tol_rot: float = 1e-5,
+    q0: Any = None,
 ) -> tuple[GoalError, ...]:
     """The independent check of ``q``: every primary goal's errors computed with Pinocchio's
     own kinematics (coal for collisions) and whether each is met (the same as
     :meth:`IKProblem.verify`).
 
+    Args:
+        problem: The problem.
+        q: The joint vector ``(nq,)`` to check.
+        tol_pos: Position tolerance [m].
+        tol_rot: Angular tolerance [rad].
+        q0: The solve's start ``(nq,)``, for goals that read it (``MinimalDisplacement``); a
+            solve's ``Result`` was judged with its ``q0``.
+
     Raises:
-        InvalidArgumentError: not a problem, ``q`` of the wrong length or not finite, or a
-            tolerance that is not a positive number.
+        InvalidArgumentError: not a problem, ``q`` or ``q0`` of the wrong length or not
+            finite, or a tolerance that is not a positive number.
     """
     if not isinstance(problem, IKProblem):
         raise InvalidArgumentError(f"problem must be an IKProblem, got {type(problem).__name__}")
-    return problem.verify(q, tol_pos, tol_rot)
+    return problem.verify(q, tol_pos, tol_rot, q0=q0)
 
 
 UNREACHABLE_BUDGET = (0.05, 3000)
@@ -809,10 +822,15 @@ def _route_key(problem: IKProblem, solver: str, settings: dict[str, Any]) -> Any
     if not settings.keys() <= _ROUTE_SETTINGS:  # (a setting the key below does not name)
         return None
     get, params = settings.get, settings.get("params") or {}
+    values = (
+        get("max_evals"), get("time_limit"), get("tol_pos"), get("tol_rot"),
+        get("stop_on_success"), get("prefer"),
+    )  # fmt: skip
+    # (each value's type too: True == 1 and 2000.0 == 2000, and a route found is not checked
+    # again, so a value the checks refuse must not find the route of one they accept)
     key = (
-        solver, get("max_evals"), get("time_limit"), get("tol_pos"), get("tol_rot"),
-        get("stop_on_success"), get("prefer"), tuple(sorted(params.items())) if params else (),
-        part,
+        solver, values, tuple(map(type, values)),
+        tuple(sorted((k, type(v), v) for k, v in params.items())) if params else (), part,
     )  # fmt: skip
     try:
         hash(key)

@@ -60,9 +60,10 @@ from typing import Any
 
 import numba
 import numpy as np
+from numpy.typing import NDArray
 
 from swarm_ik._types import BoolArray, FloatArray, IntArray
-from swarm_ik._validate import check_seed, keywords_checked
+from swarm_ik._validate import check_seed, count, floats_or, keywords_checked
 from swarm_ik.errors import InvalidArgumentError, InvalidTargetError, SwarmIKError
 from swarm_ik.goals import AvoidCollisions, Goal, Pose, Position, State, kernel_slot, kernels
 from swarm_ik.goals import base as goals_base
@@ -334,9 +335,7 @@ class BatchSettings:
             if not (np.isfinite(v) and v > 0):
                 raise InvalidArgumentError(f"{label} must be a positive number, got {v!r}")
         for label, lo in (("max_starts", 1), ("max_iters", 2), ("stall_iters", 1)):
-            v = getattr(self, label)
-            if isinstance(v, bool) or not isinstance(v, (int, np.integer)) or v < lo:
-                raise InvalidArgumentError(f"{label} must be an integer >= {lo}, got {v!r}")
+            count(getattr(self, label), label, lo)
         if self.max_starts > MAX_STARTS:
             raise InvalidArgumentError(
                 f"max_starts must be at most {MAX_STARTS} (swarm_ik.batch.MAX_STARTS; "
@@ -346,7 +345,10 @@ class BatchSettings:
         if not isinstance(self.own_start, bool):
             raise InvalidArgumentError(f"own_start must be a bool, got {self.own_start!r}")
         if self.seed is None or isinstance(self.seed, np.random.Generator):
-            raise InvalidArgumentError(f"seed must be an integer in [0, 2**63), got {self.seed!r}")
+            raise InvalidArgumentError(
+                f"seed must be an integer in [0, 2**63) (a batch keys each target's stream by "
+                f"it), got {self.seed!r}"
+            )
         check_seed(self.seed)
         if not 0.0 < self.tol_margin <= 1.0:
             raise InvalidArgumentError(f"tol_margin must be in (0, 1], got {self.tol_margin!r}")
@@ -733,6 +735,23 @@ class BatchResult(_Rows, FrozenArrays):
         return float(self.success.mean()) if self.n else 0.0
 
     @property
+    def reason(self) -> NDArray[np.str_]:
+        """Why each target ended, ``(N,)``, in :attr:`swarm_ik.Result.reason`'s words:
+        ``"converged"`` (success), ``"time_limit"`` (not started before the limit, or its
+        starts cut short by it), ``"budget"`` (``max_evals`` spent), else
+        ``"local_minima"`` (every start of ``max_starts`` ended without meeting the goals:
+        beyond reach, or missed)."""
+        s = self.settings
+        out = np.full(self.n, "local_minima", dtype="<U12")
+        if s.deadline is not None:
+            out[self.n_starts < s.max_starts] = "time_limit"
+        if s.max_evals is not None:
+            out[self.n_evals >= s.max_evals] = "budget"
+        out[self.n_starts == 0] = "time_limit"
+        out[self.success] = "converged"
+        return out
+
+    @property
     def poses_per_s(self) -> float:
         """Targets per wall-clock second."""
         return self.n / self.time_s if self.time_s > 0 else float("inf")
@@ -911,7 +930,9 @@ def _seed_starts(bc: BatchChain, q0: Any, n: int) -> FloatArray:
     clipped into the limits (with one warning), else the middle of the joint ranges."""
     if q0 is None:
         return np.tile(0.5 * (bc.bounds.lower + bc.bounds.upper), (n, 1))
-    arr = np.asarray(q0, dtype=float)
+    arr = floats_or(
+        q0, lambda: f"q0 must be {bc.nq} numbers or one row of them per target, got {q0!r:.80}"
+    )
     if arr.shape == (bc.nq,):
         arr = np.tile(arr, (n, 1))
     if arr.shape != (n, bc.nq):
@@ -1505,7 +1526,7 @@ def solve_batch(
     robot: RobotModel,
     targets: Any,
     *,
-    seed: int = 0,
+    seed: int | None = 0,
     q0: Any = None,
     tol_pos: float = 1e-5,
     tol_rot: float = 1e-5,
@@ -1546,7 +1567,9 @@ def solve_batch(
         robot: The robot.
         targets: Target poses, shape ``(N, 4, 4)`` [m], or rows ``x y z qx qy qz qw``,
             shape ``(N, 7)``; with ``position_only`` also points, shape ``(N, 3)`` [m].
-        seed: Seed of the per-target restart streams, ``0 <= seed < 2**63``.
+        seed: Seed of the per-target restart streams, ``0 <= seed < 2**63`` (None: 0, as
+            :func:`swarm_ik.solve`; a Generator is refused: each target's stream is keyed by
+            an integer).
         q0: First start, shape ``(nq,)`` (all targets) or ``(N, nq)`` (one per target);
             clipped into the limits with a warning when outside.  Default: the middle of the
             joint ranges.
@@ -1611,7 +1634,13 @@ def solve_batch(
         raise InvalidArgumentError(
             f"robot must be a RobotModel (see swarm_ik.load_robot), got {type(robot).__name__}"
         )
-    from swarm_ik._validate import float_array, positive_float
+    from swarm_ik._validate import flag, float_array, positive_float
+
+    position_only = flag(position_only, "position_only")
+    progress = flag(progress, "progress")
+    keep_on_interrupt = flag(keep_on_interrupt, "keep_on_interrupt")
+    if seed is None:  # (as solve's: seed 0)
+        seed = 0
 
     t0 = time.perf_counter()
     limit = None
@@ -1626,7 +1655,7 @@ def solve_batch(
     settings = BatchSettings(
         tol_pos=positive_float(tol_pos, "tol_pos"),
         tol_rot=positive_float(tol_rot, "tol_rot"),
-        position_only=bool(position_only),
+        position_only=position_only,
         max_starts=max_starts,
         max_iters=max_iters,
         seed=seed,

@@ -213,6 +213,16 @@ class DeferredReport:
     def __repr__(self) -> str:
         return repr(self._full())
 
+    def __eq__(self, other: object) -> bool:
+        """Equal to a report (deferred or not) of the same numbers (computing them)."""
+        if isinstance(other, DeferredReport):
+            other = other._full()
+        if not isinstance(other, CollisionReport):
+            return NotImplemented
+        return self._full() == other
+
+    __hash__ = None  # type: ignore[assignment]  # (as CollisionReport's: its list of pairs)
+
 
 # ---------------------------------------------------------------------------- geometry
 @dataclass(eq=False)

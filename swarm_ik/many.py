@@ -41,7 +41,7 @@ import numpy as np
 import pinocchio as pin
 from numpy.typing import NDArray
 
-from swarm_ik._validate import check_seed, keywords_checked
+from swarm_ik._validate import check_seed, count, keywords_checked, positive_float
 from swarm_ik.api import Route, prepare_q0, warm_up
 from swarm_ik.branches import (
     BRANCH_TOL,
@@ -72,6 +72,10 @@ SOLVER_NAME = "swarm"
 """Solver name recorded in the numerical path's results (its polish is ``swarm``'s)."""
 METHODS = ("auto", "numerical", "analytic")
 """Values of ``solve_many(method=...)``."""
+MAX_BATCH = 4096
+"""Most starts :func:`solve_many` polishes per compiled call (``batch``; its default 16: a
+larger batch only holds more scratch, about ``batch × nq`` floats per array)."""
+
 PATIENCE = 48
 """Default ``patience``: random starts in a row without a new branch that end the search."""
 POOL_FACTOR = 4
@@ -332,7 +336,7 @@ def solve_many(
         max_evals: Most FK + Jacobian evaluations in total (numerical path; on ``"auto"``'s
             fallback the closed form's polish counts against it).
         time_limit: Most wall-clock seconds, verification included (numerical path).
-        batch: Starts polished per compiled call.
+        batch: Starts polished per compiled call (1 to :data:`MAX_BATCH`).
         max_starts: Most starts; default ``64 · n`` when neither ``max_evals`` nor
             ``time_limit`` is given, else unlimited.
         max_iters: Evaluations per start before it is abandoned.
@@ -347,7 +351,9 @@ def solve_many(
         (``success`` True).  ``n_evals`` and ``time_s`` are the totals spent when each was found
         (on the analytic path the evaluations of the polish of eaik's least-squares points, 0
         where it returned none).  ``solver`` is ``"swarm"`` (numerical) or ``"analytic"``
-        (both on ``"auto"``'s fallback).  Empty when nothing was found.  :func:`windings_of`
+        (both on ``"auto"``'s fallback).  Empty when nothing was found: the target beyond reach,
+        or the budget spent before a first solution (:func:`swarm_ik.solve`'s ``reason``
+        tells which).  :func:`windings_of`
         adds each branch's other in-limit 2π copies.
 
     Raises:
@@ -364,18 +370,14 @@ def solve_many(
         raise InvalidArgumentError(f"n must be a positive integer, got {n!r}")
     if method not in METHODS:
         raise unknown("method", method, METHODS)
-    if min_distance is not None and not (np.isfinite(min_distance) and min_distance > 0):
-        raise InvalidArgumentError(
-            f"min_distance must be a positive number or None, got {min_distance!r}"
-        )
-    if batch < 1 or max_iters < 2 or (max_starts is not None and max_starts < 1) or patience < 1:
-        raise InvalidArgumentError(
-            f"need batch >= 1, max_iters >= 2, max_starts >= 1 and patience >= 1; got "
-            f"batch={batch}, max_iters={max_iters}, max_starts={max_starts}, patience={patience}"
-        )
-    for label, tol in (("tol_pos", tol_pos), ("tol_rot", tol_rot)):
-        if not (isinstance(tol, (int, float, np.number)) and math.isfinite(tol) and tol > 0):
-            raise InvalidArgumentError(f"{label} must be a positive number, got {tol!r}")
+    if min_distance is not None:
+        min_distance = positive_float(min_distance, "min_distance (or None)")
+    batch = count(batch, "batch", 1, MAX_BATCH)
+    max_iters = count(max_iters, "max_iters", 2)
+    max_starts = None if max_starts is None else count(max_starts, "max_starts (or None)")
+    patience = count(patience, "patience")
+    tol_pos = positive_float(tol_pos, "tol_pos")
+    tol_rot = positive_float(tol_rot, "tol_rot")
     check_budget(max_evals, time_limit)
     start_q, ref = _start_and_reference(problem, q0)
     checked = check_seed(seed)  # (before any Generator is made)
@@ -518,6 +520,10 @@ def windings_of(problem: IKProblem, results: list[Result], q0: Any = None) -> li
     """
     if not isinstance(problem, IKProblem):
         raise InvalidArgumentError(f"problem must be an IKProblem, got {type(problem).__name__}")
+    if not isinstance(results, (list, tuple)):
+        raise InvalidArgumentError(
+            f"results must be a list of Result objects (solve_many's), got {type(results).__name__}"
+        )
     ref = _start_and_reference(problem, q0)[1]
     out = []
     for r in results:

@@ -75,7 +75,7 @@ import numba
 import numpy as np
 from numpy.typing import NDArray
 
-from swarm_ik._validate import floats_or, keywords_checked
+from swarm_ik._validate import count, floats_or, keywords_checked, positive_float
 from swarm_ik.api import conflicting_goals
 from swarm_ik.branches import SINGULAR_SIGMA, sigma_min
 from swarm_ik.errors import InvalidArgumentError, InvalidTargetError
@@ -363,15 +363,11 @@ def solve_path(
         )
     step = _check_step(robot, max_joint_step)
     start = _check_q0(robot, q0)
-    if isinstance(densify, bool) or not isinstance(densify, (int, np.integer)) or densify < 0:
-        raise InvalidArgumentError(f"densify must be an integer >= 0, got {densify!r}")
-    for label, tol in (("tol_pos", tol_pos), ("tol_rot", tol_rot)):
-        if not _positive(tol):
-            raise InvalidArgumentError(f"{label} must be a positive number, got {tol!r}")
-    if time_limit is not None and not _positive(time_limit):
-        raise InvalidArgumentError(
-            f"time_limit must be a positive number or None, got {time_limit!r}"
-        )
+    densify = count(densify, "densify", 0)
+    tol_pos = positive_float(tol_pos, "tol_pos")
+    tol_rot = positive_float(tol_rot, "tol_rot")
+    if time_limit is not None:
+        time_limit = positive_float(time_limit, "time_limit (or None)")
     rng = make_rng(seed)
     wps = _Waypoints.build(robot, poses, goals, scene, frame)
     if densify and wps.poses is None:
@@ -414,14 +410,6 @@ def solve_path(
 
 
 # -------------------------------------------------------------------- input checks
-def _positive(value: Any) -> bool:
-    if isinstance(value, (bool, np.bool_)) or not isinstance(
-        value, (int, float, np.integer, np.floating)
-    ):
-        return False
-    return bool(math.isfinite(float(value)) and float(value) > 0)
-
-
 def _check_step(robot: Any, value: Any) -> FloatArray:
     """``max_joint_step`` as ``(nq,)`` positive finite floats."""
     if isinstance(value, (str, bytes, bool, np.bool_)) or value is None:

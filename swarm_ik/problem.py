@@ -17,6 +17,7 @@ import dataclasses
 import functools
 import math
 import reprlib
+import warnings
 from collections.abc import Sequence
 from dataclasses import dataclass
 from typing import Any
@@ -38,7 +39,7 @@ SECONDARY_WEIGHT = 1e-3
 """Weight of the secondary goals' cost (½‖r₂‖²) in the scalar cost of the swarm solvers."""
 
 
-@dataclass(frozen=True)
+@dataclass(frozen=True, eq=False)
 class GoalError:
     """How far one primary goal is from being met, computed with Pinocchio.
 
@@ -57,6 +58,26 @@ class GoalError:
     rotation_error: float
     met: bool
     details: Any = None
+
+    def __eq__(self, other: object) -> bool:
+        """Equal to a report of the same goal, numbers and verdict (a NaN error, a goal
+        without such an error, equal to NaN: two checks of one answer are equal)."""
+        if not isinstance(other, GoalError):
+            return NotImplemented
+
+        def same(a: float, b: float) -> bool:
+            return a == b or (math.isnan(a) and math.isnan(b))
+
+        return (
+            self.goal == other.goal
+            and same(self.position_error, other.position_error)
+            and same(self.rotation_error, other.rotation_error)
+            and self.met == other.met
+            and bool(self.details == other.details)
+        )
+
+    def __hash__(self) -> int:
+        return hash((self.goal, self.met))
 
     def to_dict(self) -> dict[str, Any]:
         """JSON-ready dict (NaN as None)."""
@@ -523,6 +544,18 @@ class IKProblem:
                 "MinimalDisplacement are secondary unless primary=True)"
             )
         self.goals = tuple(terms)
+        weights = [gl.weight for gl in terms if gl.is_primary]
+        if len(weights) > 1 and max(weights) > goals_base.WEIGHT_SPREAD * min(weights):
+            heavy = max(terms, key=lambda gl: gl.weight if gl.is_primary else -1.0)
+            light = min(terms, key=lambda gl: gl.weight if gl.is_primary else np.inf)
+            warnings.warn(
+                f"primary goals' weights {max(weights) / min(weights):.0e} apart "
+                f"({heavy.describe()} {heavy.weight:g}, {light.describe()} {light.weight:g}): "
+                f"the search may leave the lighter unmet where both can be met (weights "
+                f"trade primary goals off only where they conflict; keep them within "
+                f"{goals_base.WEIGHT_SPREAD:g} of each other)",
+                stacklevel=3,
+            )
         if self.target is None:
             first = next((gl for gl in terms if isinstance(gl, Pose)), None)
             self.target = None if first is None else first.target
@@ -932,11 +965,12 @@ class IKProblem:
         self, q: Any, tol_pos: float = 1e-5, tol_rot: float = 1e-5, q0: FloatArray | None = None
     ) -> tuple[GoalError, ...]:
         """Errors of every primary goal at ``q`` computed with Pinocchio's own FK (and coal
-        for collisions), not the compiled kernels, judged against the tolerances.
+        for collisions), not the compiled kernels, judged against the tolerances; ``q0``:
+        the solve's start, for goals that read it (``MinimalDisplacement``).
 
         Raises:
-            InvalidArgumentError: ``q`` of the wrong length or not finite, or a tolerance
-                that is not a positive number.
+            InvalidArgumentError: ``q`` or ``q0`` of the wrong length or not finite, or a
+                tolerance that is not a positive number.
         """
         if not (
             type(tol_pos) is float and type(tol_rot) is float
@@ -944,6 +978,8 @@ class IKProblem:
         ):  # fmt: skip
             check_tolerances(tol_pos, tol_rot)  # (anything else is refused there)
         qv = q if self.robot.is_q(q) else self.robot.check_q(q, "q")
+        if q0 is not None and not self.robot.is_q(q0):
+            q0 = self.robot.check_q(q0, "q0")
         state = State(self.robot, qv, q0)
         out = []
         for gl, prim in zip(self.goals, self.primary, strict=True):

@@ -24,7 +24,7 @@ from numpy.typing import NDArray
 
 from swarm_ik import urdf
 from swarm_ik._types import FloatArray
-from swarm_ik._validate import floats_or, keywords_checked
+from swarm_ik._validate import count, floats_or, keywords_checked
 from swarm_ik.errors import InvalidArgumentError, RobotFileNotFoundError, RobotModelError, unknown
 from swarm_ik.kernels import lie
 from swarm_ik.kernels.fk import BALL, CONTINUOUS, KIND_NAMES, PRISMATIC, REVOLUTE, TreeArrays
@@ -816,7 +816,10 @@ class RobotModel:
         """Pinocchio configuration of :attr:`model` for ``q`` (continuous → cos, sin; mimic
         followers set from their drivers); ``copy=False``: ``q`` itself where the two vectors
         are the same (for a caller that only reads it, such as Pinocchio's FK)."""
-        q = np.asarray(q, dtype=float).reshape(self.nq)
+        try:
+            q = np.asarray(q, dtype=float).reshape(self.nq)
+        except (TypeError, ValueError):
+            q = self.check_q(q)  # (refused there, the problem named)
         if self._pinocchio_q_is_q():
             return q.copy() if copy else q
         return np.array(_converted(self._to_pinocchio_plan(), self.model.nq, q.tolist()))
@@ -1056,13 +1059,18 @@ class RobotModel:
 
     # ----------------------------------------------------------------- limits
     def within_limits(self, q: FloatArray, tol: float = 1e-9) -> bool:
-        """Whether ``q`` (shape ``(nq,)``) lies within the limits (± ``tol``)."""
-        q = np.asarray(q, dtype=float)
+        """Whether ``q`` (shape ``(nq,)``) lies within the limits (± ``tol``; NaN: outside)."""
+        q = floats_or(q, lambda: f"q must be {self.nq} numbers, got {reprlib.repr(q)}")
+        if q.shape != (self.nq,):
+            raise InvalidArgumentError(f"q must hold {self.nq} values, got shape {q.shape}")
         return bool(np.all(q >= self.lower - tol) and np.all(q <= self.upper + tol))
 
     def wrap(self, q: FloatArray) -> FloatArray:
-        """Continuous joints wrapped into ``[-π, π)``; other values unchanged (same shape)."""
-        q = np.array(q, dtype=float)
+        """Continuous joints wrapped into ``[-π, π)``; other values unchanged (same shape:
+        ``(..., nq)``)."""
+        q = floats_or(q, lambda: f"q must be numbers, got {reprlib.repr(q)}")
+        if q.ndim == 0 or q.shape[-1] != self.nq:
+            raise InvalidArgumentError(f"q must end in {self.nq} values, got shape {q.shape}")
         if "wrapped" not in self._cache:  # (None: no continuous joint)
             m = self.continuous_mask
             self._cache["wrapped"] = m if m.any() else None
@@ -1075,6 +1083,13 @@ class RobotModel:
         """Joint vector(s) drawn uniformly within the limits: ``(nq,)`` or ``(n, nq)``; a
         floating base's orientation uniform over the rotations (a uniform unit quaternion,
         as a rotation vector of norm ≤ π)."""
+        if not isinstance(rng, np.random.Generator):
+            raise InvalidArgumentError(
+                f"rng must be a numpy.random.Generator (np.random.default_rng(seed)), got "
+                f"{reprlib.repr(rng)}"
+            )
+        if n is not None:
+            n = count(n, "n (or None)", 0)
         size = self.nq if n is None else (n, self.nq)
         out = rng.uniform(self.lower, self.upper, size=size)
         if self.floating_base:
@@ -1215,6 +1230,10 @@ def load_robot(
             base_box=base_box,
         )  # fmt: skip
     if srdf is not None:
+        if not isinstance(srdf, (str, os.PathLike, bool)):
+            raise InvalidArgumentError(
+                f"srdf must be a file path, False or None, got {reprlib.repr(srdf)}"
+            )
         if srdf is not False and (srdf is True or not Path(srdf).is_file()):
             raise RobotFileNotFoundError(f"SRDF file not found: {str(srdf)!r}")
         object.__setattr__(robot, "srdf", srdf)

@@ -545,9 +545,9 @@ class Scene:
     """
 
     def __init__(self, obstacles: Iterable[Shape] = ()) -> None:
-        if isinstance(obstacles, (Mapping, str, bytes, os.PathLike)) or not isinstance(
+        if isinstance(obstacles, (Mapping, str, bytes, os.PathLike, np.ndarray)) or not isinstance(
             obstacles, Iterable
-        ):
+        ):  # (an array, even empty, holds numbers, not shapes)
             raise InvalidArgumentError(_not_shapes(obstacles))
         items = tuple(obstacles)
         names: list[str] = []

@@ -642,9 +642,17 @@ def default_ee_frame(model: Any, info: UrdfInfo | None = None) -> tuple[str, str
             unsupported.add(m.driver)
             if m.driver in mimic:  # (a follower of a follower: its driver's group too)
                 unsupported.add(mimic[m.driver].driver)
+    # a free flyer at the root (load_robot(..., floating_base=True)) is on every chain: the
+    # rule reads the chains below it as it does without it
+    flyer = [
+        j > 0 and model.parents[j] == 0 and model.joints[j].shortname() == "JointModelFreeFlyer"
+        for j in range(model.njoints)
+    ]
     bad_joint = [False] * model.njoints
     for j in range(1, model.njoints):
         jname = names[j]
+        if flyer[j]:
+            continue
         bad_joint[j] = model.joints[j].nv != 1 or finger[j]
         if jname in group and not bad_joint[j]:
             carries_arm = any(
@@ -671,7 +679,7 @@ def default_ee_frame(model: Any, info: UrdfInfo | None = None) -> tuple[str, str
     for i, f in enumerate(frames):
         if f.type != pin.FrameType.BODY:
             continue
-        chain = [int(j) for j in model.supports[f.parentJoint] if j != 0]
+        chain = [int(j) for j in model.supports[f.parentJoint] if j != 0 and not flyer[j]]
         if not chain or any(bad_joint[j] for j in chain) or not drivable(chain):
             continue
         solved = sum(names[j] not in mimic for j in chain)
@@ -681,7 +689,7 @@ def default_ee_frame(model: Any, info: UrdfInfo | None = None) -> tuple[str, str
     if best is not None:
         f = frames[best_i]
         n = best[0]
-        chain = [int(j) for j in model.supports[f.parentJoint] if j != 0]
+        chain = [int(j) for j in model.supports[f.parentJoint] if j != 0 and not flyer[j]]
         k = len(chain) - n
         driven = f" and {k} mimic joint{'s' if k != 1 else ''} they drive" if k else ""
         why = (

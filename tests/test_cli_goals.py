@@ -67,7 +67,8 @@ def test_position_only_on_a_short_chain(capsys: pytest.CaptureFixture[str]) -> N
             ],
             "zero vector",
         ),
-        ([{"type": "Position", "frame": "panda_hand_tcp", "point": [0, "nan", 0]}], "finite"),
+        ([{"type": "Position", "frame": "panda_hand_tcp", "point": [0, "nan", 0]}], "text"),
+        ([{"type": "Position", "frame": "panda_hand_tcp", "point": [0, 1e400, 0]}], "finite"),
     ],
 )
 def test_bad_goals_exit_2_with_one_line(

@@ -28,6 +28,7 @@ from typing import TYPE_CHECKING, Any
 import numpy as np
 
 from swarm_ik._types import FloatArray
+from swarm_ik._validate import INT_PARAM_MAX
 from swarm_ik.errors import InvalidArgumentError, unknown
 
 if TYPE_CHECKING:
@@ -491,7 +492,8 @@ class Constraint:
                 return "one of " + ", ".join(map(repr, self.choices))
             return "a string"
         if self.kind == "int":
-            return "an integer" + (f" >= {int(self.lo)}" if np.isfinite(self.lo) else "")
+            low = f"{int(self.lo)}" if np.isfinite(self.lo) else f"{-INT_PARAM_MAX - 1}"
+            return f"an integer in [{low}, {INT_PARAM_MAX}]"
         lo_inf, hi_inf = not np.isfinite(self.lo), not np.isfinite(self.hi)
         if lo_inf and hi_inf:
             return "a finite number"
@@ -520,7 +522,8 @@ class Constraint:
             if not isinstance(value, (int, np.integer)):
                 return False, value
             n = int(value)
-            return (not np.isfinite(self.lo) or n >= self.lo), n
+            low = self.lo if np.isfinite(self.lo) else -INT_PARAM_MAX - 1
+            return low <= n <= INT_PARAM_MAX, n
         if not isinstance(value, (int, float, np.integer, np.floating)):
             return False, value
         v = float(value)
