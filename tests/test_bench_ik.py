@@ -215,3 +215,12 @@ def test_throughput_uses_the_public_batch_api_and_writes_its_report(tmp_path: Pa
     assert "| yumi_left | solve_batch, 1 process | 40 |" in md and "$" not in md
     shares = [float(r["share"]) for r in common.read_csv(tmp_path / "profile.csv")]
     assert shares[-1] == 1.0 and all(s >= 0 for s in shares)
+
+
+def test_a_target_is_the_same_whatever_block_it_is_drawn_in() -> None:
+    """Targets are drawn in blocks (one draw per block, not one per task): target ``i`` is
+    still row ``i`` of any draw of more than ``i`` targets."""
+    robot = common.cached_robot("ur5")
+    for i in (0, 7, ik.TARGET_BLOCK - 1, ik.TARGET_BLOCK):
+        expected = common.fk_targets(robot, i + 1, 3)[i]
+        np.testing.assert_array_equal(ik._target("ur5", i, 3), expected)
