@@ -55,6 +55,18 @@ def keywords_checked(func: Callable[P, R]) -> Callable[P, R]:
     return checked
 
 
+def user_stacklevel() -> int:
+    """The ``stacklevel`` that makes a warning of the calling function name the first frame
+    outside swarm_ik (the user's line, not a line of the package)."""
+    frame = inspect.currentframe()
+    frame = frame.f_back if frame is not None else None  # (the function that warns)
+    level = 1
+    while frame is not None and str(frame.f_globals.get("__name__", "")).startswith("swarm_ik"):
+        frame = frame.f_back
+        level += 1
+    return level
+
+
 def check_seed(seed: Any) -> int | np.random.Generator:
     """A seed as every solver takes it: an integer in ``[0, 2**63)`` (as an ``int``) or a
     Generator, as it is (None is seed 0).
@@ -64,6 +76,7 @@ def check_seed(seed: Any) -> int | np.random.Generator:
     """
     if type(seed) is int and 0 <= seed < SEED_LIMIT:  # (the common case, first)
         return seed
+    seed = plain_number(seed)
     if isinstance(seed, np.random.Generator):
         return seed
     if seed is None:
@@ -157,7 +170,9 @@ def float_array(value: Any, what: str = "targets", *, target: bool = True) -> Fl
         raise cls(f"{what} must be an array of numbers, got {reprlib.repr(value)}")
     if isinstance(value, np.ndarray) and value.dtype == np.float64:
         return value  # (the common case: no copy)
-    return floats_or(value, lambda: f"{what} must be an array of numbers", cls)
+    return floats_or(
+        value, lambda: f"{what} must be an array of numbers, got {reprlib.repr(value)}", cls
+    )
 
 
 INT_PARAM_MAX = 2**31 - 1

@@ -28,12 +28,12 @@ from typing import Any
 import numpy as np
 
 from swarm_ik import collision, kernels
-from swarm_ik._validate import check_seed, keywords_checked
+from swarm_ik._validate import check_seed, keywords_checked, plain_number
 from swarm_ik.errors import InvalidArgumentError, UnknownNameError, unknown
 from swarm_ik.goals import base as goals_base
 from swarm_ik.goals.axis import angle_between
 from swarm_ik.kernels import search
-from swarm_ik.kernels.lie import angle
+from swarm_ik.kernels.lie import relative_angles
 from swarm_ik.optimize import check_budget, make_rng
 from swarm_ik.pose import check_tolerances
 from swarm_ik.problem import GoalError, IKProblem
@@ -169,10 +169,15 @@ def conflicting_goals(problem: IKProblem, tol_pos: float, tol_rot: float) -> str
     rots: dict[str, list[tuple[Any, Any, float]]] = {}
     axes: dict[str, list[tuple[Any, Any, Any, float]]] = {}
     looks: list[tuple[Any, Any]] = []
+    seen: set[tuple[Any, ...]] = set()  # (a goal given twice holds nothing new)
     for gl in problem.goals:
         held = goals_base.pin_of(gl) if gl.is_primary else None
         if held is None:
             continue
+        same = tuple(v.tobytes() if isinstance(v, np.ndarray) else v for v in held)
+        if same in seen:
+            continue
+        seen.add(same)
         if held.point is not None:
             points.setdefault(held.frame, []).append((gl, held.point, held.point_slack))
         if held.rotation is not None:
@@ -181,11 +186,16 @@ def conflicting_goals(problem: IKProblem, tol_pos: float, tol_rot: float) -> str
             axes.setdefault(held.frame, []).append((gl, held.axis, held.direction, 0.0))
         elif held.axis is not None and held.look_at is not None:
             looks.append((gl, held))
-    for items in points.values():
-        for i, (a, pa, sa) in enumerate(items):
-            for b, pb, sb in items[i + 1 :]:
-                if float(np.linalg.norm(pa - pb)) > 2 * tol_pos + sa + sb:
-                    return f"{a.describe()} and {b.describe()}"
+    for items in points.values():  # (each point against the later ones at once)
+        pts = np.array([p for _, p, _ in items], dtype=float).reshape(-1, 3)
+        slack = np.array([sp for _, _, sp in items], dtype=float)
+        for i in range(len(items) - 1):
+            far = (
+                np.linalg.norm(pts[i + 1 :] - pts[i], axis=1)
+                > 2 * tol_pos + slack[i] + slack[i + 1 :]
+            )
+            if far.any():
+                return _pair(items, i, far)
     for gl, held in looks:  # (an axis towards a point is one along a known direction where
         # the frame's origin is held)
         for _, p, s in points.get(held.frame, [])[:1]:
@@ -196,10 +206,12 @@ def conflicting_goals(problem: IKProblem, tol_pos: float, tol_rot: float) -> str
                 axes.setdefault(held.frame, []).append((gl, held.axis, e / dist, wobble))
     allow = 2 * tol_rot
     for frame, items in rots.items():
+        mats = np.array([r for _, r, _ in items], dtype=float).reshape(-1, 3, 3)
+        slack = np.array([sr for _, _, sr in items], dtype=float)
         for i, (a, ra, sa) in enumerate(items):
-            for b, rb, sb in items[i + 1 :]:
-                if float(angle(ra.T @ rb)) > allow + sa + sb:
-                    return f"{a.describe()} and {b.describe()}"
+            far = relative_angles(ra, mats[i + 1 :]) > allow + sa + slack[i + 1 :]
+            if far.any():
+                return _pair(items, i, far)
             for b, ax, d, sb in axes.get(frame, []):
                 if angle_between(ra @ ax, d) > allow + sa + sb:
                     return f"{a.describe()} and {b.describe()}"
@@ -209,6 +221,11 @@ def conflicting_goals(problem: IKProblem, tol_pos: float, tol_rot: float) -> str
                 if abs(angle_between(a1, a2) - angle_between(d1, d2)) > allow + sa + sb:
                     return f"{a.describe()} and {b.describe()}"
     return None
+
+
+def _pair(items: list[Any], i: int, far: np.ndarray) -> str:
+    """The labels of goal ``i`` of ``items`` and of the first later one ``far`` marks."""
+    return f"{items[i][0].describe()} and {items[i + 1 + int(np.argmax(far))][0].describe()}"
 
 
 def end_reason(
@@ -784,6 +801,8 @@ def solve(
             f"{type(on_improvement).__name__}"
         )
     t_call = time.perf_counter()
+    max_evals, time_limit = plain_number(max_evals), plain_number(time_limit)
+    tol_pos, tol_rot = plain_number(tol_pos), plain_number(tol_rot)
     settings = dict(
         max_evals=max_evals, time_limit=time_limit, tol_pos=tol_pos, tol_rot=tol_rot,
         stop_on_success=stop_on_success, prefer=prefer, params=params,
@@ -822,10 +841,10 @@ def _route_key(problem: IKProblem, solver: str, settings: dict[str, Any]) -> Any
     if not settings.keys() <= _ROUTE_SETTINGS:  # (a setting the key below does not name)
         return None
     get, params = settings.get, settings.get("params") or {}
-    values = (
-        get("max_evals"), get("time_limit"), get("tol_pos"), get("tol_rot"),
-        get("stop_on_success"), get("prefer"),
-    )  # fmt: skip
+    values = tuple(
+        plain_number(get(k))  # (a 0-d array, taken as its number, keys as it)
+        for k in ("max_evals", "time_limit", "tol_pos", "tol_rot", "stop_on_success", "prefer")
+    )
     # (each value's type too: True == 1 and 2000.0 == 2000, and a route found is not checked
     # again, so a value the checks refuse must not find the route of one they accept)
     key = (
@@ -888,6 +907,8 @@ class IKSolver:
         self.robot = robot
         self.solver = solver
         self.params = dict(params)
+        max_evals, time_limit = plain_number(max_evals), plain_number(time_limit)
+        tol_pos, tol_rot = plain_number(tol_pos), plain_number(tol_rot)
         self.tol_pos, self.tol_rot = tol_pos, tol_rot
         self.time_limit, self.max_evals = time_limit, max_evals
         self._template = IKProblem(robot, robot.fk_pinocchio(robot.mid_q()), w_rot=w_rot)

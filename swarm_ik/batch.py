@@ -48,12 +48,9 @@ import logging
 import math
 import os
 import pickle
-import signal
-import threading
 import time
 import warnings
 import zipfile
-from collections.abc import Iterator
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
@@ -73,7 +70,7 @@ from swarm_ik.kernels.lm import CONVERGED, NOT_RUN
 from swarm_ik.kernels.search import sampling_window, splitmix64, uniform_in, uniforms, wall_clock
 from swarm_ik.optimize import check_budget
 from swarm_ik.paths import written_in_place_of
-from swarm_ik.pose import make_pose, matrix_to_quat
+from swarm_ik.pose import matrix_to_quat, poses_from_rows
 from swarm_ik.problem import IKProblem
 from swarm_ik.result import FrozenArrays
 from swarm_ik.robot import RobotModel
@@ -335,7 +332,7 @@ class BatchSettings:
             if not (np.isfinite(v) and v > 0):
                 raise InvalidArgumentError(f"{label} must be a positive number, got {v!r}")
         for label, lo in (("max_starts", 1), ("max_iters", 2), ("stall_iters", 1)):
-            count(getattr(self, label), label, lo)
+            object.__setattr__(self, label, count(getattr(self, label), label, lo))
         if self.max_starts > MAX_STARTS:
             raise InvalidArgumentError(
                 f"max_starts must be at most {MAX_STARTS} (swarm_ik.batch.MAX_STARTS; "
@@ -873,13 +870,10 @@ def check_targets(targets: Any, orth_tol: float = 1e-6, positions: bool = False)
         out[:, [0, 1, 2, 3], [0, 1, 2, 3]] = 1.0
         out[:, :3, 3] = arr
         return out
-    if rows:  # x y z qx qy qz qw
+    if rows:  # x y z qx qy qz qw (a block at a time: see below)
         out = np.empty((arr.shape[0], 4, 4))
-        for i, row in enumerate(arr):
-            try:
-                out[i] = make_pose(row[:3], row[3:])
-            except InvalidTargetError as exc:
-                raise InvalidTargetError(f"target {i}: {exc}") from None
+        for a in range(0, arr.shape[0], BLOCK):
+            out[a : a + BLOCK] = poses_from_rows(arr[a : a + BLOCK], a)
         return out
     if arr.ndim != 3 or arr.shape[1:] != (4, 4):
         also = ", (N, 3) points" if positions else ""
@@ -1617,7 +1611,8 @@ def solve_batch(
         progress: Show a progress bar (tqdm) over the chunks.
         keep_on_interrupt: On Ctrl-C return the chunks finished so far (``interrupted``
             set) instead of raising ``KeyboardInterrupt``; chunks then go out in waves of two
-            per worker, and worker processes are started with SIGINT blocked (``swarm-ik batch``).
+            per worker (``swarm-ik batch``).  An embedded cluster's worker processes are
+            started with SIGINT blocked either way: a Ctrl-C reaches this process alone.
 
     Returns:
         A :class:`BatchResult`, one row per target, in the order of ``targets``.
@@ -1637,7 +1632,7 @@ def solve_batch(
     from swarm_ik._validate import flag, float_array, positive_float
 
     position_only = flag(position_only, "position_only")
-    progress = flag(progress, "progress")
+    progress = False if progress is None else flag(progress, "progress (or None)")
     keep_on_interrupt = flag(keep_on_interrupt, "keep_on_interrupt")
     if seed is None:  # (as solve's: seed 0)
         seed = 0
@@ -1684,14 +1679,12 @@ def solve_batch(
     interrupted = False
     with contextlib.ExitStack() as stack:
         t_setup = time.perf_counter()
-        # (worker processes are started here for an embedded cluster only)
-        embedded = isinstance(scheduler, str) and scheduler == distributed.LOCAL
-        guard = _sigint_blocked_for_workers() if keep_on_interrupt and embedded else None
+        # (worker processes are started here for an embedded cluster only, deaf to SIGINT:
+        # distributed.sigint_blocked_for_workers)
         try:
-            with guard or contextlib.nullcontext():
-                client = stack.enter_context(distributed.connect(scheduler))
+            client = stack.enter_context(distributed.connect(scheduler))
         except KeyboardInterrupt:  # a Ctrl-C during the cluster's start-up, raised once it
-            if not keep_on_interrupt:  # is up (closed by the stack on the way out)
+            if not keep_on_interrupt:  # is up (closed on the way out)
                 raise
             logging.getLogger("distributed").setLevel(logging.CRITICAL)
             return BatchResult.from_chunks(
@@ -1754,58 +1747,6 @@ def solve_batch(
     return BatchResult.from_chunks(
         parts, robot, settings, time.perf_counter() - t0, setup_s, interrupted, labels
     )
-
-
-@contextlib.contextmanager
-def _sigint_blocked_for_workers() -> Iterator[None]:
-    """Start worker processes deaf to SIGINT without losing a Ctrl-C meant for this process.
-
-    While the body runs (an embedded cluster's start-up) SIGINT is *blocked* in this thread;
-    the threads it starts meanwhile and the processes they start (fork, spawn or forkserver:
-    the mask survives fork and exec) inherit the mask, so a Ctrl-C sent to the process group
-    later stays pending in the workers for good (no traceback from each) and reaches this
-    process only.  A Ctrl-C during the body is recorded (held pending by the mask, or caught
-    by a handler where a thread that does not block SIGINT takes it) and raised again at its
-    end, with the cluster in hand (the caller's exit closes it): not lost (the SIG_IGN used
-    before dropped it, and the whole batch then ran), not raised half-way through the
-    start-up.  The mask and the handler are restored at once.
-
-    multiprocessing's resource tracker is started first: the thread that starts it unblocks
-    SIGINT (bpo-33613), and would then start the workers with SIGINT unblocked.  Where masks
-    are not available (Windows) SIGINT is ignored during the body instead, as it was.
-    """
-    if (
-        threading.current_thread() is not threading.main_thread()
-        or signal.getsignal(signal.SIGINT) is None  # (a handler set from C: not restorable)
-    ):
-        yield
-        return
-    if not hasattr(signal, "pthread_sigmask"):  # pragma: no cover - Windows
-        old = signal.signal(signal.SIGINT, signal.SIG_IGN)
-        try:
-            yield
-        finally:
-            signal.signal(signal.SIGINT, old)
-        return
-    caught: list[int] = []
-
-    def record(signum: int, frame: Any) -> None:
-        caught.append(signum)
-
-    old_handler = signal.signal(signal.SIGINT, record)
-    try:
-        from multiprocessing import resource_tracker
-
-        resource_tracker.ensure_running()
-        old_mask = signal.pthread_sigmask(signal.SIG_BLOCK, {signal.SIGINT})
-        try:
-            yield
-        finally:  # (a Ctrl-C held pending is taken by `record` here)
-            signal.pthread_sigmask(signal.SIG_SETMASK, old_mask)
-    finally:
-        signal.signal(signal.SIGINT, old_handler)
-        if caught:  # sent again, to the handler it was meant for (KeyboardInterrupt)
-            signal.raise_signal(signal.SIGINT)
 
 
 # --------------------------------------------------------------------------- files

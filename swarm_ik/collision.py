@@ -37,7 +37,6 @@ from __future__ import annotations
 
 import contextlib
 import hashlib
-import inspect
 import json
 import os
 import threading
@@ -53,6 +52,7 @@ import pinocchio as pin
 from numpy.typing import NDArray
 
 from swarm_ik._types import FloatArray
+from swarm_ik._validate import user_stacklevel
 from swarm_ik.errors import InvalidArgumentError, RobotFileNotFoundError, RobotModelError
 from swarm_ik.kernels.mesh import enclosed_points
 from swarm_ik.paths import cache_dir, package_dirs
@@ -903,18 +903,6 @@ class _Checker:
 
 ALWAYS_SAMPLES = 16
 """Random configurations :meth:`RobotCollision.pairs_always_in_contact` checks."""
-
-
-def user_stacklevel() -> int:
-    """The ``stacklevel`` that makes a warning of the calling function name the first frame
-    outside swarm_ik (the user's line, not a line of the package)."""
-    frame = inspect.currentframe()
-    frame = frame.f_back if frame is not None else None  # (the function that warns)
-    level = 1
-    while frame is not None and str(frame.f_globals.get("__name__", "")).startswith("swarm_ik"):
-        frame = frame.f_back
-        level += 1
-    return level
 
 
 # ---------------------------------------------------------------------- sampling rule

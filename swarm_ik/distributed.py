@@ -31,7 +31,9 @@ import logging
 import multiprocessing
 import os
 import re
+import signal
 import socket
+import threading
 import uuid
 from collections.abc import Callable, Iterator, Sequence
 from contextlib import ExitStack, closing, contextmanager
@@ -80,7 +82,16 @@ def check_scheduler(scheduler: Any) -> Any:
     if scheduler is None or scheduler == IN_PROCESS:
         return None
     if isinstance(scheduler, str):
-        if scheduler == LOCAL or scheduler.startswith(SCHEMES):
+        if scheduler == LOCAL:
+            return scheduler
+        if scheduler.startswith(("tcp://", "tls://")) and not re.fullmatch(
+            r"(?:tcp|tls)://(\[[^\]]+\]|[^:/\[\]]+):\d{1,5}/?", scheduler
+        ):
+            raise InvalidArgumentError(
+                f"scheduler address {scheduler!r} needs a host and a port, e.g. "
+                "tcp://127.0.0.1:8786"
+            )
+        if scheduler.startswith(SCHEMES):
             return scheduler
         raise InvalidArgumentError(
             f"unknown scheduler {scheduler!r}; valid choices: 'none' (in this process), "
@@ -123,18 +134,24 @@ def connect(
         return
     distributed = _import_distributed()
     if scheduler == LOCAL:
+        cluster = None
         try:
-            cluster = distributed.LocalCluster(
-                n_workers=n_workers or available_cores(),
-                threads_per_worker=1,
-                processes=True,
-                host="127.0.0.1",
-                dashboard_address=None,
-                # (what the worker processes print: an ERROR record too, e.g. a heartbeat cut
-                # by the scheduler closing on Ctrl-C, 30 lines; a task's error reaches the
-                # client)
-                silence_logs=logging.CRITICAL,
-            )
+            with sigint_blocked_for_workers():  # (a Ctrl-C reaches this process alone)
+                cluster = distributed.LocalCluster(
+                    n_workers=n_workers or available_cores(),
+                    threads_per_worker=1,
+                    processes=True,
+                    host="127.0.0.1",
+                    dashboard_address=None,
+                    # (what the worker processes print: an ERROR record too, e.g. a heartbeat cut
+                    # by the scheduler closing on Ctrl-C, 30 lines; a task's error reaches the
+                    # client)
+                    silence_logs=logging.CRITICAL,
+                )
+        except KeyboardInterrupt:  # (raised once the cluster is up: closed, then passed on)
+            if cluster is not None:
+                cluster.close()
+            raise
         except RuntimeError as exc:  # (a worker that failed to start)
             raise InvalidArgumentError(
                 f"scheduler='local' could not start its worker processes ({exc}); " + _MAIN_GUARD
@@ -160,10 +177,67 @@ def connect(
         raise InvalidArgumentError(
             f"could not reach the Dask scheduler at {scheduler!r} ({exc})"
         ) from None
+    except (MemoryError, ValueError, TypeError) as exc:  # (a server whose greeting Dask misread:
+        # a length of 3 EiB, say)
+        raise InvalidArgumentError(
+            f"{scheduler!r} answered, but not as a Dask scheduler ({type(exc).__name__})"
+        ) from None
     try:
         yield client
     finally:
         client.close()
+
+
+@contextmanager
+def sigint_blocked_for_workers() -> Iterator[None]:
+    """Start worker processes deaf to SIGINT without losing a Ctrl-C meant for this process.
+
+    While the body runs (an embedded cluster's start-up) SIGINT is *blocked* in this thread;
+    the threads it starts meanwhile and the processes they start (fork, spawn or forkserver:
+    the mask survives fork and exec) inherit the mask, so a Ctrl-C sent to the process group
+    later stays pending in the workers for good (no traceback from each) and reaches this
+    process only.  A Ctrl-C during the body is recorded (held pending by the mask, or caught
+    by a handler where a thread that does not block SIGINT takes it) and raised again at its
+    end, with the cluster in hand (the caller's exit closes it): not lost (the SIG_IGN used
+    before dropped it, and the whole batch then ran), not raised half-way through the
+    start-up.  The mask and the handler are restored at once.
+
+    multiprocessing's resource tracker is started first: the thread that starts it unblocks
+    SIGINT (bpo-33613), and would then start the workers with SIGINT unblocked.  Where masks
+    are not available (Windows) SIGINT is ignored during the body instead, as it was.
+    """
+    if (
+        threading.current_thread() is not threading.main_thread()
+        or signal.getsignal(signal.SIGINT) is None  # (a handler set from C: not restorable)
+    ):
+        yield
+        return
+    if not hasattr(signal, "pthread_sigmask"):  # pragma: no cover - Windows
+        old = signal.signal(signal.SIGINT, signal.SIG_IGN)
+        try:
+            yield
+        finally:
+            signal.signal(signal.SIGINT, old)
+        return
+    caught: list[int] = []
+
+    def record(signum: int, frame: Any) -> None:
+        caught.append(signum)
+
+    old_handler = signal.signal(signal.SIGINT, record)
+    try:
+        from multiprocessing import resource_tracker
+
+        resource_tracker.ensure_running()
+        old_mask = signal.pthread_sigmask(signal.SIG_BLOCK, {signal.SIGINT})
+        try:
+            yield
+        finally:  # (a Ctrl-C held pending is taken by `record` here)
+            signal.pthread_sigmask(signal.SIG_SETMASK, old_mask)
+    finally:
+        signal.signal(signal.SIGINT, old_handler)
+        if caught:  # sent again, to the handler it was meant for (KeyboardInterrupt)
+            signal.raise_signal(signal.SIGINT)
 
 
 _MAIN_GUARD = (
@@ -303,13 +377,30 @@ def map_chunks(
 
 def _probe(scheduler: str, timeout: float) -> None:
     """Refuse at once a ``tcp://host:port`` scheduler that refuses the connection (Dask's
-    client retries until its ``timeout``, 30 s, before saying so)."""
+    client retries until its ``timeout``, 30 s, before saying so), or that sends nothing
+    within :data:`PROBE_S` of it (a Dask scheduler greets a new connection at once; another
+    server, a dashboard's HTTP port say, waits for a request, and Dask's client waited for
+    its greeting forever, whatever the time limit)."""
     m = re.fullmatch(r"tcp://\[?([^\]/]+?)\]?:(\d+)/?", scheduler)
     if m is None:
         return
+    wait = min(timeout, PROBE_S)
     try:
-        socket.create_connection((m.group(1), int(m.group(2))), timeout=min(timeout, 5.0)).close()
+        with socket.create_connection((m.group(1), int(m.group(2))), timeout=wait) as conn:
+            conn.settimeout(wait)
+            greeted = bool(conn.recv(8))
+    except TimeoutError:
+        greeted = False
     except OSError as exc:
         raise InvalidArgumentError(
             f"could not reach the Dask scheduler at {scheduler!r} ({exc.strerror or exc})"
         ) from None
+    if not greeted:
+        raise InvalidArgumentError(
+            f"{scheduler!r} accepted the connection but sent nothing in {wait:g} s: not a Dask "
+            "scheduler's address (a dashboard's HTTP port?)"
+        )
+
+
+PROBE_S = 5.0
+"""Seconds :func:`connect` waits for a remote scheduler's greeting before refusing it."""

@@ -33,7 +33,7 @@ import functools
 import math
 import time
 import weakref
-from collections.abc import Callable
+from collections.abc import Callable, Iterable, Mapping
 from typing import Any
 
 import numba
@@ -72,7 +72,7 @@ SOLVER_NAME = "swarm"
 """Solver name recorded in the numerical path's results (its polish is ``swarm``'s)."""
 METHODS = ("auto", "numerical", "analytic")
 """Values of ``solve_many(method=...)``."""
-MAX_BATCH = 4096
+MAX_BATCH = 65536
 """Most starts :func:`solve_many` polishes per compiled call (``batch``; its default 16: a
 larger batch only holds more scratch, about ``batch × nq`` floats per array)."""
 
@@ -520,7 +520,7 @@ def windings_of(problem: IKProblem, results: list[Result], q0: Any = None) -> li
     """
     if not isinstance(problem, IKProblem):
         raise InvalidArgumentError(f"problem must be an IKProblem, got {type(problem).__name__}")
-    if not isinstance(results, (list, tuple)):
+    if isinstance(results, (str, bytes, Mapping)) or not isinstance(results, Iterable):
         raise InvalidArgumentError(
             f"results must be a list of Result objects (solve_many's), got {type(results).__name__}"
         )

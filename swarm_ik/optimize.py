@@ -10,7 +10,7 @@ from typing import Any
 
 import numpy as np
 
-from swarm_ik._validate import check_seed
+from swarm_ik._validate import check_seed, plain_number
 from swarm_ik.errors import InvalidArgumentError
 from swarm_ik.pose import is_finite_nonneg
 from swarm_ik.solvers import base
@@ -52,7 +52,8 @@ MAX_EVALS_LIMIT = 2**62
 
 def check_budget(max_evals: int | None, time_limit: float | None) -> None:
     """Refuse a zero/negative evaluation budget or time limit, or one beyond
-    :data:`MAX_EVALS_LIMIT` evaluations."""
+    :data:`MAX_EVALS_LIMIT` evaluations (a 0-d array is its number)."""
+    max_evals, time_limit = plain_number(max_evals), plain_number(time_limit)
     if max_evals is not None and (
         isinstance(max_evals, bool) or not isinstance(max_evals, (int, np.integer)) or max_evals < 1
     ):
@@ -148,6 +149,13 @@ def minimize(
         )
     if np.any(lo > hi):
         raise InvalidArgumentError(f"lower > upper at indices {np.flatnonzero(lo > hi).tolist()}")
+    with np.errstate(over="ignore"):
+        wide = ~np.isfinite(hi - lo)
+    if wide.any():  # (the uniform draws of every solver span hi - lo)
+        raise InvalidArgumentError(
+            f"upper - lower overflows a float at indices {np.flatnonzero(wide).tolist()}: "
+            "bounds must span less than 1.7e308"
+        )
     if f_target is not None and not (
         isinstance(f_target, (int, float, np.integer, np.floating)) and np.isfinite(f_target)
     ):

@@ -10,6 +10,7 @@ import reprlib
 from typing import Any
 
 import numpy as np
+from numpy.typing import NDArray
 
 from swarm_ik._types import FloatArray
 from swarm_ik._validate import floats_or
@@ -78,11 +79,33 @@ def quat_to_matrix(quat_xyzw: Any) -> FloatArray:
         raise InvalidTargetError(
             f"quaternion must be 4 finite numbers (x, y, z, w), got {q.tolist()}"
         )
-    u = unit(q)
-    if u is None:
+    rot, zero = _rotations_of_quaternions(q[None])
+    if zero[0]:
         raise InvalidTargetError(f"quaternion has zero norm: {q.tolist()}")
-    x, y, z, w = u
-    return unit_quaternion_matrix(x, y, z, w)
+    return rot[0]  # type: ignore[no-any-return]
+
+
+def _rotations_of_quaternions(q: FloatArray) -> tuple[FloatArray, NDArray[np.bool_]]:
+    """Rotation matrices ``(N, 3, 3)`` of finite quaternions ``(x, y, z, w)`` ``(N, 4)``, each
+    divided by its largest absolute component, then by its norm (as :func:`unit`); and which
+    have a norm (almost) zero ``(N,)`` (their matrices not meaningful).  One formula for one
+    quaternion and a batch of rows, so that both give the same bits."""
+    big = np.max(np.abs(q), axis=1)
+    scaled = q / np.where(big > 0.0, big, 1.0)[:, None]
+    norm = np.linalg.norm(scaled, axis=1)
+    zero = ~(big * norm >= 1e-9)
+    x, y, z, w = (scaled / np.where(zero, 1.0, norm)[:, None]).T
+    out = np.empty((q.shape[0], 3, 3))
+    out[:, 0, 0] = 1 - 2 * (y * y + z * z)
+    out[:, 0, 1] = 2 * (x * y - z * w)
+    out[:, 0, 2] = 2 * (x * z + y * w)
+    out[:, 1, 0] = 2 * (x * y + z * w)
+    out[:, 1, 1] = 1 - 2 * (x * x + z * z)
+    out[:, 1, 2] = 2 * (y * z - x * w)
+    out[:, 2, 0] = 2 * (x * z - y * w)
+    out[:, 2, 1] = 2 * (y * z + x * w)
+    out[:, 2, 2] = 1 - 2 * (x * x + y * y)
+    return out, zero
 
 
 def unit_quaternion_matrix(x: float, y: float, z: float, w: float) -> FloatArray:
@@ -114,6 +137,28 @@ def make_pose(position: Any, quat_xyzw: Any) -> FloatArray:
     pose[:3, :3] = quat_to_matrix(quat_xyzw)
     pose[:3, 3] = p
     return pose
+
+
+def poses_from_rows(rows: FloatArray, first: int = 0) -> FloatArray:
+    """Poses ``(N, 4, 4)`` of finite rows ``x y z qx qy qz qw`` ``(N, 7)``: :func:`make_pose`
+    of each, all at once (each quaternion divided by its largest absolute component, then by
+    its norm, as :func:`unit`).
+
+    Raises:
+        InvalidTargetError: a quaternion of norm (almost) zero (the first such row named, as
+            target ``first + its row``).
+    """
+    rot, zero = _rotations_of_quaternions(rows[:, 3:7])
+    if zero.any():
+        i = int(np.flatnonzero(zero)[0])
+        raise InvalidTargetError(
+            f"target {first + i}: quaternion has zero norm: {rows[i, 3:7].tolist()}"
+        )
+    out = np.zeros((rows.shape[0], 4, 4))
+    out[:, :3, :3] = rot
+    out[:, :3, 3] = rows[:, :3]
+    out[:, 3, 3] = 1.0
+    return out
 
 
 def project_to_se3(matrix: Any) -> FloatArray:

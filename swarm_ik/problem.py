@@ -26,7 +26,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from swarm_ik._types import FloatArray
-from swarm_ik._validate import keywords_checked
+from swarm_ik._validate import keywords_checked, user_stacklevel
 from swarm_ik.errors import InvalidArgumentError, InvalidTargetError, SwarmIKError, unknown
 from swarm_ik.fitness import FITNESS, get_fitness
 from swarm_ik.goals import AvoidCollisions, Goal, Pose, Position, State, kernel_slot, kernels
@@ -37,6 +37,17 @@ from swarm_ik.robot import RobotModel
 
 SECONDARY_WEIGHT = 1e-3
 """Weight of the secondary goals' cost (½‖r₂‖²) in the scalar cost of the swarm solvers."""
+
+
+def _same_details(a: Any, b: Any) -> bool:
+    """Whether two goal reports' ``details`` are equal: the same object, equal, or equal
+    arrays (a Python goal's ``met`` may report anything)."""
+    if a is b:
+        return True
+    try:
+        return bool(a == b)
+    except (ValueError, TypeError):  # (arrays: no single truth value)
+        return bool(np.array_equal(np.asarray(a), np.asarray(b)))
 
 
 @dataclass(frozen=True, eq=False)
@@ -73,7 +84,7 @@ class GoalError:
             and same(self.position_error, other.position_error)
             and same(self.rotation_error, other.rotation_error)
             and self.met == other.met
-            and bool(self.details == other.details)
+            and _same_details(self.details, other.details)
         )
 
     def __hash__(self) -> int:
@@ -554,7 +565,7 @@ class IKProblem:
                 f"the search may leave the lighter unmet where both can be met (weights "
                 f"trade primary goals off only where they conflict; keep them within "
                 f"{goals_base.WEIGHT_SPREAD:g} of each other)",
-                stacklevel=3,
+                stacklevel=user_stacklevel(),
             )
         if self.target is None:
             first = next((gl for gl in terms if isinstance(gl, Pose)), None)

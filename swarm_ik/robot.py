@@ -783,12 +783,12 @@ class RobotModel:
         one pose) or ``(pop, nq) -> (pop, 4, 4)`` (the compiled batch FK)."""
         f = self.frame_index(frame)
         arr = np.asarray(q)
-        if arr.dtype.kind == "c":  # (numpy would drop the imaginary parts with a warning)
-            raise InvalidArgumentError(f"q must be real joint values, got complex {arr.dtype}")
-        if arr.shape == (self.nq,) and arr.dtype.kind in "fiu":
+        if arr.dtype.kind not in "fiu":  # (text, complex values, None: refused, named)
+            arr = floats_or(q, lambda: f"q must be real joint values, got {reprlib.repr(q)}")
+        if arr.shape == (self.nq,):
             # (a Data of its own: the State a Python goal reads stays valid if it calls fk)
             return self._frame_pose(arr, self.frame_ids[f], self._data("fk_data"))
-        out = self.tree.fk(q)
+        out = self.tree.fk(arr)
         return out[..., f, :, :]
 
     def fk_all(self, q: FloatArray) -> FloatArray:
@@ -1059,10 +1059,11 @@ class RobotModel:
 
     # ----------------------------------------------------------------- limits
     def within_limits(self, q: FloatArray, tol: float = 1e-9) -> bool:
-        """Whether ``q`` (shape ``(nq,)``) lies within the limits (± ``tol``; NaN: outside)."""
+        """Whether ``q`` (shape ``(nq,)``, or ``(..., nq)``: every row) lies within the limits
+        (± ``tol``; NaN: outside)."""
         q = floats_or(q, lambda: f"q must be {self.nq} numbers, got {reprlib.repr(q)}")
-        if q.shape != (self.nq,):
-            raise InvalidArgumentError(f"q must hold {self.nq} values, got shape {q.shape}")
+        if q.ndim == 0 or q.shape[-1] != self.nq:
+            raise InvalidArgumentError(f"q must end in {self.nq} values, got shape {q.shape}")
         return bool(np.all(q >= self.lower - tol) and np.all(q <= self.upper + tol))
 
     def wrap(self, q: FloatArray) -> FloatArray:
@@ -1083,7 +1084,7 @@ class RobotModel:
         """Joint vector(s) drawn uniformly within the limits: ``(nq,)`` or ``(n, nq)``; a
         floating base's orientation uniform over the rotations (a uniform unit quaternion,
         as a rotation vector of norm ≤ π)."""
-        if not isinstance(rng, np.random.Generator):
+        if not isinstance(rng, (np.random.Generator, np.random.RandomState)):
             raise InvalidArgumentError(
                 f"rng must be a numpy.random.Generator (np.random.default_rng(seed)), got "
                 f"{reprlib.repr(rng)}"

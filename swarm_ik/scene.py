@@ -545,9 +545,11 @@ class Scene:
     """
 
     def __init__(self, obstacles: Iterable[Shape] = ()) -> None:
-        if isinstance(obstacles, (Mapping, str, bytes, os.PathLike, np.ndarray)) or not isinstance(
-            obstacles, Iterable
-        ):  # (an array, even empty, holds numbers, not shapes)
+        if (
+            isinstance(obstacles, (Mapping, str, bytes, os.PathLike))
+            or (isinstance(obstacles, np.ndarray) and obstacles.dtype != object)
+            or not isinstance(obstacles, Iterable)
+        ):  # (an array of numbers, even empty, holds no shapes)
             raise InvalidArgumentError(_not_shapes(obstacles))
         items = tuple(obstacles)
         names: list[str] = []

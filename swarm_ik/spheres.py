@@ -41,6 +41,9 @@ import contextlib
 import hashlib
 import json
 import math
+import signal
+import sys
+import threading
 from dataclasses import dataclass
 from typing import Any
 
@@ -80,6 +83,34 @@ MAX_FIT_TRIANGLES = 5e6
 a mesh scaled a million times at a 2 cm tolerance needs 10¹⁸)."""
 
 
+def _import_trimesh() -> Any:
+    """``trimesh``, a Ctrl-C during its first import kept: trimesh guards its optional
+    imports with ``except BaseException``, which took the ``KeyboardInterrupt`` of a Ctrl-C
+    arriving meanwhile (a first collision solve then printed its whole answer); the signal is
+    recorded during the import and raised after it."""
+    if (
+        "trimesh" in sys.modules
+        or threading.current_thread() is not threading.main_thread()
+        or signal.getsignal(signal.SIGINT) is None  # (a handler set from C: not restorable)
+    ):
+        import trimesh
+
+        return trimesh
+    caught: list[int] = []
+
+    def record(signum: int, frame: Any) -> None:
+        caught.append(signum)
+
+    old = signal.signal(signal.SIGINT, record)
+    try:
+        import trimesh
+    finally:
+        signal.signal(signal.SIGINT, old)
+    if caught:
+        signal.raise_signal(signal.SIGINT)  # (to the handler it was meant for)
+    return trimesh
+
+
 def fit_mesh(
     vertices: FloatArray, faces: IntArray, tolerance: float
 ) -> tuple[FloatArray, FloatArray]:
@@ -94,8 +125,9 @@ def fit_mesh(
         Centres ``(k, 3)`` [m] and radii ``(k,)`` [m] in the mesh frame.
     """
     import scipy.sparse as sp
-    import trimesh
     from scipy.spatial import cKDTree
+
+    trimesh = _import_trimesh()
 
     V = np.asarray(vertices, dtype=float)
     F = np.asarray(faces, dtype=np.int64)
@@ -181,9 +213,10 @@ def fit_spheres(geometry: Any, tolerance: float = TOLERANCE) -> tuple[FloatArray
         RobotModelError: another geometry type (the supported ones listed).
     """
     import coal
-    import trimesh
 
     from swarm_ik.errors import RobotModelError
+
+    trimesh = _import_trimesh()
 
     if isinstance(geometry, coal.Sphere):
         return np.zeros((1, 3)), np.array([float(geometry.radius)])

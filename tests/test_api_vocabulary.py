@@ -240,3 +240,30 @@ def test_a_floating_base_keeps_the_fixed_base_tool_frame(name: str) -> None:
     fixed = swarm_ik.load_robot(name)
     floating = swarm_ik.load_robot(name, floating_base=True)
     assert floating.frames == fixed.frames
+
+
+def test_what_the_checks_still_take(panda, target) -> None:
+    """Values refused by no check before them stay taken (a diff review): a legacy
+    RandomState, rows of joint vectors, an object array of shapes, progress=None, and a 0-d
+    time limit that keys the same shared route as its number."""
+    assert panda.random_q(np.random.RandomState(0), 2).shape == (2, panda.nq)
+    assert panda.within_limits(panda.random_q(np.random.default_rng(0), 3))
+    box = Box([0.1, 0.1, 0.1], [2.0, 2.0, 2.0])
+    assert len(Scene(np.array([box], dtype=object)).obstacles) == 1
+    swarm_ik.solve_batch(panda, target[None], progress=None)
+    problem = swarm_ik.IKProblem(panda, target)
+    routes = panda._cache.setdefault("routes", {})
+    swarm_ik.solve(problem, time_limit=1.5)
+    n = len(routes)
+    swarm_ik.solve(problem, time_limit=np.array(1.5))
+    assert len(routes) == n
+
+
+def test_goal_errors_with_array_or_nan_details_equal_themselves() -> None:
+    from swarm_ik.problem import GoalError
+
+    arr = GoalError("g", 0.0, float("nan"), True, np.array([1.0, 2.0]))
+    nan = GoalError("g", 0.0, 0.0, True, float("nan"))
+    assert arr == arr and nan == nan
+    assert arr == GoalError("g", 0.0, float("nan"), True, np.array([1.0, 2.0]))
+    assert arr != GoalError("g", 0.0, float("nan"), True, np.array([1.0, 3.0]))

@@ -335,14 +335,14 @@ def test_the_resolution_named_is_the_finest_that_fits(
 def test_start_up_guard_holds_a_ctrl_c_and_raises_it_at_its_end() -> None:
     """Inside the guard SIGINT is blocked (a child started there inherits the mask) and a
     Ctrl-C is held; at its end the mask and handler are as before and the Ctrl-C raises."""
-    from swarm_ik.batch import _sigint_blocked_for_workers
+    from swarm_ik.distributed import sigint_blocked_for_workers
 
     handler = signal.getsignal(signal.SIGINT)
     mask = signal.pthread_sigmask(signal.SIG_BLOCK, set())
     child = "print(open('/proc/self/status').read())"
     reached_end = False
     with pytest.raises(KeyboardInterrupt):
-        with _sigint_blocked_for_workers():
+        with sigint_blocked_for_workers():
             assert signal.SIGINT in signal.pthread_sigmask(signal.SIG_BLOCK, set())
             status = subprocess.run(
                 [sys.executable, "-c", child], capture_output=True, text=True, check=True
@@ -355,5 +355,5 @@ def test_start_up_guard_holds_a_ctrl_c_and_raises_it_at_its_end() -> None:
     assert reached_end
     assert signal.getsignal(signal.SIGINT) is handler
     assert signal.pthread_sigmask(signal.SIG_BLOCK, set()) == mask
-    with _sigint_blocked_for_workers():  # no Ctrl-C: nothing raised
+    with sigint_blocked_for_workers():  # no Ctrl-C: nothing raised
         pass

@@ -199,6 +199,8 @@ def main(argv: Sequence[str] | None = None) -> int:
     anything unexpected 3 and one line (``SWARM_IK_DEBUG=1`` re-raises it), Ctrl-C 130.
     """
     script = argv is None  # the console script: this process is ours to tune
+    if sys.stdout is None:  # (started with standard output closed, `>&-`: what it prints
+        sys.stdout = open(os.devnull, "w")  # noqa: SIM115  # goes nowhere, as with >/dev/null)
     argv = list(sys.argv[1:] if argv is None else argv)
     as_json = "--json" in argv
     try:

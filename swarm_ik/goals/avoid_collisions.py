@@ -237,7 +237,8 @@ class AvoidCollisions(Goal):
         every sampled configuration
         (:meth:`~swarm_ik.collision.RobotCollision.pairs_always_in_contact`): solves that
         cannot meet this goal otherwise end without saying why."""
-        from swarm_ik.collision import ALWAYS_SAMPLES, user_stacklevel
+        from swarm_ik._validate import user_stacklevel
+        from swarm_ik.collision import ALWAYS_SAMPLES
 
         key = (self.scene, bool(self.self_collision), self.margin)
         seen = robot._cache.setdefault("always_in_contact", set())

@@ -24,6 +24,7 @@ import contextlib
 import hashlib
 import os
 import shutil
+import stat
 import sys
 import threading
 from collections.abc import Callable, Iterable, Iterator
@@ -190,6 +191,10 @@ def drop_damaged_cache_files(folders: Iterable[str]) -> list[str]:
                 removed.append(path)
             continue
         try:
+            if not stat.S_ISREG(os.stat(path).st_mode):  # (a FIFO or device in its place:
+                os.remove(path)  # opened, it blocked the import for good)
+                removed.append(path)
+                continue
             with open(path, "rb") as f:
                 size = os.fstat(f.fileno()).st_size
                 if _whole_pickles(f, size, 2 if path.endswith(".nbi") else 1):

@@ -28,7 +28,7 @@ from typing import TYPE_CHECKING, Any
 import numpy as np
 
 from swarm_ik._types import FloatArray
-from swarm_ik._validate import INT_PARAM_MAX
+from swarm_ik._validate import INT_PARAM_MAX, plain_number
 from swarm_ik.errors import InvalidArgumentError, unknown
 
 if TYPE_CHECKING:
@@ -508,7 +508,8 @@ class Constraint:
 
     def convert(self, value: Any) -> tuple[bool, Any]:
         """``(ok, value)``: whether ``value`` is accepted, and its normalised form (floats as
-        ``float``, integers as ``int``)."""
+        ``float``, integers as ``int``; a 0-d array is its number)."""
+        value = plain_number(value)
         if self.kind == "bool":
             if isinstance(value, (bool, np.bool_)):
                 return True, bool(value)
