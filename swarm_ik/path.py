@@ -1022,28 +1022,33 @@ def _closed_form(
         certified = all(sigma_min(ctx.robot, q) >= SINGULAR_SIGMA for q in qs)
     blocked = None
     if not ctx.wps.plain and qs.shape[0]:  # the other goals (collisions, …) filter the set
-        keep, failed = _goal_filter(ctx.wps.problem(i), qs, ctx)
-        blocked = None if keep.any() else failed
+        keep, failed, cut = _goal_filter(ctx.wps.problem(i), qs, ctx)
+        blocked = None if keep.any() or cut else failed
+        certified = certified and not cut  # (rows left unchecked: no proof from them)
         qs = qs[keep]
     return _with_windings(qs, ctx.lower, ctx.upper, ctx.windings), True, certified, blocked
 
 
 def _goal_filter(
     problem: Any, qs: FloatArray, ctx: _Context
-) -> tuple[NDArray[np.bool_], tuple[int, ...]]:
-    """Which rows of ``qs`` meet ``problem`` (:meth:`IKProblem.verify` and its bounds), and
-    the indices in ``problem.goals`` of the goals some row failed (-1: the bounds), sorted."""
+) -> tuple[NDArray[np.bool_], tuple[int, ...], bool]:
+    """Which rows of ``qs`` meet ``problem`` (:meth:`IKProblem.verify` and its bounds), the
+    indices in ``problem.goals`` of the goals some row failed (-1: the bounds), sorted, and
+    whether the time limit cut the checks short (the rows after it not kept, and no proof
+    drawn from them: a check among thousands of obstacles may take 0.1 s a row)."""
     primary = [k for k in range(len(problem.goals)) if problem.primary[k]]
     keep = np.zeros(qs.shape[0], dtype=bool)
     failed: set[int] = set()
     for r in range(qs.shape[0]):
+        if r and keep.any() and ctx.past_limit():
+            return keep, tuple(sorted(failed)), True
         errs = problem.verify(qs[r], ctx.tol_pos, ctx.tol_rot)
         missed = {k for k, e in zip(primary, errs, strict=True) if not e.met}
         if not problem.within_bounds(qs[r]):
             missed.add(-1)
         keep[r] = not missed
         failed |= missed
-    return keep, tuple(sorted(failed))
+    return keep, tuple(sorted(failed)), False
 
 
 NEAR_LS_STARTS = 16
