@@ -172,6 +172,19 @@ def test_report_only_names_the_run_it_reports_not_its_own_arguments(tmp_path: Pa
     )
 
 
+def test_report_only_names_the_host_the_rows_were_measured_on(tmp_path: Path) -> None:
+    """The run records its machine in run.json; ``--report-only`` (elsewhere) names it."""
+    import json
+
+    out = tmp_path / "r"
+    assert ik.run(_args(*QUICK, "--peers", "swarm", "--out", str(out))) == 0
+    info = json.loads((out / common.RUN_INFO).read_text())
+    info["machine"]["CPU"] = "The Run's Own CPU 9000"
+    (out / common.RUN_INFO).write_text(json.dumps(info))
+    assert ik.run(_args("--report-only", "--no-progress", "--out", str(out))) == 0
+    assert "The Run's Own CPU 9000" in (out / "summary.md").read_text()
+
+
 def test_quick_never_writes_into_a_full_run(tmp_path: Path) -> None:
     out = tmp_path / "full"
     common.write_run_info(out, "ik", quick=False)

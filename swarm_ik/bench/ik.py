@@ -258,9 +258,7 @@ def write_summary(out: Path, plan: IKPlan, quick: bool, wall_s: float | None) ->
     notes = sorted({(r["robot"], r["solver"], r["note"]) for r in rows if r["note"]})
     skipped = "\n".join(f"- `{s}` on `{r}`: {n}" for r, s, n in notes) or "- none"
     described = "\n".join(f"- `{n}`: {peers.PEERS[n].what}" for n in plan.peers if n in peers.PEERS)
-    info = common.machine_info(
-        ("pytracik", "roboticstoolbox-python", "pin-pink", "ikpy", "threadpoolctl")
-    )
+    info = recorded_machine(out) or common.machine_info(PACKAGES)
     command = (
         f"swarm-ik bench ik --robots {' '.join(plan.robots)} --peers {' '.join(plan.peers)} "
         f"--n {plan.n} --budgets-ms {' '.join(f'{b:g}' for b in plan.budgets_ms)} "
@@ -380,6 +378,21 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     )
 
 
+PACKAGES = ("pytracik", "roboticstoolbox-python", "pin-pink", "ikpy", "threadpoolctl")
+"""The peers' distributions whose versions a report names."""
+
+
+def recorded_machine(out: Path) -> dict[str, str] | None:
+    """The machine a run recorded in ``out``'s :data:`~swarm_ik.bench.common.RUN_INFO` (where
+    its rows were measured: ``--report-only`` on another host names the run's), or None."""
+    try:
+        rec = json.loads((Path(out) / common.RUN_INFO).read_text()).get("machine")
+    except (OSError, ValueError, AttributeError):
+        return None
+    ok = isinstance(rec, dict) and all(isinstance(v, str) for v in rec.values())
+    return rec if ok else None
+
+
 def recorded_plan(out: Path) -> IKPlan | None:
     """The plan a run recorded in ``out``'s :data:`~swarm_ik.bench.common.RUN_INFO` (what
     ``--report-only`` reports, whatever its own arguments), or None where it recorded none."""
@@ -444,7 +457,13 @@ def run(args: argparse.Namespace) -> int:
         plan = recorded_plan(out) or plan  # (the header names the run, not this invocation)
     else:  # (a .urdf path is only checked by loading it)
         common.check_robots([r for r in plan.robots if r.endswith(".urdf")])
-        common.write_run_info(out, COMMAND, quick, plan=dataclasses.asdict(plan))
+        common.write_run_info(
+            out,
+            COMMAND,
+            quick,
+            plan=dataclasses.asdict(plan),
+            machine=common.machine_info(PACKAGES),
+        )
     common.single_thread()
     missing = [p for p in plans.IK_PEERS if not peers.get(p).available()]
     if missing and not args.peers:
