@@ -241,3 +241,27 @@ def test_a_pair_in_contact_whatever_the_joints_is_named_in_a_warning() -> None:
         swarm_ik.solve(
             swarm_ik.IKProblem(panda, goals=[pose, G.AvoidCollisions(scene)]), max_evals=50
         )
+
+
+def test_a_chunk_run_where_the_robot_was_unpickled_does_not_warn_again() -> None:
+    """A Dask worker unpickles the batch's robot without the record of the warning the caller
+    gave when its goals were made: its chunks say nothing more."""
+    import dataclasses
+    import pickle
+    import warnings
+
+    from swarm_ik import batch
+
+    ur5 = robot("ur5")
+    targets = ur5.fk(ur5.random_q(np.random.default_rng(1), 3))
+    far = Scene([Box([0.1] * 3, [1.0, 1.0, 1.0])])
+    with pytest.warns(UserWarning, match="closer than the margin"):
+        goals = batch.BatchGoals(ur5, [G.AvoidCollisions(far, margin=0.02)], False, targets[0])
+    bc = dataclasses.replace(batch.BatchChain.from_robot(ur5), goals=goals)
+    worker_bc = pickle.loads(pickle.dumps(bc))
+    seeds = np.tile(ur5.mid_q(), (3, 1))
+    with warnings.catch_warnings(record=True) as said:
+        warnings.simplefilter("always")
+        out = batch._run_chunk(worker_bc, batch.BatchSettings(max_starts=2), (0, targets, seeds))
+    assert out.q.shape == (3, ur5.nq)
+    assert not [w for w in said if "random configurations" in str(w.message)]
