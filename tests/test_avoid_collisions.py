@@ -254,7 +254,7 @@ def test_a_chunk_run_where_the_robot_was_unpickled_does_not_warn_again() -> None
 
     ur5 = robot("ur5")
     targets = ur5.fk(ur5.random_q(np.random.default_rng(1), 3))
-    far = Scene([Box([0.1] * 3, [1.0, 1.0, 1.0])])
+    far = Scene([Box([0.1] * 3, [1.0, -1.25, 1.0])])  # (a scene of its own: warned once a robot)
     with pytest.warns(UserWarning, match="closer than the margin"):
         goals = batch.BatchGoals(ur5, [G.AvoidCollisions(far, margin=0.02)], False, targets[0])
     bc = dataclasses.replace(batch.BatchChain.from_robot(ur5), goals=goals)
