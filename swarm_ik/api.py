@@ -100,7 +100,8 @@ def unreachable_goal(
     """A primary goal point beyond its frame's reach (:meth:`RobotModel.reach_radius`), or
     inside an obstacle of a collision goal, or a primary goal that says it cannot be met
     within the tolerances (:meth:`swarm_ik.goals.Goal.infeasible`), if any: no joint vector
-    can meet it.  Returns its label (or the goal's reason)."""
+    can meet it.  Returns one line saying which goal and why (the goal's own reason where it
+    gave one)."""
     avoid = problem.collision_goal
     for gl in problem.goals:
         if not gl.is_primary:
@@ -118,7 +119,10 @@ def unreachable_goal(
         except UnknownNameError:  # (a frame of the model that no goal frame's path holds: a
             continue  # Python goal's; no bound on its reach is known here)
         if far > radius * (1 + 1e-9):
-            return gl.describe()
+            return (
+                f"{gl.describe()} beyond its frame's reach ({far:.3g} m from the root, at "
+                f"most {radius:.3g} m)"
+            )
         if slack > 0.0 or avoid is None:
             continue  # (a region, not a point: it may reach out of an obstacle)
         if not _origin_in_body(problem.robot, held.frame):

@@ -7,7 +7,10 @@ Positions in metres, angles in radians.  Lower is better, zero at the target.
   rotation entries.  The paper uses millimetres with ``λ = 1e-2``; in metres ``λ = 10`` gives
   the same values.
 * ``"euler-zyz"``: eq. 15 of [MGWO], ``μ·(|Δx|+|Δy|+|Δz|) + |Δα|+|Δβ|+|Δγ|`` with
-  ZYZ Euler angles, differences wrapped to ``(−π, π]``, ``μ = 1``.
+  ZYZ Euler angles, ``μ = 1``.  Two departures from the printed equation (ours, named here):
+  the angle differences are wrapped to ``(−π, π]`` (eq. 15 subtracts them plainly, so
+  ``α = π − ε`` and ``−π + ε`` would count as ``2π`` apart), and at ``β = 0`` or ``π``, where
+  the split between ``α`` and ``γ`` is arbitrary, ``α = 0`` (the whole yaw in ``γ``).
 * ``"paper-pso"``: eqs. 3–5 of [PSO-IK], ``|Δp|² + (N·N* + O·O* + A·A* − 3)²``.  The paper
   prints the orientation term legibly as ``(N·N* + O·O* + A·A* − 1)²`` (eq. 4, and its
   derivative eq. 11), which is wrong: ``N·N* + O·O* + A·A* = 1 + 2·cos θ`` for a rotation

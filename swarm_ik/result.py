@@ -53,9 +53,12 @@ class Result:
             evaluation budget ran out), ``"time_limit"``, ``"local_minima"`` (every start
             ended in a local minimum or at its iteration cap within the solver's own
             iteration count), ``"unreachable"`` (a goal point lies beyond the frame's
-            reach: no joint vector can meet it), ``"conflicting_goals"`` (two goals of one
-            frame at places no pose meets together, or primary goals pulling against each
-            other at the answer: :meth:`swarm_ik.IKProblem.opposing_goals`), or
+            reach or inside an obstacle, or a goal says it cannot be met, e.g. a
+            ``CenterOfMass`` margin deeper than its support polygon allows: no joint vector
+            can meet it; :func:`swarm_ik.api.unreachable_goal` says which and why),
+            ``"conflicting_goals"`` (two goals of one frame at places no pose meets
+            together, or primary goals pulling against each other at the answer:
+            :meth:`swarm_ik.IKProblem.opposing_goals`), or
             ``"stopped"`` (the solver returned on its own before its budget without success).
     """
 

@@ -235,7 +235,9 @@ def test_summarize_uses_population_std() -> None:
 
 def test_verdict_rule() -> None:
     assert judge(5.3, 5.27).label == "reproduced"
-    assert judge(0.05, 0.43).label == "reproduced"  # factor 8.6: same order of magnitude
+    assert judge(0.05, 0.43).label == "same order"  # factor 8.6: not reproduced
+    assert judge(0.0618, 0.0122).text == "same order (ratio 5.1)"
+    assert judge(0.3, 0.43).label == "reproduced"  # within a factor 2
     assert judge(0.04, 0.43).label == "better"
     worse = judge(2.2, 0.0122, why_worse="unreachable")
     assert worse.label == "worse" and "unreachable" in worse.text and worse.reason == "unreachable"
@@ -245,7 +247,8 @@ def test_verdict_rule() -> None:
     assert judge(1e-10, 4.04e-16, floor=1e-12).label == "worse"
     # negative minimum (Hartmann-3): distances to f_min, at the printed resolution
     fmin = published.HARTMANN3_MIN
-    assert judge(-3.86244, -3.8628, f_min=fmin, floor=5e-5).label == "reproduced"
+    assert judge(-3.86244, -3.8628, f_min=fmin, floor=5e-5).label == "same order"  # ×6.8
+    assert judge(-3.86278, -3.8628, f_min=fmin, floor=5e-5).label == "reproduced"
     assert judge(-3.8609, -3.8628, f_min=fmin, floor=5e-5).label == "worse"
     assert judge(-3.8628, -3.8609, f_min=fmin, floor=5e-5).label == "better"
 

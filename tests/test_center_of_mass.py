@@ -239,6 +239,19 @@ def test_a_margin_just_beyond_the_inscribed_radius_is_infeasible() -> None:
     assert CenterOfMass(support=corner, margin=0.058).infeasible(None, 1e-5, 1e-5) is None  # type: ignore[arg-type]
 
 
+def test_a_point_on_one_ground_axis_outside_the_polygons_range_is_infeasible() -> None:
+    """``axes="x"`` with x beyond the feet's range ran its whole time limit (the proof looked
+    only at points on both ground axes)."""
+    feet = [[-0.105, -0.15], [0.105, -0.15], [0.105, 0.15], [-0.105, 0.15]]
+    far = CenterOfMass(point=[0.5, 0, 0], axes="x", support=feet)
+    why = far.infeasible(None, 1e-5, 1e-5)  # type: ignore[arg-type]
+    assert why is not None and "outside its support polygon's range" in why
+    deep = CenterOfMass(point=[0, 0.12, 0], axes="y", support=feet, margin=0.05)
+    assert deep.infeasible(None, 1e-5, 1e-5) is not None  # type: ignore[arg-type]
+    inside = CenterOfMass(point=[0.05, 0, 0], axes="xz", support=feet, margin=0.05)
+    assert inside.infeasible(None, 1e-5, 1e-5) is None  # type: ignore[arg-type]
+
+
 def test_urdf_without_masses_is_refused(tmp_path) -> None:  # type: ignore[no-untyped-def]
     links = "".join(f'<link name="l{i}"/>' for i in range(3))
     joints = "".join(

@@ -730,3 +730,15 @@ def test_only_the_console_script_gets_the_start_up_ctrl_c_handler(
 
     monkeypatch.setattr(sys, "orig_argv", argv)
     assert _startup.console_script() == ours
+
+
+def test_an_unreachable_target_says_why(capsys: pytest.CaptureFixture[str]) -> None:
+    """A solve that ends ``unreachable`` prints which goal and why (the bare word before)."""
+    argv = ["solve", "--robot", "panda", "--pose", "3", "0", "0", "0", "0", "0", "1"]
+    from swarm_ik.cli import main
+
+    assert main([*argv, "--time-limit", "0.05"]) == 1
+    out = capsys.readouterr().out
+    assert "why: Pose(panda_hand_tcp) beyond its frame's reach (3 m from the root" in out
+    d = cli_json(capsys, *argv, "--time-limit", "0.05", code=1)
+    assert d["reason"] == "unreachable" and "beyond its frame's reach" in d["why"]

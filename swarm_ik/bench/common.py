@@ -504,13 +504,18 @@ VERDICT_FACTOR = 10.0
 """Ratio beyond which ours counts as better / worse than the published value (one order of
 magnitude, in the distance to the known minimum)."""
 
+REPRODUCED_FACTOR = 2.0
+"""Ratio within which ours counts as *reproduced*; between it and :data:`VERDICT_FACTOR` the
+verdict is *same order* (of magnitude), with the ratio: a mean 5× the paper's is not called
+reproduced."""
+
 
 @dataclass(frozen=True)
 class Verdict:
     """Our value against a published one.
 
     Attributes:
-        label: ``"reproduced"``, ``"better"`` or ``"worse"``.
+        label: ``"reproduced"``, ``"same order"``, ``"better"`` or ``"worse"``.
         ratio: ``max(ours − f_min, floor) / max(published − f_min, floor)``.
         text: One line for the report (with the reason when worse).
         reason: The reason given when worse (``None`` otherwise).
@@ -534,8 +539,9 @@ def judge(
     """Compare our statistic with the published one, in distance to the known minimum.
 
     Rule: ``a = max(ours − f_min, floor)``, ``b = max(published − f_min, floor)``; ``a/b <
-    1/factor`` → *better*, ``a/b > factor`` → *worse*, otherwise *reproduced* (same order of
-    magnitude).  ``floor`` is the level below which values are not distinguished: numerical
+    1/factor`` → *better*, ``a/b > factor`` → *worse*, within :data:`REPRODUCED_FACTOR`
+    either way → *reproduced*, otherwise *same order* (of magnitude, the ratio given).
+    ``floor`` is the level below which values are not distinguished: numerical
     exactness for IK fitness, or the resolution of a published number printed with few
     decimals.  A ``floor`` of 0 uses the smallest positive double.
 
@@ -560,7 +566,9 @@ def judge(
     if ratio > factor:
         reason = why_worse or "cause not identified"
         return Verdict("worse", ratio, f"worse (×{ratio:.2g}): {reason}", reason)
-    return Verdict("reproduced", ratio, f"reproduced (ratio {ratio:.2g})")
+    if 1.0 / REPRODUCED_FACTOR <= ratio <= REPRODUCED_FACTOR:
+        return Verdict("reproduced", ratio, f"reproduced (ratio {ratio:.2g})")
+    return Verdict("same order", ratio, f"same order (ratio {ratio:.2g})")
 
 
 def group_rows(

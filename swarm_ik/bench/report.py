@@ -155,7 +155,7 @@ def _verdict(comp: Comparison, solver: str, st: Stats) -> Verdict | None:
 def short_verdict(v: Verdict) -> str:
     """The verdict label with the first clause of its reason (for the headline)."""
     if not v.reason:
-        return v.label
+        return v.text if v.label == "same order" else v.label
     reason = v.reason
     for cut in (";", " ("):
         reason = reason.split(cut)[0]

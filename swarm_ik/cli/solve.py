@@ -219,10 +219,11 @@ def run(args: argparse.Namespace) -> int:
     _check_dls_problem(args, problem)
     _check_closed_form_compare(args, problem)
     res = swarm_ik.solve(problem, args.solver, **solve_kwargs(args), **dict(args.param))
+    why = _why_not(problem, res, solve_kwargs(args))
     if args.json:
-        _print_json(args, robot, res)
+        _print_json(args, robot, res, why)
     else:
-        _print_text(args, robot, res)
+        _print_text(args, robot, res, why)
     if args.show or args.animate or args.html or args.compare:
         _viewer.after_solve(args, problem, res)
     return EXIT_OK if res.success else EXIT_NOT_REACHED
@@ -303,8 +304,24 @@ def _measured(res: Any, field: str) -> bool:
     return any(getattr(e, field) == getattr(e, field) for e in res.goal_errors)
 
 
-def _print_json(args: argparse.Namespace, robot: Any, res: Any) -> None:
+def _why_not(problem: Any, res: Any, kwargs: dict[str, Any]) -> str | None:
+    """What a solve that ended ``unreachable`` or ``conflicting_goals`` found: the goal
+    beyond reach (or the goal's own reason, e.g. a centre-of-mass margin deeper than its
+    support polygon allows), or the two goals no pose meets together; None otherwise."""
+    from swarm_ik import api
+
+    tol = (kwargs.get("tol_pos", 1e-5), kwargs.get("tol_rot", 1e-5))
+    if res.reason == "unreachable":
+        return api.unreachable_goal(problem, *tol)
+    if res.reason == "conflicting_goals":
+        found = api.conflicting_goals(problem, *tol)
+        return None if found is None else f"{found} cannot be met together"
+    return None
+
+
+def _print_json(args: argparse.Namespace, robot: Any, res: Any, why: str | None) -> None:
     d = res.to_dict()
+    d["why"] = why
     d.pop("history")
     if args.position_only or not _measured(res, "rotation_error"):
         d["rotation_error"] = None  # not measured: no goal asked for a rotation
@@ -322,7 +339,7 @@ def _print_json(args: argparse.Namespace, robot: Any, res: Any) -> None:
     print(json.dumps(d))
 
 
-def _print_text(args: argparse.Namespace, robot: Any, res: Any) -> None:
+def _print_text(args: argparse.Namespace, robot: Any, res: Any, why: str | None) -> None:
     status = "reached" if res.success else "NOT reached (best found below)"
     joints = (
         f"{robot.nq - 6} joints + floating base" if robot.floating_base else f"{robot.nq} joints"
@@ -353,6 +370,8 @@ def _print_text(args: argparse.Namespace, robot: Any, res: Any) -> None:
         rot = f"{res.rotation_error:.3e} rad"
     pos = f"{res.position_error:.3e} m" if _measured(res, "position_error") else "n/a"
     print(f"position error {pos}, rotation error {rot} ({res.reason})")
+    if why:
+        print(f"why: {why}")
     print(
         f"evaluations {res.n_evals}, time {res.time_s * 1e3:.2f} ms, "
         f"within limits {res.within_limits}"

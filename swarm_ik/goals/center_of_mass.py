@@ -313,9 +313,23 @@ class CenterOfMass(Goal):
                 f"CenterOfMass margin {self.margin:g} m deeper than its support polygon allows "
                 f"(no point lies more than {deepest:.3g} m inside it)"
             )
-        if self.point is None or "x" not in self.axes or "y" not in self.axes:
+        if self.point is None:
             return None
         poly = self.support
+        if ("x" in self.axes) != ("y" in self.axes):  # one ground axis: a point margin inside
+            # the polygon has that coordinate within its range, shrunk by the margin
+            a = 0 if "x" in self.axes else 1
+            lo = float(poly[:, a].min()) + self.margin
+            hi = float(poly[:, a].max()) - self.margin
+            v = float(self.point[a])
+            if v < lo - 2 * tol_pos or v > hi + 2 * tol_pos:
+                return (
+                    f"CenterOfMass point {'xy'[a]} = {v:g} outside its support polygon's range "
+                    f"[{lo:.3g}, {hi:.3g}] m (less the margin {self.margin:g} m)"
+                )
+            return None
+        if "x" not in self.axes or "y" not in self.axes:
+            return None
         d, _, _ = _polygon_distance(
             float(self.point[0]), float(self.point[1]), poly[:, 0].copy(), poly[:, 1].copy()
         )

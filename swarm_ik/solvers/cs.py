@@ -108,9 +108,13 @@ def run(
 
     ``e = [p_target − p; log(R_target Rᵀ)]`` and ``J`` the world-aligned frame Jacobian, from
     ``ev.residual_jacobian`` (one evaluation per step); ``J⁺`` cuts singular values below
-    ``1e-10·σ_max``.  Eq. 16 of [CS-IK] is not legible in our copy; the text says the rate
-    decays exponentially from ``η0 = 1`` with a parameter ``η_t = 0.001``; the schedule above
-    is our reading (it tends to ``η_t``).  ``τ = 100`` steps: the first ~10 steps are nearly
+    ``1e-10·σ_max``.  Eq. 16 of [CS-IK] (an "exponential learning-rate decay") is not legible
+    in our copy; its text defines ``η0 = 1`` (the initial rate), ``η_t = 0.001`` (a "dynamic
+    adjustment parameter") and ``N``, "the total number of steps set to iterate to the set
+    accuracy", which our schedule does not use: ours is a choice (it starts at ``η0`` and
+    tends to ``η_t``, at a rate ``τ`` in place of the paper's ``N``; a reading such as
+    ``η0·η_t^(n/N)`` would need ``N``, which the paper does not give either).  ``τ = 100``
+    steps: the first ~10 steps are nearly
     full Gauss–Newton steps, which converge quadratically near a solution, so the decay only
     damps the steps of a polish that wanders.  Measured (30 random reachable targets, se3
     fitness, 20 000 evaluations): success 93 % / 57 % / 60 % on loading_manipulator_long /
@@ -138,8 +142,10 @@ def run(
         newton: Switch to the Newton polish once the best fitness is below ``eps``.
         eps: Threshold ``ε`` of the switch ([CS-IK]: 0.2).
         eta0: Initial learning rate ``η0`` ([CS-IK]: 1).
-        eta_t: Final learning rate ``η_t`` ([CS-IK]: 0.001).
-        tau: Decay constant ``τ`` of the learning rate, in Newton steps (not in the paper).
+        eta_t: The rate the schedule tends to, ``η_t`` ([CS-IK]: 0.001, its "dynamic
+            adjustment parameter").
+        tau: Decay constant ``τ`` of the learning rate, in Newton steps (not in the paper,
+            which uses a total step count ``N`` it does not give).
 
     Parameter values are checked by the registry (:data:`CONSTRAINTS`, ``pop_size`` and
         ``iterations`` by :meth:`swarm_ik.solvers.base.SolverSpec.resolve`).

@@ -18,6 +18,7 @@ import numpy as np
 
 from swarm_ik._types import IntArray
 from swarm_ik.solvers.base import Evaluator, register
+from swarm_ik.solvers.gwo import schedule_length
 
 
 def distinct_indices(rng: np.random.Generator, m: int) -> IntArray:
@@ -64,7 +65,9 @@ def run(
           r <  ω:  X_i(t+1) = (P_r2 - P_r3)·exp(-r') + P_r1
           r >= ω:  X_i(t+1) = (P_r2 - P_r3)·ω + (G_b + X_i(t))/2
 
-      ``X_i(t)`` is the fly's current position (its last candidate, accepted or not).
+      ``X_i(t)`` is the fly's current position (its last candidate, accepted or not).  ``r``
+      and ``r'`` are drawn once per fly and iteration, shared by its joints (the paper writes
+      them as scalars; our reading).
     * Bounds (eq. 12): each out-of-bound component becomes ``l_j + (u_j - l_j)·k``,
       ``k ~ U[0, 1]``.
     * Visual search (eqs. 13-14), greedy with ``<=``: ``P_i`` and ``G_b`` take ``X_i(t+1)``
@@ -83,7 +86,10 @@ def run(
         rng: Source of all randomness.
         pop_size: Population size ``m`` ([HLFOA]: 100); at least 4 (three distinct partners
             besides the fly itself).
-        iterations: ``t_max`` ([HLFOA]: 1000); also sets the schedule ``ω``.
+        iterations: ``t_max`` ([HLFOA]: 1000); also sets the schedule ``ω``, shortened to the
+            iterations an evaluation budget smaller than ``m·t_max`` allows (so that ``ω``
+            still reaches its end within the budget, as GWO's ``a``:
+            :func:`swarm_ik.solvers.gwo.schedule_length`; a choice, the paper runs whole).
         realtime: True: real-time update of eqs. 13-14, one evaluation per call (the paper).
             False: synchronous update, one batch per iteration (the ``hlfoa-batch`` variant,
             not in the paper).
@@ -103,7 +109,7 @@ def run(
     g = p[ib].copy()
     gf = float(pf[ib])
 
-    t_max = max(int(iterations), 1)
+    t_max = schedule_length(ev, m, iterations)
     for t in range(1, int(iterations) + 1):
         if ev.done:
             break
