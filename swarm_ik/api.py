@@ -120,8 +120,8 @@ def unreachable_goal(
             continue  # Python goal's; no bound on its reach is known here)
         if far > radius * (1 + 1e-9):
             return (
-                f"{gl.describe()} beyond its frame's reach ({far:.3g} m from the root, at "
-                f"most {radius:.3g} m)"
+                f"{gl.describe()} beyond its frame's reach (its point {far:.4g} m from the "
+                f"world origin, the frame reaches {radius:.4g} m at most)"
             )
         if slack > 0.0 or avoid is None:
             continue  # (a region, not a point: it may reach out of an obstacle)

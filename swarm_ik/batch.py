@@ -64,7 +64,6 @@ from swarm_ik._validate import check_seed, count, floats_or, keywords_checked
 from swarm_ik.errors import InvalidArgumentError, InvalidTargetError, SwarmIKError
 from swarm_ik.goals import AvoidCollisions, Goal, Pose, Position, State, kernel_slot, kernels
 from swarm_ik.goals import base as goals_base
-from swarm_ik.goals.avoid_collisions import ALWAYS_IN_CONTACT_WARNING
 from swarm_ik.kernels import announced, lie, lm, loaded_despite_damage
 from swarm_ik.kernels.fk import TreeArrays
 from swarm_ik.kernels.lm import CONVERGED, NOT_RUN
@@ -1414,10 +1413,7 @@ def _run_chunk(
     bc: BatchChain, settings: BatchSettings, item: tuple[int, FloatArray, FloatArray]
 ) -> ChunkResult:
     start, targets, q_seed = item
-    with warnings.catch_warnings():  # (said once by the caller, when its goals were made: a
-        # Dask worker, its robot unpickled without the record of it, said it again)
-        warnings.filterwarnings("ignore", message=ALWAYS_IN_CONTACT_WARNING)
-        return solve_chunk(bc, settings, start, targets, q_seed)
+    return solve_chunk(bc, settings, start, targets, q_seed)
 
 
 MAX_CHUNK = 16384

@@ -84,11 +84,10 @@ def check_scheduler(scheduler: Any) -> Any:
     if isinstance(scheduler, str):
         if scheduler == LOCAL:
             return scheduler
-        if scheduler.startswith(("tcp://", "tls://")) and not re.fullmatch(
-            r"(?:tcp|tls)://(\[[^\]]+\]|[^:/\[\]]+):\d{1,5}/?", scheduler
-        ):
+        m = re.fullmatch(r"(?:tcp|tls)://(\[[^\]]+\]|[^:/\[\]]+):(\d{1,5})/?", scheduler)
+        if scheduler.startswith(("tcp://", "tls://")) and (m is None or int(m.group(2)) > 65535):
             raise InvalidArgumentError(
-                f"scheduler address {scheduler!r} needs a host and a port, e.g. "
+                f"scheduler address {scheduler!r} needs a host and a port (1 to 65535), e.g. "
                 "tcp://127.0.0.1:8786"
             )
         if scheduler.startswith(SCHEMES):
@@ -386,19 +385,28 @@ def _probe(scheduler: str, timeout: float) -> None:
         return
     wait = min(timeout, PROBE_S)
     try:
-        with socket.create_connection((m.group(1), int(m.group(2))), timeout=wait) as conn:
-            conn.settimeout(wait)
-            greeted = bool(conn.recv(8))
-    except TimeoutError:
-        greeted = False
-    except OSError as exc:
+        conn = socket.create_connection((m.group(1), int(m.group(2))), timeout=wait)
+    except (OSError, UnicodeError) as exc:  # (refused, timed out, no such host, a bad name)
         raise InvalidArgumentError(
-            f"could not reach the Dask scheduler at {scheduler!r} ({exc.strerror or exc})"
+            f"could not reach the Dask scheduler at {scheduler!r} "
+            f"({getattr(exc, 'strerror', None) or exc})"
         ) from None
-    if not greeted:
+    with conn:
+        conn.settimeout(wait)
+        try:
+            greeting = conn.recv(8)
+        except TimeoutError:
+            raise InvalidArgumentError(
+                f"{scheduler!r} accepted the connection but sent nothing in {wait:g} s: not a "
+                "Dask scheduler's address (a dashboard's HTTP port?)"
+            ) from None
+        except OSError as exc:
+            greeting, why = b"", exc.strerror or str(exc)
+        else:
+            why = "it closed the connection at once"
+    if not greeting:
         raise InvalidArgumentError(
-            f"{scheduler!r} accepted the connection but sent nothing in {wait:g} s: not a Dask "
-            "scheduler's address (a dashboard's HTTP port?)"
+            f"{scheduler!r} is no Dask scheduler's address ({why} without a greeting)"
         )
 
 

@@ -44,10 +44,21 @@ def _same_details(a: Any, b: Any) -> bool:
     arrays (a Python goal's ``met`` may report anything)."""
     if a is b:
         return True
+    if isinstance(a, float) and isinstance(b, float):
+        return a == b or (math.isnan(a) and math.isnan(b))
+    if isinstance(a, dict) and isinstance(b, dict):
+        return a.keys() == b.keys() and all(_same_details(a[k], b[k]) for k in a)
+    if isinstance(a, (list, tuple)) and type(a) is type(b):
+        return len(a) == len(b) and all(map(_same_details, a, b))
+    if isinstance(a, np.ndarray) or isinstance(b, np.ndarray):
+        try:
+            return bool(np.array_equal(a, b, equal_nan=True))
+        except TypeError:  # (not numbers: NaN has no meaning there)
+            return bool(np.array_equal(a, b))
     try:
         return bool(a == b)
-    except (ValueError, TypeError):  # (arrays: no single truth value)
-        return bool(np.array_equal(np.asarray(a), np.asarray(b)))
+    except (ValueError, TypeError):  # (no single truth value)
+        return False
 
 
 @dataclass(frozen=True, eq=False)

@@ -861,7 +861,9 @@ class RobotModel:
     def __getstate__(self) -> dict[str, Any]:
         state = dict(self.__dict__)
         state.pop("_local", None)  # per-thread Pinocchio Data: rebuilt on demand
-        state["_cache"] = {}
+        # (caches are rebuilt on demand, but the record of the warnings already given travels:
+        # a Dask worker said the always-in-contact warning again)
+        state["_cache"] = {k: v for k, v in self._cache.items() if k in _CACHE_KEPT_IN_PICKLES}
         return state
 
     def __setstate__(self, state: dict[str, Any]) -> None:
@@ -1140,6 +1142,10 @@ class RobotModel:
             f"RobotModel(name={self.name!r}, nq={self.nq}, ee_frame={self.ee_frame!r}, "
             f"kinds={list(self.joint_kinds)})"
         )
+
+
+_CACHE_KEPT_IN_PICKLES = ("always_in_contact",)
+"""The entries of a robot's cache that travel with it when pickled (what it has said)."""
 
 
 def _frame_id(model: Any, name: str) -> int:

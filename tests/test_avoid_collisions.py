@@ -244,8 +244,8 @@ def test_a_pair_in_contact_whatever_the_joints_is_named_in_a_warning() -> None:
 
 
 def test_a_chunk_run_where_the_robot_was_unpickled_does_not_warn_again() -> None:
-    """A Dask worker unpickles the batch's robot without the record of the warning the caller
-    gave when its goals were made: its chunks say nothing more."""
+    """A Dask worker unpickles the batch's robot: the record of the warning the caller gave
+    when its goals were made travels with it, so its chunks say nothing more."""
     import dataclasses
     import pickle
     import warnings

@@ -236,7 +236,7 @@ def test_summarize_uses_population_std() -> None:
 def test_verdict_rule() -> None:
     assert judge(5.3, 5.27).label == "reproduced"
     assert judge(0.05, 0.43).label == "same order"  # factor 8.6: not reproduced
-    assert judge(0.0618, 0.0122).text == "same order (ratio 5.1)"
+    assert judge(0.0618, 0.0122).text == "same order (ratio 5.07)"
     assert judge(0.3, 0.43).label == "reproduced"  # within a factor 2
     assert judge(0.04, 0.43).label == "better"
     worse = judge(2.2, 0.0122, why_worse="unreachable")

@@ -739,6 +739,6 @@ def test_an_unreachable_target_says_why(capsys: pytest.CaptureFixture[str]) -> N
 
     assert main([*argv, "--time-limit", "0.05"]) == 1
     out = capsys.readouterr().out
-    assert "why: Pose(panda_hand_tcp) beyond its frame's reach (3 m from the root" in out
+    assert "why: Pose(panda_hand_tcp) beyond its frame's reach (its point 3 m from" in out
     d = cli_json(capsys, *argv, "--time-limit", "0.05", code=1)
     assert d["reason"] == "unreachable" and "beyond its frame's reach" in d["why"]

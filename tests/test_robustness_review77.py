@@ -123,3 +123,60 @@ def test_refusals_of_the_robot_and_minimize() -> None:
         panda.fk("a")
     with pytest.raises(errors.InvalidArgumentError, match="overflows"):
         swarm_ik.minimize(lambda x: x.sum(1), [-1e308] * 2, [1e308] * 2, max_evals=200)
+
+
+def test_the_probe_tells_an_unreachable_host_from_a_silent_or_closing_one(monkeypatch) -> None:
+    """A server that closes at once is no scheduler; one that never completes the connection
+    could not be reached (it was called one that "accepted the connection")."""
+    server = socket.socket()
+    server.bind(("127.0.0.1", 0))
+    server.listen(1)
+    threading.Thread(target=lambda: server.accept()[0].close(), daemon=True).start()
+    address = f"tcp://127.0.0.1:{server.getsockname()[1]}"
+    try:
+        with pytest.raises(errors.InvalidArgumentError, match="closed the connection at once"):
+            distributed._probe(address, 1.0)
+    finally:
+        server.close()
+
+    def never(*args: object, **kwargs: object) -> None:
+        raise TimeoutError("timed out")
+
+    monkeypatch.setattr(socket, "create_connection", never)
+    with pytest.raises(errors.InvalidArgumentError, match=r"could not reach .* \(timed out\)"):
+        distributed._probe("tcp://10.255.255.1:8786", 1.0)
+    with pytest.raises(errors.InvalidArgumentError, match="1 to 65535"):
+        distributed.check_scheduler("tcp://127.0.0.1:99999")
+
+
+def test_one_quaternion_and_rows_give_the_same_bits_without_warnings() -> None:
+    import warnings
+
+    from swarm_ik.pose import poses_from_rows, quat_to_matrix
+
+    rng = np.random.default_rng(5)
+    quats = np.concatenate(
+        [
+            rng.normal(size=(300, 4)),
+            rng.normal(size=(50, 4)) * 1e300,
+            [[1.7e308, 1.7e308, 0, 1.7e308]],
+        ]
+    )
+    rows = np.concatenate([np.zeros((len(quats), 3)), quats], axis=1)
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        batch = poses_from_rows(rows)[:, :3, :3]
+        one = np.array([quat_to_matrix(q) for q in quats])
+    np.testing.assert_array_equal(one, batch)
+
+
+def test_a_wall_on_a_narrowed_continuous_joint_stops_the_particle() -> None:
+    """``Evaluator.wrapped`` is what a step across ±π becomes; a clip beyond it is a wall
+    (PSO and MGWO zero the velocity there, and only there)."""
+    from swarm_ik.solvers.base import Evaluator
+
+    ev = Evaluator(lambda x: x.sum(1), [-0.5, -np.pi], [0.5, np.pi])
+    ev.wrap_mask = np.array([True, True])
+    xn = np.array([[0.75, 3.5]])
+    x = ev.clip(xn)
+    assert (x == ev.wrapped(xn)).tolist() == [[False, True]]

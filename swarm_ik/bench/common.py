@@ -567,8 +567,8 @@ def judge(
         reason = why_worse or "cause not identified"
         return Verdict("worse", ratio, f"worse (×{ratio:.2g}): {reason}", reason)
     if 1.0 / REPRODUCED_FACTOR <= ratio <= REPRODUCED_FACTOR:
-        return Verdict("reproduced", ratio, f"reproduced (ratio {ratio:.2g})")
-    return Verdict("same order", ratio, f"same order (ratio {ratio:.2g})")
+        return Verdict("reproduced", ratio, f"reproduced (ratio {ratio:.3g})")
+    return Verdict("same order", ratio, f"same order (ratio {ratio:.3g})")
 
 
 def group_rows(

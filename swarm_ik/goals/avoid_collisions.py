@@ -108,11 +108,6 @@ MAX_ROWS_LIMIT = 4096
 Jacobian the LM factors)."""
 
 
-ALWAYS_IN_CONTACT_WARNING = r"AvoidCollisions\(margin=.* in each of \d+ random configurations"
-"""The pattern of the warning of a goal whose pairs are in contact whatever the joints (for a
-filter: :meth:`AvoidCollisions._warn_always_in_contact`)."""
-
-
 @dataclass(frozen=True)
 class AvoidCollisions(Goal):
     """No contact between the robot's collision bodies (self-collision) nor with a scene.
@@ -256,7 +251,7 @@ class AvoidCollisions(Goal):
         if pairs:
             near = "closer than the margin" if self.margin > 0 else "in contact"
             warnings.warn(
-                f"AvoidCollisions(margin={self.margin:g} m): "  # (ALWAYS_IN_CONTACT_WARNING)
+                f"AvoidCollisions(margin={self.margin:g} m): "
                 f"{', '.join(f'{a}–{b}' for a, b in pairs)} {near} in each of "
                 f"{ALWAYS_SAMPLES} random configurations: no answer may be free of contact "
                 "(lower the margin, disable a self pair in the robot's SRDF, or move the "

@@ -370,14 +370,20 @@ class Evaluator:
             x[0] = self.q0
         return x
 
-    def clip(self, x: FloatArray) -> FloatArray:
-        """Points clipped to the bounds (same shape); continuous joints are wrapped into
-        ``[-π, π)`` first, so a step across ±π comes out on the other side."""
+    def wrapped(self, x: FloatArray) -> FloatArray:
+        """Points with their continuous joints wrapped into ``[-π, π)`` (same shape; ``x``
+        itself when there are none)."""
         if self.wrap_mask.any():
             x = np.array(x, dtype=float)
             m = self.wrap_mask
             x[..., m] = (x[..., m] + np.pi) % (2 * np.pi) - np.pi
-        return np.clip(x, self.lower, self.upper)
+        return x
+
+    def clip(self, x: FloatArray) -> FloatArray:
+        """Points clipped to the bounds (same shape); continuous joints are wrapped into
+        ``[-π, π)`` first (:meth:`wrapped`), so a step across ±π comes out on the other side
+        (a continuous joint's narrower bounds, if any, then clip it)."""
+        return np.clip(self.wrapped(x), self.lower, self.upper)
 
     def resample_out_of_bounds(self, rng: np.random.Generator, x: FloatArray) -> FloatArray:
         """Replace each out-of-bound component by a uniform draw in its range ([HLFOA], eq. 12)."""

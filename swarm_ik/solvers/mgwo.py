@@ -188,8 +188,8 @@ def run(
         xn = gwo_move(x, lx[group_of], a, rng)  # step 7 (eqs. of GWO) for the other wolves
         xn[worst] = x[worst] + v[worst]
         x_new = ev.clip(xn)
-        kept = (x_new[worst] == xn[worst]) | ev.wrap_mask  # absorbing walls (a continuous
-        v[worst] = np.where(kept, v[worst], 0.0)  # joint wrapped across ±π meets none)
+        kept = x_new[worst] == ev.wrapped(xn[worst])  # absorbing walls (a continuous
+        v[worst] = np.where(kept, v[worst], 0.0)  # joint wrapped across ±π meets none there)
         x = x_new
 
         # step 6, eq. 23: re-initialise the worst sub-population after a long stagnation.

@@ -226,8 +226,8 @@ def run(
         v = np.clip(w * v + c1 * r1 * (p - x) + c2 * r2 * (g - x), -vlim, vlim)  # eq. 6
         xn = x + v
         x = ev.clip(xn)
-        v = np.where((x == xn) | ev.wrap_mask, v, 0.0)  # (stopped at a wall; a continuous
-        # joint wrapped across ±π meets none and keeps its velocity)
+        v = np.where(x == ev.wrapped(xn), v, 0.0)  # (stopped at a wall; a continuous joint
+        # wrapped across ±π meets none there and keeps its velocity)
         escaped = np.zeros(0, dtype=np.int64)
         if escape and stall >= escape_after:  # eq. 14 for the worse half
             escaped = np.argsort(pf, kind="stable")[m - m // 2 :]
