@@ -1680,11 +1680,15 @@ def solve_batch(
     with contextlib.ExitStack() as stack:
         t_setup = time.perf_counter()
         # (worker processes are started here for an embedded cluster only, deaf to SIGINT:
-        # distributed.sigint_blocked_for_workers)
+        # distributed.sigint_blocked_for_workers; kept on interrupt, a Ctrl-C during the whole
+        # start-up, the client's included, is held until the cluster is up, in the stack)
+        embedded = isinstance(scheduler, str) and scheduler == distributed.LOCAL
+        guard = distributed.sigint_blocked_for_workers() if keep_on_interrupt and embedded else None
         try:
-            client = stack.enter_context(distributed.connect(scheduler))
+            with guard or contextlib.nullcontext():
+                client = stack.enter_context(distributed.connect(scheduler))
         except KeyboardInterrupt:  # a Ctrl-C during the cluster's start-up, raised once it
-            if not keep_on_interrupt:  # is up (closed on the way out)
+            if not keep_on_interrupt:  # is up (closed by the stack on the way out)
                 raise
             logging.getLogger("distributed").setLevel(logging.CRITICAL)
             return BatchResult.from_chunks(
