@@ -33,12 +33,12 @@ import os
 import re
 import signal
 import socket
-import threading
 import uuid
 from collections.abc import Callable, Iterator, Sequence
 from contextlib import ExitStack, closing, contextmanager
 from typing import Any, TypeVar
 
+from swarm_ik._signals import sigint_deferred, sigint_settable
 from swarm_ik.errors import InvalidArgumentError
 
 T = TypeVar("T")
@@ -72,6 +72,10 @@ def available_cores() -> int:
         return max(1, os.cpu_count() or 1)
 
 
+_HOST_PORT = re.compile(r"(tcp|tls)://(\[[^\]]+\]|[^:/\[\]]+):(\d{1,5})/?")
+"""A ``tcp://`` or ``tls://`` address: scheme, host (an IPv6 one in brackets), port."""
+
+
 def check_scheduler(scheduler: Any) -> Any:
     """Validate a ``scheduler`` value; returns it (``None`` for "no Dask").
 
@@ -84,8 +88,8 @@ def check_scheduler(scheduler: Any) -> Any:
     if isinstance(scheduler, str):
         if scheduler == LOCAL:
             return scheduler
-        m = re.fullmatch(r"(?:tcp|tls)://(\[[^\]]+\]|[^:/\[\]]+):(\d{1,5})/?", scheduler)
-        if scheduler.startswith(("tcp://", "tls://")) and (m is None or int(m.group(2)) > 65535):
+        m = _HOST_PORT.fullmatch(scheduler)
+        if scheduler.startswith(("tcp://", "tls://")) and (m is None or int(m.group(3)) > 65535):
             raise InvalidArgumentError(
                 f"scheduler address {scheduler!r} needs a host and a port (1 to 65535), e.g. "
                 "tcp://127.0.0.1:8786"
@@ -205,10 +209,7 @@ def sigint_blocked_for_workers() -> Iterator[None]:
     SIGINT (bpo-33613), and would then start the workers with SIGINT unblocked.  Where masks
     are not available (Windows) SIGINT is ignored during the body instead, as it was.
     """
-    if (
-        threading.current_thread() is not threading.main_thread()
-        or signal.getsignal(signal.SIGINT) is None  # (a handler set from C: not restorable)
-    ):
+    if not sigint_settable():
         yield
         return
     if not hasattr(signal, "pthread_sigmask"):  # pragma: no cover - Windows
@@ -218,25 +219,15 @@ def sigint_blocked_for_workers() -> Iterator[None]:
         finally:
             signal.signal(signal.SIGINT, old)
         return
-    caught: list[int] = []
-
-    def record(signum: int, frame: Any) -> None:
-        caught.append(signum)
-
-    old_handler = signal.signal(signal.SIGINT, record)
-    try:
+    with sigint_deferred():  # (raised again once the mask is off and the handler back)
         from multiprocessing import resource_tracker
 
         resource_tracker.ensure_running()
         old_mask = signal.pthread_sigmask(signal.SIG_BLOCK, {signal.SIGINT})
         try:
             yield
-        finally:  # (a Ctrl-C held pending is taken by `record` here)
+        finally:  # (a Ctrl-C held pending is recorded by sigint_deferred's handler here)
             signal.pthread_sigmask(signal.SIG_SETMASK, old_mask)
-    finally:
-        signal.signal(signal.SIGINT, old_handler)
-        if caught:  # sent again, to the handler it was meant for (KeyboardInterrupt)
-            signal.raise_signal(signal.SIGINT)
 
 
 _MAIN_GUARD = (
@@ -380,12 +371,12 @@ def _probe(scheduler: str, timeout: float) -> None:
     within :data:`PROBE_S` of it (a Dask scheduler greets a new connection at once; another
     server, a dashboard's HTTP port say, waits for a request, and Dask's client waited for
     its greeting forever, whatever the time limit)."""
-    m = re.fullmatch(r"tcp://\[?([^\]/]+?)\]?:(\d+)/?", scheduler)
-    if m is None:
+    m = _HOST_PORT.fullmatch(scheduler)
+    if m is None or m.group(1) != "tcp":
         return
     wait = min(timeout, PROBE_S)
     try:
-        conn = socket.create_connection((m.group(1), int(m.group(2))), timeout=wait)
+        conn = socket.create_connection((m.group(2).strip("[]"), int(m.group(3))), timeout=wait)
     except (OSError, UnicodeError) as exc:  # (refused, timed out, no such host, a bad name)
         raise InvalidArgumentError(
             f"could not reach the Dask scheduler at {scheduler!r} "

@@ -105,22 +105,14 @@ def _rotations_of_quaternions(q: FloatArray) -> tuple[FloatArray, NDArray[np.boo
     with np.errstate(over="ignore"):  # (a norm of 1e308 and more: inf, as in Python floats)
         zero = ~(big * norm >= 1e-9)
     x, y, z, w = (scaled / np.where(zero, 1.0, norm)[:, None]).T
-    out = np.empty((q.shape[0], 3, 3))
-    out[:, 0, 0] = 1 - 2 * (y * y + z * z)
-    out[:, 0, 1] = 2 * (x * y - z * w)
-    out[:, 0, 2] = 2 * (x * z + y * w)
-    out[:, 1, 0] = 2 * (x * y + z * w)
-    out[:, 1, 1] = 1 - 2 * (x * x + z * z)
-    out[:, 1, 2] = 2 * (y * z - x * w)
-    out[:, 2, 0] = 2 * (x * z - y * w)
-    out[:, 2, 1] = 2 * (y * z + x * w)
-    out[:, 2, 2] = 1 - 2 * (x * x + y * y)
-    return out, zero
+    # (unit_quaternion_matrix's entries, elementwise on the columns: (3, 3, N))
+    return np.moveaxis(unit_quaternion_matrix(x, y, z, w), -1, 0), zero
 
 
-def unit_quaternion_matrix(x: float, y: float, z: float, w: float) -> FloatArray:
+def unit_quaternion_matrix(x: Any, y: Any, z: Any, w: Any) -> FloatArray:
     """Rotation matrix ``(3, 3)`` of the unit quaternion ``w + xi + yj + zk`` (already
-    normalised: :func:`unit`)."""
+    normalised: :func:`unit`); of arrays of ``N`` such quaternions' components, the matrices
+    ``(3, 3, N)``."""
     return np.array(
         [
             [1 - 2 * (y * y + z * z), 2 * (x * y - z * w), 2 * (x * z + y * w)],

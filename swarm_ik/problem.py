@@ -40,8 +40,8 @@ SECONDARY_WEIGHT = 1e-3
 
 
 def _same_details(a: Any, b: Any) -> bool:
-    """Whether two goal reports' ``details`` are equal: the same object, equal, or equal
-    arrays (a Python goal's ``met`` may report anything)."""
+    """Whether two goal reports' ``details`` (or errors) are equal: the same object, equal,
+    both NaN, or equal arrays (a Python goal's ``met`` may report anything)."""
     if a is b:
         return True
     if isinstance(a, float) and isinstance(b, float):
@@ -86,14 +86,10 @@ class GoalError:
         without such an error, equal to NaN: two checks of one answer are equal)."""
         if not isinstance(other, GoalError):
             return NotImplemented
-
-        def same(a: float, b: float) -> bool:
-            return a == b or (math.isnan(a) and math.isnan(b))
-
         return (
             self.goal == other.goal
-            and same(self.position_error, other.position_error)
-            and same(self.rotation_error, other.rotation_error)
+            and _same_details(self.position_error, other.position_error)
+            and _same_details(self.rotation_error, other.rotation_error)
             and self.met == other.met
             and _same_details(self.details, other.details)
         )

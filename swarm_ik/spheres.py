@@ -41,14 +41,13 @@ import contextlib
 import hashlib
 import json
 import math
-import signal
 import sys
-import threading
 from dataclasses import dataclass
 from typing import Any
 
 import numpy as np
 
+from swarm_ik._signals import sigint_deferred
 from swarm_ik._types import FloatArray, IntArray
 from swarm_ik.errors import InvalidArgumentError
 from swarm_ik.kernels.mesh import triangle_owners, winding_numbers
@@ -88,26 +87,12 @@ def _import_trimesh() -> Any:
     imports with ``except BaseException``, which took the ``KeyboardInterrupt`` of a Ctrl-C
     arriving meanwhile (a first collision solve then printed its whole answer); the signal is
     recorded during the import and raised after it."""
-    if (
-        "trimesh" in sys.modules
-        or threading.current_thread() is not threading.main_thread()
-        or signal.getsignal(signal.SIGINT) is None  # (a handler set from C: not restorable)
-    ):
+    if "trimesh" in sys.modules:
         import trimesh
 
         return trimesh
-    caught: list[int] = []
-
-    def record(signum: int, frame: Any) -> None:
-        caught.append(signum)
-
-    old = signal.signal(signal.SIGINT, record)
-    try:
+    with sigint_deferred():
         import trimesh
-    finally:
-        signal.signal(signal.SIGINT, old)
-    if caught:
-        signal.raise_signal(signal.SIGINT)  # (to the handler it was meant for)
     return trimesh
 
 
