@@ -4,9 +4,15 @@ an existing Dask scheduler.
 ``scheduler`` (the ``--scheduler`` option of ``swarm-ik batch | reach | bench``) is one of:
 
 * ``None`` or ``"none"``: no Dask; the chunks run one after the other in this process.
+* ``"threads"``: no Dask either; the chunks run on a pool of threads of this process, one per
+  core (:class:`Threads`).  The compiled kernels of :func:`swarm_ik.solve_batch` release the
+  GIL while they run, so its chunks run side by side with nothing to start and nothing
+  copied between processes (the Python between two kernel calls, coal's exact check and
+  Python goals still take turns).  For batches and reach maps; the benchmarks that time
+  Python peers refuse it.
 * ``"local"``: an embedded :class:`dask.distributed.LocalCluster` on 127.0.0.1, one
-  single-threaded worker *process* per core (the compiled kernels hold the GIL, so processes,
-  not threads, give parallelism).  Needs no set-up; it starts in a few seconds.
+  single-threaded worker *process* per core (any work, whatever holds the GIL).  Needs no
+  set-up; it starts in a few seconds.
 * an address ``"tcp://host:port"`` (or ``tls://…``): an existing scheduler, e.g. one started
   with ``dask scheduler`` and workers started with ``dask worker tcp://host:port`` on other
   machines (each with swarm_ik installed).
@@ -30,9 +36,11 @@ from __future__ import annotations
 import logging
 import multiprocessing
 import os
+import queue
 import re
 import signal
 import socket
+import threading
 import uuid
 from collections.abc import Callable, Iterator, Sequence
 from contextlib import ExitStack, closing, contextmanager
@@ -48,6 +56,8 @@ LOCAL = "local"
 """``scheduler`` value for an embedded LocalCluster."""
 IN_PROCESS = "none"
 """``scheduler`` value for no Dask at all (chunks run in this process)."""
+THREADS = "threads"
+"""``scheduler`` value for a pool of threads in this process (:class:`Threads`; no Dask)."""
 SCHEMES = ("tcp://", "tls://", "inproc://")
 """Accepted prefixes of a scheduler address."""
 
@@ -76,17 +86,32 @@ _HOST_PORT = re.compile(r"(tcp|tls)://(\[[^\]]+\]|[^:/\[\]]+):(\d{1,5})/?")
 """A ``tcp://`` or ``tls://`` address: scheme, host (an IPv6 one in brackets), port."""
 
 
-def check_scheduler(scheduler: Any) -> Any:
-    """Validate a ``scheduler`` value; returns it (``None`` for "no Dask").
+def check_scheduler(scheduler: Any, *, threads: bool = True) -> Any:
+    """Validate a ``scheduler`` value; returns it (``None`` for "in this process, one chunk
+    after the other").
+
+    Args:
+        scheduler: See the module docstring.
+        threads: Whether ``"threads"`` is a choice (not for the benchmarks that time Python
+            peers: threads of one process would take turns on the GIL inside their timings).
 
     Raises:
-        InvalidArgumentError: not ``None``, ``"none"``, ``"local"``, an address with one of
-            :data:`SCHEMES`, or a ``distributed.Client``; the message lists the choices.
+        InvalidArgumentError: not ``None``, ``"none"``, ``"threads"``, ``"local"``, an address
+            with one of :data:`SCHEMES`, or a ``distributed.Client``; the message lists the
+            choices.
     """
     if scheduler is None or scheduler == IN_PROCESS:
         return None
     if isinstance(scheduler, str):
         if scheduler == LOCAL:
+            return scheduler
+        if scheduler == THREADS:
+            if not threads:
+                raise InvalidArgumentError(
+                    "scheduler 'threads' is for batches and reach maps (its threads would take "
+                    "turns on Python's lock inside the timings here); valid choices: 'none', "
+                    "'local' or a Dask scheduler address tcp://host:port"
+                )
             return scheduler
         m = _HOST_PORT.fullmatch(scheduler)
         if scheduler.startswith(("tcp://", "tls://")) and (m is None or int(m.group(3)) > 65535):
@@ -98,15 +123,17 @@ def check_scheduler(scheduler: Any) -> Any:
             return scheduler
         raise InvalidArgumentError(
             f"unknown scheduler {scheduler!r}; valid choices: 'none' (in this process), "
-            "'local' (embedded LocalCluster), or an address starting with "
+            + ("'threads' (a thread per core in this process), " if threads else "")
+            + "'local' (embedded LocalCluster), or an address starting with "
             + ", ".join(SCHEMES)
             + " (e.g. tcp://127.0.0.1:8786)"
         )
     if hasattr(scheduler, "submit") and hasattr(scheduler, "gather"):
         return scheduler
     raise InvalidArgumentError(
-        f"scheduler must be None, 'none', 'local', an address or a distributed.Client; got "
-        f"{type(scheduler).__name__}"
+        "scheduler must be None, 'none', "
+        + ("'threads', " if threads else "")
+        + f"'local', an address or a distributed.Client; got {type(scheduler).__name__}"
     )
 
 
@@ -121,16 +148,21 @@ def connect(
 
     Args:
         scheduler: See the module docstring.
-        n_workers: Worker processes of an embedded LocalCluster (default: the cores).
+        n_workers: Worker processes of an embedded LocalCluster, or threads of
+            ``"threads"`` (default: the cores).
         timeout: Seconds to wait for a remote scheduler.
 
     Yields:
-        ``None`` (in-process), or a ``distributed.Client``.  A Client passed in is yielded
-        and left open; clusters and clients created here are closed at exit.
+        ``None`` (in-process), :class:`Threads` (``"threads"``), or a
+        ``distributed.Client``.  A Client passed in is yielded and left open; clusters and
+        clients created here are closed at exit.
     """
     scheduler = check_scheduler(scheduler)
     if scheduler is None:
         yield None
+        return
+    if isinstance(scheduler, str) and scheduler == THREADS:
+        yield Threads(n_workers or available_cores())
         return
     if not isinstance(scheduler, str):
         yield scheduler
@@ -255,10 +287,84 @@ def abandon(client: Any) -> None:
 
 
 def n_workers(client: Any) -> int:
-    """Workers behind ``client`` (1 for ``None``, in-process)."""
+    """Workers behind ``client`` (1 for ``None``, in-process; the threads of :class:`Threads`)."""
     if client is None:
         return 1
+    if isinstance(client, Threads):
+        return client.n
     return max(1, len(client.scheduler_info().get("workers", {})))
+
+
+class Threads:
+    """The pool of ``scheduler="threads"``: chunks on up to ``n`` threads of this process.
+
+    The kernels of a batch release the GIL (numba's ``nogil``) while they run, so chunks run
+    side by side on the cores; the Python between kernel calls takes turns.  The threads are
+    started by each :meth:`map` and are daemons: after a Ctrl-C (or a chunk's error) no chunk
+    starts, and a chunk already running ends in the background without keeping the process
+    alive (a compiled chunk cannot be stopped from outside; a batch's chunks take a fraction
+    of a second each, a time limit bounds them).
+
+    Attributes:
+        n: Threads (at least 1).
+    """
+
+    WAIT_S = 0.1
+    """Seconds between two looks of the calling thread at the chunks (where a Ctrl-C raises)."""
+
+    def __init__(self, n: int) -> None:
+        self.n = max(1, int(n))
+
+    def map(
+        self,
+        func: Callable[[T], R],
+        items: Sequence[T],
+        done: Callable[[int], Any] | None = None,
+    ) -> list[R]:
+        """``[func(item) for item in items]``, the items taken in order by the threads;
+        ``done(i)`` is called in the calling thread as item ``i`` finishes.  The first error
+        of a chunk is raised here (no chunk starts after it)."""
+        results: list[Any] = [None] * len(items)
+        todo: queue.SimpleQueue[int] = queue.SimpleQueue()
+        for i in range(len(items)):
+            todo.put(i)
+        finished: queue.SimpleQueue[tuple[int, BaseException | None]] = queue.SimpleQueue()
+        stop = threading.Event()
+
+        def work() -> None:
+            while not stop.is_set():
+                try:
+                    i = todo.get_nowait()
+                except queue.Empty:
+                    return
+                try:
+                    results[i] = func(items[i])
+                except BaseException as exc:  # (passed to the calling thread)
+                    stop.set()
+                    finished.put((i, exc))
+                    return
+                finished.put((i, None))
+
+        for k in range(min(self.n, len(items))):
+            threading.Thread(target=work, name=f"swarm-ik-{k}", daemon=True).start()
+        try:
+            for _ in range(len(items)):
+                while True:
+                    try:
+                        i, exc = finished.get(timeout=self.WAIT_S)
+                        break
+                    except queue.Empty:
+                        continue
+                if exc is not None:
+                    raise exc
+                if done is not None:
+                    done(i)
+        finally:
+            stop.set()
+        return results
+
+    def __repr__(self) -> str:
+        return f"Threads(n={self.n})"
 
 
 class _NoBar:
@@ -282,10 +388,11 @@ def progress_bar(enabled: bool, total: int, desc: str | None, unit: str) -> Any:
 
 
 def on_every_worker(client: Any, func: Callable[[T], R], item: T, name: str = "swarm-ik") -> None:
-    """``func(item)`` once on each worker behind ``client`` (nothing for ``None``), waited for:
+    """``func(item)`` once on each worker behind ``client``, waited for:
     what the workers load the first time (the kernels from numba's cache, a scene's sphere
-    model) loaded before a caller's clock starts."""
-    if client is None:
+    model) loaded before a caller's clock starts; nothing for ``None`` or :class:`Threads`
+    (this process: the caller's own loading)."""
+    if client is None or isinstance(client, Threads):
         return
     call = uuid.uuid4().hex[:16]
     workers = list(client.scheduler_info().get("workers", {}))
@@ -348,6 +455,8 @@ def map_chunks(
                 out.append(func(item))
                 bar.update(w)
             return out
+        if isinstance(client, Threads):
+            return client.map(func, items, lambda i: bar.update(weights[i]))
         distributed = _import_distributed()
         # keys of this call alone: a key of an earlier call that failed may still name its
         # cancelled task on this client, which would answer for the new one

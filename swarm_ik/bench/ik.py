@@ -447,7 +447,7 @@ def run(args: argparse.Namespace) -> int:
     """Run ``bench ik`` with parsed options; returns the exit code (0; 130 when interrupted)."""
     from swarm_ik import distributed
 
-    distributed.check_scheduler(getattr(args, "scheduler", None))
+    distributed.check_scheduler(getattr(args, "scheduler", None), threads=False)
     if args.jobs < 1:
         raise InvalidArgumentError(f"--jobs must be >= 1, got {args.jobs}")
     plan, quick = plan_from_args(args)

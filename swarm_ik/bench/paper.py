@@ -792,7 +792,7 @@ def config_from_args(args: argparse.Namespace) -> tuple[Config, Path, list[str]]
     """
     from swarm_ik import distributed
 
-    distributed.check_scheduler(getattr(args, "scheduler", None))
+    distributed.check_scheduler(getattr(args, "scheduler", None), threads=False)
     cfg = QUICK if args.quick else FULL
     if args.runs is not None:
         cfg = cfg.with_runs(args.runs)

@@ -10,6 +10,8 @@ FK; the loops with Pinocchio's FK through :func:`swarm_ik.verify`).
 Methods (one CSV row per robot, method and N):
 
 * ``batch-1proc``: ``solve_batch`` in this process (no Dask), one core;
+* ``batch-threads``: ``solve_batch(..., scheduler="threads")``: in this process, a thread per
+  core (the kernels release the GIL);
 * ``batch-dask``: ``solve_batch`` on ``--scheduler`` (``local``: an embedded LocalCluster
   with one worker process per core; default ``none``: not run).  The cluster is started
   and the workers warmed up (kernels loaded) before timing; its start-up time is reported
@@ -27,6 +29,7 @@ collision-free (self and scene), then:
   judged afterwards with coal too (success = the pose and no contact; the check not timed);
 * ``boxesK-avoid-1proc``: ``solve_batch(..., goals=[AvoidCollisions(scene)])`` in this
   process (the exact check of its answers inside the call, timed);
+* ``boxesK-avoid-threads``: the same on a thread per core;
 * ``boxesK-avoid-dask``: the same on ``--scheduler`` (when one is given).
 
 Writes under ``--out`` (default ``./bench-throughput``): ``throughput.csv`` (the experiment),
@@ -394,6 +397,7 @@ def run_experiment(
     with distributed.connect(scheduler) as client:
         setup_s = time.perf_counter() - t_setup
         workers = distributed.n_workers(client)
+        cores = distributed.available_cores()
         for robot in loaded:
             print(f"[throughput] {robot.name}", flush=True)
             if use_dask:  # warm the workers up (kernels loaded in every process)
@@ -404,6 +408,10 @@ def run_experiment(
                 targets = make_targets(robot, n, seed)
                 res = fastest()
                 record_batch("batch-1proc", res, f"success {res.success_rate:.4f}")
+                res_t = fastest(scheduler=distributed.THREADS)
+                if not np.array_equal(res_t.q, res.q):  # pragma: no cover - a bug
+                    raise RuntimeError("threaded and in-process results differ")
+                record_batch("batch-threads", res_t, f"({cores} threads)", cores)
                 if use_dask:
                     res_d = fastest(scheduler=client)
                     if not np.array_equal(res_d.q, res.q):  # pragma: no cover - a bug
@@ -427,6 +435,10 @@ def run_experiment(
                     rows[-1].update(success_rate=f"{ok.mean():.6f}", n_success=int(ok.sum()))
                     res = fastest(on=free, goals=avoid)
                     record_batch(f"boxes{k}-avoid-1proc", res, f"success {res.success_rate:.4f}")
+                    res_t = fastest(on=free, goals=avoid, scheduler=distributed.THREADS)
+                    if not np.array_equal(res_t.q, res.q):  # pragma: no cover - a bug
+                        raise RuntimeError("threaded and in-process results differ")
+                    record_batch(f"boxes{k}-avoid-threads", res_t, f"({cores} threads)", cores)
                     if use_dask:
                         solve_batch(robot, free[: 8 * workers], goals=avoid, scheduler=client,
                                     chunk_size=8)  # fmt: skip
@@ -444,6 +456,7 @@ def run_experiment(
 
 METHOD_LABELS = {
     "batch-1proc": "solve_batch, 1 process",
+    "batch-threads": "solve_batch, a thread per core",
     "batch-dask": "solve_batch on Dask",
     "loop-solve": "loop over solve()",
     "loop-tracik": "loop over TRAC-IK",
@@ -460,6 +473,7 @@ def method_label(method: str) -> str:
         return {
             "plain": f"solve_batch, {k} boxes, no collision goal (judged with coal)",
             "avoid-1proc": f"solve_batch + AvoidCollisions, {k} boxes, 1 process",
+            "avoid-threads": f"solve_batch + AvoidCollisions, {k} boxes, a thread per core",
             "avoid-dask": f"solve_batch + AvoidCollisions, {k} boxes, on Dask",
         }.get(rest, method)
     return method

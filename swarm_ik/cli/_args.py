@@ -47,7 +47,8 @@ FRAME_HELP = (
     "the robot's tool frame(s))"
 )
 SCHEDULER_HELP = (
-    "where to solve: 'none' (default: this process, no Dask), 'local' (an embedded Dask "
+    "where to solve: 'none' (default: this process, no Dask), 'threads' (this process, a "
+    "thread per core, no Dask), 'local' (an embedded Dask "
     "LocalCluster, one worker process per core; pip install 'swarm_ik[dask]'), or a Dask "
     "scheduler address tcp://host:port"
 )
@@ -368,7 +369,10 @@ def add_lm_options(parser: Any, max_starts: int, starts_help: str) -> None:
 def add_scheduler(parser: Any, default: str = "none") -> None:
     """``--scheduler`` (for any command that distributes work with Dask)."""
     parser.add_argument(
-        "--scheduler", default=default, metavar="local|none|tcp://HOST:PORT", help=SCHEDULER_HELP
+        "--scheduler",
+        default=default,
+        metavar="none|threads|local|tcp://HOST:PORT",
+        help=SCHEDULER_HELP,
     )
 
 

@@ -7,8 +7,9 @@ row per target (``.npz`` or ``.csv``); ``--random N`` solves N targets sampled b
 kinematics instead (``--scene FILE``: every answer clear of the scene's obstacles and of
 itself, the goal :class:`~swarm_ik.goals.AvoidCollisions` of every target; a random target's
 configuration may itself be in contact, so some may be unreachable).  ``--scheduler``:
-``none`` (default: this process, no Dask), ``local`` (an embedded Dask LocalCluster, one
-worker process per core; extra ``dask``), or a scheduler address ``tcp://host:port``.
+``none`` (default: this process, no Dask), ``threads`` (this process, a thread per core),
+``local`` (an embedded Dask LocalCluster, one worker process per core; extra ``dask``), or a
+scheduler address ``tcp://host:port``.
 
 Exit codes: 0 all targets solved, 1 some not solved, 2 bad input (``--out`` is checked,
 written to and removed, before any work), 130 interrupted.
@@ -16,8 +17,8 @@ written to and removed, before any work), 130 interrupted.
 Ctrl-C stops after the chunks already finished: their rows (the first ``k`` targets, in
 order) are written to ``--out`` and the command exits with 130, printing one line.  It is
 :func:`swarm_ik.batch.solve_batch` with ``keep_on_interrupt=True``: the chunks go out in waves
-(one chunk at a time in-process, two per worker on Dask), each solved with its index in the
-whole batch, so the answers are bit-identical to a plain ``solve_batch``'s.
+(one chunk at a time in-process, two per thread or Dask worker), each solved with its index in
+the whole batch, so the answers are bit-identical to a plain ``solve_batch``'s.
 """
 
 from __future__ import annotations

@@ -384,7 +384,7 @@ def fk_fields(
                 k = parent[k]
 
 
-@numba.njit(cache=True)
+@numba.njit(cache=True, nogil=True)
 def fk_batch(
     q: FloatArray, t: TreeArrays, out_t: FloatArray, out_j: FloatArray, want_jac: bool
 ) -> None:  # pragma: no cover - compiled

@@ -1019,7 +1019,7 @@ def secondary_descent(
     return used
 
 
-@numba.njit(cache=True)
+@numba.njit(cache=True, nogil=True)
 def errors_batch(q: FloatArray, t: TreeArrays, g: GoalTable, ks: GoalKernels, b: Bounds,
                  out_err: FloatArray, out_cost2: FloatArray) -> None:  # fmt: skip
     """Errors of every goal ``(pop, ng, 2)`` and the secondary cost ``(pop,)`` of each row of

@@ -1,0 +1,149 @@
+"""``scheduler="threads"``: a batch's chunks on threads of this process (the kernels release
+the GIL), with the answers of the in-process batch, errors and Ctrl-C passed to the caller."""
+
+from __future__ import annotations
+
+import os
+import signal
+import subprocess
+import sys
+import threading
+import time
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+import swarm_ik
+from swarm_ik import distributed
+from swarm_ik.cli import main
+from swarm_ik.errors import InvalidArgumentError
+from swarm_ik.goals import AvoidCollisions, Posture
+from swarm_ik.scene import Box, Scene
+
+
+def _targets(robot, n: int, seed: int) -> np.ndarray:
+    return robot.fk(robot.random_q(np.random.default_rng(seed), n))
+
+
+def test_threads_is_a_scheduler_where_python_peers_are_not_timed() -> None:
+    assert distributed.check_scheduler("threads") == "threads"
+    with pytest.raises(InvalidArgumentError, match="'threads' .*'local'"):
+        distributed.check_scheduler("thread")
+    with pytest.raises(InvalidArgumentError, match="'threads' is for batches"):
+        distributed.check_scheduler("threads", threads=False)
+    with pytest.raises(InvalidArgumentError) as info:
+        distributed.check_scheduler("thread", threads=False)
+    assert "'threads'" not in str(info.value)
+    with distributed.connect("threads", n_workers=3) as pool:
+        assert distributed.n_workers(pool) == 3
+
+
+def test_map_chunks_on_threads_keeps_order_and_runs_each_item_once() -> None:
+    seen: list[int] = []
+    lock = threading.Lock()
+
+    def square(x: int) -> int:
+        with lock:
+            seen.append(x)
+        return x * x
+
+    out = distributed.map_chunks(square, list(range(40)), scheduler="threads")
+    assert out == [x * x for x in range(40)]
+    assert sorted(seen) == list(range(40))
+    assert distributed.map_chunks(square, [], scheduler="threads") == []
+
+
+def test_an_error_in_a_chunk_reaches_the_caller_and_stops_the_rest() -> None:
+    started: list[int] = []
+
+    def fails_at_three(x: int) -> int:
+        started.append(x)
+        if x == 3:
+            raise ValueError("chunk 3 failed")
+        time.sleep(0.01)
+        return x
+
+    pool = distributed.Threads(2)
+    with pytest.raises(ValueError, match="chunk 3 failed"):
+        pool.map(fails_at_three, list(range(200)))
+    time.sleep(0.1)  # (a chunk running when it failed ends; none starts after)
+    assert len(started) < 20
+
+
+def test_threads_give_the_answers_of_the_batch_in_this_process(get_robot) -> None:
+    robot = get_robot("panda")
+    targets = _targets(robot, 300, 4)
+    ref = swarm_ik.solve_batch(robot, targets, seed=2, chunk_size=25)
+    got = swarm_ik.solve_batch(robot, targets, seed=2, chunk_size=25, scheduler="threads")
+    np.testing.assert_array_equal(got.q, ref.q)
+    np.testing.assert_array_equal(got.n_evals, ref.n_evals)
+    np.testing.assert_array_equal(got.success, ref.success)
+    assert got.success.mean() > 0.99
+
+
+def test_threads_give_the_answers_of_the_batch_with_goals(get_robot) -> None:
+    robot = get_robot("panda")
+    scene = Scene([Box([0.3, 0.3, 0.3], [0.0, 0.6, 0.3], name="block")])
+    q = robot.random_q(np.random.default_rng(9), 60)
+    free = q[[not robot.collision_model().collides(x, scene, 0.0, True) for x in q]][:30]
+    targets = robot.fk(free)
+    goals = [AvoidCollisions(scene), Posture(robot.mid_q(), weight=1e-3)]
+    ref = swarm_ik.solve_batch(robot, targets, goals=goals, chunk_size=8)
+    got = swarm_ik.solve_batch(robot, targets, goals=goals, chunk_size=8, scheduler="threads")
+    np.testing.assert_array_equal(got.q, ref.q)
+    np.testing.assert_array_equal(got.success, ref.success)
+    assert got.success.all()
+
+
+def test_cli_batch_on_threads(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
+    out = tmp_path / "r.npz"
+    rc = main(["batch", "--robot", "yumi_left", "--random", "200", "--out", str(out),
+               "--scheduler", "threads", "--chunk-size", "32", "--seed", "3",
+               "--no-progress"])  # fmt: skip
+    assert rc == 0, capsys.readouterr().err
+    robot = swarm_ik.load_robot("yumi_left")
+    ref = swarm_ik.solve_batch(robot, _targets(robot, 200, 3), seed=3, chunk_size=32)
+    np.testing.assert_array_equal(np.load(out)["q"], ref.q)
+
+
+@pytest.mark.skipif(not sys.platform.startswith("linux"), reason="POSIX signals")
+def test_ctrl_c_stops_a_batch_on_threads_at_once(tmp_path: Path) -> None:
+    """The threads are daemons that take no chunk after the Ctrl-C: the command exits 130 with
+    one line while a chunk may still run, instead of waiting for the whole batch."""
+    env = dict(os.environ)
+    for var in ("OMP_NUM_THREADS", "OPENBLAS_NUM_THREADS", "MKL_NUM_THREADS"):
+        env.setdefault(var, "1")
+    proc = subprocess.Popen(
+        [sys.executable, "-m", "swarm_ik.cli", "batch", "--robot", "panda", "--random",
+         "400000", "--max-starts", "64", "--chunk-size", "2000", "--out",
+         str(tmp_path / "b.npz"), "--scheduler", "threads", "--no-progress"],
+        stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True, cwd=tmp_path, env=env,
+        start_new_session=True,
+    )  # fmt: skip
+    time.sleep(6.0)  # (the robot and kernels loaded, chunks under way: 400,000 take ~8 s)
+    assert proc.poll() is None, proc.communicate()
+    sent = time.perf_counter()
+    os.killpg(proc.pid, signal.SIGINT)
+    try:
+        _out, err = proc.communicate(timeout=10.0)
+    except subprocess.TimeoutExpired:
+        os.killpg(proc.pid, signal.SIGKILL)
+        proc.communicate()
+        pytest.fail("still running 10 s after Ctrl-C")
+    took = time.perf_counter() - sent
+    assert proc.returncode == 130, err
+    lines = err.strip().splitlines()
+    assert len(lines) == 1 and lines[0].startswith("swarm-ik: interrupted"), err
+    assert took < 5.0
+
+
+@pytest.mark.parametrize("command", ["ik", "paper"])
+def test_benchmarks_of_python_peers_refuse_threads(
+    command: str, tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    rc = main(["bench", command, "--scheduler", "threads", "--out", str(tmp_path / "b")])
+    err = capsys.readouterr().err.strip().splitlines()
+    assert rc == 2 and len(err) == 1, err
+    assert "'threads' is for batches" in err[0]
+    assert not (tmp_path / "b").exists()
