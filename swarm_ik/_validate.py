@@ -298,6 +298,30 @@ def grid_cells(lower: Any, upper: Any, resolution: float) -> int | float:
     return n
 
 
+def finest_edge(lower: Any, upper: Any, cap: int) -> float | None:
+    """The finest voxel edge [m] whose grid over the box ``lower``–``upper`` (``(3,)`` each)
+    has at most ``cap`` voxels (:func:`grid_cells`, which rounds each axis up), rounded up to
+    three digits (so that it fits); None where no edge can be named (an extent beyond a
+    float, or a box of no extent)."""
+    lo = np.asarray(lower, dtype=float).reshape(3)
+    hi = np.asarray(upper, dtype=float).reshape(3)
+    sizes = [float(hi[a]) - float(lo[a]) for a in range(3)]
+    sides = [e for e in sizes if e > 0.0]  # (the others are one voxel thick at any edge)
+    if not sides or not all(math.isfinite(e) for e in sizes) or cap < 1:
+        return None
+    # by bisection (the count falls as the edge grows) between the root of volume / cap (too
+    # fine: a box never has fewer voxels) and the longest side (one voxel); in logarithms,
+    # for boxes of 1e-300 or 1e300 m
+    a = (sum(math.log(e) for e in sides) - math.log(cap)) / len(sides) - 1e-9
+    b = math.log(max(sides))
+    for _ in range(200):
+        mid = 0.5 * (a + b)
+        a, b = (mid, b) if grid_cells(lo, hi, math.exp(mid)) > cap else (a, mid)
+    fits = math.exp(b)
+    step = 10.0 ** (math.floor(math.log10(fits)) - 2)
+    return math.ceil(fits / step * (1 - 1e-12)) * step
+
+
 def check_grid_size(
     lower: Any, upper: Any, resolution: Any, max_cells: int = MAX_GRID_CELLS
 ) -> int:
@@ -319,12 +343,8 @@ def check_grid_size(
     res = positive_float(resolution, "resolution")
     n = grid_cells(lower, upper, res)
     if n > max_cells:
-        with np.errstate(over="ignore", invalid="ignore"):  # (bounds of 1e300 m: none fits)
-            extent = np.asarray(upper, dtype=float).reshape(3) - np.asarray(
-                lower, dtype=float
-            ).reshape(3)
-            fit = float(np.cbrt(np.prod(np.maximum(extent, res)) / max_cells))
-        hint = f"--resolution {fit:.3g} or coarser, or " if math.isfinite(fit) else ""
+        fit = finest_edge(lower, upper, max_cells)
+        hint = "" if fit is None else f"--resolution {fit:.3g} or coarser, or "
         raise InvalidArgumentError(
             f"a grid of {res:g} m voxels over this box has "
             f"{format(n, '.3g') if n < 1e300 else 'over 1e300'} voxels, more than "

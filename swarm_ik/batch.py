@@ -1793,7 +1793,8 @@ def read_targets(path: str | Path, positions: bool = False) -> FloatArray:
             f"{', '.join(keys) or '(none)'}"
         )
     if suffix == ".csv":
-        with p.open(newline="") as fh:
+        with p.open(newline="", encoding="utf-8-sig") as fh:  # (a byte-order mark, as
+            # "CSV UTF-8" files of spreadsheets start with, dropped)
             # comma-separated, or separated by white space (np.savetxt's default) when the
             # first row that is not a comment has no comma
             data_line = next(

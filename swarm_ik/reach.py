@@ -30,6 +30,7 @@ from typing import Any
 import numpy as np
 from numpy.typing import NDArray
 
+from swarm_ik._validate import SEED_LIMIT, count, finest_edge, flag, positive_float
 from swarm_ik.batch import solve_batch
 from swarm_ik.errors import InvalidArgumentError
 from swarm_ik.paths import written_in_place_of
@@ -66,6 +67,8 @@ class ReachMap:
         tol_pos: Position tolerance [m]; ``tol_rot``: rotation tolerance [rad].
         max_starts: Starts per pose before it counts as unreachable.
         time_s: Wall-clock seconds of the computation.
+        position_only: The voxels' centres were solved as positions, the frame's orientation
+            free (``orientations`` is then the identity alone, K = 1).
     """
 
     robot: str
@@ -85,6 +88,7 @@ class ReachMap:
     tol_rot: float
     max_starts: int
     time_s: float
+    position_only: bool = False
 
     @property
     def centres(self) -> FloatArray:
@@ -96,6 +100,12 @@ class ReachMap:
     def n_orientations(self) -> int:
         """Orientations tried per voxel (K)."""
         return int(self.orientations.shape[0])
+
+    _SAVED = (
+        "robot", "ee_frame", "x", "y", "z", "index", "solved", "hits", "orientations",
+        "resolution", "base", "seed", "tol_pos", "tol_rot", "max_starts", "time_s",
+    )  # fmt: skip
+    """The arrays :meth:`load` reads (``urdf`` too when present)."""
 
     def save(self, path: str | Path) -> Path:
         """Write the map to ``.npz`` (arrays ``x, y, z, index, solved, hits, centres,
@@ -130,13 +140,35 @@ class ReachMap:
             tol_rot=self.tol_rot,
             max_starts=self.max_starts,
             time_s=self.time_s,
+            position_only=self.position_only,
             urdf=self.urdf,
         )
 
     @classmethod
     def load(cls, path: str | Path) -> ReachMap:
-        """Read a map written by :meth:`save`."""
-        d = np.load(Path(path), allow_pickle=False)
+        """Read a map written by :meth:`save`.
+
+        Raises:
+            InvalidArgumentError: no such file, not an ``.npz`` archive, or one without a
+                map's arrays (the missing ones named).
+        """
+        p = Path(path)
+        try:
+            d = np.load(p, allow_pickle=False)
+        except OSError as exc:
+            raise InvalidArgumentError(
+                f"cannot read a reach map from {str(p)!r}: {exc.strerror or exc}"
+            ) from None
+        except (ValueError, EOFError):
+            d = None
+        if not hasattr(d, "files"):
+            raise InvalidArgumentError(f"{str(p)!r} is not a reach map's .npz archive")
+        missing = [k for k in cls._SAVED if k not in d.files]
+        if missing:
+            raise InvalidArgumentError(
+                f"{str(p)!r} is no reach map (written by ReachMap.save): it lacks "
+                f"{', '.join(missing)}"
+            )
         return cls(
             robot=str(d["robot"]),
             ee_frame=str(d["ee_frame"]),
@@ -155,6 +187,7 @@ class ReachMap:
             max_starts=int(d["max_starts"]),
             time_s=float(d["time_s"]),
             urdf=str(d["urdf"]) if "urdf" in d.files else "",
+            position_only=bool(d["position_only"]) if "position_only" in d.files else False,
         )
 
     def __repr__(self) -> str:
@@ -248,8 +281,6 @@ def check_grid_size(
             the count, its memory, and the finest resolution that fits; where even one
             voxel's orientations are too many, fewer orientations or a larger cap).
     """
-    import math
-
     ext = np.asarray(upper, dtype=float).reshape(3) - np.asarray(lower, dtype=float).reshape(3)
     with np.errstate(over="ignore", divide="ignore"):
         per_axis = np.maximum(1.0, np.ceil(ext / float(resolution) - 1e-9))
@@ -265,32 +296,9 @@ def check_grid_size(
             "orientations (--orientations, n_orientations) or raise the cap (--max-targets, "
             "max_targets)"
         )
-    cap = max_targets // k  # voxels allowed
-    sizes = [float(e) for e in ext]
-
-    def voxels(r: float) -> float:  # (the count above, for edge r)
-        n = 1.0
-        for e in sizes:
-            per = e / r - 1e-9
-            if not math.isfinite(per):
-                return math.inf
-            n *= max(1, math.ceil(per))
-        return n
-
-    # the finest edge that fits, by bisection (the count falls as the edge grows), between
-    # the root of volume / cap (too fine: a box never has fewer voxels) and the longest side
-    # (one voxel); in logarithms, for boxes of 1e-300 or 1e300 m
-    sides = [e for e in sizes if e > 0.0]  # (the others are one voxel thick at any edge)
+    fits = finest_edge(lower, upper, max_targets // k)  # (the voxels allowed)
     coarser = "a coarser resolution"
-    if sides and all(math.isfinite(e) for e in sizes):  # (else no edge to name)
-        lo = (sum(math.log(e) for e in sides) - math.log(cap)) / len(sides) - 1e-9
-        hi = math.log(max(sides))
-        for _ in range(200):
-            mid = 0.5 * (lo + hi)
-            lo, hi = (mid, hi) if voxels(math.exp(mid)) > cap else (lo, mid)
-        fits = math.exp(hi)
-        step = 10.0 ** (math.floor(math.log10(fits)) - 2)  # rounded up to 3 digits: it fits
-        fits = math.ceil(fits / step * (1 - 1e-12)) * step
+    if fits is not None:
         coarser += f" (at least {fits:.3g} m for this box)"
     raise InvalidArgumentError(
         f"resolution {resolution!r} m gives a grid of {n_voxels:.3g} voxels × "
@@ -305,7 +313,8 @@ def reach_map(
     *,
     resolution: float = 0.1,
     bounds: Any = None,
-    n_orientations: int = 8,
+    n_orientations: int | None = None,
+    position_only: bool = False,
     seed: int = 0,
     tol_pos: float = 1e-5,
     tol_rot: float = 1e-5,
@@ -322,7 +331,11 @@ def reach_map(
         resolution: Voxel edge [m].
         bounds: ``(lower (3,), upper (3,))`` corners of the box [m], or 6 numbers
             ``xmin ymin zmin xmax ymax zmax``; default :func:`default_bounds`.
-        n_orientations: Orientations tried per voxel (K), the same for every voxel.
+        n_orientations: Orientations tried per voxel (K), the same for every voxel
+            (default 8; 1 with ``position_only``, which takes no other).
+        position_only: Solve each voxel's centre as a position, the frame's orientation free
+            (the map of where the frame's origin can be: an arm of fewer than 6 joints
+            reaches a random full orientation almost nowhere).
         seed: Seed of the orientations and of the solver's restarts.
         tol_pos: Position tolerance [m]; tol_rot: rotation tolerance [rad].
         max_starts: Starts per pose before it counts as unreachable (the cost of an
@@ -342,16 +355,22 @@ def reach_map(
             than ``max_targets`` poses.
     """
     t0 = time.perf_counter()
-    if not (np.isfinite(resolution) and resolution > 0):
-        raise InvalidArgumentError(f"resolution must be a positive length [m], got {resolution!r}")
-    if (
-        isinstance(n_orientations, bool)
-        or not isinstance(n_orientations, (int, np.integer))
-        or n_orientations < 1
-    ):
+    if not isinstance(robot, RobotModel):
         raise InvalidArgumentError(
-            f"n_orientations must be a positive integer, got {n_orientations!r}"
+            f"robot must be a RobotModel (see swarm_ik.load_robot), got {type(robot).__name__}"
         )
+    resolution = positive_float(resolution, "resolution [m]")
+    position_only = flag(position_only, "position_only")
+    if n_orientations is None:
+        n_orientations = 1 if position_only else 8
+    n_orientations = count(n_orientations, "n_orientations")
+    if position_only and n_orientations != 1:
+        raise InvalidArgumentError(
+            f"a position-only map tries one target per voxel (its orientation is free); got "
+            f"n_orientations={n_orientations}"
+        )
+    seed = count(seed, "seed", 0, SEED_LIMIT - 1)
+    max_targets = count(max_targets, "max_targets", 1, 2**62)
     if bounds is None:
         lo, hi = default_bounds(robot, seed=seed)
     else:
@@ -382,7 +401,7 @@ def reach_map(
             f"more than max_targets={max_targets}; use a coarser resolution (given "
             f"{resolution} m) or smaller bounds"
         )
-    rots = random_rotations(np.random.default_rng(seed), k)
+    rots = np.eye(3)[None] if position_only else random_rotations(np.random.default_rng(seed), k)
     pts = centres[inside]
     targets = np.zeros((pts.shape[0], k, 4, 4))
     targets[:, :, :3, :3] = rots[None]
@@ -391,6 +410,7 @@ def reach_map(
     res = solve_batch(
         robot, targets.reshape(-1, 4, 4), seed=seed, tol_pos=tol_pos, tol_rot=tol_rot,
         max_starts=max_starts, max_iters=max_iters, scheduler=scheduler, progress=progress,
+        position_only=position_only,
     )  # fmt: skip
     hits = np.zeros((centres.shape[0], k), dtype=bool)
     hits[inside] = res.success.reshape(-1, k)
@@ -413,6 +433,7 @@ def reach_map(
         max_starts=int(max_starts),
         time_s=time.perf_counter() - t0,
         urdf=str(robot.urdf_path),
+        position_only=position_only,
     )
 
 

@@ -86,7 +86,13 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     )
     parser.add_argument("--chunk-size", type=int, default=None, help="targets per task")
     argtypes.add_seed(parser, "seed of the restarts (and of sampled targets)")
-    add_lm_options(parser, 128, "most LM starts per target, the seed included")
+    add_lm_options(
+        parser,
+        128,
+        "most LM starts per target's search, the seed included (with --scene an answer in "
+        "contact is searched for again, in a few times this many more starts: "
+        "swarm_ik.solve_batch's max_starts)",
+    )
     parser.add_argument(
         "--max-evals",
         type=int,

@@ -72,9 +72,16 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument(
         "--orientations",
         type=count(1),
-        default=8,
+        default=None,
         metavar="K",
-        help="orientations tried per voxel (default 8, seeded random rotations)",
+        help="orientations tried per voxel (default 8, seeded random rotations; 1 with "
+        "--position-only)",
+    )
+    parser.add_argument(
+        "--position-only",
+        action="store_true",
+        help="map where the frame's origin can be, its orientation free (for arms of fewer "
+        "than 6 joints, which reach a random full orientation almost nowhere)",
     )
     parser.add_argument(
         "--out",
@@ -207,15 +214,27 @@ def run(args: argparse.Namespace) -> int:
         lo, hi = np.asarray(bounds[0], float), np.asarray(bounds[1], float)
     else:
         lo, hi = reach.default_bounds(robot, seed=args.seed)
+    k = args.orientations or (1 if args.position_only else 8)
+    if args.position_only and k != 1:
+        raise InvalidArgumentError(
+            f"--position-only tries one target per voxel (its orientation is free); got "
+            f"--orientations {k}"
+        )
     _validate.check_grid_size(lo, hi, args.resolution)
-    reach.check_grid_size(lo, hi, args.resolution, args.orientations, args.max_targets)
+    reach.check_grid_size(lo, hi, args.resolution, k, args.max_targets)
+    if robot.nq < 6 and not args.position_only:
+        skipped.append(
+            f"note: {robot.name} has {robot.nq} joints, so a random full orientation is out "
+            "of its reach almost everywhere; --position-only maps its positions"
+        )
     if skipped:  # every check passed: one line, then the work
         print("swarm-ik reach: " + "; ".join(skipped), file=sys.stderr, flush=True)
     rmap = reach.reach_map(
         robot,
         resolution=args.resolution,
         bounds=np.concatenate([lo, hi]),
-        n_orientations=args.orientations,
+        n_orientations=k,
+        position_only=args.position_only,
         seed=args.seed,
         tol_pos=args.tol_pos,
         tol_rot=args.tol_rot,
@@ -233,7 +252,8 @@ def run(args: argparse.Namespace) -> int:
     reachable = rmap.index > 0
     print(
         f"robot {robot.name}, frame {robot.ee_frame}: grid {rmap.index.shape} of "
-        f"{rmap.resolution:g} m voxels, K = {rmap.n_orientations} orientations"
+        f"{rmap.resolution:g} m voxels, "
+        + ("positions only" if rmap.position_only else f"K = {rmap.n_orientations} orientations")
     )
     mean = float(rmap.index[reachable].mean()) if reachable.any() else 0.0
     print(

@@ -220,7 +220,10 @@ def load_goals(source: str | os.PathLike[str] | Sequence[Mapping[str, Any]]) -> 
                 f"{p}: larger than the {MAX_GOALS_FILE // 2**20} MiB limit of a goals file"
             )
         try:
-            data = json.loads(p.read_text(), object_pairs_hook=functools.partial(_no_repeats, p))
+            data = json.loads(
+                p.read_text(encoding="utf-8-sig"),  # (a byte-order mark dropped)
+                object_pairs_hook=functools.partial(_no_repeats, p),
+            )
         except RecursionError:
             raise InvalidArgumentError(f"{p}: JSON nested too deeply") from None
         except (OSError, UnicodeDecodeError, json.JSONDecodeError) as exc:

@@ -299,18 +299,34 @@ def announced() -> Iterator[None]:
         timer.cancel()
 
 
+def raise_ctrl_c(exc: BaseException) -> None:
+    """Raise the ``KeyboardInterrupt`` behind ``exc`` when a Ctrl-C cut a compiled kernel's
+    clock read short, else return (the caller raises ``exc`` again).
+
+    The kernels read the clock in ``numba.objmode`` (:func:`swarm_ik.kernels.search.now`,
+    ``wall_clock``), which enters Python through numba's unpickling of the object-mode
+    function; a Ctrl-C handled there comes out of the kernel as ``SystemError: … returned a
+    result with an exception set``, caused by the ``KeyboardInterrupt``.  A caller's ``except
+    KeyboardInterrupt`` (``solve_batch(keep_on_interrupt=True)``, a notebook's interrupt) must
+    see the interruption it is."""
+    if isinstance(exc, SystemError) and isinstance(exc.__cause__, KeyboardInterrupt):
+        raise exc.__cause__ from None
+
+
 def loaded_despite_damage(load: Callable[[], T]) -> T:
     """``load()``, a first call that loads compiled kernels from numba's cache; when it fails
     and swarm_ik's cache holds files, they are all removed (one line on stderr) and ``load``
     runs once more, compiling anew.  A cache file whole in length but damaged inside (flipped
     bytes: numba's ``LLVM bitcode parsing error`` or a ``UnicodeDecodeError`` on every run),
     which the check on import cannot see, so costs one compile instead of every solve.  An
-    error that is not the cache's comes back from the second call as it was."""
+    error that is not the cache's comes back from the second call as it was; a Ctrl-C that
+    cut the kernel's clock read short as ``KeyboardInterrupt`` (:func:`raise_ctrl_c`)."""
     try:
         return load()
     except (KeyboardInterrupt, SwarmIKError):
         raise
     except Exception as exc:
+        raise_ctrl_c(exc)
         if not _raised_loading_a_cache(exc) or cut_by_ctrl_c(exc):
             raise
         removed = drop_cache_files(cache_folders(_SETTLED[0]))

@@ -55,7 +55,7 @@ from numpy.typing import NDArray
 from swarm_ik.errors import InvalidArgumentError, unknown
 from swarm_ik.goals import base as goals_base
 from swarm_ik.goals import kernels
-from swarm_ik.kernels import lm, search
+from swarm_ik.kernels import lm, raise_ctrl_c, search
 from swarm_ik.kernels.lm import BUDGET, CONVERGED, ITER_CAP, LOCAL_MIN, NOT_RUN, LMSettings
 from swarm_ik.problem import REPLACEABLE, IKProblem
 from swarm_ik.solvers.base import Evaluator, FloatArray, register
@@ -325,14 +325,19 @@ def compiled_search(
     """
     out_q = np.empty(seed_q.shape[0])
     st = search_state(pol, pop_size) if state is None else state
-    used, f, dp, dr, stopped, hist = search.swarm_search(
-        st, seed_q, pol.kernel_tol_pos, pol.kernel_tol_rot,
-        float(tol_pos) if stop else -1.0, float(tol_rot) if stop else -1.0, float(w_rot),
-        int(pop_size), int(n_swarm), int(iterations), max_evals is None and time_limit is None,
-        int(min(remaining, 2**62)), -1 if max_evals is None else int(max_evals),
-        int(evals_before), search.NO_LIMIT if time_limit is None else max(float(time_limit), 0.0),
-        float(t0), key, out_q,
-    )  # fmt: skip
+    try:
+        used, f, dp, dr, stopped, hist = search.swarm_search(
+            st, seed_q, pol.kernel_tol_pos, pol.kernel_tol_rot,
+            float(tol_pos) if stop else -1.0, float(tol_rot) if stop else -1.0, float(w_rot),
+            int(pop_size), int(n_swarm), int(iterations), max_evals is None and time_limit is None,
+            int(min(remaining, 2**62)), -1 if max_evals is None else int(max_evals),
+            int(evals_before),
+            search.NO_LIMIT if time_limit is None else max(float(time_limit), 0.0),
+            float(t0), key, out_q,
+        )  # fmt: skip
+    except SystemError as exc:  # (a Ctrl-C in the kernel's clock read: KeyboardInterrupt)
+        raise_ctrl_c(exc)
+        raise
     return SearchOutcome(out_q, float(f), float(dp), float(dr), int(used), bool(stopped), hist)
 
 
