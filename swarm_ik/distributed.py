@@ -300,10 +300,11 @@ class Threads:
 
     The kernels of a batch release the GIL (numba's ``nogil``) while they run, so chunks run
     side by side on the cores; the Python between kernel calls takes turns.  The threads are
-    started by each :meth:`map` and are daemons: after a Ctrl-C (or a chunk's error) no chunk
-    starts, and a chunk already running ends in the background without keeping the process
-    alive (a compiled chunk cannot be stopped from outside; a batch's chunks take a fraction
-    of a second each, a time limit bounds them).
+    daemons kept for the process's later calls (what a thread makes once, such as its list of
+    goal kernels, is made once): after a Ctrl-C (or a chunk's error) no chunk starts, and a
+    chunk already running ends in the background without keeping the process alive (a
+    compiled chunk cannot be stopped from outside; a batch's chunks take a fraction of a
+    second each, a time limit bounds them).
 
     Attributes:
         n: Threads (at least 1).
@@ -321,9 +322,9 @@ class Threads:
         items: Sequence[T],
         done: Callable[[int], Any] | None = None,
     ) -> list[R]:
-        """``[func(item) for item in items]``, the items taken in order by the threads;
-        ``done(i)`` is called in the calling thread as item ``i`` finishes.  The first error
-        of a chunk is raised here (no chunk starts after it)."""
+        """``[func(item) for item in items]``, the items taken in order by up to :attr:`n`
+        threads; ``done(i)`` is called in the calling thread as item ``i`` finishes.  The
+        first error of a chunk is raised here (no chunk starts after it)."""
         results: list[Any] = [None] * len(items)
         todo: queue.SimpleQueue[int] = queue.SimpleQueue()
         for i in range(len(items)):
@@ -331,7 +332,7 @@ class Threads:
         finished: queue.SimpleQueue[tuple[int, BaseException | None]] = queue.SimpleQueue()
         stop = threading.Event()
 
-        def work() -> None:
+        def runner() -> None:  # (one of this call's n: takes items until none is left)
             while not stop.is_set():
                 try:
                     i = todo.get_nowait()
@@ -345,8 +346,8 @@ class Threads:
                     return
                 finished.put((i, None))
 
-        for k in range(min(self.n, len(items))):
-            threading.Thread(target=work, name=f"swarm-ik-{k}", daemon=True).start()
+        for _ in range(min(self.n, len(items))):
+            _POOL.run(runner)
         try:
             for _ in range(len(items)):
                 while True:
@@ -365,6 +366,40 @@ class Threads:
 
     def __repr__(self) -> str:
         return f"Threads(n={self.n})"
+
+
+class _Pool:
+    """The process's daemon threads behind :class:`Threads`: a job waits for an idle thread,
+    and a new thread starts when none is idle."""
+
+    def __init__(self) -> None:
+        self._jobs: queue.SimpleQueue[Callable[[], None]] = queue.SimpleQueue()
+        self._lock = threading.Lock()
+        self._idle = 0
+        self._started = 0
+
+    def run(self, job: Callable[[], None]) -> None:
+        """Run ``job`` on a thread of the pool (an idle one, else a new one)."""
+        with self._lock:
+            if self._idle > 0:
+                self._idle -= 1
+            else:
+                self._started += 1
+                name = f"swarm-ik-{self._started}"
+                threading.Thread(target=self._serve, name=name, daemon=True).start()
+        self._jobs.put(job)
+
+    def _serve(self) -> None:
+        while True:
+            job = self._jobs.get()
+            try:
+                job()
+            finally:
+                with self._lock:
+                    self._idle += 1
+
+
+_POOL = _Pool()
 
 
 class _NoBar:

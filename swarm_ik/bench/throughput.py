@@ -393,65 +393,99 @@ def run_experiment(
     for robot in loaded:  # compile / load the kernels once
         solve_batch(robot, make_targets(robot, 10, seed), tol_pos=tol, tol_rot=tol)
     use_dask = distributed.check_scheduler(scheduler) is not None
-    t_setup = time.perf_counter()
-    with distributed.connect(scheduler) as client:
-        setup_s = time.perf_counter() - t_setup
-        workers = distributed.n_workers(client)
-        cores = distributed.available_cores()
-        for robot in loaded:
-            print(f"[throughput] {robot.name}", flush=True)
-            if use_dask:  # warm the workers up (kernels loaded in every process)
-                solve_batch(
-                    robot, make_targets(robot, 64 * workers, seed), scheduler=client, chunk_size=32
-                )
-            for n in sizes:
-                targets = make_targets(robot, n, seed)
-                res = fastest()
-                record_batch("batch-1proc", res, f"success {res.success_rate:.4f}")
-                res_t = fastest(scheduler=distributed.THREADS)
+    cores = distributed.available_cores()
+    answers: dict[tuple[str, int, int], Any] = {}  # (robot, N, boxes) -> the in-process answer
+    # the rows of this process first, with no Dask cluster alive (its idle processes took
+    # 5-8 % of the threads' speed), then the Dask rows
+    for robot in loaded:
+        print(f"[throughput] {robot.name}", flush=True)
+        for n in sizes:
+            targets = make_targets(robot, n, seed)
+            res = fastest()
+            answers[robot.name, n, 0] = res.q
+            record_batch("batch-1proc", res, f"success {res.success_rate:.4f}")
+            res_t = fastest(scheduler=distributed.THREADS)
+            if not np.array_equal(res_t.q, res.q):  # pragma: no cover - a bug
+                raise RuntimeError("threaded and in-process results differ")
+            record_batch("batch-threads", res_t, f"({cores} threads)", cores)
+            if n <= loop_max:
+                t, ok, ev = loop_solve(robot, targets, tol, seed)
+                record("loop-solve", t, ok, f"success {ok.mean():.4f}", evals=ev)
+                trac = loop_tracik(robot, targets, tol) if with_tracik else None
+                if trac is not None:
+                    record("loop-tracik", *trac, f"success {trac[1].mean():.4f}")
+            for k in boxes:
+                scene = box_scene(robot, k, seed)
+                _q, free = collision_free_targets(robot, scene, n, seed)
+                avoid = [swarm_ik.goals.AvoidCollisions(scene)]
+                solve_batch(robot, free[:8], goals=avoid)  # (the sphere model, untimed)
+                res = fastest(on=free)
+                rc = robot.collision_model()
+                ok = res.success & np.array([not rc.collides(q, scene) for q in res.q])
+                record_batch(f"boxes{k}-plain", res, f"success {ok.mean():.4f} (coal)")
+                rows[-1].update(success_rate=f"{ok.mean():.6f}", n_success=int(ok.sum()))
+                res = fastest(on=free, goals=avoid)
+                answers[robot.name, n, k] = res.q
+                record_batch(f"boxes{k}-avoid-1proc", res, f"success {res.success_rate:.4f}")
+                res_t = fastest(on=free, goals=avoid, scheduler=distributed.THREADS)
                 if not np.array_equal(res_t.q, res.q):  # pragma: no cover - a bug
                     raise RuntimeError("threaded and in-process results differ")
-                record_batch("batch-threads", res_t, f"({cores} threads)", cores)
-                if use_dask:
+                record_batch(f"boxes{k}-avoid-threads", res_t, f"({cores} threads)", cores)
+        prof += profile_batch(robot, min(max(sizes), 10_000), seed, tol)
+    if use_dask:
+        t_setup = time.perf_counter()
+        with distributed.connect(scheduler) as client:
+            setup_s = time.perf_counter() - t_setup
+            workers = distributed.n_workers(client)
+            for robot in loaded:
+                print(f"[throughput] {robot.name} on Dask", flush=True)
+                solve_batch(  # (the workers warmed up: kernels loaded in every process)
+                    robot, make_targets(robot, 64 * workers, seed), scheduler=client, chunk_size=32
+                )
+                for n in sizes:
+                    targets = make_targets(robot, n, seed)
                     res_d = fastest(scheduler=client)
-                    if not np.array_equal(res_d.q, res.q):  # pragma: no cover - a bug
+                    if not np.array_equal(res_d.q, answers[robot.name, n, 0]):  # pragma: no cover
                         raise RuntimeError("Dask and in-process results differ")
                     record_batch("batch-dask", res_d, f"({workers} workers)", workers, setup_s)
-                if n <= loop_max:
-                    t, ok, ev = loop_solve(robot, targets, tol, seed)
-                    record("loop-solve", t, ok, f"success {ok.mean():.4f}", evals=ev)
-                    trac = loop_tracik(robot, targets, tol) if with_tracik else None
-                    if trac is not None:
-                        record("loop-tracik", *trac, f"success {trac[1].mean():.4f}")
-                for k in boxes:
-                    scene = box_scene(robot, k, seed)
-                    _q, free = collision_free_targets(robot, scene, n, seed)
-                    avoid = [swarm_ik.goals.AvoidCollisions(scene)]
-                    solve_batch(robot, free[:8], goals=avoid)  # (the sphere model, untimed)
-                    res = fastest(on=free)
-                    rc = robot.collision_model()
-                    ok = res.success & np.array([not rc.collides(q, scene) for q in res.q])
-                    record_batch(f"boxes{k}-plain", res, f"success {ok.mean():.4f} (coal)")
-                    rows[-1].update(success_rate=f"{ok.mean():.6f}", n_success=int(ok.sum()))
-                    res = fastest(on=free, goals=avoid)
-                    record_batch(f"boxes{k}-avoid-1proc", res, f"success {res.success_rate:.4f}")
-                    res_t = fastest(on=free, goals=avoid, scheduler=distributed.THREADS)
-                    if not np.array_equal(res_t.q, res.q):  # pragma: no cover - a bug
-                        raise RuntimeError("threaded and in-process results differ")
-                    record_batch(f"boxes{k}-avoid-threads", res_t, f"({cores} threads)", cores)
-                    if use_dask:
+                    for k in boxes:
+                        scene = box_scene(robot, k, seed)
+                        _q, free = collision_free_targets(robot, scene, n, seed)
+                        avoid = [swarm_ik.goals.AvoidCollisions(scene)]
                         solve_batch(robot, free[: 8 * workers], goals=avoid, scheduler=client,
                                     chunk_size=8)  # fmt: skip
                         res_d = fastest(on=free, goals=avoid, scheduler=client)
-                        if not np.array_equal(res_d.q, res.q):  # pragma: no cover - a bug
+                        if not np.array_equal(
+                            res_d.q, answers[robot.name, n, k]
+                        ):  # pragma: no cover
                             raise RuntimeError("Dask and in-process results differ")
                         record_batch(
                             f"boxes{k}-avoid-dask", res_d, f"({workers} workers)", workers, setup_s
                         )
-            prof += profile_batch(robot, min(max(sizes), 10_000), seed, tol)
+    names = [r.name for r in loaded]
+    rows.sort(key=lambda r: _row_rank(r, names))
     csv_path = common.write_csv(out / "throughput.csv", FIELDS, rows)
     prof_path = common.write_csv(out / "profile.csv", PROFILE_FIELDS, prof)
     return csv_path, prof_path
+
+
+METHOD_ORDER = (
+    "batch-1proc", "batch-threads", "batch-dask", "loop-solve", "loop-tracik", "plain",
+    "avoid-1proc", "avoid-threads", "avoid-dask",
+)  # fmt: skip
+"""The order of a robot's rows of one N in the CSV and the report (``boxesK-`` rows by K, then
+by their suffix)."""
+
+
+def _row_rank(row: dict[str, Any], names: Sequence[str]) -> tuple[int, int, int, int]:
+    """Where ``row`` goes: by robot (``names``: in the order run), N, boxes (none first),
+    method."""
+    method = str(row["method"])
+    head, _, rest = method.partition("-")
+    boxes = int(head[5:]) if head.startswith("boxes") and head[5:].isdigit() else 0
+    name = rest if boxes else method
+    rank = METHOD_ORDER.index(name) if name in METHOD_ORDER else len(METHOD_ORDER)
+    return names.index(row["robot"]), int(row["n"]), boxes, rank
 
 
 METHOD_LABELS = {
