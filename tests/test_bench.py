@@ -630,13 +630,13 @@ def test_throughput_report_gives_the_collision_free_rows_as_a_ratio_of_the_plain
         {"robot": "panda", "n": "100", "method": m, "poses_per_s": str(v)}
         for m, v in (
             ("batch-1proc", 900.0), ("boxes40-plain", 1000.0), ("boxes40-avoid-1proc", 250.0),
-            ("boxes40-avoid-dask", 400.0), ("boxes10-plain", 800.0),
-            ("boxes10-avoid-1proc", 400.0),
+            ("boxes40-avoid-threads", 300.0), ("boxes40-avoid-dask", 400.0),
+            ("boxes10-plain", 800.0), ("boxes10-avoid-1proc", 400.0),
         )
     ]  # fmt: skip
     text = box_ratios(rows)
-    assert "| panda | 40 | 100 | 0.25 | 0.40 |" in text
-    assert "| panda | 10 | 100 | 0.50 | – |" in text  # (no Dask row)
+    assert "| panda | 40 | 100 | 0.25 | 0.30 | 0.40 |" in text
+    assert "| panda | 10 | 100 | 0.50 | – | – |" in text  # (no threads or Dask row)
     assert box_ratios(rows[:1]) == ""
 
 

@@ -569,16 +569,15 @@ def box_ratios(rows: list[dict[str, str]]) -> str:
         cells = [
             f"{rate[(robot, n, f'{head}-{v}')] / plain:.2f}" if (robot, n, f"{head}-{v}") in rate
             else "–"
-            for v in ("avoid-1proc", "avoid-dask")
+            for v in ("avoid-1proc", "avoid-threads", "avoid-dask")
         ]  # fmt: skip
-        out.append(f"| {robot} | {head[5:]} | {int(n):,} | {cells[0]} | {cells[1]} |")
+        out.append(f"| {robot} | {head[5:]} | {int(n):,} | {' | '.join(cells)} |")
     if not out:
         return ""
     return (
         "\nWith `AvoidCollisions`, poses/s as a ratio of the plain batch's on the same targets:"
-        "\n\n| robot | boxes | N | 1 process | on Dask |\n|---|---:|---:|---:|---:|\n"
-        + "\n".join(out)
-        + "\n"
+        "\n\n| robot | boxes | N | 1 process | a thread per core | on Dask |"
+        "\n|---|---:|---:|---:|---:|---:|\n" + "\n".join(out) + "\n"
     )
 
 
