@@ -24,6 +24,7 @@ import json
 import math
 import os
 import platform
+import signal
 import string
 import sys
 import xml.etree.ElementTree as ET
@@ -36,7 +37,7 @@ import numpy as np
 
 from swarm_ik.bench.sizes import check_sizes
 from swarm_ik.errors import InvalidArgumentError, SwarmIKError
-from swarm_ik.kernels import cut_by_ctrl_c
+from swarm_ik.kernels import counted_sigint, cut_by_ctrl_c
 
 THREAD_VARIABLES = (
     "OMP_NUM_THREADS",
@@ -75,6 +76,9 @@ def module_main(
     stderr and exit 2."""
 
     def main(argv: Sequence[str] | None = None) -> int:
+        if argv is None:  # (run as a module: this process's own, a Ctrl-C counted so that
+            # one a kernel lost is raised again, as in the console script)
+            signal.signal(signal.SIGINT, counted_sigint)
         parser = argparse.ArgumentParser(
             prog=f"python -m swarm_ik.bench.{name}", description=description
         )

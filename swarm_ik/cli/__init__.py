@@ -288,7 +288,7 @@ def _quiet_stdout() -> None:
 def _unexpected(exc: Exception, as_json: bool) -> int:
     """Exit 3 and one line for an error inside swarm_ik (or 130 for one that a Ctrl-C
     caused); ``SWARM_IK_DEBUG=1`` raises it again."""
-    if _SIGINTS[0]:  # (a Ctrl-C that cut a C routine short: SystemError and the like)
+    if kernels.SIGINTS[0]:  # (a Ctrl-C that cut a C routine short: SystemError and the like)
         return _interrupted(as_json)
     if os.environ.get("SWARM_IK_DEBUG"):
         raise exc
@@ -320,24 +320,13 @@ def _own_process() -> None:
     ``argv``, in someone else's process).
 
     The collector is off until the command is known (:data:`SHORT_COMMANDS` keep it off).
-    A Ctrl-C is counted (:func:`_on_sigint`), and one that lands in a callback from compiled
-    code while kernels load, where Python swallows it ("Exception ignored on calling ctypes
-    callback"), is raised again (:func:`_unraisable`).
+    A Ctrl-C is counted (:func:`swarm_ik.kernels.counted_sigint`), and one that lands in a
+    callback from compiled code while kernels load, where Python swallows it ("Exception
+    ignored on calling ctypes callback"), is raised again (:func:`_unraisable`).
     """
     gc.disable()
-    signal.signal(signal.SIGINT, _on_sigint)
+    signal.signal(signal.SIGINT, kernels.counted_sigint)
     sys.unraisablehook = _unraisable
-
-
-_SIGINTS = [0]
-"""Ctrl-Cs this process received (the console script's handler)."""
-
-
-def _on_sigint(signum: int, frame: Any) -> None:
-    """Python's own Ctrl-C (``KeyboardInterrupt``), counted: an error that follows one (a C
-    routine cut short, ``SystemError``) is reported as the interruption it is."""
-    _SIGINTS[0] += 1
-    signal.default_int_handler(signum, frame)
 
 
 def _unraisable(args: Any) -> None:

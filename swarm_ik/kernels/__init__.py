@@ -24,6 +24,7 @@ import contextlib
 import hashlib
 import os
 import shutil
+import signal
 import stat
 import sys
 import threading
@@ -297,6 +298,30 @@ def announced() -> Iterator[None]:
         yield
     finally:
         timer.cancel()
+
+
+SIGINTS = [0]
+"""Ctrl-Cs this process received, counted by :func:`counted_sigint` where swarm_ik's own
+entry points (the console script, ``python -m swarm_ik.bench.NAME``) make it the SIGINT
+handler; 0 elsewhere (a user's process keeps its own handler)."""
+
+
+def counted_sigint(signum: int, frame: object) -> None:
+    """Python's own Ctrl-C handler (``KeyboardInterrupt``), counted in :data:`SIGINTS`: an
+    error that follows one (a C routine cut short, ``SystemError``) is the interruption it
+    is, and one that a kernel lost is raised again (:func:`raise_lost_ctrl_c`)."""
+    SIGINTS[0] += 1
+    signal.default_int_handler(signum, frame)  # type: ignore[arg-type]
+
+
+def raise_lost_ctrl_c(before: int) -> None:
+    """Raise ``KeyboardInterrupt`` when :data:`SIGINTS` moved from ``before`` (read before a
+    compiled call that reads the clock) although the call returned: the ``KeyboardInterrupt``
+    of a Ctrl-C that lands in the kernel's object-mode block is at times lost instead of
+    coming out as a ``SystemError`` (:func:`raise_ctrl_c`; 1 of 40 Ctrl-Cs of ``python -m
+    swarm_ik.bench.path`` ran on)."""
+    if SIGINTS[0] != before:
+        raise KeyboardInterrupt
 
 
 def raise_ctrl_c(exc: BaseException) -> None:

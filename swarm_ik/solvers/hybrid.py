@@ -55,7 +55,7 @@ from numpy.typing import NDArray
 from swarm_ik.errors import InvalidArgumentError, unknown
 from swarm_ik.goals import base as goals_base
 from swarm_ik.goals import kernels
-from swarm_ik.kernels import lm, raise_ctrl_c, search
+from swarm_ik.kernels import SIGINTS, lm, raise_ctrl_c, raise_lost_ctrl_c, search
 from swarm_ik.kernels.lm import BUDGET, CONVERGED, ITER_CAP, LOCAL_MIN, NOT_RUN, LMSettings
 from swarm_ik.problem import REPLACEABLE, IKProblem
 from swarm_ik.solvers.base import Evaluator, FloatArray, register
@@ -325,6 +325,7 @@ def compiled_search(
     """
     out_q = np.empty(seed_q.shape[0])
     st = search_state(pol, pop_size) if state is None else state
+    ctrl_c = SIGINTS[0]
     try:
         used, f, dp, dr, stopped, hist = search.swarm_search(
             st, seed_q, pol.kernel_tol_pos, pol.kernel_tol_rot,
@@ -338,6 +339,7 @@ def compiled_search(
     except SystemError as exc:  # (a Ctrl-C in the kernel's clock read: KeyboardInterrupt)
         raise_ctrl_c(exc)
         raise
+    raise_lost_ctrl_c(ctrl_c)
     return SearchOutcome(out_q, float(f), float(dp), float(dr), int(used), bool(stopped), hist)
 
 
