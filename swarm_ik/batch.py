@@ -929,7 +929,8 @@ def _check_pose_block(blk: FloatArray, first: int, orth_tol: float) -> None:
         )  # fmt: skip
     ).max(axis=0)
     det = np.einsum("ni,ni->n", c0, np.cross(c1, c2))
-    bad = (orth > orth_tol) | (np.abs(det - 1.0) > orth_tol)
+    bad = ~((orth <= orth_tol) & (np.abs(det - 1.0) <= orth_tol))  # (NaN: entries that
+    # overflow, 1e200 say, are bad too)
     if bad.any():
         i = int(np.flatnonzero(bad)[0])
         raise InvalidTargetError(

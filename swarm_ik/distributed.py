@@ -128,6 +128,8 @@ def check_scheduler(scheduler: Any, *, threads: bool = True) -> Any:
             + ", ".join(SCHEMES)
             + " (e.g. tcp://127.0.0.1:8786)"
         )
+    if isinstance(scheduler, Threads) and threads:  # (what connect("threads") yields)
+        return scheduler
     if hasattr(scheduler, "submit") and hasattr(scheduler, "gather"):
         return scheduler
     raise InvalidArgumentError(
@@ -164,7 +166,7 @@ def connect(
     if isinstance(scheduler, str) and scheduler == THREADS:
         yield Threads(n_workers or available_cores())
         return
-    if not isinstance(scheduler, str):
+    if not isinstance(scheduler, str):  # (a Client, or a Threads: used as they are)
         yield scheduler
         return
     distributed = _import_distributed()
@@ -346,9 +348,11 @@ class Threads:
                     return
                 finished.put((i, None))
 
-        for _ in range(min(self.n, len(items))):
-            _POOL.run(runner)
         try:
+            with sigint_deferred():  # (a Ctrl-C here is raised once every runner started, and
+                # the finally below stops them: none lost, none left running the batch)
+                for _ in range(min(self.n, len(items))):
+                    _POOL.run(runner)
             for _ in range(len(items)):
                 while True:
                     try:
@@ -381,13 +385,20 @@ class _Pool:
     def run(self, job: Callable[[], None]) -> None:
         """Run ``job`` on a thread of the pool (an idle one, else a new one)."""
         with self._lock:
-            if self._idle > 0:
-                self._idle -= 1
-            else:
+            start = self._idle == 0
+            if start:
                 self._started += 1
-                name = f"swarm-ik-{self._started}"
-                threading.Thread(target=self._serve, name=name, daemon=True).start()
+            else:
+                self._idle -= 1
+            name = f"swarm-ik-{self._started}"
         self._jobs.put(job)
+        if start:
+            try:
+                threading.Thread(target=self._serve, name=name, daemon=True).start()
+            except BaseException:  # (no thread: the job waits for one that frees itself)
+                with self._lock:
+                    self._started -= 1
+                raise
 
     def _serve(self) -> None:
         while True:

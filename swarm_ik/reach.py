@@ -23,6 +23,8 @@ as a coloured point cloud; needs ``meshcat``).  The command line ``swarm-ik reac
 from __future__ import annotations
 
 import time
+import zipfile
+import zlib
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
@@ -154,41 +156,44 @@ class ReachMap:
         """
         p = Path(path)
         try:
-            d = np.load(p, allow_pickle=False)
-        except OSError as exc:
+            with np.load(p, allow_pickle=False) as d:
+                if not hasattr(d, "files"):  # (one array: a .npy)
+                    raise InvalidArgumentError(f"{str(p)!r} is not a reach map's .npz archive")
+                missing = [k for k in cls._SAVED if k not in d.files]
+                if missing:
+                    raise InvalidArgumentError(
+                        f"{str(p)!r} is no reach map (written by ReachMap.save): it lacks "
+                        f"{', '.join(missing)}"
+                    )
+                return cls(
+                    robot=str(d["robot"]),
+                    ee_frame=str(d["ee_frame"]),
+                    x=d["x"],
+                    y=d["y"],
+                    z=d["z"],
+                    index=d["index"],
+                    solved=d["solved"],
+                    hits=d["hits"],
+                    orientations=d["orientations"],
+                    resolution=float(d["resolution"]),
+                    base=d["base"],
+                    seed=int(d["seed"]),
+                    tol_pos=float(d["tol_pos"]),
+                    tol_rot=float(d["tol_rot"]),
+                    max_starts=int(d["max_starts"]),
+                    time_s=float(d["time_s"]),
+                    urdf=str(d["urdf"]) if "urdf" in d.files else "",
+                    position_only=bool(d["position_only"]) if "position_only" in d.files else False,
+                )
+        except InvalidArgumentError:
+            raise
+        except FileNotFoundError:
+            raise InvalidArgumentError(f"no reach map at {str(p)!r}: no such file") from None
+        except (OSError, ValueError, EOFError, TypeError, zipfile.BadZipFile, zlib.error) as exc:
+            # (not numpy's format, a damaged archive, an array of another kind)
             raise InvalidArgumentError(
-                f"cannot read a reach map from {str(p)!r}: {exc.strerror or exc}"
+                f"{str(p)!r} is not a readable reach map's .npz archive ({type(exc).__name__})"
             ) from None
-        except (ValueError, EOFError):
-            d = None
-        if not hasattr(d, "files"):
-            raise InvalidArgumentError(f"{str(p)!r} is not a reach map's .npz archive")
-        missing = [k for k in cls._SAVED if k not in d.files]
-        if missing:
-            raise InvalidArgumentError(
-                f"{str(p)!r} is no reach map (written by ReachMap.save): it lacks "
-                f"{', '.join(missing)}"
-            )
-        return cls(
-            robot=str(d["robot"]),
-            ee_frame=str(d["ee_frame"]),
-            x=d["x"],
-            y=d["y"],
-            z=d["z"],
-            index=d["index"],
-            solved=d["solved"],
-            hits=d["hits"],
-            orientations=d["orientations"],
-            resolution=float(d["resolution"]),
-            base=d["base"],
-            seed=int(d["seed"]),
-            tol_pos=float(d["tol_pos"]),
-            tol_rot=float(d["tol_rot"]),
-            max_starts=int(d["max_starts"]),
-            time_s=float(d["time_s"]),
-            urdf=str(d["urdf"]) if "urdf" in d.files else "",
-            position_only=bool(d["position_only"]) if "position_only" in d.files else False,
-        )
 
     def __repr__(self) -> str:
         reach = self.index > 0

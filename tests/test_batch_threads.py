@@ -17,7 +17,7 @@ import pytest
 import swarm_ik
 from swarm_ik import distributed
 from swarm_ik.cli import main
-from swarm_ik.errors import InvalidArgumentError
+from swarm_ik.errors import InvalidArgumentError, InvalidTargetError
 from swarm_ik.goals import AvoidCollisions, Posture
 from swarm_ik.scene import Box, Scene
 
@@ -147,3 +147,63 @@ def test_benchmarks_of_python_peers_refuse_threads(
     assert rc == 2 and len(err) == 1, err
     assert "'threads' is for batches" in err[0]
     assert not (tmp_path / "b").exists()
+
+
+def test_a_ctrl_c_as_a_map_starts_leaves_no_runaway_and_no_lost_thread() -> None:
+    """An interrupt landing while the runners start (a SIGALRM raising KeyboardInterrupt at
+    1-300 µs, in place of a Ctrl-C) stopped nothing (the whole map ran on) and lost pool
+    threads (each later map started new ones)."""
+    if not hasattr(signal, "setitimer"):
+        pytest.skip("no interval timer")
+
+    def interrupt(*_: object) -> None:
+        raise KeyboardInterrupt
+
+    done: list[int] = []
+
+    def slow(x: int) -> None:
+        time.sleep(0.002)
+        done.append(x)
+
+    old = signal.signal(signal.SIGALRM, interrupt)
+    pool, runaway = distributed.Threads(2), 0
+    try:
+        for d in range(1, 300, 3):
+            del done[:]
+            try:
+                signal.setitimer(signal.ITIMER_REAL, d * 1e-6)
+                pool.map(slow, list(range(60)))
+                signal.setitimer(signal.ITIMER_REAL, 0)
+            except KeyboardInterrupt:
+                n0 = len(done)
+                time.sleep(0.05)
+                runaway += len(done) - n0 > 4
+    finally:
+        signal.setitimer(signal.ITIMER_REAL, 0)
+        signal.signal(signal.SIGALRM, old)
+    time.sleep(0.2)
+    assert runaway == 0
+    names = [t.name for t in threading.enumerate() if t.name.startswith("swarm-ik-")]
+    assert len(names) <= 8, names  # (the pool's threads are reused)
+
+
+def test_a_pool_handle_is_a_scheduler_and_bench_throughput_refuses_threads(
+    get_robot, tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    robot = get_robot("panda")
+    targets = _targets(robot, 20, 1)
+    with distributed.connect("threads") as pool:
+        got = swarm_ik.solve_batch(robot, targets, scheduler=pool, chunk_size=4)
+    np.testing.assert_array_equal(got.q, swarm_ik.solve_batch(robot, targets, chunk_size=4).q)
+    rc = main(["bench", "throughput", "--scheduler", "threads", "--out", str(tmp_path / "b")])
+    err = capsys.readouterr().err.strip().splitlines()
+    assert rc == 2 and len(err) == 1 and "'threads' is for batches" in err[0], err
+    assert not (tmp_path / "b").exists()
+
+
+def test_rotation_blocks_too_large_to_square_are_refused(get_robot) -> None:
+    robot = get_robot("panda")
+    pose = robot.fk(robot.mid_q())[None].copy()
+    pose[0, :3, :3] *= 1e200  # (its products overflow: inf - inf is NaN)
+    with pytest.raises(InvalidTargetError, match="not orthonormal"):
+        swarm_ik.solve_batch(robot, pose)

@@ -185,8 +185,12 @@ def test_reach_map_refuses_bad_arguments_as_its_own(get_robot, kwargs: dict) -> 
 def test_reach_map_load_refuses_what_is_no_map(tmp_path: Path) -> None:
     np.savez(tmp_path / "other.npz", q=np.zeros(3))
     (tmp_path / "text.npz").write_text("not numpy")
-    for name, message in [("other.npz", "lacks robot"), ("text.npz", "not a reach map"),
-                          ("none.npz", "No such file")]:  # fmt: skip
+    whole = (tmp_path / "other.npz").read_bytes()
+    (tmp_path / "cut.npz").write_bytes(whole[: len(whole) // 2])
+    (tmp_path / "junk.npz").write_bytes(b"PK\x03\x04" + b"junk" * 40)
+    for name, message in [("other.npz", "lacks robot"), ("text.npz", "not a readable reach map"),
+                          ("none.npz", "no such file"), ("cut.npz", "not a readable reach map"),
+                          ("junk.npz", "not a readable reach map")]:  # fmt: skip
         with pytest.raises(InvalidArgumentError, match=message):
             reach.ReachMap.load(tmp_path / name)
 
