@@ -65,7 +65,7 @@ from swarm_ik._validate import check_seed, count, floats_or, keywords_checked
 from swarm_ik.errors import InvalidArgumentError, InvalidTargetError, SwarmIKError
 from swarm_ik.goals import AvoidCollisions, Goal, Pose, Position, State, kernel_slot, kernels
 from swarm_ik.goals import base as goals_base
-from swarm_ik.kernels import SIGINTS, announced, lie, lm, loaded_despite_damage, raise_lost_ctrl_c
+from swarm_ik.kernels import announced, lie, lm, loaded_despite_damage, raise_lost_ctrl_c
 from swarm_ik.kernels.fk import TreeArrays
 from swarm_ik.kernels.lm import CONVERGED, NOT_RUN
 from swarm_ik.kernels.search import sampling_window, splitmix64, uniform_in, uniforms, wall_clock
@@ -1004,7 +1004,6 @@ def _polish_targets(
     conv = np.zeros(n, dtype=np.bool_)
     if n:
         seeds = np.ascontiguousarray(q_seed, dtype=float)
-        ctrl_c = SIGINTS[0]
         loaded_despite_damage(  # (a cache damaged inside its files: removed, compiled again)
             lambda: _solve_targets(
                 t_par, cols, seeds, index, tree, goals, kernels(), bounds,
@@ -1018,7 +1017,7 @@ def _polish_targets(
                 q, evals, starts, conv,
             )
         )  # fmt: skip
-        raise_lost_ctrl_c(ctrl_c)  # (a Ctrl-C the kernel's clock read lost)
+        raise_lost_ctrl_c()  # (a Ctrl-C the kernel's clock read lost)
     return q, evals, starts, conv
 
 

@@ -209,10 +209,10 @@ def test_a_byte_order_mark_is_read_past(get_robot, tmp_path: Path) -> None:
 
 
 def test_a_ctrl_c_a_kernel_lost_is_raised_when_it_returns(get_robot, monkeypatch) -> None:
-    """The KeyboardInterrupt of a Ctrl-C that lands in a kernel's object-mode clock read is
-    at times lost (``python -m swarm_ik.bench.path`` ran on after 1 of 40 Ctrl-Cs): where
-    swarm_ik's own handler counts the Ctrl-Cs, a count that moved during the call raises it
-    once the kernel returns."""
+    """The KeyboardInterrupt of a Ctrl-C is at times lost (``python -m swarm_ik.bench.path``
+    ran on after 1 of 40 Ctrl-Cs): where swarm_ik's own handler counts the Ctrl-Cs (whose
+    interruption ends the process), a count that is not zero raises it again around the next
+    compiled call."""
     from swarm_ik.kernels import SIGINTS, search
 
     robot = get_robot("panda")

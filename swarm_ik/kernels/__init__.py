@@ -314,13 +314,13 @@ def counted_sigint(signum: int, frame: object) -> None:
     signal.default_int_handler(signum, frame)  # type: ignore[arg-type]
 
 
-def raise_lost_ctrl_c(before: int) -> None:
-    """Raise ``KeyboardInterrupt`` when :data:`SIGINTS` moved from ``before`` (read before a
-    compiled call that reads the clock) although the call returned: the ``KeyboardInterrupt``
-    of a Ctrl-C that lands in the kernel's object-mode block is at times lost instead of
-    coming out as a ``SystemError`` (:func:`raise_ctrl_c`; 1 of 40 Ctrl-Cs of ``python -m
-    swarm_ik.bench.path`` ran on)."""
-    if SIGINTS[0] != before:
+def raise_lost_ctrl_c() -> None:
+    """Raise ``KeyboardInterrupt`` when :data:`SIGINTS` counted a Ctrl-C and yet the work goes
+    on (called around compiled calls): in the processes that count them, the interruption
+    ends the process, so a count that is not zero here is a ``KeyboardInterrupt`` that was
+    lost on its way (about 1 of 40 Ctrl-Cs of ``python -m swarm_ik.bench.path``, landing in a
+    kernel's object-mode clock read or in a peer's extension, ran on for good)."""
+    if SIGINTS[0]:
         raise KeyboardInterrupt
 
 

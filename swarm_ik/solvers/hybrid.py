@@ -55,7 +55,7 @@ from numpy.typing import NDArray
 from swarm_ik.errors import InvalidArgumentError, unknown
 from swarm_ik.goals import base as goals_base
 from swarm_ik.goals import kernels
-from swarm_ik.kernels import SIGINTS, lm, raise_ctrl_c, raise_lost_ctrl_c, search
+from swarm_ik.kernels import lm, raise_ctrl_c, raise_lost_ctrl_c, search
 from swarm_ik.kernels.lm import BUDGET, CONVERGED, ITER_CAP, LOCAL_MIN, NOT_RUN, LMSettings
 from swarm_ik.problem import REPLACEABLE, IKProblem
 from swarm_ik.solvers.base import Evaluator, FloatArray, register
@@ -176,6 +176,7 @@ class Polisher(NamedTuple):
         dr = np.empty(k)
         status = np.empty(k, dtype=np.int64)
         evals = np.empty(k, dtype=np.int64)
+        raise_lost_ctrl_c()  # (a loop of polishes: where a lost Ctrl-C is raised again)
         used = lm.lm_run(
             starts, self.tree, self.table, self.kernels, self.bounds, self.cfg, self.kernel_tol_pos,
             self.kernel_tol_rot, int(max_evals), bool(stop_first), out_q, dp, dr, status, evals,
@@ -325,7 +326,6 @@ def compiled_search(
     """
     out_q = np.empty(seed_q.shape[0])
     st = search_state(pol, pop_size) if state is None else state
-    ctrl_c = SIGINTS[0]
     try:
         used, f, dp, dr, stopped, hist = search.swarm_search(
             st, seed_q, pol.kernel_tol_pos, pol.kernel_tol_rot,
@@ -339,7 +339,7 @@ def compiled_search(
     except SystemError as exc:  # (a Ctrl-C in the kernel's clock read: KeyboardInterrupt)
         raise_ctrl_c(exc)
         raise
-    raise_lost_ctrl_c(ctrl_c)
+    raise_lost_ctrl_c()
     return SearchOutcome(out_q, float(f), float(dp), float(dr), int(used), bool(stopped), hist)
 
 
