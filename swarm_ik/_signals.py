@@ -33,8 +33,9 @@ def sigint_deferred() -> Iterator[None]:
     def record(signum: int, frame: Any) -> None:
         caught.append(signum)
 
-    old = signal.signal(signal.SIGINT, record)
-    try:
+    old = signal.getsignal(signal.SIGINT)
+    try:  # (the handler replaced inside: an interruption as it is replaced cannot leave it)
+        signal.signal(signal.SIGINT, record)
         yield
     finally:
         signal.signal(signal.SIGINT, old)

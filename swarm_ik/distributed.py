@@ -247,8 +247,9 @@ def sigint_blocked_for_workers() -> Iterator[None]:
         yield
         return
     if not hasattr(signal, "pthread_sigmask"):  # pragma: no cover - Windows
-        old = signal.signal(signal.SIGINT, signal.SIG_IGN)
+        old = signal.getsignal(signal.SIGINT)
         try:
+            signal.signal(signal.SIGINT, signal.SIG_IGN)
             yield
         finally:
             signal.signal(signal.SIGINT, old)
