@@ -8,7 +8,11 @@ from __future__ import annotations
 import functools
 import json
 import os
+import signal
+import subprocess
+import time
 from collections.abc import Callable
+from pathlib import Path
 
 import numpy as np
 import pytest
@@ -182,3 +186,50 @@ def refused(no_robot_loading: None, capsys: pytest.CaptureFixture[str]) -> Calla
     """:func:`cli_error` of a command line that must be refused before a robot is loaded
     (:func:`no_robot_loading`): called with ``ARGV``, it returns the one error line."""
     return functools.partial(cli_error, capsys)
+
+
+def interrupted_when_ready(
+    args: list[str], cwd: Path, after: float = 1.5
+) -> tuple[int, str, float]:
+    """Run ``args`` in a session of its own; once it prints ``ready`` (kernels loaded), wait
+    ``after`` s and send a Ctrl-C to its group; returns (exit code, its output, seconds from
+    the Ctrl-C to its exit)."""
+    env = dict(os.environ)
+    for var in ("OMP_NUM_THREADS", "OPENBLAS_NUM_THREADS", "MKL_NUM_THREADS"):
+        env.setdefault(var, "1")
+    proc = subprocess.Popen(
+        args, stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True, cwd=cwd, env=env,
+        start_new_session=True,
+    )  # fmt: skip
+    assert proc.stdout is not None
+    seen = []
+    for line in proc.stdout:  # (kernels compiled on a cold cache: minutes at worst)
+        seen.append(line)
+        if line.startswith("ready"):
+            break
+    else:
+        proc.wait()
+        pytest.fail("never ready:\n" + "".join(seen))
+    time.sleep(after)
+    sent = time.perf_counter()
+    os.killpg(proc.pid, signal.SIGINT)
+    try:
+        out, _ = proc.communicate(timeout=20.0)
+    except subprocess.TimeoutExpired:
+        os.killpg(proc.pid, signal.SIGKILL)
+        proc.communicate()
+        pytest.fail("still running 20 s after the Ctrl-C")
+    return proc.returncode, "".join(seen) + out, time.perf_counter() - sent
+
+
+WARM_CLI = """
+import sys, runpy
+import numpy as np, swarm_ik
+robot = swarm_ik.load_robot("panda")
+swarm_ik.solve_batch(robot, np.tile(robot.fk(robot.mid_q()), (1, 1, 1)))
+print("ready", flush=True)
+sys.argv = ["swarm-ik", *sys.argv[1:]]
+runpy.run_module("swarm_ik.cli", run_name="__main__")
+"""
+"""A script that loads Panda's batch kernels, prints ``ready``, then runs ``swarm-ik`` with
+its arguments (for :func:`interrupted_when_ready`)."""

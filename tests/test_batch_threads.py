@@ -3,9 +3,7 @@ the GIL), with the answers of the in-process batch, errors and Ctrl-C passed to 
 
 from __future__ import annotations
 
-import os
 import signal
-import subprocess
 import sys
 import threading
 import time
@@ -13,6 +11,7 @@ from pathlib import Path
 
 import numpy as np
 import pytest
+from conftest import WARM_CLI, interrupted_when_ready
 
 import swarm_ik
 from swarm_ik import distributed
@@ -111,30 +110,17 @@ def test_cli_batch_on_threads(tmp_path: Path, capsys: pytest.CaptureFixture[str]
 def test_ctrl_c_stops_a_batch_on_threads_at_once(tmp_path: Path) -> None:
     """The threads are daemons that take no chunk after the Ctrl-C: the command exits 130 with
     one line while a chunk may still run, instead of waiting for the whole batch."""
-    env = dict(os.environ)
-    for var in ("OMP_NUM_THREADS", "OPENBLAS_NUM_THREADS", "MKL_NUM_THREADS"):
-        env.setdefault(var, "1")
-    proc = subprocess.Popen(
-        [sys.executable, "-m", "swarm_ik.cli", "batch", "--robot", "panda", "--random",
-         "400000", "--max-starts", "64", "--chunk-size", "2000", "--out",
-         str(tmp_path / "b.npz"), "--scheduler", "threads", "--no-progress"],
-        stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True, cwd=tmp_path, env=env,
-        start_new_session=True,
+    warm = tmp_path / "warm.py"
+    warm.write_text(WARM_CLI)
+    rc, out, took = interrupted_when_ready(
+        [sys.executable, str(warm), "batch", "--robot", "panda", "--random", "400000",
+         "--max-starts", "64", "--chunk-size", "2000", "--out", str(tmp_path / "b.npz"),
+         "--scheduler", "threads", "--no-progress"],
+        tmp_path, after=1.0,
     )  # fmt: skip
-    time.sleep(6.0)  # (the robot and kernels loaded, chunks under way: 400,000 take ~8 s)
-    assert proc.poll() is None, proc.communicate()
-    sent = time.perf_counter()
-    os.killpg(proc.pid, signal.SIGINT)
-    try:
-        _out, err = proc.communicate(timeout=10.0)
-    except subprocess.TimeoutExpired:
-        os.killpg(proc.pid, signal.SIGKILL)
-        proc.communicate()
-        pytest.fail("still running 10 s after Ctrl-C")
-    took = time.perf_counter() - sent
-    assert proc.returncode == 130, err
-    lines = err.strip().splitlines()
-    assert len(lines) == 1 and lines[0].startswith("swarm-ik: interrupted"), err
+    assert rc == 130, out
+    lines = out.strip().splitlines()[1:]  # (after "ready")
+    assert len(lines) == 1 and lines[0].startswith("swarm-ik: interrupted"), out
     assert took < 5.0
 
 

@@ -6,17 +6,12 @@ project's own, and a byte-order mark at the start of a CSV or JSON file is read 
 from __future__ import annotations
 
 import json
-import os
-import signal
-import subprocess
 import sys
-import textwrap
-import time
 from pathlib import Path
 
 import numpy as np
 import pytest
-from conftest import cli_error
+from conftest import WARM_CLI, cli_error, interrupted_when_ready
 
 import swarm_ik
 from swarm_ik import _validate, reach
@@ -26,36 +21,6 @@ from swarm_ik.errors import InvalidArgumentError, SwarmIKError
 from swarm_ik.goals import load_goals
 
 posix = pytest.mark.skipif(not sys.platform.startswith("linux"), reason="POSIX signals")
-
-
-def _interrupted(args: list[str], cwd: Path, after: float = 1.5) -> tuple[int, str]:
-    """Run ``args`` in a session of its own; once it prints ``ready`` (kernels loaded), wait
-    ``after`` s and send a Ctrl-C to its group; returns (exit code, its output)."""
-    env = dict(os.environ)
-    for var in ("OMP_NUM_THREADS", "OPENBLAS_NUM_THREADS", "MKL_NUM_THREADS"):
-        env.setdefault(var, "1")
-    proc = subprocess.Popen(
-        args, stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True, cwd=cwd, env=env,
-        start_new_session=True,
-    )  # fmt: skip
-    assert proc.stdout is not None
-    seen = []
-    for line in proc.stdout:  # (kernels compiled on a cold cache: minutes at worst)
-        seen.append(line)
-        if line.startswith("ready"):
-            break
-    else:
-        proc.wait()
-        pytest.fail("never ready:\n" + "".join(seen))
-    time.sleep(after)
-    os.killpg(proc.pid, signal.SIGINT)
-    try:
-        out, _ = proc.communicate(timeout=20.0)
-    except subprocess.TimeoutExpired:
-        os.killpg(proc.pid, signal.SIGKILL)
-        proc.communicate()
-        pytest.fail("still running 20 s after the Ctrl-C")
-    return proc.returncode, "".join(seen) + out
 
 
 API = """
@@ -93,7 +58,7 @@ def test_a_ctrl_c_in_a_kernel_is_a_keyboard_interrupt(
     missed it."""
     script = tmp_path / "run.py"
     script.write_text(f"MODE = {mode!r}\n" + API)
-    rc, out = _interrupted([sys.executable, str(script)], tmp_path)
+    rc, out, _took = interrupted_when_ready([sys.executable, str(script)], tmp_path)
     assert expected in out, out
     assert "SystemError" not in out
 
@@ -103,18 +68,8 @@ def test_cli_batch_keeps_its_finished_rows_when_targets_need_restarts(tmp_path: 
     far = tmp_path / "far.csv"
     far.write_text("x,y,z,qx,qy,qz,qw\n" + "5,5,5,0,0,0,1\n" * 12000)
     warm = tmp_path / "warm.py"  # (the command's kernels loaded first, then "ready")
-    warm.write_text(
-        textwrap.dedent("""
-        import sys, runpy
-        import numpy as np, swarm_ik
-        robot = swarm_ik.load_robot("panda")
-        swarm_ik.solve_batch(robot, np.tile(robot.fk(robot.mid_q()), (1, 1, 1)))
-        print("ready", flush=True)
-        sys.argv = ["swarm-ik", *sys.argv[1:]]
-        runpy.run_module("swarm_ik.cli", run_name="__main__")
-    """)
-    )
-    rc, out = _interrupted(
+    warm.write_text(WARM_CLI)
+    rc, out, _took = interrupted_when_ready(
         [sys.executable, str(warm), "batch", "--robot", "panda", "--targets", str(far),
          "--chunk-size", "200", "--out", str(tmp_path / "b.npz"), "--no-progress"],
         tmp_path, after=2.0,

@@ -233,8 +233,6 @@ def run(args: argparse.Namespace) -> int:
         robot,
         resolution=args.resolution,
         bounds=np.concatenate([lo, hi]),
-        n_orientations=k,
-        position_only=args.position_only,
         seed=args.seed,
         tol_pos=args.tol_pos,
         tol_rot=args.tol_rot,
@@ -243,6 +241,8 @@ def run(args: argparse.Namespace) -> int:
         scheduler=None if args.scheduler in (None, "none") else args.scheduler,
         progress=not args.no_progress and sys.stderr.isatty(),
         max_targets=args.max_targets,
+        n_orientations=k,
+        position_only=args.position_only,
     )
     written = [str(rmap.save(out))]
     if png is not None:
