@@ -394,7 +394,9 @@ def run_experiment(
         solve_batch(robot, make_targets(robot, 10, seed), tol_pos=tol, tol_rot=tol)
     use_dask = distributed.check_scheduler(scheduler) is not None
     cores = distributed.available_cores()
-    answers: dict[tuple[str, int, int], Any] = {}  # (robot, N, boxes) -> the in-process answer
+    # (robot, N, boxes) -> the targets, goals and in-process answer, for the Dask rows (the
+    # collision-free targets, drawn and checked by coal, not drawn twice)
+    kept: dict[tuple[str, int, int], tuple[np.ndarray, Any, np.ndarray]] = {}
     # the rows of this process first, with no Dask cluster alive (its idle processes took
     # 5-8 % of the threads' speed), then the Dask rows
     for robot in loaded:
@@ -402,7 +404,7 @@ def run_experiment(
         for n in sizes:
             targets = make_targets(robot, n, seed)
             res = fastest()
-            answers[robot.name, n, 0] = res.q
+            kept[robot.name, n, 0] = (targets, None, res.q)
             record_batch("batch-1proc", res, f"success {res.success_rate:.4f}")
             res_t = fastest(scheduler=distributed.THREADS)
             if not np.array_equal(res_t.q, res.q):  # pragma: no cover - a bug
@@ -425,7 +427,7 @@ def run_experiment(
                 record_batch(f"boxes{k}-plain", res, f"success {ok.mean():.4f} (coal)")
                 rows[-1].update(success_rate=f"{ok.mean():.6f}", n_success=int(ok.sum()))
                 res = fastest(on=free, goals=avoid)
-                answers[robot.name, n, k] = res.q
+                kept[robot.name, n, k] = (free, avoid, res.q)
                 record_batch(f"boxes{k}-avoid-1proc", res, f"success {res.success_rate:.4f}")
                 res_t = fastest(on=free, goals=avoid, scheduler=distributed.THREADS)
                 if not np.array_equal(res_t.q, res.q):  # pragma: no cover - a bug
@@ -443,21 +445,17 @@ def run_experiment(
                     robot, make_targets(robot, 64 * workers, seed), scheduler=client, chunk_size=32
                 )
                 for n in sizes:
-                    targets = make_targets(robot, n, seed)
+                    targets, _, q = kept[robot.name, n, 0]
                     res_d = fastest(scheduler=client)
-                    if not np.array_equal(res_d.q, answers[robot.name, n, 0]):  # pragma: no cover
+                    if not np.array_equal(res_d.q, q):  # pragma: no cover - a bug
                         raise RuntimeError("Dask and in-process results differ")
                     record_batch("batch-dask", res_d, f"({workers} workers)", workers, setup_s)
                     for k in boxes:
-                        scene = box_scene(robot, k, seed)
-                        _q, free = collision_free_targets(robot, scene, n, seed)
-                        avoid = [swarm_ik.goals.AvoidCollisions(scene)]
+                        free, avoid, q = kept[robot.name, n, k]
                         solve_batch(robot, free[: 8 * workers], goals=avoid, scheduler=client,
                                     chunk_size=8)  # fmt: skip
                         res_d = fastest(on=free, goals=avoid, scheduler=client)
-                        if not np.array_equal(
-                            res_d.q, answers[robot.name, n, k]
-                        ):  # pragma: no cover
+                        if not np.array_equal(res_d.q, q):  # pragma: no cover - a bug
                             raise RuntimeError("Dask and in-process results differ")
                         record_batch(
                             f"boxes{k}-avoid-dask", res_d, f"({workers} workers)", workers, setup_s
