@@ -313,6 +313,30 @@ def check_grid_size(
     )
 
 
+DEFAULT_ORIENTATIONS = 8
+"""Orientations tried per voxel of a map of poses (:func:`reach_map`, ``swarm-ik reach``)."""
+
+
+def orientation_count(
+    n_orientations: Any, position_only: bool, what: str = "a position-only map"
+) -> int:
+    """The orientations tried per voxel (K): ``n_orientations`` checked, or its default
+    (:data:`DEFAULT_ORIENTATIONS`; 1 for a position-only map, which takes no other).
+
+    Raises:
+        InvalidArgumentError: not a positive integer, or other than 1 with ``position_only``
+            (the message names ``what`` asked for positions).
+    """
+    if n_orientations is None:
+        return 1 if position_only else DEFAULT_ORIENTATIONS
+    k = count(n_orientations, "n_orientations")
+    if position_only and k != 1:
+        raise InvalidArgumentError(
+            f"{what} tries one target per voxel (its orientation is free); got {k} orientations"
+        )
+    return k
+
+
 def reach_map(
     robot: RobotModel,
     *,
@@ -366,14 +390,7 @@ def reach_map(
         )
     resolution = positive_float(resolution, "resolution [m]")
     position_only = flag(position_only, "position_only")
-    if n_orientations is None:
-        n_orientations = 1 if position_only else 8
-    n_orientations = count(n_orientations, "n_orientations")
-    if position_only and n_orientations != 1:
-        raise InvalidArgumentError(
-            f"a position-only map tries one target per voxel (its orientation is free); got "
-            f"n_orientations={n_orientations}"
-        )
+    n_orientations = orientation_count(n_orientations, position_only)
     seed = count(seed, "seed", 0, SEED_LIMIT - 1)
     max_targets = count(max_targets, "max_targets", 1, 2**62)
     if bounds is None:

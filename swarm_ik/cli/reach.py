@@ -214,12 +214,7 @@ def run(args: argparse.Namespace) -> int:
         lo, hi = np.asarray(bounds[0], float), np.asarray(bounds[1], float)
     else:
         lo, hi = reach.default_bounds(robot, seed=args.seed)
-    k = args.orientations or (1 if args.position_only else 8)
-    if args.position_only and k != 1:
-        raise InvalidArgumentError(
-            f"--position-only tries one target per voxel (its orientation is free); got "
-            f"--orientations {k}"
-        )
+    k = reach.orientation_count(args.orientations, args.position_only, "--position-only")
     _validate.check_grid_size(lo, hi, args.resolution)
     reach.check_grid_size(lo, hi, args.resolution, k, args.max_targets)
     if robot.nq < 6 and not args.position_only:
