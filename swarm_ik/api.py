@@ -267,7 +267,10 @@ def prepare_q0(problem: IKProblem, q0: Any) -> np.ndarray | None:
     clipped into them with a warning (continuous joints wrapped first)."""
     if q0 is None:
         return None
-    q = problem.robot.wrap(problem.robot.check_q(q0, "q0"))
+    robot = problem.robot
+    q = robot.check_q(q0, "q0")  # (a copy)
+    if robot.wrapped_mask() is not None:
+        q = robot.wrap(q)
     if problem.within_bounds(q, 0.0):
         return q
     fixed = np.clip(q, problem.lower, problem.upper)
@@ -550,6 +553,8 @@ class Route:
                     out = self._search(seed_q, key, max_evals, search_limit)
                 elapsed = time.perf_counter() - t0
             q, fit, n_evals, history = out.q, out.fitness, out.used, out.history
+            q.setflags(write=False)  # (the search's own arrays: the Result keeps them as they
+            history.setflags(write=False)  # are, read-only, instead of copying them)
             n_evals += first_evals
             elapsed += first_s
             if not math.isfinite(fit) or len(problem.goals) > 1:  # (the problem's own sum)

@@ -1074,13 +1074,18 @@ class RobotModel:
         q = floats_or(q, lambda: f"q must be numbers, got {reprlib.repr(q)}")
         if q.ndim == 0 or q.shape[-1] != self.nq:
             raise InvalidArgumentError(f"q must end in {self.nq} values, got shape {q.shape}")
-        if "wrapped" not in self._cache:  # (None: no continuous joint)
-            m = self.continuous_mask
-            self._cache["wrapped"] = m if m.any() else None
-        m = self._cache["wrapped"]
+        m = self.wrapped_mask()
         if m is not None:
             q[..., m] = (q[..., m] + np.pi) % (2 * np.pi) - np.pi
         return q
+
+    def wrapped_mask(self) -> NDArray[np.bool_] | None:
+        """:attr:`continuous_mask`, or None when the robot has no continuous joint (nothing
+        for :meth:`wrap` to do); made once."""
+        if "wrapped" not in self._cache:
+            m = self.continuous_mask
+            self._cache["wrapped"] = m if m.any() else None
+        return self._cache["wrapped"]  # type: ignore[no-any-return]
 
     def random_q(self, rng: np.random.Generator, n: int | None = None) -> FloatArray:
         """Joint vector(s) drawn uniformly within the limits: ``(nq,)`` or ``(n, nq)``; a
