@@ -5,6 +5,7 @@ never met."""
 from __future__ import annotations
 
 import math
+import warnings
 from dataclasses import dataclass
 from typing import Any, ClassVar
 
@@ -1365,3 +1366,156 @@ def test_a_goal_kernel_whose_cache_cannot_be_written_is_compiled_in_memory(
     panda = robot("panda")
     goals = [Lift("panda_hand_tcp", 0.3), G.Position("panda_hand_tcp", [0.5, 0.1, 0.3])]
     assert swarm_ik.solve(swarm_ik.IKProblem(panda, goals=goals), seed=0).success
+
+
+def _axis_kernel(axis: int) -> Any:
+    """A compiled goal kernel of one's own: the frame origin's coordinate ``axis`` at
+    ``par[0]`` [m], one row (each call a new kernel, registered when first solved)."""
+
+    @numba.njit(GOAL_SIGNATURE)
+    def kernel(par, ipar, q, f_pos, f_rot, f_jac, want_jac, res, jac, err, work):
+        f = ipar[0]
+        res[0] = par[0] - f_pos[f, axis]
+        if want_jac:
+            jac[0, :] = f_jac[f, axis, :]
+        err[0] = abs(res[0])
+        err[1] = np.nan
+
+    return kernel
+
+
+@dataclass(frozen=True)
+class AtX(G.Goal):
+    """A compiled goal written outside the package: the frame origin's x [m]."""
+
+    frame: str
+    x: float
+    kernel: ClassVar[Any] = _axis_kernel(0)
+
+    def encode(self, robot, q0):
+        return G.Encoded(np.array([self.x]), np.array([frame_index(self, robot)]), 1)
+
+    def residual(self, state):
+        return np.array([self.x - state.pose(self.frame)[0, 3]])
+
+    def jacobian(self, state):
+        return -state.jacobian(self.frame)[:1]
+
+
+@dataclass(frozen=True)
+class AtXBrokenTwin(AtX):
+    """Its numpy twin raises (a typo in a user's goal, say)."""
+
+    def residual(self, state):
+        return np.array([1.0 / 0.0])
+
+
+def test_a_compiled_user_goal_whose_numpy_twin_raises_is_named() -> None:
+    """The numpy residual of a compiled goal written outside swarm_ik is the user's code too: an
+    exception there is refused naming the goal and the method, not passed on bare."""
+    r = robot("panda")
+    with pytest.raises(InvalidArgumentError, match=r"AtXBrokenTwin\(panda_hand_tcp\)\.residual"):
+        swarm_ik.solve(
+            swarm_ik.IKProblem(r, goals=[AtXBrokenTwin("panda_hand_tcp", 0.4)]), time_limit=0.5
+        )
+
+
+def test_a_solve_with_user_goals_passes_under_warnings_as_errors() -> None:
+    """numba's 'experimental feature' warning on the goal kernels' table is swarm_ik's to
+    silence, also under a caller's ``simplefilter("error")`` (pytest's ``-W error``): a new
+    compiled goal is registered and solved, and so is a Python goal."""
+    r = robot("panda")
+    x = float(r.fk(r.random_q(np.random.default_rng(3)))[0, 3])
+
+    @dataclass(frozen=True)
+    class AtXOwnKernel(AtX):  # (a kernel no other test registered)
+        kernel: ClassVar[Any] = _axis_kernel(0)
+
+    for goal in (AtXOwnKernel("panda_hand_tcp", x), OnPlane("panda_hand_tcp", height=0.3)):
+        with warnings.catch_warnings():
+            warnings.simplefilter("error")
+            res = swarm_ik.solve(swarm_ik.IKProblem(r, goals=[goal]), seed=0, time_limit=2.0)
+        assert res.success, goal
+
+
+@dataclass(frozen=True)
+class TiltOf(G.Goal):
+    """The frame's z axis at ``angle`` [rad] from world z, judged as an angle
+    (``errors``)."""
+
+    frame: str
+    angle: float = 0.5
+    bad: str = ""
+
+    def _tilt(self, state):
+        return math.acos(max(-1.0, min(1.0, state.pose(self.frame)[2, 2])))
+
+    def residual(self, state):
+        return np.array([self._tilt(state) - self.angle])
+
+    def jacobian(self, state):
+        z = state.pose(self.frame)[:3, 2]
+        s = math.sin(self._tilt(state))
+        dzz = np.cross(state.jacobian(self.frame)[3:].T, z)[:, 2]  # d z_z / dq = (ω × z)_z
+        return (-dzz / max(s, 1e-9))[None]
+
+    def errors(self, state):
+        if self.bad == "raise":
+            raise RuntimeError("boom")
+        if self.bad == "text":
+            return "oops"
+        return math.nan, abs(self._tilt(state) - self.angle)
+
+
+def test_a_python_goals_own_errors_are_judged_as_an_angle() -> None:
+    """A goal's ``errors(state)`` -> (NaN, angle) is judged against ``tol_rot`` and reported in
+    ``rotation_error`` (docs/goals.md), checked here with Pinocchio's pose."""
+    r = robot("panda")
+    res = swarm_ik.solve(swarm_ik.IKProblem(r, goals=[TiltOf("panda_hand_tcp")]), seed=0)
+    assert res.success
+    tilt = math.acos(r.fk_pinocchio(res.q, "panda_hand_tcp")[2, 2])
+    assert abs(tilt - 0.5) <= 1e-5
+    assert res.position_error == 0.0 and res.rotation_error == pytest.approx(abs(tilt - 0.5))
+    assert math.isnan(res.goal_errors[0].position_error)
+
+
+@pytest.mark.parametrize(
+    ("bad", "match"),
+    [
+        ("raise", r"TiltOf\(panda_hand_tcp\)\.errors\(state\) raised RuntimeError"),
+        ("text", r"TiltOf\(panda_hand_tcp\)\.errors\(state\) must return .* got 'oops'"),
+    ],
+)
+def test_a_python_goals_bad_errors_are_refused_naming_it(bad, match) -> None:
+    r = robot("panda")
+    with pytest.raises(InvalidArgumentError, match=match):
+        swarm_ik.solve(swarm_ik.IKProblem(r, goals=[TiltOf("panda_hand_tcp", bad=bad)]), seed=0)
+
+
+@dataclass(frozen=True)
+class OnPlaneChecked(G.Goal):
+    """OnPlane with its fields checked by the class attributes docs/goals.md names."""
+
+    frame: str
+    normal: Any = (0.0, 0.0, 1.0)
+    point: Any = (0.0, 0.0, 0.3)
+    units: ClassVar[tuple[str, ...]] = ("normal",)
+    vectors: ClassVar[tuple[str, ...]] = ("point",)
+
+    def residual(self, state):
+        return np.array([self.normal @ (state.pose(self.frame)[:3, 3] - self.point)])
+
+    def jacobian(self, state):
+        return self.normal[None] @ state.jacobian(self.frame)[:3]
+
+
+def test_a_python_goals_units_and_vectors_are_checked_and_stored_as_arrays() -> None:
+    goal = OnPlaneChecked("panda_hand_tcp", normal=(0.0, 0.0, 2.0))
+    assert np.array_equal(goal.normal, [0.0, 0.0, 1.0]) and goal.point.dtype == float
+    with pytest.raises(InvalidArgumentError, match=r"OnPlaneChecked\.normal must not be the zero"):
+        OnPlaneChecked("panda_hand_tcp", normal=(0.0, 0.0, 0.0))
+    with pytest.raises(InvalidArgumentError, match=r"OnPlaneChecked\.point must be finite"):
+        OnPlaneChecked("panda_hand_tcp", point=(0.0, np.nan, 0.3))
+    r = robot("panda")
+    res = swarm_ik.solve(swarm_ik.IKProblem(r, goals=[goal]), seed=0)
+    assert res.success and abs(r.fk_pinocchio(res.q, "panda_hand_tcp")[2, 3] - 0.3) <= 1e-5

@@ -227,6 +227,13 @@ def _kept(goal: Goal, state: State, kind: str, compute: Callable[[State], Any]) 
     return value
 
 
+def built_in(goal: Goal) -> bool:
+    """Whether ``goal``'s class is one of swarm_ik's own: an exception raised in its methods is
+    a defect of swarm_ik and propagates as it is, where one of a goal written outside the
+    package is reported naming the goal and the method."""
+    return str(type(goal).__module__).startswith("swarm_ik.")
+
+
 def _real(goal: Goal, state: State, what: str) -> FloatArray:
     """What ``goal.<what>(state)`` returns, as a float array.  An exception raised inside a
     Python goal's method is reported naming the goal and the method
@@ -239,7 +246,7 @@ def _real(goal: Goal, state: State, what: str) -> FloatArray:
         raise
     except SwarmIKError as exc:  # (a state's own refusal, say an unknown frame: its class
         # kept, the goal and the method named)
-        if goal.compiled:
+        if built_in(goal):
             raise
         try:
             named = type(exc)(f"{goal.describe()}.{what}(state): {exc}")
@@ -247,7 +254,7 @@ def _real(goal: Goal, state: State, what: str) -> FloatArray:
             named = InvalidArgumentError(f"{goal.describe()}.{what}(state): {exc}")
         raise named from exc
     except Exception as exc:  # (the user's code: any error it raises)
-        if goal.compiled:
+        if built_in(goal):
             raise
         raise InvalidArgumentError(
             f"{goal.describe()}.{what}(state) raised {type(exc).__name__}: "
@@ -287,7 +294,7 @@ def _users(goal: Goal, what: str, call: Callable[[], Any]) -> Any:
     except SwarmIKError:
         raise
     except Exception as exc:
-        if str(type(goal).__module__).startswith("swarm_ik."):
+        if built_in(goal):
             raise
         raise InvalidArgumentError(
             f"{goal.describe()}.{what} raised {type(exc).__name__}: {reprlib.repr(str(exc))}"
@@ -449,8 +456,39 @@ def _numbers(value: Any) -> bool:
 
 def errors_of(goal: Goal, state: State) -> tuple[float, float]:
     """``goal.errors(state)`` (computed once per point in a scope of
-    :func:`reuse_goal_values`)."""
-    return _kept(goal, state, "e", goal.errors)  # type: ignore[no-any-return]
+    :func:`reuse_goal_values`).
+
+    Raises:
+        InvalidArgumentError: a goal written outside swarm_ik whose ``errors`` raises (the
+            goal, the method and ``q`` named, its exception chained) or returns anything but
+            two real numbers.
+    """
+    return _kept(goal, state, "e", lambda s: _errors_pair(goal, s))  # type: ignore[no-any-return]
+
+
+def _errors_pair(goal: Goal, state: State) -> tuple[float, float]:
+    """``goal.errors(state)`` checked: ``(position error, angular error)`` as floats."""
+    try:
+        value = goal.errors(state)
+    except SwarmIKError:
+        raise
+    except Exception as exc:
+        if built_in(goal):
+            raise
+        raise InvalidArgumentError(
+            f"{goal.describe()}.errors(state) raised {type(exc).__name__}: "
+            f"{reprlib.repr(str(exc))} at q = {np.round(state.q, 6).tolist()}"
+        ) from exc
+    pair = value if isinstance(value, (tuple, list)) else ()
+    if len(pair) != 2 or not all(
+        isinstance(v, (int, float, np.integer, np.floating)) and not isinstance(v, bool)
+        for v in pair
+    ):
+        raise InvalidArgumentError(
+            f"{goal.describe()}.errors(state) must return (position error [m], angular error "
+            f"[rad]), two numbers (NaN where none), got {reprlib.repr(value)}"
+        )
+    return float(pair[0]), float(pair[1])
 
 
 def _frames_hint(frame: Any, names: list[str], most: int = 40) -> str:
@@ -953,7 +991,7 @@ def search_rows(
     except InvalidArgumentError:
         raise  # (named already: complex values)
     except (TypeError, ValueError) as exc:
-        if goal.compiled:
+        if built_in(goal):
             raise
         raise InvalidArgumentError(
             f"{goal.describe()}: residual(state) and jacobian(state) must return arrays of "

@@ -76,9 +76,11 @@ GOAL_SIGNATURE = types.void(
 """The signature of every compiled goal kernel (see the module docstring): compile one with
 ``numba.njit(GOAL_SIGNATURE, cache=True)``."""
 
-# numba warns that first-class function types (the goal kernels' table below) are an
-# experimental feature each time it compiles with one; the table is this package's design
-warnings.filterwarnings("ignore", message="First-class function type feature is experimental")
+EXPERIMENTAL = "First-class function type feature is experimental"
+"""numba's warning each time it types a tuple of first-class functions (the goal kernels'
+table below is this package's design): ignored where the table is made
+(:func:`kernel_list`), also under a caller's ``warnings.simplefilter("error")``."""
+warnings.filterwarnings("ignore", message=EXPERIMENTAL)
 
 GOAL_KERNEL = types.FunctionType(GOAL_SIGNATURE)
 """The numba type of a goal kernel as the table holds it (a first-class function)."""
@@ -118,7 +120,9 @@ def _goal_kernels(fns: Any) -> Any:  # pragma: no cover - compiled
 def kernel_list(kernels: Sequence[Any]) -> GoalKernels:
     """The :class:`GoalKernels` of ``kernels`` (slot ``i`` is ``kernels[i]``, at least one),
     each compiled with :data:`GOAL_SIGNATURE`."""
-    return _goal_kernels(tuple(kernels))  # type: ignore[no-any-return]
+    with warnings.catch_warnings():  # (a caller's filters may turn numba's warning into an error)
+        warnings.filterwarnings("ignore", message=EXPERIMENTAL)
+        return _goal_kernels(tuple(kernels))  # type: ignore[no-any-return]
 
 
 class LMSettings(NamedTuple):
