@@ -28,7 +28,7 @@ from typing import Any
 import numpy as np
 
 from swarm_ik import collision, kernels
-from swarm_ik._validate import check_seed, keywords_checked, plain_number
+from swarm_ik._validate import check_seed, flag, keywords_checked, plain_number, user_stacklevel
 from swarm_ik.errors import InvalidArgumentError, UnknownNameError, unknown
 from swarm_ik.goals import base as goals_base
 from swarm_ik.goals.axis import angle_between
@@ -275,7 +275,10 @@ def prepare_q0(problem: IKProblem, q0: Any) -> np.ndarray | None:
         return q
     fixed = np.clip(q, problem.lower, problem.upper)
     names = [problem.robot.joint_names[i] for i in np.flatnonzero(fixed != q)]
-    warnings.warn(f"q0 lies outside the joint limits at {names}; clipped into them", stacklevel=3)
+    warnings.warn(
+        f"q0 lies outside the joint limits at {names}; clipped into them",
+        stacklevel=user_stacklevel(),
+    )
     return fixed
 
 
@@ -384,7 +387,7 @@ class Route:
         self.max_evals = None if max_evals is None else int(max_evals)
         self.time_limit = None if time_limit is None else float(time_limit)
         self.tol_pos, self.tol_rot = float(tol_pos), float(tol_rot)
-        self.stop_on_success = bool(stop_on_success)
+        self.stop_on_success = flag(stop_on_success, "stop_on_success")
         self.prefer = prefer
         self._lock = threading.Lock()
         self._warm = False  # (warm_up ran for this route)
@@ -479,6 +482,8 @@ class Route:
         """
         t_run = time.perf_counter()
         problem = self.problem if problem is None else problem
+        if self.prefer == "nearest" and q0 is None:
+            raise InvalidArgumentError("prefer='nearest' needs a starting point q0")
         seed = check_seed(seed)
         q_start = prepare_q0(problem, q0)
         if budget is None:
@@ -800,8 +805,6 @@ def solve(
         The frozen :class:`~swarm_ik.result.Result`; ``success`` is checked with Pinocchio,
         never taken from the solver.
     """
-    if prefer == "nearest" and q0 is None:
-        raise InvalidArgumentError("prefer='nearest' needs a starting point q0")
     if not isinstance(problem, IKProblem):
         raise InvalidArgumentError(f"problem must be an IKProblem, got {type(problem).__name__}")
     if on_improvement is not None and not callable(on_improvement):
@@ -888,6 +891,8 @@ class IKSolver:
         time_limit: Most seconds per solve (None: the solver's own iteration count).
         max_evals: Most evaluations per solve.
         w_rot: Weight of the rotation error; 0 makes targets position-only.
+        prefer: ``"best"`` or ``"nearest"`` (each solve then needs ``q0``), as in
+            :func:`solve`.
         **params: The solver's parameters (unknown names refused with the valid list).
 
     >>> import numpy as np, swarm_ik
@@ -907,6 +912,7 @@ class IKSolver:
         time_limit: float | None = None,
         max_evals: int | None = None,
         w_rot: float = 1.0,
+        prefer: str = "best",
         **params: Any,
     ) -> None:
         if not isinstance(robot, RobotModel):
@@ -920,10 +926,11 @@ class IKSolver:
         tol_pos, tol_rot = plain_number(tol_pos), plain_number(tol_rot)
         self.tol_pos, self.tol_rot = tol_pos, tol_rot
         self.time_limit, self.max_evals = time_limit, max_evals
+        self.prefer = prefer
         self._template = IKProblem(robot, robot.fk_pinocchio(robot.mid_q()), w_rot=w_rot)
         self._route = Route(
             self._template, solver, max_evals=max_evals, time_limit=time_limit,
-            tol_pos=tol_pos, tol_rot=tol_rot, params=params,
+            tol_pos=tol_pos, tol_rot=tol_rot, prefer=prefer, params=params,
         )  # fmt: skip
         warm_up(self._route)
 
@@ -931,7 +938,8 @@ class IKSolver:
         """Pickled as its arguments (the route is bound again where it is unpickled)."""
         kwargs = dict(
             tol_pos=self.tol_pos, tol_rot=self.tol_rot, time_limit=self.time_limit,
-            max_evals=self.max_evals, w_rot=self._template.w_rot, **self.params,
+            max_evals=self.max_evals, w_rot=self._template.w_rot, prefer=self.prefer,
+            **self.params,
         )  # fmt: skip
         return (_rebuild_ik_solver, (self.robot, self.solver, kwargs))
 
@@ -957,7 +965,7 @@ class IKSolver:
             return solve(
                 target, self.solver, seed=seed, max_evals=self.max_evals,
                 time_limit=self.time_limit, q0=q0, tol_pos=self.tol_pos, tol_rot=self.tol_rot,
-                **self.params,
+                prefer=self.prefer, **self.params,
             )  # fmt: skip
         return self._route.run(self._template.with_target(target), q0, seed)
 
@@ -965,5 +973,5 @@ class IKSolver:
         return (
             f"IKSolver(robot={self.robot.name!r}, solver={self.solver!r}, "
             f"tol_pos={self.tol_pos}, tol_rot={self.tol_rot}, time_limit={self.time_limit}, "
-            f"max_evals={self.max_evals})"
+            f"max_evals={self.max_evals}, prefer={self.prefer!r})"
         )

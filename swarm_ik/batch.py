@@ -61,7 +61,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from swarm_ik._types import BoolArray, FloatArray, IntArray
-from swarm_ik._validate import check_seed, count, floats_or, keywords_checked
+from swarm_ik._validate import check_seed, count, floats_or, keywords_checked, user_stacklevel
 from swarm_ik.errors import InvalidArgumentError, InvalidTargetError, SwarmIKError
 from swarm_ik.goals import AvoidCollisions, Goal, Pose, Position, State, kernel_slot, kernels
 from swarm_ik.goals import base as goals_base
@@ -965,7 +965,7 @@ def _seed_starts(bc: BatchChain, q0: Any, n: int) -> FloatArray:
     if outside:
         warnings.warn(
             f"q0 lies outside the joint limits for {outside} target(s); clipped into them",
-            stacklevel=3,
+            stacklevel=user_stacklevel(),
         )
     return np.ascontiguousarray(fixed)
 

@@ -333,8 +333,9 @@ def solve_many(
         tol_pos: Position tolerance [m] of every solution.
         tol_rot: Rotation tolerance [rad] of every solution.
         seed: Seed or Generator for the random starts.
-        max_evals: Most FK + Jacobian evaluations in total (numerical path; on ``"auto"``'s
-            fallback the closed form's polish counts against it).
+        max_evals: Most FK + Jacobian evaluations in total: the closed form's polish of
+            eaik's least-squares points (analytic path) and the numerical search (on
+            ``"auto"``'s fallback both, from one budget).
         time_limit: Most wall-clock seconds, verification included (numerical path).
         batch: Starts polished per compiled call (1 to :data:`MAX_BATCH`).
         max_starts: Most starts; default ``64 · n`` when neither ``max_evals`` nor
@@ -419,7 +420,7 @@ def solve_many(
             problem, lambda: search(max_evals, t_search, limit), ref, seed_label
         )
     t0 = time.perf_counter()
-    cf = analytic.closed_form_set(problem, ref, tol_pos, tol_rot)
+    cf = analytic.closed_form_set(problem, ref, tol_pos, tol_rot, max_evals)
     qs, dps, drs = cf.q, cf.position_error, cf.rotation_error
     periodic = periodic_mask(problem.robot, problem.lower, problem.upper)
     if min_distance is not None and qs.shape[0] > 1:

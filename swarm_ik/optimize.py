@@ -10,7 +10,7 @@ from typing import Any
 
 import numpy as np
 
-from swarm_ik._validate import check_seed, plain_number
+from swarm_ik._validate import check_seed, plain_number, user_stacklevel
 from swarm_ik.errors import InvalidArgumentError
 from swarm_ik.pose import is_finite_nonneg
 from swarm_ik.solvers import base
@@ -87,7 +87,7 @@ def _check_x0(x0: Any, lo: FloatArray, hi: FloatArray) -> FloatArray:
     if outside.size:
         warnings.warn(
             f"x0 lies outside the bounds at indices {outside.tolist()}; clipped into them",
-            stacklevel=3,
+            stacklevel=user_stacklevel(),
         )
     return fixed
 

@@ -88,9 +88,22 @@ MAX_SOLVED_DOF = 150
 ``Data`` allocates second-order tensors of ``nv³`` numbers (216 MB each at 150 joints)."""
 
 
-def _base_box(value: Any) -> FloatArray:
+DEFAULT_BASE_BOX = 2.0
+"""Half-width [m] of a floating base's box when ``base_box`` is not given: a standing
+humanoid's pelvis, a base driving a few metres."""
+
+
+def _base_box(value: Any, floating_base: bool) -> FloatArray:
     """Half-widths [m] of a floating base's box around the origin: one positive number or
-    three."""
+    three (None: :data:`DEFAULT_BASE_BOX`); refused without a floating base, which it would
+    not bound."""
+    if value is None:
+        value = DEFAULT_BASE_BOX
+    elif not floating_base:
+        raise InvalidArgumentError(
+            f"base_box bounds a floating base: give floating_base=True with it (got "
+            f"base_box={reprlib.repr(value)} and no floating base)"
+        )
     try:
         box = np.broadcast_to(np.asarray(value, dtype=float), (3,)).copy()
     except (TypeError, ValueError):
@@ -325,7 +338,8 @@ def _reduce(
         jname = reduced.names[j]
         if floating and j == 1:  # x, y, z along the world axes, then the rotation
             placement = reduced.jointPlacements[1]
-            box = np.full(3, 2.0) if base_box is None else np.asarray(base_box, dtype=float)
+            box = np.asarray(DEFAULT_BASE_BOX if base_box is None else base_box, dtype=float)
+            box = np.broadcast_to(box, (3,))
             for k in range(4):
                 kinds.append(PRISMATIC if k < 3 else BALL)
                 axes.append(np.eye(3)[k] if k < 3 else np.array([0.0, 0.0, 1.0]))
@@ -547,7 +561,7 @@ class RobotModel:
         frame_reason: str = "given",
         floating_base: bool = False,
         locked: Mapping[str, float] | Sequence[str] | None = None,
-        base_box: Any = 2.0,
+        base_box: Any = None,
     ) -> RobotModel:
         """Load a URDF and reduce it to the joints between the root and the goal frame(s).
 
@@ -573,7 +587,7 @@ class RobotModel:
             raise InvalidArgumentError(
                 f"floating_base must be true or false, got {floating_base!r}"
             )
-        box = _base_box(base_box)
+        box = _base_box(base_box, bool(floating_base))
         # decoded, checked, joints renamed, stderr captured
         full, info = urdf.load_urdf(p, floating_base=bool(floating_base))
         body_frames = [f.name for f in full.frames if f.type == pin.FrameType.BODY]
@@ -1191,7 +1205,7 @@ def load_robot(
     srdf: str | os.PathLike[str] | bool | None = None,
     floating_base: bool = False,
     locked: Mapping[str, float] | Sequence[str] | None = None,
-    base_box: Any = 2.0,
+    base_box: Any = None,
 ) -> RobotModel:
     """Load a robot by bundled name, ``example-robot-data`` name, or URDF path.
 
@@ -1215,13 +1229,14 @@ def load_robot(
             names (held at their neutral value).  The answer keeps them exactly there; mimic
             followers of a locked joint follow it.
         base_box: Half-widths [m] of the floating base's box around the origin (one number or
-            three; default 2: a standing humanoid's pelvis, a base driving a few metres).
+            three; default :data:`DEFAULT_BASE_BOX`, 2: a standing humanoid's pelvis, a base
+            driving a few metres); only with ``floating_base=True``.
 
     Raises:
         UnknownNameError: a locked joint is not a one-DoF joint of the URDF (they are
             listed).
         InvalidArgumentError: a locked value outside its limits or not finite, a bad
-            ``base_box``.
+            ``base_box`` or one without a floating base.
 
     Returns:
         The robot, reduced to the joints between the root and its goal frame(s).

@@ -167,6 +167,8 @@ def test_json_round_trip() -> None:
         ({}, "needs a point"),
         ({"support": [[0, 0], [1, 0]]}, "at least 3"),
         ({"support": [[0, 0], [2, 2], [2, 0], [0, 1]]}, "self-intersecting"),
+        # (a bow-tie whose halves cancel: named as what it is, not "zero area"; review 90)
+        ({"support": [[0, 0], [1, 1], [1, 0], [0, 1]]}, "self-intersecting"),
         ({"support": [[0, 0], [1, 0], [float("nan"), 1]]}, "finite"),
         ({"support": [[0, 0], [1, 0], [2, 0]]}, "zero area"),
         ({"support": [[0, 0], [1, 0], [1, 1], [1, 0]]}, "repeats"),

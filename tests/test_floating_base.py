@@ -185,6 +185,8 @@ def test_locked_list_holds_the_neutral_value() -> None:
         ({"floating_base": "yes"}, InvalidArgumentError, "floating_base"),
         ({"floating_base": True, "base_box": -1.0}, InvalidArgumentError, "base_box"),
         ({"floating_base": True, "base_box": [1.0, 2.0]}, InvalidArgumentError, "base_box"),
+        # (review 90: a box without a floating base was dropped without a word)
+        ({"base_box": (1.0, 2.0, 3.0)}, InvalidArgumentError, "give floating_base=True with it"),
     ],
 )
 def test_bad_input_refused(kwargs: dict, error: type, words: str) -> None:

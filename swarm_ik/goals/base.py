@@ -460,25 +460,15 @@ def errors_of(goal: Goal, state: State) -> tuple[float, float]:
 
     Raises:
         InvalidArgumentError: a goal written outside swarm_ik whose ``errors`` raises (the
-            goal, the method and ``q`` named, its exception chained) or returns anything but
-            two real numbers.
+            goal and the method named, its exception chained) or returns anything but two
+            real numbers.
     """
     return _kept(goal, state, "e", lambda s: _errors_pair(goal, s))  # type: ignore[no-any-return]
 
 
 def _errors_pair(goal: Goal, state: State) -> tuple[float, float]:
     """``goal.errors(state)`` checked: ``(position error, angular error)`` as floats."""
-    try:
-        value = goal.errors(state)
-    except SwarmIKError:
-        raise
-    except Exception as exc:
-        if built_in(goal):
-            raise
-        raise InvalidArgumentError(
-            f"{goal.describe()}.errors(state) raised {type(exc).__name__}: "
-            f"{reprlib.repr(str(exc))} at q = {np.round(state.q, 6).tolist()}"
-        ) from exc
+    value = _users(goal, "errors(state)", lambda: goal.errors(state))
     pair = value if isinstance(value, (tuple, list)) else ()
     if len(pair) != 2 or not all(
         isinstance(v, (int, float, np.integer, np.floating)) and not isinstance(v, bool)

@@ -150,12 +150,7 @@ def support_polygon(value: Any) -> FloatArray:
                 raise InvalidArgumentError(
                     f"CenterOfMass.support repeats vertex {poly[i].tolist()}"
                 )
-    area = 0.5 * float(
-        np.sum(poly[:, 0] * np.roll(poly[:, 1], -1) - np.roll(poly[:, 0], -1) * poly[:, 1])
-    )
-    if abs(area) < 1e-12:
-        raise InvalidArgumentError("CenterOfMass.support has zero area")
-    for i in range(k):
+    for i in range(k):  # (first: a bow-tie's two halves can cancel to a zero area)
         for j in range(i + 1, k):
             if j == i + 1 or (i == 0 and j == k - 1):
                 continue  # adjacent edges share a vertex
@@ -163,6 +158,11 @@ def support_polygon(value: Any) -> FloatArray:
                 raise InvalidArgumentError(
                     f"CenterOfMass.support is self-intersecting (edges {i} and {j})"
                 )
+    area = 0.5 * float(
+        np.sum(poly[:, 0] * np.roll(poly[:, 1], -1) - np.roll(poly[:, 0], -1) * poly[:, 1])
+    )
+    if abs(area) < 1e-12:
+        raise InvalidArgumentError("CenterOfMass.support has zero area")
     return poly
 
 

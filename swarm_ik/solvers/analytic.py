@@ -362,7 +362,9 @@ def solve_all(
     return cf.q, cf.position_error, cf.rotation_error
 
 
-def _checked_set(problem: IKProblem, ref: Any, tol_pos: float, tol_rot: float) -> ClosedFormSet:
+def _checked_set(
+    problem: IKProblem, ref: Any, tol_pos: float, tol_rot: float, max_evals: int | None = None
+) -> ClosedFormSet:
     """:func:`closed_form_set` after :func:`support`'s check (``ref`` None: the middle of the
     bounds)."""
     reason = support(problem)
@@ -370,7 +372,7 @@ def _checked_set(problem: IKProblem, ref: Any, tol_pos: float, tol_rot: float) -
         raise AnalyticUnsupportedError(f"no analytic IK for this problem: {reason}")
     lo, hi = problem.lower, problem.upper
     center = 0.5 * (lo + hi) if ref is None else np.asarray(ref, dtype=float)
-    return closed_form_set(problem, center, tol_pos, tol_rot)
+    return closed_form_set(problem, center, tol_pos, tol_rot, max_evals)
 
 
 def solve_supported(
@@ -419,7 +421,11 @@ in 4–12)."""
 
 
 def closed_form_set(
-    problem: IKProblem, ref: FloatArray, tol_pos: float, tol_rot: float
+    problem: IKProblem,
+    ref: FloatArray,
+    tol_pos: float,
+    tol_rot: float,
+    max_evals: int | None = None,
 ) -> ClosedFormSet:
     """The closed-form set of a problem :func:`support` accepted (the per-call path of
     :func:`solve_all` and :func:`swarm_ik.solve_many`); ``ref`` ``(nq,)`` is required.
@@ -435,7 +441,9 @@ def closed_form_set(
     ``q5 = 1e-9``, it may stall there above round-off) and is a new solution modulo 2π joins
     the set, which is then marked ``incomplete`` if that solution is singular.  An unreachable
     branch's least-squares point stalls within a few evaluations (the polish costs ≈ 45 µs
-    where eaik returns such points: about a quarter of random UR5 targets).
+    where eaik returns such points: about a quarter of random UR5 targets).  ``max_evals``
+    bounds the polish's evaluations in all (None: :data:`POLISH_ITERS` per point); points it
+    leaves unpolished are not solutions.
 
     Returns:
         A :class:`ClosedFormSet`; empty when the pose is out of reach or no solution fits the
@@ -476,7 +484,7 @@ def closed_form_set(
         starts = np.vstack([starts, _clipped_misfits(qs, lo, hi, ref)])
     if starts.shape[0] == 0:
         return ClosedFormSet(sols, dps, drs, False, 0)
-    found, evals = _polish(problem, starts, tol_pos, tol_rot)
+    found, evals = _polish(problem, starts, tol_pos, tol_rot, max_evals)
     # no solution at all, and eaik's points at a singular configuration (held back by the
     # limits, say): a continuum may hide solutions there (a generic target's least-squares
     # points, its branches out of reach, often lie at the straight elbow too: they mark
@@ -489,7 +497,8 @@ def closed_form_set(
     if missed:  # the polish again from points along each singular start's self-motion
         moved = _self_motion_starts(robot, starts, lo, hi, ref)
         if moved.shape[0]:
-            found, more = _polish(problem, moved, tol_pos, tol_rot)
+            left = None if max_evals is None else max_evals - evals
+            found, more = _polish(problem, moved, tol_pos, tol_rot, left)
             evals += more
     if found.shape[0] == 0:
         return ClosedFormSet(sols, dps, drs, missed, evals)
@@ -562,18 +571,28 @@ def _clipped_misfits(qs: FloatArray, lo: FloatArray, hi: FloatArray, ref: FloatA
 
 
 def _polish(
-    problem: IKProblem, starts: FloatArray, tol_pos: float, tol_rot: float
+    problem: IKProblem,
+    starts: FloatArray,
+    tol_pos: float,
+    tol_rot: float,
+    max_evals: int | None = None,
 ) -> tuple[FloatArray, int]:
     """``starts`` ``(m, nq)`` polished towards round-off with the compiled LM kernel within
     the problem's bounds: ``(the points that ended within the tolerances (k, nq), evaluations
     spent)``.  Near a singular target a start may stall on the floor of a valley of tiny
     residual above round-off (a UR wrist at ``q5 = 1e-9``), within the tolerances: such a
-    point is kept too (the caller checks each one with Pinocchio)."""
+    point is kept too (the caller checks each one with Pinocchio).  At most ``max_evals``
+    evaluations in all (None: :data:`POLISH_ITERS` per start)."""
+    budget = POLISH_ITERS * starts.shape[0]
+    if max_evals is not None:
+        budget = min(budget, max_evals)
+    if budget <= 0:
+        return np.empty((0, starts.shape[1])), 0
     pol = Polisher.from_problem(
         problem, tol_pos=ROUNDOFF_TOL, tol_rot=ROUNDOFF_TOL,
         wrap=problem.robot.continuous_mask, max_iters=POLISH_ITERS,
     )  # fmt: skip
-    res = pol.polish(starts, POLISH_ITERS * starts.shape[0], stop_first=False)
+    res = pol.polish(starts, budget, stop_first=False)
     met = (res.position_error <= tol_pos) & (res.rotation_error <= tol_rot)
     return np.ascontiguousarray(res.q[met]), int(res.used)
 
@@ -605,7 +624,9 @@ def run(ev: Evaluator, rng: np.random.Generator) -> None:
     if problem is None:
         raise AnalyticUnsupportedError("solver 'analytic' needs an IK problem, not an objective")
     tol_pos, tol_rot = ev.tolerance if ev.tolerance is not None else (1e-5, 1e-5)
-    cf = _checked_set(problem, ev.q0, tol_pos, tol_rot)
+    # (the polish within the budget, less the evaluation that records the answer)
+    polish = None if ev.max_evals is None else max(ev.remaining - 1, 0)
+    cf = _checked_set(problem, ev.q0, tol_pos, tol_rot, polish)
     qs, dp, dr = cf.q, cf.position_error, cf.rotation_error
     if qs.shape[0]:
         ev.record(qs[:1], np.array(fitness_of_errors(problem, qs[:1], dp[:1], dr[:1])))

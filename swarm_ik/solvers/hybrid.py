@@ -57,6 +57,7 @@ from swarm_ik.goals import base as goals_base
 from swarm_ik.goals import kernels
 from swarm_ik.kernels import lm, raise_ctrl_c, raise_lost_ctrl_c, search
 from swarm_ik.kernels.lm import BUDGET, CONVERGED, ITER_CAP, LOCAL_MIN, NOT_RUN, LMSettings
+from swarm_ik.periodic import nearest_winding, periodic_mask
 from swarm_ik.problem import REPLACEABLE, IKProblem
 from swarm_ik.solvers.base import Evaluator, FloatArray, register
 from swarm_ik.solvers.gwo import gwo_move
@@ -716,7 +717,10 @@ def run(
             queue = propose(ev, rng, arch_x, arch_f, n_swarm, m, a, (s_lo, s_hi))
     if nearest:
         if sol_x:
-            sols = np.asarray(sol_x)
+            # each solution as its 2π copy within the bounds nearest to q0 (the same pose: a
+            # joint with a range of 2π or more may turn either way to reach it)
+            periodic = periodic_mask(problem.robot, ev.lower, ev.upper)
+            sols = nearest_winding(np.asarray(sol_x), ev.lower, ev.upper, periodic, seed)[0]
             k = int(np.argmin(pol_sec.secondary_cost(sols)))
             q_best = sols[k]
             if ev.remaining > 0:
