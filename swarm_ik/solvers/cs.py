@@ -4,11 +4,17 @@ Two registrations of the same :func:`run`:
 
 * ``cs``: cuckoo search [CS] as in [CS-IK] (eqs. 8–13): Lévy flights drawn by
   Mantegna's algorithm (β = 1.5), discovery of alien eggs with probability ``pa = 0.25``,
-  greedy replacement; 50 nests, 3000 iterations.
+  greedy replacement; 50 nests, 3000 iterations.  Our copy of [CS-IK] lacks eqs. 8–12 (its
+  text keeps the roles of eq. 8, the global search, and eq. 9, the local one, and eq. 13's
+  ``σ_v = 1``): the steps, ``pa`` and ``β`` are those of [CS]'s reference code, which that
+  text agrees with.
 * ``cs-newton``: [CS-IK]'s combination: the same search until the best fitness drops below
   ``ε = 0.2``, then Newton / pseudo-inverse iterations ``θ ← θ + η_n·J⁺·e`` on the best nest
-  with an exponentially decaying learning rate (eqs. 6, 15, 16).  Needs an IK problem (the
-  Jacobian).
+  with an exponentially decaying learning rate (eqs. 6, 15, 16).  Eq. 15 is printed as
+  ``θ_{n+1} = θ_n + Learn_n·f(θ_n)`` with ``f`` the scalar fitness of eq. 7 (``‖D·J⁻¹‖²``),
+  which cannot be added to a joint vector: we read ``f`` as the Newton step ``J⁺·e`` of eq. 6
+  whose norm eq. 7 measures.  The step is clipped into the joint limits (our choice: the paper
+  says nothing of bounds).  Needs an IK problem (the Jacobian).
 """
 
 from __future__ import annotations
@@ -48,7 +54,7 @@ def levy_steps(rng: np.random.Generator, shape: tuple[int, ...], beta: float = 1
     Args:
         rng: Source of ``u`` and ``v``.
         shape: Output shape.
-        beta: Lévy index ``β`` in ``(0, 2)`` ([CS-IK]: 1.5).
+        beta: Lévy index ``β`` in ``(0, 2)`` ([CS]'s reference code: 1.5).
 
     Returns:
         Steps of the given shape (finite: ``|v|`` is floored at the smallest normal double).
@@ -119,12 +125,13 @@ def run(
     damps the steps of a polish that wanders.  Measured (30 random reachable targets, se3
     fitness, 20 000 evaluations): success 93 % / 57 % / 60 % on loading_manipulator_long /
     yumi_left / panda with τ = 100, against 83 % / 37 % / 57 % with τ = 10, whose rate is
-    below 0.01 after 50 steps.  Each step's point is evaluated by
-    the next step; ``ev`` keeps the best point, so a diverging polish cannot lose the
-    search's answer.  Faithful to the paper, the polish runs only once the threshold is
-    reached: if the search never gets below ``eps``, no Newton step is made (set
-    ``eps=inf`` to polish the best initial nest at once).  The polish does not go back to the
-    search when it stalls (e.g. at a joint limit or in a local minimum of a redundant arm).
+    below 0.01 after 50 steps.  Each step's point is evaluated by the next step (the last
+    one's after the loop, within the budget); ``ev`` keeps the best point, so a diverging
+    polish cannot lose the search's answer.  Faithful to the paper, the polish runs only
+    once the threshold is reached: if the search never gets below ``eps``, no Newton step is
+    made (set ``eps=inf`` to polish the best initial nest at once).  The polish does not go
+    back to the search when it stalls (e.g. at a joint limit or in a local minimum of a
+    redundant arm).
 
     ``eps`` is compared with the problem's fitness (``"se3"``: metres + radians by default).
     [CS-IK]'s fitness is instead the squared norm of the Newton step (its eq. 7), so its
@@ -136,8 +143,9 @@ def run(
         rng: Source of all randomness.
         pop_size: Number of nests ([CS-IK]: 50).
         iterations: Iterations, search and Newton steps together ([CS-IK]: 3000).
-        pa: Discovery probability ``pa`` ([CS-IK]: 0.25).
-        beta: Lévy index ``β`` ([CS-IK]: 1.5).
+        pa: Discovery probability ``pa`` ([CS]'s reference code: 0.25; see the module
+            docstring).
+        beta: Lévy index ``β`` ([CS]'s reference code: 1.5).
         alpha: Step scale ``α`` of the Lévy flights (reference code: 0.01).
         newton: Switch to the Newton polish once the best fitness is below ``eps``.
         eps: Threshold ``ε`` of the switch ([CS-IK]: 0.2).
@@ -202,6 +210,8 @@ def run(
         eta = newton_rate(k_step, eta0, eta_t, tau)
         theta = ev.clip(theta + eta * (np.linalg.pinv(jac[0], rcond=_PINV_RCOND) @ err[0]))
         ev.end_iteration()
+    if not ev.done:  # (the last step's point, which no next step evaluates)
+        ev(theta[None])
 
 
 CONSTRAINTS = {

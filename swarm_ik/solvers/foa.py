@@ -73,7 +73,12 @@ def run(
       ``U[-1, 1]/s_j`` in raw axis units;
     * eqs. 7-8: ``Smell_i = f(S_i)`` for the whole swarm in one batch; best fly;
     * eq. 9 / step 7: the swarm location moves to the best fly only if its smell improves on
-      the best so far (strictly).
+      the best so far (strictly), and the run goes on for all ``iterations``, as [FOA]'s code
+      does.  Read literally, [HLFOA] §2.1's step 7 ("if the best smell improves on the previous
+      generation's best and the iteration count is below the maximum, repeat step 6; otherwise
+      output the result and end") would end the run at the first generation that does not
+      improve; its own count of ``m·t_max + 1`` evaluations (§2.2.5) assumes the full run, which
+      is our reading.
 
     ``S_ij > 0`` always: the algorithm never evaluates a negative joint value (unless a bound
     forces it) and so cannot reach optima with negative coordinates.  This is the weakness
