@@ -794,9 +794,10 @@ def solve(
         stop_on_success: Stop as soon as the tolerances are met (False runs the whole budget,
             as the papers' experiments do).
         prefer: ``"best"`` (default: the lowest fitness found) or ``"nearest"``: among the
-            solutions found, the one nearest to ``q0`` in joint space (continuous joints
-            wrapped).  ``"nearest"`` needs ``q0`` and a solver with a ``prefer`` parameter
-            (``swarm``).
+            solutions found, the one nearest to ``q0`` in joint space, each as its 2π copy
+            within the limits nearest to ``q0`` on joints whose range is 2π or more (the same
+            pose; continuous joints wrapped).  ``"nearest"`` needs ``q0`` and a solver with a
+            ``prefer`` parameter (``swarm``).
         on_improvement: Optional callback ``(q (nq,), fitness)`` called each time the best
             point found improves (e.g. to record a trace, :func:`swarm_ik.viz.solve_traced`).
         **params: The solver's own parameters; unknown names are refused with the valid list.

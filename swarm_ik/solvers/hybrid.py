@@ -489,10 +489,12 @@ def run(
     stops each start at ``tol_margin`` × the tolerance of ``ev.tolerance`` (1e-5 m / 1e-5 rad
     when the evaluator has none).
 
-    With ``prefer="nearest"`` the answer is the solution nearest to ``q0`` (wrapped joint
-    distance) rather than the lowest fitness: once a first solution is found, ``nearest_starts``
-    more starts drawn around ``q0`` are polished, the nearest converged one is kept and, on a
-    redundant arm, slid along its self-motion towards ``q0`` (:func:`nullspace_toward`).
+    With ``prefer="nearest"`` the answer is the solution nearest to ``q0`` rather than the
+    lowest fitness: once a first solution is found, ``nearest_starts`` more starts drawn
+    around ``q0`` are polished, each converged one taken as its 2π copy within the bounds
+    nearest to ``q0`` (on joints whose range is 2π or more: the same pose), the nearest kept
+    and, on a redundant arm, slid along its self-motion towards ``q0``
+    (:func:`nullspace_toward`).
 
     Args:
         ev: The evaluator; must wrap an IK problem.
