@@ -7,7 +7,8 @@ and draws the best fitness against the evaluations spent (``Result.history`` hol
 fitness after each iteration; an iteration costs ``n_evals / iterations`` evaluations on
 average).
 
-Run: ``python examples/04_compare_solvers.py [--out convergence.png]`` (needs matplotlib).
+Run: ``python examples/04_compare_solvers.py [--out convergence.png]`` (the plot needs
+matplotlib, the ``plot`` extra; without it the table is printed and the plot skipped).
 Without ``--out`` the plot goes into a temporary folder (its path is printed); nothing is
 written into the current folder.  A few seconds (``SWARM_IK_QUICK=1``: a smaller budget).
 """
@@ -43,23 +44,16 @@ def main() -> None:
 
 def run(out: Path) -> None:
     """Solve with every solver, print the table, save the plot to ``out``."""
-
-    import matplotlib
-
-    if QUICK or not os.environ.get("DISPLAY"):
-        matplotlib.use("Agg")  # headless: draw into the file only
-    import matplotlib.pyplot as plt
-
     robot = swarm_ik.load_robot("panda")
     q_true = np.array([0.3, -0.5, 0.2, -2.0, 0.1, 1.6, 0.7])
     problem = swarm_ik.IKProblem(robot, robot.fk(q_true))
     names = [s for s in SOLVERS if s in swarm_ik.solvers.names()]
 
-    fig, ax = plt.subplots(figsize=(7, 4.5))
     print(
         f"{'solver':14s} {'success':>7s} {'pos. err [m]':>12s} {'rot. err [rad]':>14s} "
         f"{'evals':>6s} {'time [ms]':>9s}"
     )
+    curves = {}
     for name in names:
         res = swarm_ik.solve(problem, name, seed=0, max_evals=BUDGET, stop_on_success=False)
         print(
@@ -68,8 +62,19 @@ def run(out: Path) -> None:
         )
         h = np.asarray(res.history)
         if h.size:
-            evals = np.arange(1, h.size + 1) * res.n_evals / h.size
-            ax.semilogy(evals, np.maximum(h, 1e-16), label=name)
+            curves[name] = (np.arange(1, h.size + 1) * res.n_evals / h.size, h)
+    try:
+        import matplotlib
+    except ImportError:
+        print("\nplot skipped: matplotlib is not installed (pip install 'swarm_ik[plot]')")
+        return
+    if QUICK or not os.environ.get("DISPLAY"):
+        matplotlib.use("Agg")  # headless: draw into the file only
+    import matplotlib.pyplot as plt
+
+    fig, ax = plt.subplots(figsize=(7, 4.5))
+    for name, (evals, h) in curves.items():
+        ax.semilogy(evals, np.maximum(h, 1e-16), label=name)
     ax.set_xscale("log")
     ax.set_xlabel("fitness evaluations")
     ax.set_ylabel("best fitness  |Δp| + θ  (m + rad)")

@@ -7,6 +7,7 @@ value and, where there is a set of valid values, list them.
 
 from __future__ import annotations
 
+import difflib
 from collections.abc import Iterable
 
 
@@ -45,6 +46,10 @@ def unknown(kind: str, name: object, valid: Iterable[str]) -> UnknownNameError:
         name: The value the user gave.
         valid: The names that would have been accepted.
     """
-    choices = ", ".join(sorted({str(v) for v in valid}))  # (each name once)
+    names = sorted({str(v) for v in valid})  # (each name once)
     plural = kind + ("es" if kind.endswith("s") else "s")  # "fitnesses", "solvers"
-    return UnknownNameError(f"unknown {kind} {name!r}; valid {plural}: {choices}")
+    close = difflib.get_close_matches(str(name), names, n=3, cutoff=0.6)
+    if not close:  # (a name in other case: "Panda")
+        close = [n for n in names if n.lower() == str(name).lower()]
+    hint = f"did you mean {' or '.join(repr(c) for c in close)}? " if close else ""
+    return UnknownNameError(f"unknown {kind} {name!r}; {hint}valid {plural}: {', '.join(names)}")

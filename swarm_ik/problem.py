@@ -767,8 +767,9 @@ class IKProblem:
     @classmethod
     def from_q(cls, robot: RobotModel, q: Any, fitness: str = "se3", **kwargs: Any) -> IKProblem:
         """The single-pose problem whose target is the FK of ``q`` (reachable by
-        construction)."""
-        return cls(robot, robot.fk(robot.check_q(q)), fitness=fitness, **kwargs)
+        construction; a warning when ``q`` lies outside the joint limits:
+        :meth:`RobotModel.target_q`)."""
+        return cls(robot, robot.fk(robot.target_q(q)), fitness=fitness, **kwargs)
 
     # --------------------------------------------------------------- hot path
     def _errors_and_cost2(

@@ -24,7 +24,7 @@ from numpy.typing import NDArray
 
 from swarm_ik import urdf
 from swarm_ik._types import FloatArray
-from swarm_ik._validate import count, floats_or, keywords_checked
+from swarm_ik._validate import count, floats_or, keywords_checked, user_stacklevel
 from swarm_ik.errors import InvalidArgumentError, RobotFileNotFoundError, RobotModelError, unknown
 from swarm_ik.kernels import lie
 from swarm_ik.kernels.fk import BALL, CONTINUOUS, KIND_NAMES, PRISMATIC, REVOLUTE, TreeArrays
@@ -1138,6 +1138,21 @@ class RobotModel:
             and q.shape == (self.nq,)
             and math.isfinite(sum(q.tolist()))  # (a sum that overflows: the full check decides)
         )
+
+    def target_q(self, q: Any, what: str = "q") -> FloatArray:
+        """A joint vector whose forward kinematics makes a target (:meth:`check_q`), with a
+        warning when it lies outside the joint limits: its pose may still be reachable, but
+        values beyond the limits are often degrees given where radians are due."""
+        q = self.check_q(q, what)
+        outside = np.flatnonzero((q < self.lower - 1e-9) | (q > self.upper + 1e-9))
+        if outside.size:
+            names = [self.joint_names[i] for i in outside]
+            warnings.warn(
+                f"{what} lies outside the joint limits at {names} (radians and metres are "
+                "expected: degrees?); the target is its forward kinematics all the same",
+                stacklevel=user_stacklevel(),
+            )
+        return q
 
     def check_q(self, q: Any, what: str = "q") -> FloatArray:
         """Validate a joint vector: shape ``(nq,)`` and finite; returns it as floats (a

@@ -204,7 +204,7 @@ def test_unknown_robot_name_lists_the_robots() -> None:
     with pytest.raises(errors.UnknownNameError) as info:
         swarm_ik.load_robot("yumi")
     msg = str(info.value)
-    assert msg.startswith("unknown robot 'yumi'; valid robots: ")
+    assert msg.startswith("unknown robot 'yumi'; did you mean 'yumi_left'? valid robots: ")
     for name in ("yumi_left", "loading_manipulator", "panda", "ur5"):
         assert name in msg
 

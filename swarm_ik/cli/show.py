@@ -127,10 +127,10 @@ def run(args: argparse.Namespace) -> int:
     target = None
     goals = None  # (several frames and --from-q: a pose goal on each, as `swarm-ik solve`)
     if args.from_q is not None and len(robot.frames) > 1:
-        poses = robot.fk_all(robot.check_q(args.from_q, "--from-q"))
+        poses = robot.fk_all(robot.target_q(args.from_q, "--from-q"))
         goals = [swarm_ik.goals.Pose(f, t) for f, t in zip(robot.frames, poses, strict=True)]
     elif args.from_q is not None:
-        target = robot.fk(robot.check_q(args.from_q, "--from-q"))
+        target = robot.fk(robot.target_q(args.from_q, "--from-q"))
     elif args.pose is not None:
         target = np.asarray(args.pose, dtype=float)
     if args.q:

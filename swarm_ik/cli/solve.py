@@ -197,7 +197,7 @@ def run(args: argparse.Namespace) -> int:
         except RecursionError:  # checked before (check_goals_file): a second guard
             raise InvalidArgumentError(f"--goals {args.goals!r}: JSON nested too deep") from None
     elif args.from_q is not None and len(robot.frames) > 1:  # a Pose goal on every frame
-        poses = robot.fk_all(robot.check_q(args.from_q, "--from-q"))
+        poses = robot.fk_all(robot.target_q(args.from_q, "--from-q"))
         goals = [
             swarm_ik.goals.Position(f, t[:3, 3])
             if args.position_only
@@ -205,7 +205,7 @@ def run(args: argparse.Namespace) -> int:
             for f, t in zip(robot.frames, poses, strict=True)
         ]
     elif args.from_q is not None:
-        target = robot.fk_pinocchio(robot.check_q(args.from_q, "--from-q"))
+        target = robot.fk_pinocchio(robot.target_q(args.from_q, "--from-q"))
     else:
         target = np.asarray(pose, dtype=float)
     if args.scene is not None:

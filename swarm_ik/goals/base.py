@@ -1061,6 +1061,12 @@ def frame_index(goal: Goal, robot: RobotModel, frame: str | None = None) -> int:
     """
     frame = goal.frame_name() if frame is None else frame
     if frame not in robot.frames:
+        full = robot.full_model
+        if not isinstance(frame, str) or not full.existFrame(frame):  # (no frame of the URDF)
+            names = [f.name for f in full.frames if f.name != "universe"]
+            raise UnknownNameError(
+                f"{goal.describe()}: unknown frame {frame!r}; " + _frames_hint(frame, names)
+            )
         raise UnknownNameError(
             f"{goal.describe()}: {frame!r} is not a goal frame of this robot; goal frames: "
             f"{', '.join(robot.frames)} (load the robot with every goal frame: "

@@ -352,6 +352,7 @@ def loaded_despite_damage(load: Callable[[], T]) -> T:
         raise
     except Exception as exc:
         raise_ctrl_c(exc)
+        raise_lost_ctrl_c()  # (a Ctrl-C counted: what failed is its doing, not the cache's)
         if not _raised_loading_a_cache(exc) or cut_by_ctrl_c(exc):
             raise
         removed = drop_cache_files(cache_folders(_SETTLED[0]))
