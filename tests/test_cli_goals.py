@@ -50,7 +50,7 @@ def test_position_only_on_a_short_chain(capsys: pytest.CaptureFixture[str]) -> N
         ([{"type": "Bogus"}], "unknown goal type 'Bogus'"),
         (
             [{"type": "Position", "frame": "nope", "point": [0, 0, 0]}],
-            "goal frames: panda_hand_tcp",
+            "unknown frame 'nope'; frames of this robot: panda_link0",
         ),
         (
             [{"type": "Position", "frame": "panda_hand_tcp", "point": [0, 0, 0], "x": 1}],

@@ -611,7 +611,7 @@ def test_unreachable_and_degenerate_targets_give_an_honest_result(
 @pytest.mark.parametrize(
     ("args", "message"),
     [
-        (["--robot", "yumi"], "unknown robot 'yumi'; valid robots:"),
+        (["--robot", "yumi"], "unknown robot 'yumi'; did you mean 'yumi_left'? valid robots:"),
         (["--robot", "{bad}"], "not a valid XML file"),
         (["--robot", "{missing}"], "URDF file not found"),
         (["--robot", "yumi_left", "--frame", "tool1"], "unknown frame 'tool1'; valid frames:"),
