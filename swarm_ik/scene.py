@@ -562,7 +562,14 @@ class Scene:
             names.append(o.name if o.name else f"{o.kind}{i}")
         dup = sorted(n for n, k in collections.Counter(names).items() if k > 1)
         if dup:
-            raise InvalidArgumentError(f"scene: obstacle name(s) {dup} used more than once")
+            unnamed = sorted({names[i] for i, o in enumerate(items) if not o.name} & set(dup))
+            why = (
+                f" ({unnamed} also the default name of an unnamed obstacle: kind + its index "
+                "in the scene; name that one)"
+                if unnamed
+                else ""
+            )
+            raise InvalidArgumentError(f"scene: obstacle name(s) {dup} used more than once{why}")
         self._obstacles: tuple[Shape, ...] = items
         self._names: tuple[str, ...] = tuple(names)
         self._coal: list[tuple[str, Any]] | None = None

@@ -274,6 +274,10 @@ JSON_BAD = [
     ('{"obstacles": [], "obstacles": []}', J, ["'obstacles' given twice"]),
     ('{"obstacles": [{"type": "Sphere", "radius": 1, "name": "a"}, '
      '{"type": "Sphere", "radius": 1, "name": "a"}]}', J, ["['a'] used more than once"]),
+    # (review 92: a name that is also an unnamed obstacle's default, said so)
+    ('[{"type": "Box", "name": "box1", "size": [0.1, 0.1, 0.1]}, '
+     '{"type": "Box", "size": [0.1, 0.1, 0.1]}]', J,
+     ["['box1'] used more than once", "default name of an unnamed obstacle"]),
     ('{"obstacles": [', J, ["not a JSON file"]),
     ('{"obstacles": [{"type": "Sphere", "radius": ' + "1" * 5000 + "}]}", J, ["radius", "inf"]),
     ("[" * 40 + "]" * 40, J, ["nested more than 32 levels"]),
