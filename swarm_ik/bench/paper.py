@@ -39,6 +39,7 @@ its report says so.
 from __future__ import annotations
 
 import argparse
+import inspect
 import json
 import math
 import platform
@@ -86,6 +87,7 @@ from swarm_ik.bench.report import (
     render_headline,
 )
 from swarm_ik.errors import InvalidArgumentError, unknown
+from swarm_ik.solvers import mgwo
 from swarm_ik.testfunctions import FUNCTIONS
 
 
@@ -373,7 +375,42 @@ def _setup_003(block: str, cfg: Config, **values: Any) -> str:
     keys = ("pop", "iterations", "runs")
     ours = {k: getattr(cfg, f"{k}_003") for k in keys}
     paper = {f"paper_{k}": getattr(FULL, f"{k}_003") for k in keys}
-    return _text(block, **ours, **paper, **values)
+    return _text(block, **ours, **paper, mgwo_settings=_mgwo_settings(), **values)
+
+
+def _mgwo_settings() -> str:
+    """MGWO's defaults that [MGWO] does not give (the sub-packs, γ, ω, c1, c2), as
+    ``swarm_ik.solvers.mgwo.run`` has them."""
+    params = inspect.signature(mgwo.run).parameters
+    names = {"subpops": "m", "gamma": "γ", "omega": "ω", "c1": "c1", "c2": "c2"}
+    return ", ".join(f"{sym} = {params[k].default:g}" for k, sym in names.items())
+
+
+def _gain_note(rows: list[dict[str, Any]]) -> str:
+    """[MGWO] Table 4's MGWO-over-GWO gain on the reachable robot beside ours (mean fitness
+    ratios), empty when a solver has no run."""
+    mine = {
+        s: [r["fitness"] for r in rows if r["robot"] == "loading_manipulator_long"
+            and r["solver"] == s]
+        for s in ("gwo", "mgwo")
+    }  # fmt: skip
+    if not mine["gwo"] or not mine["mgwo"]:
+        return ""
+    t = published.P003_TABLE4
+    p_gwo, p_mgwo = (_printed_row(t, a).stats["mean"] for a in ("GWO", "MGWO"))
+    o_gwo, o_mgwo = (float(np.mean(mine[s])) for s in ("gwo", "mgwo"))
+    paper_gain, our_gain = p_gwo / p_mgwo, o_gwo / max(o_mgwo, 1e-300)
+    ratio = our_gain / paper_gain
+    word = (
+        "the gain is of the paper's size" if 0.5 <= ratio <= 2.0
+        else f"the gain is {'smaller' if ratio < 1 else 'larger'} than the paper's"
+        + (" (MGWO is no better than GWO here)" if our_gain <= 1.0 else "")
+    )  # fmt: skip
+    return _text(
+        "note-003-table4-gain", paper_gain=f"{paper_gain:.3g}", paper_gwo=fmt(p_gwo, 5),
+        paper_mgwo=fmt(p_mgwo, 5), our_gain=f"{our_gain:.3g}", our_gwo=f"{o_gwo:.3g}",
+        our_mgwo=f"{o_mgwo:.3g}", gain_word=word,
+    )  # fmt: skip
 
 
 def _f4_worst_note() -> str:
@@ -392,7 +429,9 @@ def _f4_worst_note() -> str:
 
 def _section_003_table3(cfg: Config, rows: list[dict[str, Any]], hl: Headline, out: Path) -> str:
     def why_mgwo(solver: str, st: Stats) -> str | None:
-        return _text("why-mgwo", inline=True, pop=cfg.pop_003) if solver == "mgwo" else None
+        if solver != "mgwo":
+            return None
+        return _text("why-mgwo", inline=True, pop=cfg.pop_003, mgwo_settings=_mgwo_settings())
 
     parts = [
         _setup_003(
@@ -493,7 +532,8 @@ def _section_003_table4(cfg: Config, rows: list[dict[str, Any]], hl: Headline, o
                         vagwo_best=fmt(_printed_row(t, "VAGWO").stats["best"], 5),
                         mgwo_var=fmt(_printed_row(t, "MGWO").stats["var"], 5),
                     ),
-                ),
+                )
+                + ((gain,) if (gain := _gain_note(rows)) else ()),
             ),
             rows,
             hl,

@@ -97,25 +97,33 @@ P000_TABLE2 = PublishedTable(
     "YuMi left arm, the given pose; population 100, 1000 iterations, 10 runs",
     (
         PublishedRow(
-            "FOA", "foa", {"best": 5.21425, "mean": 5.27143, "worst": 5.35291, "std": 4.57e-2}
+            "FOA", "foa", {"best": 5.21425, "mean": 5.27143, "worst": 5.35291, "std": 4.57435e-2}
         ),
         PublishedRow(
-            "LGMS-FOA", None, {"best": 0.207373, "mean": 0.540788, "worst": 1.20566, "std": 0.265}
+            "LGMS-FOA",
+            None,
+            {"best": 0.207373, "mean": 0.540788, "worst": 1.20566, "std": 0.265285},
         ),
         PublishedRow(
-            "AE-LGMS-FOA", None, {"best": 3.42e-2, "mean": 0.3495, "worst": 0.7838, "std": 0.2151}
+            "AE-LGMS-FOA",
+            None,
+            {"best": 3.42399e-2, "mean": 0.349514, "worst": 0.783828, "std": 0.215070},
         ),
-        PublishedRow("IFOA", None, {"best": 5.426, "mean": 5.515, "worst": 5.585, "std": 5.85e-2}),
-        PublishedRow("SFOA", None, {"best": 6.149, "mean": 6.935, "worst": 7.772, "std": 0.583}),
+        PublishedRow(
+            "IFOA", None, {"best": 5.42641, "mean": 5.51490, "worst": 5.58521, "std": 5.84845e-2}
+        ),
+        PublishedRow(
+            "SFOA", None, {"best": 6.14915, "mean": 6.93508, "worst": 7.77175, "std": 0.582956}
+        ),
         PublishedRow(
             "HLFOA",
             "hlfoa",
-            {"best": 2.22e-16, "mean": 4.04e-16, "worst": 5.07e-16, "std": 8.02e-17},
+            {"best": 2.22045e-16, "mean": 4.03677e-16, "worst": 5.07372e-16, "std": 8.02196e-17},
         ),
     ),
 )
-"""[HLFOA], Table 2: best / mean / worst / std of the fitness over 10 runs (the paper prints six
-significant digits; several values here are rounded to three or four)."""
+"""[HLFOA], Table 2: best / mean / worst / std of the fitness over 10 runs, as the paper prints
+them (six significant digits)."""
 
 P000_TABLE4 = PublishedTable(
     "HLFOA",
