@@ -38,12 +38,13 @@ def main() -> None:
     elif QUICK:  # the test suite: a folder deleted afterwards
         with tempfile.TemporaryDirectory() as tmp:
             run(Path(tmp) / "convergence.png")
-    else:  # kept, so that it can be opened
-        run(Path(tempfile.mkdtemp(prefix="swarm_ik_04_")) / "convergence.png")
+    else:  # a folder kept, so that the plot can be opened (made when there is a plot)
+        run(None)
 
 
-def run(out: Path) -> None:
-    """Solve with every solver, print the table, save the plot to ``out``."""
+def run(out: Path | None) -> None:
+    """Solve with every solver, print the table, save the plot to ``out`` (None: into a new
+    temporary folder)."""
     robot = swarm_ik.load_robot("panda")
     q_true = np.array([0.3, -0.5, 0.2, -2.0, 0.1, 1.6, 0.7])
     problem = swarm_ik.IKProblem(robot, robot.fk(q_true))
@@ -82,6 +83,8 @@ def run(out: Path) -> None:
     ax.grid(True, which="both", alpha=0.3)
     ax.legend(fontsize=8)
     fig.tight_layout()
+    if out is None:
+        out = Path(tempfile.mkdtemp(prefix="swarm_ik_04_")) / "convergence.png"
     fig.savefig(out, dpi=110)
     print(f"\nconvergence plot: {out}")
     if not QUICK and os.environ.get("DISPLAY"):

@@ -1144,7 +1144,8 @@ class RobotModel:
         warning when it lies outside the joint limits: its pose may still be reachable, but
         values beyond the limits are often degrees given where radians are due."""
         q = self.check_q(q, what)
-        outside = np.flatnonzero((q < self.lower - 1e-9) | (q > self.upper + 1e-9))
+        beyond = (q < self.lower - 1e-9) | (q > self.upper + 1e-9)
+        outside = np.flatnonzero(beyond & ~self.continuous_mask)  # (any angle: continuous)
         if outside.size:
             names = [self.joint_names[i] for i in outside]
             warnings.warn(

@@ -1519,3 +1519,17 @@ def test_a_python_goals_units_and_vectors_are_checked_and_stored_as_arrays() -> 
     r = robot("panda")
     res = swarm_ik.solve(swarm_ik.IKProblem(r, goals=[goal]), seed=0)
     assert res.success and abs(r.fk_pinocchio(res.q, "panda_hand_tcp")[2, 3] - 0.3) <= 1e-5
+
+
+@dataclass(frozen=True)
+class TiltAsArray(TiltOf):
+    """``errors`` as a numpy array of two numbers (review 95: refused for a moment)."""
+
+    def errors(self, state):
+        return np.array([math.nan, abs(self._tilt(state) - self.angle)])
+
+
+def test_a_python_goals_errors_may_be_an_array_of_two_numbers() -> None:
+    r = robot("panda")
+    res = swarm_ik.solve(swarm_ik.IKProblem(r, goals=[TiltAsArray("panda_hand_tcp")]), seed=0)
+    assert res.success and math.isnan(res.goal_errors[0].position_error)

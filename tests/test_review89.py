@@ -89,3 +89,36 @@ def test_the_q0_clipped_warning_names_the_callers_line() -> None:
             call()
         clipped = [w for w in caught if "clipped into them" in str(w.message)]
         assert clipped and clipped[0].filename == __file__
+
+
+def test_nearest_keeps_a_solution_whose_2pi_copy_misses_a_joint_goal() -> None:
+    """Review 95: a goal on joint values tells 2π copies apart. ``JointValue(pan, 3.0)`` with
+    ``q0[0] = -3``: the copy nearest q0 (-3.28) missed it, so the answer stays at 3.0."""
+    from swarm_ik.goals import JointValue, Pose
+
+    r = robot("ur5")
+    qt = np.array([3.0, -1.2, 1.3, -1.0, 1.2, 0.4])
+    problem = IKProblem(r, goals=[Pose(r.frames[0], r.fk(qt)), JointValue(r.joint_names[0], 3.0)])
+    q0 = qt.copy()
+    q0[0] = -3.0
+    res = swarm_ik.solve(problem, q0=q0, seed=1, prefer="nearest", max_evals=5000)
+    assert res.success and abs(res.q[0] - 3.0) <= 1e-5
+
+
+def test_a_target_from_continuous_joints_beyond_pi_does_not_warn() -> None:
+    """Any angle is a continuous joint's: only the other joints' limits are checked."""
+    r = robot("kinova")
+    q = r.mid_q()
+    q[np.flatnonzero(r.continuous_mask)[0]] = 4.0
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        IKProblem.from_q(r, q)
+
+
+def test_cs_newton_without_a_newton_step_spends_the_papers_count() -> None:
+    """No step below ``eps``: m·t_max + m evaluations, no extra one (review 95)."""
+    r = robot("panda")
+    problem = IKProblem.from_q(r, r.mid_q() + 0.3)
+    res = swarm_ik.solve(problem, "cs-newton", seed=0, pop_size=10, iterations=5, eps=1e-12,
+                         stop_on_success=False)  # fmt: skip
+    assert res.n_evals == 10 + 5 * 2 * 10

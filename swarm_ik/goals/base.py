@@ -469,11 +469,11 @@ def errors_of(goal: Goal, state: State) -> tuple[float, float]:
 def _errors_pair(goal: Goal, state: State) -> tuple[float, float]:
     """``goal.errors(state)`` checked: ``(position error, angular error)`` as floats."""
     value = _users(goal, "errors(state)", lambda: goal.errors(state))
-    pair = value if isinstance(value, (tuple, list)) else ()
-    if len(pair) != 2 or not all(
-        isinstance(v, (int, float, np.integer, np.floating)) and not isinstance(v, bool)
-        for v in pair
-    ):
+    try:
+        pair = np.asarray(value)
+    except Exception:  # (ragged nesting)
+        pair = np.asarray(None)
+    if pair.shape != (2,) or pair.dtype.kind not in "iuf":  # (two real numbers, any container)
         raise InvalidArgumentError(
             f"{goal.describe()}.errors(state) must return (position error [m], angular error "
             f"[rad]), two numbers (NaN where none), got {reprlib.repr(value)}"

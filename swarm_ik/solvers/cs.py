@@ -203,14 +203,16 @@ def run(
     if not newton:
         return
     theta = best.copy()
+    stepped = False
     for k_step in range(iterations - t):
         if ev.done:
             break
         _, err, jac = ev.residual_jacobian(theta[None])
         eta = newton_rate(k_step, eta0, eta_t, tau)
         theta = ev.clip(theta + eta * (np.linalg.pinv(jac[0], rcond=_PINV_RCOND) @ err[0]))
+        stepped = True
         ev.end_iteration()
-    if not ev.done:  # (the last step's point, which no next step evaluates)
+    if stepped and not ev.done:  # (the last step's point, which no next step evaluates)
         ev(theta[None])
 
 

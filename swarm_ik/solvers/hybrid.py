@@ -719,10 +719,9 @@ def run(
             queue = propose(ev, rng, arch_x, arch_f, n_swarm, m, a, (s_lo, s_hi))
     if nearest:
         if sol_x:
-            # each solution as its 2π copy within the bounds nearest to q0 (the same pose: a
-            # joint with a range of 2π or more may turn either way to reach it)
-            periodic = periodic_mask(problem.robot, ev.lower, ev.upper)
-            sols = nearest_winding(np.asarray(sol_x), ev.lower, ev.upper, periodic, seed)[0]
+            sols = np.asarray(sol_x)
+            if prefer == "nearest":
+                sols = _nearest_copies(problem, sols, ev.lower, ev.upper, seed)
             k = int(np.argmin(pol_sec.secondary_cost(sols)))
             q_best = sols[k]
             if ev.remaining > 0:
@@ -738,6 +737,24 @@ def run(
             ev.add_evals(0, best_x, best_f)
         if open_gen or not ev.history:
             ev.end_iteration()
+
+
+def _nearest_copies(
+    problem: IKProblem, sols: FloatArray, lower: FloatArray, upper: FloatArray, q0: FloatArray
+) -> FloatArray:
+    """Each solution ``(k, nq)`` as its 2π copy within the bounds nearest to ``q0`` (a joint
+    whose range is 2π or more may turn either way to the same pose), where the copy meets the
+    problem as well as the solution does: a goal on joint values (``JointValue``, a primary
+    ``Posture``) tells the copies apart, and then the solution stays as it is."""
+    periodic = periodic_mask(problem.robot, lower, upper)
+    copies = nearest_winding(sols, lower, upper, periodic, q0)[0]
+    same = problem.fitness(copies) <= problem.fitness(sols) + SAME_POSE_FITNESS
+    return np.where(same[:, None], copies, sols)
+
+
+SAME_POSE_FITNESS = 1e-9
+"""Fitness by which a 2π copy of a solution may exceed it and still count as meeting the
+problem as well (round-off of the FK of angles 2π apart is about 1e-15)."""
 
 
 register(
