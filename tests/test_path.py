@@ -564,8 +564,9 @@ def test_waypoints_cut_by_the_time_limit_are_not_called_unreachable() -> None:
 
 def test_a_first_timed_path_in_a_fresh_process_gets_its_answer() -> None:
     """The first timed path of a process loads its kernels before the clock, charged to the
-    limit up to half of it (as a first solve's loading): a short reachable path at 50 ms is
-    solved (before, loading took the whole limit and the path ended unsolved)."""
+    limit up to half of it (as a first solve's loading): a short reachable path at 0.5 s is
+    solved (loading takes 0.6-1 s here, so before it took the whole limit and the path ended
+    unsolved; the warm path takes 40-80 ms, so the half left is ample on a loaded machine)."""
     import subprocess
     import sys
 
@@ -577,7 +578,7 @@ def test_a_first_timed_path_in_a_fresh_process_gets_its_answer() -> None:
         "wps = []\n"
         "for k in range(20):\n"
         "    T = T0.copy(); T[:3, 3] += [0.005 * k, 0, 0]; wps.append(T)\n"
-        "res = swarm_ik.solve_path(robot, wps, q0=q, time_limit=0.05)\n"
+        "res = swarm_ik.solve_path(robot, wps, q0=q, time_limit=0.5)\n"
         "print(res.success, all(res.reached))\n"
     )
     out = subprocess.run(
