@@ -91,35 +91,31 @@ P000_Q_PRINTED_DEG = (-135.4, -99.5, 13.8, 97.9, -70.8, 188.3, 166.4)
 with bounded least squares from random starts; refined in
 :data:`swarm_ik.bench.plans.Q_EXACT`)."""
 
+
+def _hlfoa_rows(printed: str) -> tuple[PublishedRow, ...]:
+    """[HLFOA]'s rows from a table as printed: per line the algorithm, our solver's name
+    (``-``: not implemented here) and best / mean / worst / std."""
+    rows = []
+    for line in printed.strip().splitlines():
+        name, solver, *values = line.split()
+        stats = dict(zip(("best", "mean", "worst", "std"), map(float, values), strict=True))
+        rows.append(PublishedRow(name, None if solver == "-" else solver, stats))
+    return tuple(rows)
+
+
 P000_TABLE2 = PublishedTable(
     "HLFOA",
     "Table 2",
     "YuMi left arm, the given pose; population 100, 1000 iterations, 10 runs",
-    (
-        PublishedRow(
-            "FOA", "foa", {"best": 5.21425, "mean": 5.27143, "worst": 5.35291, "std": 4.57435e-2}
-        ),
-        PublishedRow(
-            "LGMS-FOA",
-            None,
-            {"best": 0.207373, "mean": 0.540788, "worst": 1.20566, "std": 0.265285},
-        ),
-        PublishedRow(
-            "AE-LGMS-FOA",
-            None,
-            {"best": 3.42399e-2, "mean": 0.349514, "worst": 0.783828, "std": 0.215070},
-        ),
-        PublishedRow(
-            "IFOA", None, {"best": 5.42641, "mean": 5.51490, "worst": 5.58521, "std": 5.84845e-2}
-        ),
-        PublishedRow(
-            "SFOA", None, {"best": 6.14915, "mean": 6.93508, "worst": 7.77175, "std": 0.582956}
-        ),
-        PublishedRow(
-            "HLFOA",
-            "hlfoa",
-            {"best": 2.22045e-16, "mean": 4.03677e-16, "worst": 5.07372e-16, "std": 8.02196e-17},
-        ),
+    _hlfoa_rows(
+        """
+        FOA          foa    5.21425      5.27143      5.35291      4.57435e-2
+        LGMS-FOA     -      0.207373     0.540788     1.20566      0.265285
+        AE-LGMS-FOA  -      3.42399e-2   0.349514     0.783828     0.215070
+        IFOA         -      5.42641      5.51490      5.58521      5.84845e-2
+        SFOA         -      6.14915      6.93508      7.77175      0.582956
+        HLFOA        hlfoa  2.22045e-16  4.03677e-16  5.07372e-16  8.02196e-17
+        """
     ),
 )
 """[HLFOA], Table 2: best / mean / worst / std of the fitness over 10 runs, as the paper prints
@@ -129,31 +125,15 @@ P000_TABLE4 = PublishedTable(
     "HLFOA",
     "Table 4",
     "YuMi left arm, 10 arbitrary reachable poses",
-    (
-        PublishedRow(
-            "FOA", "foa", {"best": 3.12702, "mean": 7.10705, "worst": 9.80547, "std": 2.20799}
-        ),
-        PublishedRow(
-            "LGMS-FOA",
-            None,
-            {"best": 7.21645e-16, "mean": 6.83956e-1, "worst": 2.01518, "std": 6.23121e-1},
-        ),
-        PublishedRow(
-            "AE-LGMS-FOA",
-            None,
-            {"best": 2.64782e-12, "mean": 2.95665e-1, "worst": 8.66390e-1, "std": 3.03890e-1},
-        ),
-        PublishedRow(
-            "IFOA", None, {"best": 4.05356, "mean": 6.81130, "worst": 1.07144e1, "std": 1.74148}
-        ),
-        PublishedRow(
-            "SFOA", None, {"best": 3.10603, "mean": 8.82899, "worst": 1.40072e1, "std": 3.03113}
-        ),
-        PublishedRow(
-            "HLFOA",
-            "hlfoa",
-            {"best": 1.73472e-16, "mean": 3.87891e-16, "worst": 6.79526e-16, "std": 1.59873e-16},
-        ),
+    _hlfoa_rows(
+        """
+        FOA          foa    3.12702      7.10705      9.80547      2.20799
+        LGMS-FOA     -      7.21645e-16  6.83956e-1   2.01518      6.23121e-1
+        AE-LGMS-FOA  -      2.64782e-12  2.95665e-1   8.66390e-1   3.03890e-1
+        IFOA         -      4.05356      6.81130      1.07144e1    1.74148
+        SFOA         -      3.10603      8.82899      1.40072e1    3.03113
+        HLFOA        hlfoa  1.73472e-16  3.87891e-16  6.79526e-16  1.59873e-16
+        """
     ),
 )
 """[HLFOA], Table 4: best / mean / worst / std of the fitness over the 10 poses, every value as
