@@ -1621,8 +1621,12 @@ def solve_batch(
             stop at its share of the limit (its targets' share of what was left, counted
             from its start: :attr:`BatchSettings.restart_share`), so hopeless targets of one
             chunk leave time to the chunks after it.  A target reached
-            may be left unsolved where a call without the limit would have restarted it;
-            every success is the answer of a call without the limit.  Which targets are
+            may be left unsolved where a call without the limit would have restarted it,
+            and a target whose best answer when the limit came lies between the search's
+            stop test (``tol_margin`` × the tolerances) and the tolerances is a success with
+            that answer, where a call without the limit would have restarted it and may
+            answer with another branch (as with a smaller ``max_starts``); every success
+            meets the tolerances, judged with Pinocchio.  Which targets are
             reached depends on the machine's speed.  The first batch of a process loads
             its kernels (or compiles them) before the targets start: charged to the limit up
             to half of it, as a first :func:`swarm_ik.solve`'s loading.

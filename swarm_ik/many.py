@@ -348,7 +348,8 @@ def solve_many(
             and z1 in ``swarm-ik bench many`` and its seeds 7 and 11).
 
     Returns:
-        The solutions, nearest to the reference first, each verified with Pinocchio's FK
+        The solutions, nearest to the reference first (the Euclidean distance of each
+        returned ``q`` to it, whichever ``method``), each verified with Pinocchio's FK
         (``success`` True).  ``n_evals`` and ``time_s`` are the totals spent when each was found
         (on the analytic path the evaluations of the polish of eaik's least-squares points, 0
         where it returned none).  ``solver`` is ``"swarm"`` (numerical) or ``"analytic"``
@@ -464,10 +465,7 @@ def _numerical_results(
         reps = search()
         qs_all = np.array([r[0] for r in reps]).reshape(-1, problem.nq)
         fit_all = problem.fitness(qs_all) if reps else np.empty(0)
-    order = np.argsort(
-        branch_distance(qs_all, ref, periodic_mask(problem.robot, problem.lower, problem.upper)),
-        kind="stable",
-    )
+    order = _nearest_first(qs_all, ref)
     results = []
     for i in order:
         q_i, dp_i, dr_i, ev_i, t_i = reps[i]
@@ -495,8 +493,15 @@ def _merged(
     out = list(first) + [r for r in extra if found.add(r.q)]
     if not out:
         return out
-    d = branch_distance(np.array([r.q for r in out]), ref, periodic)
-    return [out[i] for i in np.argsort(d, kind="stable")[:n]]
+    return [out[i] for i in _nearest_first(np.array([r.q for r in out]), ref)[:n]]
+
+
+def _nearest_first(qs: FloatArray, ref: FloatArray) -> np.ndarray:
+    """The order of the rows of ``qs`` ``(k, nq)`` by their plain Euclidean distance to
+    ``ref`` (each already its in-limit 2π copy nearest to it): the order of every path of
+    :func:`solve_many`, as the distance ``|q − q0|`` of the returned ``q`` reads (the closed
+    form's :func:`swarm_ik.solvers.analytic.closed_form_set` orders so too)."""
+    return np.argsort(np.linalg.norm(qs - ref, axis=-1), kind="stable")
 
 
 def windings_of(problem: IKProblem, results: list[Result], q0: Any = None) -> list[list[Result]]:

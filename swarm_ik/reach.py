@@ -22,6 +22,7 @@ as a coloured point cloud; needs ``meshcat``).  The command line ``swarm-ik reac
 
 from __future__ import annotations
 
+import reprlib
 import time
 import zipfile
 import zlib
@@ -32,7 +33,7 @@ from typing import Any
 import numpy as np
 from numpy.typing import NDArray
 
-from swarm_ik._validate import SEED_LIMIT, count, finest_edge, flag, positive_float
+from swarm_ik._validate import SEED_LIMIT, count, finest_edge, flag, floats_or, positive_float
 from swarm_ik.batch import solve_batch
 from swarm_ik.errors import InvalidArgumentError
 from swarm_ik.paths import written_in_place_of
@@ -344,7 +345,7 @@ def reach_map(
     bounds: Any = None,
     n_orientations: int | None = None,
     position_only: bool = False,
-    seed: int = 0,
+    seed: int | None = 0,
     tol_pos: float = 1e-5,
     tol_rot: float = 1e-5,
     max_starts: int = 16,
@@ -365,7 +366,8 @@ def reach_map(
         position_only: Solve each voxel's centre as a position, the frame's orientation free
             (the map of where the frame's origin can be: an arm of fewer than 6 joints
             reaches a random full orientation almost nowhere).
-        seed: Seed of the orientations and of the solver's restarts.
+        seed: Seed of the orientations and of the solver's restarts (None: 0, as in
+            :func:`swarm_ik.solve`).
         tol_pos: Position tolerance [m]; tol_rot: rotation tolerance [rad].
         max_starts: Starts per pose before it counts as unreachable (the cost of an
             unreachable pose grows with it).
@@ -391,17 +393,15 @@ def reach_map(
     resolution = positive_float(resolution, "resolution [m]")
     position_only = flag(position_only, "position_only")
     n_orientations = orientation_count(n_orientations, position_only)
-    seed = count(seed, "seed", 0, SEED_LIMIT - 1)
+    seed = count(0 if seed is None else seed, "seed", 0, SEED_LIMIT - 1)  # (None: 0, as solve)
     max_targets = count(max_targets, "max_targets", 1, 2**62)
     if bounds is None:
         lo, hi = default_bounds(robot, seed=seed)
     else:
-        b = np.asarray(bounds, dtype=float).reshape(-1)
+        what = "bounds must be 6 finite numbers (xmin ymin zmin xmax ymax zmax) or (lower, upper)"
+        b = floats_or(bounds, lambda: f"{what}, got {reprlib.repr(bounds)}").reshape(-1)
         if b.shape != (6,) or not np.all(np.isfinite(b)):
-            raise InvalidArgumentError(
-                "bounds must be 6 finite numbers (xmin ymin zmin xmax ymax zmax) or "
-                f"(lower, upper); got {np.asarray(bounds).tolist()}"
-            )
+            raise InvalidArgumentError(f"{what}; got {b.tolist()}")
         lo, hi = b[:3], b[3:]
         if np.any(lo >= hi):
             raise InvalidArgumentError(
