@@ -175,6 +175,14 @@ def float_array(value: Any, what: str = "targets", *, target: bool = True) -> Fl
     )
 
 
+def json_int(digits: str) -> int | float:
+    """``json.loads``'s ``parse_int`` for files users write: an integer of more than 300
+    digits is read as a float (``inf`` beyond a float's range, which the value's own check
+    then refuses by name), where ``int()`` raises ``ValueError`` past Python's 4,300-digit
+    cap."""
+    return int(digits) if len(digits) <= 300 else float(digits)
+
+
 INT_PARAM_MAX = 2**31 - 1
 """The largest count or iteration number a parameter takes (the compiled kernels' integers
 hold far more; a larger one is a typo, and one beyond 64 bits would reach numba's typing)."""

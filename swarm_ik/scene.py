@@ -55,6 +55,7 @@ from typing import Any, ClassVar
 import numpy as np
 
 from swarm_ik._types import FloatArray
+from swarm_ik._validate import json_int
 from swarm_ik.errors import InvalidArgumentError, SwarmIKError, UnknownNameError
 from swarm_ik.paths import written_in_place_of
 from swarm_ik.pose import unit, unit_quaternion_matrix
@@ -991,16 +992,13 @@ def _parse_json(text: str, p: Path) -> Any:
             out[k] = v
         return out
 
-    def any_int(digits: str) -> int | float:
-        return int(digits) if len(digits) <= 300 else float(digits)  # Python caps int() digits
-
     return _parsed_tree(
         p,
         "JSON",
         5,
         (ValueError,),  # JSONDecodeError among them
         lambda: json.loads(
-            text, parse_constant=no_constants, object_pairs_hook=no_duplicates, parse_int=any_int
+            text, parse_constant=no_constants, object_pairs_hook=no_duplicates, parse_int=json_int
         ),
     )
 

@@ -12,6 +12,7 @@ import json
 from typing import Any
 
 from swarm_ik import argtypes
+from swarm_ik._validate import json_int
 from swarm_ik.cli import _viewer
 from swarm_ik.cli._args import (
     EXIT_NOT_REACHED,
@@ -46,7 +47,7 @@ def _parse_param(text: str) -> tuple[str, Any]:
         )
     key, raw = text.split("=", 1)
     try:
-        value = json.loads(raw)
+        value = json.loads(raw, parse_int=json_int)  # (past int()'s digit cap: a float)
     except (json.JSONDecodeError, RecursionError):
         value = raw
     return key.strip(), value

@@ -25,11 +25,23 @@ def add_parser(subparsers: Any) -> argparse.ArgumentParser:
         default="yumi_left",
         help="robot to warm up with (default: the bundled yumi_left; any robot will do)",
     )
+    p.add_argument(
+        "--fresh",
+        action="store_true",
+        help="remove swarm_ik's numba cache files first and compile every kernel anew (the "
+        "remedy for a cache file damaged so that loading it aborts the process)",
+    )
     return p  # type: ignore[no-any-return]
 
 
 def run(args: argparse.Namespace) -> int:
-    """Run one small solve of each kind; returns 0."""
+    """Run one small solve of each kind (after ``--fresh``'s removal of the cache files);
+    returns 0."""
+    if args.fresh:  # (before any kernel is loaded from the files)
+        from swarm_ik import kernels
+
+        removed = kernels.clear_cache()
+        print(f"removed {len(removed)} numba cache file(s)", file=sys.stderr, flush=True)
     import numpy as np
 
     import swarm_ik

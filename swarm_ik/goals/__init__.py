@@ -35,6 +35,7 @@ from typing import Any, TypeVar
 
 import numpy as np
 
+from swarm_ik._validate import json_int
 from swarm_ik.errors import InvalidArgumentError, InvalidTargetError, unknown
 from swarm_ik.goals.avoid_collisions import AvoidCollisions
 from swarm_ik.goals.axis import Axis
@@ -223,6 +224,7 @@ def load_goals(source: str | os.PathLike[str] | Sequence[Mapping[str, Any]]) -> 
             data = json.loads(
                 p.read_text(encoding="utf-8-sig"),  # (a byte-order mark dropped)
                 object_pairs_hook=functools.partial(_no_repeats, p),
+                parse_int=json_int,  # (an integer past Python's digit cap: a float)
             )
         except RecursionError:
             raise InvalidArgumentError(f"{p}: JSON nested too deeply") from None

@@ -355,7 +355,7 @@ def loaded_despite_damage(load: Callable[[], T]) -> T:
         raise_lost_ctrl_c()  # (a Ctrl-C counted: what failed is its doing, not the cache's)
         if not _raised_loading_a_cache(exc) or cut_by_ctrl_c(exc):
             raise
-        removed = drop_cache_files(cache_folders(_SETTLED[0]))
+        removed = clear_cache()
         if not removed:
             raise
         _notice(
@@ -365,6 +365,15 @@ def loaded_despite_damage(load: Callable[[], T]) -> T:
             f"{os.path.commonpath([os.path.dirname(p) for p in removed])}; compiling again"
         )
         return load()
+
+
+def clear_cache() -> list[str]:
+    """Remove every numba cache file of swarm_ik's kernels (in the folder settled on import),
+    so that each kernel is compiled again on its next first call; returns the paths removed.
+    ``swarm-ik warmup --fresh`` runs it first: the remedy for a cache file damaged so that
+    loading it aborts the process inside LLVM (an assertion in its bitcode reader, which no
+    Python handler can catch)."""
+    return drop_cache_files(cache_folders(_SETTLED[0]))
 
 
 def _settle() -> None:

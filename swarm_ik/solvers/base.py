@@ -30,6 +30,7 @@ import numpy as np
 from swarm_ik._types import FloatArray
 from swarm_ik._validate import INT_PARAM_MAX, plain_number
 from swarm_ik.errors import InvalidArgumentError, unknown
+from swarm_ik.kernels import raise_lost_ctrl_c
 
 if TYPE_CHECKING:
     from swarm_ik.problem import IKProblem
@@ -174,7 +175,11 @@ class Evaluator:
     # ------------------------------------------------------------- evaluation
     def _granted(self, pop: int) -> int:
         """Rows of a request of ``pop`` the evaluator evaluates: none once :attr:`done`,
-        else at most :attr:`remaining`."""
+        else at most :attr:`remaining`.  Every request of a solver passes here: where a
+        Ctrl-C that the work lost on its way is raised again
+        (:func:`swarm_ik.kernels.raise_lost_ctrl_c`; a paper solver's loop ran on to its
+        budget after 1 of 25 Ctrl-Cs)."""
+        raise_lost_ctrl_c()
         return 0 if self.done else min(pop, self.remaining)
 
     def __call__(self, x_batch: FloatArray) -> FloatArray:
