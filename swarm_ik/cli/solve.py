@@ -12,7 +12,6 @@ import json
 from typing import Any
 
 from swarm_ik import argtypes
-from swarm_ik._validate import json_int
 from swarm_ik.cli import _viewer
 from swarm_ik.cli._args import (
     EXIT_NOT_REACHED,
@@ -45,6 +44,8 @@ def _parse_param(text: str) -> tuple[str, Any]:
         raise argparse.ArgumentTypeError(
             f"solver parameter must look like name=value, got {text!r}"
         )
+    from swarm_ik._validate import json_int  # (numpy: loaded when a parameter is given)
+
     key, raw = text.split("=", 1)
     try:
         value = json.loads(raw, parse_int=json_int)  # (past int()'s digit cap: a float)
