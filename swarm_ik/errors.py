@@ -23,6 +23,12 @@ class RobotModelError(SwarmIKError, ValueError):
     """A URDF that cannot be turned into a serial-chain robot (bad XML, loops, limits...)."""
 
 
+class RobotModelWarning(UserWarning):
+    """A URDF loaded with a part that could not be read (an ``<inertial>`` whose mass is not a
+    number: the link loaded without mass).  :func:`swarm_ik.load_robot` silences the warnings
+    of the libraries it calls while loading, not these."""
+
+
 class UnknownNameError(SwarmIKError, KeyError):
     """A name (robot, frame, solver, fitness, joint) that is not among the valid ones."""
 

@@ -25,7 +25,13 @@ from numpy.typing import NDArray
 from swarm_ik import urdf
 from swarm_ik._types import FloatArray
 from swarm_ik._validate import count, floats_or, keywords_checked, user_stacklevel
-from swarm_ik.errors import InvalidArgumentError, RobotFileNotFoundError, RobotModelError, unknown
+from swarm_ik.errors import (
+    InvalidArgumentError,
+    RobotFileNotFoundError,
+    RobotModelError,
+    RobotModelWarning,
+    unknown,
+)
 from swarm_ik.kernels import lie
 from swarm_ik.kernels.fk import BALL, CONTINUOUS, KIND_NAMES, PRISMATIC, REVOLUTE, TreeArrays
 from swarm_ik.paths import (  # (the robot tables live there: no kernels to list them)
@@ -399,7 +405,8 @@ def _reduce(
             flo, fhi = joint_range[jname]
             lo_d, hi_d = sorted(((flo - b) / a, (fhi - b) / a))
             lower[d] = max(lower[d], lo_d)
-            upper[d] = min(upper[d], hi_d)
+            upper[d] = min(upper[d], hi_d) + 0.0  # (+0.0: a follower's 0 · -1 gave -0.0, and
+            # numpy's uniform refuses a range of [0, -0.0])
             if lower[d] > upper[d]:
                 raise RobotModelError(
                     f"{p}: mimic joint {jname!r} cannot stay within its limits for any value "
@@ -486,6 +493,18 @@ def _unit(v: FloatArray, what: str) -> FloatArray:
     if u is None:
         raise InvalidArgumentError(f"{what} has zero norm: {v.tolist()}")
     return u
+
+
+def _real_values(q: Any) -> FloatArray:
+    """``q`` as an array of real numbers (its shape checked by the caller), or
+    :class:`InvalidArgumentError` naming what it holds (text, complex values, None)."""
+    try:
+        arr = np.asarray(q)
+    except (TypeError, ValueError):  # (ragged nesting: refused below, named)
+        arr = np.asarray(None)
+    if arr.dtype.kind not in "fiu":
+        arr = floats_or(q, lambda: f"q must be real joint values, got {reprlib.repr(q)}")
+    return arr
 
 
 @dataclass(frozen=True, eq=False)
@@ -796,9 +815,7 @@ class RobotModel:
         ``(nq,) -> (4, 4)`` (Pinocchio's FK, :meth:`fk_pinocchio`: nothing to compile for
         one pose) or ``(pop, nq) -> (pop, 4, 4)`` (the compiled batch FK)."""
         f = self.frame_index(frame)
-        arr = np.asarray(q)
-        if arr.dtype.kind not in "fiu":  # (text, complex values, None: refused, named)
-            arr = floats_or(q, lambda: f"q must be real joint values, got {reprlib.repr(q)}")
+        arr = _real_values(q)
         if arr.shape == (self.nq,):
             # (a Data of its own: the State a Python goal reads stays valid if it calls fk)
             return self._frame_pose(arr, self.frame_ids[f], self._data("fk_data"))
@@ -807,13 +824,13 @@ class RobotModel:
 
     def fk_all(self, q: FloatArray) -> FloatArray:
         """Poses of every goal frame: ``(nq,) -> (nf, 4, 4)``, ``(pop, nq) -> (pop, nf, 4, 4)``."""
-        return self.tree.fk(q)
+        return self.tree.fk(_real_values(q))
 
     def fk_jacobian(self, q: FloatArray, frame: str | None = None) -> tuple[FloatArray, FloatArray]:
         """Pose(s) and LOCAL_WORLD_ALIGNED frame Jacobian(s) ``(…, 6, nq)``, rows ``[v; ω]``,
         of one goal frame (default the first)."""
         f = self.frame_index(frame)
-        t, j = self.tree.fk_jacobian(q)
+        t, j = self.tree.fk_jacobian(_real_values(q))
         return t[..., f, :, :], j[..., f, :, :]
 
     def _pinocchio_q_is_q(self) -> bool:
@@ -1266,12 +1283,15 @@ def load_robot(
         frames, reason = ee_frame, "given"
     else:
         frames, reason = default_frame, "the robot's usual tool frame"
-    with warnings.catch_warnings():
-        warnings.simplefilter("ignore")
+    with warnings.catch_warnings(record=True) as said:
+        warnings.simplefilter("always")  # (the libraries' warnings silenced, not swarm_ik's own)
         robot = RobotModel.from_urdf(
             path, frames, frame_reason=reason, floating_base=floating_base, locked=locked,
             base_box=base_box,
         )  # fmt: skip
+    for w in said:
+        if issubclass(w.category, RobotModelWarning):
+            warnings.warn(w.message, stacklevel=user_stacklevel())
     if srdf is not None:
         if not isinstance(srdf, (str, os.PathLike, bool)):
             raise InvalidArgumentError(

@@ -32,6 +32,7 @@ import re
 import sys
 import tempfile
 import threading
+import warnings
 import xml.etree.ElementTree as ET
 from collections import Counter
 from collections.abc import Iterator
@@ -44,7 +45,8 @@ import numpy as np
 import pinocchio as pin
 
 from swarm_ik._types import FloatArray
-from swarm_ik.errors import InvalidArgumentError, RobotModelError
+from swarm_ik._validate import user_stacklevel
+from swarm_ik.errors import InvalidArgumentError, RobotModelError, RobotModelWarning
 
 log = logging.getLogger("swarm_ik")
 
@@ -311,11 +313,19 @@ def check_urdf_xml(root: ET.Element, where: str = "URDF") -> dict[str, MimicJoin
                 raise RobotModelError(
                     f"{where}: joint {name!r} has lower limit {lo} > upper limit {hi}"
                 )
-    for follower, m in mimic.items():
-        if m.driver not in joint_list:  # (whatever frames are loaded: on or off the chain)
-            raise RobotModelError(
-                f"{where}: joint {follower!r} mimics joint {m.driver!r}, which is not in the file"
-            )
+    # a dangling reference: the follower moves on its own, as Pinocchio loads it, with one
+    # warning (example-robot-data's alex_psyonic_hands names 8 drivers it does not have)
+    dangling = {f: m.driver for f, m in mimic.items() if m.driver not in joint_list}
+    if dangling:
+        for follower in dangling:
+            del mimic[follower]
+        pairs = ", ".join(f"{f!r} → {d!r}" for f, d in dangling.items())
+        warnings.warn(
+            f"{where}: {len(dangling)} joint(s) mimic a joint that is not in the file "
+            f"({pairs}); they are loaded as independent joints",
+            RobotModelWarning,
+            stacklevel=user_stacklevel(),
+        )
     roots = links - children
     if len(roots) != 1:
         raise RobotModelError(
@@ -460,7 +470,26 @@ def build_model(
         raise RobotModelError(f"{where}: Pinocchio could not load it ({_one_line(detail)})")
     for line in messages:
         log.debug("%s: urdfdom: %s", where, line)
+    _warn_of_skipped_inertials(where, messages)
     return model, messages
+
+
+def _warn_of_skipped_inertials(where: str, messages: tuple[str, ...]) -> None:
+    """A warning per link whose ``<inertial>`` urdfdom could not read (``mass [abc] is not a
+    float``): it loads the link with no mass, so a centre of mass would be wrong where plain
+    IK is not (a warning, not a refusal; urdfdom's messages are otherwise kept at DEBUG)."""
+    said = [re.sub(r"^Error:\s*", "", m).strip() for m in messages if not m.startswith("at line")]
+    for k, line in enumerate(said):
+        link = re.match(r"Could not parse inertial element for Link \[(.*)\]$", line)
+        if link is None:
+            continue
+        cause = f" ({said[k - 1]})" if k > 0 and not said[k - 1].startswith("Could not") else ""
+        warnings.warn(
+            f"{where}: the inertial of link {link.group(1)!r} could not be read{cause}; the link "
+            "is loaded without mass (a CenterOfMass goal would be wrong)",
+            RobotModelWarning,
+            stacklevel=user_stacklevel(),
+        )
 
 
 def _one_line(text: str, limit: int = 300) -> str:
