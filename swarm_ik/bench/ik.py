@@ -258,7 +258,9 @@ def write_summary(out: Path, plan: IKPlan, quick: bool, wall_s: float | None) ->
     notes = sorted({(r["robot"], r["solver"], r["note"]) for r in rows if r["note"]})
     skipped = "\n".join(f"- `{s}` on `{r}`: {n}" for r, s, n in notes) or "- none"
     described = "\n".join(f"- `{n}`: {peers.PEERS[n].what}" for n in plan.peers if n in peers.PEERS)
-    info = recorded_machine(out) or common.machine_info(PACKAGES)
+    # (a run records its machine before its report: none recorded is an older run's, whose
+    # host is not this one's)
+    info = recorded_machine(out) or {"host": "not recorded by the run"}
     command = (
         f"swarm-ik bench ik --robots {' '.join(plan.robots)} --peers {' '.join(plan.peers)} "
         f"--n {plan.n} --budgets-ms {' '.join(f'{b:g}' for b in plan.budgets_ms)} "
@@ -454,7 +456,13 @@ def run(args: argparse.Namespace) -> int:
     out = common.resolve_out(args.out, COMMAND, quick)
     if args.report_only:
         common.require_results(out, [runner.csv_path(out, "peers")], COMMAND, quick)
-        plan = recorded_plan(out) or plan  # (the header names the run, not this invocation)
+        recorded = recorded_plan(out)  # (the header names the run, not this invocation)
+        if recorded is None:
+            print(
+                f"{out}: the run recorded no plan; the report's header names this invocation's",
+                file=sys.stderr,
+            )
+        plan = recorded or plan
     else:  # (a .urdf path is only checked by loading it)
         common.check_robots([r for r in plan.robots if r.endswith(".urdf")])
         common.write_run_info(
