@@ -205,7 +205,10 @@ def run(args: argparse.Namespace) -> int:
     rows += frame_goal_set("look-at", n, budget, args.seed)
     rows += posture(n, budget, args.seed)
     common.write_csv(out / "goals.csv", FIELDS, rows)
-    common.write_run_info(out, "goals", args.quick, n=n, budget_ms=args.budget_ms)
+    common.write_run_info(
+        out, "goals", args.quick, n=n, budget_ms=args.budget_ms,
+        machine=common.machine_info(("pin-pink",)),
+    )  # fmt: skip
     return common.write_report(out / "summary.md", report(common.read_csv(out / "goals.csv")))
 
 
