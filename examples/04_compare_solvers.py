@@ -23,6 +23,7 @@ from pathlib import Path
 import numpy as np
 
 import swarm_ik
+from swarm_ik.viz import output_file
 
 QUICK = os.environ.get("SWARM_IK_QUICK") == "1"
 BUDGET = 1_000 if QUICK else 3_000
@@ -31,7 +32,9 @@ SOLVERS = ("swarm", "dls", "hlfoa", "mgwo", "gwo", "pso-improved", "cs-newton", 
 
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    parser.add_argument("--out", type=Path, default=None, help="PNG file for the plot")
+    parser.add_argument(
+        "--out", type=output_file(".png"), default=None, help="PNG file for the plot"
+    )
     args = parser.parse_args()
     if args.out is not None:
         run(args.out)

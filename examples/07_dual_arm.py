@@ -21,13 +21,14 @@ import numpy as np
 
 import swarm_ik
 from swarm_ik.goals import Pose
+from swarm_ik.viz import output_file
 
 QUICK = os.environ.get("SWARM_IK_QUICK") == "1"
 
 
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    parser.add_argument("--html", type=Path, default=None, help="write the scene to FILE")
+    parser.add_argument("--html", type=output_file(".html"), help="write the scene to FILE")
     args = parser.parse_args()
     robot = swarm_ik.load_robot("baxter")
     print(f"{robot.name}: {robot.nq} joints, goal frames {robot.frames}")

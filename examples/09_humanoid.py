@@ -29,6 +29,7 @@ import pinocchio as pin
 import swarm_ik
 from swarm_ik.bench.wholebody_peers import polygon_margin, reference_configuration, support_polygon
 from swarm_ik.goals import CenterOfMass, Pose
+from swarm_ik.viz import output_file
 
 QUICK = os.environ.get("SWARM_IK_QUICK") == "1"
 FRAMES = ["left_sole_link", "right_sole_link", "gripper_left_base_link", "gripper_right_base_link"]
@@ -40,7 +41,7 @@ MARGIN = 0.03
 
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    parser.add_argument("--html", type=Path, default=None, help="write the scene to FILE")
+    parser.add_argument("--html", type=output_file(".html"), help="write the scene to FILE")
     args = parser.parse_args()
     # the pelvis stands 1.02 m high in half-sitting: a base box taller than the default 1 m
     robot = swarm_ik.load_robot(

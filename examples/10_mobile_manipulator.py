@@ -26,6 +26,7 @@ import numpy as np
 
 import swarm_ik
 from swarm_ik.goals import Axis, JointValue, Pose
+from swarm_ik.viz import output_file
 
 QUICK = os.environ.get("SWARM_IK_QUICK") == "1"
 ROBOT = "tiago_no_hand"  # example-robot-data's tiago_description/robots/tiago_no_hand.urdf
@@ -36,7 +37,7 @@ BOX = 3.0
 
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    parser.add_argument("--html", type=Path, default=None, help="write the scene to FILE")
+    parser.add_argument("--html", type=output_file(".html"), help="write the scene to FILE")
     args = parser.parse_args()
     # a shelf 1.8 m ahead, 0.6 m to the left, 0.75 m high; the tool's x axis (its approach
     # direction) pointing forward, level

@@ -71,7 +71,7 @@ def check_viewer(args: argparse.Namespace, *, live: bool) -> None:
         InvalidArgumentError: ``--html`` cannot be written.
     """
     html = getattr(args, "html", None)
-    if html:
+    if html is not None:  # (an empty path too: refused there, not taken as no page)
         check_output_file(html, "--html", HTML_SUFFIXES)
     if html or live:
         from swarm_ik import viz
@@ -246,7 +246,7 @@ def result_line(res: Any, position_only: bool = False) -> str:
 # ------------------------------------------------------------------------- solve hook
 def wants_drawing(args: argparse.Namespace) -> bool:
     """Whether ``swarm-ik solve`` draws anything (``--html`` or ``--show``)."""
-    return bool(args.html or args.show)
+    return args.html is not None or bool(args.show)
 
 
 def after_solve(args: argparse.Namespace, problem: Any, result: Any) -> None:

@@ -23,7 +23,7 @@ True
 
 from __future__ import annotations
 
-from swarm_ik.viz.export import CommandLog, check_output_path, static_html
+from swarm_ik.viz.export import CommandLog, check_output_path, output_file, static_html
 from swarm_ik.viz.geometry import full_configuration, package_dirs, reach_length, visual_model
 from swarm_ik.viz.obstacles import add_contact_bodies, add_obstacles, show_collision
 from swarm_ik.viz.scene import (
@@ -65,6 +65,7 @@ __all__ = [
     "VizUnavailableError",
     "animate_trace",
     "check_output_path",
+    "output_file",
     "error_lines",
     "full_configuration",
     "package_dirs",

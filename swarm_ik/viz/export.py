@@ -12,9 +12,11 @@ use it (a ``swarm_ik_shared`` command carries the meshes; the others refer to th
 
 from __future__ import annotations
 
+import argparse
 import base64
 import hashlib
 import os
+from collections.abc import Callable
 from pathlib import Path
 from typing import Any
 
@@ -266,3 +268,22 @@ def check_output_path(path: str | os.PathLike[str], what: str, suffixes: tuple[s
     if not parent.is_dir():
         raise InvalidArgumentError(f"{what} {str(p)!r}: folder {str(parent)!r} does not exist")
     return p
+
+
+def output_file(*suffixes: str) -> Callable[[str], Path]:
+    """An ``argparse`` type for an output file of a script (the examples' ``--html FILE``,
+    ``--out FILE``): the path checked by :func:`check_output_path` when the arguments are
+    parsed, so that a missing folder or a wrong suffix is one line and exit 2 before any work,
+    not a traceback after it.
+
+    Args:
+        *suffixes: Valid suffixes (lower case, with the dot).
+    """
+
+    def parse(text: str) -> Path:
+        try:
+            return check_output_path(text, "the file", tuple(suffixes))
+        except InvalidArgumentError as exc:
+            raise argparse.ArgumentTypeError(str(exc)) from None
+
+    return parse

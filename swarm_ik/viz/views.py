@@ -11,6 +11,7 @@ import numpy as np
 import pinocchio as pin
 
 from swarm_ik._types import FloatArray
+from swarm_ik._validate import count, positive_float
 from swarm_ik.errors import InvalidArgumentError, unknown
 from swarm_ik.pose import as_pose
 from swarm_ik.problem import IKProblem
@@ -19,6 +20,15 @@ from swarm_ik.robot import RobotModel
 from swarm_ik.viz.geometry import full_configuration, reach_length
 from swarm_ik.viz.scene import GHOST_COLOR, LAYOUTS, ROOT, Scene, text_png, translation
 from swarm_ik.viz.trace import Trace
+
+
+def nonnegative_seconds(value: Any, what: str) -> float:
+    """``value`` as a finite number of seconds ``>= 0``, or :class:`InvalidArgumentError`
+    naming ``what`` (NaN made ``int(round(hold_s * fps))`` a bare ``ValueError``)."""
+    ok = isinstance(value, (int, float, np.integer, np.floating)) and not isinstance(value, bool)
+    if not ok or not (0.0 <= float(value) < float("inf")):
+        raise InvalidArgumentError(f"{what} must be a finite number of seconds >= 0, got {value!r}")
+    return float(value)
 
 
 def error_lines(result: Result, label: str | None = None) -> list[str]:
@@ -162,6 +172,12 @@ def animate_trace(
     Returns:
         The number of frames.
     """
+    if name not in scene.robots:
+        raise unknown("drawing", name, list(scene.robots))
+    if len(trace) == 0:
+        raise InvalidArgumentError("animate_trace needs a trace of at least one iteration")
+    fps = int(count(fps, "fps"))
+    hold_s = nonnegative_seconds(hold_s, "hold_s")
     drawing = scene.robots[name]
     tr = trace.subsample(max_frames)
     anim = scene.animation(fps)
@@ -255,6 +271,9 @@ def show_configurations(
     """
     if layout not in LAYOUTS:
         raise unknown("layout", layout, LAYOUTS)
+    hold_s = nonnegative_seconds(hold_s, "hold_s")
+    if spacing is not None:
+        spacing = positive_float(spacing, "spacing [m] (or None)")
     if len(qs) == 0:
         raise InvalidArgumentError("show_configurations needs at least one configuration")
     qs = [robot.check_q(q, f"configuration #{k + 1}") for k, q in enumerate(qs)]
@@ -336,7 +355,7 @@ def several_solutions(
     n: int,
     *,
     solver: str | None = None,
-    min_distance: float = 0.5,
+    min_distance: float | None = 0.5,
     seed: int = 0,
     **solve_kwargs: Any,
 ) -> list[Result]:
@@ -367,6 +386,10 @@ def several_solutions(
             swarm_ik.solve_many(problem, n, min_distance=min_distance, seed=seed, **solve_kwargs),
         )
         return found or [swarm_ik.solve(problem, seed=seed, **solve_kwargs)]
+    if min_distance is not None:  # (checked as solve_many checks it: NaN kept one solution,
+        # a negative distance the same one n times)
+        min_distance = positive_float(min_distance, "min_distance (or None)")
+    least = 0.0 if min_distance is None else min_distance
     robot = problem.robot
     kept: list[Result] = []
     best: Result | None = None
@@ -374,7 +397,7 @@ def several_solutions(
         r = swarm_ik.solve(problem, solver, seed=s, **solve_kwargs)
         if best is None or r.fitness < best.fitness:
             best = r
-        far = all(np.linalg.norm(robot.wrap(r.q - k.q)) >= min_distance for k in kept)
+        far = all(np.linalg.norm(robot.wrap(r.q - k.q)) >= least for k in kept)
         if r.success and far:
             kept.append(r)
             if len(kept) == n:
