@@ -81,3 +81,31 @@ def test_bad_viewer_values_are_refused_by_name() -> None:
     for word, call in _calls():
         with pytest.raises(SwarmIKError, match=word):
             call()
+
+
+def test_scene_and_view_arguments_of_the_wrong_kind_are_refused_by_name() -> None:
+    """The lower-level drawing calls took None for a robot (AttributeError), colours and
+    offsets of the wrong length (IndexError, ValueError), a 3x3 or NaN triad pose, a negative
+    triad length, an opacity of 2, and a camera with no point or a zero direction."""
+    robot = swarm_ik.load_robot("yumi_left")
+    q = robot.mid_q()
+    scene = viz.Scene()
+    calls: list[tuple[str, Any]] = [
+        ("robot", lambda: viz.show_pose(None, q)),  # type: ignore[arg-type]
+        ("result", lambda: viz.error_lines(None)),  # type: ignore[arg-type]
+        ("color", lambda: scene.add_robot(robot, q, color=[1, 2])),
+        ("color", lambda: scene.add_robot(robot, q, color=[2, 0, 0, 1])),
+        ("offset", lambda: scene.add_robot(robot, q, offset=[1, 2])),
+        ("pose", lambda: scene.add_triad("t", np.eye(3))),
+        ("pose", lambda: scene.add_triad("t", np.full((4, 4), np.nan))),
+        ("length", lambda: scene.add_triad("t", np.eye(4), length=-1)),
+        ("opacity", lambda: scene.add_triad("t", np.eye(4), opacity=2)),
+        ("sphere", lambda: scene.add_triad("t", np.eye(4), sphere=[1])),
+        ("points", lambda: scene.frame_camera(np.zeros((0, 3)))),
+        ("direction", lambda: scene.frame_camera(np.zeros((2, 3)), direction=(0, 0, 0))),
+    ]
+    for word, call in calls:
+        with pytest.raises(SwarmIKError, match=word):
+            call()
+    scene.add_robot(robot, q, color=viz.GHOST_COLOR, offset=[0.1, 0, 0])  # (good ones drawn)
+    scene.add_triad("t", np.eye(4), sphere=(1.0, 0.85, 0.1, 0.45))

@@ -21,7 +21,8 @@ import numpy as np
 import pinocchio as pin
 
 from swarm_ik._types import FloatArray
-from swarm_ik.errors import SwarmIKError
+from swarm_ik._validate import floats_or, positive_float
+from swarm_ik.errors import InvalidArgumentError, SwarmIKError
 from swarm_ik.paths import written_in_place_of
 from swarm_ik.robot import RobotModel
 from swarm_ik.viz.export import CommandLog, check_output_path, static_html
@@ -201,6 +202,10 @@ class Scene:
             The drawing (pose it again with :meth:`RobotDrawing.set_q`).
         """
         q = robot.check_q(q)
+        if color is not None:
+            color = _rgba(color, "color")
+        if offset is not None:
+            offset = _finite(offset, (3,), "offset [m]")
         geom = self._geoms.get(id(robot))
         if geom is None:
             geom = self._geoms[id(robot)] = visual_model(robot)
@@ -234,6 +239,14 @@ class Scene:
         """
         import meshcat.geometry as mg
 
+        pose = _finite(pose, (4, 4), "pose")
+        length = positive_float(length, "length [m]")
+        radius = None if radius is None else positive_float(radius, "radius [m] (or None)")
+        opacity = float(_finite(opacity, (), "opacity"))
+        if not 0.0 <= opacity <= 1.0:
+            raise InvalidArgumentError(f"opacity must lie in [0, 1], got {opacity}")
+        if sphere is not None:
+            sphere = _rgba(sphere, "sphere")
         r = length / 25.0 if radius is None else radius
         node = self.node(name)
         node.delete()
@@ -255,7 +268,7 @@ class Scene:
                 color=rgb_int(sphere), opacity=float(sphere[3]), transparent=float(sphere[3]) < 1.0
             )
             node["origin"]["shape"].set_object(mg.Sphere(length / 5.0), mat)
-        node.set_transform(np.asarray(pose, dtype=float))
+        node.set_transform(pose)
 
     def add_label(self, name: str, lines: Sequence[str], **placement: Any) -> None:
         """A flat sign with text (a texture), standing upright: :meth:`add_image` of the text
@@ -401,7 +414,12 @@ class Scene:
         Returns:
             The unit direction from the centre to the camera, shape ``(3,)``.
         """
-        pts = np.atleast_2d(np.asarray(points, dtype=float))
+        pts = np.atleast_2d(_finite(points, None, "points [m]"))
+        if pts.ndim != 2 or pts.shape[1] != 3 or pts.shape[0] == 0:
+            raise InvalidArgumentError(f"points must have shape (n, 3), n >= 1; got {pts.shape}")
+        d = _finite(direction, (3,), "direction")
+        if not np.linalg.norm(d) > 0.0:
+            raise InvalidArgumentError("direction has zero length")
         lo, hi = pts.min(axis=0), pts.max(axis=0)
         center = 0.5 * (lo + hi)
         radius = max(0.25, 0.5 * float(np.linalg.norm(hi - lo)))
@@ -409,7 +427,6 @@ class Scene:
         self.visualizer[ROOT].set_transform(translation(-center))
         # a floor that stays in front of the camera (lines passing behind it get lost)
         self.add_floor(center[:2], 0.95 * radius)
-        d = np.asarray(direction, dtype=float)
         d = d / np.linalg.norm(d)
         pos = d * (1.45 * radius if distance is None else distance)
         # the camera node lives in three.js axes (y up): world (x, y, z) -> (x, z, -y)
@@ -508,3 +525,22 @@ def text_png(lines: Sequence[str], font_px: int = 28) -> tuple[bytes, float]:
     buf = io.BytesIO()
     img.save(buf, format="PNG")
     return buf.getvalue(), w / h
+
+
+def _finite(value: Any, shape: tuple[int, ...] | None, what: str) -> FloatArray:
+    """``value`` as finite floats of ``shape`` (None: any), or :class:`InvalidArgumentError`
+    naming ``what``."""
+    arr = floats_or(value, lambda: f"{what} must be numbers, got {value!r}")
+    if shape is not None and arr.shape != shape:
+        raise InvalidArgumentError(f"{what} must have shape {shape}, got {arr.shape}")
+    if not np.all(np.isfinite(arr)):
+        raise InvalidArgumentError(f"{what} must be finite, got {arr.tolist()}")
+    return arr
+
+
+def _rgba(value: Any, what: str) -> list[float]:
+    """An RGBA colour: four numbers in ``[0, 1]``, or :class:`InvalidArgumentError`."""
+    arr = _finite(value, (4,), f"{what} (RGBA)")
+    if np.any(arr < 0.0) or np.any(arr > 1.0):
+        raise InvalidArgumentError(f"{what} (RGBA) must lie in [0, 1], got {arr.tolist()}")
+    return [float(v) for v in arr]

@@ -31,8 +31,16 @@ def nonnegative_seconds(value: Any, what: str) -> float:
     return float(value)
 
 
+def _is(value: Any, cls: type, what: str) -> None:
+    """Refuse ``value`` unless it is a ``cls`` (``None`` or another object gave a bare
+    ``AttributeError`` deep in the drawing)."""
+    if not isinstance(value, cls):
+        raise InvalidArgumentError(f"{what} must be a {cls.__name__}, got {type(value).__name__}")
+
+
 def error_lines(result: Result, label: str | None = None) -> list[str]:
     """Text lines stating a result's solver, status and errors."""
+    _is(result, Result, "result")
     head = label or (result.solver or "solver") + (
         f" (seed {result.seed})" if result.seed is not None else ""
     )
@@ -97,6 +105,7 @@ def show_pose(
     Returns:
         The scene (``scene.url`` for the live view, ``scene.save_html(path)`` to export).
     """
+    _is(robot, RobotModel, "robot")
     q = robot.check_q(q)
     scene = Scene() if scene is None else scene
     scene.add_robot(robot, q, name="robot")
@@ -217,6 +226,8 @@ def show_result(
     Returns:
         The scene.
     """
+    _is(problem, IKProblem, "problem")
+    _is(result, Result, "result")
     lines = error_lines(result)
     if compare is not None:
         lines += error_lines(compare, f"{compare.solver} (ghost, orange)")
