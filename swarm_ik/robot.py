@@ -498,13 +498,9 @@ def _unit(v: FloatArray, what: str) -> FloatArray:
 def _real_values(q: Any) -> FloatArray:
     """``q`` as an array of real numbers (its shape checked by the caller), or
     :class:`InvalidArgumentError` naming what it holds (text, complex values, None)."""
-    try:
-        arr = np.asarray(q)
-    except (TypeError, ValueError):  # (ragged nesting: refused below, named)
-        arr = np.asarray(None)
-    if arr.dtype.kind not in "fiu":
-        arr = floats_or(q, lambda: f"q must be real joint values, got {reprlib.repr(q)}")
-    return arr
+    if isinstance(q, np.ndarray) and q.dtype.kind in "fiu":
+        return q
+    return floats_or(q, lambda: f"q must be real joint values, got {reprlib.repr(q)}")
 
 
 @dataclass(frozen=True, eq=False)

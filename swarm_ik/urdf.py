@@ -464,8 +464,7 @@ def build_model(
             error = str(exc).strip() or type(exc).__name__
     messages = tuple(lines)
     if error is not None or model is None:
-        # urdfdom's first complaint is the cause; drop its "at line N in file.cpp" lines
-        said = [re.sub(r"^Error:\s*", "", m) for m in messages if not m.startswith("at line")]
+        said = _complaints(messages)  # (urdfdom's first complaint is the cause)
         detail = "; ".join([*said[:1], error or ""]).strip("; ")
         raise RobotModelError(f"{where}: Pinocchio could not load it ({_one_line(detail)})")
     for line in messages:
@@ -474,11 +473,17 @@ def build_model(
     return model, messages
 
 
+def _complaints(messages: tuple[str, ...]) -> list[str]:
+    """urdfdom's messages without their ``Error:`` prefix and their ``at line N in file.cpp``
+    lines."""
+    return [re.sub(r"^Error:\s*", "", m).strip() for m in messages if not m.startswith("at line")]
+
+
 def _warn_of_skipped_inertials(where: str, messages: tuple[str, ...]) -> None:
     """A warning per link whose ``<inertial>`` urdfdom could not read (``mass [abc] is not a
     float``): it loads the link with no mass, so a centre of mass would be wrong where plain
     IK is not (a warning, not a refusal; urdfdom's messages are otherwise kept at DEBUG)."""
-    said = [re.sub(r"^Error:\s*", "", m).strip() for m in messages if not m.startswith("at line")]
+    said = _complaints(messages)
     for k, line in enumerate(said):
         link = re.match(r"Could not parse inertial element for Link \[(.*)\]$", line)
         if link is None:

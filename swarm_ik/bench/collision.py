@@ -539,12 +539,10 @@ def make_solvers(
                 call = _with_time_left(ours)
             elif name == "tracik-reject":
                 peers.make("tracik", robot, budget_s, TOL)  # refused here when missing
-                # (eps TOL/√3 per twist component, the `tracik` peer's: its claims meet the
-                # Euclidean check, where eps TOL sent claimed answers to be rejected and tried
-                # again, 24 of 200 Panda claims in review 99)
-                tk = peers.TracIK(
-                    robot, TRACIK_ATTEMPT_FRACTION * budget_s, TOL / math.sqrt(3), name
-                )
+                # (the `tracik` peer's eps: its claims meet the Euclidean check, where eps TOL
+                # sent claimed answers to be rejected and tried again, 24 of 200 Panda claims)
+                eps = peers.tracik_eps(TOL)
+                tk = peers.TracIK(robot, TRACIK_ATTEMPT_FRACTION * budget_s, eps, name)
                 call = _fixed(tk)
             else:
                 call = _fixed(peers.make("rtb-lm", robot, budget_s, TOL))

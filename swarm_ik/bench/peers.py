@@ -557,6 +557,12 @@ class IkpyIK:
 
 
 # --------------------------------------------------------------------------- registry
+def tracik_eps(tol: float) -> float:
+    """TRAC-IK's eps for a Euclidean tolerance ``tol``: its test bounds each twist component,
+    so ``tol/√3`` puts each error's norm within ``tol`` (its claim then implies our check)."""
+    return tol / math.sqrt(3.0)
+
+
 PEERS: dict[str, PeerInfo] = {
     p.name: p
     for p in (
@@ -595,7 +601,7 @@ PEERS: dict[str, PeerInfo] = {
             "pytracik",
             "TRAC-IK (pytracik), Speed, timeout = budget, eps = tol/√3 per twist component "
             "(follows --tol; its claim then implies the Euclidean check)",
-            lambda r, b, t: TracIK(r, b, t / math.sqrt(3.0), "tracik"),
+            lambda r, b, t: TracIK(r, b, tracik_eps(t), "tracik"),
         ),
         PeerInfo(
             "rtb-lm",

@@ -23,6 +23,7 @@ import pinocchio as pin
 from swarm_ik._types import FloatArray
 from swarm_ik._validate import floats_or, positive_float
 from swarm_ik.errors import InvalidArgumentError, SwarmIKError
+from swarm_ik.goals.base import vec3
 from swarm_ik.paths import written_in_place_of
 from swarm_ik.robot import RobotModel
 from swarm_ik.viz.export import CommandLog, check_output_path, static_html
@@ -205,7 +206,7 @@ class Scene:
         if color is not None:
             color = _rgba(color, "color")
         if offset is not None:
-            offset = _finite(offset, (3,), "offset [m]")
+            offset = vec3(offset, "offset [m]")
         geom = self._geoms.get(id(robot))
         if geom is None:
             geom = self._geoms[id(robot)] = visual_model(robot)
@@ -417,9 +418,7 @@ class Scene:
         pts = np.atleast_2d(_finite(points, None, "points [m]"))
         if pts.ndim != 2 or pts.shape[1] != 3 or pts.shape[0] == 0:
             raise InvalidArgumentError(f"points must have shape (n, 3), n >= 1; got {pts.shape}")
-        d = _finite(direction, (3,), "direction")
-        if not np.linalg.norm(d) > 0.0:
-            raise InvalidArgumentError("direction has zero length")
+        d = vec3(direction, "direction", unit=True)
         lo, hi = pts.min(axis=0), pts.max(axis=0)
         center = 0.5 * (lo + hi)
         radius = max(0.25, 0.5 * float(np.linalg.norm(hi - lo)))
@@ -427,7 +426,6 @@ class Scene:
         self.visualizer[ROOT].set_transform(translation(-center))
         # a floor that stays in front of the camera (lines passing behind it get lost)
         self.add_floor(center[:2], 0.95 * radius)
-        d = d / np.linalg.norm(d)
         pos = d * (1.45 * radius if distance is None else distance)
         # the camera node lives in three.js axes (y up): world (x, y, z) -> (x, z, -y)
         self.visualizer["/Cameras/default/rotated/<object>"].set_property(

@@ -11,7 +11,7 @@ import numpy as np
 import pinocchio as pin
 
 from swarm_ik._types import FloatArray
-from swarm_ik._validate import count, positive_float
+from swarm_ik._validate import count, nonnegative, positive_float
 from swarm_ik.errors import InvalidArgumentError, unknown
 from swarm_ik.pose import as_pose
 from swarm_ik.problem import IKProblem
@@ -22,13 +22,13 @@ from swarm_ik.viz.scene import GHOST_COLOR, LAYOUTS, ROOT, Scene, text_png, tran
 from swarm_ik.viz.trace import Trace
 
 
-def nonnegative_seconds(value: Any, what: str) -> float:
-    """``value`` as a finite number of seconds ``>= 0``, or :class:`InvalidArgumentError`
-    naming ``what`` (NaN made ``int(round(hold_s * fps))`` a bare ``ValueError``)."""
-    ok = isinstance(value, (int, float, np.integer, np.floating)) and not isinstance(value, bool)
-    if not ok or not (0.0 <= float(value) < float("inf")):
-        raise InvalidArgumentError(f"{what} must be a finite number of seconds >= 0, got {value!r}")
-    return float(value)
+def _seconds(value: Any) -> float:
+    """``hold_s`` as a finite number of seconds ``>= 0`` (:func:`swarm_ik._validate.nonnegative`;
+    NaN made ``int(round(hold_s * fps))`` a bare ``ValueError``)."""
+    what = "hold_s must be a finite number of seconds >= 0"
+    if value is None:
+        raise InvalidArgumentError(f"{what}, got None")
+    return float(nonnegative(value, what, ()))  # type: ignore[arg-type]
 
 
 def _is(value: Any, cls: type, what: str) -> None:
@@ -186,7 +186,7 @@ def animate_trace(
     if len(trace) == 0:
         raise InvalidArgumentError("animate_trace needs a trace of at least one iteration")
     fps = int(count(fps, "fps"))
-    hold_s = nonnegative_seconds(hold_s, "hold_s")
+    hold_s = _seconds(hold_s)
     drawing = scene.robots[name]
     tr = trace.subsample(max_frames)
     anim = scene.animation(fps)
@@ -282,7 +282,7 @@ def show_configurations(
     """
     if layout not in LAYOUTS:
         raise unknown("layout", layout, LAYOUTS)
-    hold_s = nonnegative_seconds(hold_s, "hold_s")
+    hold_s = _seconds(hold_s)
     if spacing is not None:
         spacing = positive_float(spacing, "spacing [m] (or None)")
     if len(qs) == 0:
@@ -397,10 +397,9 @@ def several_solutions(
             swarm_ik.solve_many(problem, n, min_distance=min_distance, seed=seed, **solve_kwargs),
         )
         return found or [swarm_ik.solve(problem, seed=seed, **solve_kwargs)]
-    if min_distance is not None:  # (checked as solve_many checks it: NaN kept one solution,
-        # a negative distance the same one n times)
-        min_distance = positive_float(min_distance, "min_distance (or None)")
-    least = 0.0 if min_distance is None else min_distance
+    # (checked as solve_many checks it: NaN kept one solution, a negative distance the same one
+    # n times)
+    least = 0.0 if min_distance is None else positive_float(min_distance, "min_distance (or None)")
     robot = problem.robot
     kept: list[Result] = []
     best: Result | None = None
