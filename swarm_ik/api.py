@@ -415,21 +415,19 @@ class Route:
             self._bound_goals = problem.compiled_goals
             p0 = self.pol.table.p0.tolist()  # each goal's block of the table's floats
             self._blocks = [(p0[i], p0[i + 1]) for i in range(len(p0) - 1)]
-            self.state = hybrid.search_state(self.pol, kw["pop_size"])
-            self._n_swarm = int(round(kw["swarm_fraction"] * kw["pop_size"]))
+            self.search = hybrid.BoundSearch(
+                self.pol, pop_size=kw["pop_size"],
+                n_swarm=int(round(kw["swarm_fraction"] * kw["pop_size"])),
+                iterations=kw["iterations"], stop=True, tol_pos=self.tol_pos,
+                tol_rot=self.tol_rot, w_rot=0.0 if problem.position_only else problem.w_rot,
+            )  # fmt: skip
 
     def _search(
         self, q_start: np.ndarray, key: np.uint64, max_evals: int | None, time_limit: float | None
     ) -> hybrid.SearchOutcome:
         """The compiled search from ``q_start`` on the route's state."""
-        kw = self.kwargs
-        return hybrid.compiled_search(
-            self.pol, q_start, key, pop_size=kw["pop_size"], n_swarm=self._n_swarm,
-            iterations=kw["iterations"], stop=True, tol_pos=self.tol_pos, tol_rot=self.tol_rot,
-            w_rot=0.0 if self.problem.position_only else self.problem.w_rot,
-            max_evals=max_evals, remaining=2**62 if max_evals is None else max_evals,
-            evals_before=0, time_limit=time_limit, t0=time.perf_counter(), state=self.state,
-        )  # fmt: skip
+        remaining = 2**62 if max_evals is None else max_evals
+        return self.search(q_start, key, max_evals, remaining, 0, time_limit, time.perf_counter())
 
     def _rebind(self, problem: IKProblem, q_start: np.ndarray | None) -> None:
         """Write the parameter blocks of ``problem``'s goals that differ from the bound ones
@@ -691,7 +689,7 @@ class Route:
         the search's ``elapsed``."""
         scope = goals_base.reuse_goal_values(resume=True) if problem.python_goals else _NO_SCOPE
         with scope:  # (a slow goal: its values at q computed once, if not yet)
-            goal_errors = problem.verify(q, self.tol_pos, self.tol_rot, q0=q_start)
+            goal_errors = problem.verify_checked(q, self.tol_pos, self.tol_rot, q_start)
             within = problem.within_bounds(q)
             success = within
             dp = dr = 0.0

@@ -999,7 +999,15 @@ class IKProblem:
         qv = q if self.robot.is_q(q) else self.robot.check_q(q, "q")
         if q0 is not None and not self.robot.is_q(q0):
             q0 = self.robot.check_q(q0, "q0")
-        state = State(self.robot, qv, q0)
+        return self.verify_checked(qv, tol_pos, tol_rot, q0)
+
+    def verify_checked(
+        self, q: FloatArray, tol_pos: float, tol_rot: float, q0: FloatArray | None = None
+    ) -> tuple[GoalError, ...]:
+        """:meth:`verify` of arguments it would accept as they are (float64 vectors of the
+        robot's length, finite; positive float tolerances): the route's judge, whose answer
+        and settings were checked once."""
+        state = State(self.robot, q, q0)
         out = []
         for gl, prim in zip(self.goals, self.primary, strict=True):
             if not prim:

@@ -10,7 +10,7 @@ import numpy as np
 from swarm_ik._types import FloatArray
 
 
-@dataclass(frozen=True, eq=False)
+@dataclass(frozen=True, eq=False, init=False)
 class Result:
     """What :func:`swarm_ik.solve` returns.
 
@@ -76,15 +76,36 @@ class Result:
     goal_errors: tuple[Any, ...] = ()
     reason: str = ""
 
-    def __post_init__(self) -> None:
-        # (the arrays frozen, whatever the caller keeps doing with its own)
-        object.__setattr__(self, "q", _read_only(self.q))
-        object.__setattr__(self, "history", _read_only(self.history))
+    def __init__(
+        self,
+        q: Any,
+        fitness: float,
+        position_error: float,
+        rotation_error: float,
+        n_evals: int,
+        time_s: float,
+        success: bool,
+        within_limits: bool,
+        history: Any,
+        solver: str = "",
+        seed: int | None = None,
+        goal_errors: tuple[Any, ...] = (),
+        reason: str = "",
+    ) -> None:
+        # the dataclass's own __init__ of a frozen class sets each field through
+        # object.__setattr__ (2.5 µs, every solve); one update of the instance's dict is the
+        # same assignment (the arrays frozen, whatever the caller keeps doing with its own)
+        self.__dict__.update(
+            q=_read_only(q), fitness=fitness, position_error=position_error,
+            rotation_error=rotation_error, n_evals=n_evals, time_s=time_s, success=success,
+            within_limits=within_limits, history=_read_only(history), solver=solver, seed=seed,
+            goal_errors=goal_errors, reason=reason,
+        )  # fmt: skip
 
     def __setstate__(self, state: dict[str, Any]) -> None:
         # (pickle and copy restore the fields without __init__: read-only here too)
         self.__dict__.update(state)
-        self.__post_init__()
+        self.__dict__.update(q=_read_only(self.q), history=_read_only(self.history))
 
     def to_dict(self) -> dict[str, Any]:
         """JSON-ready dict (arrays as lists)."""

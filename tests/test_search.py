@@ -358,7 +358,6 @@ def test_a_spent_time_limit_stops_the_compiled_search() -> None:
     late) ends the search after its seed's polish; it never means "no limit" (a collision
     solve's try given -2e-5 s of its share searched an unreachable target without end)."""
     from swarm_ik.api import Route
-    from swarm_ik.solvers import hybrid
 
     robot = swarm_ik.load_robot("panda")
     far = np.eye(4)
@@ -366,10 +365,5 @@ def test_a_spent_time_limit_stops_the_compiled_search() -> None:
     route = Route(swarm_ik.IKProblem(robot, far), time_limit=1.0)
     for limit in (0.0, -2e-5, -1.0):
         t0 = time.perf_counter()
-        out = hybrid.compiled_search(
-            route.pol, robot.mid_q(), search.key_of_seed(0), pop_size=12, n_swarm=6,
-            iterations=100, stop=True, tol_pos=1e-5, tol_rot=1e-5, w_rot=1.0,
-            max_evals=None, remaining=2**62, evals_before=0, time_limit=limit,
-            t0=t0, state=route.state,
-        )  # fmt: skip
+        out = route.search(robot.mid_q(), search.key_of_seed(0), None, 2**62, 0, limit, t0)
         assert out.used <= 2 * route.kwargs["max_iters"], (limit, out.used)

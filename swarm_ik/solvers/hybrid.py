@@ -71,7 +71,7 @@ __all__ = [
     "NOT_RUN",
     "Polisher",
     "SearchOutcome",
-    "compiled_search",
+    "BoundSearch",
     "run",
 ]
 
@@ -258,7 +258,7 @@ def wrapped_distance(a: FloatArray, b: FloatArray, wrap: NDArray[np.bool_]) -> F
 
 
 class SearchOutcome(NamedTuple):
-    """What :func:`compiled_search` returns.
+    """What a :class:`BoundSearch` returns.
 
     Attributes:
         q: The answer (lowest fitness seen), ``(nq,)``.
@@ -287,61 +287,77 @@ def search_state(pol: Polisher, pop_size: int) -> Any:
     )
 
 
-def compiled_search(
-    pol: Polisher,
-    seed_q: FloatArray,
-    key: np.uint64,
-    *,
-    pop_size: int,
-    n_swarm: int,
-    iterations: int,
-    stop: bool,
-    tol_pos: float,
-    tol_rot: float,
-    w_rot: float,
-    max_evals: int | None,
-    remaining: int,
-    evals_before: int,
-    time_limit: float | None,
-    t0: float,
-    state: Any = None,
-) -> SearchOutcome:
-    """Run the whole search of :func:`run` in one compiled call
-    (:func:`swarm_ik.kernels.search.swarm_search`).
+class BoundSearch:
+    """The compiled search (:func:`swarm_ik.kernels.search.swarm_search`) bound to a
+    polisher and to the settings that stay fixed between its calls (a route's, made once):
+    a call passes only the start, the stream key and the budgets.
 
     Args:
         pol: The polisher (kernel tolerances).
-        seed_q: First start, ``(nq,)``, inside the bounds.
-        key: Random stream key (:func:`swarm_ik.kernels.search.stream_key`).
         pop_size, n_swarm, iterations: As :func:`run`.
         stop: Stop at the first point within ``tol_pos``/``tol_rot``.
         tol_pos, tol_rot: Success tolerances [m], [rad].
         w_rot: Angle weight of the fitness [m/rad].
-        max_evals: The evaluation budget of the solve (``None``: none).
-        remaining: Evaluations this call may spend.
-        evals_before: Evaluations counted before (for the ``a`` schedule).
-        time_limit: Seconds since ``t0`` (``None``: none).
-        t0: Start of the solve, ``time.perf_counter()`` [s].
         state: The polisher's :class:`swarm_ik.kernels.search.SearchState` for ``pop_size``
             (:func:`search_state`; made here when None).
     """
-    out_q = np.empty(seed_q.shape[0])
-    st = search_state(pol, pop_size) if state is None else state
-    try:
-        used, f, dp, dr, stopped, hist = search.swarm_search(
-            st, seed_q, pol.kernel_tol_pos, pol.kernel_tol_rot,
+
+    def __init__(
+        self,
+        pol: Polisher,
+        *,
+        pop_size: int,
+        n_swarm: int,
+        iterations: int,
+        stop: bool,
+        tol_pos: float,
+        tol_rot: float,
+        w_rot: float,
+        state: Any = None,
+    ) -> None:
+        self.state = search_state(pol, pop_size) if state is None else state
+        self.nq = int(pol.bounds.lower.shape[0])
+        self.fixed = (
+            pol.kernel_tol_pos, pol.kernel_tol_rot,
             float(tol_pos) if stop else -1.0, float(tol_rot) if stop else -1.0, float(w_rot),
-            int(pop_size), int(n_swarm), int(iterations), max_evals is None and time_limit is None,
-            int(min(remaining, 2**62)), -1 if max_evals is None else int(max_evals),
-            int(evals_before),
-            search.NO_LIMIT if time_limit is None else max(float(time_limit), 0.0),
-            float(t0), key, out_q,
+            int(pop_size), int(n_swarm), int(iterations),
         )  # fmt: skip
-    except SystemError as exc:  # (a Ctrl-C in the kernel's clock read: KeyboardInterrupt)
-        raise_ctrl_c(exc)
-        raise
-    raise_lost_ctrl_c()
-    return SearchOutcome(out_q, float(f), float(dp), float(dr), int(used), bool(stopped), hist)
+
+    def __call__(
+        self,
+        seed_q: FloatArray,
+        key: np.uint64,
+        max_evals: int | None,
+        remaining: int,
+        evals_before: int,
+        time_limit: float | None,
+        t0: float,
+    ) -> SearchOutcome:
+        """Search from ``seed_q`` (``(nq,)``, inside the bounds, float64 and contiguous).
+
+        Args:
+            seed_q: First start.
+            key: Random stream key (:func:`swarm_ik.kernels.search.stream_key`).
+            max_evals: The evaluation budget of the solve (``None``: none).
+            remaining: Evaluations this call may spend.
+            evals_before: Evaluations counted before (for the ``a`` schedule).
+            time_limit: Seconds since ``t0`` (``None``: none).
+            t0: Start of the solve, ``time.perf_counter()`` [s].
+        """
+        out_q = np.empty(self.nq)
+        try:
+            used, f, dp, dr, stopped, hist = search.swarm_search(
+                self.state, seed_q, *self.fixed, max_evals is None and time_limit is None,
+                int(min(remaining, 2**62)), -1 if max_evals is None else int(max_evals),
+                int(evals_before),
+                search.NO_LIMIT if time_limit is None else max(float(time_limit), 0.0),
+                float(t0), key, out_q,
+            )  # fmt: skip
+        except SystemError as exc:  # (a Ctrl-C in the kernel's clock read: KeyboardInterrupt)
+            raise_ctrl_c(exc)
+            raise
+        raise_lost_ctrl_c()
+        return SearchOutcome(out_q, f, dp, dr, used, stopped, hist)
 
 
 def compiled_ok(problem: IKProblem, prefer: str) -> bool:
@@ -568,14 +584,15 @@ def run(
         and ev.f_target is None
         and (not ev.stops_on_success or ev.tolerance is not None)
     ):  # the whole loop in one compiled call (kernels/search.py)
-        res = compiled_search(
-            pol,
+        bound = BoundSearch(
+            pol, pop_size=pop_size, n_swarm=int(round(swarm_fraction * pop_size)),
+            iterations=iterations, stop=ev.stops_on_success, tol_pos=tol_pos, tol_rot=tol_rot,
+            w_rot=w_rot,
+        )  # fmt: skip
+        res = bound(
             np.ascontiguousarray(seed, dtype=float),
             search.stream_key(rng) if ev.key is None else ev.key,
-            stop=ev.stops_on_success, tol_pos=tol_pos, tol_rot=tol_rot, w_rot=w_rot,
-            pop_size=pop_size, n_swarm=int(round(swarm_fraction * pop_size)),
-            iterations=iterations, max_evals=ev.max_evals, remaining=ev.remaining,
-            evals_before=ev.n_evals, time_limit=ev.time_limit, t0=ev.t0,
+            ev.max_evals, ev.remaining, ev.n_evals, ev.time_limit, ev.t0,
         )  # fmt: skip
         prior = ev.best_f
         ev.add_evals(res.used)
