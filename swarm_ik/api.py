@@ -102,35 +102,72 @@ def unreachable_goal(
     within the tolerances (:meth:`swarm_ik.goals.Goal.infeasible`), if any: no joint vector
     can meet it.  Returns one line saying which goal and why (the goal's own reason where it
     gave one)."""
-    avoid = problem.collision_goal
     for gl in problem.goals:
-        if not gl.is_primary:
-            continue
-        why = goals_base.infeasible_of(gl, problem.robot, tol_pos, tol_rot)
-        if why is not None:
-            return why
-        held = goals_base.pin_of(gl)
-        if held is None or held.point is None:
-            continue
-        point, slack = held.point, held.point_slack  # (a region reaches this much nearer)
-        far = math.hypot(*(float(v) for v in point)) - slack  # (no overflow at 1e300 m)
-        try:
-            radius = problem.robot.reach_radius(held.frame)
-        except UnknownNameError:  # (a frame of the model that no goal frame's path holds: a
-            continue  # Python goal's; no bound on its reach is known here)
-        if far > radius * (1 + 1e-9):
-            return (
-                f"{gl.describe()} beyond its frame's reach (its point {far:.4g} m from the "
-                f"world origin, the frame reaches {radius:.4g} m at most)"
-            )
-        if slack > 0.0 or avoid is None:
-            continue  # (a region, not a point: it may reach out of an obstacle)
-        if not _origin_in_body(problem.robot, held.frame):
-            continue  # (a frame off the robot's bodies, a grasp point, may lie in an obstacle)
-        inside = avoid.obstacle_containing(point, ORIGIN_REACH)  # (the robot in contact)
-        if inside is not None:
-            return f"{gl.describe()} inside obstacle {inside!r}"
+        if gl.is_primary:
+            why = goal_unreachable(problem, gl, tol_pos, tol_rot)
+            if why is not None:
+                return why
     return None
+
+
+def goal_unreachable(problem: IKProblem, gl: Any, tol_pos: float, tol_rot: float) -> str | None:
+    """Why no joint vector can meet the goal ``gl`` of ``problem`` (:func:`unreachable_goal`'s
+    test of one goal), or None when that is not known."""
+    why = goals_base.infeasible_of(gl, problem.robot, tol_pos, tol_rot)
+    if why is not None:
+        return why
+    held = goals_base.pin_of(gl)
+    if held is None or held.point is None:
+        return None
+    point, slack = held.point, held.point_slack  # (a region reaches this much nearer)
+    far = math.hypot(*(float(v) for v in point)) - slack  # (no overflow at 1e300 m)
+    try:
+        radius = problem.robot.reach_radius(held.frame)
+    except UnknownNameError:  # (a frame of the model that no goal frame's path holds: a
+        return None  # Python goal's; no bound on its reach is known here)
+    if far > radius * (1 + 1e-9):
+        return (
+            f"{gl.describe()} beyond its frame's reach (its point {far:.4g} m from the "
+            f"world origin, the frame reaches {radius:.4g} m at most)"
+        )
+    avoid = problem.collision_goal
+    if slack > 0.0 or avoid is None:
+        return None  # (a region, not a point: it may reach out of an obstacle)
+    if not _origin_in_body(problem.robot, held.frame):
+        return None  # (a frame off the robot's bodies, a grasp point, may lie in an obstacle)
+    inside = avoid.obstacle_containing(point, ORIGIN_REACH)  # (the robot in contact)
+    if inside is not None:
+        return f"{gl.describe()} inside obstacle {inside!r}"
+    return None
+
+
+def unreachable_targets(
+    problem: IKProblem, points: Any, tol_pos: float = 1e-5, tol_rot: float = 1e-5
+) -> np.ndarray:
+    """:func:`unreachable_goal` of each target of a batch, ``(N,)`` bool: ``problem``'s first
+    goal is the target's own (its point rewritten per target: ``points`` ``(N, 3)`` [m]), its
+    other goals are every target's.  The points are judged at once against the frame's reach
+    (with a collision goal, coal's obstacle test for those within it whose point lies in an
+    obstacle's bounding box)."""
+    pts = np.asarray(points, dtype=float).reshape(-1, 3)
+    n = pts.shape[0]
+    if n == 0 or any(
+        goal_unreachable(problem, gl, tol_pos, tol_rot) is not None
+        for gl in problem.goals[1:]
+        if gl.is_primary
+    ):
+        return np.full(n, n > 0)
+    frame = str(problem.goals[0].frame_name())
+    far = np.hypot(np.hypot(pts[:, 0], pts[:, 1]), pts[:, 2])  # (no overflow at 1e300 m)
+    out = far > problem.robot.reach_radius(frame) * (1 + 1e-9)
+    avoid = problem.collision_goal
+    if avoid is not None and len(avoid.scene) and _origin_in_body(problem.robot, frame):
+        lo, hi = avoid.scene.boxes()
+        for i in np.flatnonzero(~out).tolist():  # (coal's probe only in an obstacle's box)
+            p = pts[i]
+            if np.any(np.all((lo <= p) & (p <= hi), axis=1)):
+                out[i] = avoid.obstacle_containing(p, ORIGIN_REACH) is not None
+    return out
 
 
 ORIGIN_REACH = 1e-3

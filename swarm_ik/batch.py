@@ -62,6 +62,7 @@ from numpy.typing import NDArray
 
 from swarm_ik._types import BoolArray, FloatArray, IntArray
 from swarm_ik._validate import check_seed, count, floats_or, keywords_checked, user_stacklevel
+from swarm_ik.api import unreachable_targets
 from swarm_ik.errors import InvalidArgumentError, InvalidTargetError, SwarmIKError
 from swarm_ik.goals import AvoidCollisions, Goal, Pose, Position, State, kernel_slot, kernels
 from swarm_ik.goals import base as goals_base
@@ -674,6 +675,11 @@ class BatchResult(_Rows, FrozenArrays):
             (``AvoidCollisions``: coal finds no contact), ``(N, k)``; checked only for targets
             whose own pose is within tolerance and on which the kernel converged (the other
             rows are False).  None when ``solve_batch`` had no ``goals``.
+        unreachable: Whether each target is proven out of reach, ``(N,)``, as
+            :func:`swarm_ik.solve` proves it (:func:`swarm_ik.api.unreachable_targets`): its
+            point beyond the frame's reach or inside an obstacle, or a goal of ``goals`` that
+            says it cannot be met; asked only of targets started and not solved (one the time
+            limit left unstarted stays ``"time_limit"``).  None: not asked.
     """
 
     time_s: float
@@ -684,6 +690,7 @@ class BatchResult(_Rows, FrozenArrays):
     interrupted: bool = False
     goal_labels: tuple[str, ...] = ()
     goals_met: BoolArray | None = None
+    unreachable: BoolArray | None = None
 
     @classmethod
     def from_chunks(
@@ -741,10 +748,10 @@ class BatchResult(_Rows, FrozenArrays):
     @property
     def reason(self) -> NDArray[np.str_]:
         """Why each target ended, ``(N,)``, in :attr:`swarm_ik.Result.reason`'s words:
-        ``"converged"`` (success), ``"time_limit"`` (not started before the limit, or its
-        starts cut short by it), ``"budget"`` (``max_evals`` spent), else
-        ``"local_minima"`` (every start of ``max_starts`` ended without meeting the goals:
-        beyond reach, or missed)."""
+        ``"converged"`` (success), ``"unreachable"`` (proven out of reach:
+        :attr:`unreachable`), ``"time_limit"`` (not started before the limit, or its starts
+        cut short by it), ``"budget"`` (``max_evals`` spent), else ``"local_minima"`` (every
+        start of ``max_starts`` ended without meeting the goals)."""
         s = self.settings
         out = np.full(self.n, "local_minima", dtype="<U12")
         if s.deadline is not None:
@@ -752,6 +759,8 @@ class BatchResult(_Rows, FrozenArrays):
         if s.max_evals is not None:
             out[self.n_evals >= s.max_evals] = "budget"
         out[self.n_starts == 0] = "time_limit"
+        if self.unreachable is not None:
+            out[self.unreachable] = "unreachable"
         out[self.success] = "converged"
         return out
 
@@ -977,7 +986,8 @@ def pose_errors(
     ``(N, 4, 4)`` for the tree's first frame, with the batched FK (not the LM kernel)."""
     poses = tree.fk(q)[:, 0] if q.shape[0] else np.empty((0, 4, 4))
     d = poses[:, :3, 3] - targets[:, :3, 3]
-    dp = np.sqrt(d[:, 0] * d[:, 0] + d[:, 1] * d[:, 1] + d[:, 2] * d[:, 2])  # (as Pose.errors)
+    with np.errstate(over="ignore"):  # (a target at 1e300 m: its error inf, as Pose.errors's)
+        dp = np.sqrt(d[:, 0] * d[:, 0] + d[:, 1] * d[:, 1] + d[:, 2] * d[:, 2])
     return dp, lie.relative_angles(targets[:, :3, :3], poses[:, :3, :3])
 
 
@@ -1776,9 +1786,17 @@ def solve_batch(
                 distributed.abandon(client)  # (its workers killed: the exit closes at once)
             finally:
                 bar.close()
-    return BatchResult.from_chunks(
-        parts, robot, settings, time.perf_counter() - t0, setup_s, interrupted, labels
-    )
+    done = BatchResult.from_chunks(parts, robot, settings, 0.0, setup_s, interrupted, labels)
+    # (the targets started and not solved: proven out of reach, as solve proves it, or not;
+    # one the time limit left unstarted was not examined)
+    unsolved = np.flatnonzero(~done.success & (done.n_starts > 0))
+    beyond = np.zeros(done.n, dtype=bool)
+    if unsolved.size:
+        problem = bc.goals.problem if bc.goals is not None else IKProblem(robot, poses[0])
+        beyond[unsolved] = unreachable_targets(
+            problem, poses[unsolved, :3, 3], settings.tol_pos, settings.tol_rot
+        )
+    return dataclasses.replace(done, time_s=time.perf_counter() - t0, unreachable=beyond)
 
 
 # --------------------------------------------------------------------------- files

@@ -207,11 +207,15 @@ def test_each_batch_row_says_why_it_ended(panda) -> None:
     targets = panda.fk(q)
     targets[:4, 0, 3] += 5.0  # beyond reach
     res = swarm_ik.solve_batch(panda, targets, max_starts=4)
-    assert (res.reason[:4] == "local_minima").all()
+    assert (res.reason[:4] == "unreachable").all()  # (as solve says: proven, whatever the budget)
     assert (res.reason[res.success] == "converged").all()
     assert set(res.reason[4:][~res.success[4:]]) <= {"local_minima"}
     cut = swarm_ik.solve_batch(panda, targets, max_evals=3)
-    assert set(cut.reason[~cut.success]) == {"budget"}
+    assert (cut.reason[:4] == "unreachable").all()
+    assert set(cut.reason[4:][~cut.success[4:]]) == {"budget"}
+    for i in (0, 5):  # (the reasons of solve for the same targets)
+        one = swarm_ik.solve(swarm_ik.IKProblem(panda, targets[i]), max_evals=3)
+        assert one.reason == ("unreachable" if i < 4 else "budget") or one.success
 
 
 def test_a_batch_seed_of_none_is_seed_zero_and_a_generator_is_refused(panda, target) -> None:

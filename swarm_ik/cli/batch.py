@@ -223,5 +223,11 @@ def run(args: argparse.Namespace) -> int:
         )
         if not_started:
             print(f"{not_started} targets not started before --time-limit (counted unsolved)")
+        out_of_reach = int((res.reason == "unreachable").sum())
+        if out_of_reach:
+            print(
+                f"{out_of_reach} targets out of reach (beyond the frame's reach, inside an "
+                "obstacle, or a goal no joint vector meets)"
+            )
     print(f"wrote {args.out}")
     return EXIT_OK if n_ok == res.n else EXIT_NOT_REACHED
