@@ -679,7 +679,8 @@ class BatchResult(_Rows, FrozenArrays):
             :func:`swarm_ik.solve` proves it (:func:`swarm_ik.api.unreachable_targets`): its
             point beyond the frame's reach or inside an obstacle, or a goal of ``goals`` that
             says it cannot be met; asked only of targets started and not solved (one the time
-            limit left unstarted stays ``"time_limit"``).  None: not asked.
+            limit left unstarted stays ``"time_limit"``; under a time limit, coal's test of a
+            point in an obstacle's bounding box only until the limit).  None: not asked.
     """
 
     time_s: float
@@ -1793,9 +1794,10 @@ def solve_batch(
     beyond = np.zeros(done.n, dtype=bool)
     if unsolved.size:
         problem = bc.goals.problem if bc.goals is not None else IKProblem(robot, poses[0])
-        beyond[unsolved] = unreachable_targets(
-            problem, poses[unsolved, :3, 3], settings.tol_pos, settings.tol_rot
-        )
+        beyond[unsolved] = unreachable_targets(  # (coal's probes within the time limit)
+            problem, poses[unsolved, :3, 3], settings.tol_pos, settings.tol_rot,
+            None if limit is None else t0 + limit,
+        )  # fmt: skip
     return dataclasses.replace(done, time_s=time.perf_counter() - t0, unreachable=beyond)
 
 

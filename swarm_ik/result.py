@@ -102,10 +102,15 @@ class Result:
             goal_errors=goal_errors, reason=reason,
         )  # fmt: skip
 
+    def __post_init__(self) -> None:
+        # (the arrays frozen where __init__ is not this one: a dataclass subclass's own
+        # __init__ calls this, as do pickle and copy through __setstate__)
+        self.__dict__.update(q=_read_only(self.q), history=_read_only(self.history))
+
     def __setstate__(self, state: dict[str, Any]) -> None:
         # (pickle and copy restore the fields without __init__: read-only here too)
         self.__dict__.update(state)
-        self.__dict__.update(q=_read_only(self.q), history=_read_only(self.history))
+        self.__post_init__()
 
     def to_dict(self) -> dict[str, Any]:
         """JSON-ready dict (arrays as lists)."""

@@ -73,3 +73,20 @@ def test_a_target_point_inside_an_obstacle_is_unreachable_as_in_solve() -> None:
         swarm_ik.IKProblem(robot, goals=[Pose(robot.ee_frame, inside), avoid]), max_evals=300
     )
     assert single.reason == "unreachable"
+
+
+def test_coal_probes_stop_at_the_deadline_and_the_reach_test_does_not() -> None:
+    """Under a batch's time limit the obstacle probes (13 µs each) end at the limit: a point
+    not probed by then is not called unreachable; points beyond reach are judged at once."""
+    from swarm_ik.api import unreachable_targets
+
+    robot = swarm_ik.load_robot("panda")
+    t = _targets(robot, 6, 6)
+    inside = next(x for x in t if np.linalg.norm(x[:3, 3]) > 0.45)
+    scene = Scene([Box((0.12, 0.12, 0.12), tuple(inside[:3, 3]))])
+    problem = swarm_ik.IKProblem(
+        robot, goals=[Pose(robot.ee_frame, inside), AvoidCollisions(scene)]
+    )
+    points = np.stack([inside[:3, 3], [5.0, 0.0, 0.0]])
+    assert unreachable_targets(problem, points).tolist() == [True, True]
+    assert unreachable_targets(problem, points, deadline=0.0).tolist() == [False, True]

@@ -195,3 +195,15 @@ def test_results_compare_by_identity_and_hash() -> None:
     assert a == a and a != b and len({a, b}) == 2
     batch = swarm_ik.solve_batch(robot, robot.fk(robot.mid_q())[None])
     assert batch == batch and hash(batch) == hash(batch)
+
+
+def test_a_dataclass_subclass_of_result_keeps_read_only_arrays() -> None:
+    @dataclasses.dataclass(frozen=True, eq=False)
+    class Tagged(Result):
+        tag: str = ""
+
+    q = np.zeros(3)
+    r = Tagged(q, 0.0, 0.0, 0.0, 1, 0.0, True, True, np.zeros(2), tag="x")
+    assert not r.q.flags.writeable and not r.history.flags.writeable
+    q[0] = 1.0
+    assert r.q[0] == 0.0 and r.tag == "x"
