@@ -350,13 +350,14 @@ def solve_many(
     Returns:
         The solutions, nearest to the reference first (the Euclidean distance of each
         returned ``q`` to it, whichever ``method``), each verified with Pinocchio's FK
-        (``success`` True).  ``n_evals`` and ``time_s`` are the totals spent when each was found
-        (on the analytic path the evaluations of the polish of eaik's least-squares points, 0
-        where it returned none).  ``solver`` is ``"swarm"`` (numerical) or ``"analytic"``
-        (both on ``"auto"``'s fallback).  Empty when nothing was found: the target beyond reach,
-        or the budget spent before a first solution (:func:`swarm_ik.solve`'s ``reason``
-        tells which).  :func:`windings_of`
-        adds each branch's other in-limit 2π copies.
+        (``success`` True; ``goal_errors`` each primary goal's errors, as
+        :func:`swarm_ik.solve`'s).  ``n_evals`` and ``time_s`` are the totals spent when
+        each was found (on the analytic path the evaluations of the polish of eaik's
+        least-squares points, 0 where it returned none).  ``solver`` is ``"swarm"``
+        (numerical) or ``"analytic"`` (both on ``"auto"``'s fallback).  Empty when nothing
+        was found: the target beyond reach, or the budget spent before a first solution
+        (:func:`swarm_ik.solve`'s ``reason`` tells which).  :func:`windings_of` adds each
+        branch's other in-limit 2π copies.
 
     Raises:
         InvalidArgumentError: ``n``, ``min_distance``, ``batch``, ``patience``, a tolerance or
@@ -414,11 +415,19 @@ def solve_many(
             return None
         return max(time_limit - (time.perf_counter() - t_load), 0.5 * time_limit)
 
+    def judged(found: list[Result]) -> list[Result]:
+        """Each solution with its goals' errors from Pinocchio (:meth:`IKProblem.verify`),
+        as :func:`swarm_ik.solve`'s result has them."""
+        return [
+            dataclasses.replace(r, goal_errors=problem.verify(r.q, tol_pos, tol_rot, q0=start_q))
+            for r in found
+        ]
+
     if not use_analytic:
         limit = loaded()
         t_search = time.perf_counter()
-        return _numerical_results(
-            problem, lambda: search(max_evals, t_search, limit), ref, seed_label
+        return judged(
+            _numerical_results(problem, lambda: search(max_evals, t_search, limit), ref, seed_label)
         )
     t0 = time.perf_counter()
     cf = analytic.closed_form_set(problem, ref, tol_pos, tol_rot, max_evals)
@@ -434,7 +443,7 @@ def solve_many(
     elapsed = time.perf_counter() - t0
     results = _results(qs, dps, drs, [cf.evals] * k, [elapsed] * k, fits, "analytic", seed_label)
     if method == "analytic" or not cf.incomplete:
-        return results
+        return judged(results)
     # auto, and the closed form is known to miss solutions (a singular target, e.g. a UR
     # wrist at q5 = 0 with a continuum of them): the numerical search as method="numerical"
     # runs it (its compiled kernels loaded off the clock; the closed form's time and polish
@@ -446,7 +455,7 @@ def solve_many(
     numerical = _numerical_results(
         problem, lambda: search(left, t_search, limit), ref, seed_label, cf.evals
     )
-    return _merged(numerical, results, periodic, min_distance, ref, int(n))
+    return judged(_merged(numerical, results, periodic, min_distance, ref, int(n)))
 
 
 def _numerical_results(

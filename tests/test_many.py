@@ -193,7 +193,7 @@ def test_results_are_plain_results():
             q=r.q, fitness=r.fitness, position_error=r.position_error,
             rotation_error=r.rotation_error, n_evals=r.n_evals, time_s=r.time_s,
             success=True, within_limits=True, history=r.history, solver=r.solver, seed=r.seed,
-            reason="converged",
+            goal_errors=problem.verify(r.q), reason="converged",
         )  # fmt: skip
         assert type(r) is Result and r.__dict__.keys() == twin.__dict__.keys()
         assert r.to_dict() == twin.to_dict()
@@ -293,3 +293,25 @@ def test_warmup_runs_on_a_urdf_without_masses(planar2_urdf: str, capsys) -> None
 
     assert main(["warmup", "--robot", planar2_urdf]) == 0
     assert "kernels ready" in capsys.readouterr().out
+
+
+@pytest.mark.parametrize("method", ["numerical", "auto"])
+def test_each_solution_carries_its_goals_errors_as_solve_does(method: str) -> None:
+    """solve_many's results were built without goal_errors (empty), where solve's list each
+    primary goal's errors from Pinocchio; each carries them now, equal to verify's."""
+    from swarm_ik.goals import Axis, Position
+
+    robot = swarm_ik.load_robot("ur5")
+    q = np.array([0.3, -1.0, 1.2, -0.5, 1.1, 0.2])
+    t = robot.fk(q)
+    ee = robot.ee_frame
+    for problem in (
+        swarm_ik.IKProblem(robot, t),
+        swarm_ik.IKProblem(robot, goals=[Position(ee, t[:3, 3]), Axis(ee, [0, 0, 1], t[:3, 2])]),
+    ):
+        found = swarm_ik.solve_many(problem, n=4, method=method, max_evals=4000, tol_pos=1e-6)
+        assert found
+        for r in found:
+            assert len(r.goal_errors) == len(problem.goals)
+            assert all(e.met for e in r.goal_errors)
+            assert r.goal_errors == problem.verify(r.q, 1e-6, 1e-5)
