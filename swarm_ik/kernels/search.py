@@ -339,7 +339,7 @@ def swarm_search(
         if has_time:
             left = time_limit - (t_call - t0)
             cap = min(cap, max(8, int(0.8 * left / sec_per_eval)))
-        u = lm.lm_run(
+        u = lm.lm_polish(
             queue[:n_queue], t, g, ks, b, cfg, kernel_tol_pos, kernel_tol_rot, cap, True,
             pq[:n_queue], pdp[:n_queue], pdr[:n_queue], pst[:n_queue], pev[:n_queue], work,
         )  # fmt: skip

@@ -178,7 +178,7 @@ class Polisher(NamedTuple):
         status = np.empty(k, dtype=np.int64)
         evals = np.empty(k, dtype=np.int64)
         raise_lost_ctrl_c()  # (a loop of polishes: where a lost Ctrl-C is raised again)
-        used = lm.lm_run(
+        used = lm.lm_polish(
             starts, self.tree, self.table, self.kernels, self.bounds, self.cfg, self.kernel_tol_pos,
             self.kernel_tol_rot, int(max_evals), bool(stop_first), out_q, dp, dr, status, evals,
             self.work,
