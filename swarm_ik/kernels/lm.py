@@ -604,7 +604,7 @@ def damping(
     return lam, stall, lam > 1e8 or stall >= cfg.stall_iters
 
 
-@numba.njit(cache=True, inline="always")
+@numba.njit(cache=True)
 def evaluate(
     q: FloatArray,
     t: TreeArrays,
@@ -615,11 +615,31 @@ def evaluate(
     trial: bool,
 ) -> float:  # pragma: no cover - compiled
     """One evaluation: FK (+ Jacobians) and the primary stack at ``q``; returns its squared
-    norm.  ``trial`` writes into the ``*_t`` buffers of ``w``."""
+    norm.  ``trial`` writes into the ``*_t`` buffers of ``w``.
+
+    Called, not inlined, with one site of the FK and of the goal rows (each site of an
+    ``inline="always"`` function compiles a copy of it): the secondary descent evaluates at
+    three places, and inlined there it compiled for 37 s."""
     fk_one(q, t, w.fk, want_jac)
-    if trial:
-        return goal_rows(q, w.fk, g, ks, True, want_jac, w.res_t, w.jac_t, w.err_t, w.work)
-    return goal_rows(q, w.fk, g, ks, True, want_jac, w.res, w.jac, w.err, w.work)
+    res, jac, err = (w.res_t, w.jac_t, w.err_t) if trial else (w.res, w.jac, w.err)
+    return goal_rows(q, w.fk, g, ks, True, want_jac, res, jac, err, w.work)
+
+
+@numba.njit(cache=True)
+def secondary_rows(
+    q: FloatArray,
+    fs: FKScratch,
+    g: GoalTable,
+    ks: GoalKernels,
+    res: FloatArray,
+    jac: FloatArray,
+    err: FloatArray,
+    work: FloatArray,
+) -> float:  # pragma: no cover - compiled
+    """The secondary stack at ``q`` (its FK in ``fs``): :func:`goal_rows` of the secondary
+    goals, with their Jacobian, called (one compiled copy for the secondary descent's two
+    sites)."""
+    return goal_rows(q, fs, g, ks, False, True, res, jac, err, work)
 
 
 def _lm_run(
@@ -909,7 +929,7 @@ def secondary_descent(
     if max_evals < 1 or m2 == 0:
         return 0
     evaluate(q, t, g, ks, w, True, False)
-    cost2 = goal_rows(q, w.fk, g, ks, False, True, res2, jac2, err2, w.work)
+    cost2 = secondary_rows(q, w.fk, g, ks, res2, jac2, err2, w.work)
     used = 1
     if not within_tolerance(w.err, g.primary, tol_pos, tol_rot):
         return used
@@ -1015,7 +1035,7 @@ def secondary_descent(
             evaluate(q_t, t, g, ks, w, True, True)
             used += 1
         ok_primary = within_tolerance(w.err_t, g.primary, tol_pos, tol_rot)
-        cost2_t = goal_rows(q_t, w.fk, g, ks, False, True, res2_t, jac2_t, err2, w.work)
+        cost2_t = secondary_rows(q_t, w.fk, g, ks, res2_t, jac2_t, err2, w.work)
         if ok_primary and cost2_t < cost2:
             rel = (cost2 - cost2_t) / cost2
             for j in range(n):
