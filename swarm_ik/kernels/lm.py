@@ -1065,12 +1065,14 @@ def errors_batch(q: FloatArray, t: TreeArrays, g: GoalTable, ks: GoalKernels, b:
     ``q`` ``(pop, nq)`` (no Jacobians)."""
     m = max(g.rows_primary, g.rows_secondary)
     w = make_work_nb(t, g, m)
+    passes = 2 if g.rows_secondary > 0 else 1  # the primary goals, then the secondary ones
     for k in range(q.shape[0]):
         fk_one(q[k], t, w.fk, False)
-        goal_rows(q[k], w.fk, g, ks, True, False, w.res, w.jac, w.err, w.work)
         c2 = 0.0
-        if g.rows_secondary > 0:
-            c2 = goal_rows(q[k], w.fk, g, ks, False, False, w.res, w.jac, w.err, w.work)
+        for p in range(passes):  # (one site of the inlined goal rows: one compiled copy)
+            c = goal_rows(q[k], w.fk, g, ks, p == 0, False, w.res, w.jac, w.err, w.work)
+            if p == 1:
+                c2 = c
         for i in range(g.kind.shape[0]):
             out_err[k, i, 0] = w.err[i, 0]
             out_err[k, i, 1] = w.err[i, 1]
