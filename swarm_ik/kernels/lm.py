@@ -928,10 +928,16 @@ def secondary_descent(
         out_q[j] = q[j]
     if max_evals < 1 or m2 == 0:
         return 0
-    evaluate(q, t, g, ks, w, True, False)
+    # (into the trial buffers, as every later evaluation: numba compiles a call with other
+    # literal flags as another function, 5 s more)
+    evaluate(q, t, g, ks, w, True, True)
+    for a in range(m1):
+        w.res[a] = w.res_t[a]
+        for j in range(n):
+            w.jac[a, j] = w.jac_t[a, j]
     cost2 = secondary_rows(q, w.fk, g, ks, res2, jac2, err2, w.work)
     used = 1
-    if not within_tolerance(w.err, g.primary, tol_pos, tol_rot):
+    if not within_tolerance(w.err_t, g.primary, tol_pos, tol_rot):
         return used
     mu = 1e-3
     reach = SECONDARY_REACH
