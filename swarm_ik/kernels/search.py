@@ -320,6 +320,10 @@ def swarm_search(
     calls = 0
     counter = np.uint64(0)
     sampling_window(b.lower, b.upper, seed_q, lo, hi)
+    # each polish call ends at its first converged start; the flag is a runtime bool (always
+    # true), not the literal True: numba compiles a call with a literal flag as a function of
+    # its own, and lm_polish would compile twice (6 s), here and for the Python loops' calls
+    stop_first = m >= 0
     while True:
         if stopped or used >= max_evals:
             break
@@ -340,7 +344,7 @@ def swarm_search(
             left = time_limit - (t_call - t0)
             cap = min(cap, max(8, int(0.8 * left / sec_per_eval)))
         u = lm.lm_polish(
-            queue[:n_queue], t, g, ks, b, cfg, kernel_tol_pos, kernel_tol_rot, cap, True,
+            queue[:n_queue], t, g, ks, b, cfg, kernel_tol_pos, kernel_tol_rot, cap, stop_first,
             pq[:n_queue], pdp[:n_queue], pdr[:n_queue], pst[:n_queue], pev[:n_queue], work,
         )  # fmt: skip
         open_gen = True
