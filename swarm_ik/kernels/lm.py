@@ -606,23 +606,29 @@ def damping(
 
 @numba.njit(cache=True)
 def evaluate(
-    q: FloatArray,
-    t: TreeArrays,
-    g: GoalTable,
-    ks: GoalKernels,
-    w: Work,
-    want_jac: bool,
-    trial: bool,
+    q: FloatArray, t: TreeArrays, g: GoalTable, ks: GoalKernels, w: Work
 ) -> float:  # pragma: no cover - compiled
-    """One evaluation: FK (+ Jacobians) and the primary stack at ``q``; returns its squared
-    norm.  ``trial`` writes into the ``*_t`` buffers of ``w``.
+    """One trial evaluation: FK with Jacobians and the primary stack at ``q`` into the
+    ``*_t`` buffers of ``w``; returns its squared norm (:func:`keep_trial` makes it the
+    current point's).
 
     Called, not inlined, with one site of the FK and of the goal rows (each site of an
     ``inline="always"`` function compiles a copy of it): the secondary descent evaluates at
-    three places, and inlined there it compiled for 37 s."""
-    fk_one(q, t, w.fk, want_jac)
-    res, jac, err = (w.res_t, w.jac_t, w.err_t) if trial else (w.res, w.jac, w.err)
-    return goal_rows(q, w.fk, g, ks, True, want_jac, res, jac, err, w.work)
+    three places, and inlined there it compiled for 37 s.  No flags: numba compiles a call
+    with other literal flags as another function (5 s more when the first evaluation wrote
+    other buffers)."""
+    fk_one(q, t, w.fk, True)
+    return goal_rows(q, w.fk, g, ks, True, True, w.res_t, w.jac_t, w.err_t, w.work)
+
+
+@numba.njit(cache=True, inline="always")
+def keep_trial(w: Work, m: int, n: int) -> None:  # pragma: no cover - compiled
+    """The trial point's primary residual ``(m,)`` and Jacobian ``(m, n)`` made the current
+    point's (the ``*_t`` buffers of :func:`evaluate` copied into ``w.res``, ``w.jac``)."""
+    for a in range(m):
+        w.res[a] = w.res_t[a]
+        for j in range(n):
+            w.jac[a, j] = w.jac_t[a, j]
 
 
 @numba.njit(cache=True)
@@ -928,13 +934,8 @@ def secondary_descent(
         out_q[j] = q[j]
     if max_evals < 1 or m2 == 0:
         return 0
-    # (into the trial buffers, as every later evaluation: numba compiles a call with other
-    # literal flags as another function, 5 s more)
-    evaluate(q, t, g, ks, w, True, True)
-    for a in range(m1):
-        w.res[a] = w.res_t[a]
-        for j in range(n):
-            w.jac[a, j] = w.jac_t[a, j]
+    evaluate(q, t, g, ks, w)
+    keep_trial(w, m1, n)
     cost2 = secondary_rows(q, w.fk, g, ks, res2, jac2, err2, w.work)
     used = 1
     if not within_tolerance(w.err_t, g.primary, tol_pos, tol_rot):
@@ -1022,7 +1023,7 @@ def secondary_descent(
         _step_into_bounds(
             q, delta, min(1.0, reach / big) if big > 0.0 else 1.0, b.wrap, b.lower, b.upper, q_t
         )
-        evaluate(q_t, t, g, ks, w, True, True)
+        evaluate(q_t, t, g, ks, w)
         used += 1
         # back onto the primary goals: Gauss–Newton steps from the trial point
         for _ in range(SECONDARY_RESTORE):
@@ -1038,7 +1039,7 @@ def secondary_descent(
             for j in range(n):
                 z[j] = q_t[j]
             _step_into_bounds(z, x, 1.0, b.wrap, b.lower, b.upper, q_t)
-            evaluate(q_t, t, g, ks, w, True, True)
+            evaluate(q_t, t, g, ks, w)
             used += 1
         ok_primary = within_tolerance(w.err_t, g.primary, tol_pos, tol_rot)
         cost2_t = secondary_rows(q_t, w.fk, g, ks, res2_t, jac2_t, err2, w.work)
@@ -1047,10 +1048,7 @@ def secondary_descent(
             for j in range(n):
                 q[j] = q_t[j]
                 out_q[j] = q_t[j]
-            for a in range(m1):
-                w.res[a] = w.res_t[a]
-                for j in range(n):
-                    w.jac[a, j] = w.jac_t[a, j]
+            keep_trial(w, m1, n)
             for a in range(m2):
                 res2[a] = res2_t[a]
                 for j in range(n):
