@@ -125,7 +125,7 @@ def goal_unreachable(problem: IKProblem, gl: Any, tol_pos: float, tol_rot: float
         radius = problem.robot.reach_radius(held.frame)
     except UnknownNameError:  # (a frame of the model that no goal frame's path holds: a
         return None  # Python goal's; no bound on its reach is known here)
-    if far > radius * (1 + 1e-9):
+    if far > reach_limit(radius):
         return (
             f"{gl.describe()} beyond its frame's reach (its point {far:.4g} m from the "
             f"world origin, the frame reaches {radius:.4g} m at most)"
@@ -164,7 +164,7 @@ def unreachable_targets(
         return np.full(n, n > 0)
     frame = str(problem.goals[0].frame_name())
     far = np.hypot(np.hypot(pts[:, 0], pts[:, 1]), pts[:, 2])  # (no overflow at 1e300 m)
-    out = far > problem.robot.reach_radius(frame) * (1 + 1e-9)
+    out = far > reach_limit(problem.robot.reach_radius(frame))
     avoid = problem.collision_goal
     if avoid is not None and len(avoid.scene) and _origin_in_body(problem.robot, frame):
         lo, hi = avoid.scene.boxes()
@@ -178,6 +178,12 @@ def unreachable_targets(
                 break
             out[i] = avoid.obstacle_containing(pts[i], ORIGIN_REACH) is not None
     return out
+
+
+def reach_limit(radius: float) -> float:
+    """The distance from the world origin [m] past which a point is out of a frame's reach of
+    ``radius`` (:meth:`RobotModel.reach_radius`, with room for its round-off)."""
+    return radius * (1 + 1e-9)
 
 
 ORIGIN_REACH = 1e-3

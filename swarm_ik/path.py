@@ -76,7 +76,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from swarm_ik._validate import count, floats_or, keywords_checked, positive_float
-from swarm_ik.api import conflicting_goals
+from swarm_ik.api import conflicting_goals, reach_limit
 from swarm_ik.branches import SINGULAR_SIGMA, sigma_min
 from swarm_ik.errors import InvalidArgumentError, InvalidTargetError
 from swarm_ik.goals import base as goals_base
@@ -1905,8 +1905,8 @@ def _beyond_reach(ctx: _Context, i: int) -> bool:
     """Whether waypoint ``i``'s pose lies beyond the frame's reach (no solution can exist)."""
     if ctx.wps.poses is None:
         return False
-    radius = ctx.robot.reach_radius(ctx.wps.frame)
-    return float(np.linalg.norm(ctx.wps.poses[i][:3, 3])) > radius * (1 + 1e-9)
+    limit = reach_limit(ctx.robot.reach_radius(ctx.wps.frame))
+    return float(np.linalg.norm(ctx.wps.poses[i][:3, 3])) > limit
 
 
 __all__ = [
