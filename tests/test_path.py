@@ -588,6 +588,7 @@ def test_a_first_timed_path_in_a_fresh_process_gets_its_answer() -> None:
     assert out.stdout.split() == ["True", "True"], out.stdout
 
 
+@timed()
 def test_a_long_ur5_path_ends_within_its_time_limit() -> None:
     """A UR5 line of 1,000 waypoints (256 closed-form candidates a layer): the dynamic
     programme relaxed each pair of layers twice, in the build and again in the search,

@@ -749,6 +749,7 @@ def test_bad_solver_parameters_are_refused_before_running(
         {"stall_rel": 1.0},
     ],
 )
+@timed()
 def test_extreme_accepted_swarm_parameters_still_honour_the_budget(
     problem: IKProblem, params: dict
 ) -> None:
