@@ -513,7 +513,14 @@ def _nearest_first(qs: FloatArray, ref: FloatArray) -> np.ndarray:
     return np.argsort(np.linalg.norm(qs - ref, axis=-1), kind="stable")
 
 
-def windings_of(problem: IKProblem, results: list[Result], q0: Any = None) -> list[list[Result]]:
+def windings_of(
+    problem: IKProblem,
+    results: list[Result],
+    q0: Any = None,
+    *,
+    tol_pos: float = 1e-5,
+    tol_rot: float = 1e-5,
+) -> list[list[Result]]:
     """Each solution with its other in-limit 2π copies (joints whose range exceeds 2π).
 
     Args:
@@ -521,10 +528,19 @@ def windings_of(problem: IKProblem, results: list[Result], q0: Any = None) -> li
         results: Solutions, e.g. of :func:`solve_many`.
         q0: The reference the copies are ordered by (default: the middle of the ranges), as
             given to :func:`solve_many`.
+        tol_pos: Position tolerance the copies are judged by [m], as given to
+            :func:`solve_many`.
+        tol_rot: Rotation tolerance [rad], likewise.
 
     Returns:
         Per solution, a list of :class:`Result`: the solution first, then its copies by
-        distance to the reference, each verified with Pinocchio's FK.
+        distance to the reference, each judged with Pinocchio (:meth:`IKProblem.verify`,
+        ``goal_errors`` as :func:`solve_many`'s).  A copy that misses a goal reading the
+        joints themselves (a ``JointValue`` whose joint winds) is left out.
+
+    Raises:
+        InvalidArgumentError: ``problem`` is not an :class:`IKProblem`, ``results`` not
+            :class:`Result` objects, or a tolerance or ``q0`` is bad.
 
     >>> import numpy as np, swarm_ik
     >>> robot = swarm_ik.load_robot("ur5")
@@ -539,12 +555,14 @@ def windings_of(problem: IKProblem, results: list[Result], q0: Any = None) -> li
         raise InvalidArgumentError(
             f"results must be a list of Result objects (solve_many's), got {type(results).__name__}"
         )
-    ref = _start_and_reference(problem, q0)[1]
+    tol_pos = positive_float(tol_pos, "tol_pos")
+    tol_rot = positive_float(tol_rot, "tol_rot")
+    start_q, ref = _start_and_reference(problem, q0)
     out = []
     for r in results:
         if not isinstance(r, Result):
             raise InvalidArgumentError(f"results must be Result objects, got {type(r).__name__}")
-        out.append(_with_windings(problem, r, ref))
+        out.append(_with_windings(problem, r, ref, start_q, tol_pos, tol_rot))
     return out
 
 
@@ -611,8 +629,16 @@ def _start_and_reference(problem: IKProblem, q0: Any) -> tuple[FloatArray | None
     return start_q, start_q if start_q is not None else 0.5 * (problem.lower + problem.upper)
 
 
-def _with_windings(problem: IKProblem, rep: Result, ref: FloatArray) -> list[Result]:
-    """The representative and its other in-limit 2π copies, each verified with Pinocchio."""
+def _with_windings(
+    problem: IKProblem,
+    rep: Result,
+    ref: FloatArray,
+    start_q: FloatArray | None,
+    tol_pos: float,
+    tol_rot: float,
+) -> list[Result]:
+    """The representative and its other in-limit 2π copies, each judged with Pinocchio
+    (:meth:`IKProblem.verify`; copies that miss a goal are left out)."""
     copies = _windings(rep.q, problem.lower, problem.upper, revolute_mask(problem.robot))
     if copies.shape[0] == 0:
         return [rep]
@@ -625,7 +651,10 @@ def _with_windings(problem: IKProblem, rep: Result, ref: FloatArray) -> list[Res
     fits = problem.fitness(others)
     out = [rep]
     for q, a, b, f in zip(others, dps, drs, fits, strict=True):
-        out.append(_result(q, a, b, rep.n_evals, rep.time_s, float(f), rep.solver, rep.seed))
+        errors = problem.verify(q, tol_pos, tol_rot, q0=start_q)
+        if all(e.met for e in errors):
+            found = _result(q, a, b, rep.n_evals, rep.time_s, float(f), rep.solver, rep.seed)
+            out.append(dataclasses.replace(found, goal_errors=errors))
     return out
 
 

@@ -245,6 +245,31 @@ def test_windings_of_refuses_what_is_not_a_result():
         swarm_ik.windings_of(robot, [])
 
 
+def test_windings_keep_only_copies_that_meet_every_goal_and_carry_their_errors() -> None:
+    """A 2π copy moves the joints themselves: with the UR5's last joint held by a
+    ``JointValue``, its copies at 0.2 − 2π were returned as solutions (and with no
+    ``goal_errors``); each copy is now judged like a solution."""
+    from swarm_ik.goals import JointValue, Position
+
+    robot = swarm_ik.load_robot("ur5")
+    q = np.array([0.3, -1.0, 1.2, -0.5, 1.1, 0.2])
+    goals = [Position(robot.ee_frame, robot.fk(q)[:3, 3]), JointValue("wrist_3_joint", 0.2)]
+    problem = swarm_ik.IKProblem(robot, goals=goals)
+    groups = swarm_ik.windings_of(problem, swarm_ik.solve_many(problem, n=2, seed=0))
+    assert groups and all(len(g) > 1 for g in groups)  # copies of the other joints remain
+    for group in groups:
+        for r in group:
+            assert r.q[5] == pytest.approx(0.2, abs=1e-5)
+            assert [e.goal for e in r.goal_errors] == [g.describe() for g in goals]
+            assert all(e.met for e in r.goal_errors)
+            assert all(e.met for e in problem.verify(r.q))
+    free = swarm_ik.IKProblem(robot, goals=goals[:1])
+    moved = swarm_ik.windings_of(free, swarm_ik.solve_many(free, n=1, seed=0))[0]
+    assert any(abs(r.q[5] - moved[0].q[5]) > 6.0 for r in moved)  # (the joint winds when free)
+    with pytest.raises(swarm_ik.InvalidArgumentError, match="tol_pos"):
+        swarm_ik.windings_of(problem, [], tol_pos=0.0)
+
+
 def test_a_redundant_arm_is_not_stopped_by_the_patience_of_the_branch_search() -> None:
     """A Panda target where many random starts stall: the branch search's patience (48
     starts in a row without a new branch) ended the search at 3 of 16 solutions, although a
