@@ -222,6 +222,8 @@ def conflicting_goals(problem: IKProblem, tol_pos: float, tol_rot: float) -> str
 
     The angular allowances also hold the regions' reach (a bounded pose's rotation bounds, a
     point's ball seen from the point looked at)."""
+    if sum(1 for gl in problem.goals if gl.is_primary) < 2:
+        return None  # (one goal alone conflicts with nothing)
     points: dict[str, list[tuple[Any, Any, float]]] = {}
     rots: dict[str, list[tuple[Any, Any, float]]] = {}
     axes: dict[str, list[tuple[Any, Any, Any, float]]] = {}

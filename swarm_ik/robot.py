@@ -790,9 +790,18 @@ class RobotModel:
         """An upper bound [m] on the distance from the world origin that ``frame`` can reach:
         the sum of the joint offsets along its path, the prismatic strokes and the frame
         offset; ``base=False`` leaves out a floating base's box (the reach from the base: a
-        length scale of the robot itself)."""
-        t = self.tree
+        length scale of the robot itself).  Computed once per frame (the model's arrays,
+        as its other cached values, are not changed after loading)."""
         f = self.frame_index(frame)
+        known = self._cache.setdefault("reach_radius", {})
+        got = known.get((f, base))
+        if got is None:
+            got = known[(f, base)] = self._reach_radius(f, base)
+        return float(got)
+
+    def _reach_radius(self, f: int, base: bool) -> float:
+        """:meth:`reach_radius` of goal frame index ``f``, computed."""
+        t = self.tree
         total = float(np.linalg.norm(t.frame_pos[f]))
         j = int(t.frame_joint[f])
         stop = 3 if (self.floating_base and not base) else -1  # (tree joints 0-3: the base)

@@ -10,12 +10,12 @@ from typing import Any
 
 import numpy as np
 import pytest
+from conftest import robot
 
 import swarm_ik
 from swarm_ik import errors
 from swarm_ik.goals import AvoidCollisions, MinimalDisplacement, Orientation, Pose, Position
 from swarm_ik.scene import Box, Scene
-from tests.conftest import robot
 
 HUGE = 10**30
 

@@ -14,6 +14,7 @@ from pathlib import Path
 
 import numpy as np
 import pytest
+from conftest import robot
 
 import swarm_ik
 from swarm_ik import distributed, errors, kernels
@@ -21,7 +22,6 @@ from swarm_ik.api import conflicting_goals
 from swarm_ik.batch import check_targets
 from swarm_ik.goals import Position
 from swarm_ik.pose import make_pose
-from tests.conftest import robot
 
 
 def test_a_scheduler_address_needs_a_host_and_a_port() -> None:

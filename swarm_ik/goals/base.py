@@ -413,7 +413,10 @@ def pin_of(goal: Goal) -> Pin | None:
         value = getattr(held, name, None) if ok else None
         if value is None:
             continue
-        arr = np.asarray(value, dtype=float) if _numbers(value) else None
+        if isinstance(value, np.ndarray) and value.dtype == np.float64:
+            arr = value  # (a goal's own float array: read, never written)
+        else:
+            arr = np.asarray(value, dtype=float) if _numbers(value) else None
         if arr is None or arr.shape != shape or not np.isfinite(arr).all():
             ok = False
             break
@@ -425,12 +428,15 @@ def pin_of(goal: Goal) -> Pin | None:
             fixed[name] = fixed[name] / norm if ok else fixed[name]
     rot = fixed.get("rotation")
     if ok and rot is not None:
-        off = float(np.abs(rot.T @ rot - np.eye(3)).max())
+        gram = rot.T @ rot
+        gram.flat[::4] -= 1.0
+        off = float(np.abs(gram).max())
         accepted = getattr(goal, "orth_tol", 0.0)  # (what the goal itself took as a rotation)
-        ok = bool(np.linalg.det(rot) > 0) and off <= max(PIN_ORTH_TOL, float(accepted))
+        ok = _det3(rot) > 0.0 and off <= max(PIN_ORTH_TOL, float(accepted))
         if ok and off > PIN_ORTH_TOL:  # (a rotation block accepted with a loose orth_tol
             return None  # says too little for a proof: none is drawn from this goal)
-        if ok and off > 0.0:  # (a rounded rotation, as a paper prints it: the nearest one)
+        if ok and off > 1e-12:  # (a rounded rotation, as a paper prints it: the nearest
+            # one; a rotation off by round-off, a target made by FK, is one already)
             block = np.eye(4)
             block[:3, :3] = rot
             fixed["rotation"] = project_to_se3(block)[:3, :3]
@@ -443,6 +449,12 @@ def pin_of(goal: Goal) -> Pin | None:
             f"{reprlib.repr(held)}"
         )
     return held._replace(**fixed)
+
+
+def _det3(m: FloatArray) -> float:
+    """The determinant of a ``(3, 3)`` matrix (the rule of Sarrus, in Python floats)."""
+    (a, b, c), (d, e, f), (g, h, i) = m.tolist()
+    return a * (e * i - f * h) - b * (d * i - f * g) + c * (d * h - e * g)
 
 
 def _numbers(value: Any) -> bool:
