@@ -413,6 +413,7 @@ def pin_of(goal: Goal) -> Pin | None:
         value = getattr(held, name, None) if ok else None
         if value is None:
             continue
+        arr: FloatArray | None
         if isinstance(value, np.ndarray) and value.dtype == np.float64:
             arr = value  # (a goal's own float array: read, never written)
         else:
