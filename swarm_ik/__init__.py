@@ -40,6 +40,7 @@ _LAZY = {
     "project_to_se3": "swarm_ik.pose",
     "IKProblem": "swarm_ik.problem",
     "Result": "swarm_ik.result",
+    "Solutions": "swarm_ik.result",
     "RobotModel": "swarm_ik.robot",
     "load_robot": "swarm_ik.robot",
     "robot_names": "swarm_ik.paths",
@@ -75,7 +76,7 @@ if TYPE_CHECKING:  # for type checkers and IDEs: the names as if imported eagerl
     from swarm_ik.paths import robot_names
     from swarm_ik.pose import make_pose, project_to_se3
     from swarm_ik.problem import IKProblem
-    from swarm_ik.result import Result
+    from swarm_ik.result import Result, Solutions
     from swarm_ik.robot import RobotModel, load_robot
     from swarm_ik.scene import Scene
 
@@ -92,6 +93,7 @@ __all__ = [
     "RobotModel",
     "RobotModelError",
     "Scene",
+    "Solutions",
     "SwarmIKError",
     "UnknownNameError",
     "load_robot",

@@ -287,6 +287,17 @@ def _pair(items: list[Any], i: int, far: np.ndarray) -> str:
     return f"{items[i][0].describe()} and {items[i + 1 + int(np.argmax(far))][0].describe()}"
 
 
+def proven_failure(problem: IKProblem, tol_pos: float, tol_rot: float) -> str | None:
+    """``"unreachable"`` where :func:`unreachable_goal` proves a goal unreachable,
+    ``"conflicting_goals"`` where :func:`conflicting_goals` proves two goals contradictory,
+    else None (nothing proven)."""
+    if unreachable_goal(problem, tol_pos, tol_rot) is not None:
+        return "unreachable"
+    if conflicting_goals(problem, tol_pos, tol_rot) is not None:
+        return "conflicting_goals"
+    return None
+
+
 def end_reason(
     problem: IKProblem,
     success: bool,
@@ -302,10 +313,9 @@ def end_reason(
     goals pulling against each other (:meth:`IKProblem.opposing_goals`) are looked for."""
     if success:
         return "converged"
-    if unreachable_goal(problem, tol_pos, tol_rot) is not None:
-        return "unreachable"
-    if conflicting_goals(problem, tol_pos, tol_rot) is not None:
-        return "conflicting_goals"
+    proven = proven_failure(problem, tol_pos, tol_rot)
+    if proven is not None:
+        return proven
     if q is not None and problem.opposing_goals(q):
         return "conflicting_goals"
     if max_evals is not None and n_evals >= max_evals:

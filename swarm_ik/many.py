@@ -34,7 +34,7 @@ import math
 import time
 import weakref
 from collections.abc import Callable, Iterable, Mapping
-from typing import Any
+from typing import Any, NamedTuple
 
 import numba
 import numpy as np
@@ -42,7 +42,7 @@ import pinocchio as pin
 from numpy.typing import NDArray
 
 from swarm_ik._validate import check_seed, count, keywords_checked, positive_float
-from swarm_ik.api import Route, prepare_q0, warm_up
+from swarm_ik.api import Route, prepare_q0, proven_failure, warm_up
 from swarm_ik.branches import (
     BRANCH_TOL,
     ROUNDOFF_TOL,
@@ -64,7 +64,7 @@ from swarm_ik.goals.base import reuse_goal_values
 from swarm_ik.kernels import joints
 from swarm_ik.optimize import check_budget, make_rng
 from swarm_ik.problem import IKProblem
-from swarm_ik.result import Result
+from swarm_ik.result import Result, Solutions
 from swarm_ik.solvers import analytic
 from swarm_ik.solvers.hybrid import CONVERGED, Polisher
 
@@ -270,7 +270,7 @@ def solve_many(
     max_starts: int | None = None,
     max_iters: int = 30,
     patience: int = PATIENCE,
-) -> list[Result]:
+) -> Solutions:
     """Find the distinct IK solutions of a target: every branch once, or a spread for
     redundant arms.
 
@@ -355,9 +355,12 @@ def solve_many(
         each was found (on the analytic path the evaluations of the polish of eaik's
         least-squares points, 0 where it returned none).  ``solver`` is ``"swarm"``
         (numerical) or ``"analytic"`` (both on ``"auto"``'s fallback).  Empty when nothing
-        was found: the target beyond reach, or the budget spent before a first solution
-        (:func:`swarm_ik.solve`'s ``reason`` tells which).  :func:`windings_of` adds each
-        branch's other in-limit 2π copies.
+        was found: the target beyond reach, or the budget spent before a first solution.
+        A :class:`~swarm_ik.result.Solutions` (a list) whose ``reason``, ``n_evals`` and
+        ``time_s`` say why the search ended and what the whole call spent, in
+        :func:`swarm_ik.solve`'s words (``"converged"``, ``"budget"``, ``"time_limit"``,
+        ``"unreachable"``, …).  :func:`windings_of` adds each branch's other in-limit 2π
+        copies.
 
     Raises:
         InvalidArgumentError: ``n``, ``min_distance``, ``batch``, ``patience``, a tolerance or
@@ -395,9 +398,9 @@ def solve_many(
     elif method == "auto" and analytic.eaik_available():
         use_analytic = not analytic.support(problem)
 
-    def search(
-        evals: int | None, t0: float, limit: float | None
-    ) -> list[tuple[FloatArray, float, float, int, float]]:
+    t_call = time.perf_counter()
+
+    def search(evals: int | None, t0: float, limit: float | None) -> _Found:
         """The numerical search within ``evals`` and ``limit`` seconds from ``t0``."""
         return _numerical(
             problem, int(n), ref, start_q, make_rng(seed), min_distance, evals, limit,
@@ -415,27 +418,36 @@ def solve_many(
             return None
         return max(time_limit - (time.perf_counter() - t_load), 0.5 * time_limit)
 
-    def judged(found: list[Result]) -> list[Result]:
+    def judged(found: list[Result], ended: str, evals: int) -> Solutions:
         """Each solution with its goals' errors from Pinocchio (:meth:`IKProblem.verify`),
-        as :func:`swarm_ik.solve`'s result has them."""
-        return [
+        as :func:`swarm_ik.solve`'s result has them, and why the call ended
+        (:attr:`Solutions.reason`)."""
+        out = [
             dataclasses.replace(r, goal_errors=problem.verify(r.q, tol_pos, tol_rot, q0=start_q))
             for r in found
         ]
+        if len(out) >= n or (out and ended not in ("budget", "time_limit")):
+            reason = "converged"
+        elif out:
+            reason = ended
+        else:
+            reason = proven_failure(problem, tol_pos, tol_rot) or _EMPTY_REASON[ended]
+        return Solutions(out, reason, evals, time.perf_counter() - t_call)
 
     if not use_analytic:
         limit = loaded()
         t_search = time.perf_counter()
-        return judged(
-            _numerical_results(problem, lambda: search(max_evals, t_search, limit), ref, seed_label)
+        numerical, found = _numerical_results(
+            problem, lambda: search(max_evals, t_search, limit), ref, seed_label
         )
+        return judged(numerical, found.ended, found.used)
     t0 = time.perf_counter()
     cf = analytic.closed_form_set(problem, ref, tol_pos, tol_rot, max_evals)
     qs, dps, drs = cf.q, cf.position_error, cf.rotation_error
     periodic = periodic_mask(problem.robot, problem.lower, problem.upper)
     if min_distance is not None and qs.shape[0] > 1:
-        found = BranchSet(periodic, BRANCH_TOL, min_distance)
-        keep = [i for i in range(qs.shape[0]) if found.add(qs[i])]
+        distinct = BranchSet(periodic, BRANCH_TOL, min_distance)
+        keep = [i for i in range(qs.shape[0]) if distinct.add(qs[i])]
         qs, dps, drs = qs[keep], dps[keep], drs[keep]
     qs, dps, drs = qs[:n], dps[:n], drs[:n]  # already nearest to the reference first
     fits = analytic.fitness_of_errors(problem, qs, dps, drs)
@@ -443,7 +455,7 @@ def solve_many(
     elapsed = time.perf_counter() - t0
     results = _results(qs, dps, drs, [cf.evals] * k, [elapsed] * k, fits, "analytic", seed_label)
     if method == "analytic" or not cf.incomplete:
-        return judged(results)
+        return judged(results, "complete" if not cf.incomplete else "converged", cf.evals)
     # auto, and the closed form is known to miss solutions (a singular target, e.g. a UR
     # wrist at q5 = 0 with a continuum of them): the numerical search as method="numerical"
     # runs it (its compiled kernels loaded off the clock; the closed form's time and polish
@@ -452,26 +464,51 @@ def solve_many(
     limit = loaded()
     left = None if max_evals is None else max(max_evals - cf.evals, 0)
     t_search = time.perf_counter() - elapsed
-    numerical = _numerical_results(
+    numerical, found = _numerical_results(
         problem, lambda: search(left, t_search, limit), ref, seed_label, cf.evals
     )
-    return judged(_merged(numerical, results, periodic, min_distance, ref, int(n)))
+    merged = _merged(numerical, results, periodic, min_distance, ref, int(n))
+    return judged(merged, found.ended, cf.evals + found.used)
+
+
+_EMPTY_REASON = {
+    "budget": "budget",
+    "time_limit": "time_limit",
+    "starts": "local_minima",  # (every start of the search's own count ended without one)
+    "converged": "local_minima",
+    "complete": "unreachable",  # (a closed form's every branch, none within the limits)
+}
+""":attr:`Solutions.reason` of an empty answer by how the search ended, where no goal is
+proven unreachable or contradictory (:func:`swarm_ik.api.proven_failure`)."""
+
+
+class _Found(NamedTuple):
+    """What the numerical search (:func:`_numerical`) ends with."""
+
+    kept: list[tuple[FloatArray, float, float, int, float]]
+    """The solutions: ``(q, dp, dr, evals when found, seconds when found)``."""
+    ended: str
+    """Why it ended: ``"converged"`` (``n`` found or no new branch in its patience),
+    ``"budget"``, ``"time_limit"`` or ``"starts"`` (its count of starts)."""
+    used: int
+    """Evaluations spent."""
 
 
 def _numerical_results(
     problem: IKProblem,
-    search: Callable[[], list[tuple[FloatArray, float, float, int, float]]],
+    search: Callable[[], _Found],
     ref: FloatArray,
     seed_label: int | None,
     evals_before: int = 0,
-) -> list[Result]:
+) -> tuple[list[Result], _Found]:
     """The numerical path of :func:`solve_many` (its compiled kernels already loaded): the
     ``search`` (:func:`_numerical`), the solutions as results nearest to the reference
     first, each one's ``n_evals`` counted from ``evals_before`` (evaluations spent before
-    the search)."""
+    the search), and the search's end."""
     # (a Python goal's values at each point computed once: rows, errors, checks)
     with reuse_goal_values(bool(problem.python_goals)):
-        reps = search()
+        found = search()
+        reps = found.kept
         qs_all = np.array([r[0] for r in reps]).reshape(-1, problem.nq)
         fit_all = problem.fitness(qs_all) if reps else np.empty(0)
     order = _nearest_first(qs_all, ref)
@@ -482,7 +519,7 @@ def _numerical_results(
         results.append(
             _result(q_i, dp_i, dr_i, evals_before + ev_i, t_i, fit_i, SOLVER_NAME, seed_label)
         )
-    return results
+    return results, found
 
 
 def _merged(
@@ -850,8 +887,9 @@ def _numerical(
     max_iters: int,
     patience: int,
     t0: float,
-) -> list[tuple[FloatArray, float, float, int, float]]:
-    """The numerical search; returns ``(q, dp, dr, evals when found, seconds when found)``.
+) -> _Found:
+    """The numerical search: its solutions ``(q, dp, dr, evals when found, seconds when
+    found)``, why it ended and the evaluations it spent (:class:`_Found`).
 
     Rounds of one compiled polish call each: the pending first-tier hop starts of the new
     branches, else the second-tier ones, else ``batch`` random starts (the first round: the
@@ -903,13 +941,17 @@ def _numerical(
     since_new = 0
     sec_per_eval = 3e-6
     round_s = 0.0  # a round's own time besides its compiled call [s] (measured)
+    ended = "converged"  # (n found, or no new branch in its patience)
     while len(kept) < target_count:
         t_round = time.perf_counter()
         if max_evals is not None and used >= max_evals:
+            ended = "budget"
             break
         if deadline is not None and t_round + round_s >= deadline:
+            ended = "time_limit"
             break
         if max_starts is not None and n_starts >= max_starts:
+            ended = "starts"
             break
         room = 1 << 30 if max_starts is None else max_starts - n_starts
         starts = None
@@ -1002,7 +1044,7 @@ def _numerical(
         else:
             since_new += max(0, ran - n_hop)
         round_s = max(time.perf_counter() - t_round - polish_s, 0.5 * round_s)
-    if not redundant:
-        return kept
-    picks = spread_select(np.array([k[0] for k in kept]).reshape(-1, nq), n, periodic, ref)
-    return [kept[i] for i in picks]
+    if redundant:
+        picks = spread_select(np.array([k[0] for k in kept]).reshape(-1, nq), n, periodic, ref)
+        kept = [kept[i] for i in picks]
+    return _Found(kept, ended, used)

@@ -163,3 +163,29 @@ class FrozenArrays:
         # (pickle and copy.deepcopy restore the fields without __post_init__)
         self.__dict__.update(state)
         freeze_arrays(self)
+
+
+class Solutions(list[Result]):
+    """What :func:`swarm_ik.solve_many` returns: its solutions, a list of :class:`Result`
+    (nearest to the reference first, each judged with Pinocchio), with why the search ended
+    and what the whole call spent, in :func:`swarm_ik.solve`'s words.
+
+    Attributes:
+        reason: ``"converged"`` (``n`` solutions, or fewer when the search found no new
+            branch in its patience: every branch it could find), ``"budget"`` or
+            ``"time_limit"`` (the budget ran out before ``n``; the solutions found are
+            kept), or for an empty list :attr:`Result.reason`'s words for a failed solve
+            (``"unreachable"``, ``"conflicting_goals"``, ``"local_minima"``, …).
+        n_evals: Evaluations the whole call spent.
+        time_s: Wall-clock seconds of the whole call [s].
+    """
+
+    reason: str
+    n_evals: int
+    time_s: float
+
+    def __init__(
+        self, results: Any = (), reason: str = "", n_evals: int = 0, time_s: float = 0.0
+    ) -> None:
+        super().__init__(results)
+        self.reason, self.n_evals, self.time_s = str(reason), int(n_evals), float(time_s)

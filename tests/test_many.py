@@ -270,6 +270,31 @@ def test_windings_keep_only_copies_that_meet_every_goal_and_carry_their_errors()
         swarm_ik.windings_of(problem, [], tol_pos=0.0)
 
 
+def test_solve_many_says_why_it_ended_in_solves_words() -> None:
+    """solve_many's list says why its search ended and what the call spent (an empty list
+    said nothing: beyond reach and out of budget looked the same)."""
+    import pickle
+
+    ur5 = swarm_ik.load_robot("ur5")
+    problem = swarm_ik.IKProblem.from_q(ur5, [0.3, -1.0, 1.2, -0.5, 1.1, 0.2])
+    sols = swarm_ik.solve_many(problem, n=2, method="numerical", seed=0)
+    assert isinstance(sols, swarm_ik.Solutions) and len(sols) == 2
+    assert sols.reason == "converged"
+    assert sols.n_evals >= max(r.n_evals for r in sols) > 0 and sols.time_s > 0.0
+    every = swarm_ik.solve_many(problem, n=16, method="numerical", seed=0)
+    assert 0 < len(every) < 16 and every.reason == "converged"  # (every branch it found)
+    far = swarm_ik.IKProblem(ur5, [5.0, 0.0, 0.0, 0.0, 0.0, 0.0, 1.0])
+    none = swarm_ik.solve_many(far, n=2, method="numerical", max_evals=200)
+    assert none == [] and none.reason == "unreachable"
+    assert swarm_ik.solve(far, max_evals=200).reason == none.reason
+    panda = swarm_ik.load_robot("panda")
+    hard = swarm_ik.IKProblem.from_q(panda, [0.3, -0.4, 0.2, -2.0, 0.1, 1.8, 0.5])
+    cut = swarm_ik.solve_many(hard, n=16, max_evals=30, seed=0)
+    assert len(cut) < 16 and cut.reason == "budget" and cut.n_evals <= 30
+    back = pickle.loads(pickle.dumps(sols))
+    assert (back.reason, back.n_evals, len(back)) == (sols.reason, sols.n_evals, 2)
+
+
 def test_a_redundant_arm_is_not_stopped_by_the_patience_of_the_branch_search() -> None:
     """A Panda target where many random starts stall: the branch search's patience (48
     starts in a row without a new branch) ended the search at 3 of 16 solutions, although a
