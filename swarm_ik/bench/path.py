@@ -178,7 +178,8 @@ def branch_layers(robot: Any, poses: Any, numerical: bool = False) -> list[Any]:
             found += swarm_ik.solve_many(
                 problem, n=16, method="numerical", tol_pos=TOL, tol_rot=TOL
             )
-        qs = [r.q for branch in swarm_ik.windings_of(problem, found) for r in branch]
+        copies = swarm_ik.windings_of(problem, found, tol_pos=TOL, tol_rot=TOL)
+        qs = [r.q for branch in copies for r in branch]
         layers.append(np.array(qs, dtype=float).reshape(-1, robot.nq))
     return layers
 
