@@ -37,7 +37,6 @@ def test_report_only_names_no_host_for_a_run_that_recorded_none(
     out = tmp_path / "ik"
     shutil.copytree(RESULTS / "ik", out)
     info = json.loads((out / "run.json").read_text())
-    assert info["machine"]["CPU"].startswith("Intel")
     del info["machine"]
     (out / "run.json").write_text(json.dumps(info))
     assert cli.main(["bench", "ik", "--report-only", "--out", str(out)]) == 0
