@@ -370,6 +370,7 @@ def solve_many(
         swarm_ik.solvers.analytic.AnalyticUnsupportedError: ``method="analytic"`` on a chain
             or problem eaik cannot solve.
     """
+    t_call = time.perf_counter()
     if not isinstance(problem, IKProblem):
         raise InvalidArgumentError(f"problem must be an IKProblem, got {type(problem).__name__}")
     if isinstance(n, bool) or not isinstance(n, (int, np.integer)) or n < 1:
@@ -397,8 +398,9 @@ def solve_many(
         use_analytic = True
     elif method == "auto" and analytic.eaik_available():
         use_analytic = not analytic.support(problem)
-
-    t_call = time.perf_counter()
+    proven = proven_failure(problem, tol_pos, tol_rot)
+    if proven is not None:  # (no joint vector meets the goals: no budget is spent on them)
+        return Solutions([], proven, 0, time.perf_counter() - t_call)
 
     def search(evals: int | None, t0: float, limit: float | None) -> _Found:
         """The numerical search within ``evals`` and ``limit`` seconds from ``t0``."""
@@ -430,8 +432,8 @@ def solve_many(
             reason = "converged"
         elif out:
             reason = ended
-        else:
-            reason = proven_failure(problem, tol_pos, tol_rot) or _EMPTY_REASON[ended]
+        else:  # (nothing proven before the search: see above)
+            reason = _EMPTY_REASON[ended]
         return Solutions(out, reason, evals, time.perf_counter() - t_call)
 
     if not use_analytic:
@@ -478,8 +480,8 @@ _EMPTY_REASON = {
     "converged": "local_minima",
     "complete": "unreachable",  # (a closed form's every branch, none within the limits)
 }
-""":attr:`Solutions.reason` of an empty answer by how the search ended, where no goal is
-proven unreachable or contradictory (:func:`swarm_ik.api.proven_failure`)."""
+""":attr:`Solutions.reason` of an empty answer by how the search ended (a goal proven
+unreachable, or two contradictory, end the call before it: :func:`swarm_ik.api.proven_failure`)."""
 
 
 class _Found(NamedTuple):
@@ -489,7 +491,8 @@ class _Found(NamedTuple):
     """The solutions: ``(q, dp, dr, evals when found, seconds when found)``."""
     ended: str
     """Why it ended: ``"converged"`` (``n`` found or no new branch in its patience),
-    ``"budget"``, ``"time_limit"`` or ``"starts"`` (its count of starts)."""
+    ``"budget"`` (evaluations, or the caller's ``max_starts``), ``"time_limit"`` or
+    ``"starts"`` (its own count of starts, ``64 n``, where no budget was given)."""
     used: int
     """Evaluations spent."""
 
@@ -599,6 +602,11 @@ def windings_of(
     for r in results:
         if not isinstance(r, Result):
             raise InvalidArgumentError(f"results must be Result objects, got {type(r).__name__}")
+        if r.q.shape != (problem.nq,):
+            raise InvalidArgumentError(
+                f"results must be solutions of this problem's robot ({problem.nq} joints), got "
+                f"a Result with {r.q.shape[0] if r.q.ndim == 1 else r.q.shape} joint values"
+            )
         out.append(_with_windings(problem, r, ref, start_q, tol_pos, tol_rot))
     return out
 
@@ -903,8 +911,10 @@ def _numerical(
     lower, upper = problem.lower, problem.upper
     periodic = periodic_mask(robot, lower, upper)
     revolute = revolute_mask(robot)
+    starts_end = "budget"  # (a count of starts the caller gave is part of the budget)
     if max_starts is None and max_evals is None and time_limit is None:
         max_starts = 64 * n
+        starts_end = "starts"
     pol = Polisher.from_problem(
         problem, lower, upper, tol_pos=ROUNDOFF_TOL, tol_rot=ROUNDOFF_TOL,
         wrap=robot.continuous_mask, max_iters=max_iters,
@@ -951,7 +961,7 @@ def _numerical(
             ended = "time_limit"
             break
         if max_starts is not None and n_starts >= max_starts:
-            ended = "starts"
+            ended = starts_end
             break
         room = 1 << 30 if max_starts is None else max_starts - n_starts
         starts = None

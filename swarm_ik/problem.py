@@ -22,6 +22,7 @@ from collections.abc import Sequence
 from dataclasses import dataclass
 from typing import Any
 
+import numba
 import numpy as np
 from numpy.typing import NDArray
 
@@ -251,51 +252,68 @@ def _check_python_jacobian(robot: RobotModel, goal: Goal) -> None:
     )
 
 
-_PAD, _SENTINEL = 4, 1.2345678901e300
-"""Rows (and goal entries) past a kernel's own that :func:`_kernel_rows` fills with the
-sentinel, to find a kernel writing beyond them."""
+_BOUNDS_CHECKED: dict[int, tuple[Any, Any]] = {}
+"""A goal kernel (by ``id``) → ``(the kernel, its copy compiled with numba's bounds
+checks)``, made once per kernel for :func:`_kernel_rows`."""
+
+
+def _bounds_checked(kernel: Any) -> Any:
+    """``kernel`` (a ``numba.njit`` dispatcher) compiled again from its Python function with
+    ``boundscheck=True`` (numba's public options): an index past an array raises
+    ``IndexError`` instead of writing into whatever memory follows."""
+    known = _BOUNDS_CHECKED.get(id(kernel))
+    if known is None or known[0] is not kernel:
+        known = (kernel, numba.njit(boundscheck=True)(kernel.py_func))
+        _BOUNDS_CHECKED[id(kernel)] = known
+    return known[1]
 
 
 def _kernel_rows(robot: RobotModel, goal: Goal, q: FloatArray) -> tuple[FloatArray, FloatArray]:
-    """The rows ``(m,)`` and step Jacobian ``(m, nq)`` a compiled goal's kernel writes at
-    ``q``, run with :data:`_PAD` rows and a goal entry past its own holding a sentinel.
+    """The weighted rows ``(m,)`` and step Jacobian ``(m, nq)`` a compiled goal's kernel
+    writes at ``q``, its copy with bounds checks (:func:`_bounds_checked`) called on arrays of
+    exactly its own size: its rows as its ``encode`` declares them, its two errors, its
+    parameter block and the scratch vector.
 
     Raises:
-        InvalidArgumentError: the kernel raised, or wrote past the rows its ``encode``
-            declares or past its two errors (which corrupts the rows of the goal after it, or
-            memory: an abort at exit).
+        InvalidArgumentError: the kernel raised, or indexed past one of those arrays (a write
+            past its rows corrupts the rows of the goal after it, or memory: an abort at
+            exit; the search itself runs the kernel without bounds checks).
     """
     prob = IKProblem(robot, goals=[goal])
     tab = prob.table(None)
-    m, nq = tab.rows_primary, robot.nq
-    res = np.zeros((1, m + _PAD))  # (its own rows start at zero, as the search's do)
-    jac = np.zeros((1, m + _PAD, nq))
-    err = np.full((1, 2, 2), np.nan)
-    res[0, m:], jac[0, m:], err[0, 1] = _SENTINEL, _SENTINEL, _SENTINEL
+    m, nq = int(tab.nrows[0]), robot.nq
+    par = np.ascontiguousarray(tab.par[tab.p0[0] : tab.p0[1]])
+    ipar = np.ascontiguousarray(tab.ipar[tab.i0[0] : tab.i0[1]])
+    poses, f_jac = prob.tree.fk_jacobian(q)
+    f_pos = np.ascontiguousarray(poses[:, :3, 3])
+    f_rot = np.ascontiguousarray(poses[:, :3, :3])
+    res, jac, err = np.zeros(m), np.zeros((m, nq)), np.full(2, np.nan)
+    work = np.zeros(lm.WORK_SIZE)
     try:
-        lm.residuals_batch(q[None], prob.tree, tab, kernels(), prob.bounds, True, res, jac, err)
+        fn = _bounds_checked(goal.kernel_of())
+        fn(par, ipar, q, f_pos, f_rot, np.ascontiguousarray(f_jac), True, res, jac, err, work)
     except SwarmIKError:
         raise
+    except IndexError as exc:  # (numba's bounds check)
+        raise InvalidArgumentError(
+            f"{goal.describe()}: its kernel indexes past its {m} row{'s' * (m != 1)} (the rows "
+            "its encode() declares), its two errors, its parameter block or its scratch "
+            f"({lm.WORK_SIZE} floats) at q = {np.round(q, 6).tolist()}: declare every row it "
+            f"writes (docs/goals.md; numba: {reprlib.repr(str(exc))})"
+        ) from exc
     except Exception as exc:  # (raised inside the compiled kernel)
         raise InvalidArgumentError(
             f"{goal.describe()}: its kernel raised {type(exc).__name__}: "
             f"{reprlib.repr(str(exc))} at q = {np.round(q, 6).tolist()}"
         ) from exc
-    if (
-        np.any(res[0, m:] != _SENTINEL)
-        or np.any(jac[0, m:] != _SENTINEL)
-        or np.any(err[0, 1] != _SENTINEL)
-    ):
-        raise InvalidArgumentError(
-            f"{goal.describe()}: its kernel writes past its {m} row{'s' * (m != 1)} (the rows "
-            "its encode() declares) or past its two errors: declare every row it writes "
-            "(docs/goals.md)"
-        )
-    return res[0, :m], jac[0, :m]
+    w = float(tab.weight[0])
+    return res * w, jac * w
 
 
-def _check_kernel_twin(robot: RobotModel, goal: Goal) -> None:
-    """A compiled goal written outside swarm_ik, checked once per class and robot: its
+def _check_kernel_twin(robot: RobotModel, goal: Goal, form: tuple[Any, ...] = ()) -> None:
+    """A compiled goal written outside swarm_ik, checked once per class, robot and ``form``
+    of its parameter block (its sizes, its integers and its rows: a goal whose rows depend on
+    its integers is probed for each, since a kernel past its rows corrupts memory): its
     kernel's rows and step Jacobian at one configuration against its own numpy
     ``residual``/``jacobian`` on Pinocchio's state (the Jacobian when it defines one: its
     sign only, on the rows whose twin has a derivative, as a Python goal's is judged).  The
@@ -311,9 +329,10 @@ def _check_kernel_twin(robot: RobotModel, goal: Goal) -> None:
     if str(cls.__module__).startswith("swarm_ik."):
         return
     checked = robot._cache.setdefault("twins_checked", set())
-    if cls in checked:
+    key = (cls, form)
+    if key in checked:
         return
-    checked.add(cls)  # (before the problem below, which would check it again)
+    checked.add(key)  # (before the problem below, which would check it again)
     q = _probe_q(robot)
     try:  # (probed as a primary goal: a secondary one alone makes no problem)
         probe = dataclasses.replace(goal, primary=True) if not goal.is_primary else goal
@@ -327,7 +346,7 @@ def _check_kernel_twin(robot: RobotModel, goal: Goal) -> None:
             probe, State(robot, q), want_jac=cls.jacobian is not Goal.jacobian
         )
     except BaseException:
-        checked.discard(cls)
+        checked.discard(key)
         raise
 
     def close(a: FloatArray, b: FloatArray) -> bool:
@@ -340,7 +359,7 @@ def _check_kernel_twin(robot: RobotModel, goal: Goal) -> None:
         # sign, told by the Jacobian)
         sign = -1.0 if float(np.sum(jac * j_np)) > 0.0 else 1.0
     if sign == 0.0:
-        checked.discard(cls)
+        checked.discard(key)
         raise InvalidArgumentError(
             f"{goal.describe()}: its kernel's rows {np.round(res, 9).tolist()} differ from its "
             f"residual(state) {np.round(r_np, 9).tolist()} at q = {np.round(q, 6).tolist()} "
@@ -361,7 +380,7 @@ def _check_kernel_twin(robot: RobotModel, goal: Goal) -> None:
         what = "points against −∂r/∂q of its rows (it has the other sign)"
     else:
         return
-    checked.discard(cls)
+    checked.discard(key)
     raise InvalidArgumentError(
         f"{goal.describe()}: its kernel's step Jacobian {what} at q = "
         f"{np.round(q, 6).tolist()}: the kernel's rows satisfy r(q + δ) ≈ r − Jδ (docs/goals.md)"
@@ -436,8 +455,9 @@ class IKProblem:
             goals of their errors, ``‖Δp‖ + w_rot·θ`` for a pose, plus
             ``SECONDARY_WEIGHT·½‖r₂‖²``), or, for a single-pose problem only, the paper forms
             ``"paper-l1"``, ``"euler-zyz"``, ``"paper-pso"`` (see :mod:`swarm_ik.fitness`).
-            (For compatibility a string passed as the third positional argument is taken as
-            ``fitness``.)
+            (For compatibility a fitness name passed as the third positional argument is
+            taken as ``fitness``; with ``fitness`` given too, or a string that names no
+            fitness, it is refused.)
         w_rot: Weight of angular errors in ``"se3"`` [m/rad]: 0, or between 1e-6 and 1e6
             (a goal weight's range); 0 with ``target`` makes the problem position-only.
         lam: λ of ``"paper-l1"`` (per metre).
@@ -463,7 +483,7 @@ class IKProblem:
         robot: RobotModel,
         target: Any = None,
         goals: Sequence[Goal] | str | None = None,
-        fitness: str = "se3",
+        fitness: str | None = None,
         *,
         w_rot: float = _W_ROT,
         lam: float = _LAM,
@@ -479,7 +499,7 @@ class IKProblem:
         if (
             goals is None
             and target is not None
-            and fitness == "se3"
+            and fitness in (None, "se3")
             and lower is None
             and upper is None
             and w_rot is _W_ROT
@@ -490,7 +510,7 @@ class IKProblem:
             template = robot._cache.get("pose_problem")
             if template is None:
                 template = object.__new__(IKProblem)
-                template._make(robot, robot.fk_pinocchio(robot.mid_q()), None, fitness,
+                template._make(robot, robot.fk_pinocchio(robot.mid_q()), None, "se3",
                                w_rot, lam, mu, orth_tol, None, None)  # fmt: skip
                 robot._cache["pose_problem"] = template
             template._retarget(self, target, orth_tol)
@@ -503,7 +523,7 @@ class IKProblem:
         robot: RobotModel,
         target: Any,
         goals: Sequence[Goal] | str | None,
-        fitness: str,
+        fitness: str | None,
         w_rot: float,
         lam: float,
         mu: float,
@@ -513,7 +533,18 @@ class IKProblem:
     ) -> None:
         """The constructor's general path (any goals and options)."""
         if isinstance(goals, str):  # IKProblem(robot, target, "paper-l1"): the 0.1 signature
+            if goals not in FITNESS:
+                raise InvalidArgumentError(
+                    f"goals must be a list of goal terms (swarm_ik.goals), got {goals!r} (a "
+                    f"string there is read as the fitness, one of {', '.join(FITNESS)})"
+                )
+            if fitness is not None and fitness != goals:
+                raise InvalidArgumentError(
+                    f"two fitness names: {goals!r} where the goals go and fitness={fitness!r}; "
+                    "give the fitness once, as fitness="
+                )
             fitness, goals = goals, None
+        fitness = "se3" if fitness is None else fitness
         self.robot = robot
         if not (is_finite_nonneg(w_rot) and is_finite_nonneg(lam) and is_finite_nonneg(mu)):
             label, v = next(
@@ -683,7 +714,8 @@ class IKProblem:
             for i, gl in enumerate(self.compiled_goals):
                 enc = goals_base.checked_encoding(gl, functools.partial(self.encode, i, None))
                 kernel_slot(gl.kernel_of())
-                blocks.append((enc.par.shape[0], enc.ipar.tobytes()))
+                form = (enc.par.shape[0], enc.ipar.tobytes(), int(enc.rows))
+                blocks.append(form[:2])
                 cls = type(gl)
                 if cls.residual is Goal.residual and cls.errors is Goal.errors:
                     raise InvalidArgumentError(
@@ -691,7 +723,7 @@ class IKProblem:
                         "judge checks every answer with them on Pinocchio's state, not with the "
                         "kernel (docs/goals.md)"
                     )
-                _check_kernel_twin(robot, gl)
+                _check_kernel_twin(robot, gl, form)
             # (the blocks' form: a route rewrites only the floats of another problem's goals,
             # so problems whose integer parameters or block sizes differ take other routes)
             self._blocks = tuple(blocks)

@@ -165,3 +165,17 @@ def test_as_pose_accepts_a_float64_dtype_that_is_not_numpys_own_object() -> None
     assert other == np.float64 and other is not np.dtype(np.float64)
     out = as_pose(t.view(other))
     assert np.array_equal(out, t) and out.dtype == np.float64
+
+
+def test_a_string_where_the_goals_go_is_a_fitness_given_once() -> None:
+    """A held-out review: ``goals="euler-zyz"`` silently overrode ``fitness="se3"``, and
+    ``goals="Pose"`` was refused as a missing target, naming neither."""
+    r = robot("panda")
+    target = r.fk(r.mid_q())
+    assert swarm_ik.IKProblem(r, target, "euler-zyz").fitness_name == "euler-zyz"
+    assert swarm_ik.IKProblem(r, target, "euler-zyz", "euler-zyz").fitness_name == "euler-zyz"
+    assert swarm_ik.IKProblem(r, target, fitness="se3").fitness_name == "se3"
+    with pytest.raises(swarm_ik.InvalidArgumentError, match="two fitness names"):
+        swarm_ik.IKProblem(r, target, goals="euler-zyz", fitness="se3")
+    with pytest.raises(swarm_ik.InvalidArgumentError, match=r"goals must be a list.*'Pose'"):
+        swarm_ik.IKProblem(r, goals="Pose")

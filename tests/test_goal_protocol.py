@@ -5,6 +5,8 @@ never met."""
 from __future__ import annotations
 
 import math
+import subprocess
+import sys
 import warnings
 from dataclasses import dataclass
 from typing import Any, ClassVar
@@ -1087,11 +1089,73 @@ class _Overrun(G.Goal):
 
 def test_a_compiled_kernel_writing_past_its_rows_is_refused() -> None:
     """Writing a row its encode() does not declare solved "successfully" and sometimes
-    aborted the process at exit (a held-out review): the kernel is run once with sentinel
-    rows after its own."""
+    aborted the process at exit (a held-out review): a copy of the kernel compiled with
+    numba's bounds checks is run once on arrays of its own size."""
     with pytest.raises(InvalidArgumentError, match=r"_Overrun\(panda_hand_tcp\): its kernel "
-                       r"writes past its 1 row"):  # fmt: skip
+                       r"indexes past its 1 row"):  # fmt: skip
         swarm_ik.IKProblem(robot("panda"), goals=[_Overrun()])
+
+
+_ROWS_BY_ITS_INTEGERS = """
+import math, sys
+from dataclasses import dataclass
+from typing import Any, ClassVar
+import numba, numpy as np, swarm_ik
+from swarm_ik.goals import Goal, Position
+from swarm_ik.goals.base import Encoded, frame_index
+
+@numba.njit
+def rows(par, ipar, q, f_pos, f_rot, f_jac, want_jac, res, jac, err, work):
+    f = ipar[0]
+    for k in range(ipar[1]):  # (ipar[1] rows; encode declares one)
+        res[k] = par[0] - f_pos[f, 2]
+        if want_jac:
+            for j in range(q.shape[0]):
+                jac[k, j] = f_jac[f, 2, j]
+    err[0] = abs(par[0] - f_pos[f, 2])
+    err[1] = math.nan
+
+@dataclass(frozen=True)
+class Height(Goal):
+    frame: str
+    height: float = 0.0
+    copies: int = 1
+    kernel: ClassVar[Any] = rows
+    def encode(self, robot, q0):
+        ipar = np.array([frame_index(self, robot), self.copies])
+        return Encoded(np.array([self.height]), ipar, 1)
+    def residual(self, state):
+        return np.array([self.height - state.pose(self.frame)[2, 3]])
+    def jacobian(self, state):
+        return -state.jacobian(self.frame)[2:3]
+
+robot = swarm_ik.load_robot("panda")
+T = robot.fk_pinocchio(robot.random_q(np.random.default_rng(1)))
+def problem(copies):
+    goals = [Position("panda_hand_tcp", T[:3, 3]), Height("panda_hand_tcp", T[2, 3], copies=copies)]
+    return swarm_ik.IKProblem(robot, goals=goals)
+print(swarm_ik.solve(problem(1), seed=0).reason)
+for copies in (2, 9):
+    try:
+        problem(copies)
+        print("accepted")
+    except swarm_ik.InvalidArgumentError as exc:
+        print("refused" if "indexes past its 1 row" in str(exc) else exc)
+"""
+
+
+def test_a_kernel_whose_rows_follow_its_integers_is_probed_for_each_and_safely() -> None:
+    """A held-out review: the probe ran once per goal class, so a later goal of the class
+    whose integers make its kernel write two rows was accepted and the process died at exit
+    (exit 134/139, heap corruption); and the probe's four sentinel rows let an overrun of
+    nine rows write past its own arrays.  Each form of a goal's block is probed now, by a
+    bounds-checked copy of its kernel: both are refused and the process ends cleanly."""
+    out = subprocess.run(
+        [sys.executable, "-c", _ROWS_BY_ITS_INTEGERS], capture_output=True, text=True,
+        timeout=600,
+    )  # fmt: skip
+    assert out.returncode == 0, out.stderr[-2000:]
+    assert out.stdout.split() == ["converged", "refused", "refused"], out.stdout
 
 
 @dataclass(frozen=True)

@@ -295,6 +295,28 @@ def test_solve_many_says_why_it_ended_in_solves_words() -> None:
     assert (back.reason, back.n_evals, len(back)) == (sols.reason, sols.n_evals, 2)
 
 
+def test_solve_many_spends_nothing_on_a_proof_and_counts_max_starts_as_budget() -> None:
+    """A held-out review: with a time limit, a target proven beyond reach took the whole
+    limit (5 s, 4 million evaluations; solve returns at once); and a search cut by the
+    caller's max_starts said "converged" with 1 of 8 branches."""
+    import time
+
+    ur5 = swarm_ik.load_robot("ur5")
+    far = swarm_ik.IKProblem(ur5, goals=[swarm_ik.goals.Position("tool0", [3.0, 0.0, 0.5])])
+    for budget in ({"time_limit": 5.0}, {"max_evals": 2_000_000}):
+        t0 = time.perf_counter()
+        none = swarm_ik.solve_many(far, n=8, **budget)
+        assert none == [] and none.reason == "unreachable" and none.n_evals == 0
+        assert time.perf_counter() - t0 < 2.0
+    problem = swarm_ik.IKProblem.from_q(ur5, [0.3, -1.0, 1.2, -0.5, 1.1, 0.2])
+    cut = swarm_ik.solve_many(problem, n=16, method="numerical", max_starts=1)
+    assert len(cut) == 1 and cut.reason == "budget"
+    panda = swarm_ik.load_robot("panda")
+    other = swarm_ik.solve(swarm_ik.IKProblem.from_q(panda, panda.mid_q()))
+    with pytest.raises(swarm_ik.InvalidArgumentError, match="6 joints"):
+        swarm_ik.windings_of(problem, [other])
+
+
 def test_a_redundant_arm_is_not_stopped_by_the_patience_of_the_branch_search() -> None:
     """A Panda target where many random starts stall: the branch search's patience (48
     starts in a row without a new branch) ended the search at 3 of 16 solutions, although a

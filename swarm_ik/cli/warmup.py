@@ -91,6 +91,7 @@ def run(args: argparse.Namespace) -> int:
             ),
         ),
         ("every built-in goal's kernel", lambda: _goal_kernels(robot, target)),
+        ("a goal written in Python", lambda: _python_goal(robot, target)),
         ("floating base and balance", lambda: _whole_body(args.robot)),
         ("jump-free path (solve_path)", lambda: _paths(robot, q, target)),
         (
@@ -120,6 +121,36 @@ def _goal_kernels(robot: Any, target: Any) -> None:
     bounded = goals.Pose(robot.ee_frame, target, tolerance=(0.01, 0.01, 0.01, 0.1, 0.1, 0.1))
     goals.kernel_slot(bounded.kernel_of())
     goals.kernels()
+
+
+def _python_goal(robot: Any, target: Any) -> None:
+    """One solve of a pose beside a goal written in Python (docs/goals.md): the numpy
+    polish's compiled helpers (the compiled goals' rows and errors at a batch of points),
+    which a first such goal compiled for about 11 s."""
+    from dataclasses import dataclass
+
+    import numpy as np
+
+    import swarm_ik
+    from swarm_ik import goals
+
+    @dataclass(frozen=True)
+    class Height(goals.Goal):
+        """The frame origin at a height [m] (the plane goal of docs/goals.md, shorter)."""
+
+        frame: str
+        height: float
+
+        def residual(self, state: Any) -> Any:
+            return np.array([state.pose(self.frame)[2, 3] - self.height])
+
+        def jacobian(self, state: Any) -> Any:
+            return state.jacobian(self.frame)[2:3]
+
+    height = Height(robot.ee_frame, float(target[2, 3]))
+    problem = swarm_ik.IKProblem(robot, goals=[goals.Pose(robot.ee_frame, target), height])
+    start = np.clip(robot.mid_q() + 0.3, robot.lower, robot.upper)  # (not at the answer)
+    swarm_ik.solve(problem, max_evals=50, q0=start)
 
 
 def _whole_body(name: str) -> None:
