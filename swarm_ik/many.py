@@ -420,7 +420,9 @@ def solve_many(
             return None
         return max(time_limit - (time.perf_counter() - t_load), 0.5 * time_limit)
 
-    def judged(found: list[Result], ended: str, evals: int) -> Solutions:
+    def judged(
+        found: list[Result], ended: str, evals: int, closest: FloatArray | None = None
+    ) -> Solutions:
         """Each solution with its goals' errors from Pinocchio (:meth:`IKProblem.verify`),
         as :func:`swarm_ik.solve`'s result has them, and why the call ended
         (:attr:`Solutions.reason`)."""
@@ -432,7 +434,9 @@ def solve_many(
             reason = "converged"
         elif out:
             reason = ended
-        else:  # (nothing proven before the search: see above)
+        elif closest is not None and problem.opposing_goals(closest):
+            reason = "conflicting_goals"  # (as solve says at its answer)
+        else:  # (nothing proven before the search: see below)
             reason = _EMPTY_REASON[ended]
         return Solutions(out, reason, evals, time.perf_counter() - t_call)
 
@@ -442,7 +446,7 @@ def solve_many(
         numerical, found = _numerical_results(
             problem, lambda: search(max_evals, t_search, limit), ref, seed_label
         )
-        return judged(numerical, found.ended, found.used)
+        return judged(numerical, found.ended, found.used, found.closest)
     t0 = time.perf_counter()
     cf = analytic.closed_form_set(problem, ref, tol_pos, tol_rot, max_evals)
     qs, dps, drs = cf.q, cf.position_error, cf.rotation_error
@@ -470,7 +474,7 @@ def solve_many(
         problem, lambda: search(left, t_search, limit), ref, seed_label, cf.evals
     )
     merged = _merged(numerical, results, periodic, min_distance, ref, int(n))
-    return judged(merged, found.ended, cf.evals + found.used)
+    return judged(merged, found.ended, cf.evals + found.used, found.closest)
 
 
 _EMPTY_REASON = {
@@ -495,6 +499,9 @@ class _Found(NamedTuple):
     ``"starts"`` (its own count of starts, ``64 n``, where no budget was given)."""
     used: int
     """Evaluations spent."""
+    closest: FloatArray | None = None
+    """Where nothing was found: the start that ended nearest to meeting the goals, where
+    goals pulling against each other are looked for (:meth:`IKProblem.opposing_goals`)."""
 
 
 def _numerical_results(
@@ -952,6 +959,8 @@ def _numerical(
     sec_per_eval = 3e-6
     round_s = 0.0  # a round's own time besides its compiled call [s] (measured)
     ended = "converged"  # (n found, or no new branch in its patience)
+    closest: FloatArray | None = None  # the failed start nearest to meeting the goals
+    closest_err = math.inf
     while len(kept) < target_count:
         t_round = time.perf_counter()
         if max_evals is not None and used >= max_evals:
@@ -999,6 +1008,11 @@ def _numerical(
         ran = int(np.count_nonzero(out.status))
         n_starts += ran
         conv = np.flatnonzero(out.status[:ran] == CONVERGED)
+        if not kept and ran:  # (what an empty answer's reason is read at: see solve_many)
+            miss = out.position_error[:ran] + np.nan_to_num(out.rotation_error[:ran])
+            k_min = int(np.argmin(miss))
+            if miss[k_min] < closest_err:
+                closest, closest_err = out.q[k_min].copy(), float(miss[k_min])
         cand, ok = fold(out.q[conv])
         conv, cand = conv[ok], cand[ok]
         fresh = fold.new(cand, merge)
@@ -1057,4 +1071,4 @@ def _numerical(
     if redundant:
         picks = spread_select(np.array([k[0] for k in kept]).reshape(-1, nq), n, periodic, ref)
         kept = [kept[i] for i in picks]
-    return _Found(kept, ended, used)
+    return _Found(kept, ended, used, closest)

@@ -174,8 +174,12 @@ class Solutions(list[Result]):
         reason: ``"converged"`` (``n`` solutions, or fewer when the search found no new
             branch in its patience: every branch it could find), ``"budget"`` or
             ``"time_limit"`` (the budget ran out before ``n``; the solutions found are
-            kept), or for an empty list :attr:`Result.reason`'s words for a failed solve
-            (``"unreachable"``, ``"conflicting_goals"``, ``"local_minima"``, …).
+            kept), or for an empty list :attr:`Result.reason`'s words for a failed solve:
+            ``"unreachable"`` or ``"conflicting_goals"`` where proven before the search (no
+            evaluation spent), ``"conflicting_goals"`` where the start that ended nearest to
+            the goals shows them pulling against each other
+            (:meth:`~swarm_ik.problem.IKProblem.opposing_goals`), else ``"local_minima"``
+            or the budget's reason.
         n_evals: Evaluations the whole call spent.
         time_s: Wall-clock seconds of the whole call [s].
     """

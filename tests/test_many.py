@@ -1,6 +1,8 @@
 """solve_many: each branch once modulo 2π, early stop, windings, spread on redundant arms."""
 
+import math
 import time
+from dataclasses import dataclass
 
 import numpy as np
 import pytest
@@ -295,6 +297,22 @@ def test_solve_many_says_why_it_ended_in_solves_words() -> None:
     assert (back.reason, back.n_evals, len(back)) == (sols.reason, sols.n_evals, 2)
 
 
+@dataclass(frozen=True)
+class _ZAngle(swarm_ik.goals.Goal):
+    """The angle [rad] of a frame's z axis to the world's z axis (no pin: nothing proves a
+    conflict before the search)."""
+
+    frame: str
+    theta: float
+
+    def residual(self, state):
+        return np.array([math.acos(np.clip(state.pose(self.frame)[2, 2], -1, 1)) - self.theta])
+
+    def jacobian(self, state):
+        z, w = state.pose(self.frame)[:3, 2], state.jacobian(self.frame)[3:]
+        return (-(w[0] * z[1] - w[1] * z[0]) / math.sqrt(max(1 - z[2] ** 2, 1e-300)))[None]
+
+
 def test_solve_many_spends_nothing_on_a_proof_and_counts_max_starts_as_budget() -> None:
     """A held-out review: with a time limit, a target proven beyond reach took the whole
     limit (5 s, 4 million evaluations; solve returns at once); and a search cut by the
@@ -311,6 +329,18 @@ def test_solve_many_spends_nothing_on_a_proof_and_counts_max_starts_as_budget() 
     problem = swarm_ik.IKProblem.from_q(ur5, [0.3, -1.0, 1.2, -0.5, 1.1, 0.2])
     cut = swarm_ik.solve_many(problem, n=16, method="numerical", max_starts=1)
     assert len(cut) == 1 and cut.reason == "budget"
+    # goals without a pin that contradict each other: solve reads it at its answer
+    # (opposing_goals), solve_many at its nearest failed start (it said local_minima)
+    target = ur5.fk(np.array([0.3, -1.0, 1.2, -0.5, 1.1, 0.2]))
+    tilt = swarm_ik.IKProblem(
+        ur5,
+        goals=[
+            swarm_ik.goals.Pose("tool0", target),
+            _ZAngle("tool0", 0.8 + math.acos(target[2, 2])),
+        ],
+    )
+    assert swarm_ik.solve(tilt, time_limit=1.0).reason == "conflicting_goals"
+    assert swarm_ik.solve_many(tilt, n=8, time_limit=1.0).reason == "conflicting_goals"
     panda = swarm_ik.load_robot("panda")
     other = swarm_ik.solve(swarm_ik.IKProblem.from_q(panda, panda.mid_q()))
     with pytest.raises(swarm_ik.InvalidArgumentError, match="6 joints"):
