@@ -461,7 +461,8 @@ def solve_many(
     elapsed = time.perf_counter() - t0
     results = _results(qs, dps, drs, [cf.evals] * k, [elapsed] * k, fits, "analytic", seed_label)
     if method == "analytic" or not cf.incomplete:
-        return judged(results, "complete" if not cf.incomplete else "converged", cf.evals)
+        cut = max_evals is not None and cf.evals >= max_evals  # (the polish's budget spent)
+        return judged(results, "budget" if cut else "closed_form", cf.evals)
     # auto, and the closed form is known to miss solutions (a singular target, e.g. a UR
     # wrist at q5 = 0 with a continuum of them): the numerical search as method="numerical"
     # runs it (its compiled kernels loaded off the clock; the closed form's time and polish
@@ -482,7 +483,8 @@ _EMPTY_REASON = {
     "time_limit": "time_limit",
     "starts": "local_minima",  # (every start of the search's own count ended without one)
     "converged": "local_minima",
-    "complete": "unreachable",  # (a closed form's every branch, none within the limits)
+    "closed_form": "stopped",  # (the closed form returned none within the tolerances and
+    # limits: not a proof, eaik's points polished to the tolerances may fall short)
 }
 """:attr:`Solutions.reason` of an empty answer by how the search ended (a goal proven
 unreachable, or two contradictory, end the call before it: :func:`swarm_ik.api.proven_failure`)."""
@@ -605,7 +607,7 @@ def windings_of(
     tol_pos = positive_float(tol_pos, "tol_pos")
     tol_rot = positive_float(tol_rot, "tol_rot")
     start_q, ref = _start_and_reference(problem, q0)
-    out = []
+    out: list[list[Result]] = []
     for r in results:
         if not isinstance(r, Result):
             raise InvalidArgumentError(f"results must be Result objects, got {type(r).__name__}")
@@ -614,6 +616,14 @@ def windings_of(
                 f"results must be solutions of this problem's robot ({problem.nq} joints), got "
                 f"a Result with {r.q.shape[0] if r.q.ndim == 1 else r.q.shape} joint values"
             )
+        errors = problem.verify(r.q, tol_pos, tol_rot, q0=start_q)
+        if not all(e.met for e in errors):
+            raise InvalidArgumentError(
+                f"results[{len(out)}] does not meet this problem's goals within the tolerances "
+                "(a solution of another problem or robot?): "
+                + ", ".join(f"{e.goal} off by {e.position_error:.3g} m, "
+                            f"{e.rotation_error:.3g} rad" for e in errors if not e.met)
+            )  # fmt: skip
         out.append(_with_windings(problem, r, ref, start_q, tol_pos, tol_rot))
     return out
 

@@ -17,6 +17,7 @@ import dataclasses
 import functools
 import math
 import reprlib
+import threading
 import warnings
 from collections.abc import Sequence
 from dataclasses import dataclass
@@ -188,7 +189,20 @@ JACOBIAN_STEP = 1e-6
 goal's ``jacobian`` with."""
 
 
+_CHECK_LOCK = threading.RLock()
+"""Held while a goal class is checked (:func:`_check_python_jacobian`,
+:func:`_check_kernel_twin`): a check marks its class as checked before it runs (the probe
+problem it makes would check it again), so a second thread making a problem of the class
+at the same time skipped the check and took a goal the first then refused."""
+
+
 def _check_python_jacobian(robot: RobotModel, goal: Goal) -> None:
+    """:func:`_check_python_jacobian_now` under :data:`_CHECK_LOCK`."""
+    with _CHECK_LOCK:
+        _check_python_jacobian_now(robot, goal)
+
+
+def _check_python_jacobian_now(robot: RobotModel, goal: Goal) -> None:
     """A goal written in Python, checked once per class and robot: its ``jacobian`` along
     one direction at one configuration against the central difference of its ``residual``
     (three residual calls and one Jacobian call, when the first problem of the class is made:
@@ -311,6 +325,12 @@ def _kernel_rows(robot: RobotModel, goal: Goal, q: FloatArray) -> tuple[FloatArr
 
 
 def _check_kernel_twin(robot: RobotModel, goal: Goal, form: tuple[Any, ...] = ()) -> None:
+    """:func:`_check_kernel_twin_now` under :data:`_CHECK_LOCK`."""
+    with _CHECK_LOCK:
+        _check_kernel_twin_now(robot, goal, form)
+
+
+def _check_kernel_twin_now(robot: RobotModel, goal: Goal, form: tuple[Any, ...] = ()) -> None:
     """A compiled goal written outside swarm_ik, checked once per class, robot and ``form``
     of its parameter block (its sizes, its integers and its rows: a goal whose rows depend on
     its integers is probed for each, since a kernel past its rows corrupts memory): its

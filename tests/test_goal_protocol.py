@@ -1096,6 +1096,65 @@ def test_a_compiled_kernel_writing_past_its_rows_is_refused() -> None:
         swarm_ik.IKProblem(robot("panda"), goals=[_Overrun()])
 
 
+@dataclass(frozen=True)
+class _OverrunToo(_Overrun):
+    """A class of its own: the race below is on its first problems."""
+
+
+def test_two_threads_making_the_first_problems_of_a_goal_class_are_both_checked() -> None:
+    """Review 106: the class was marked checked before its probe ran, so a second thread
+    making a problem at the same time skipped the probe and took a kernel that writes past
+    its rows, which the first thread then refused."""
+    import threading
+
+    r = robot("panda")
+    outcomes: list[str] = []
+
+    def make() -> None:
+        try:
+            swarm_ik.IKProblem(r, goals=[_OverrunToo()])
+            outcomes.append("accepted")
+        except InvalidArgumentError:
+            outcomes.append("refused")
+
+    threads = [threading.Thread(target=make) for _ in range(2)]
+    for t in threads:
+        t.start()
+    for t in threads:
+        t.join()
+    assert outcomes == ["refused", "refused"]
+
+
+@dataclass(frozen=True)
+class _HeldRotation(G.Goal):
+    """A goal whose pin holds a rotation given as an ndarray subclass (np.matrix)."""
+
+    frame: str
+    rot: Any
+
+    def residual(self, state):
+        return np.zeros(1)
+
+    def jacobian(self, state):
+        return np.zeros((1, state.q.shape[0]))
+
+    def pin(self):
+        return G.Pin(self.frame, rotation=self.rot)
+
+
+@pytest.mark.filterwarnings("ignore::PendingDeprecationWarning")
+def test_a_pin_given_as_a_matrix_subclass_is_read_as_an_array() -> None:
+    """Review 106: pin_of's float64 fast path let an np.matrix through, and the proofs then
+    raised a bare TypeError (it was converted to a plain array before)."""
+    ur5 = robot("ur5")
+    target = ur5.fk(np.array([0.3, -1.2, 1.4, -0.5, 1.1, 0.2]))
+    goals = [
+        _HeldRotation("tool0", np.matrix(target[:3, :3])),
+        G.Axis("tool0", [0, 0, 1], target[:3, 2]),
+    ]
+    assert swarm_ik.solve(swarm_ik.IKProblem(ur5, goals=goals), seed=0).reason == "converged"
+
+
 _ROWS_BY_ITS_INTEGERS = """
 import math, sys
 from dataclasses import dataclass

@@ -345,6 +345,26 @@ def test_solve_many_spends_nothing_on_a_proof_and_counts_max_starts_as_budget() 
     other = swarm_ik.solve(swarm_ik.IKProblem.from_q(panda, panda.mid_q()))
     with pytest.raises(swarm_ik.InvalidArgumentError, match="6 joints"):
         swarm_ik.windings_of(problem, [other])
+    ur10 = swarm_ik.load_robot("ur10")  # (six joints too: judged, not only counted)
+    alien = swarm_ik.solve_many(swarm_ik.IKProblem(ur10, problem.target), n=1)
+    with pytest.raises(swarm_ik.InvalidArgumentError, match=r"results\[0\] does not meet"):
+        swarm_ik.windings_of(problem, alien)
+
+
+def test_the_closed_forms_polish_cut_by_max_evals_says_budget() -> None:
+    """Review 106: the analytic path said local_minima (nothing found) or converged (some)
+    when max_evals cut its polish; solve says budget; and an empty closed form is no proof
+    of unreachability (a tolerance below what its polish reaches said unreachable)."""
+    pytest.importorskip("eaik")
+    ur5 = swarm_ik.load_robot("ur5")
+    at_wrist_zero = [-1.3177, 2.6348, 0.024, -2.4209, 0.0, 2.9426]
+    problem = swarm_ik.IKProblem(ur5, ur5.fk(np.array(at_wrist_zero)))
+    cut = swarm_ik.solve_many(problem, n=16, method="analytic", max_evals=4)
+    assert cut.reason == "budget" == swarm_ik.solve(problem, max_evals=4).reason
+    full = swarm_ik.solve_many(problem, n=16, method="analytic")
+    assert len(full) > len(cut) and full.reason == "converged"
+    exacting = swarm_ik.solve_many(problem, n=16, method="analytic", tol_pos=1e-18, tol_rot=1e-18)
+    assert exacting.reason != "unreachable"
 
 
 def test_a_redundant_arm_is_not_stopped_by_the_patience_of_the_branch_search() -> None:

@@ -414,8 +414,9 @@ def pin_of(goal: Goal) -> Pin | None:
         if value is None:
             continue
         arr: FloatArray | None
-        if isinstance(value, np.ndarray) and value.dtype == np.float64:
-            arr = value  # (a goal's own float array: read, never written)
+        if type(value) is np.ndarray and value.dtype == np.float64:
+            arr = value  # (a goal's own float array: read, never written; a subclass, such
+            # as np.matrix, is made a plain array below)
         else:
             arr = np.asarray(value, dtype=float) if _numbers(value) else None
         if arr is None or arr.shape != shape or not np.isfinite(arr).all():
