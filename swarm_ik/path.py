@@ -81,7 +81,7 @@ from swarm_ik.branches import SINGULAR_SIGMA, sigma_min
 from swarm_ik.errors import InvalidArgumentError, InvalidTargetError
 from swarm_ik.goals import base as goals_base
 from swarm_ik.kernels import joints
-from swarm_ik.optimize import make_rng
+from swarm_ik.optimize import check_budget, make_rng
 from swarm_ik.result import FrozenArrays
 
 FloatArray = NDArray[np.float64]
@@ -252,6 +252,7 @@ class PathResult(FrozenArrays):
         travel: Joint travel of the path, ``Σ_steps Σ_j |Δq_j|`` [rad / m].
         q_dense: With ``densify=k``: the checked path through the interpolated poses,
             shape ``((N − 1)(k + 1) + 1, nq)``; else None.
+        n_evals: Evaluations the call's solves spent (``max_evals`` bounds them).
     """
 
     q: FloatArray
@@ -269,6 +270,7 @@ class PathResult(FrozenArrays):
     n_candidates: NDArray[np.int64] = field(default_factory=lambda: np.zeros(0, dtype=np.int64))
     travel: float = 0.0
     q_dense: FloatArray | None = None
+    n_evals: int = 0
 
     def __repr__(self) -> str:
         return (
@@ -290,6 +292,7 @@ def solve_path(
     scene: Any = None,
     frame: str | None = None,
     time_limit: float | None = None,
+    max_evals: int | None = None,
     seed: int | np.random.Generator = 0,
     densify: int = 0,
     tol_pos: float = 1e-5,
@@ -335,6 +338,13 @@ def solve_path(
             waypoints) is charged to the limit up to half of it, as a first :func:`swarm_ik.solve`'s
             loading: such a call overruns by the loading and still gets half its limit; ``time_s``
             counts it.  Results are deterministic for a seed only when the limit is not reached.
+        max_evals: Most evaluations (FK and Jacobian, as :func:`swarm_ik.solve` counts them)
+            for the whole call, over every solve it runs (the branch searches, the tracking
+            solves, the densify checks): it ends building as ``time_limit`` does, after
+            :data:`SEARCH_SHARE` of them unless the waypoints left, each at the mean of those
+            built, fit in :data:`TRACK_SHARE` less than all of them; the remaining waypoints
+            are tracked while evaluations are left, the others not solved.  A budget, not a
+            clock: the same seed gives the same path.  ``PathResult.n_evals`` is what was spent.
         seed: Seed (or Generator) of every random choice (the solvers' seeds are drawn from
             it): the same seed gives the same path.
         densify: Poses interpolated between consecutive waypoints (position lerp, rotation
@@ -349,7 +359,7 @@ def solve_path(
     Raises:
         InvalidArgumentError: a bad shape, ``N < 2``, a non-positive or wrongly sized
             ``max_joint_step``, ``q0`` of the wrong length, not finite or outside the limits,
-            a bad ``densify``, ``time_limit``, tolerance, seed or goal list.
+            a bad ``densify``, ``time_limit``, ``max_evals``, tolerance, seed or goal list.
         InvalidWaypointError: a pose that is not a finite rigid transform (a subclass of
             both :class:`InvalidArgumentError` and :class:`InvalidTargetError`).
         UnknownNameError: ``frame`` is not a goal frame of the robot.
@@ -368,6 +378,7 @@ def solve_path(
     tol_rot = positive_float(tol_rot, "tol_rot")
     if time_limit is not None:
         time_limit = positive_float(time_limit, "time_limit (or None)")
+    check_budget(max_evals, None)
     rng = make_rng(seed)
     wps = _Waypoints.build(robot, poses, goals, scene, frame)
     if densify and wps.poses is None:
@@ -395,6 +406,7 @@ def solve_path(
         limit = t_clock + float(time_limit) - reserve
         deadline = t_clock + SEARCH_SHARE * (limit - t_clock)
     ctx = _Context(robot, wps, step, float(tol_pos), float(tol_rot), rng, deadline, limit)
+    ctx.max_evals = None if max_evals is None else int(max_evals)
     if limit is not None:
         ctx.keep = TRACK_SHARE * (limit - t_clock)
     graph = _build(ctx, start)
@@ -613,21 +625,25 @@ def _parse_poses(poses: Any) -> FloatArray:
 
 
 # -------------------------------------------------------------------- solving
-def _all_solutions(
-    problem: Any, n: int, seed: int, tol_pos: float, tol_rot: float, deadline: float | None
-) -> tuple[FloatArray, bool]:
+def _all_solutions(problem: Any, n: int, seed: int, ctx: _Context) -> tuple[FloatArray, bool]:
     """Every distinct solution :func:`swarm_ik.solve_many` finds: ``(q (k, nq), closed
     form)``, its search ended at ``deadline`` (``time.perf_counter()`` seconds; None: no
     deadline) and at its own count of starts without a limit (``64 n``) in any case, so that
     a search the deadline does not cut finds what it finds without one (goals written in
-    Python, milliseconds a call, took minutes past a path's time limit here)."""
+    Python, milliseconds a call, took minutes past a path's time limit here), and within
+    the evaluations left of the call's (:meth:`_Context.spend`)."""
     import swarm_ik
 
+    deadline = ctx.deadline
     limit = None if deadline is None else max(deadline - time.perf_counter(), 1e-3)
+    left = ctx.evals_left()
+    if left == 0:
+        return np.empty((0, problem.nq)), False
     results = swarm_ik.solve_many(
-        problem, n=n, seed=seed, tol_pos=tol_pos, tol_rot=tol_rot, time_limit=limit,
-        max_starts=64 * n,
+        problem, n=n, seed=seed, tol_pos=ctx.tol_pos, tol_rot=ctx.tol_rot, time_limit=limit,
+        max_evals=left, max_starts=64 * n,
     )  # fmt: skip
+    ctx.spend(results.n_evals)
     qs = np.array([r.q for r in results if r.success], dtype=float).reshape(-1, problem.nq)
     # (closed form: eaik's set, with the numerical search's added where it is incomplete)
     closed = any(r.solver == "analytic" for r in results)
@@ -676,6 +692,17 @@ class _Context:
         self.keep = 0.0  # seconds before the limit that building always leaves to tracking
         self.stopped_at: int | None = None  # the layer being built when building stopped
         self.t_build: float | None = None  # when the first layer's building began
+        self.max_evals: int | None = None  # the call's evaluation budget (None: none)
+        self.used = 0  # evaluations spent by the solves so far
+        self.spent = False  # the budget of evaluations (not the clock) ended the building
+
+    def evals_left(self) -> int | None:
+        """Evaluations left of ``max_evals`` (None: no budget)."""
+        return None if self.max_evals is None else max(self.max_evals - self.used, 0)
+
+    def spend(self, n: int) -> None:
+        """``n`` evaluations spent by a solve."""
+        self.used += int(n)
 
     def seed(self) -> int:
         return int(self.rng.integers(2**31))
@@ -704,6 +731,13 @@ class _Context:
         before the limit less :attr:`keep` (a path that builds every layer in 0.55 of its
         limit used to stop at half of it and track the rest one solve each, jumping where the
         layers would not have)."""
+        if not self.timed_out and self.max_evals is not None:
+            i, cap = self.layer, self.max_evals
+            if self.used >= SEARCH_SHARE * cap and not (
+                i > 0 and self.used + (self.wps.n - i) * self.used / i < (1 - TRACK_SHARE) * cap
+            ):  # (the evaluations' share spent, as the clock's below)
+                self.timed_out = self.spent = True
+                self.stopped_at = i
         if self.timed_out or self.deadline is None:
             return self.timed_out
         now = time.perf_counter()
@@ -721,7 +755,11 @@ class _Context:
         return self.timed_out
 
     def past_limit(self) -> bool:
-        """Whether the time limit is spent (no waypoint is solved any more)."""
+        """Whether the time limit or the evaluations are spent (no waypoint is solved any
+        more)."""
+        if self.max_evals is not None and self.used >= self.max_evals:
+            self.spent = self.spent or not self.timed_out
+            return True
         return self.limit is not None and time.perf_counter() + self.search_s >= self.limit
 
     def track(
@@ -735,20 +773,35 @@ class _Context:
 
         pose, problem = target
         q_start = np.ascontiguousarray(np.clip(q_start, self.lower, self.upper))
+        left = self.evals_left()
+        if left == 0:  # (the budget spent: not solved)
+            return q_start, False
+        budget = TRACK_EVALS if left is None else min(TRACK_EVALS, left)
         if pose is not None and self.ik is not None and (problem is None or self.pose_first):
-            res = self.ik.solve(
-                np.ascontiguousarray(pose, dtype=float), q0=q_start, seed=self.seed()
-            )
+            pose = np.ascontiguousarray(pose, dtype=float)
+            if budget == TRACK_EVALS:  # (the bound solver's budget)
+                res = self.ik.solve(pose, q0=q_start, seed=self.seed())
+            else:  # (what is left of the call's budget)
+                res = swarm_ik.solve(
+                    swarm_ik.IKProblem(self.robot, pose), q0=q_start, seed=self.seed(),
+                    max_evals=budget, tol_pos=self.tol_pos, tol_rot=self.tol_rot,
+                )  # fmt: skip
+            self.spend(res.n_evals)
             q = np.array(res.q, dtype=float)
             if problem is None:
                 return q, bool(res.success)
             if res.success and _meets(problem, q, self):
                 return q, True
+            left = self.evals_left()
+            if left == 0:
+                return q, False
+            budget = TRACK_EVALS if left is None else min(TRACK_EVALS, left)
         res = swarm_ik.solve(
-            problem, q0=q_start, seed=self.seed(), max_evals=TRACK_EVALS,
+            problem, q0=q_start, seed=self.seed(), max_evals=budget,
             time_limit=self.solve_limit(), tol_pos=self.tol_pos, tol_rot=self.tol_rot,
             prefer="nearest",
         )  # fmt: skip
+        self.spend(res.n_evals)
         return np.array(res.q, dtype=float), bool(res.success)
 
     def solve_limit(self) -> float | None:
@@ -1002,9 +1055,7 @@ def _closed_form(
     pose_problem = ctx.wps.pose_only(i)
     if pose_problem is None:
         return None
-    qs, closed = _all_solutions(
-        pose_problem, CLOSED_FORM_N, ctx.seed(), ctx.tol_pos, ctx.tol_rot, ctx.deadline
-    )
+    qs, closed = _all_solutions(pose_problem, CLOSED_FORM_N, ctx.seed(), ctx)
     if not closed:
         return qs, False, False, None
     assert ctx.wps.poses is not None
@@ -1064,7 +1115,6 @@ def _missed_solutions(
     """Solutions of ``pose`` next to eaik's least-squares points ``near`` that are no branch
     of ``known`` (modulo 2π, 1e-4 rad): each point polished from itself alone (one
     :func:`swarm_ik.solve_batch` call), judged by its check, brought within the limits."""
-    import swarm_ik
 
     # each point and NEAR_LS_STARTS starts scattered around it: at a singular pose eaik's
     # point may lie centimetres from its branch's solutions (a UR wrist at q5 = 0 gave one
@@ -1076,12 +1126,8 @@ def _missed_solutions(
     )
     starts = np.concatenate([near, (near[:, None, :] + scatter).reshape(-1, near.shape[1])])
     starts = np.clip(starts, ctx.lower, ctx.upper)
-    res = swarm_ik.solve_batch(
-        ctx.robot, np.repeat(np.asarray(pose)[None], starts.shape[0], axis=0),
-        q0=np.ascontiguousarray(starts), seed=ctx.seed(), tol_pos=ctx.tol_pos,
-        tol_rot=ctx.tol_rot, max_starts=1,
-    )  # fmt: skip
-    found = np.asarray(res.q, dtype=float)[np.asarray(res.success, dtype=bool)]
+    qs, ok = _polish_each(ctx, pose, starts)
+    found = qs[ok]
     known_c = _canon(known, ctx)
     out: list[FloatArray] = []
     for q in found:
@@ -1127,9 +1173,7 @@ def _meets(problem: Any, q: FloatArray, ctx: _Context) -> bool:
 
 def _spread(ctx: _Context, i: int) -> FloatArray:
     """Waypoint ``i``'s own spread of solutions (numerical ``solve_many``)."""
-    qs, _ = _all_solutions(
-        ctx.wps.problem(i), SEEDS, ctx.seed(), ctx.tol_pos, ctx.tol_rot, ctx.deadline
-    )
+    qs, _ = _all_solutions(ctx.wps.problem(i), SEEDS, ctx.seed(), ctx)
     return qs
 
 
@@ -1176,12 +1220,38 @@ def _null(ctx: _Context, qs: FloatArray) -> FloatArray:
     return np.asarray(np.linalg.svd(np.asarray(jac).reshape(-1, 6, qs.shape[1]))[2][:, -1, :])
 
 
+def _polish_each(
+    ctx: _Context, pose: FloatArray, starts: FloatArray
+) -> tuple[FloatArray, NDArray[np.bool_]]:
+    """``pose`` solved from each row of ``starts`` ``(k, nq)`` (inside the limits), the start
+    the only one: one compiled :func:`swarm_ik.solve_batch` call, ``(q (k, nq), success
+    (k,))``.  Within the call's evaluations left (:meth:`_Context.evals_left`): the first
+    starts only, an equal share each, where they are fewer than the rows (the others
+    returned as they are, not met)."""
+    import swarm_ik
+
+    k = starts.shape[0]
+    qs, ok = np.array(starts, dtype=float), np.zeros(k, dtype=bool)
+    left = ctx.evals_left()
+    m = k if left is None else min(k, left)
+    if m == 0:
+        return qs, ok
+    res = swarm_ik.solve_batch(
+        ctx.robot, np.repeat(np.asarray(pose)[None], m, axis=0),
+        q0=np.ascontiguousarray(starts[:m]), seed=ctx.seed(), tol_pos=ctx.tol_pos,
+        tol_rot=ctx.tol_rot, max_starts=1, max_evals=None if left is None else left // m,
+    )  # fmt: skip
+    ctx.spend(int(np.sum(res.n_evals)))
+    qs[:m] = np.asarray(res.q, dtype=float)
+    ok[:m] = np.asarray(res.success, dtype=bool)
+    return qs, ok
+
+
 def _track_batch(ctx: _Context, i: int, starts: Any) -> tuple[FloatArray, NDArray[np.bool_]]:
     """Waypoint ``i`` solved from each row of ``starts`` ``(k, nq)``, the start the only one
     (so the answer is the solution it polishes into): one compiled call of
     :func:`swarm_ik.solve_batch` for an end-effector pose (then checked against the waypoint's
     other goals, if any, with :meth:`IKProblem.verify`), else one solve per start."""
-    import swarm_ik
 
     nq = ctx.robot.nq
     starts = np.clip(np.asarray(starts, dtype=float).reshape(-1, nq), ctx.lower, ctx.upper)
@@ -1189,13 +1259,7 @@ def _track_batch(ctx: _Context, i: int, starts: Any) -> tuple[FloatArray, NDArra
     if starts.shape[0] == 0:
         return starts, np.zeros(0, dtype=bool)
     if pose is not None and (problem is None or ctx.pose_first):
-        res = swarm_ik.solve_batch(
-            ctx.robot, np.repeat(np.asarray(pose)[None], starts.shape[0], axis=0),
-            q0=np.ascontiguousarray(starts), seed=ctx.seed(), tol_pos=ctx.tol_pos,
-            tol_rot=ctx.tol_rot, max_starts=1,
-        )  # fmt: skip
-        qs = np.array(res.q, dtype=float)
-        ok = np.array(res.success, dtype=bool)
+        qs, ok = _polish_each(ctx, pose, starts)
         if problem is not None:
             ok = np.array(
                 [bool(o) and _meets(problem, q, ctx) for q, o in zip(qs, ok, strict=True)]
@@ -1705,6 +1769,7 @@ def _finish(
         n_candidates=np.array([layer.shape[0] for layer in graph.layers], dtype=np.int64),
         travel=float(d.sum()),
         q_dense=dense,
+        n_evals=ctx.used,
     )
 
 
@@ -1818,9 +1883,10 @@ def _reason(
         parts.append(msg)
     if ctx.timed_out:
         unchecked = "; the interpolated poses of the later steps were not checked" if k else ""
-        msg = "time_limit reached: the later waypoints were only tracked (no time to build them)"
+        what, lack = ("max_evals", "evaluations") if ctx.spent else ("time_limit", "time")
+        msg = f"{what} reached: the later waypoints were only tracked (no {lack} to build them)"
         if ctx.cut is None and ctx.stopped_at is not None and ctx.stopped_at >= q.shape[0] - 1:
-            msg = "time_limit reached: every waypoint built, the refinement after it cut short"
+            msg = f"{what} reached: every waypoint built, the refinement after it cut short"
         if ctx.cut is not None:
             last = q.shape[0] - 1
             held = f"waypoints {ctx.cut}–{last}" if ctx.cut < last else f"waypoint {last}"

@@ -186,6 +186,31 @@ def test_time_limit_covers_the_whole_call():
     assert f"waypoints {cut}–199 not solved" in res.reason
 
 
+@pytest.mark.parametrize("name", ["panda", "ur5"])
+def test_max_evals_bounds_the_whole_path_and_keeps_it_deterministic(name: str) -> None:
+    """solve_path had no max_evals (solve's vocabulary): the budget covers every solve of the
+    call, ends the building as the time limit does, and, unlike a clock, gives the same path
+    for a seed."""
+    robot = get(name)
+    q = smooth_q(robot, 5, n=12)
+    poses = robot.fk(q)
+    full = solve_path(robot, poses, q0=q[0], seed=3)
+    assert full.success and full.n_evals > 0 and "max_evals" not in full.reason
+    same = solve_path(robot, poses, q0=q[0], seed=3, max_evals=10 * full.n_evals)
+    np.testing.assert_array_equal(same.q, full.q)
+    assert same.n_evals == full.n_evals
+    for budget in (40, full.n_evals // 3):
+        cut = solve_path(robot, poses, q0=q[0], seed=3, max_evals=budget)
+        assert 0 < cut.n_evals <= budget
+        assert cut.reached[0] and "max_evals reached" in cut.reason
+        again = solve_path(robot, poses, q0=q[0], seed=3, max_evals=budget)
+        np.testing.assert_array_equal(again.q, cut.q)
+        assert (again.n_evals, again.reason) == (cut.n_evals, cut.reason)
+    for bad in (0, -5, 2.5, True, "100"):
+        with pytest.raises(InvalidArgumentError, match="max_evals"):
+            solve_path(robot, poses, max_evals=bad)
+
+
 @timed()
 def test_the_search_through_many_candidates_is_inside_the_time_limit():
     """A UR5 circle: eight closed-form branches and their 2π copies per waypoint, millions
