@@ -6,8 +6,8 @@ import json
 
 import numpy as np
 import pytest
+from conftest import cli_error, timed
 from conftest import robot as get
-from conftest import timed
 
 import swarm_ik
 from swarm_ik import path as sp
@@ -403,6 +403,19 @@ def _cli(argv):
     parser = Parser(prog="swarm-ik")
     cli_path.add_parser(parser.add_subparsers(dest="command"))
     return cli_path.run(parser.parse_args(["path", *argv]))
+
+
+def test_cli_path_takes_max_evals(tmp_path, capsys):
+    """``swarm-ik path --max-evals``: the budget as in the Python call, its spend in the
+    JSON, and a bad one refused with one line (exit 2)."""
+    robot = get("panda")
+    poses = str(tmp_path / "poses.npy")
+    np.save(poses, robot.fk(smooth_q(robot, 14, n=6)))
+    assert _cli(["--robot", "panda", "--poses", poses, "--max-evals", "60", "--json"]) == 1
+    report = json.loads(capsys.readouterr().out)
+    assert 0 < report["n_evals"] <= 60 and "max_evals reached" in report["reason"]
+    line = cli_error(capsys, "path", "--robot", "panda", "--poses", poses, "--max-evals", "0")
+    assert "max_evals must be a positive integer" in line
 
 
 def test_cli_writes_the_path_and_exits_by_outcome(tmp_path, capsys):

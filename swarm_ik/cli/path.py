@@ -93,6 +93,13 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
         "the poses are validated and the answers checked in any case, about 45 us a waypoint, "
         "so a limit shorter than that is overrun (100,000 waypoints: about 4.5 s)",
     )
+    parser.add_argument(
+        "--max-evals",
+        type=int,
+        default=None,
+        help="most FK + Jacobian evaluations for the whole path, over every solve it runs "
+        "(the same path for a seed, unlike --time-limit)",
+    )
     add_tolerances(parser)
     parser.add_argument(
         "--out",
@@ -140,8 +147,8 @@ def run(args: argparse.Namespace) -> int:
     scene = None if args.scene is None else swarm_ik.Scene.load(args.scene)
     res = solve_path(
         robot, poses, max_joint_step=step, q0=args.q0, scene=scene, seed=args.seed,
-        densify=args.densify, time_limit=args.time_limit, tol_pos=args.tol_pos,
-        tol_rot=args.tol_rot,
+        densify=args.densify, time_limit=args.time_limit, max_evals=args.max_evals,
+        tol_pos=args.tol_pos, tol_rot=args.tol_rot,
     )  # fmt: skip
     if args.out is not None:
         _write(args.out, robot, res.q)
@@ -208,6 +215,7 @@ def _as_dict(robot: Any, res: Any, out: Path | None) -> dict[str, Any]:
         "exhaustive": res.exhaustive,
         "reason": res.reason,
         "time_s": res.time_s,
+        "n_evals": res.n_evals,
         "position_errors": [float(v) for v in res.position_errors],
         "rotation_errors": [float(v) for v in res.rotation_errors],
         "q": [[float(v) for v in row] for row in res.q],
