@@ -35,14 +35,14 @@ def _five(panda: swarm_ik.RobotModel, target: np.ndarray) -> dict[str, Any]:
     problem = swarm_ik.IKProblem(panda, target)
 
     def solve(**kw: Any) -> Any:
-        return swarm_ik.solve(problem, max_evals=2000, **kw)
+        return swarm_ik.solve(problem, **{"max_evals": 2000, **kw})
 
     def ik_solver(**kw: Any) -> Any:
         seed = kw.pop("seed", 0)
-        return swarm_ik.IKSolver(panda, max_evals=2000, **kw).solve(target, seed=seed)
+        return swarm_ik.IKSolver(panda, **{"max_evals": 2000, **kw}).solve(target, seed=seed)
 
     def many(**kw: Any) -> Any:
-        return swarm_ik.solve_many(problem, n=2, max_evals=2000, **kw)
+        return swarm_ik.solve_many(problem, n=2, **{"max_evals": 2000, **kw})
 
     def batch(**kw: Any) -> Any:
         return swarm_ik.solve_batch(panda, target[None], **kw)
@@ -56,9 +56,10 @@ def _five(panda: swarm_ik.RobotModel, target: np.ndarray) -> dict[str, Any]:
 
 @pytest.mark.parametrize(
     "kw",
-    [dict(tol_pos=True), dict(tol_rot=True), dict(time_limit=True), dict(tol_pos="1e-5")],
+    [dict(tol_pos=True), dict(tol_rot=True), dict(time_limit=True), dict(tol_pos="1e-5"),
+     dict(max_evals=0), dict(max_evals=True), dict(max_evals=2.5)],
     ids=str,
-)
+)  # fmt: skip
 def test_the_five_solve_calls_refuse_the_same_values(panda, target, kw) -> None:
     for name, call in _five(panda, target).items():
         with pytest.raises(errors.InvalidArgumentError):
@@ -67,8 +68,11 @@ def test_the_five_solve_calls_refuse_the_same_values(panda, target, kw) -> None:
 
 
 @pytest.mark.parametrize(
-    "kw", [dict(tol_pos=np.array(1e-5)), dict(time_limit=np.array(2.0)), dict(seed=None)], ids=str
-)
+    "kw",
+    [dict(tol_pos=np.array(1e-5)), dict(time_limit=np.array(2.0)), dict(seed=None),
+     dict(max_evals=np.array(3000))],
+    ids=str,
+)  # fmt: skip
 def test_the_five_solve_calls_take_the_same_values(panda, target, kw) -> None:
     for call in _five(panda, target).values():
         call(**kw)
