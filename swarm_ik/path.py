@@ -625,20 +625,23 @@ def _parse_poses(poses: Any) -> FloatArray:
 
 
 # -------------------------------------------------------------------- solving
-def _all_solutions(problem: Any, n: int, seed: int, ctx: _Context) -> tuple[FloatArray, bool]:
+def _all_solutions(problem: Any, n: int, seed: int, ctx: _Context) -> tuple[FloatArray, bool, bool]:
     """Every distinct solution :func:`swarm_ik.solve_many` finds: ``(q (k, nq), closed
     form)``, its search ended at ``deadline`` (``time.perf_counter()`` seconds; None: no
     deadline) and at its own count of starts without a limit (``64 n``) in any case, so that
     a search the deadline does not cut finds what it finds without one (goals written in
     Python, milliseconds a call, took minutes past a path's time limit here), and within
-    the evaluations left of the call's (:meth:`_Context.spend`)."""
+    the evaluations left of the call's (:meth:`_Context.spend`) less :attr:`_Context.keep_evals`.
+    The third value: the search ran to its own end (no budget or time limit cut it)."""
     import swarm_ik
 
     deadline = ctx.deadline
     limit = None if deadline is None else max(deadline - time.perf_counter(), 1e-3)
     left = ctx.evals_left()
+    if left is not None:
+        left -= min(ctx.keep_evals, left // 2)
     if left == 0:
-        return np.empty((0, problem.nq)), False
+        return np.empty((0, problem.nq)), False, False
     results = swarm_ik.solve_many(
         problem, n=n, seed=seed, tol_pos=ctx.tol_pos, tol_rot=ctx.tol_rot, time_limit=limit,
         max_evals=left, max_starts=64 * n,
@@ -647,7 +650,7 @@ def _all_solutions(problem: Any, n: int, seed: int, ctx: _Context) -> tuple[Floa
     qs = np.array([r.q for r in results if r.success], dtype=float).reshape(-1, problem.nq)
     # (closed form: eaik's set, with the numerical search's added where it is incomplete)
     closed = any(r.solver == "analytic" for r in results)
-    return qs, closed
+    return qs, closed, results.reason not in ("budget", "time_limit")
 
 
 class _Context:
@@ -695,6 +698,11 @@ class _Context:
         self.max_evals: int | None = None  # the call's evaluation budget (None: none)
         self.used = 0  # evaluations spent by the solves so far
         self.spent = False  # the budget of evaluations (not the clock) ended the building
+        self.cut_by = "time_limit"  # what the last past_limit() found spent
+        self.cut_reason = "time_limit"  # what left the waypoints from ctx.cut on unsolved
+        self.budget_cut = False  # the budget cut a solve short (a closed form's probe: no proof)
+        self.keep_evals = 0  # evaluations a branch search leaves for the solve after it
+        self.cut_layers: set[int] = set()  # waypoints whose closed-form search was cut
 
     def evals_left(self) -> int | None:
         """Evaluations left of ``max_evals`` (None: no budget)."""
@@ -759,8 +767,12 @@ class _Context:
         more)."""
         if self.max_evals is not None and self.used >= self.max_evals:
             self.spent = self.spent or not self.timed_out
+            self.cut_by = "max_evals"
             return True
-        return self.limit is not None and time.perf_counter() + self.search_s >= self.limit
+        if self.limit is not None and time.perf_counter() + self.search_s >= self.limit:
+            self.cut_by = "time_limit"
+            return True
+        return False
 
     def track(
         self, target: tuple[FloatArray | None, Any], q_start: FloatArray
@@ -775,6 +787,7 @@ class _Context:
         q_start = np.ascontiguousarray(np.clip(q_start, self.lower, self.upper))
         left = self.evals_left()
         if left == 0:  # (the budget spent: not solved)
+            self.budget_cut = True
             return q_start, False
         budget = TRACK_EVALS if left is None else min(TRACK_EVALS, left)
         if pose is not None and self.ik is not None and (problem is None or self.pose_first):
@@ -787,6 +800,7 @@ class _Context:
                     max_evals=budget, tol_pos=self.tol_pos, tol_rot=self.tol_rot,
                 )  # fmt: skip
             self.spend(res.n_evals)
+            self.budget_cut = self.budget_cut or (budget < TRACK_EVALS and not res.success)
             q = np.array(res.q, dtype=float)
             if problem is None:
                 return q, bool(res.success)
@@ -802,6 +816,7 @@ class _Context:
             prefer="nearest",
         )  # fmt: skip
         self.spend(res.n_evals)
+        self.budget_cut = self.budget_cut or (budget < TRACK_EVALS and not res.success)
         return np.array(res.q, dtype=float), bool(res.success)
 
     def solve_limit(self) -> float | None:
@@ -1055,17 +1070,20 @@ def _closed_form(
     pose_problem = ctx.wps.pose_only(i)
     if pose_problem is None:
         return None
-    qs, closed = _all_solutions(pose_problem, CLOSED_FORM_N, ctx.seed(), ctx)
+    qs, closed, whole = _all_solutions(pose_problem, CLOSED_FORM_N, ctx.seed(), ctx)
     if not closed:
         return qs, False, False, None
     assert ctx.wps.poses is not None
     near = _least_squares_solutions(ctx.robot, ctx.wps.poses[i])
-    certified = ctx.full_branches is not None and near is not None
+    certified = whole and ctx.full_branches is not None and near is not None
     if near is not None and near.shape[0]:
-        missed = _missed_solutions(ctx, ctx.wps.poses[i], qs, near)
-        if missed.shape[0]:
+        missed, cut = _missed_solutions(ctx, ctx.wps.poses[i], qs, near)
+        if missed.shape[0] or cut:  # (a probe the budget cut proves nothing)
             certified = False
             qs = _merge(qs, missed, ctx)
+    if not whole:  # (cut by the budget or the clock: its set proves nothing)
+        ctx.cut_layers.add(i)
+        ctx.budget_cut = ctx.budget_cut or ctx.max_evals is not None
     if certified:
         assert ctx.full_branches is not None
         certified = 0 < qs.shape[0] <= ctx.full_branches
@@ -1111,7 +1129,7 @@ NEAR_LS_SPREAD = 0.7
 
 def _missed_solutions(
     ctx: _Context, pose: FloatArray, known: FloatArray, near: FloatArray
-) -> FloatArray:
+) -> tuple[FloatArray, bool]:
     """Solutions of ``pose`` next to eaik's least-squares points ``near`` that are no branch
     of ``known`` (modulo 2π, 1e-4 rad): each point polished from itself alone (one
     :func:`swarm_ik.solve_batch` call), judged by its check, brought within the limits."""
@@ -1126,7 +1144,7 @@ def _missed_solutions(
     )
     starts = np.concatenate([near, (near[:, None, :] + scatter).reshape(-1, near.shape[1])])
     starts = np.clip(starts, ctx.lower, ctx.upper)
-    qs, ok = _polish_each(ctx, pose, starts)
+    qs, ok, cut = _polish_each(ctx, pose, starts)
     found = qs[ok]
     known_c = _canon(known, ctx)
     out: list[FloatArray] = []
@@ -1137,7 +1155,7 @@ def _missed_solutions(
         if out and bool(np.any(_close(_canon(np.array(out), ctx), c, 1e-4))):
             continue
         out.append(q)
-    return np.array(out).reshape(-1, known.shape[1])
+    return np.array(out).reshape(-1, known.shape[1]), cut
 
 
 def _close(rows: FloatArray, q: FloatArray, tol: float) -> NDArray[np.bool_]:
@@ -1173,7 +1191,7 @@ def _meets(problem: Any, q: FloatArray, ctx: _Context) -> bool:
 
 def _spread(ctx: _Context, i: int) -> FloatArray:
     """Waypoint ``i``'s own spread of solutions (numerical ``solve_many``)."""
-    qs, _ = _all_solutions(ctx.wps.problem(i), SEEDS, ctx.seed(), ctx)
+    qs, _, _ = _all_solutions(ctx.wps.problem(i), SEEDS, ctx.seed(), ctx)
     return qs
 
 
@@ -1222,12 +1240,13 @@ def _null(ctx: _Context, qs: FloatArray) -> FloatArray:
 
 def _polish_each(
     ctx: _Context, pose: FloatArray, starts: FloatArray
-) -> tuple[FloatArray, NDArray[np.bool_]]:
+) -> tuple[FloatArray, NDArray[np.bool_], bool]:
     """``pose`` solved from each row of ``starts`` ``(k, nq)`` (inside the limits), the start
     the only one: one compiled :func:`swarm_ik.solve_batch` call, ``(q (k, nq), success
     (k,))``.  Within the call's evaluations left (:meth:`_Context.evals_left`): the first
     starts only, an equal share each, where they are fewer than the rows (the others
-    returned as they are, not met)."""
+    returned as they are, not met).  The third value: the budget cut a start short (one
+    left out, or one that stopped unmet at its share), where its answer proves nothing."""
     import swarm_ik
 
     k = starts.shape[0]
@@ -1235,16 +1254,22 @@ def _polish_each(
     left = ctx.evals_left()
     m = k if left is None else min(k, left)
     if m == 0:
-        return qs, ok
+        ctx.budget_cut = ctx.budget_cut or k > 0
+        return qs, ok, k > 0
+    share = None if left is None else left // m
     res = swarm_ik.solve_batch(
         ctx.robot, np.repeat(np.asarray(pose)[None], m, axis=0),
         q0=np.ascontiguousarray(starts[:m]), seed=ctx.seed(), tol_pos=ctx.tol_pos,
-        tol_rot=ctx.tol_rot, max_starts=1, max_evals=None if left is None else left // m,
+        tol_rot=ctx.tol_rot, max_starts=1, max_evals=share,
     )  # fmt: skip
     ctx.spend(int(np.sum(res.n_evals)))
     qs[:m] = np.asarray(res.q, dtype=float)
     ok[:m] = np.asarray(res.success, dtype=bool)
-    return qs, ok
+    cut = share is not None and (
+        m < k or bool(np.any(~ok[:m] & (np.asarray(res.n_evals) >= share)))
+    )
+    ctx.budget_cut = ctx.budget_cut or cut
+    return qs, ok, cut
 
 
 def _track_batch(ctx: _Context, i: int, starts: Any) -> tuple[FloatArray, NDArray[np.bool_]]:
@@ -1259,7 +1284,7 @@ def _track_batch(ctx: _Context, i: int, starts: Any) -> tuple[FloatArray, NDArra
     if starts.shape[0] == 0:
         return starts, np.zeros(0, dtype=bool)
     if pose is not None and (problem is None or ctx.pose_first):
-        qs, ok = _polish_each(ctx, pose, starts)
+        qs, ok, _ = _polish_each(ctx, pose, starts)
         if problem is not None:
             ok = np.array(
                 [bool(o) and _meets(problem, q, ctx) for q, o in zip(qs, ok, strict=True)]
@@ -1364,7 +1389,8 @@ def _build(ctx: _Context, start: FloatArray | None) -> _Graph:
         if i > 0 and (ctx.cut is not None or ctx.past_limit()):
             # not solved: the best candidate of the waypoint before held, not reached
             ctx.timed_out = True
-            ctx.cut = i if ctx.cut is None else ctx.cut
+            if ctx.cut is None:
+                ctx.cut, ctx.cut_reason = i, ctx.cut_by
             ra, ta = value(i - 1)
             graph.layers.append(_pick(graph.layers[i - 1], ra, ta, 1, ctx))
             ctx.built(graph.layers[i - 1].shape[0], 1)
@@ -1379,7 +1405,11 @@ def _build(ctx: _Context, start: FloatArray | None) -> _Graph:
         cert = used_closed = spread_done = False
         blocked = None
         if closed_ok and not ctx.out_of_time():
+            # (within a budget, waypoint 0's branch search leaves evaluations for the
+            # solve from q0 after it: q0 itself may be the answer)
+            ctx.keep_evals = TRACK_EVALS if i == 0 and start is not None else 0
             cf = _closed_form(ctx, i)
+            ctx.keep_evals = 0
             if cf is None:
                 closed_ok = False
             elif cf[1]:
@@ -1830,7 +1860,12 @@ def _reason(
         why = "no IK solution found"
         if blocked:  # (the closed form's branches, every one rejected by the other goals)
             why = _blocked_reason(ctx, graph, missed, blocked)
-        closed_none = not blocked and any(graph.closed) and ctx.wps.pose_only(missed[0]) is not None
+        closed_none = (  # (each one's own closed-form set, whole, held no solution)
+            not blocked
+            and ctx.wps.pose_only(missed[0]) is not None
+            and all(i < len(graph.closed) and graph.closed[i] for i in missed)
+            and not ctx.cut_layers.intersection(missed)
+        )
         if beyond:
             why += f"; beyond the frame's reach: {beyond[:10]}"
         elif closed_none:
@@ -1844,7 +1879,8 @@ def _reason(
             len(blocked) == len(missed) and all(graph.certified[i] for i in blocked)
         )
         if ctx.timed_out and not proven:  # (tracked with what the limit left: not a proof)
-            parts.append(f"waypoint{plural} {where} not reached within the time limit")
+            within = "max_evals" if ctx.spent else "the time limit"
+            parts.append(f"waypoint{plural} {where} not reached within {within}")
         else:
             parts.append(f"waypoint{plural} {where} unreachable: {why}")
     if jumps:
@@ -1881,6 +1917,11 @@ def _reason(
         if k and not densify_ok and not ctx.timed_out:
             msg += f"; densify checks stopped after {DENSIFY_ROUNDS} rounds"
         parts.append(msg)
+    if ctx.budget_cut and not ctx.timed_out:
+        parts.append(
+            "max_evals reached: some solves were cut short (a closed-form set they checked is "
+            "not certified complete)"
+        )
     if ctx.timed_out:
         unchecked = "; the interpolated poses of the later steps were not checked" if k else ""
         what, lack = ("max_evals", "evaluations") if ctx.spent else ("time_limit", "time")
@@ -1890,7 +1931,8 @@ def _reason(
         if ctx.cut is not None:
             last = q.shape[0] - 1
             held = f"waypoints {ctx.cut}–{last}" if ctx.cut < last else f"waypoint {last}"
-            msg += f", and {held} not solved (holding waypoint {ctx.cut - 1}'s configuration)"
+            by = "" if ctx.cut_reason == what else f" ({ctx.cut_reason} reached)"
+            msg += f", and {held} not solved{by} (holding waypoint {ctx.cut - 1}'s configuration)"
         parts.append(msg + unchecked)
     if not parts:
         checked = f", {k} interpolated poses per step checked" if k else ""

@@ -211,6 +211,36 @@ def test_max_evals_bounds_the_whole_path_and_keeps_it_deterministic(name: str) -
             solve_path(robot, poses, max_evals=bad)
 
 
+def test_a_budget_cut_claims_no_proof_and_keeps_q0_a_candidate() -> None:
+    """Review 107: within max_evals, waypoint 0's branch search spent the budget before the
+    solve from q0 (a jump of 0.45 rad into waypoint 0 that q0 met exactly, "no IK solution
+    lies within max_joint_step of q0"); a reached-by-budget message named a time limit the
+    call did not have; a waypoint the budget left unbuilt was "unreachable (closed form:
+    none meets it)"; and a closed-form set whose probe the budget cut was certified, so
+    the path "proved" no jump-free path exists."""
+    from swarm_ik.bench.path import make_path
+
+    panda = get("panda")
+    q = np.array([0.5, 0.3, -0.4, -1.8, 0.2, 1.9, 0.6])
+    poses = panda.fk(np.linspace(q, q + 0.05, 2))
+    for budget in (5, 17, 50, 1000):
+        res = solve_path(panda, poses, q0=q, max_evals=budget)
+        assert "time limit" not in res.reason and "time_limit" not in res.reason
+        if budget >= 17:
+            assert res.reconfigurations == () and res.reached[0]
+    ur5 = get("ur5")
+    q = np.array([0.3, -1.2, 1.4, -1.8, -1.57, 0.0])
+    cut = solve_path(ur5, ur5.fk(np.linspace(q, q + 0.1, 4)), q0=q, max_evals=2)
+    assert "unreachable" not in cut.reason and "max_evals reached" in cut.reason
+    rng = np.random.default_rng(330)
+    line = make_path(ur5, "line", rng, int(rng.choice([2, 3, 6])))
+    whole = solve_path(ur5, line, seed=330)
+    assert not whole.exhaustive and whole.reconfigurations  # (its unbounded verdict)
+    starved = solve_path(ur5, line, seed=330, max_evals=1)
+    assert not starved.exhaustive and "max_evals reached" in starved.reason
+    assert "proves" not in starved.reason
+
+
 @timed()
 def test_the_search_through_many_candidates_is_inside_the_time_limit():
     """A UR5 circle: eight closed-form branches and their 2π copies per waypoint, millions
