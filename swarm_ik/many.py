@@ -63,7 +63,7 @@ from swarm_ik.goals import base as goals_base
 from swarm_ik.goals.base import reuse_goal_values
 from swarm_ik.kernels import joints
 from swarm_ik.optimize import check_budget, make_rng
-from swarm_ik.problem import IKProblem
+from swarm_ik.problem import GoalError, IKProblem, largest_errors
 from swarm_ik.result import Result, Solutions
 from swarm_ik.solvers import analytic
 from swarm_ik.solvers.hybrid import CONVERGED, Polisher
@@ -643,10 +643,19 @@ def _result(
     fit: float,
     solver: str,
     seed: int | None,
+    goal_errors: tuple[GoalError, ...] = (),
 ) -> Result:
-    """One verified solution as a :class:`Result`."""
+    """One verified solution as a :class:`Result` (``goal_errors``: its check's)."""
     return _results(
-        np.asarray(q, dtype=float)[None], [dp], [dr], [n_evals], [t_found], [fit], solver, seed
+        np.asarray(q, dtype=float)[None],
+        [dp],
+        [dr],
+        [n_evals],
+        [t_found],
+        [fit],
+        solver,
+        seed,
+        [goal_errors],
     )[0]
 
 
@@ -659,9 +668,10 @@ def _results(
     fits: Any,
     solver: str,
     seed: int | None,
+    goal_errors: Any = None,
 ) -> list[Result]:
     """Verified solutions ``qs`` ``(k, nq)`` as :class:`Result` objects, each ``q`` a fresh
-    copy."""
+    copy (``goal_errors``: each one's check, else none yet)."""
     k = qs.shape[0]
     if k == 0:
         return []
@@ -680,6 +690,8 @@ def _results(
         kw["n_evals"] = int(evals[i])
         kw["time_s"] = float(times[i])
         kw["history"] = hist[i]
+        if goal_errors is not None:
+            kw["goal_errors"] = goal_errors[i]
         out.append(Result(**kw))
     return out
 
@@ -709,14 +721,15 @@ def _with_windings(
     others = copies[branch_distance(copies, rep.q, periodic) > 1e-9]
     if others.shape[0] == 0:
         return [rep]
-    dps, drs = pose_errors(problem, others)
     fits = problem.fitness(others)
     out = [rep]
-    for q, a, b, f in zip(others, dps, drs, fits, strict=True):
+    for q, f in zip(others, fits, strict=True):
         errors = problem.verify(q, tol_pos, tol_rot, q0=start_q)
-        if all(e.met for e in errors):
-            found = _result(q, a, b, rep.n_evals, rep.time_s, float(f), rep.solver, rep.seed)
-            out.append(dataclasses.replace(found, goal_errors=errors))
+        if all(e.met for e in errors):  # (its errors: the summary figures of the check)
+            dp, dr = largest_errors(errors)
+            out.append(
+                _result(q, dp, dr, rep.n_evals, rep.time_s, float(f), rep.solver, rep.seed, errors)
+            )
     return out
 
 
