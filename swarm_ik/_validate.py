@@ -55,6 +55,19 @@ def keywords_checked(func: Callable[P, R]) -> Callable[P, R]:
     return checked
 
 
+def one_line(text: object, limit: int | None = None) -> str:
+    """``text`` on one line (whitespace runs, newlines included, become one space), cut at
+    ``limit`` characters with an ellipsis at the end (the start of a message says most)."""
+    out = " ".join(str(text).split())
+    return out if limit is None or len(out) <= limit else out[: limit - 1] + "…"
+
+
+def quoted_error(exc: BaseException, limit: int = 200) -> str:
+    """The text of ``exc`` (a user's code raised it) quoted on one line for a message of
+    ours: its start kept whole (``reprlib.repr`` cut it in the middle to 30 characters)."""
+    return repr(one_line(exc, limit))
+
+
 def user_stacklevel() -> int:
     """The ``stacklevel`` that makes a warning of the calling function name the first frame
     outside swarm_ik (the user's line, not a line of the package)."""

@@ -116,7 +116,7 @@ def goal_unreachable(problem: IKProblem, gl: Any, tol_pos: float, tol_rot: float
     why = goals_base.infeasible_of(gl, problem.robot, tol_pos, tol_rot)
     if why is not None:
         return why
-    held = goals_base.pin_of(gl)
+    held = goals_base.pin_of(gl, problem.robot)
     if held is None or held.point is None:
         return None
     point, slack = held.point, held.point_slack  # (a region reaches this much nearer)
@@ -230,7 +230,7 @@ def conflicting_goals(problem: IKProblem, tol_pos: float, tol_rot: float) -> str
     looks: list[tuple[Any, Any]] = []
     seen: set[tuple[Any, ...]] = set()  # (a goal given twice holds nothing new)
     for gl in problem.goals:
-        held = goals_base.pin_of(gl) if gl.is_primary else None
+        held = goals_base.pin_of(gl, problem.robot) if gl.is_primary else None
         if held is None:
             continue
         same = tuple(v.tobytes() if isinstance(v, np.ndarray) else v for v in held)

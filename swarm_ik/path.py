@@ -76,7 +76,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from swarm_ik._validate import count, floats_or, keywords_checked, positive_float
-from swarm_ik.api import conflicting_goals, reach_limit
+from swarm_ik.api import conflicting_goals, reach_limit, unreachable_goal
 from swarm_ik.branches import SINGULAR_SIGMA, sigma_min
 from swarm_ik.errors import InvalidArgumentError, InvalidTargetError
 from swarm_ik.goals import base as goals_base
@@ -1832,16 +1832,25 @@ def _unwind(rows: FloatArray, start: FloatArray | None, ctx: _Context) -> FloatA
     return out
 
 
-def _conflicts(ctx: _Context, missed: list[int]) -> str:
-    """Where the goals of a waypoint not reached conflict (:func:`swarm_ik.api.conflicting_goals`:
-    what they hold their frames to, before any search), as ``solve`` says it: the first such
-    waypoint and its goals (goal lists of a path were "no IK solution found" where ``solve``
-    of the same goals said ``conflicting_goals``); empty when none is found."""
+def _conflicts(ctx: _Context, missed: list[int], q: FloatArray) -> tuple[str, bool]:
+    """Where the goals of a waypoint not reached conflict, as ``solve`` says it: the first
+    waypoint whose goals :func:`swarm_ik.api.conflicting_goals` proves contradictory (what
+    they hold their frames to, before any search: a proof), else the first whose goals pull
+    against each other at the configuration the path holds for it
+    (:meth:`swarm_ik.IKProblem.opposing_goals`, as ``solve`` judges its answer: no proof; the
+    first three such waypoints tried).
+    Returns ``(the text, a proof)``; ``("", False)`` when none is found (goal lists of a path
+    were "no IK solution found" where ``solve`` of the same goals said
+    ``conflicting_goals``)."""
     for i in missed:
         why = conflicting_goals(ctx.wps.problem(i), ctx.tol_pos, ctx.tol_rot)
         if why is not None:
-            return f"; the goals of waypoint {i} conflict: {why}"
-    return ""
+            return f"; the goals of waypoint {i} conflict: {why}", True
+    for i in missed[:3]:  # (a few: each test evaluates every goal and its Jacobian once)
+        why = ctx.wps.problem(i).opposing_goals(q[i])
+        if why is not None:
+            return f"; the goals of waypoint {i} pull against each other: {why}", False
+    return "", False
 
 
 def _reason(
@@ -1855,7 +1864,8 @@ def _reason(
     missed = [int(i) for i in np.flatnonzero(~np.asarray(reached)) if i < cut]
     if missed:
         where = ", ".join(str(i) for i in missed[:10]) + (" …" if len(missed) > 10 else "")
-        beyond = [i for i in missed if _beyond_reach(ctx, i)]
+        out_of_reach = {i: _beyond_reach(ctx, i) for i in missed}
+        beyond = [i for i in missed if out_of_reach[i] is not None]
         blocked = [i for i in missed if i < len(graph.blocked) and graph.blocked[i] is not None]
         why = "no IK solution found"
         if blocked:  # (the closed form's branches, every one rejected by the other goals)
@@ -1867,22 +1877,24 @@ def _reason(
             and not ctx.cut_layers.intersection(missed)
         )
         if beyond:
-            why += f"; beyond the frame's reach: {beyond[:10]}"
+            why += f"; {out_of_reach[beyond[0]]}: {beyond[:10]}"
         elif closed_none:
             why += " (closed form: none meets it within the joint limits)"
         why += _inside_reason(ctx, missed)
-        conflicts = _conflicts(ctx, missed)
+        conflicts, conflict_proof = _conflicts(ctx, missed, q)
         why += conflicts
         plural = "s" if len(missed) > 1 else ""
-        proven = bool(beyond) or closed_none or bool(conflicts)
+        proven = bool(beyond) or closed_none or conflict_proof
         proven = proven or (
             len(blocked) == len(missed) and all(graph.certified[i] for i in blocked)
         )
         if ctx.timed_out and not proven:  # (tracked with what the limit left: not a proof)
             within = "max_evals" if ctx.spent else "the time limit"
-            parts.append(f"waypoint{plural} {where} not reached within {within}")
-        else:
+            parts.append(f"waypoint{plural} {where} not reached within {within}{conflicts}")
+        elif proven:
             parts.append(f"waypoint{plural} {where} unreachable: {why}")
+        else:  # (a search that found nothing: no proof that nothing exists)
+            parts.append(f"waypoint{plural} {where} not reached: {why}")
     if jumps:
         listed = ", ".join(f"{i} ({s:.3g})" for i, s in jumps[:10])
         listed += " …" if len(jumps) > 10 else ""
@@ -1999,7 +2011,7 @@ def _inside_obstacle(ctx: _Context, i: int) -> str | None:
         return None
     points = [ctx.wps.poses[i][:3, 3]] if ctx.wps.poses is not None else []
     for g in problem.goals:
-        held = goals_base.pin_of(g) if g.is_primary else None
+        held = goals_base.pin_of(g, problem.robot) if g.is_primary else None
         if held is not None and held.point is not None:
             points.append(held.point)
     for point in points:
@@ -2009,12 +2021,17 @@ def _inside_obstacle(ctx: _Context, i: int) -> str | None:
     return None
 
 
-def _beyond_reach(ctx: _Context, i: int) -> bool:
-    """Whether waypoint ``i``'s pose lies beyond the frame's reach (no solution can exist)."""
-    if ctx.wps.poses is None:
-        return False
-    limit = reach_limit(ctx.robot.reach_radius(ctx.wps.frame))
-    return float(np.linalg.norm(ctx.wps.poses[i][:3, 3])) > limit
+def _beyond_reach(ctx: _Context, i: int) -> str | None:
+    """Why no solution of waypoint ``i`` can exist, if that is proven: its pose beyond the
+    frame's reach, or a goal of it unreachable as ``solve`` proves it
+    (:func:`swarm_ik.api.unreachable_goal`: a point beyond its frame's reach, a goal's own
+    ``infeasible``); else None."""
+    if ctx.wps.poses is not None:
+        limit = reach_limit(ctx.robot.reach_radius(ctx.wps.frame))
+        if float(np.linalg.norm(ctx.wps.poses[i][:3, 3])) > limit:
+            return "beyond the frame's reach"
+    why = unreachable_goal(ctx.wps.problem(i), ctx.tol_pos, ctx.tol_rot)
+    return None if why is None else f"proven unreachable ({why})"
 
 
 __all__ = [

@@ -16,7 +16,6 @@ from __future__ import annotations
 import dataclasses
 import functools
 import math
-import reprlib
 import threading
 import warnings
 from collections.abc import Sequence
@@ -28,7 +27,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from swarm_ik._types import FloatArray
-from swarm_ik._validate import keywords_checked, user_stacklevel
+from swarm_ik._validate import keywords_checked, quoted_error, user_stacklevel
 from swarm_ik.errors import InvalidArgumentError, InvalidTargetError, SwarmIKError, unknown
 from swarm_ik.fitness import FITNESS, get_fitness
 from swarm_ik.goals import AvoidCollisions, Goal, Pose, Position, State, kernel_slot, kernels
@@ -313,12 +312,12 @@ def _kernel_rows(robot: RobotModel, goal: Goal, q: FloatArray) -> tuple[FloatArr
             f"{goal.describe()}: its kernel indexes past its {m} row{'s' * (m != 1)} (the rows "
             "its encode() declares), its two errors, its parameter block or its scratch "
             f"({lm.WORK_SIZE} floats) at q = {np.round(q, 6).tolist()}: declare every row it "
-            f"writes (docs/goals.md; numba: {reprlib.repr(str(exc))})"
+            f"writes (docs/goals.md; numba: {quoted_error(exc)})"
         ) from exc
     except Exception as exc:  # (raised inside the compiled kernel)
         raise InvalidArgumentError(
             f"{goal.describe()}: its kernel raised {type(exc).__name__}: "
-            f"{reprlib.repr(str(exc))} at q = {np.round(q, 6).tolist()}"
+            f"{quoted_error(exc)} at q = {np.round(q, 6).tolist()}"
         ) from exc
     w = float(tab.weight[0])
     return res * w, jac * w
@@ -939,22 +938,48 @@ class IKProblem:
         of it: no small step lowers one's residual without raising another's (two goals no
         configuration meets together end so, as may goals stuck against each other at a
         local minimum).  Those pulling that hard are named.
+
+        The same test is made on the pulls of the sum of the goals' norms ``Σ ‖w_i r_i‖``,
+        ``g_i / ‖w_i r_i‖``, of the goals whose rows' norm is at least ``ratio`` of the
+        largest (a goal met, or nearly, has no share in that sum's pull): the answer a
+        search keeps is the one of least summed error, and where two goals ask for values no
+        configuration gives together (a distance of 0.3 and of 0.9) every point between
+        them has the same sum, so the answer kept may be one where the squares are
+        unbalanced (errors 0.51 and 0.09) and their pulls do not cancel, while the pulls of
+        the norms do.
         """
         if int(self.primary.sum()) < 2:
             return None
         qv = self.robot.check_q(q, "q")
         state = State(self.robot, qv)
         pulls = []
+        norms = []
         for gl in self.goals:
             if not gl.is_primary or type(gl).jacobian is Goal.jacobian:
                 continue
             r, jac = goals_base.search_rows(gl, state)
             assert jac is not None
             pulls.append((gl, jac.T @ r))
+            norms.append(float(np.linalg.norm(r)))
         if len(pulls) < 2:
             return None
+        found = self._opposing(qv, pulls, ratio)
+        if found is None:
+            least = ratio * max(norms)  # (a goal met, or nearly: no share in the sum)
+            unit = [
+                (gl, g / n)
+                for (gl, g), n in zip(pulls, norms, strict=True)
+                if n > 0.0 and n >= least
+            ]
+            found = self._opposing(qv, unit, ratio) if len(unit) >= 2 else None
+        return found
+
+    def _opposing(
+        self, q: FloatArray, pulls: list[tuple[Any, FloatArray]], ratio: float
+    ) -> str | None:
+        """:meth:`opposing_goals`'s test of one set of pulls ``(goal, g_i (nq,))``."""
         total = np.sum([g for _, g in pulls], axis=0)
-        free = ~pushed_out(qv, -total, self.bounds, 1e-12)  # (the descent moves along −Σg)
+        free = ~pushed_out(q, -total, self.bounds, 1e-12)  # (the descent moves along −Σg)
         size = [float(np.linalg.norm(g[free])) for _, g in pulls]
         big = max(size)
         if not big > 0.0 or float(np.linalg.norm(total[free])) > ratio * big:

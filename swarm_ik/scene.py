@@ -55,7 +55,7 @@ from typing import Any, ClassVar
 import numpy as np
 
 from swarm_ik._types import FloatArray
-from swarm_ik._validate import json_int
+from swarm_ik._validate import json_int, one_line
 from swarm_ik.errors import InvalidArgumentError, SwarmIKError, UnknownNameError
 from swarm_ik.paths import written_in_place_of
 from swarm_ik.pose import unit, unit_quaternion_matrix
@@ -88,11 +88,6 @@ class SceneFileNotFoundError(SwarmIKError, FileNotFoundError):
 
 class SceneDependencyError(SwarmIKError, ImportError):
     """A scene format whose reader needs a package that is not installed (PyYAML)."""
-
-
-def _one_line(text: object) -> str:
-    """``text`` on one line (whitespace runs, newlines included, become one space)."""
-    return " ".join(str(text).split())
 
 
 # --------------------------------------------------------------------------- validation
@@ -448,7 +443,7 @@ def _context(prefix: str) -> Iterator[None]:
     try:
         yield
     except SwarmIKError as exc:
-        raise type(exc)(_one_line(f"{prefix}: {exc}")) from None
+        raise type(exc)(one_line(f"{prefix}: {exc}")) from None
 
 
 def _check_fields(where: str, given: Mapping[Any, Any], required: Sequence[str],
@@ -1020,7 +1015,7 @@ def _parsed_tree(
     except InvalidArgumentError:
         raise
     except errors as exc:
-        raise InvalidArgumentError(f"{p}: not a {kind} file ({_one_line(exc)})") from None
+        raise InvalidArgumentError(f"{p}: not a {kind} file ({one_line(exc)})") from None
     except RecursionError:
         raise InvalidArgumentError(
             f"{p}: nested more than {MAX_DEPTH} levels deep (a scene needs about {levels})"
@@ -1281,7 +1276,7 @@ class _Stream:
         return f"{self.where}: line {self.line() if line is None else line}: {self.context}"
 
     def fail(self, message: str, line: int | None = None) -> InvalidArgumentError:
-        return InvalidArgumentError(_one_line(f"{self.at(line)}{message}"))
+        return InvalidArgumentError(one_line(f"{self.at(line)}{message}"))
 
     def token(self, what: str) -> str:
         m = _TOKEN.match(self.text, self.pos)
@@ -1611,7 +1606,7 @@ def _from_urdf(p: Path) -> list[Shape]:
     try:
         model, info = load_urdf(p)
     except RobotModelError as exc:
-        raise InvalidArgumentError(_one_line(exc)) from None
+        raise InvalidArgumentError(one_line(exc)) from None
     _check_zero_within_limits(model, p)
     root = ET.fromstring(info.xml)
     n_collision = _check_urdf_collisions(root, str(p))
@@ -1633,7 +1628,7 @@ def _from_urdf(p: Path) -> list[Shape]:
                 model, info.xml, pin.GeometryType.COLLISION, package_dirs=package_dirs(p)
             )
         except (ValueError, RuntimeError) as exc:
-            error = _one_line(exc)
+            error = one_line(exc)
     if error is not None:
         if "could not be found" in error:
             raise SceneFileNotFoundError(f"{p}: {error}")
@@ -1642,7 +1637,7 @@ def _from_urdf(p: Path) -> list[Shape]:
         detail = "; ".join(ln for ln in said if not ln.startswith("at line"))[:300]
         raise InvalidArgumentError(
             f"{p}: Pinocchio read {len(geom.geometryObjects)} of its {n_collision} collision "
-            f"geometries ({_one_line(detail) or 'no message'})"
+            f"geometries ({one_line(detail) or 'no message'})"
         )
     data, gdata = model.createData(), pin.GeometryData(geom)
     pin.forwardKinematics(model, data, pin.neutral(model))

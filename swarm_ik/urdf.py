@@ -45,7 +45,7 @@ import numpy as np
 import pinocchio as pin
 
 from swarm_ik._types import FloatArray
-from swarm_ik._validate import user_stacklevel
+from swarm_ik._validate import one_line, user_stacklevel
 from swarm_ik.errors import InvalidArgumentError, RobotModelError, RobotModelWarning
 
 log = logging.getLogger("swarm_ik")
@@ -466,7 +466,7 @@ def build_model(
     if error is not None or model is None:
         said = _complaints(messages)  # (urdfdom's first complaint is the cause)
         detail = "; ".join([*said[:1], error or ""]).strip("; ")
-        raise RobotModelError(f"{where}: Pinocchio could not load it ({_one_line(detail)})")
+        raise RobotModelError(f"{where}: Pinocchio could not load it ({one_line(detail, 300)})")
     for line in messages:
         log.debug("%s: urdfdom: %s", where, line)
     _warn_of_skipped_inertials(where, messages)
@@ -495,11 +495,6 @@ def _warn_of_skipped_inertials(where: str, messages: tuple[str, ...]) -> None:
             RobotModelWarning,
             stacklevel=user_stacklevel(),
         )
-
-
-def _one_line(text: str, limit: int = 300) -> str:
-    text = " ".join(text.split())
-    return text if len(text) <= limit else text[: limit - 1] + "…"
 
 
 @dataclass(frozen=True)

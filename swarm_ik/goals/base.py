@@ -37,7 +37,7 @@ import numpy as np
 import pinocchio as pin
 from numpy.typing import NDArray
 
-from swarm_ik._validate import floats_or
+from swarm_ik._validate import floats_or, quoted_error
 from swarm_ik.errors import InvalidArgumentError, SwarmIKError, UnknownNameError
 from swarm_ik.kernels import loaded_despite_damage
 from swarm_ik.kernels.lm import GOAL_SIGNATURE, kernel_list
@@ -258,7 +258,7 @@ def _real(goal: Goal, state: State, what: str) -> FloatArray:
             raise
         raise InvalidArgumentError(
             f"{goal.describe()}.{what}(state) raised {type(exc).__name__}: "
-            f"{reprlib.repr(str(exc))} at q = {np.round(state.q, 6).tolist()}"
+            f"{quoted_error(exc)} at q = {np.round(state.q, 6).tolist()}"
         ) from exc
     arr = np.asarray(value)
     if np.iscomplexobj(arr):
@@ -297,7 +297,7 @@ def _users(goal: Goal, what: str, call: Callable[[], Any]) -> Any:
         if built_in(goal):
             raise
         raise InvalidArgumentError(
-            f"{goal.describe()}.{what} raised {type(exc).__name__}: {reprlib.repr(str(exc))}"
+            f"{goal.describe()}.{what} raised {type(exc).__name__}: {quoted_error(exc)}"
         ) from exc
 
 
@@ -392,7 +392,7 @@ PIN_ORTH_TOL = 1e-3
 the nearest rotation); a goal accepted with a looser ``orth_tol`` gives no pin."""
 
 
-def pin_of(goal: Goal) -> Pin | None:
+def pin_of(goal: Goal, robot: RobotModel | None = None) -> Pin | None:
     """``goal.pin()``, checked: None or a :class:`Pin` of finite arrays of the right shapes,
     its rotation the nearest proper rotation to the one given (a target rounded to a few
     digits, as [HLFOA] prints it, passed ``IKProblem(..., orth_tol=1e-4)`` and was then
@@ -402,10 +402,18 @@ def pin_of(goal: Goal) -> Pin | None:
 
     Raises:
         InvalidArgumentError: the method raised, or returned anything else (the goal named).
+        UnknownNameError: the pin names a frame ``robot`` (when given) does not have.
     """
     held = _users(goal, "pin()", goal.pin)
     if held is None:
         return None
+    if robot is not None and isinstance(getattr(held, "frame", None), str):
+        if not robot.model.existFrame(held.frame):  # (a typo: no proof drawn, silently)
+            names = [f.name for f in robot.model.frames]
+            raise UnknownNameError(
+                f"{goal.describe()}.pin() names unknown frame {held.frame!r}; "
+                + _frames_hint(held.frame, names)
+            )
     shapes = {"point": (3,), "rotation": (3, 3), "axis": (3,), "direction": (3,), "look_at": (3,)}
     ok = isinstance(held, Pin) and isinstance(held.frame, str)
     fixed = {}
@@ -518,6 +526,15 @@ class _Holders(threading.local):
 _STATE_HOLDER = _Holders()
 
 
+def _read_only(q: Any) -> FloatArray:
+    """A read-only view of ``q`` as float64: a goal reads the state's joint vectors, and one
+    that wrote into them (a finite difference in place, say) changed the search's own
+    array, and so a Result's ``q`` after its errors were judged."""
+    view = np.asarray(q, dtype=float).view()
+    view.flags.writeable = False
+    return view
+
+
 class State:
     """What a Python goal sees: the joint vector and Pinocchio's kinematics at it.
 
@@ -529,14 +546,14 @@ class State:
 
     Attributes:
         robot: The robot.
-        q: Joint vector ``(nq,)`` (rad / m).
-        q0: The solve's start ``(nq,)``, or None.
+        q: Joint vector ``(nq,)`` (rad / m), read-only (copy it to change it).
+        q0: The solve's start ``(nq,)``, or None (read-only too).
     """
 
     def __init__(self, robot: RobotModel, q: Any, q0: Any = None) -> None:
         self.robot = robot
-        self.q = np.asarray(q, dtype=float)
-        self.q0 = None if q0 is None else np.asarray(q0, dtype=float)
+        self.q = _read_only(q)
+        self.q0 = None if q0 is None else _read_only(q0)
         self._q_pin = robot.to_pinocchio(self.q, copy=False)  # (read only)
         self._data = robot._data("state")  # (one Data per thread for states, reused)
         self._values = _values_at(robot, self.q, self.q0)  # (the Python goals' values here)
@@ -659,8 +676,7 @@ def checked_encoding(goal: Goal, encode: Callable[[], Any]) -> Encoded:
         raise
     except Exception as exc:  # (the goal's own code: any error it raises)
         raise InvalidArgumentError(
-            f"{goal.describe()}.encode(robot, q0) raised {type(exc).__name__}: "
-            f"{reprlib.repr(str(exc))}"
+            f"{goal.describe()}.encode(robot, q0) raised {type(exc).__name__}: {quoted_error(exc)}"
         ) from exc
     if not isinstance(block, Encoded):
         raise InvalidArgumentError(f"{goal.describe()}: {form}, got {reprlib.repr(block)}")
@@ -999,7 +1015,7 @@ def search_rows(
             raise
         raise InvalidArgumentError(
             f"{goal.describe()}: residual(state) and jacobian(state) must return arrays of "
-            f"numbers ({type(exc).__name__}: {reprlib.repr(str(exc))})"
+            f"numbers ({type(exc).__name__}: {quoted_error(exc)})"
         ) from None
     if r.ndim > 1:
         raise InvalidArgumentError(
