@@ -183,6 +183,28 @@ def _probe_q(robot: RobotModel) -> FloatArray:
     return np.asarray(np.clip(q, lo, hi))
 
 
+PROBES = 4
+"""Configurations beyond the first where a compiled goal's rows are checked
+(:func:`_more_probe_qs`): a kernel writing NaN in part of the joint space (half of a torso's
+range, say) passed the one probe and made that part a wall the search never said a word
+about, where a Python goal's NaN is refused at once."""
+
+
+def _more_probe_qs(robot: RobotModel, n: int = PROBES) -> list[FloatArray]:
+    """``n`` more configurations spread over the joint ranges (a low-discrepancy sequence,
+    every joint at another fraction of its range in each, from 5 % to 95 %), where
+    :func:`_check_kernel_twin` checks a compiled goal's rows again."""
+    lo, hi = np.asarray(robot.lower, dtype=float), np.asarray(robot.upper, dtype=float)
+    finite = np.isfinite(lo) & np.isfinite(hi)
+    j = np.arange(1, lo.shape[0] + 1)
+    out = []
+    for k in range(1, n + 1):
+        frac = 0.05 + 0.9 * ((0.7548776662 * k + 0.5698402910 * j) % 1.0)
+        q = np.where(finite, lo + frac * np.where(finite, hi - lo, 0.0), 2.0 * frac - 1.0)
+        out.append(np.asarray(np.clip(q, lo, hi)))
+    return out
+
+
 JACOBIAN_STEP = 1e-6
 """Step [rad, m] of the central difference :func:`_check_python_jacobian` compares a Python
 goal's ``jacobian`` with."""
@@ -323,6 +345,11 @@ def _kernel_rows(robot: RobotModel, goal: Goal, q: FloatArray) -> tuple[FloatArr
     return res * w, jac * w
 
 
+def _close(a: FloatArray, b: FloatArray) -> bool:
+    """Whether a kernel's rows ``a`` equal its twin's ``b`` (:data:`TWIN_RTOL`)."""
+    return a.shape == b.shape and bool(np.all(np.abs(a - b) <= TWIN_RTOL * (1.0 + np.abs(b))))
+
+
 def _check_kernel_twin(robot: RobotModel, goal: Goal, form: tuple[Any, ...] = ()) -> None:
     """:func:`_check_kernel_twin_now` under :data:`_CHECK_LOCK`."""
     with _CHECK_LOCK:
@@ -335,14 +362,16 @@ def _check_kernel_twin_now(robot: RobotModel, goal: Goal, form: tuple[Any, ...] 
     its integers is probed for each, since a kernel past its rows corrupts memory): its
     kernel's rows and step Jacobian at one configuration against its own numpy
     ``residual``/``jacobian`` on Pinocchio's state (the Jacobian when it defines one: its
-    sign only, on the rows whose twin has a derivative, as a Python goal's is judged).  The
+    sign only, on the rows whose twin has a derivative, as a Python goal's is judged), then
+    its rows at :data:`PROBES` more configurations (finite, and equal to the residual's).  The
     kernel writes ``r`` as ``residual`` does and the step Jacobian ``J = −∂r/∂q``
     (``r(q + δ) ≈ r − Jδ``);
     a kernel of the other sign, or one disagreeing with its twin, would end every solve with
     the budget's reason and no word why.
 
     Raises:
-        InvalidArgumentError: the two disagree (both named, with the configuration).
+        InvalidArgumentError: the two disagree, or the kernel wrote NaN or infinite values
+            (named, with the configuration).
     """
     cls = type(goal)
     if str(cls.__module__).startswith("swarm_ik."):
@@ -358,27 +387,60 @@ def _check_kernel_twin_now(robot: RobotModel, goal: Goal, form: tuple[Any, ...] 
     except (TypeError, ValueError):
         return
     try:
-        res, jac = _kernel_rows(robot, probe, q)
-        if cls.residual is Goal.residual:  # (no numpy twin to compare with)
-            return
-        r_np, j_np = goals_base.search_rows(
-            probe, State(robot, q), want_jac=cls.jacobian is not Goal.jacobian
-        )
+        _check_kernel_rows(robot, probe, q)
     except BaseException:
         checked.discard(key)
         raise
 
-    def close(a: FloatArray, b: FloatArray) -> bool:
-        return a.shape == b.shape and bool(np.all(np.abs(a - b) <= TWIN_RTOL * (1.0 + np.abs(b))))
 
+def _check_kernel_rows(robot: RobotModel, goal: Goal, q: FloatArray) -> None:
+    """:func:`_check_kernel_twin_now`'s checks of ``goal`` (primary) at ``q``, then its rows
+    at :func:`_more_probe_qs` (finite, and equal to its twin's, up to their sign)."""
+    res, jac = _kernel_rows(robot, goal, q)
+    _check_finite_rows(goal, q, res, jac)
+    twin = type(goal).residual is not Goal.residual
+    if twin:
+        _check_twin_at(robot, goal, q, res, jac)
+    for q_at in _more_probe_qs(robot):
+        res_at, jac_at = _kernel_rows(robot, goal, q_at)
+        _check_finite_rows(goal, q_at, res_at, jac_at)
+        if twin:
+            r_at = goals_base.search_rows(goal, State(robot, q_at), want_jac=False)[0]
+            if not (_close(res_at, r_at) or _close(res_at, -r_at)):
+                raise InvalidArgumentError(
+                    f"{goal.describe()}: its kernel's rows {np.round(res_at, 9).tolist()} "
+                    f"differ from its residual(state) {np.round(r_at, 9).tolist()} at q = "
+                    f"{np.round(q_at, 6).tolist()} (the kernel writes the residual's rows, "
+                    "weighted alike; docs/goals.md)"
+                )
+
+
+def _check_finite_rows(goal: Goal, q: FloatArray, res: FloatArray, jac: FloatArray) -> None:
+    """Refuse a kernel's rows or step Jacobian at ``q`` that are not finite."""
+    if not (np.all(np.isfinite(res)) and np.all(np.isfinite(jac))):
+        raise InvalidArgumentError(
+            f"{goal.describe()}: its kernel wrote NaN or infinite rows or Jacobian entries at "
+            f"q = {np.round(q, 6).tolist()} (rows {np.round(res, 9).tolist()}; a goal's rows "
+            "are finite wherever the joints may go; docs/goals.md)"
+        )
+
+
+def _check_twin_at(
+    robot: RobotModel, goal: Goal, q: FloatArray, res: FloatArray, jac: FloatArray
+) -> None:
+    """The kernel's rows ``res`` and step Jacobian ``jac`` at ``q`` against the goal's numpy
+    ``residual``/``jacobian`` (see :func:`_check_kernel_twin_now`)."""
+    cls = type(goal)
+    r_np, j_np = goals_base.search_rows(
+        goal, State(robot, q), want_jac=cls.jacobian is not Goal.jacobian
+    )
     # r may be the residual or its negative (only |r| is judged), its step Jacobian then
     # −∂r/∂q: +jacobian(state) for −residual, −jacobian(state) for +residual
-    sign = 1.0 if close(res, r_np) else -1.0 if close(res, -r_np) else 0.0
-    if close(res, r_np) and close(res, -r_np) and j_np is not None:  # (rows of zero: either
+    sign = 1.0 if _close(res, r_np) else -1.0 if _close(res, -r_np) else 0.0
+    if _close(res, r_np) and _close(res, -r_np) and j_np is not None:  # (rows of zero: either
         # sign, told by the Jacobian)
         sign = -1.0 if float(np.sum(jac * j_np)) > 0.0 else 1.0
     if sign == 0.0:
-        checked.discard(key)
         raise InvalidArgumentError(
             f"{goal.describe()}: its kernel's rows {np.round(res, 9).tolist()} differ from its "
             f"residual(state) {np.round(r_np, 9).tolist()} at q = {np.round(q, 6).tolist()} "
@@ -399,7 +461,6 @@ def _check_kernel_twin_now(robot: RobotModel, goal: Goal, form: tuple[Any, ...] 
         what = "points against −∂r/∂q of its rows (it has the other sign)"
     else:
         return
-    checked.discard(key)
     raise InvalidArgumentError(
         f"{goal.describe()}: its kernel's step Jacobian {what} at q = "
         f"{np.round(q, 6).tolist()}: the kernel's rows satisfy r(q + δ) ≈ r − Jδ (docs/goals.md)"

@@ -1039,7 +1039,7 @@ def test_a_compiled_kernel_that_raises_is_named() -> None:
     """A numba ``raise`` inside a user's kernel came out as a bare ValueError: it is named
     when the problem is made (the kernel is run once at a probe configuration), or when the
     search meets it elsewhere."""
-    from swarm_ik.problem import _probe_q
+    from swarm_ik.problem import _more_probe_qs, _probe_q
 
     r = robot("panda")
     with pytest.raises(InvalidArgumentError, match=r"_Wall\(panda_hand_tcp\): its kernel raised "
@@ -1050,7 +1050,8 @@ def test_a_compiled_kernel_that_raises_is_named() -> None:
     class _FarWall(_Wall):
         pass
 
-    wall = float(r.fk(_probe_q(r))[0, 3]) + 0.01  # (the probe stands before it)
+    probes = [_probe_q(r), *_more_probe_qs(r)]
+    wall = max(float(r.fk(q)[0, 3]) for q in probes) + 0.01  # (the probes stand before it)
     point = r.fk(_probe_q(r))[:3, 3] + [0.3, 0.0, 0.0]  # (beyond it: the search crosses it)
     prob = swarm_ik.IKProblem(r, goals=[G.Position("panda_hand_tcp", point), _FarWall(x=wall)])
     with pytest.raises(

@@ -7,13 +7,18 @@ robot lacks is refused; a user's exception text is quoted from its start."""
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass
+from typing import Any, ClassVar
 
+import numba
 import numpy as np
 import pytest
 
 import swarm_ik
 from swarm_ik.goals import Goal, Pin, Position
+from swarm_ik.goals.base import Encoded
+from swarm_ik.kernels.lm import GOAL_SIGNATURE
 
 
 @dataclass(frozen=True)
@@ -53,6 +58,29 @@ class Raises(Height):
 
     def residual(self, state: swarm_ik.goals.State) -> np.ndarray:
         raise ValueError("the residual needs a calibration table: " + "x" * 20 + " MISSING-KEY k")
+
+
+@numba.njit(GOAL_SIGNATURE)
+def _height_nan_kernel(par, ipar, q, f_pos, f_rot, f_jac, want_jac, res, jac, err, work):
+    """The frame origin's height at ``par[0]``, NaN wherever the first joint is negative."""
+    f = ipar[0]
+    res[0] = par[0] - f_pos[f, 2] if q[0] >= 0.0 else math.nan
+    if want_jac:
+        for j in range(jac.shape[1]):
+            jac[0, j] = f_jac[f, 2, j]
+    err[0] = abs(res[0])
+    err[1] = np.nan
+
+
+@dataclass(frozen=True)
+class HeightNaN(Height):
+    """Height's compiled twin, with a kernel that writes NaN in half of the joint space."""
+
+    kernel: ClassVar[Any] = _height_nan_kernel
+
+    def encode(self, robot: swarm_ik.RobotModel, q0: Any) -> Encoded:
+        frame = np.array([robot.frames.index(self.frame)], dtype=np.int64)
+        return Encoded(np.array([self.height]), frame, 1)
 
 
 @pytest.fixture(scope="module")
@@ -119,3 +147,11 @@ def test_a_users_exception_text_is_quoted_from_its_start(panda) -> None:
     text = str(info.value)
     assert "calibration table: " + "x" * 20 + " MISSING-KEY k" in text, text
     assert "\n" not in text
+
+
+def test_a_compiled_kernel_writing_nan_somewhere_is_refused(panda) -> None:
+    """Its one probe (first joint positive) passed, and the search took the half of the
+    joint space where the kernel writes NaN as a wall: every solve ended with its budget."""
+    goal = HeightNaN(panda.ee_frame, 0.5)
+    with pytest.raises(swarm_ik.InvalidArgumentError, match="NaN or infinite rows"):
+        swarm_ik.solve(swarm_ik.IKProblem(panda, goals=[goal]), seed=0, max_evals=500)
