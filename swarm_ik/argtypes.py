@@ -25,8 +25,9 @@ def seed(text: str) -> int:
     return value
 
 
-def count(lowest: int = 1) -> Callable[[str], int]:
-    """The type of an option that counts something: an integer ``>= lowest``."""
+def count(lowest: int = 1, highest: int | None = None) -> Callable[[str], int]:
+    """The type of an option that counts something: an integer ``>= lowest`` (and
+    ``<= highest`` when given)."""
 
     def parse(text: str) -> int:
         try:
@@ -35,6 +36,10 @@ def count(lowest: int = 1) -> Callable[[str], int]:
             raise argparse.ArgumentTypeError(f"expected an integer, got {text!r}") from None
         if value < lowest:
             raise argparse.ArgumentTypeError(f"must be an integer from {lowest}, got {text}")
+        if highest is not None and value > highest:
+            raise argparse.ArgumentTypeError(
+                f"must be an integer from {lowest} to {highest}, got {text}"
+            )
         return value
 
     parse.__name__ = f"count_from_{lowest}"

@@ -33,6 +33,7 @@ from typing import Any
 import numpy as np
 from numpy.typing import NDArray
 
+from swarm_ik import batch
 from swarm_ik._validate import SEED_LIMIT, count, finest_edge, flag, floats_or, positive_float
 from swarm_ik.batch import solve_batch
 from swarm_ik.errors import InvalidArgumentError
@@ -394,7 +395,7 @@ def reach_map(
     position_only = flag(position_only, "position_only")
     n_orientations = orientation_count(n_orientations, position_only)
     seed = count(0 if seed is None else seed, "seed", 0, SEED_LIMIT - 1)  # (None: 0, as solve)
-    max_targets = count(max_targets, "max_targets", 1, 2**62)
+    max_targets = count(max_targets, "max_targets", 1, batch.MAX_TARGETS)  # (one batch)
     if bounds is None:
         lo, hi = default_bounds(robot, seed=seed)
     else:

@@ -58,9 +58,11 @@ def test_every_sub_command_is_a_module_with_add_parser_and_run() -> None:
     for name, module in cli.COMMANDS.items():
         assert module.__name__ == f"swarm_ik.cli.{name}"
         assert callable(module.add_parser) and callable(module.run)
+    from swarm_ik.batch import MAX_TARGETS as BATCH_MAX_TARGETS
     from swarm_ik.reach import MAX_TARGETS
 
     assert reach_cli.MAX_TARGETS == MAX_TARGETS
+    assert reach_cli.BATCH_MAX_TARGETS == BATCH_MAX_TARGETS
 
 
 def test_import_is_light_and_python_m_works() -> None:

@@ -131,6 +131,14 @@ class Parser(argparse.ArgumentParser):
     def error(self, message: str) -> NoReturn:
         raise UsageError(f"{self.prog}: error: {message} (see `{self.prog} --help`)")
 
+    def _print_message(self, message: str, file: Any = None) -> None:
+        """The help, written and flushed; a write that fails (``--help > /dev/full``) raises
+        (argparse's own passes it over, and the command exited 0 having written nothing)."""
+        if message:
+            out = sys.stderr if file is None else file
+            out.write(message)
+            out.flush()
+
 
 EPILOG = (
     "exit codes: 0 success, 1 target not reached (the best found is printed), 2 bad input "
@@ -168,7 +176,10 @@ def _fail(message: str, code: int, as_json: bool, kind: str) -> int:
         except OSError:  # (standard output cannot be written: the line on stderr instead)
             pass
     prefix = "" if message.startswith("swarm-ik") else "swarm-ik: error: "
-    print(prefix + message, file=sys.stderr, flush=True)
+    try:
+        print(prefix + message, file=sys.stderr, flush=True)
+    except OSError:  # (standard error cannot be written, `2>/dev/full`: the exit code says it)
+        pass
     return code
 
 
@@ -188,8 +199,13 @@ def _one_line_warning(
     line: str | None = None,
 ) -> None:
     """A warning as the command line prints it: one line, ``swarm-ik: warning: …``, without
-    the package's file, line and source (a ``q0`` clipped into the limits, say)."""
-    print(f"swarm-ik: warning: {message}", file=sys.stderr if file is None else file)
+    the package's file, line and source (a ``q0`` clipped into the limits, say); none where
+    standard error cannot be written (``2>/dev/full``: the command goes on, its exit code
+    its own)."""
+    try:
+        print(f"swarm-ik: warning: {message}", file=sys.stderr if file is None else file)
+    except OSError:
+        pass
 
 
 def main(argv: Sequence[str] | None = None) -> int:

@@ -1,0 +1,80 @@
+"""Review 109 (held out: the command line, caches, a cold start): counts that could run for
+hours or fill the memory are refused first; a batch's bad settings are refused before its
+kernels load; the exit code stays the command's when standard error cannot be written; a
+help that cannot be written exits 74."""
+
+from __future__ import annotations
+
+import os
+import subprocess
+import sys
+
+import pytest
+
+import swarm_ik
+from swarm_ik import batch, many, reach
+
+ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
+
+
+def _cli(*argv: str, stdout: object = subprocess.PIPE, stderr: object = subprocess.PIPE):
+    return subprocess.run(
+        [sys.executable, "-m", "swarm_ik.cli", *argv],
+        stdout=stdout, stderr=stderr, text=True, timeout=300, cwd=ROOT,
+    )  # fmt: skip
+
+
+@pytest.fixture(scope="module")
+def panda() -> swarm_ik.RobotModel:
+    return swarm_ik.load_robot("panda")
+
+
+def test_solve_many_refuses_more_solutions_than_it_can_compare(panda) -> None:
+    """n = 10¹² ran for hours without a budget (the branch set is compared as it grows)."""
+    problem = swarm_ik.IKProblem(panda, panda.fk(panda.mid_q()))
+    with pytest.raises(swarm_ik.InvalidArgumentError, match=r"n must be an integer in \[1, "):
+        swarm_ik.solve_many(problem, n=10**12, max_evals=100)  # (the budget: no hang here)
+    with pytest.raises(swarm_ik.InvalidArgumentError):
+        swarm_ik.solve_many(problem, n=many.MAX_SOLUTIONS + 1, max_evals=100)
+    assert len(swarm_ik.solve_many(problem, n=2, max_evals=3000)) >= 1
+
+
+def test_a_reach_map_refuses_a_cap_beyond_one_batch_before_building_its_grid(panda) -> None:
+    with pytest.raises(swarm_ik.InvalidArgumentError, match="max_targets"):
+        reach.reach_map(panda, resolution=0.01, max_targets=batch.MAX_TARGETS + 1)
+    out = _cli("reach", "--robot", "ur5", "--resolution", "0.0098", "--max-targets",
+               "1000000000", "--out", "never/rr.npz", "--no-png", "--no-html")  # fmt: skip
+    assert out.returncode == 2 and "--max-targets" in out.stderr, out.stderr
+    assert len(out.stderr.strip().splitlines()) == 1
+
+
+@pytest.mark.parametrize("kw", [{"chunk_size": 0}, {"scheduler": "bogus"}])
+def test_a_batch_refuses_its_settings_before_loading_kernels(panda, kw, monkeypatch) -> None:
+    """They were refused after the kernels loaded (17 s on an empty cache)."""
+
+    def loading(*args: object) -> float:
+        raise AssertionError("kernels loaded before the settings were checked")
+
+    monkeypatch.setattr(batch, "_load_kernels", loading)
+    with pytest.raises(swarm_ik.InvalidArgumentError):
+        swarm_ik.solve_batch(panda, panda.fk(panda.mid_q())[None], **kw)
+
+
+def test_the_exit_code_is_the_commands_when_standard_error_cannot_be_written() -> None:
+    with open(os.devnull, "w") as sink, open("/dev/full", "w") as full:
+        bad = _cli("solve", "--robot", "nosuch", "--pose", "0.4", "0.1", "0.5", "1", "0", "0",
+                   "0", stdout=sink, stderr=full)  # fmt: skip
+        assert bad.returncode == 2
+        # (a q outside the limits warns; the warning cannot be written, the solve goes on)
+        ok = _cli("solve", "--robot", "panda", "--from-q", "9", "0", "0", "-1", "0", "1", "0",
+                  stderr=full)  # fmt: skip
+    assert ok.returncode == 0 and "converged" in ok.stdout
+
+
+@pytest.mark.skipif(not os.path.exists("/dev/full"), reason="no /dev/full")
+@pytest.mark.parametrize("argv", [["--help"], ["solve", "--help"]])
+def test_a_help_that_cannot_be_written_exits_74(argv) -> None:
+    with open("/dev/full", "w") as full:
+        out = _cli(*argv, stdout=full)
+    assert out.returncode == 74 and "cannot write" in out.stderr, out.stderr
+    assert _cli(*argv).returncode == 0
