@@ -63,13 +63,10 @@ class Raises(Height):
 @numba.njit(GOAL_SIGNATURE)
 def _height_nan_kernel(par, ipar, q, f_pos, f_rot, f_jac, want_jac, res, jac, err, work):
     """The frame origin's height at ``par[0]``, NaN wherever the first joint is negative."""
-    f = ipar[0]
-    res[0] = par[0] - f_pos[f, 2] if q[0] >= 0.0 else math.nan
     if want_jac:
-        for j in range(jac.shape[1]):
-            jac[0, j] = f_jac[f, 2, j]
-    err[0] = abs(res[0])
-    err[1] = np.nan
+        jac[0, :] = f_jac[ipar[0], 2, :]
+    res[0] = par[0] - f_pos[ipar[0], 2] if q[0] >= 0.0 else math.nan
+    err[0], err[1] = abs(res[0]), np.nan
 
 
 @dataclass(frozen=True)
