@@ -770,15 +770,19 @@ class BatchResult(_Rows, FrozenArrays):
         """Targets per wall-clock second."""
         return self.n / self.time_s if self.time_s > 0 else float("inf")
 
-    def save(self, path: str | Path, targets: FloatArray | None = None) -> Path:
+    def save(
+        self, path: str | Path, targets: FloatArray | None = None, compress: bool = True
+    ) -> Path:
         """Write the answers to ``.npz`` or ``.csv`` (chosen by the suffix).
 
         The ``.npz`` holds ``q``, ``position_error``, ``rotation_error``, ``success``,
         ``n_evals``, ``n_starts``, ``joint_names``, ``tol_pos``, ``tol_rot``, ``seed`` (and
         ``targets`` ``(N, 4, 4)`` when given; ``goal_labels`` and ``goals_met`` after a batch
-        with goals).  The ``.csv`` has a header ``index, <joint names>, position_error,
-        rotation_error, success, n_evals`` (then one ``met:<goal label>`` column per primary
-        goal of a batch with goals) and one row per target.
+        with goals), compressed unless ``compress`` is False (``swarm-ik batch`` after a
+        Ctrl-C: 590,000 Panda rows in 0.4 s instead of 3.9–5.3 s).  The ``.csv`` has a header
+        ``index, <joint names>, position_error, rotation_error, success, n_evals`` (then one
+        ``met:<goal label>`` column per primary goal of a batch with goals) and one row per
+        target.
 
         Raises:
             InvalidArgumentError: the suffix is neither ``.npz`` nor ``.csv``.
@@ -791,10 +795,10 @@ class BatchResult(_Rows, FrozenArrays):
                 "valid suffixes: .csv, .npz"
             )
         with written_in_place_of(p) as part:  # (never a partial file)
-            self._write(part, suffix, targets)
+            self._write(part, suffix, targets, compress)
         return p
 
-    def _write(self, p: Path, suffix: str, targets: FloatArray | None) -> None:
+    def _write(self, p: Path, suffix: str, targets: FloatArray | None, compress: bool) -> None:
         """Write the answers to ``p`` in the format of ``suffix`` (see :meth:`save`)."""
         if suffix == ".npz":
             arrays: dict[str, Any] = {
@@ -815,7 +819,7 @@ class BatchResult(_Rows, FrozenArrays):
                 arrays["goal_labels"] = np.array(self.goal_labels, dtype=str)
                 arrays["goals_met"] = self.goals_met
             with p.open("wb") as fb:  # (a file object: numpy adds no suffix to it)
-                np.savez_compressed(fb, **arrays)
+                (np.savez_compressed if compress else np.savez)(fb, **arrays)
         else:
             names = self.joint_names or tuple(f"q{j}" for j in range(self.q.shape[1]))
             with p.open("w", newline="") as fh:

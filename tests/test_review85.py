@@ -75,7 +75,7 @@ def test_cli_batch_keeps_its_finished_rows_when_targets_need_restarts(tmp_path: 
         tmp_path, after=2.0,
     )  # fmt: skip
     assert rc == 130, out
-    assert "interrupted; wrote the " in out, out
+    assert "interrupted; writing the " in out, out
     kept = np.load(tmp_path / "b.npz")["q"]
     assert 0 < kept.shape[0] < 12000 and kept.shape[0] % 200 == 0
 

@@ -983,7 +983,7 @@ def test_cli_batch_ctrl_c_keeps_finished_chunks(
     )
     err = capsys.readouterr().err.strip().splitlines()
     assert rc == 130
-    assert len(err) == 1 and "interrupted; wrote the 128 finished targets (of 200)" in err[0]
+    assert len(err) == 1 and "interrupted; writing the 128 finished targets (of 200)" in err[0]
     saved = np.load(out)
     assert saved["q"].shape == (128, 7) and saved["targets"].shape == (128, 4, 4)
     # the rows kept are exactly what solve_batch gives for these targets

@@ -189,13 +189,14 @@ def run(args: argparse.Namespace) -> int:
         progress=not args.no_progress and sys.stderr.isatty(),
         keep_on_interrupt=True,
     )
-    if res.interrupted:
+    if res.interrupted:  # (the line first, then the rows, uncompressed: at once)
         if res.n:
-            res.save(args.out, targets=targets[: res.n])
-            kept = f"wrote the {res.n} finished targets (of {len(targets)}) to {args.out}"
+            kept = f"writing the {res.n} finished targets (of {len(targets)}) to {args.out}"
         else:
             kept = "no chunk had finished; nothing written"
-        print(f"swarm-ik: interrupted; {kept}", file=sys.stderr)
+        print(f"swarm-ik: interrupted; {kept}", file=sys.stderr, flush=True)
+        if res.n:
+            res.save(args.out, targets=targets[: res.n], compress=False)
         return EXIT_INTERRUPTED
     res.save(args.out, targets=targets)
     n_ok = int(res.success.sum())
