@@ -32,7 +32,7 @@ mgwo    10   0.1   0.7  6.3      0.87     56.3   -3.86267  0.083    0.078      0
 1.30, −3.8628; Table 4 (IK, its own robot limits): GWO 0.4292, MGWO 0.0122.
 
 What this reproduces and what it does not: MGWO's gains on the multimodal IK problem (the mean
-halves and the worst run is six times better than GWO's) and on F4 (closer to −3.86278, as
+falls 2.8-fold and the worst run is six times better than GWO's) and on F4 (closer to −3.86278, as
 in the paper).  It does **not** reproduce the paper's gains on F1–F3: with the 30 wolves
 split into sub-packs of 10, each sub-pack behaves like a GWO of 10 wolves (GWO with 10
 wolves: F1 4.5e-4), and the king-guided worst wolves do not make up for it.  The paper's
