@@ -232,8 +232,8 @@ class PathResult(FrozenArrays):
             waypoint the step arrives at (0: the step from ``q0``), ``size`` the change of
             the joint furthest beyond its bound in that step (the largest ``|Δq_j| /
             max_joint_step_j``; with one bound for every joint, the largest change)
-            [rad / m] (a step failing the densify check: the largest joint travel along its
-            tracked chain).
+            [rad / m] (a step within the bound that fails the densify check: the largest
+            joint travel along its tracked chain).
         max_step: Largest joint change between consecutive configurations [rad / m].
         max_step_ratio: Largest ``|Δq_j| / max_joint_step_j`` (≤ 1 when jump-free).
         position_errors: Per waypoint, the largest position error of its goals [m], ``(N,)``.
@@ -251,7 +251,9 @@ class PathResult(FrozenArrays):
         n_candidates: Candidates considered per waypoint, ``(N,)``.
         travel: Joint travel of the path, ``Σ_steps Σ_j |Δq_j|`` [rad / m].
         q_dense: With ``densify=k``: the checked path through the interpolated poses,
-            shape ``((N − 1)(k + 1) + 1, nq)``; else None.
+            shape ``((N − 1)(k + 1) + 1, nq)``; else None.  The rows of a step listed in
+            ``reconfigurations`` are its tracked chain as far as it went and need not meet
+            their poses (a UR5 step whose chain travelled 12.7 rad: rows 5–8 mm off).
         n_evals: Evaluations the call's solves spent (``max_evals`` bounds them).
     """
 
@@ -1832,25 +1834,25 @@ def _unwind(rows: FloatArray, start: FloatArray | None, ctx: _Context) -> FloatA
     return out
 
 
-def _conflicts(ctx: _Context, missed: list[int], q: FloatArray) -> tuple[str, bool]:
+def _conflicts(ctx: _Context, missed: list[int], q: FloatArray) -> tuple[str, int | None]:
     """Where the goals of a waypoint not reached conflict, as ``solve`` says it: the first
     waypoint whose goals :func:`swarm_ik.api.conflicting_goals` proves contradictory (what
     they hold their frames to, before any search: a proof), else the first whose goals pull
     against each other at the configuration the path holds for it
     (:meth:`swarm_ik.IKProblem.opposing_goals`, as ``solve`` judges its answer: no proof; the
     first three such waypoints tried).
-    Returns ``(the text, a proof)``; ``("", False)`` when none is found (goal lists of a path
-    were "no IK solution found" where ``solve`` of the same goals said
+    Returns ``(the text, the waypoint proven so or None)``; ``("", None)`` when none is found
+    (goal lists of a path were "no IK solution found" where ``solve`` of the same goals said
     ``conflicting_goals``)."""
     for i in missed:
         why = conflicting_goals(ctx.wps.problem(i), ctx.tol_pos, ctx.tol_rot)
         if why is not None:
-            return f"; the goals of waypoint {i} conflict: {why}", True
+            return f"; the goals of waypoint {i} conflict: {why}", i
     for i in missed[:3]:  # (a few: each test evaluates every goal and its Jacobian once)
         why = ctx.wps.problem(i).opposing_goals(q[i])
         if why is not None:
-            return f"; the goals of waypoint {i} pull against each other: {why}", False
-    return "", False
+            return f"; the goals of waypoint {i} pull against each other: {why}", None
+    return "", None
 
 
 def _reason(
@@ -1863,38 +1865,7 @@ def _reason(
     cut = q.shape[0] if ctx.cut is None else ctx.cut
     missed = [int(i) for i in np.flatnonzero(~np.asarray(reached)) if i < cut]
     if missed:
-        where = ", ".join(str(i) for i in missed[:10]) + (" …" if len(missed) > 10 else "")
-        out_of_reach = {i: _beyond_reach(ctx, i) for i in missed}
-        beyond = [i for i in missed if out_of_reach[i] is not None]
-        blocked = [i for i in missed if i < len(graph.blocked) and graph.blocked[i] is not None]
-        why = "no IK solution found"
-        if blocked:  # (the closed form's branches, every one rejected by the other goals)
-            why = _blocked_reason(ctx, graph, missed, blocked)
-        closed_none = (  # (each one's own closed-form set, whole, held no solution)
-            not blocked
-            and ctx.wps.pose_only(missed[0]) is not None
-            and all(i < len(graph.closed) and graph.closed[i] for i in missed)
-            and not ctx.cut_layers.intersection(missed)
-        )
-        if beyond:
-            why += f"; {out_of_reach[beyond[0]]}: {beyond[:10]}"
-        elif closed_none:
-            why += " (closed form: none meets it within the joint limits)"
-        why += _inside_reason(ctx, missed)
-        conflicts, conflict_proof = _conflicts(ctx, missed, q)
-        why += conflicts
-        plural = "s" if len(missed) > 1 else ""
-        proven = bool(beyond) or closed_none or conflict_proof
-        proven = proven or (
-            len(blocked) == len(missed) and all(graph.certified[i] for i in blocked)
-        )
-        if ctx.timed_out and not proven:  # (tracked with what the limit left: not a proof)
-            within = "max_evals" if ctx.spent else "the time limit"
-            parts.append(f"waypoint{plural} {where} not reached within {within}{conflicts}")
-        elif proven:
-            parts.append(f"waypoint{plural} {where} unreachable: {why}")
-        else:  # (a search that found nothing: no proof that nothing exists)
-            parts.append(f"waypoint{plural} {where} not reached: {why}")
+        parts.extend(_missed_reasons(ctx, graph, q, missed))
     if jumps:
         listed = ", ".join(f"{i} ({s:.3g})" for i, s in jumps[:10])
         listed += " …" if len(jumps) > 10 else ""
@@ -1953,6 +1924,66 @@ def _reason(
             f"({max_ratio:.2f} of the bound){checked}"
         )
     return "; ".join(parts)
+
+
+def _listed(indices: list[int]) -> str:
+    """``"waypoint 3"`` or ``"waypoints 3, 4, …"`` (the first ten)."""
+    where = ", ".join(str(i) for i in indices[:10]) + (" …" if len(indices) > 10 else "")
+    return f"waypoint{'s' if len(indices) > 1 else ''} {where}"
+
+
+def _missed_reasons(ctx: _Context, graph: _Graph, q: FloatArray, missed: list[int]) -> list[str]:
+    """What the reason says of the waypoints ``missed`` (before the cut): those proven to
+    have no solution are "unreachable", with the proof (the pose beyond the frame's reach, a
+    goal proven unreachable, the pose's whole closed-form set outside the limits or rejected
+    by the other goals, goals whose pins conflict); the others are "not reached" (a search
+    that found nothing, or the budget that ended it), with what is known of them."""
+    out_of_reach = {i: _beyond_reach(ctx, i) for i in missed}
+    beyond = [i for i in missed if out_of_reach[i] is not None]
+    blocked = [i for i in missed if i < len(graph.blocked) and graph.blocked[i] is not None]
+    closed = [  # (each one's own closed-form set, whole, held no solution)
+        i
+        for i in missed
+        if i not in blocked
+        and out_of_reach[i] is None
+        and ctx.wps.pose_only(i) is not None
+        and i < len(graph.closed)
+        and graph.closed[i]
+        and i not in ctx.cut_layers
+    ]
+    conflicts, conflict_at = _conflicts(ctx, missed, q)
+    proofs = set(beyond) | set(closed) | {i for i in blocked if graph.certified[i]}
+    if conflict_at is not None:
+        proofs.add(conflict_at)
+    proven = [i for i in missed if i in proofs]
+    rest = [i for i in missed if i not in proofs]
+    parts = []
+    if proven:
+        blocked_p = [i for i in blocked if i in proofs]
+        why = "no IK solution found"
+        if blocked_p:
+            why = _blocked_reason(ctx, graph, proven, blocked_p)
+        if beyond:
+            why += f"; {out_of_reach[beyond[0]]}: {beyond[:10]}"
+        if closed:
+            at = "" if closed == proven else f": {closed[:10]}"
+            why += f" (closed form: none meets it within the joint limits{at})"
+        why += _inside_reason(ctx, proven)
+        if conflict_at is not None:
+            why += conflicts
+        parts.append(f"{_listed(proven)} unreachable: {why}")
+    if rest:
+        blocked_r = [i for i in blocked if i not in proofs]
+        found = _blocked_reason(ctx, graph, rest, blocked_r) if blocked_r else ""
+        known = _inside_reason(ctx, rest) + (conflicts if conflict_at is None else "")
+        if ctx.timed_out:  # (tracked with what the limit left: not a proof)
+            within = "max_evals" if ctx.spent else "the time limit"
+            head = f"{_listed(rest)} not reached within {within}"
+            parts.append(head + (f"; {found}" if found else "") + known)
+        else:  # (a search that found nothing: no proof that nothing exists)
+            found = found or "no IK solution found"
+            parts.append(f"{_listed(rest)} not reached: {found}{known}")
+    return parts
 
 
 def _blocked_reason(ctx: _Context, graph: _Graph, missed: list[int], blocked: list[int]) -> str:

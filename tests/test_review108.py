@@ -152,3 +152,26 @@ def test_a_compiled_kernel_writing_nan_somewhere_is_refused(panda) -> None:
     goal = HeightNaN(panda.ee_frame, 0.5)
     with pytest.raises(swarm_ik.InvalidArgumentError, match="NaN or infinite rows"):
         swarm_ik.solve(swarm_ik.IKProblem(panda, goals=[goal]), seed=0, max_evals=500)
+
+
+def test_only_the_waypoints_proven_unreachable_are_called_so() -> None:
+    """Review 112: a UR5 line leaving the workspace called every missed waypoint
+    'unreachable' because its last ten are beyond the reach; those in reach that the search
+    missed are 'not reached'."""
+    from swarm_ik.api import reach_limit
+
+    robot = swarm_ik.load_robot("ur5")
+    rng = np.random.default_rng(1)
+    for _ in range(2):
+        a = robot.fk(robot.random_q(rng))
+        robot.random_q(rng)
+    poses = np.repeat(a[None], 30, 0)
+    poses[:, :3, 3] += np.linspace(0.0, 0.8, 30)[:, None] * a[:3, 3] / np.linalg.norm(a[:3, 3])
+    res = swarm_ik.solve_path(robot, poses, seed=1)
+    limit = reach_limit(robot.reach_radius(robot.ee_frame))
+    far = [i for i in range(30) if np.linalg.norm(poses[i, :3, 3]) > limit]
+    near_missed = [i for i in np.flatnonzero(~res.reached) if i not in far]
+    assert far and near_missed, res.reason
+    head = "waypoints " + ", ".join(str(i) for i in far[:10])
+    assert f"{head} unreachable: " in res.reason, res.reason
+    assert f"waypoints {near_missed[0]}, " in res.reason and " not reached: " in res.reason
