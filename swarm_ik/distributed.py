@@ -179,7 +179,10 @@ def connect(
                     threads_per_worker=1,
                     processes=True,
                     host="127.0.0.1",
-                    dashboard_address=None,
+                    # (no dashboard: Dask's scheduler still serves HTTP, on 8787 unless told
+                    # otherwise, and warned where that port was taken; a free local port)
+                    dashboard_address="127.0.0.1:0",
+                    scheduler_kwargs={"dashboard": False},
                     # (what the worker processes print: an ERROR record too, e.g. a heartbeat cut
                     # by the scheduler closing on Ctrl-C, 30 lines; a task's error reaches the
                     # client)

@@ -78,3 +78,25 @@ def test_a_help_that_cannot_be_written_exits_74(argv) -> None:
         out = _cli(*argv, stdout=full)
     assert out.returncode == 74 and "cannot write" in out.stderr, out.stderr
     assert _cli(*argv).returncode == 0
+
+
+def test_an_embedded_dask_cluster_leaves_port_8787_alone(panda) -> None:
+    """Review 114: the embedded cluster's scheduler served HTTP on 8787 (dashboard_address=None
+    is Dask's default port, not none) and warned in four lines where another program held it."""
+    pytest.importorskip("distributed")
+    import socket
+    import warnings
+
+    held = socket.socket()
+    try:
+        held.bind(("127.0.0.1", 8787))
+    except OSError:
+        pytest.skip("port 8787 is taken on this machine")
+    held.listen()
+    try:
+        with warnings.catch_warnings():
+            warnings.filterwarnings("error", message=".*8787")  # (the port's warning fails)
+            res = swarm_ik.solve_batch(panda, panda.fk(panda.mid_q())[None], scheduler="local")
+    finally:
+        held.close()
+    assert res.success.all()
