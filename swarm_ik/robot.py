@@ -284,6 +284,8 @@ def _reduce(
                 raise RobotModelError(
                     f"{p}: joint {name!r} mimics joint {driver!r}, which is not in the model"
                 )
+            if driver == name:
+                raise RobotModelError(f"{p}: joint {name!r} mimics itself")
             if driver in mimic:
                 raise RobotModelError(
                     f"{p}: joint {name!r} mimics {driver!r}, itself a mimic joint (chains of "

@@ -213,7 +213,21 @@ def parse_urdf_xml(text: str, where: str = "URDF") -> ET.Element:
         raise RobotModelError(
             f"{where}: not a URDF (root element is <{root.tag}>, expected <robot>)"
         )
+    macro = next((el for el in root.iter() if str(el.tag).startswith(XACRO_TAG)), None)
+    expression = any("${" in v for el in root.iter() for v in el.attrib.values())
+    if macro is not None or expression:  # (urdfdom skips the unknown elements: the macros'
+        # links and joints were left out in silence)
+        what = f"<xacro:{str(macro.tag)[len(XACRO_TAG) :]}>" if macro is not None else "${...}"
+        raise RobotModelError(
+            f"{where}: a xacro file ({what}): xacro files must be expanded first: run "
+            "`xacro FILE > robot.urdf` (ROS's xacro package) and load robot.urdf"
+        )
     return root
+
+
+XACRO_TAG = "{http://www.ros.org/wiki/xacro}"
+"""The namespace of xacro's elements (``xmlns:xacro="http://www.ros.org/wiki/xacro"``), as
+ElementTree names them."""
 
 
 MAX_LINKS = 10_000
@@ -298,6 +312,14 @@ def check_urdf_xml(root: ET.Element, where: str = "URDF") -> dict[str, MimicJoin
                     f"{where}: {jtype} joint {name!r} has no <limit lower=... upper=...>; "
                     "URDF requires limits on revolute and prismatic joints (use type "
                     "'continuous' for a revolute joint without limits)"
+                )
+            if limit.get("lower") is None and limit.get("upper") is None:
+                warnings.warn(
+                    f"{where}: {jtype} joint {name!r} has a <limit> without lower and upper: "
+                    "URDF's default [0, 0] holds it still (give lower=... upper=..., or make "
+                    "it a fixed joint)",
+                    RobotModelWarning,
+                    stacklevel=user_stacklevel(),
                 )
             try:
                 lo = float(limit.get("lower", "0"))
@@ -678,6 +700,7 @@ def default_ee_frame(model: Any, info: UrdfInfo | None = None) -> tuple[str, str
         for j in range(model.njoints)
     ]
     bad_joint = [False] * model.njoints
+    refused = [False] * model.njoints  # (an arm joint of a mimic group the model refuses)
     for j in range(1, model.njoints):
         jname = names[j]
         if flyer[j]:
@@ -690,6 +713,7 @@ def default_ee_frame(model: Any, info: UrdfInfo | None = None) -> tuple[str, str
                 if k != j
             )  # (a mimic group moving only itself and fingers: a gripper)
             bad_joint[j] = group[jname] in unsupported or not carries_arm
+            refused[j] = carries_arm and group[jname] in unsupported
 
     def drivable(chain: list[int]) -> bool:
         """Whether every mimic follower on ``chain`` has its driver on it too."""
@@ -705,16 +729,30 @@ def default_ee_frame(model: Any, info: UrdfInfo | None = None) -> tuple[str, str
 
     best: tuple[Any, ...] | None = None
     best_i = -1
+    cut = (0, "", "")  # the longest chain cut by a refused mimic group: (joints, frame, joint)
     for i, f in enumerate(frames):
         if f.type != pin.FrameType.BODY:
             continue
         chain = [int(j) for j in model.supports[f.parentJoint] if j != 0 and not flyer[j]]
+        if chain and all(refused[j] or not bad_joint[j] for j in chain):
+            first = next((j for j in chain if refused[j]), None)
+            if first is not None and len(chain) > cut[0]:
+                cut = (len(chain), f.name, names[first])
         if not chain or any(bad_joint[j] for j in chain) or not drivable(chain):
             continue
         solved = sum(names[j] not in mimic for j in chain)
         key = (solved, frame_name_score(f.name), fixed_depth(i), -i)
         if best is None or key > best:
             best, best_i = key, i
+    if best is not None and cut[0] > best[0]:  # (an arm of refused mimic joints: the frame
+        # before them was taken in silence, a 6-joint arm solved as 2 joints)
+        warnings.warn(
+            f"the default end-effector frame stops before joint {cut[2]!r}: a longer chain "
+            f"(to {cut[1]!r}, {cut[0]} joints) holds mimic joints swarm_ik cannot drive; name "
+            "the frame to be told why",
+            RobotModelWarning,
+            stacklevel=user_stacklevel(),
+        )
     if best is not None:
         f = frames[best_i]
         n = best[0]
