@@ -37,6 +37,7 @@ from swarm_ik import batch
 from swarm_ik._validate import SEED_LIMIT, count, finest_edge, flag, floats_or, positive_float
 from swarm_ik.batch import solve_batch
 from swarm_ik.errors import InvalidArgumentError
+from swarm_ik.kernels.fk import PRISMATIC
 from swarm_ik.paths import written_in_place_of
 from swarm_ik.robot import RobotModel
 
@@ -114,11 +115,14 @@ class ReachMap:
     def save(self, path: str | Path) -> Path:
         """Write the map to ``.npz`` (arrays ``x, y, z, index, solved, hits, centres,
         orientations, base`` and the scalars); :meth:`load` reads it back."""
+        from swarm_ik.viz.export import check_output_path
+
         p = Path(path)
         if p.suffix.lower() != ".npz":
             raise InvalidArgumentError(
                 f"reachability maps are written as .npz; got {str(p)!r} (valid suffix: .npz)"
             )
+        check_output_path(p, "reachability map", (".npz",))  # (a folder, a missing folder)
         with written_in_place_of(p) as part, part.open("wb") as fb:  # (never a partial file)
             self._write(fb)
         return p
@@ -211,19 +215,23 @@ def chain_reach_bound(robot: RobotModel) -> tuple[FloatArray, float]:
     """A sphere holding every end-effector position: centre (the first joint) and radius.
 
     The radius is the sum of the joint placement offsets after the first joint, the
-    end-effector offset, and the largest travel of every prismatic joint: a rigorous bound,
-    whatever the joint values.
+    end-effector offset, and the largest travel of every prismatic joint of the tree (a mimic
+    follower's too: its driver's travel times its multiplier, plus its offset): a rigorous
+    bound, whatever the joint values.
 
     Returns:
         ``(centre (3,) [m], radius [m])``.
     """
     c = robot.tree
     radius = float(np.linalg.norm(c.pos_p[1:], axis=1).sum() + np.linalg.norm(c.frame_pos[0]))
-    for j, kind in enumerate(robot.joint_kinds):
-        if kind == "prismatic":
-            radius += float(max(abs(robot.lower[j]), abs(robot.upper[j])))
+    for j in range(c.kind.shape[0]):
+        if c.kind[j] == PRISMATIC:
+            qi = int(c.q_index[j])
+            stroke = max(abs(float(robot.lower[qi])), abs(float(robot.upper[qi])))
+            travel = abs(float(c.multiplier[j])) * stroke + abs(float(c.offset[j]))
+            radius += travel
             if j == 0:  # the first joint's own travel moves the centre as well
-                radius += float(max(abs(robot.lower[0]), abs(robot.upper[0])))
+                radius += travel
     return np.array(c.pos_p[0], dtype=float), radius
 
 
@@ -307,11 +315,12 @@ def check_grid_size(
     coarser = "a coarser resolution"
     if fits is not None:
         coarser += f" (at least {fits:.3g} m for this box)"
+    fewer = " or fewer orientations" if k > 1 else ""  # (a map of positions has one)
     raise InvalidArgumentError(
         f"resolution {resolution!r} m gives a grid of {n_voxels:.3g} voxels × "
         f"{n_orientations} orientations = {poses:.3g} poses (about {poses * 128 / 1e9:.3g} "
         f"GB of targets), more than max_targets={max_targets}; use {coarser}, smaller "
-        "bounds or fewer orientations"
+        f"bounds{fewer}"
     )
 
 
@@ -463,7 +472,13 @@ def reach_map(
 # --------------------------------------------------------------------------- pictures
 def plot_slices(rmap: ReachMap, path: str | Path, dpi: int = 120) -> Path:
     """Heat maps of the index on three orthogonal slices through the first joint (XY, XZ,
-    YZ), written as a PNG (matplotlib, imported here)."""
+    YZ), written as a PNG (matplotlib, imported here; another format of matplotlib's by the
+    suffix).
+
+    Raises:
+        InvalidArgumentError: matplotlib is missing, or ``path`` is a folder, in a missing
+            folder, or of a format matplotlib does not write.
+    """
     try:
         import matplotlib
 
@@ -473,6 +488,15 @@ def plot_slices(rmap: ReachMap, path: str | Path, dpi: int = 120) -> Path:
         raise InvalidArgumentError(
             'plotting needs matplotlib: pip install "swarm_ik[plot]"'
         ) from None
+    from swarm_ik.viz.export import check_output_path
+
+    p = Path(path)
+    if not p.suffix and not p.is_dir():  # (as matplotlib names a file without a suffix)
+        p = p.with_suffix(".png")
+    from matplotlib.backend_bases import FigureCanvasBase
+
+    formats = tuple(f".{f}" for f in FigureCanvasBase.get_supported_filetypes())
+    check_output_path(p, "plot", formats)  # (before drawing: a folder, a missing folder)
     ix = int(np.argmin(np.abs(rmap.x - rmap.base[0])))
     iy = int(np.argmin(np.abs(rmap.y - rmap.base[1])))
     iz = int(np.argmin(np.abs(rmap.z - rmap.base[2])))
@@ -505,9 +529,6 @@ def plot_slices(rmap: ReachMap, path: str | Path, dpi: int = 120) -> Path:
         f"{rmap.robot} ({rmap.ee_frame}): reachability, {rmap.resolution:g} m voxels, "
         f"tolerance {rmap.tol_pos:g} m / {rmap.tol_rot:g} rad"
     )
-    p = Path(path)
-    if not p.suffix:  # (as matplotlib names a file without a suffix)
-        p = p.with_suffix(".png")
     with written_in_place_of(p) as part:  # (never a partial file)
         fig.savefig(part, dpi=dpi, format=p.suffix[1:].lower())
     plt.close(fig)

@@ -9,6 +9,7 @@ import os
 import subprocess
 import sys
 
+import numpy as np
 import pytest
 
 import swarm_ik
@@ -100,3 +101,40 @@ def test_an_embedded_dask_cluster_leaves_port_8787_alone(panda) -> None:
     finally:
         held.close()
     assert res.success.all()
+
+
+def test_the_resolution_a_refused_reach_map_suggests_is_accepted() -> None:
+    """Review 116: the voxels' cap suggested 0.00972 m for a UR5 map, which the poses' cap
+    (8 orientations, 5·10⁶ poses) then refused; a map of positions was told to use fewer
+    orientations, though it has one."""
+    import re
+
+    robot = swarm_ik.load_robot("ur5")
+    lo, hi = reach.default_bounds(robot, seed=0)
+    for k in (8, 1):
+        with pytest.raises(swarm_ik.InvalidArgumentError) as info:
+            reach.check_grid_size(lo, hi, 0.005, k, reach.MAX_TARGETS)
+        suggested = float(re.search(r"at least ([0-9.e-]+) m", str(info.value)).group(1))
+        assert reach.check_grid_size(lo, hi, suggested, k, reach.MAX_TARGETS) > 0
+        assert ("fewer orientations" in str(info.value)) == (k > 1)
+
+
+def test_a_prismatic_mimic_joint_s_travel_counts_in_the_reach_bound(tmp_path) -> None:
+    """Review 116: chain_reach_bound left out a mimic follower's stroke, and a map marked
+    voxels 0.8-2.3 m away unreachable without solving them (reach_radius counted it)."""
+    urdf = tmp_path / "slide.urdf"
+    limit = '<limit lower="{}" upper="{}" effort="1" velocity="1"/>'
+    urdf.write_text(
+        '<robot name="s"><link name="b"/><link name="a"/><link name="c"/><link name="t"/>'
+        '<joint name="j0" type="revolute"><parent link="b"/><child link="a"/>'
+        '<axis xyz="0 0 1"/>' + limit.format(-3, 3) + "</joint>"
+        '<joint name="j1" type="prismatic"><parent link="a"/><child link="c"/>'
+        '<origin xyz="0.3 0 0.1"/><axis xyz="1 0 0"/>' + limit.format(0, 0.5) + "</joint>"
+        '<joint name="j2" type="prismatic"><parent link="c"/><child link="t"/>'
+        '<axis xyz="1 0 0"/>' + limit.format(0, 1.5) + '<mimic joint="j1" multiplier="3"/>'
+        "</joint></robot>"
+    )
+    robot = swarm_ik.load_robot(urdf, "t")
+    _, radius = reach.chain_reach_bound(robot)
+    tip = robot.fk(robot.upper)[:3, 3]
+    assert radius >= float(np.linalg.norm(tip)) - 1e-12 and radius >= 2.3 - 1e-9

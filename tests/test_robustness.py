@@ -1046,8 +1046,8 @@ def test_verify_refuses_a_bad_joint_vector(problem: IKProblem) -> None:
 @pytest.mark.parametrize(
     ("resolution", "message"),
     [
-        ("0.002", r"more than the cap of 10000000; use --resolution"),
-        ("1e-4", r"more than the cap of 10000000"),
+        ("0.002", r"more than max_targets=5000000; use a coarser resolution \(at least"),
+        ("1e-4", r"more than max_targets=5000000"),
         ("0", r"--resolution must be a positive number, got 0.0"),
         ("nan", r"--resolution must be a positive number"),
     ],

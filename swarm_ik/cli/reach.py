@@ -221,8 +221,10 @@ def run(args: argparse.Namespace) -> int:
     else:
         lo, hi = reach.default_bounds(robot, seed=args.seed)
     k = reach.orientation_count(args.orientations, args.position_only, "--position-only")
-    _validate.check_grid_size(lo, hi, args.resolution)
+    # (the poses' cap first: its finest resolution fits the voxels' cap too, where the
+    # voxels' suggested one was then refused for its poses)
     reach.check_grid_size(lo, hi, args.resolution, k, args.max_targets)
+    _validate.check_grid_size(lo, hi, args.resolution)
     if robot.nq < 6 and not args.position_only:
         skipped.append(
             f"note: {robot.name} has {robot.nq} joints, so a random full orientation is out "
