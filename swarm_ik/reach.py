@@ -296,8 +296,9 @@ def check_grid_size(
             the count, its memory, and the finest resolution that fits; where even one
             voxel's orientations are too many, fewer orientations or a larger cap).
     """
-    ext = np.asarray(upper, dtype=float).reshape(3) - np.asarray(lower, dtype=float).reshape(3)
-    with np.errstate(over="ignore", divide="ignore"):
+    with np.errstate(over="ignore", divide="ignore"):  # (an extent beyond a float: inf)
+        lo, hi = np.asarray(lower, dtype=float), np.asarray(upper, dtype=float)
+        ext = hi.reshape(3) - lo.reshape(3)
         per_axis = np.maximum(1.0, np.ceil(ext / float(resolution) - 1e-9))
         n_voxels = float(np.prod(per_axis))
     k = int(n_orientations)
@@ -316,11 +317,15 @@ def check_grid_size(
     if fits is not None:
         coarser += f" (at least {fits:.3g} m for this box)"
     fewer = " or fewer orientations" if k > 1 else ""  # (a map of positions has one)
+
+    def size(x: float) -> str:
+        return format(x, ".3g") if x < 1e300 else "over 1e300"
+
     raise InvalidArgumentError(
-        f"resolution {resolution!r} m gives a grid of {n_voxels:.3g} voxels × "
-        f"{n_orientations} orientations = {poses:.3g} poses (about {poses * 128 / 1e9:.3g} "
-        f"GB of targets), more than max_targets={max_targets}; use {coarser}, smaller "
-        f"bounds{fewer}"
+        f"resolution {resolution!r} m gives a grid of {size(n_voxels)} voxels × "
+        f"{n_orientations} orientations = {size(poses)} poses (about "
+        f"{size(poses * 128 / 1e9)} GB of targets), more than max_targets={max_targets}; use "
+        f"{coarser}, smaller bounds{fewer}"
     )
 
 

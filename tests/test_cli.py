@@ -566,7 +566,7 @@ def test_empty_target_files_and_huge_reach_bounds_are_refused(
             "--out",
             str(tmp_path / "m.npz"),
         )
-        assert "over 1e300 voxels" in line and "smaller --bounds" in line
+        assert "over 1e300 voxels" in line and "smaller bounds" in line
 
 
 def test_api_budgets_beyond_numbers_are_refused() -> None:
