@@ -493,9 +493,20 @@ class IKTask:
         )
 
     def order(self) -> list[str]:
-        """The peers in this task's run order (a seeded permutation)."""
-        rng = np.random.default_rng([self.seed, self.target_id, int(self.budget_ms * 1000)])
-        return [self.peers[i] for i in rng.permutation(len(self.peers))]
+        """The peers in this task's run order: a permutation seeded by the task (the robot
+        too), drawn again while two of our own peers that run the same search (``swarm``,
+        ``ik-solver``) would run one right after the other (the second ran warm: its own
+        time half the first's, review 117), where another peer can stand between them."""
+        robot = int.from_bytes(self.robot.encode()[:8].ljust(8, b"\0"), "little")
+        rng = np.random.default_rng([self.seed, self.target_id, int(self.budget_ms * 1000), robot])
+        twins = {"swarm", "ik-solver"}
+        for _ in range(100):
+            order = [self.peers[i] for i in rng.permutation(len(self.peers))]
+            if len(self.peers) < 3 or not any(
+                {a, b} == twins for a, b in zip(order, order[1:], strict=False)
+            ):
+                break
+        return order
 
 
 def ik_tasks(plan: IKPlan) -> list[IKTask]:
