@@ -343,6 +343,12 @@ def finest_edge(lower: Any, upper: Any, cap: int) -> float | None:
     return math.ceil(fits / step * (1 - 1e-12)) * step
 
 
+def size_text(x: float) -> str:
+    """A count or size for a message: three digits, or ``"over 1e300"`` (a grid beyond a
+    float's range has an infinite count)."""
+    return format(x, ".3g") if x < 1e300 else "over 1e300"
+
+
 def check_grid_size(
     lower: Any, upper: Any, resolution: Any, max_cells: int = MAX_GRID_CELLS
 ) -> int:
@@ -367,8 +373,7 @@ def check_grid_size(
         fit = finest_edge(lower, upper, max_cells)
         hint = "" if fit is None else f"--resolution {fit:.3g} or coarser, or "
         raise InvalidArgumentError(
-            f"a grid of {res:g} m voxels over this box has "
-            f"{format(n, '.3g') if n < 1e300 else 'over 1e300'} voxels, more than "
+            f"a grid of {res:g} m voxels over this box has {size_text(n)} voxels, more than "
             f"the cap of {max_cells}; use {hint}smaller --bounds"
         )
     return int(n)  # (finite here: at most max_cells)

@@ -1928,8 +1928,12 @@ def _reason(
 
 def _listed(indices: list[int]) -> str:
     """``"waypoint 3"`` or ``"waypoints 3, 4, …"`` (the first ten)."""
-    where = ", ".join(str(i) for i in indices[:10]) + (" …" if len(indices) > 10 else "")
-    return f"waypoint{'s' if len(indices) > 1 else ''} {where}"
+    return f"waypoint{'s' if len(indices) > 1 else ''} {_first_ten(indices)}"
+
+
+def _first_ten(indices: list[int]) -> str:
+    """``"3, 4, 5"``: the first ten indices, ``…`` after them when there are more."""
+    return ", ".join(str(i) for i in indices[:10]) + (" …" if len(indices) > 10 else "")
 
 
 def _missed_reasons(ctx: _Context, graph: _Graph, q: FloatArray, missed: list[int]) -> list[str]:
@@ -2005,7 +2009,7 @@ def _blocked_reason(ctx: _Context, graph: _Graph, missed: list[int], blocked: li
         else f"IK solution meeting {', '.join(sorted(failed))}"
     )
     fails = "collides" if collisions else "fails it" if len(failed) == 1 else "fails them"
-    listed = ", ".join(str(i) for i in blocked[:10]) + (" …" if len(blocked) > 10 else "")
+    listed = _first_ten(blocked)
     complete = all(graph.certified[i] for i in blocked)
     sets = "each set complete: a proof" if complete else "the sets not certified complete"
     how = f"(closed form: every branch within the joint limits {fails}; {sets})"
@@ -2027,7 +2031,7 @@ def _inside_reason(ctx: _Context, missed: list[int]) -> str:
     out = ""
     for name, at in inside.items():
         plural = "s" if len(at) > 1 else ""
-        where = ", ".join(str(i) for i in at[:10]) + (" …" if len(at) > 10 else "")
+        where = _first_ten(at)
         out += f"; the target point of waypoint{plural} {where} lies inside obstacle {name!r}"
     return out
 

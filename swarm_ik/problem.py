@@ -176,11 +176,9 @@ def _probe_q(robot: RobotModel) -> FloatArray:
     """The configuration the goals' checks probe: no two joints alike (a residual that
     vanishes where joints are equal, or at the middle of the ranges, would tell neither
     sign), inside the limits."""
-    lo, hi = np.asarray(robot.lower, dtype=float), np.asarray(robot.upper, dtype=float)
-    frac = 0.25 + 0.5 * ((0.6180339887 * np.arange(1, lo.shape[0] + 1)) % 1.0)
-    finite = np.isfinite(lo) & np.isfinite(hi)
-    q = np.where(finite, lo + frac * np.where(finite, hi - lo, 0.0), frac - 0.5)
-    return np.asarray(np.clip(q, lo, hi))
+    j = np.arange(1, robot.nq + 1)
+    frac = 0.25 + 0.5 * ((0.6180339887 * j) % 1.0)
+    return _at_fractions(robot, frac, frac - 0.5)
 
 
 PROBES = 4
@@ -194,15 +192,21 @@ def _more_probe_qs(robot: RobotModel, n: int = PROBES) -> list[FloatArray]:
     """``n`` more configurations spread over the joint ranges (a low-discrepancy sequence,
     every joint at another fraction of its range in each, from 5 % to 95 %), where
     :func:`_check_kernel_twin` checks a compiled goal's rows again."""
-    lo, hi = np.asarray(robot.lower, dtype=float), np.asarray(robot.upper, dtype=float)
-    finite = np.isfinite(lo) & np.isfinite(hi)
-    j = np.arange(1, lo.shape[0] + 1)
+    j = np.arange(1, robot.nq + 1)
     out = []
     for k in range(1, n + 1):
         frac = 0.05 + 0.9 * ((0.7548776662 * k + 0.5698402910 * j) % 1.0)
-        q = np.where(finite, lo + frac * np.where(finite, hi - lo, 0.0), 2.0 * frac - 1.0)
-        out.append(np.asarray(np.clip(q, lo, hi)))
+        out.append(_at_fractions(robot, frac, 2.0 * frac - 1.0))
     return out
+
+
+def _at_fractions(robot: RobotModel, frac: Any, unbounded: Any) -> FloatArray:
+    """The joint vector at fractions ``frac`` ``(nq,)`` of the joint ranges, ``unbounded``
+    [rad, m] on a joint without finite limits, inside the limits."""
+    lo, hi = np.asarray(robot.lower, dtype=float), np.asarray(robot.upper, dtype=float)
+    finite = np.isfinite(lo) & np.isfinite(hi)
+    q = np.where(finite, lo + frac * np.where(finite, hi - lo, 0.0), unbounded)
+    return np.asarray(np.clip(q, lo, hi))
 
 
 JACOBIAN_STEP = 1e-6
@@ -407,12 +411,19 @@ def _check_kernel_rows(robot: RobotModel, goal: Goal, q: FloatArray) -> None:
         if twin:
             r_at = goals_base.search_rows(goal, State(robot, q_at), want_jac=False)[0]
             if not (_close(res_at, r_at) or _close(res_at, -r_at)):
-                raise InvalidArgumentError(
-                    f"{goal.describe()}: its kernel's rows {np.round(res_at, 9).tolist()} "
-                    f"differ from its residual(state) {np.round(r_at, 9).tolist()} at q = "
-                    f"{np.round(q_at, 6).tolist()} (the kernel writes the residual's rows, "
-                    "weighted alike; docs/goals.md)"
-                )
+                raise _rows_differ(goal, res_at, r_at, q_at)
+
+
+def _rows_differ(
+    goal: Goal, res: FloatArray, r_np: FloatArray, q: FloatArray
+) -> InvalidArgumentError:
+    """The refusal of a kernel whose rows ``res`` differ from its residual's ``r_np`` at
+    ``q``."""
+    return InvalidArgumentError(
+        f"{goal.describe()}: its kernel's rows {np.round(res, 9).tolist()} differ from its "
+        f"residual(state) {np.round(r_np, 9).tolist()} at q = {np.round(q, 6).tolist()} "
+        "(the kernel writes the residual's rows, weighted alike; docs/goals.md)"
+    )
 
 
 def _check_finite_rows(goal: Goal, q: FloatArray, res: FloatArray, jac: FloatArray) -> None:
@@ -441,11 +452,7 @@ def _check_twin_at(
         # sign, told by the Jacobian)
         sign = -1.0 if float(np.sum(jac * j_np)) > 0.0 else 1.0
     if sign == 0.0:
-        raise InvalidArgumentError(
-            f"{goal.describe()}: its kernel's rows {np.round(res, 9).tolist()} differ from its "
-            f"residual(state) {np.round(r_np, 9).tolist()} at q = {np.round(q, 6).tolist()} "
-            "(the kernel writes the residual's rows, weighted alike; docs/goals.md)"
-        )
+        raise _rows_differ(goal, res, r_np, q)
     if j_np is None:
         return
     # only the sign is judged, on the rows whose twin has a derivative (an approximate step

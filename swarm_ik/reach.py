@@ -34,7 +34,15 @@ import numpy as np
 from numpy.typing import NDArray
 
 from swarm_ik import batch
-from swarm_ik._validate import SEED_LIMIT, count, finest_edge, flag, floats_or, positive_float
+from swarm_ik._validate import (
+    SEED_LIMIT,
+    count,
+    finest_edge,
+    flag,
+    floats_or,
+    positive_float,
+    size_text,
+)  # fmt: skip
 from swarm_ik.batch import solve_batch
 from swarm_ik.errors import InvalidArgumentError
 from swarm_ik.kernels.fk import PRISMATIC
@@ -317,15 +325,11 @@ def check_grid_size(
     if fits is not None:
         coarser += f" (at least {fits:.3g} m for this box)"
     fewer = " or fewer orientations" if k > 1 else ""  # (a map of positions has one)
-
-    def size(x: float) -> str:
-        return format(x, ".3g") if x < 1e300 else "over 1e300"
-
     raise InvalidArgumentError(
-        f"resolution {resolution!r} m gives a grid of {size(n_voxels)} voxels × "
-        f"{n_orientations} orientations = {size(poses)} poses (about "
-        f"{size(poses * 128 / 1e9)} GB of targets), more than max_targets={max_targets}; use "
-        f"{coarser}, smaller bounds{fewer}"
+        f"resolution {resolution!r} m gives a grid of {size_text(n_voxels)} voxels × "
+        f"{n_orientations} orientations = {size_text(poses)} poses (about "
+        f"{size_text(poses * 128 / 1e9)} GB of targets), more than max_targets={max_targets}; "
+        f"use {coarser}, smaller bounds{fewer}"
     )
 
 
