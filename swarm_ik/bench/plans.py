@@ -12,6 +12,7 @@ Specs only: nothing here runs a solver or writes a file (the runner is
 
 from __future__ import annotations
 
+import zlib
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass, replace
 from functools import lru_cache, partial
@@ -497,7 +498,7 @@ class IKTask:
         too), drawn again while two of our own peers that run the same search (``swarm``,
         ``ik-solver``) would run one right after the other (the second ran warm: its own
         time half the first's, review 117), where another peer can stand between them."""
-        robot = int.from_bytes(self.robot.encode()[:8].ljust(8, b"\0"), "little")
+        robot = zlib.crc32(self.robot.encode())  # (the whole name: stable across runs)
         rng = np.random.default_rng([self.seed, self.target_id, int(self.budget_ms * 1000), robot])
         twins = {"swarm", "ik-solver"}
         for _ in range(100):
