@@ -372,7 +372,9 @@ def warm_up(route: Route) -> None:
         search.key_of_seed(0)  # (every run keys its stream so: Route.run)
         if route.compiled:  # the one compiled call of the route (with a clock: its first
             # read is slow); a cache damaged inside its files is removed and compiled again
-            kernels.loaded_despite_damage(lambda: route._search(q, np.uint64(1), 1, 60.0))
+            kernels.loaded_despite_damage(
+                lambda: route._search(q, np.uint64(1), 1, 60.0), mark=True
+            )
         else:  # what the solvers' loops call, on a plain problem of the same goals (the
             # methods of a subclass or of the instance are the caller's: not run here), each
             # Python goal replaced by a stand-in: a user's goal may take milliseconds a call,

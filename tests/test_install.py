@@ -8,6 +8,7 @@ import contextlib
 import json
 import os
 import pickle
+import platform
 import re
 import shlex
 import shutil
@@ -574,3 +575,66 @@ def test_an_interruption_is_no_damaged_cache() -> None:
     except RuntimeError as exc:
         assert cut_by_ctrl_c(exc)  # (its context, though not its cause, is the interruption)
     assert not cut_by_ctrl_c(RuntimeError("LLVM bitcode parsing error"))
+
+
+def _whole_index(folder: Path) -> Path:
+    """A cache index file that is whole (two pickles), as numba writes them."""
+    folder.mkdir(parents=True, exist_ok=True)
+    index = folder / "lie.log3_nb-33.py311.nbi"
+    index.write_bytes(pickle.dumps(1) + pickle.dumps(2))
+    return index
+
+
+def test_a_process_that_aborts_while_loading_kernels_makes_the_next_one_clear_the_cache(
+    tmp_path: Path,
+) -> None:
+    """An abort inside LLVM (a cache file damaged so that its bitcode reader fails an
+    assertion) kills the process where no Python handler sees it; the mark it leaves makes
+    the next import remove every cache file (one line), so that only one run aborts."""
+    cache = tmp_path / "numba"
+    index = _whole_index(Path(cache_folders(str(cache))[KERNEL_PACKAGES.index("kernels")]))
+    env = _env(NUMBA_CACHE_DIR=str(cache))
+    aborted = _python(
+        "import os, swarm_ik.kernels as k\nwith k.loading_marked():\n    os.abort()", env, ROOT
+    )
+    assert aborted.returncode != 0 and index.exists()
+    run = _python("import swarm_ik.kernels", env, ROOT)
+    assert run.returncode == 0, run.stderr[-2000:]
+    assert not index.exists()
+    (line,) = run.stderr.strip().splitlines()
+    assert "a process died while it loaded the compiled kernels" in line
+    assert "removed 1 numba cache file(s)" in line
+    again = _python("import swarm_ik.kernels", env, ROOT)  # (the mark went with the files)
+    assert again.returncode == 0 and again.stderr == ""
+
+
+def test_a_load_that_returns_or_raises_leaves_no_mark_and_a_live_ones_mark_is_kept(
+    tmp_path: Path,
+) -> None:
+    """A load that ends (or raises: a Ctrl-C, an error) removes its mark, nested loads
+    included; the mark of a process still loading (another solve starting beside this one)
+    clears nothing."""
+    cache = tmp_path / "numba"
+    index = _whole_index(Path(cache_folders(str(cache))[KERNEL_PACKAGES.index("kernels")]))
+    env = _env(NUMBA_CACHE_DIR=str(cache))
+    code = (
+        "import os, swarm_ik.kernels as k\n"
+        "with k.loading_marked():\n"
+        "    with k.loading_marked():\n"
+        "        pass\n"
+        "    print(len([n for n in os.listdir(k.cache_folders(k._SETTLED[0])[0])"
+        " if n.startswith(k.LOADING_MARK)]))\n"
+        "try:\n"
+        "    k.loaded_despite_damage(lambda: 1 / 0, mark=True)\n"
+        "except ZeroDivisionError:\n"
+        "    pass\n"
+    )
+    run = _python(code, env, ROOT)
+    assert run.returncode == 0, run.stderr[-2000:]
+    assert run.stdout.split() == ["1"]  # (one mark while inside, the nested one the same)
+    first = Path(cache_folders(str(cache))[0])
+    assert not [p for p in first.iterdir() if p.name.startswith("swarm_ik-loading")]
+    live = first / f"swarm_ik-loading-{platform.node()}-{os.getpid()}"
+    live.write_text("")
+    run = _python("import swarm_ik.kernels", env, ROOT)
+    assert run.returncode == 0 and run.stderr == "" and index.exists() and live.exists()

@@ -115,7 +115,7 @@ def kernel_slot(kernel: Any) -> int:
             ours = str(getattr(kernel.py_func, "__module__", "")).startswith("swarm_ik.")
             # (a damaged cache of swarm_ik's own kernels is removed and compiled again; a
             # user's kernel is the user's, its errors reported as they are)
-            typed = loaded_despite_damage(compiled) if ours else compiled()
+            typed = loaded_despite_damage(compiled, mark=True) if ours else compiled()
         except Exception as exc:  # numba's typing errors have no public base class
             first = str(exc).strip().splitlines()[0] if str(exc).strip() else type(exc).__name__
             raise InvalidArgumentError(
@@ -139,7 +139,10 @@ def kernels() -> Any:
         made = _LISTS.made
         if made is None or made[0] != _GENERATION[0]:  # (its builder is a compiled call
             # too: a cache damaged inside, removed)
-            made = (_GENERATION[0], loaded_despite_damage(lambda: kernel_list(list(_KERNELS))))
+            made = (
+                _GENERATION[0],
+                loaded_despite_damage(lambda: kernel_list(list(_KERNELS)), mark=True),
+            )
             _LISTS.made = made
         return made[1]
 

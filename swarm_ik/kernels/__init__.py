@@ -23,13 +23,14 @@ from __future__ import annotations
 import contextlib
 import hashlib
 import os
+import platform
 import shutil
 import signal
 import stat
 import sys
 import threading
 from collections.abc import Callable, Iterable, Iterator
-from typing import IO, TypeVar
+from typing import IO, Any, TypeVar
 
 from swarm_ik import paths
 from swarm_ik.errors import SwarmIKError
@@ -338,15 +339,101 @@ def raise_ctrl_c(exc: BaseException) -> None:
         raise exc.__cause__ from None
 
 
-def loaded_despite_damage(load: Callable[[], T]) -> T:
+LOADING_MARK = "swarm_ik-loading"
+"""The name's prefix of the file a process keeps in swarm_ik's cache folder while it loads
+compiled kernels (:func:`loading_marked`; ``<prefix>-<host>-<pid>``)."""
+
+_MARK: list[Any] = [0, None]  # (how deep this process is in marked loads; its file's path)
+_MARK_LOCK = threading.Lock()
+
+
+def _mark_path(host: str, pid: int) -> str | None:
+    """Where the loading mark of process ``pid`` on ``host`` lives (None: no cache folder)."""
+    folders = cache_folders(_SETTLED[0])
+    return os.path.join(folders[0], f"{LOADING_MARK}-{host}-{pid}") if folders else None
+
+
+@contextlib.contextmanager
+def loading_marked() -> Iterator[None]:
+    """The body loads compiled kernels from numba's cache: a mark in the cache folder says so
+    until it returns or raises.  A process that dies inside, an abort that no Python handler
+    sees (LLVM's bitcode reader failing an assertion on a cache file damaged inside), leaves
+    its mark, and the next process to import swarm_ik on this host finds it, with its process
+    gone, and removes every cache file (:func:`_recover_from_dead_loads`): one run aborts,
+    the next compiles anew.  A mark that cannot be written is skipped (a read-only cache)."""
+    with _MARK_LOCK:
+        if _MARK[0] == 0:
+            path = _mark_path(platform.node(), os.getpid())
+            try:
+                if path is not None:
+                    os.makedirs(os.path.dirname(path), exist_ok=True)
+                    with open(path, "w"):
+                        pass
+            except OSError:
+                path = None
+            _MARK[1] = path
+        _MARK[0] += 1
+    try:
+        yield
+    finally:
+        with _MARK_LOCK:
+            _MARK[0] -= 1
+            if _MARK[0] == 0 and _MARK[1] is not None:
+                with contextlib.suppress(OSError):
+                    os.remove(_MARK[1])
+                _MARK[1] = None
+
+
+def _alive(pid: int) -> bool:
+    """Whether process ``pid`` runs (or may: one this user cannot signal)."""
+    try:
+        os.kill(pid, 0)
+    except ProcessLookupError:
+        return False
+    except (PermissionError, OSError, OverflowError):
+        return True
+    return True
+
+
+def _recover_from_dead_loads() -> list[str]:
+    """Remove every swarm_ik cache file when a process of this host died while it loaded
+    compiled kernels (its :func:`loading_marked` file left, the process gone), and the marks
+    of such processes; returns the cache files removed."""
+    folders = cache_folders(_SETTLED[0])
+    if not folders:
+        return []
+    host = platform.node()
+    prefix = f"{LOADING_MARK}-{host}-"
+    try:
+        names = [n for n in os.listdir(folders[0]) if n.startswith(prefix)]
+    except OSError:
+        return []
+    dead = [n for n in names if n[len(prefix) :].isdigit() and not _alive(int(n[len(prefix) :]))]
+    if not dead:
+        return []
+    removed = clear_cache()
+    for name in dead:
+        with contextlib.suppress(OSError):
+            os.remove(os.path.join(folders[0], name))
+    return removed
+
+
+def loaded_despite_damage(load: Callable[[], T], mark: bool = False) -> T:
     """``load()``, a first call that loads compiled kernels from numba's cache; when it fails
     and swarm_ik's cache holds files, they are all removed (one line on stderr) and ``load``
     runs once more, compiling anew.  A cache file whole in length but damaged inside (flipped
     bytes: numba's ``LLVM bitcode parsing error`` or a ``UnicodeDecodeError`` on every run),
     which the check on import cannot see, so costs one compile instead of every solve.  An
     error that is not the cache's comes back from the second call as it was; a Ctrl-C that
-    cut the kernel's clock read short as ``KeyboardInterrupt`` (:func:`raise_ctrl_c`)."""
+    cut the kernel's clock read short as ``KeyboardInterrupt`` (:func:`raise_ctrl_c`).
+    ``mark``: the call is a load that returns soon (a route's warm-up, the goal kernels'
+    table, the first batched FK), marked for the next process if it aborts
+    (:func:`loading_marked`); a call that runs the work itself (a batch, a command) is not
+    marked: a kill in the middle of it is no sign of a damaged cache."""
     try:
+        if mark:
+            with loading_marked():
+                return load()
         return load()
     except (KeyboardInterrupt, SwarmIKError):
         raise
@@ -377,8 +464,17 @@ def clear_cache() -> list[str]:
 
 
 def _settle() -> None:
-    """Settle the cache folder, then drop the damaged files in it (one line on stderr)."""
+    """Settle the cache folder, then drop the damaged files in it, or all of them after a
+    process died loading them (one line on stderr)."""
     _SETTLED[0] = settle_numba_cache()
+    after_abort = _recover_from_dead_loads()
+    if after_abort:
+        _notice(
+            f"a process died while it loaded the compiled kernels (an abort on a damaged cache "
+            f"file?); removed {len(after_abort)} numba cache file(s) under "
+            f"{os.path.commonpath([os.path.dirname(p) for p in after_abort])}; their kernels "
+            "are compiled again on first use"
+        )
     removed = drop_damaged_cache_files(cache_folders(_SETTLED[0]))
     if removed:
         names = ", ".join(os.path.basename(p) for p in removed[:3])

@@ -48,6 +48,17 @@ def rotation_z_to(axis: FloatArray) -> FloatArray:
     return np.eye(3) + k + k @ k / (1.0 + float(a[2]))
 
 
+_FK_CALLS = [0]
+"""Batched FK calls this process made (:func:`_first_fk`)."""
+
+
+def _first_fk() -> bool:
+    """Whether this is the process's first batched FK call (the one that loads its kernel
+    from numba's cache: marked, see :func:`swarm_ik.kernels.loading_marked`)."""
+    _FK_CALLS[0] += 1
+    return _FK_CALLS[0] == 1  # (with or without Jacobians: one signature, one kernel)
+
+
 class TreeArrays(NamedTuple):
     """A kinematic tree as arrays (every joint axis on z), with its frames.
 
@@ -166,7 +177,9 @@ class TreeArrays(NamedTuple):
         """Poses of every frame: ``(nq,) -> (nf, 4, 4)`` or ``(pop, nq) -> (pop, nf, 4, 4)``."""
         q2, single = self._prep(q)
         out_t = np.empty((q2.shape[0], self.nf, 4, 4))
-        loaded_despite_damage(lambda: fk_batch(q2, self, out_t, np.empty((1, 1, 6, 1)), False))
+        loaded_despite_damage(
+            lambda: fk_batch(q2, self, out_t, np.empty((1, 1, 6, 1)), False), mark=_first_fk()
+        )
         return out_t[0] if single else out_t
 
     def fk_jacobian(self, q: FloatArray) -> tuple[FloatArray, FloatArray]:
@@ -176,7 +189,7 @@ class TreeArrays(NamedTuple):
         pop = q2.shape[0]
         out_t = np.empty((pop, self.nf, 4, 4))
         out_j = np.empty((pop, self.nf, 6, self.nq))
-        loaded_despite_damage(lambda: fk_batch(q2, self, out_t, out_j, True))
+        loaded_despite_damage(lambda: fk_batch(q2, self, out_t, out_j, True), mark=_first_fk())
         return (out_t[0], out_j[0]) if single else (out_t, out_j)
 
     def _prep(self, q: FloatArray) -> tuple[FloatArray, bool]:
