@@ -46,7 +46,14 @@ _LAZY = {
     "robot_names": "swarm_ik.paths",
     "Scene": "swarm_ik.scene",
 }
-_SUBMODULES = ("goals", "problem", "solvers")
+_SUBMODULES = (
+    "api", "argtypes", "batch", "bench", "branches", "cli", "collision", "distributed",
+    "errors", "fitness", "goals", "kernels", "many", "optimize", "path", "paths", "periodic",
+    "pose", "problem", "reach", "result", "robot", "scene", "solvers", "spheres",
+    "testfunctions", "urdf", "viz",
+)  # fmt: skip
+"""The public modules, each loaded on first use as ``swarm_ik.<name>`` (``help(swarm_ik.many)``
+works without ``import swarm_ik.many`` first)."""
 
 
 def __getattr__(name: str) -> Any:

@@ -6,6 +6,7 @@ from __future__ import annotations
 
 import argparse
 import sys
+import warnings
 from typing import Any
 
 from swarm_ik import argtypes
@@ -166,6 +167,19 @@ def run(args: argparse.Namespace) -> int:
             min_distance=0.5 if args.min_distance is None else args.min_distance,
             seed=args.seed,
         )
+        asked = 1 if args.solutions is None else args.solutions
+        if len(results) < asked and results[0].success:
+            why = (
+                f"--solver {args.solver} solved from successive seeds reaches the solutions its "
+                "starts lead to; without --solver, swarm_ik.solve_many looks for every branch"
+                if args.solver is not None
+                else "the target has no more distinct ones, or the search's budget ended"
+            )
+            warnings.warn(
+                f"found {len(results)} of the {asked} solutions asked for (at least "
+                f"{0.5 if args.min_distance is None else args.min_distance:g} apart): {why}",
+                stacklevel=1,
+            )
     for k, r in enumerate(results):
         print(
             f"#{k + 1} " + _viewer.result_line(r) + "\n   q = " + " ".join(f"{v:.6f}" for v in r.q)

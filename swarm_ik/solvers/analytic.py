@@ -483,7 +483,8 @@ def closed_form_set(
     if c < k:
         starts = np.vstack([starts, _clipped_misfits(qs, lo, hi, ref)])
     if starts.shape[0] == 0:
-        return ClosedFormSet(sols, dps, drs, False, 0)
+        cf = ClosedFormSet(sols, dps, drs, False, 0)
+        return _with_continuum(problem, cf, ref, tol_pos, tol_rot, max_evals)
     found, evals = _polish(problem, starts, tol_pos, tol_rot, max_evals)
     # no solution at all, and eaik's points at a singular configuration (held back by the
     # limits, say): a continuum may hide solutions there (a generic target's least-squares
@@ -501,22 +502,83 @@ def closed_form_set(
             found, more = _polish(problem, moved, tol_pos, tol_rot, left)
             evals += more
     if found.shape[0] == 0:
-        return ClosedFormSet(sols, dps, drs, missed, evals)
-    both = np.vstack([sols, found])
-    out2 = np.empty_like(both)
-    key2 = np.empty(both.shape[0])
-    c2 = _fold_unique(both, lo, hi, ref, BRANCH_TOL * BRANCH_TOL, out2, key2)
-    if c2 == sols.shape[0]:  # every polished point a known solution
-        return ClosedFormSet(sols, dps, drs, missed, evals)
-    dp2, dr2 = pose_errors_of(robot.fk_pinocchio_many(out2[:c2]), problem.goals[0])
-    ok = (dp2 <= tol_pos) & (dr2 <= tol_rot)
-    qs2 = out2[:c2][ok]
-    incomplete = missed or any(  # a new solution at a singular configuration (a sample of
-        sigma_min(robot, q) < SINGULAR_SIGMA  # a continuum?)
-        for q in qs2
+        cf = ClosedFormSet(sols, dps, drs, missed, evals)
+        return _with_continuum(problem, cf, ref, tol_pos, tol_rot, max_evals)
+    cf = _joined(
+        problem, ClosedFormSet(sols, dps, drs, missed, evals), found, ref, tol_pos, tol_rot
+    )
+    incomplete = cf.incomplete or any(  # a new solution at a singular configuration (a
+        sigma_min(robot, q) < SINGULAR_SIGMA  # sample of a continuum?)
+        for q in cf.q
         if not _is_among(q, sols)
     )
-    return ClosedFormSet(qs2, dp2[ok], dr2[ok], incomplete, evals)
+    return _with_continuum(
+        problem, cf._replace(incomplete=incomplete), ref, tol_pos, tol_rot, max_evals
+    )
+
+
+def _joined(
+    problem: IKProblem,
+    cf: ClosedFormSet,
+    found: FloatArray,
+    ref: FloatArray,
+    tol_pos: float,
+    tol_rot: float,
+) -> ClosedFormSet:
+    """``cf`` with the polished points ``found`` ``(m, nq)`` that are new solutions modulo 2π
+    (folded into the limits nearest ``ref``, checked with Pinocchio's FK against the
+    tolerances)."""
+    lo, hi = problem.lower, problem.upper
+    both = np.vstack([cf.q, found])
+    out = np.empty_like(both)
+    c = _fold_unique(both, lo, hi, ref, BRANCH_TOL * BRANCH_TOL, out, np.empty(both.shape[0]))
+    if c == cf.q.shape[0]:  # every polished point a known solution
+        return cf
+    dp, dr = pose_errors_of(problem.robot.fk_pinocchio_many(out[:c]), problem.goals[0])
+    ok = (dp <= tol_pos) & (dr <= tol_rot)
+    return cf._replace(q=out[:c][ok], position_error=dp[ok], rotation_error=dr[ok])
+
+
+CONTINUUM_GAP = 1e-2
+"""Joint distance [rad / m, modulo 2π] from every solution of a closed-form set beyond which a
+point polished from a step along a singular solution's self-motion is a new sample of a
+continuum (:func:`_with_continuum`); nearer, it is the polish stopping beside an isolated
+double root (a straight elbow: a few 1e-6 rad from it)."""
+
+
+def _with_continuum(
+    problem: IKProblem,
+    cf: ClosedFormSet,
+    ref: FloatArray,
+    tol_pos: float,
+    tol_rot: float,
+    max_evals: int | None,
+) -> ClosedFormSet:
+    """``cf``, or, where one of its solutions lies at a singular configuration from which a
+    step along the self-motion (:func:`_self_motion_starts`) polishes into a new solution, a
+    sample of a continuum (exact to round-off and farther than :data:`CONTINUUM_GAP` from
+    each solution): ``cf``
+    with the new ones joined and marked incomplete.  A UR arm's
+    home pose (wrist and elbow straight at once) is such a target: eaik returns two exact
+    points of the wrist's continuum there and nothing else marks the set.  Run where eaik's
+    set was not taken as it came (a least-squares point, or one that failed the check)."""
+    if cf.incomplete or cf.q.shape[0] == 0:
+        return cf
+    moved = _self_motion_starts(problem.robot, cf.q, problem.lower, problem.upper, ref)
+    if moved.shape[0] == 0:
+        return cf
+    left = None if max_evals is None else max_evals - cf.evals
+    found, more = _polish(problem, moved, tol_pos, tol_rot, left)
+    cf = cf._replace(evals=cf.evals + more)
+    if found.shape[0]:  # (exact points only: beside a near-singular target the polish
+        # stalls on a valley floor within the tolerances, no solution of a continuum)
+        dp, dr = pose_errors_of(problem.robot.fk_pinocchio_many(found), problem.goals[0])
+        found = found[(dp <= 10 * ROUNDOFF_TOL) & (dr <= 10 * ROUNDOFF_TOL)]
+    every = np.ones(cf.q.shape[1], dtype=bool)
+    new = [q for q in found if float(branch_distance(cf.q, q, every).min()) > CONTINUUM_GAP]
+    if not new:
+        return cf
+    return _joined(problem, cf, np.array(new), ref, tol_pos, tol_rot)._replace(incomplete=True)
 
 
 SELF_MOTION_SHIFTS = (-1.5, -1.0, -0.5, 0.5, 1.0, 1.5)

@@ -373,8 +373,9 @@ def several_solutions(
     """Up to ``n`` distinct solutions of ``problem``.
 
     Without ``solver``, :func:`swarm_ik.solve_many`; with one, solves from successive seeds
-    keeping the successes at least ``min_distance`` apart (joint-space distance, rad / m,
-    continuous joints wrapped as in ``solve_many``; at most ``4 n`` solves).
+    (each after the first from a random start ``q0`` drawn with ``seed``, unless ``q0`` is
+    given) keeping the successes at least ``min_distance`` apart (joint-space distance, rad /
+    m, continuous joints wrapped as in ``solve_many``; at most ``4 n`` solves).
 
     Args:
         problem: The problem.
@@ -403,8 +404,12 @@ def several_solutions(
     robot = problem.robot
     kept: list[Result] = []
     best: Result | None = None
+    starts = np.random.default_rng(seed)  # (the starts after the first: a seeded draw)
     for s in range(seed, seed + 4 * n):
-        r = swarm_ik.solve(problem, solver, seed=s, **solve_kwargs)
+        kwargs = dict(solve_kwargs)
+        if s > seed and "q0" not in solve_kwargs:  # (from one start, a local solver finds
+            kwargs["q0"] = starts.uniform(problem.lower, problem.upper)  # one branch only)
+        r = swarm_ik.solve(problem, solver, seed=s, **kwargs)
         if best is None or r.fitness < best.fitness:
             best = r
         far = all(np.linalg.norm(robot.wrap(r.q - k.q)) >= least for k in kept)
