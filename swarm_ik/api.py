@@ -29,6 +29,7 @@ import numpy as np
 
 from swarm_ik import collision, kernels
 from swarm_ik._validate import check_seed, flag, keywords_checked, plain_number, user_stacklevel
+from swarm_ik.argtypes import SEED_LIMIT
 from swarm_ik.errors import InvalidArgumentError, UnknownNameError, unknown
 from swarm_ik.goals import base as goals_base
 from swarm_ik.goals.axis import angle_between
@@ -585,17 +586,25 @@ class Route:
             and self.prefer == "best"
             and on_improvement is None
             and not problem.has_secondary
+            and (max_evals is None or max_evals >= 2)  # (one evaluation: the search alone)
         ):
             t_first = time.perf_counter()
+            # (the tries' seeds: the integer seed, or one draw of the Generator, so that a
+            # Generator in one state gives one answer as an integer seed does)
+            first_seed = seed_val
+            if isinstance(seed, np.random.Generator):
+                first_seed = int(seed.integers(0, SEED_LIMIT))
+            assert first_seed is not None
+            # (the tries get half of what the judge leaves: a try that passes is judged too)
             first, first_evals = self._collision_free_first(
-                problem, q_start, seed_val, time_limit, max_evals
+                problem, q_start, first_seed, self._search_limit(time_limit), max_evals
             )
-            if first is not None:
-                return first
+            if first is not None:  # (its seed as the caller gave it: None for a Generator)
+                return dataclasses.replace(first, seed=seed_val)
             first_s = time.perf_counter() - t_first
             if time_limit is not None:  # (the rest of the budget for the search with rows)
                 time_limit = max(time_limit - first_s, 1e-4)
-            if max_evals is not None:
+            if max_evals is not None:  # (at least one left: the tries take at most half)
                 max_evals = max(max_evals - first_evals, 1)
         else:
             first_s, first_evals = 0.0, 0
@@ -666,16 +675,18 @@ class Route:
 
     def _search_limit(self, time_limit: float | None) -> float | None:
         """The search's share of ``time_limit``: less what judging its answer costs on this
-        route (measured on its earlier runs), at most half of it."""
+        route (measured on its earlier runs), at most 90 % of it (coal's check of a collision
+        goal takes most of a 1 ms limit: half of it kept for the search overran such a limit
+        by 70 %)."""
         if time_limit is None:
             return None
-        return time_limit - min(self._judge_s, 0.5 * time_limit)
+        return time_limit - min(self._judge_s, 0.9 * time_limit)
 
     def _collision_free_first(
         self,
         problem: IKProblem,
         q_start: np.ndarray | None,
-        seed: int | None,
+        seed: int,
         time_limit: float | None,
         max_evals: int | None,
     ) -> tuple[Result | None, int]:
@@ -722,7 +733,7 @@ class Route:
                 None if half is None else half - evals,
                 None if share is None else share - spent,  # (> 0: tested above)
             )
-            res = route.run(free, start, None if seed is None else seed + k, budget=left)
+            res = route.run(free, start, (seed + k) % SEED_LIMIT, budget=left)
             evals += res.n_evals
             k += 1
             if res.success and not collides(res.q, col.scene, col.margin, bool(col.self_collision)):

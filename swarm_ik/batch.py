@@ -1492,6 +1492,25 @@ half of what is left: targets stop starting that much earlier.  The check of a s
 target's answer is kept per target as it starts (:data:`FINISH_PER_STARTED`; a target not
 started is not checked)."""
 
+FINISH_FIXED = 1e-4
+"""Seconds a timed :func:`solve_batch` keeps out of its ``time_limit`` (up to half of what is
+left) for the end of the call whatever its size (the result's arrays, the check of the
+unsolved targets' reach) — the first call's estimate: each timed call then adds what it
+overran its limit by (or lets a tenth go when it ended in time), per robot
+(:func:`_finish_fixed`).  With the per-target share alone, one Panda target under a 1 ms
+limit took 1.2–1.35 ms."""
+
+
+def _finish_fixed(robot: RobotModel, overrun: float | None = None) -> float:
+    """The robot's estimate of :data:`FINISH_FIXED` [s], corrected by ``overrun`` (seconds
+    the call ended after its limit, negative when it ended earlier), within [0, 50 ms]."""
+    est = float(robot._cache.get("batch_finish_s", FINISH_FIXED))
+    if overrun is not None:
+        est = min(max(est + overrun, 0.9 * est, 0.0), 0.05)
+        robot._cache["batch_finish_s"] = est
+    return est
+
+
 FINISH_PER_STARTED = 2e-6
 """Seconds kept before the deadline per started target for the check of its answer (the
 batched FK and errors, :func:`pose_errors`: 1.1–1.9 µs measured, yumi_left); with goals, one
@@ -1532,6 +1551,7 @@ def _with_deadline(
     limit: float,
     t0: float,
     loaded: float = 0.0,
+    finish_fixed: float = FINISH_FIXED,
 ) -> BatchSettings:
     """``settings`` with the deadline of a ``time_limit`` of ``limit`` seconds begun at ``t0``
     (``time.perf_counter()``) and the ``reserve`` per started target (:data:`FINISH_PER_STARTED`
@@ -1543,8 +1563,9 @@ def _with_deadline(
     to the limit up to half of it (as a first solve's loading: the targets keep at least half,
     less what follows; a scene made on an empty cache took the whole limit, and no target
     started); what the call spent reading and checking the targets is charged whole (it grows
-    with their number: 60 ms for 10⁵ poses), and :data:`FINISH_PER_TARGET` per target is kept
-    for the end of the call (at most half of what is left)."""
+    with their number: 60 ms for 10⁵ poses), and ``finish_fixed`` (:data:`FINISH_FIXED`) and
+    :data:`FINISH_PER_TARGET` per target are kept for the end of the call (at most half of
+    what is left)."""
     t_load = time.perf_counter()
     reserve = FINISH_PER_STARTED
     if poses.shape[0]:  # (the kernels are loaded already: _load_kernels)
@@ -1566,7 +1587,8 @@ def _with_deadline(
     now = time.perf_counter()
     load, other = now - t_load + loaded, t_load - t0 - loaded
     left = max(limit - other - load, 0.5 * limit - other)
-    left -= min(FINISH_PER_TARGET * poses.shape[0], 0.5 * max(left, 0.0))
+    finish = finish_fixed + FINISH_PER_TARGET * poses.shape[0]
+    left -= min(finish, 0.5 * max(left, 0.0))
     return dataclasses.replace(settings, deadline=time.time() + left, reserve=reserve)
 
 
@@ -1776,7 +1798,9 @@ def solve_batch(
                         [], robot, settings, time.perf_counter() - t0, setup_s, True, labels
                     )
             loaded = loading_s + time.perf_counter() - t_setup
-            settings = _with_deadline(bc, settings, poses, seeds, limit, t0, loaded)
+            settings = _with_deadline(
+                bc, settings, poses, seeds, limit, t0, loaded, _finish_fixed(robot)
+            )
         workers = distributed.n_workers(client)
         size = int(chunk_size) if chunk_size is not None else default_chunk_size(n, workers)
         if limit is not None and n and settings.deadline is not None:
@@ -1821,7 +1845,10 @@ def solve_batch(
             problem, poses[unsolved, :3, 3], settings.tol_pos, settings.tol_rot,
             None if limit is None else t0 + limit,
         )  # fmt: skip
-    return dataclasses.replace(done, time_s=time.perf_counter() - t0, unreachable=beyond)
+    elapsed = time.perf_counter() - t0
+    if limit is not None and n and not interrupted:  # (what the end took: the next call's)
+        _finish_fixed(robot, elapsed - limit)
+    return dataclasses.replace(done, time_s=elapsed, unreachable=beyond)
 
 
 # --------------------------------------------------------------------------- files

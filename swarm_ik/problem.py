@@ -556,6 +556,14 @@ class IKProblem:
     Attributes:
         robot, goals, target (the first pose target, or None), fitness_name, w_rot, lower,
         upper, nq, position_only (a single Position goal from ``target`` with ``w_rot=0``).
+
+    A problem is read once, when it is made: the search's tables and bounds are built from
+    its arrays then.  Do not edit them in place (``problem.target[:] = …``, ``lower``,
+    ``upper``, a goal's ``target`` or ``q_ref``): the search would run the old problem and the
+    judge check the new one (the answer then reads as failed, never as a false success).  For
+    another target make a new problem (``IKProblem(robot, T)``, or an :class:`IKSolver`).
+    Making these arrays read-only was weighed and left: numba compiles every kernel again for
+    read-only arrays (37 s on a warm cache).
     """
 
     target: FloatArray | None
