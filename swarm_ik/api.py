@@ -464,6 +464,7 @@ class Route:
         # 20 ms limit by its first judge, coal's check, 1-1.5 ms)
         self._judge_kind = (problem.collision_goal is not None, bool(problem.python_goals))
         self._judge_s = problem.robot._cache.get("judge_s", {}).get(self._judge_kind, 0.0)
+        self._eval_s = 0.0  # (seconds per evaluation of the compiled search: _time_cap)
         # the first start without q0 when no goal names one (the middle of the ranges), found
         # at the first run without q0 (a goal's preferred_start is not asked when q0 is given)
         self._mid: Any = _NOT_YET
@@ -491,11 +492,34 @@ class Route:
             )  # fmt: skip
 
     def _search(
-        self, q_start: np.ndarray, key: np.uint64, max_evals: int | None, time_limit: float | None
+        self,
+        q_start: np.ndarray,
+        key: np.uint64,
+        max_evals: int | None,
+        time_limit: float | None,
+        cap: int | None = None,
     ) -> hybrid.SearchOutcome:
-        """The compiled search from ``q_start`` on the route's state."""
+        """The compiled search from ``q_start`` on the route's state (``cap``: the most
+        evaluations this run may spend besides its budget, see :meth:`_time_cap`)."""
         remaining = 2**62 if max_evals is None else max_evals
+        if cap is not None:
+            remaining = min(remaining, cap)
         return self.search(q_start, key, max_evals, remaining, 0, time_limit, time.perf_counter())
+
+    def _time_cap(self, search_limit: float | None) -> int | None:
+        """The evaluations a run under ``search_limit`` seconds may spend where one evaluation
+        is slow (thousands of obstacles: about 1.5 ms each among 3,000 spheres), from the
+        seconds per evaluation of this route's earlier runs; None where evaluations are fast.
+        The search reads the clock between its polish calls (its first, of the seed alone,
+        up to ``max_iters`` evaluations, the others at least 8): with slow evaluations a
+        10 ms limit took 43 ms.  Only where ``max_iters`` evaluations would take more than a
+        quarter of the limit, so that the cap never cuts a search its clock would have kept
+        going (a 1 ms Panda solve: 30 evaluations take 45 µs)."""
+        if search_limit is None or self._eval_s <= 0.0:
+            return None
+        if self.kwargs.get("max_iters", 30) * self._eval_s <= 0.25 * search_limit:
+            return None
+        return max(1, int(search_limit / self._eval_s))
 
     def _rebind(self, problem: IKProblem, q_start: np.ndarray | None) -> None:
         """Write the parameter blocks of ``problem``'s goals that differ from the bound ones
@@ -625,12 +649,18 @@ class Route:
                 same_box = problem.bounds is bound.bounds
                 seed_q = mid if mid is not None and same_box else hybrid.default_seed(problem)
                 seed_q = np.ascontiguousarray(seed_q, dtype=float)
+            cap = self._time_cap(search_limit)
             with self._lock:  # (the bound table and scratch serve one run at a time)
                 self._rebind(problem, q_start)
                 t0 = time.perf_counter()
                 with goals_base.kernel_errors_named(lambda: list(problem.compiled_goals)):
-                    out = self._search(seed_q, key, max_evals, search_limit)
+                    out = self._search(seed_q, key, max_evals, search_limit, cap)
                 elapsed = time.perf_counter() - t0
+            if out.used >= 8:  # (seconds per evaluation, rising at once, falling slowly; a
+                # run of a few evaluations is mostly the call's fixed cost)
+                self._eval_s = max(elapsed / out.used, 0.9 * self._eval_s)
+            if cap is not None and out.used >= cap and search_limit is not None:
+                search_limit = min(search_limit, elapsed)  # (the limit's evaluations spent)
             q, fit, n_evals, history = out.q, out.fitness, out.used, out.history
             q.setflags(write=False)  # (the search's own arrays: the Result keeps them as they
             history.setflags(write=False)  # are, read-only, instead of copying them)

@@ -53,7 +53,12 @@ from numpy.typing import NDArray
 
 from swarm_ik._types import FloatArray
 from swarm_ik._validate import user_stacklevel
-from swarm_ik.errors import InvalidArgumentError, RobotFileNotFoundError, RobotModelError
+from swarm_ik.errors import (
+    InvalidArgumentError,
+    RobotFileNotFoundError,
+    RobotModelError,
+    RobotModelWarning,
+)
 from swarm_ik.kernels.mesh import enclosed_points
 from swarm_ik.paths import cache_dir, package_dirs
 from swarm_ik.pose import is_finite_nonneg
@@ -334,9 +339,21 @@ class RobotCollision:
         else:
             srdf_path = Path(os.fspath(srdf))
         if srdf_path is not None:
-            for a, b, _ in parse_srdf(srdf_path):
+            srdf_pairs = parse_srdf(srdf_path)
+            for a, b, _ in srdf_pairs:
                 if a in link_joint and b in link_joint and a != b:
                     disabled["srdf"].add(_key(a, b))
+            known = {f.name for f in robot.full_model.frames}
+            unknown = sorted({n for a, b, _ in srdf_pairs for n in (a, b)} - known)
+            if unknown:  # (another robot's SRDF: its pairs disable nothing of this one)
+                warnings.warn(
+                    f"SRDF {str(srdf_path)!r} names {len(unknown)} link(s) that robot "
+                    f"{robot.name!r} does not have ({', '.join(unknown[:3])}"
+                    f"{', …' if len(unknown) > 3 else ''}): is it another robot's? Its pairs "
+                    "with them disable nothing",
+                    RobotModelWarning,
+                    stacklevel=user_stacklevel(),
+                )
         off = set().union(*disabled.values())
         candidates = [p for p in combinations(link_set, 2) if _key(*p) not in off]
         rule = "srdf" if srdf_path is not None else "sampled"

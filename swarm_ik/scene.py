@@ -371,7 +371,26 @@ class Mesh:
     """SHA-256 of the file's bytes when the mesh was made: two meshes of one path are equal
     only if the file did not change between them (a file rewritten in place was judged by
     the collision model cached for its old content)."""
+    geometry: Any = field(default=None, init=False, repr=False, compare=False)
+    """coal's model of the file as it was read when the mesh was made (scaled): every use of
+    the mesh is of this content, whatever the file holds later (a file rewritten after the
+    mesh was made, then read again at its first use, put other content under the digest of
+    the first: an answer inside the obstacle was judged free).  Pickled without it: the file
+    is read again where it is unpickled, and refused if its digest differs."""
     kind: ClassVar[str] = "mesh"
+
+    def __getstate__(self) -> dict[str, Any]:
+        return {k: v for k, v in self.__dict__.items() if k != "geometry"}
+
+    def __setstate__(self, state: dict[str, Any]) -> None:
+        self.__dict__.update(state)
+        geometry, digest = _read_mesh(Path(self.path), self.scale)
+        if digest != self.digest:
+            raise InvalidArgumentError(
+                f"mesh {self.path!r}: the file changed since the mesh was made (its SHA-256 "
+                "differs); load the scene again"
+            )
+        object.__setattr__(self, "geometry", geometry)
 
     def __post_init__(self) -> None:
         raw = self.path
@@ -385,7 +404,6 @@ class Mesh:
         if not p.is_file():
             raise SceneFileNotFoundError(f"mesh: file not found: {str(p)!r}")
         object.__setattr__(self, "path", str(p.resolve()))
-        object.__setattr__(self, "digest", hashlib.sha256(p.read_bytes()).hexdigest())
         scale: Any = self.scale
         if _is_number(scale):
             scale = (scale, scale, scale)
@@ -399,9 +417,12 @@ class Mesh:
             )
         object.__setattr__(self, "pose", _pose("mesh", self.pose))
         object.__setattr__(self, "name", _name("mesh", self.name))
+        geometry, digest = _read_mesh(p, self.scale)
+        object.__setattr__(self, "geometry", geometry)
+        object.__setattr__(self, "digest", digest)
         # its vertices as coal reads them, scaled: finite and within MAX_LENGTH (a NaN vertex
         # printed Eigen's complaints on each solve and made every configuration "in contact")
-        vertices = np.asarray(coal_geometry(self).vertices(), dtype=float)
+        vertices = np.asarray(geometry.vertices(), dtype=float)
         if not np.isfinite(vertices).all():
             raise InvalidArgumentError(f"mesh {str(p)!r}: its vertices hold NaN or infinite values")
         if vertices.size and float(np.abs(vertices).max()) > MAX_LENGTH:
@@ -881,14 +902,27 @@ def coal_geometry(shape: Shape) -> Any:
         return coal.Capsule(shape.radius, shape.length)
     if isinstance(shape, Cylinder):
         return coal.Cylinder(shape.radius, shape.length)
-    loader = coal.MeshLoader()
+    return shape.geometry.clone()  # (the content read when the mesh was made)
+
+
+def _read_mesh(path: Path, scale: tuple[float, float, float]) -> tuple[Any, str]:
+    """coal's model of the mesh file at ``path``, scaled, and the SHA-256 of the bytes it was
+    read from (the file hashed before and after coal reads it: a file rewritten meanwhile is
+    refused, not half-read)."""
+    import coal
+
+    before = hashlib.sha256(path.read_bytes()).hexdigest()
     try:
-        mesh = loader.load(shape.path, np.array(shape.scale))
+        mesh = coal.MeshLoader().load(str(path), np.array(scale))
     except (ValueError, RuntimeError) as exc:  # coal's loader: a corrupt or unknown file
         said = re.search(r"message:\s*(.*?)(?:\s*Hint:|$)", str(exc), re.S)
         reason = " ".join((said.group(1) if said else str(exc)).split())[:200]
-        raise InvalidArgumentError(f"mesh {shape.path!r}: coal cannot read it ({reason})") from None
-    return mesh
+        raise InvalidArgumentError(f"mesh {str(path)!r}: coal cannot read it ({reason})") from None
+    if hashlib.sha256(path.read_bytes()).hexdigest() != before:
+        raise InvalidArgumentError(
+            f"mesh {str(path)!r}: the file changed while it was read; load it again"
+        )
+    return mesh, before
 
 
 def coal_object(shape: Shape) -> Any:
