@@ -31,7 +31,9 @@ _PINV_RCOND = 1e-10
 
 
 def mantegna_sigma(beta: float) -> float:
-    """Scale ``σ_u`` of Mantegna's algorithm [Mantegna] for a Lévy index ``β`` ([CS-IK], eq. 12)::
+    """Scale ``σ_u`` of Mantegna's algorithm [Mantegna] for a Lévy index ``β`` (the formula of
+    [Mantegna] and [CS]'s reference code; [CS-IK] gives it among eqs. 8–12, which our copy
+    lacks)::
 
         σ_u = [Γ(1+β)·sin(πβ/2) / (Γ((1+β)/2)·β·2^((β−1)/2))]^(1/β)
 
@@ -46,7 +48,8 @@ def mantegna_sigma(beta: float) -> float:
 
 
 def levy_steps(rng: np.random.Generator, shape: tuple[int, ...], beta: float = 1.5) -> FloatArray:
-    """Lévy-stable steps by Mantegna's algorithm [Mantegna] ([CS-IK], eqs. 10–13).
+    """Lévy-stable steps by Mantegna's algorithm [Mantegna] (as [CS]'s reference code draws
+    them; of [CS-IK]'s eqs. 8–13 our copy keeps only eq. 13, ``σ_v = 1``).
 
     ``L = u / |v|^(1/β)`` with ``u ~ N(0, σ_u²)`` and ``v ~ N(0, 1)`` (``σ_v = 1``, eq. 13).
     The distribution is symmetric with a power-law tail ``P(|L| > s) ~ s^(−β)``.
@@ -92,16 +95,18 @@ def run(
     iteration makes two batched evaluations of the whole population:
 
     1. Lévy flights (eq. 8): ``x' = x + α·L·(x − x_best)·N(0, 1)`` per coordinate, with
-       ``L`` from :func:`levy_steps` (Mantegna, β = 1.5, eqs. 10–13) and ``α = 0.01``; the
-       extra standard-normal factor is the reference code's; the best nest itself does not
-       move.  A new nest replaces the old one when it is not worse (greedy, ``<=``).
+       ``L`` from :func:`levy_steps` (Mantegna, β = 1.5, as [CS]'s reference code) and
+       ``α = 0.01``; the extra standard-normal factor is the reference code's; the best nest
+       itself does not move.  A new nest replaces the old one when it is not worse (greedy, ``<=``).
     2. Discovery (eq. 9): ``x' = x + r·(x_j − x_k)·K`` with ``j, k`` two random permutations
        of the nests, one ``r ~ U[0, 1]`` per iteration and ``K_id = [rand > pa]`` per
        coordinate, exactly as the reference code (and niapy) write it; note that this changes
        each coordinate with probability ``1 − pa``, although the papers describe ``pa`` as the
        probability that an egg is discovered.  Greedy replacement again.
 
-    New points are clipped to the bounds (the reference code's ``simplebounds``).
+    New points are clipped to the bounds (the reference code's ``simplebounds``), after the
+    continuous joints are wrapped into ``[-π, π)`` (:meth:`~swarm_ik.solvers.base.Evaluator.clip`,
+    as for GWO and PSO: our choice, the reference code has no periodic variables).
     Evaluations: ``pop_size·(2·iterations + 1)``; [CS-IK]'s 3000 iterations of 50 nests
     make 300 050 evaluations, so in practice ``max_evals`` or the stop criterion ends the run.
 

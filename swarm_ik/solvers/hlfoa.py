@@ -10,6 +10,9 @@ Two registrations of the same :func:`run`:
   generated from the iteration-start ``P`` and ``G_b``, evaluated in one batch, and only then
   are ``P`` and ``G_b`` updated (synchronous update).  Much faster per evaluation on a batched
   objective, but it learns one iteration late.
+
+The paper's fitness is its eq. 3 (``IKProblem(..., fitness="paper-l1")``, as ``swarm-ik bench
+paper`` runs it); on any other fitness of the problem the algorithm minimises that one.
 """
 
 from __future__ import annotations

@@ -83,7 +83,8 @@ def run(
        with ``I_k`` the sub-pack's α and fresh ``r1, r2 ~ U[0, 1]`` per coordinate;
     5. positions are clipped to the bounds; a clipped velocity component is set to zero;
     6. when the counter exceeds ``r = γ·G_t`` (eq. 23, ``G_t = T``), the worst sub-pack (the
-       one with the worst α; never the king's) is re-initialised uniformly within the bounds,
+       one with the worst α; never the king's) is re-initialised uniformly within the bounds
+       (our reading of the paper's "随机重组", random regrouping, which it does not detail),
        with zero velocities and empty leader slots, and the counter is reset (step 6).  The new
        wolves are evaluated in the next iteration's batch: no extra evaluations.
 
