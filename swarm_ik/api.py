@@ -131,6 +131,14 @@ def goal_unreachable(problem: IKProblem, gl: Any, tol_pos: float, tol_rot: float
             f"{gl.describe()} beyond its frame's reach (its point {far:.4g} m from the "
             f"world origin, the frame reaches {radius:.4g} m at most)"
         )
+    if problem.robot.floating_base:
+        off = float(_from_base_box(problem, np.asarray(point, dtype=float)[None])[0]) - slack
+        own = problem.robot.reach_radius(held.frame, base=False)
+        if off > reach_limit(own):
+            return (
+                f"{gl.describe()} beyond its frame's reach (its point {off:.4g} m from the "
+                f"floating base's box, the frame reaches {own:.4g} m from the base at most)"
+            )
     avoid = problem.collision_goal
     if slack > 0.0 or avoid is None:
         return None  # (a region, not a point: it may reach out of an obstacle)
@@ -166,6 +174,9 @@ def unreachable_targets(
     frame = str(problem.goals[0].frame_name())
     far = np.hypot(np.hypot(pts[:, 0], pts[:, 1]), pts[:, 2])  # (no overflow at 1e300 m)
     out = far > reach_limit(problem.robot.reach_radius(frame))
+    if problem.robot.floating_base:
+        own = problem.robot.reach_radius(frame, base=False)
+        out |= _from_base_box(problem, pts) > reach_limit(own)
     avoid = problem.collision_goal
     if avoid is not None and len(avoid.scene) and _origin_in_body(problem.robot, frame):
         lo, hi = avoid.scene.boxes()
@@ -179,6 +190,16 @@ def unreachable_targets(
                 break
             out[i] = avoid.obstacle_containing(pts[i], ORIGIN_REACH) is not None
     return out
+
+
+def _from_base_box(problem: IKProblem, points: np.ndarray) -> np.ndarray:
+    """Distances [m] of ``points`` ``(N, 3)`` from the box a floating base's position keeps
+    to (the problem's bounds on ``root_joint.x``, ``.y``, ``.z``), ``(N,)``: the frame reaches
+    :meth:`RobotModel.reach_radius` ``(base=False)`` at most from there."""
+    k = problem.robot.joint_names.index("root_joint.x")
+    lo, hi = problem.lower[k : k + 3], problem.upper[k : k + 3]
+    gap = points - np.clip(points, lo, hi)
+    return np.hypot(np.hypot(gap[:, 0], gap[:, 1]), gap[:, 2])
 
 
 def reach_limit(radius: float) -> float:
@@ -330,13 +351,20 @@ def end_reason(
 
 def prepare_q0(problem: IKProblem, q0: Any) -> np.ndarray | None:
     """Validate ``q0``: right length and finite (refused otherwise); outside the bounds it is
-    clipped into them with a warning (continuous joints wrapped first)."""
+    clipped into them with a warning (continuous joints wrapped first, and a floating base's
+    rotation vector to the same rotation of norm at most π)."""
     if q0 is None:
         return None
     robot = problem.robot
     q = robot.check_q(q0, "q0")  # (a copy)
     if robot.wrapped_mask() is not None:
         q = robot.wrap(q)
+    if robot.floating_base:  # a base rotation vector beyond π: the same rotation, of norm ≤ π
+        # (clipped per component, [0, 0, 4] became [0, 0, π]: another heading)
+        k = robot.joint_names.index("root_joint.rx")
+        theta = float(np.linalg.norm(q[k : k + 3]))
+        if theta > np.pi:
+            q[k : k + 3] *= ((theta + np.pi) % (2 * np.pi) - np.pi) / theta
     if problem.within_bounds(q, 0.0):
         return q
     fixed = np.clip(q, problem.lower, problem.upper)

@@ -69,6 +69,12 @@ def _joint_kind_axis(jmodel: Any) -> tuple[int, FloatArray]:
     return kind, axis / np.linalg.norm(axis)
 
 
+def _entries(model: Any, joint: str) -> set[int]:
+    """The configuration entries of ``joint`` in ``model``."""
+    jm = model.joints[model.getJointId(joint)]
+    return set(range(jm.idx_q, jm.idx_q + jm.nq))
+
+
 class _Reduction(NamedTuple):
     reduced: Any
     locked: list[int]
@@ -150,6 +156,11 @@ def _locked_values(
         return {}
     if isinstance(locked, str):
         locked = [locked]
+    if isinstance(locked, (bytes, bytearray)):  # (iterated, its bytes read as joint ids)
+        raise InvalidArgumentError(
+            f"locked must be a dict joint -> value or a list of joint names (text), got "
+            f"{reprlib.repr(locked)}"
+        )
     if isinstance(locked, dict):
         items = list(locked.items())
     else:
@@ -1084,10 +1095,12 @@ class RobotModel:
         if not np.isfinite(arr).all():
             raise InvalidArgumentError(f"{what} contains NaN or infinite values: {arr.tolist()}")
         q_red = np.empty(self.model.nq)
+        solved = np.zeros(n_full, dtype=bool)
         for j in range(1, self.model.njoints):
             jr = self.model.joints[j]
             jf = full.joints[full.getJointId(self.model.names[j])]
             at, name = jf.idx_q, self.model.names[j]
+            solved[at : at + jf.nq] = True
             seg = arr[at : at + jf.nq]
             if jr.nq == 7:  # the free flyer: [x y z qx qy qz qw], the quaternion normalised
                 where = f"the quaternion of {name} (entries {at + 3} to {at + 6})"
@@ -1095,7 +1108,21 @@ class RobotModel:
             elif jr.nq == 2:  # a continuous joint: (cos, sin), read by atan2
                 _unit(seg, f"{what}: the (cos, sin) pair of {name} (entries {at}, {at + 1})")
             q_red[jr.idx_q : jr.idx_q + jr.nq] = seg
-        return self.from_pinocchio(q_red)
+        q = self.from_pinocchio(q_red)
+        # the held joints (locked, off the goal paths, mimic followers) are not read: say so
+        # where q_full holds other values for them (the way back would silently change them)
+        held = self.full_configuration(q)
+        moved = np.flatnonzero(~solved & (np.abs(arr - held) > 1e-9))
+        if moved.size:
+            names = [n for n in full.names[1:] if _entries(full, n) & set(moved.tolist())]
+            warnings.warn(
+                f"q_full holds other values than this model holds for {len(names)} joint(s) "
+                f"it does not solve ({', '.join(names[:3])}{', …' if len(names) > 3 else ''}):"
+                " they are not read (load_robot's locked= sets a held value)",
+                RobotModelWarning,
+                stacklevel=user_stacklevel(),
+            )
+        return q
 
     # ----------------------------------------------------------------- limits
     def within_limits(self, q: FloatArray, tol: float = 1e-9) -> bool:

@@ -95,7 +95,8 @@ class Formatter(argparse.HelpFormatter):
     made when the help is printed (names that need heavy imports; the plain ``help`` given
     to ``add_argument`` is what argparse checks there); and the
     column of the help texts counts the indent of sub-command names, so that a name as long
-    as ``throughput`` keeps its help on its own line (argparse leaves it out)."""
+    as ``throughput`` keeps its help on its own line (argparse leaves it out); lines break
+    between words, never at a hyphen inside a name."""
 
     def add_argument(self, action: argparse.Action) -> None:
         super().add_argument(action)
@@ -116,6 +117,13 @@ class Formatter(argparse.HelpFormatter):
         if getattr(action, "whole_metavar", False) and isinstance(action.metavar, str):
             return action.metavar
         return super()._format_args(action, default_metavar)
+
+    def _split_lines(self, text: str, width: int) -> list[str]:
+        # (lines broken between words only: a name such as pso-improved or --time-limit was
+        # cut at its hyphen, "pso- improved")
+        import textwrap
+
+        return textwrap.wrap(" ".join(text.split()), width, break_on_hyphens=False)
 
 
 class Parser(argparse.ArgumentParser):

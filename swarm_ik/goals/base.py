@@ -773,8 +773,32 @@ def vec3(value: Any, what: str, *, unit: bool = False) -> FloatArray:
     return arr
 
 
+class _GoalType(type):
+    """The type of every goal class: a call with arguments the goal does not take (an unknown
+    keyword, a missing field) is refused with :class:`InvalidArgumentError` naming the valid
+    fields (Python's ``TypeError`` of the dataclass's ``__init__`` before), as a goals file's
+    unknown field is."""
+
+    def __call__(cls, *args: Any, **kwargs: Any) -> Any:
+        try:
+            return super().__call__(*args, **kwargs)
+        except TypeError as exc:
+            import dataclasses
+            import inspect
+
+            try:  # (the arguments against __init__'s signature: a TypeError raised inside a
+                # goal's own code is left as it is)
+                inspect.signature(cls.__init__).bind(None, *args, **kwargs)  # type: ignore[misc]
+            except TypeError:
+                valid = [f.name for f in dataclasses.fields(cls) if f.init]  # type: ignore[arg-type]
+                raise InvalidArgumentError(
+                    f"goal {cls.__name__}: {exc}; valid fields: {', '.join(valid)}"
+                ) from None
+            raise
+
+
 @dataclass(frozen=True)
-class Goal:
+class Goal(metaclass=_GoalType):
     """Base of every goal (see the module docstring for the protocol).
 
     Attributes:

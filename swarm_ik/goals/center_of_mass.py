@@ -294,6 +294,16 @@ class CenterOfMass(Goal):
                 f"CenterOfMass.axes must be distinct letters of 'xyz', got {self.axes!r}"
             )
         object.__setattr__(self, "margin", non_negative(self.margin, "CenterOfMass.margin"))
+        if self.margin > 0.0 and self.support is None:  # (a field that would do nothing)
+            raise InvalidArgumentError(
+                "CenterOfMass.margin applies to a support polygon; give support= or leave "
+                "margin out"
+            )
+        if self.axes != "xy" and self.point is None:
+            raise InvalidArgumentError(
+                f"CenterOfMass.axes ({self.axes!r}) applies to a point; give point= or leave "
+                "axes out"
+            )
         super().__post_init__()
 
     def describe(self) -> str:
