@@ -330,7 +330,7 @@ def test_weight_and_primary_are_keyword_only_fields_of_every_goal() -> None:
         lambda: G.Posture([0.0] * 7, 2.0),  # (not taken as joint_weights)
         lambda: G.AvoidCollisions(None, True, 0.0, 5),  # (not taken as max_rows)
     ):
-        with pytest.raises(TypeError):
+        with pytest.raises(swarm_ik.InvalidArgumentError, match="takes .* positional"):
             positional_weight()  # type: ignore[misc]
     assert list(G.goal_to_dict(G.Pose(f, pose))) == [
         "type", "frame", "target", "weight", "primary", "orth_tol", "tolerance",

@@ -33,7 +33,7 @@ def test_center_of_mass_refuses_fields_that_would_do_nothing() -> None:
 )
 def test_a_goal_called_with_arguments_it_does_not_take_is_refused_by_name(make) -> None:  # type: ignore[no-untyped-def]
     """A bare ``TypeError`` before; a goals file's unknown field was already refused."""
-    with pytest.raises(InvalidArgumentError, match="valid fields: weight, primary"):
+    with pytest.raises(InvalidArgumentError, match="valid fields: .*weight, primary"):
         make()
 
 

@@ -407,9 +407,9 @@ def test_bounds_at_their_limits_are_accepted() -> None:
     assert goal.tolerance == (0.0, 0.0, 0.0, math.pi, 0.0, math.pi)
     assert all(type(x) is float for x in goal.tolerance)
     assert G.Position("panda_hand_tcp", [0, 0, 0], radius=0).radius == 0.0
-    with pytest.raises(TypeError):
+    with pytest.raises(swarm_ik.InvalidArgumentError, match="positional"):
         G.Pose("panda_hand_tcp", pose, 1e-6, BOX)  # keyword-only  # type: ignore[misc]
-    with pytest.raises(TypeError):
+    with pytest.raises(swarm_ik.InvalidArgumentError, match="positional"):
         G.Position("panda_hand_tcp", [0, 0, 0], 0.1)  # type: ignore[misc]
 
 

@@ -790,7 +790,9 @@ class _GoalType(type):
                 # goal's own code is left as it is)
                 inspect.signature(cls.__init__).bind(None, *args, **kwargs)  # type: ignore[misc]
             except TypeError:
-                valid = [f.name for f in dataclasses.fields(cls) if f.init]  # type: ignore[arg-type]
+                fields = [f for f in dataclasses.fields(cls) if f.init]  # type: ignore[arg-type]
+                valid = [f.name for f in fields if not f.kw_only]  # (positional first, as
+                valid += [f.name for f in fields if f.kw_only]  # goal_to_dict lists them)
                 raise InvalidArgumentError(
                     f"goal {cls.__name__}: {exc}; valid fields: {', '.join(valid)}"
                 ) from None
