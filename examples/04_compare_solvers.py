@@ -1,6 +1,8 @@
 """Compare the solvers on one Panda pose, with a convergence plot.
 
-Every registered swarm solver and the ``dls`` baseline get the same target and the same budget
+Eight solvers (the papers' optimisers ``foa``, ``hlfoa``, ``gwo``, ``mgwo``, ``pso-improved`` and
+``cs-newton``, our ``swarm`` and the ``dls`` baseline; the registry's other names are variants
+of these) get the same target and the same budget
 of fitness evaluations (``stop_on_success=False``, so each runs until the budget or its own
 iteration count ends, as in the papers' experiments).  The script prints one line per solver
 and draws the best fitness against the evaluations spent (``Result.history`` holds the best

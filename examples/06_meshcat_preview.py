@@ -19,7 +19,6 @@ from __future__ import annotations
 
 import argparse
 import os
-import sys
 import tempfile
 from pathlib import Path
 
@@ -71,7 +70,7 @@ def run(out_dir: Path | None) -> None:
     )
     scene = viz.show_result(problem, result, trace=trace, compare=dls)
 
-    # the Panda's Collada meshes make a 40 MB page; the quick run uses YuMi's cylinders
+    # the Panda's Collada meshes make a 15 MB page; the quick run uses YuMi's cylinders
     robot = yumi if QUICK else swarm_ik.load_robot("panda")
     q = Q_YUMI if QUICK else np.array([0.3, -0.5, 0.2, -2.0, 0.1, 1.6, 0.7])
     problem_many = swarm_ik.IKProblem(robot, robot.fk(q))
@@ -88,13 +87,7 @@ def run(out_dir: Path | None) -> None:
         return
     print("YuMi, HLFOA vs DLS (animated):", scene.url)
     print(f"{robot.name}, three solutions:", many.url)
-    no_wait = os.environ.get("SWARM_IK_NO_WAIT", "") not in ("", "0")
-    if not no_wait and sys.stdin is not None and sys.stdin.isatty():
-        input("open the URLs in a browser; press Enter to quit ")
-    else:
-        print("no terminal to wait on: closing the viewers (use --html DIR for files)")
-    scene.close()
-    many.close()
+    print(viz.served(scene, many))
 
 
 if __name__ == "__main__":

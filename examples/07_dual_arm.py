@@ -15,6 +15,7 @@ from __future__ import annotations
 
 import argparse
 import os
+import sys
 from pathlib import Path
 
 import numpy as np
@@ -54,6 +55,9 @@ def draw(robot: swarm_ik.RobotModel, q: np.ndarray, targets: list[np.ndarray],
 
         viz.require_meshcat()
     except swarm_ik.SwarmIKError as exc:
+        if html is not None:  # (a page was asked for: none written is a failure, exit 2)
+            print(f"cannot write {html}: {exc}", file=sys.stderr)
+            raise SystemExit(2) from None
         print(f"viewer skipped: {exc}")
         return
     scene = viz.show_pose(robot, q, target=targets[0], lines=["Baxter: both grippers"])

@@ -21,6 +21,7 @@ from __future__ import annotations
 
 import argparse
 import os
+import sys
 from pathlib import Path
 
 import numpy as np
@@ -120,6 +121,9 @@ def draw(
 
         scene = viz.Scene()
     except swarm_ik.SwarmIKError as exc:
+        if html is not None:  # (a page was asked for: none written is a failure, exit 2)
+            print(f"cannot write {html}: {exc}", file=sys.stderr)
+            raise SystemExit(2) from None
         print(f"viewer skipped: {exc}")
         return
     scene.add_robot(robot, q, name="robot")

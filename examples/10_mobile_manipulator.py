@@ -20,6 +20,7 @@ from __future__ import annotations
 
 import argparse
 import os
+import sys
 from pathlib import Path
 
 import numpy as np
@@ -78,6 +79,9 @@ def draw(robot: swarm_ik.RobotModel, q: np.ndarray, q_fixed: np.ndarray, target:
 
         scene = viz.Scene()
     except swarm_ik.SwarmIKError as exc:
+        if html is not None:  # (a page was asked for: none written is a failure, exit 2)
+            print(f"cannot write {html}: {exc}", file=sys.stderr)
+            raise SystemExit(2) from None
         print(f"viewer skipped: {exc}")
         return
     lines = ["TIAGo: the base drives, the arm reaches", "ghost: base fixed (out of reach)"]

@@ -20,6 +20,7 @@ import inspect
 import math
 import os
 import reprlib
+import tempfile
 from collections.abc import Callable
 from pathlib import Path
 from typing import Any, ParamSpec, TypeVar
@@ -29,6 +30,7 @@ import numpy as np
 from swarm_ik._types import FloatArray
 from swarm_ik.argtypes import SEED_LIMIT
 from swarm_ik.errors import InvalidArgumentError, InvalidTargetError
+from swarm_ik.paths import file_kind
 
 P = ParamSpec("P")
 R = TypeVar("R")
@@ -277,12 +279,17 @@ def check_output_path(
         The path.
 
     Raises:
-        InvalidArgumentError: the path is a folder, its folder does not exist or is not a
-            folder, it is not writable, or its suffix is not accepted.
+        InvalidArgumentError: the path is a folder or another file that is not a regular one
+            (a device, a FIFO), its folder does not exist or is not a folder, it is not
+            writable, or its suffix is not accepted.
     """
     p = Path(path)
     if p.is_dir():
         raise InvalidArgumentError(f"{what} {str(p)!r} is a folder; give a file name")
+    if p.exists() and not p.is_file():  # (follows links: a link to /dev/null is a device)
+        raise InvalidArgumentError(
+            f"{what} {str(p)!r} is {file_kind(p.stat().st_mode)}; give a file name"
+        )
     if suffixes is not None and p.suffix.lower() not in suffixes:
         raise InvalidArgumentError(
             f"{what} {str(p)!r}: unknown suffix {p.suffix!r}; valid: {', '.join(suffixes)}"
@@ -294,9 +301,33 @@ def check_output_path(
         )
     if not parent.is_dir():
         raise InvalidArgumentError(f"{what} {str(p)!r}: {str(parent)!r} is not a folder")
-    if not os.access(parent, os.W_OK) or (p.exists() and not os.access(p, os.W_OK)):
-        raise InvalidArgumentError(f"{what} {str(p)!r}: not writable (permission denied)")
+    if p.exists():  # overwritten in place: it must open for writing
+        try:
+            with open(p, "ab"):  # opened for writing, not truncated
+                pass
+        except OSError as exc:
+            raise InvalidArgumentError(
+                f"{what} {str(p)!r}: not writable ({exc.strerror})"
+            ) from None
+        return p
+    reason = probe_folder(parent)
+    if reason is not None:
+        raise InvalidArgumentError(
+            f"{what} {str(p)!r}: cannot write in folder {str(parent)!r} ({reason})"
+        )
     return p
+
+
+def probe_folder(folder: Path) -> str | None:
+    """Why a new file cannot be created in ``folder`` (``None``: it can), found by creating
+    and removing an empty one: permission bits alone do not tell (root, read-only mounts)."""
+    try:
+        fd, name = tempfile.mkstemp(prefix=".swarm-ik-probe-", dir=folder)
+    except OSError as exc:
+        return exc.strerror or type(exc).__name__
+    os.close(fd)
+    os.unlink(name)
+    return None
 
 
 MAX_GRID_CELLS = 10_000_000

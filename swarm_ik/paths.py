@@ -14,7 +14,7 @@ from collections.abc import Iterator
 from importlib import resources
 from pathlib import Path
 
-from swarm_ik.errors import RobotFileNotFoundError, SwarmIKError
+from swarm_ik.errors import InvalidArgumentError, RobotFileNotFoundError, SwarmIKError
 
 
 def bundled_robot_dir() -> Path:
@@ -216,6 +216,19 @@ def _umask() -> int:
 _UMASK = _umask()
 
 
+def file_kind(mode: int) -> str:
+    """What a path of ``st_mode`` ``mode`` is, in words (for a refusal)."""
+    if stat.S_ISDIR(mode):
+        return "a folder"
+    if stat.S_ISFIFO(mode):
+        return "a named pipe (FIFO)"
+    if stat.S_ISCHR(mode) or stat.S_ISBLK(mode):
+        return "a device"
+    if stat.S_ISSOCK(mode):
+        return "a socket"
+    return "not a regular file"
+
+
 @contextlib.contextmanager
 def written_in_place_of(path: str | os.PathLike[str]) -> Iterator[Path]:
     """A new file beside ``path`` for the body to write, renamed onto ``path`` when the body
@@ -228,9 +241,15 @@ def written_in_place_of(path: str | os.PathLike[str]) -> Iterator[Path]:
     A symbolic link is followed: the file it points to is replaced, the link kept.  Where no
     file can be made beside ``path`` (a folder that is not writable, holding a writable file)
     the body writes ``path`` itself, as a plain write would.  The replaced file's other hard
-    links keep its old content.
+    links keep its old content.  A path that is not a regular file (a device, a FIFO, a
+    folder, or a link to one) is refused with :class:`InvalidArgumentError`.
     """
     p = Path(os.path.realpath(path))
+    if p.exists() and not p.is_file():  # (a device, a FIFO, a folder: replaced by a file,
+        # /dev/null became a page; what a writer is given to replace is a file)
+        raise InvalidArgumentError(
+            f"{str(path)!r} is {file_kind(p.stat().st_mode)}; give a file name"
+        )
     try:
         fd, name = tempfile.mkstemp(dir=p.parent, prefix=f".{p.name[:40]}.", suffix=".part")
     except OSError:
@@ -243,6 +262,11 @@ def written_in_place_of(path: str | os.PathLike[str]) -> Iterator[Path]:
         os.chmod(part, mode)
         yield part
         os.replace(part, p)
+    except OSError as exc:
+        part.unlink(missing_ok=True)
+        if exc.filename is None:  # (a failed write names no file: the one asked for is named)
+            raise OSError(exc.errno, exc.strerror, str(path)) from None
+        raise
     except BaseException:
         part.unlink(missing_ok=True)
         raise

@@ -274,7 +274,10 @@ def _reduce(
         parent = full.frames[fid].parentJoint
         path_ids = [int(j) for j in full.supports[parent] if j != 0]
         if not path_ids:
-            raise RobotModelError(f"{p}: no movable joint between the root and frame {f!r}")
+            raise RobotModelError(
+                f"{p}: no movable joint between the root and frame {f!r} (a free-flying "
+                "robot? load it with floating_base=True, --floating-base on the command line)"
+            )
         keep.update(path_ids)
     keep -= set(held)
     jid = {full.names[j]: j for j in range(1, full.njoints)}

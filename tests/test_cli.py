@@ -275,15 +275,17 @@ def test_reach_refuses_non_finite_or_inverted_bounds_before_loading(
 def read_only_dir(tmp_path: Path) -> Path:
     """A folder where no file can be created: chmod 555, or, where that does not stop this
     user (root), a folder of a read-only file system."""
+    from swarm_ik._validate import probe_folder
+
     d = tmp_path / "ro"
     d.mkdir()
     d.chmod(0o555)
     try:
-        if _args._probe(d) is not None:
+        if probe_folder(d) is not None:
             yield d
             return
         for alt in (Path("/proc"), Path("/sys")):
-            if alt.is_dir() and _args._probe(alt) is not None:
+            if alt.is_dir() and probe_folder(alt) is not None:
                 yield alt
                 return
         pytest.skip("no read-only folder available to this user")

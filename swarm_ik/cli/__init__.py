@@ -11,7 +11,8 @@ into an exit code and one line:
 * 3 an unexpected error inside swarm_ik (one line; set ``SWARM_IK_DEBUG=1`` to see the
   traceback);
 * 74 the output could not be written (a full disk, ``> /dev/full``: one line);
-* 130 interrupted (Ctrl-C, at any point of the command);
+* 130 interrupted (Ctrl-C, at any point of the command; the Ctrl-C that closes a live viewer
+  is its end, and the command exits with its own outcome);
 * 141 the reader of the output went away (``swarm-ik … | head``), without a traceback.
 
 Numbers may be negative in any notation (``--from-q -1e-3 0.5 -2``): the parser does not take
@@ -151,7 +152,8 @@ class Parser(argparse.ArgumentParser):
 EPILOG = (
     "exit codes: 0 success, 1 target not reached (the best found is printed), 2 bad input "
     "(one line on stderr), 3 internal error (one line; SWARM_IK_DEBUG=1 shows the "
-    "traceback), 74 output could not be written (a full disk), 130 interrupted (Ctrl-C), "
+    "traceback), 74 output could not be written (a full disk), 130 interrupted (Ctrl-C; "
+    "one that closes a live viewer ends it, and the command exits with its own outcome), "
     "141 output pipe closed.  `swarm-ik COMMAND "
     "--help` describes a command."
 )

@@ -12,12 +12,12 @@ import argparse
 import math
 import os
 import stat
-import tempfile
 from collections.abc import Callable
 from pathlib import Path
 from typing import Any, NamedTuple
 
 from swarm_ik.errors import InvalidArgumentError
+from swarm_ik.paths import file_kind
 
 EXIT_OK = 0
 EXIT_NOT_REACHED = 1
@@ -455,18 +455,6 @@ def solve_kwargs(args: argparse.Namespace) -> dict[str, Any]:
 
 
 # --------------------------------------------------------------------------- input files
-def _kind(mode: int) -> str:
-    if stat.S_ISDIR(mode):
-        return "a folder"
-    if stat.S_ISFIFO(mode):
-        return "a named pipe (FIFO)"
-    if stat.S_ISCHR(mode) or stat.S_ISBLK(mode):
-        return "a device"
-    if stat.S_ISSOCK(mode):
-        return "a socket"
-    return "not a regular file"
-
-
 def input_file(text: str) -> str:
     """The type of an input-file option read after the robot is loaded (``--scene``,
     ``--srdf``): the path unchanged, refused as soon as it is parsed when it exists but is
@@ -481,7 +469,7 @@ def input_file(text: str) -> str:
     except OSError:
         return text
     if not stat.S_ISREG(mode):
-        raise argparse.ArgumentTypeError(f"{text!r} is {_kind(mode)}; give a regular file")
+        raise argparse.ArgumentTypeError(f"{text!r} is {file_kind(mode)}; give a regular file")
     return text
 
 
@@ -502,7 +490,9 @@ def check_input_file(path: str | os.PathLike[str], what: str, max_bytes: int | N
     except OSError as exc:
         raise InvalidArgumentError(f"{what} {str(p)!r}: cannot be read ({exc.strerror})") from None
     if not stat.S_ISREG(st.st_mode):
-        raise InvalidArgumentError(f"{what} {str(p)!r} is {_kind(st.st_mode)}; give a regular file")
+        raise InvalidArgumentError(
+            f"{what} {str(p)!r} is {file_kind(st.st_mode)}; give a regular file"
+        )
     if max_bytes is not None and st.st_size > max_bytes:
         raise InvalidArgumentError(
             f"{what} {str(p)!r}: {st.st_size} bytes, over the limit of {_size(max_bytes)} "
@@ -569,30 +559,17 @@ def check_goals_file(path: str | os.PathLike[str], what: str = "--goals") -> Non
 
 
 # -------------------------------------------------------------------------- output paths
-def _probe(folder: Path) -> str | None:
-    """Why a new file cannot be created in ``folder`` (``None``: it can), found by creating
-    and removing an empty one: permission bits alone do not tell (root, read-only mounts)."""
-    try:
-        fd, name = tempfile.mkstemp(prefix=".swarm-ik-probe-", dir=folder)
-    except OSError as exc:
-        return exc.strerror or type(exc).__name__
-    os.close(fd)
-    os.unlink(name)
-    return None
-
-
 def check_output_file(
     path: str | os.PathLike[str],
     what: str,
     suffixes: tuple[str, ...] | None = None,
     inputs: tuple[tuple[str, Any], ...] = (),
 ) -> Path:
-    """Refuse an output file that cannot be written, before any work: a folder, a wrong
-    suffix, a missing folder (:func:`swarm_ik._validate.check_output_path`), an existing
-    file that does not open for writing, one of the command's input files (``inputs``:
-    ``(option, path or None)``; ``batch --targets t.csv --out t.csv`` replaced its targets
-    with the answers), or, for a new file, a folder where no file can be created (tried, not
-    guessed from permission bits, which do not stop root or tell a read-only mount).
+    """Refuse an output file that cannot be written, before any work: what
+    :func:`swarm_ik._validate.check_output_path` refuses (a folder, a device, a wrong suffix,
+    a missing folder, an existing file that does not open for writing, a folder where no file
+    can be created), or one of the command's input files (``inputs``: ``(option, path or
+    None)``; ``batch --targets t.csv --out t.csv`` replaced its targets with the answers).
 
     Returns:
         The path.
@@ -603,29 +580,13 @@ def check_output_file(
     from swarm_ik._validate import check_output_path
 
     p = check_output_path(path, what, suffixes)
-    if p.exists():  # overwritten in place: it must open for writing
-        if not p.is_file():
-            raise InvalidArgumentError(f"{what} {str(p)!r} is {_kind(p.stat().st_mode)}")
+    if p.exists():
         for option, given in inputs:
             if given is not None and Path(given).is_file() and os.path.samefile(p, given):
                 raise InvalidArgumentError(
                     f"{what} {str(p)!r} is the file given to {option}: writing the answers "
                     "would replace it; name another file"
                 )
-        try:
-            with open(p, "ab"):  # opened for writing, not truncated
-                pass
-        except OSError as exc:
-            raise InvalidArgumentError(
-                f"{what} {str(p)!r}: not writable ({exc.strerror})"
-            ) from None
-        return p
-    parent = p.parent if str(p.parent) else Path(".")
-    reason = _probe(parent)
-    if reason is not None:
-        raise InvalidArgumentError(
-            f"{what} {str(p)!r}: cannot write in folder {str(parent)!r} ({reason})"
-        )
     return p
 
 
@@ -649,7 +610,9 @@ def check_output_folder(path: str | os.PathLike[str], what: str = "--out") -> Pa
         raise InvalidArgumentError(
             f"{what} {str(p)!r}: {str(existing)!r} is a file, so the folder cannot be made"
         )
-    reason = _probe(existing)
+    from swarm_ik._validate import probe_folder
+
+    reason = probe_folder(existing)
     if reason is not None:
         raise InvalidArgumentError(
             f"{what} {str(p)!r}: cannot write in folder {str(existing)!r} ({reason})"

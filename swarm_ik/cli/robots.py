@@ -31,7 +31,10 @@ def run(args: argparse.Namespace) -> int:
     others = {k: v for k, v in example_robot_files().items() if k not in EXAMPLE_ROBOTS}
     if others:
         print("example-robot-data, any other file by name (goal frame: the tip of the deepest")
-        print("chain unless --frame; legged robots and humanoids: add --floating-base):")
+        print(
+            "chain unless --frame; legged robots, humanoids and free-flying robots such as "
+            "iris_simple and quadrotor_base: add --floating-base):"
+        )
         for name, rel in sorted(others.items()):
             print(f"  {name:28s} {rel}")
     return 0

@@ -222,11 +222,15 @@ def run(args: argparse.Namespace) -> int:
     _check_closed_form_compare(args, problem)
     res = swarm_ik.solve(problem, args.solver, **solve_kwargs(args), **dict(args.param))
     why = _why_not(problem, res, solve_kwargs(args))
+    drawn = args.show or args.animate or args.html or args.compare
+    if args.json and drawn and not args.show:  # the page written first: a failed write is
+        _viewer.after_solve(args, problem, res)  # then the one JSON object on stdout
+        drawn = False
     if args.json:
         _print_json(args, robot, res, why)
     else:
         _print_text(args, robot, res, why)
-    if args.show or args.animate or args.html or args.compare:
+    if drawn:
         _viewer.after_solve(args, problem, res)
     return EXIT_OK if res.success else EXIT_NOT_REACHED
 

@@ -36,6 +36,7 @@ from swarm_ik.viz.scene import (
     Scene,
     VizUnavailableError,
     require_meshcat,
+    served,
 )
 from swarm_ik.viz.trace import Trace, TraceRecorder, solve_traced
 from swarm_ik.viz.views import (
@@ -71,6 +72,7 @@ __all__ = [
     "package_dirs",
     "reach_length",
     "require_meshcat",
+    "served",
     "several_solutions",
     "show_configurations",
     "show_pose",

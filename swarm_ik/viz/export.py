@@ -15,11 +15,11 @@ from __future__ import annotations
 import argparse
 import base64
 import hashlib
-import os
 from collections.abc import Callable
 from pathlib import Path
 from typing import Any
 
+from swarm_ik._validate import check_output_path
 from swarm_ik.errors import InvalidArgumentError
 
 SHARED_PREFIX = "swarm_ik-shared:"
@@ -241,33 +241,6 @@ def static_html(commands: list[dict[str, Any]], title: str = "swarm_ik") -> str:
         + "\n".join(lines)
         + "\n</script>\n</body>\n</html>\n"
     )
-
-
-def check_output_path(path: str | os.PathLike[str], what: str, suffixes: tuple[str, ...]) -> Path:
-    """Refuse an output path before any work: wrong suffix, a folder, or a missing folder.
-
-    Args:
-        path: The file to be written.
-        what: Its name in the message (e.g. ``"--html"``).
-        suffixes: Valid suffixes (lower case, with the dot).
-
-    Returns:
-        The path.
-
-    Raises:
-        InvalidArgumentError: the path cannot be written as such a file (the message says why).
-    """
-    p = Path(path)
-    if p.is_dir():
-        raise InvalidArgumentError(f"{what} {str(p)!r} is a folder; give a file name")
-    if p.suffix.lower() not in suffixes:
-        raise InvalidArgumentError(
-            f"{what} {str(p)!r}: unknown suffix {p.suffix!r}; valid: {', '.join(suffixes)}"
-        )
-    parent = p.parent if str(p.parent) else Path(".")
-    if not parent.is_dir():
-        raise InvalidArgumentError(f"{what} {str(p)!r}: folder {str(parent)!r} does not exist")
-    return p
 
 
 def output_file(*suffixes: str) -> Callable[[str], Path]:

@@ -12,6 +12,7 @@ import numpy as np
 import pinocchio as pin
 
 from swarm_ik import paths
+from swarm_ik._signals import sigint_deferred
 from swarm_ik._types import FloatArray
 from swarm_ik.errors import RobotModelError
 from swarm_ik.robot import RobotModel
@@ -71,7 +72,9 @@ def shape_loader() -> type:
     puts primitive shapes (cylinders along z where three.js has y) there with a built-in
     rotation: placing the parent node instead keeps that rotation.
     """
-    from pinocchio.visualize import MeshcatVisualizer
+    with sigint_deferred():  # (pinocchio.visualize's imports guard one with a bare except,
+        # which took a Ctrl-C arriving meanwhile: the command ran on and exited 0)
+        from pinocchio.visualize import MeshcatVisualizer
 
     class ShapeLoader(MeshcatVisualizer):  # type: ignore[misc]
         def node_of(self, geometry_object: Any) -> str:

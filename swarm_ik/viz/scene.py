@@ -11,6 +11,7 @@ from __future__ import annotations
 import contextlib
 import io
 import os
+import sys
 import tempfile
 import warnings
 from collections.abc import Sequence
@@ -470,15 +471,17 @@ class Scene:
         self, html: str | os.PathLike[str] | None, name: str, *, quick: bool = False
     ) -> str:
         """Hand the scene over: written to ``html`` when given; with ``quick`` (a test run)
-        written to a temporary ``name`` and deleted; else served live.  Returns the line to
-        print (the page written, or the viewer's address)."""
+        written to a temporary ``name`` and deleted; else served live: its address printed,
+        then kept up until Enter on a terminal (:func:`served`).  Returns the line to print
+        (the page written, or how the viewer ended)."""
         if html is not None:
             return f"wrote {self.save_html(html)}"
         if quick:
             with tempfile.TemporaryDirectory() as tmp:
                 path = self.save_html(Path(tmp) / name)
                 return f"wrote a {path.stat().st_size / 1e6:.1f} MB page (quick run: deleted)"
-        return f"meshcat viewer at {self.url}"
+        print(f"meshcat viewer at {self.url}", flush=True)
+        return served(self)  # (the URL of a viewer closed as the script ends is no use)
 
     def close(self) -> None:
         """Stop the meshcat server of this scene, if one was started (it also stops when
@@ -490,6 +493,20 @@ class Scene:
 
     def __exit__(self, *exc: Any) -> None:
         self.close()
+
+
+def served(*scenes: Scene) -> str:
+    """Keep the live viewers of ``scenes`` up until Enter is pressed on a terminal (at once
+    without one, or with ``SWARM_IK_NO_WAIT=1``), then close them; returns the line to print."""
+    no_wait = os.environ.get("SWARM_IK_NO_WAIT", "") not in ("", "0")
+    try:
+        if no_wait or sys.stdin is None or not sys.stdin.isatty():
+            return "no terminal to wait on: the viewer closes (--html FILE writes a page)"
+        input("open it in a browser; press Enter to quit ")
+        return "viewer closed"
+    finally:
+        for sc in scenes:
+            sc.close()
 
 
 def _nice_step(x: float) -> float:
