@@ -15,7 +15,6 @@ from __future__ import annotations
 
 import argparse
 import os
-import sys
 from pathlib import Path
 
 import numpy as np
@@ -50,15 +49,9 @@ def main() -> None:
 def draw(robot: swarm_ik.RobotModel, q: np.ndarray, targets: list[np.ndarray],
          html: Path | None) -> None:  # fmt: skip
     """The robot at ``q`` with a triad at each target: served live, or written to ``html``."""
-    try:
-        from swarm_ik import viz
+    from swarm_ik import viz
 
-        viz.require_meshcat()
-    except swarm_ik.SwarmIKError as exc:
-        if html is not None:  # (a page was asked for: none written is a failure, exit 2)
-            print(f"cannot write {html}: {exc}", file=sys.stderr)
-            raise SystemExit(2) from None
-        print(f"viewer skipped: {exc}")
+    if not viz.viewer_for(html):  # (no meshcat: skipped, or exit 2 when a page was asked for)
         return
     scene = viz.show_pose(robot, q, target=targets[0], lines=["Baxter: both grippers"])
     scene.add_triad("target_right", targets[1], length=0.15)

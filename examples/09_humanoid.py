@@ -21,7 +21,6 @@ from __future__ import annotations
 
 import argparse
 import os
-import sys
 from pathlib import Path
 
 import numpy as np
@@ -116,16 +115,11 @@ def draw(
     """The balanced answer, the unbalanced one ghosted, the hands' targets, the support
     polygon and both centres of mass (a ball, and its shadow on the ground), seen from the
     robot's right: served live, or written to ``html``."""
-    try:
-        from swarm_ik import viz
+    from swarm_ik import viz
 
-        scene = viz.Scene()
-    except swarm_ik.SwarmIKError as exc:
-        if html is not None:  # (a page was asked for: none written is a failure, exit 2)
-            print(f"cannot write {html}: {exc}", file=sys.stderr)
-            raise SystemExit(2) from None
-        print(f"viewer skipped: {exc}")
+    if not viz.viewer_for(html):  # (no meshcat: skipped, or exit 2 when a page was asked for)
         return
+    scene = viz.Scene()
     scene.add_robot(robot, q, name="robot")
     scene.add_robot(robot, q_fall, name="ghost", color=viz.GHOST_COLOR)
     for k, target in enumerate(hands):

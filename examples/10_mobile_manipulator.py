@@ -20,7 +20,6 @@ from __future__ import annotations
 
 import argparse
 import os
-import sys
 from pathlib import Path
 
 import numpy as np
@@ -74,16 +73,11 @@ def draw(robot: swarm_ik.RobotModel, q: np.ndarray, q_fixed: np.ndarray, target:
          html: Path | None) -> None:  # fmt: skip
     """The robot at ``q``, the fixed-base attempt ghosted, a triad at the target and one at
     the tool (:func:`swarm_ik.viz.show_pose`): served live, or written to ``html``."""
-    try:
-        from swarm_ik import viz
+    from swarm_ik import viz
 
-        scene = viz.Scene()
-    except swarm_ik.SwarmIKError as exc:
-        if html is not None:  # (a page was asked for: none written is a failure, exit 2)
-            print(f"cannot write {html}: {exc}", file=sys.stderr)
-            raise SystemExit(2) from None
-        print(f"viewer skipped: {exc}")
+    if not viz.viewer_for(html):  # (no meshcat: skipped, or exit 2 when a page was asked for)
         return
+    scene = viz.Scene()
     lines = ["TIAGo: the base drives, the arm reaches", "ghost: base fixed (out of reach)"]
     viz.show_pose(robot, q, target=target, ghost_q=q_fixed, lines=lines, scene=scene)
     print(scene.publish(html, "tiago.html", quick=QUICK))

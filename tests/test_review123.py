@@ -65,3 +65,19 @@ def test_a_free_flying_robot_loaded_without_a_floating_base_is_told_how() -> Non
     with pytest.raises(RobotModelError, match="load it with floating_base=True"):
         swarm_ik.load_robot("iris_simple")
     assert swarm_ik.load_robot("iris_simple", floating_base=True).nq == 6
+
+
+def test_a_script_asked_for_a_page_without_meshcat_exits_2(monkeypatch, capsys) -> None:  # type: ignore[no-untyped-def]
+    """Example 07 with ``--html FILE`` and no meshcat printed "viewer skipped" and exited 0,
+    no page written."""
+    from swarm_ik.viz import scene as viz_scene
+
+    def missing() -> None:
+        raise viz_scene.VizUnavailableError("the viewer needs meshcat")
+
+    monkeypatch.setattr(viz_scene, "require_meshcat", missing)
+    assert viz_scene.viewer_for(None) is False
+    assert "viewer skipped" in capsys.readouterr().out
+    with pytest.raises(SystemExit) as info:
+        viz_scene.viewer_for("page.html")
+    assert info.value.code == 2 and "cannot write page.html" in capsys.readouterr().err

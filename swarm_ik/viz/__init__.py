@@ -37,6 +37,7 @@ from swarm_ik.viz.scene import (
     VizUnavailableError,
     require_meshcat,
     served,
+    viewer_for,
 )
 from swarm_ik.viz.trace import Trace, TraceRecorder, solve_traced
 from swarm_ik.viz.views import (
@@ -78,6 +79,7 @@ __all__ = [
     "show_pose",
     "show_result",
     "show_solutions",
+    "viewer_for",
     "solve_traced",
     "static_html",
     "visual_model",

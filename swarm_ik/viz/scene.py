@@ -495,6 +495,21 @@ class Scene:
         self.close()
 
 
+def viewer_for(html: str | os.PathLike[str] | None) -> bool:
+    """For a script that draws its answer: whether meshcat is there to draw it.  Without it,
+    a page asked for (``html``) is a failure: one line on stderr and exit 2; else one line
+    says the viewer is skipped and False is returned."""
+    try:
+        require_meshcat()
+    except VizUnavailableError as exc:
+        if html is not None:
+            print(f"cannot write {os.fspath(html)}: {exc}", file=sys.stderr)
+            raise SystemExit(2) from None
+        print(f"viewer skipped: {exc}")
+        return False
+    return True
+
+
 def served(*scenes: Scene) -> str:
     """Keep the live viewers of ``scenes`` up until Enter is pressed on a terminal (at once
     without one, or with ``SWARM_IK_NO_WAIT=1``), then close them; returns the line to print."""
