@@ -778,9 +778,10 @@ class Route:
         collides = problem.robot.collision_model().collides
         evals = 0
         k = 0
+        check_s = 0.0  # (what coal's check of a try's answer took: kept out of the share)
         while share is not None or k < COLLISION_FIRST_TRIES:
             spent = time.perf_counter() - t0
-            if share is not None and spent >= share:
+            if share is not None and spent + check_s >= share:
                 break
             if half is not None and evals >= half:
                 break
@@ -789,19 +790,24 @@ class Route:
             start = q_start if rng is None else rng.uniform(problem.lower, problem.upper)
             left = (
                 None if half is None else half - evals,
-                None if share is None else share - spent,  # (> 0: tested above)
+                None if share is None else share - spent - check_s,  # (> 0: tested above)
             )
             res = route.run(free, start, (seed + k) % SEED_LIMIT, budget=left)
             evals += res.n_evals
             k += 1
-            if res.success and not collides(res.q, col.scene, col.margin, bool(col.self_collision)):
+            if not res.success:
+                if share is None:
+                    break  # (no time limit: a search that cannot meet the other goals ends them)
+                continue
+            t_check = time.perf_counter()
+            free_q = not collides(res.q, col.scene, col.margin, bool(col.self_collision))
+            check_s = max(time.perf_counter() - t_check, 0.9 * check_s)
+            if free_q:
                 out = self.judge(
                     problem, res.q, res.fitness, evals, 0.0, res.history, seed, q_start
                 )
                 if out.success:
                     return dataclasses.replace(out, time_s=time.perf_counter() - t0), evals
-            if share is None and not res.success:
-                break  # (no time limit: a search that cannot meet the other goals ends the tries)
         return None, evals
 
     def judge(
