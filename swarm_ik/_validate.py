@@ -284,9 +284,7 @@ def check_output_path(
             writable, or its suffix is not accepted.
     """
     p = Path(path)
-    if p.is_dir():
-        raise InvalidArgumentError(f"{what} {str(p)!r} is a folder; give a file name")
-    if p.exists() and not p.is_file():  # (follows links: a link to /dev/null is a device)
+    if p.exists() and not p.is_file():  # a folder, a device, a FIFO (a link followed)
         raise InvalidArgumentError(
             f"{what} {str(p)!r} is {file_kind(p.stat().st_mode)}; give a file name"
         )

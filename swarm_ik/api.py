@@ -34,7 +34,7 @@ from swarm_ik.errors import InvalidArgumentError, UnknownNameError, unknown
 from swarm_ik.goals import base as goals_base
 from swarm_ik.goals.axis import angle_between
 from swarm_ik.kernels import search
-from swarm_ik.kernels.lie import relative_angles
+from swarm_ik.kernels.lie import exp3, log3, relative_angles
 from swarm_ik.optimize import check_budget, make_rng
 from swarm_ik.pose import check_tolerances
 from swarm_ik.problem import GoalError, IKProblem
@@ -194,11 +194,10 @@ def unreachable_targets(
 
 def _from_base_box(problem: IKProblem, points: np.ndarray) -> np.ndarray:
     """Distances [m] of ``points`` ``(N, 3)`` from the box a floating base's position keeps
-    to (the problem's bounds on ``root_joint.x``, ``.y``, ``.z``), ``(N,)``: the frame reaches
+    to (the problem's bounds on ``root_joint.x``, ``.y``, ``.z``, the first entries of ``q``:
+    :data:`swarm_ik.robot.FREE_FLYER_ENTRIES`), ``(N,)``: the frame reaches
     :meth:`RobotModel.reach_radius` ``(base=False)`` at most from there."""
-    k = problem.robot.joint_names.index("root_joint.x")
-    lo, hi = problem.lower[k : k + 3], problem.upper[k : k + 3]
-    gap = points - np.clip(points, lo, hi)
+    gap = points - np.clip(points, problem.lower[:3], problem.upper[:3])  # (q's head: x y z)
     return np.hypot(np.hypot(gap[:, 0], gap[:, 1]), gap[:, 2])
 
 
@@ -359,12 +358,10 @@ def prepare_q0(problem: IKProblem, q0: Any) -> np.ndarray | None:
     q = robot.check_q(q0, "q0")  # (a copy)
     if robot.wrapped_mask() is not None:
         q = robot.wrap(q)
-    if robot.floating_base:  # a base rotation vector beyond π: the same rotation, of norm ≤ π
-        # (clipped per component, [0, 0, 4] became [0, 0, π]: another heading)
-        k = robot.joint_names.index("root_joint.rx")
-        theta = float(np.linalg.norm(q[k : k + 3]))
-        if theta > np.pi:
-            q[k : k + 3] *= ((theta + np.pi) % (2 * np.pi) - np.pi) / theta
+    # a floating base's rotation vector (entries 3-5, after its position) beyond π: the same
+    # rotation, of norm ≤ π (clipped per component, [0, 0, 4] became [0, 0, π]: another heading)
+    if robot.floating_base and float(np.linalg.norm(q[3:6])) > np.pi:
+        q[3:6] = log3(exp3(q[3:6]))
     if problem.within_bounds(q, 0.0):
         return q
     fixed = np.clip(q, problem.lower, problem.upper)
@@ -545,7 +542,7 @@ class Route:
         going (a 1 ms Panda solve: 30 evaluations take 45 µs)."""
         if search_limit is None or self._eval_s <= 0.0:
             return None
-        if self.kwargs.get("max_iters", 30) * self._eval_s <= 0.25 * search_limit:
+        if self.kwargs["max_iters"] * self._eval_s <= 0.25 * search_limit:
             return None
         return max(1, int(search_limit / self._eval_s))
 

@@ -47,7 +47,7 @@ import numba
 import numpy as np
 import pinocchio as pin
 
-from swarm_ik._types import FloatArray
+from swarm_ik._types import BoolArray, FloatArray
 from swarm_ik.branches import (
     BRANCH_TOL,
     ROUNDOFF_TOL,
@@ -476,15 +476,36 @@ def closed_form_set(
     good = (dp <= tol_pos) & (dr <= tol_rot)
     if c == k and good.all():  # (the generic target: eaik's exact set, nothing to polish)
         return ClosedFormSet(out, dp, dr, False, 0)
-    sols, dps, drs = out[:c][good], dp[good], dr[good]
+    cf = _polished_set(problem, qs, out[:c], good, dp, dr, ref, tol_pos, tol_rot, max_evals)
+    return _with_continuum(problem, cf, ref, tol_pos, tol_rot, max_evals)
+
+
+def _polished_set(
+    problem: IKProblem,
+    qs: FloatArray,
+    folded: FloatArray,
+    good: BoolArray,
+    dp: FloatArray,
+    dr: FloatArray,
+    ref: FloatArray,
+    tol_pos: float,
+    tol_rot: float,
+    max_evals: int | None,
+) -> ClosedFormSet:
+    """The set of a target whose eaik points are not all exact solutions (:func:`closed_form_set`):
+    ``folded`` the distinct in-limit copies of eaik's points ``qs``, ``good`` (with errors
+    ``dp``, ``dr``) those that met the check; the others, and eaik's points with no in-limit
+    copy, polished into solutions."""
+    robot = problem.robot
+    lo, hi = problem.lower, problem.upper
+    sols, dps, drs = folded[good], dp[good], dr[good]
     # the polish's starts: the points that failed the check, and those with no in-limit copy
     # (clipped into the limits: a continuum may reach into them elsewhere)
-    starts = out[:c][~good]
-    if c < k:
+    starts = folded[~good]
+    if folded.shape[0] < qs.shape[0]:
         starts = np.vstack([starts, _clipped_misfits(qs, lo, hi, ref)])
     if starts.shape[0] == 0:
-        cf = ClosedFormSet(sols, dps, drs, False, 0)
-        return _with_continuum(problem, cf, ref, tol_pos, tol_rot, max_evals)
+        return ClosedFormSet(sols, dps, drs, False, 0)
     found, evals = _polish(problem, starts, tol_pos, tol_rot, max_evals)
     # no solution at all, and eaik's points at a singular configuration (held back by the
     # limits, say): a continuum may hide solutions there (a generic target's least-squares
@@ -502,8 +523,7 @@ def closed_form_set(
             found, more = _polish(problem, moved, tol_pos, tol_rot, left)
             evals += more
     if found.shape[0] == 0:
-        cf = ClosedFormSet(sols, dps, drs, missed, evals)
-        return _with_continuum(problem, cf, ref, tol_pos, tol_rot, max_evals)
+        return ClosedFormSet(sols, dps, drs, missed, evals)
     cf = _joined(
         problem, ClosedFormSet(sols, dps, drs, missed, evals), found, ref, tol_pos, tol_rot
     )
@@ -512,9 +532,7 @@ def closed_form_set(
         for q in cf.q
         if not _is_among(q, sols)
     )
-    return _with_continuum(
-        problem, cf._replace(incomplete=incomplete), ref, tol_pos, tol_rot, max_evals
-    )
+    return cf._replace(incomplete=incomplete)
 
 
 def _joined(
