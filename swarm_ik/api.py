@@ -35,7 +35,7 @@ from swarm_ik.goals import base as goals_base
 from swarm_ik.goals.axis import angle_between
 from swarm_ik.kernels import search
 from swarm_ik.kernels.lie import exp3, log3, relative_angles
-from swarm_ik.optimize import check_budget, make_rng
+from swarm_ik.optimize import check_budget, make_rng, rising_estimate
 from swarm_ik.pose import check_tolerances
 from swarm_ik.problem import GoalError, IKProblem
 from swarm_ik.result import Result
@@ -683,7 +683,7 @@ class Route:
                 elapsed = time.perf_counter() - t0
             if out.used >= 8:  # (seconds per evaluation, rising at once, falling slowly; a
                 # run of a few evaluations is mostly the call's fixed cost)
-                self._eval_s = max(elapsed / out.used, 0.9 * self._eval_s)
+                self._eval_s = rising_estimate(self._eval_s, elapsed / out.used)
             if cap is not None and out.used >= cap and search_limit is not None:
                 search_limit = min(search_limit, elapsed)  # (the limit's evaluations spent)
             q, fit, n_evals, history = out.q, out.fitness, out.used, out.history
@@ -724,7 +724,7 @@ class Route:
         )  # fmt: skip
         # what judging costs this route (rising at once, falling slowly): kept out of the
         # search's time limit, so that the whole call stays within it
-        self._judge_s = max(time.perf_counter() - t_judge, 0.9 * self._judge_s)
+        self._judge_s = rising_estimate(self._judge_s, time.perf_counter() - t_judge)
         problem.robot._cache.setdefault("judge_s", {})[self._judge_kind] = self._judge_s
         return result
 
@@ -798,7 +798,7 @@ class Route:
                 continue
             t_check = time.perf_counter()
             free_q = not collides(res.q, col.scene, col.margin, bool(col.self_collision))
-            check_s = max(time.perf_counter() - t_check, 0.9 * check_s)
+            check_s = rising_estimate(check_s, time.perf_counter() - t_check)
             if free_q:
                 out = self.judge(
                     problem, res.q, res.fitness, evals, 0.0, res.history, seed, q_start

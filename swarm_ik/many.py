@@ -62,7 +62,7 @@ from swarm_ik.errors import InvalidArgumentError, unknown
 from swarm_ik.goals import base as goals_base
 from swarm_ik.goals.base import reuse_goal_values
 from swarm_ik.kernels import joints
-from swarm_ik.optimize import check_budget, make_rng
+from swarm_ik.optimize import check_budget, make_rng, rising_estimate
 from swarm_ik.problem import GoalError, IKProblem, largest_errors
 from swarm_ik.result import Result, Solutions
 from swarm_ik.solvers import analytic
@@ -103,7 +103,7 @@ def _finish_per_solution(robot: Any, measured: float | None = None) -> float:
     cache = robot._cache
     est = float(cache.get("many_finish_s", FINISH_PER_SOLUTION))
     if measured is not None:
-        est = max(measured, 0.9 * est)
+        est = rising_estimate(est, measured)
         cache["many_finish_s"] = est
     return est
 

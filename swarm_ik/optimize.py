@@ -50,6 +50,14 @@ MAX_EVALS_LIMIT = 2**62
 """The largest ``max_evals`` (the compiled kernels count evaluations in 64-bit integers)."""
 
 
+def rising_estimate(previous: float, measured: float) -> float:
+    """A running estimate of what a step of a timed call costs [s], kept out of later calls'
+    time limits: the new measurement when it is larger (rising at once, so that an overrun
+    is not repeated), else 0.9 × the previous estimate (falling by a tenth per call, so that
+    one slow call does not shorten every later search for good)."""
+    return max(measured, 0.9 * previous)
+
+
 def check_budget(max_evals: int | None, time_limit: float | None) -> None:
     """Refuse a zero/negative evaluation budget or time limit, or one beyond
     :data:`MAX_EVALS_LIMIT` evaluations (a 0-d array is its number)."""
