@@ -240,6 +240,14 @@ class PathResult(FrozenArrays):
         rotation_errors: Per waypoint, the largest angular error [rad], ``(N,)``.
         reached: Per waypoint, whether it is met, ``(N,)``.
         reason: One line: what was found and why it is (not) a success.
+        status: Why the call ended, in :attr:`swarm_ik.Result.reason`'s words (``reason``
+            says more): ``"converged"`` (every waypoint met, jump-free), ``"jumps"`` (every
+            waypoint met, with steps beyond ``max_joint_step``: :attr:`reconfigurations`),
+            ``"unreachable"`` (a waypoint proven to have no solution), ``"conflicting_goals"``
+            (a waypoint's goals proven contradictory, or pulling against each other where the
+            path holds it), ``"time_limit"`` / ``"budget"`` (the limit ended the call before
+            every waypoint was met), ``"local_minima"`` (a waypoint not met, no budget spent
+            and nothing proven).
         time_s: Wall-clock time of the call, from entry to return (what it loaded first
             included) [s].
         exhaustive: Every waypoint's candidate set was certified complete (closed form), so
@@ -273,12 +281,14 @@ class PathResult(FrozenArrays):
     travel: float = 0.0
     q_dense: FloatArray | None = None
     n_evals: int = 0
+    status: str = ""
 
     def __repr__(self) -> str:
         return (
             f"PathResult(success={self.success}, jump_free={self.jump_free}, "
             f"waypoints={self.q.shape[0]}, reconfigurations={list(self.reconfigurations)}, "
-            f"max_step={self.max_step:.4g}, time_s={self.time_s:.4f}, reason={self.reason!r})"
+            f"max_step={self.max_step:.4g}, time_s={self.time_s:.4f}, status={self.status!r}, "
+            f"reason={self.reason!r})"
         )
 
 
@@ -1777,7 +1787,7 @@ def _finish(
                 jumps.append((i, size))
     max_ratio = float(ratio.max()) if ratio.size else 0.0
     max_step = float(d.max()) if d.size else 0.0
-    reason = _reason(
+    status, reason = _reason(
         ctx, graph, start, q, reached, jumps, proof, densify_ok, max_step, max_ratio, k
     )
     for arr in (q, dp, dr, reached):
@@ -1802,6 +1812,7 @@ def _finish(
         travel=float(d.sum()),
         q_dense=dense,
         n_evals=ctx.used,
+        status=status,
     )
 
 
@@ -1859,13 +1870,29 @@ def _reason(
     ctx: _Context, graph: _Graph, start: FloatArray | None, q: FloatArray, reached: Any,
     jumps: list[tuple[int, float]], proof: bool, densify_ok: bool, max_step: float,
     max_ratio: float, k: int,
-) -> str:  # fmt: skip
-    """One line: what the path is and why it is (not) a success."""
+) -> tuple[str, str]:  # fmt: skip
+    """``(status, reason)``: why the call ended in :attr:`swarm_ik.Result.reason`'s words
+    (:attr:`PathResult.status`), and one line of what the path is and why it is (not) a
+    success."""
     parts: list[str] = []
     cut = q.shape[0] if ctx.cut is None else ctx.cut
     missed = [int(i) for i in np.flatnonzero(~np.asarray(reached)) if i < cut]
+    word = None
     if missed:
-        parts.extend(_missed_reasons(ctx, graph, q, missed))
+        found, word = _missed_reasons(ctx, graph, q, missed)
+        parts.extend(found)
+    # (the status in the precedence of Result.reason: a proof, then the budget that ended
+    # the call, then nothing known)
+    if np.asarray(reached).all():
+        status = "jumps" if jumps else "converged"
+    elif word is not None:
+        status = word
+    elif ctx.timed_out:
+        status = "budget" if ctx.spent else "time_limit"
+    elif ctx.budget_cut and ctx.max_evals is not None:
+        status = "budget"
+    else:
+        status = "local_minima"
     if jumps:
         listed = ", ".join(f"{i} ({s:.3g})" for i, s in jumps[:10])
         listed += " …" if len(jumps) > 10 else ""
@@ -1919,11 +1946,11 @@ def _reason(
         parts.append(msg + unchecked)
     if not parts:
         checked = f", {k} interpolated poses per step checked" if k else ""
-        return (
+        return status, (
             f"jump-free: all {q.shape[0]} waypoints reached, largest step {max_step:.3g} "
             f"({max_ratio:.2f} of the bound){checked}"
         )
-    return "; ".join(parts)
+    return status, "; ".join(parts)
 
 
 def _listed(indices: list[int]) -> str:
@@ -1936,12 +1963,19 @@ def _first_ten(indices: list[int]) -> str:
     return ", ".join(str(i) for i in indices[:10]) + (" …" if len(indices) > 10 else "")
 
 
-def _missed_reasons(ctx: _Context, graph: _Graph, q: FloatArray, missed: list[int]) -> list[str]:
+def _missed_reasons(
+    ctx: _Context, graph: _Graph, q: FloatArray, missed: list[int]
+) -> tuple[list[str], str | None]:
     """What the reason says of the waypoints ``missed`` (before the cut): those proven to
     have no solution are "unreachable", with the proof (the pose beyond the frame's reach, a
     goal proven unreachable, the pose's whole closed-form set outside the limits or rejected
     by the other goals, goals whose pins conflict); the others are "not reached" (a search
-    that found nothing, or the budget that ended it), with what is known of them."""
+    that found nothing, or the budget that ended it), with what is known of them.  With the
+    status word this implies (:attr:`PathResult.status`): ``"unreachable"`` where a pose is
+    beyond reach or its closed-form set outside the limits, else ``"conflicting_goals"``
+    where goals are proven contradictory or pull against each other, else ``"unreachable"``
+    where the other goals reject every branch of a complete set; None where nothing is
+    known."""
     out_of_reach = {i: _beyond_reach(ctx, i) for i in missed}
     beyond = [i for i in missed if out_of_reach[i] is not None]
     blocked = [i for i in missed if i < len(graph.blocked) and graph.blocked[i] is not None]
@@ -1987,7 +2021,14 @@ def _missed_reasons(ctx: _Context, graph: _Graph, q: FloatArray, missed: list[in
         else:  # (a search that found nothing: no proof that nothing exists)
             found = found or "no IK solution found"
             parts.append(f"{_listed(rest)} not reached: {found}{known}")
-    return parts
+    word = None
+    if beyond or closed:  # (a pose no configuration within the limits meets)
+        word = "unreachable"
+    elif conflicts:  # (proven contradictory, or pulling against each other: as solve says)
+        word = "conflicting_goals"
+    elif proven:  # (every branch of a pose rejected by the other goals: a proof)
+        word = "unreachable"
+    return parts, word
 
 
 def _blocked_reason(ctx: _Context, graph: _Graph, missed: list[int], blocked: list[int]) -> str:

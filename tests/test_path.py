@@ -750,3 +750,31 @@ def test_a_waypoint_whose_goals_conflict_says_so_as_solve_does() -> None:
     res = solve_path(robot, goals=lists)
     assert not res.reached[0] and res.reached[1]
     assert "the goals of waypoint 0 conflict: Position(panda_hand_tcp) and Position(" in res.reason
+
+
+def test_a_path_says_why_it_ended_in_the_words_of_solve() -> None:
+    """``PathResult.status`` speaks ``Result.reason``'s vocabulary (``reason`` stays the line
+    saying more): a met jump-free path converged, a met path with a jump says so, a waypoint
+    beyond reach is unreachable, two goals that no pose meets together conflict, and a call
+    whose evaluations ran out says so."""
+    from swarm_ik.goals import Position
+
+    robot = swarm_ik.load_robot("ur5")
+    start = robot.fk(np.array([0.3, -1.2, 1.4, -1.8, -1.57, 0.0]))
+    poses = np.repeat(start[None], 12, axis=0)
+    poses[:, :3, 3] += np.linspace(0, 1, 12)[:, None] * [-0.1, 0.25, 0.05]
+    met = solve_path(robot, poses, max_joint_step=0.2)
+    assert (met.status, met.success, met.jump_free) == ("converged", True, True)
+    jumpy = poses.copy()
+    jumpy[6:] = robot.fk(np.array([-1.2, -1.9, 1.2, -0.5, 1.0, 0.4]))
+    res = solve_path(robot, jumpy)
+    assert (res.status, res.success, res.jump_free) == ("jumps", True, False)
+    far = poses.copy()
+    far[5, :3, 3] = [3.0, 0.0, 0.0]
+    res = solve_path(robot, far)
+    assert res.status == "unreachable" and not res.reached[5], res.reason
+    tool = robot.ee_frame
+    res = solve_path(robot, poses[:3], goals=[Position(tool, poses[0][:3, 3] + [0.2, 0, 0])])
+    assert res.status == "conflicting_goals" and not res.success, res.reason
+    res = solve_path(robot, poses, max_evals=50)
+    assert res.status == "budget" and not res.success, res.reason

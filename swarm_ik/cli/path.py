@@ -213,6 +213,7 @@ def _as_dict(robot: Any, res: Any, out: Path | None) -> dict[str, Any]:
         "reconfigurations": [[i, s] for i, s in res.reconfigurations],
         "max_step": res.max_step,
         "exhaustive": res.exhaustive,
+        "status": res.status,
         "reason": res.reason,
         "time_s": res.time_s,
         "n_evals": res.n_evals,
