@@ -29,6 +29,11 @@ class RobotModelWarning(UserWarning):
     of the libraries it calls while loading, not these."""
 
 
+class GoalWarning(UserWarning):
+    """A goal written in Python that is accepted but may slow or stall the search (a
+    ``jacobian`` whose size disagrees with its ``residual``'s change)."""
+
+
 class UnknownNameError(SwarmIKError, KeyError):
     """A name (robot, frame, solver, fitness, joint) that is not among the valid ones."""
 

@@ -897,7 +897,8 @@ class Goal(metaclass=_GoalType):
     def errors(self, state: State) -> tuple[float, float]:
         """``(position error [m], angular error [rad])`` at ``state`` (NaN where none) that
         the tolerances judge; by default the norm of the residual as a position error."""
-        return float(np.linalg.norm(residual_of(self, state))), float("nan")
+        # (math.hypot: no overflow where a huge residual's squares would overflow)
+        return math.hypot(*residual_of(self, state).tolist()), float("nan")
 
     def met(self, state: State, tol_pos: float, tol_rot: float) -> tuple[float, float, bool, Any]:
         """The independent check at ``state``: ``(position error, angular error, met,
@@ -1026,7 +1027,8 @@ def search_rows(
     Raises:
         InvalidArgumentError: a Python goal without ``residual``/``jacobian``, returning
             arrays of another shape than ``(m,)`` and ``(m, nq)`` (the goal and the shapes
-            named), or NaN or infinite values (the goal and ``q`` named).
+            named), NaN or infinite values, or values beyond :data:`ROW_LIMIT` once
+            weighted (the goal and ``q`` named).
     """
     nq = state.q.shape[0]
     try:
@@ -1075,7 +1077,22 @@ def search_rows(
     own = goal.own_tolerance()
     if own is not None:
         r, jac = dead_zone(r, jac, SLACK_SHARE * own)
-    return w * r, (None if jac is None else w * jac)
+    r, jac = w * r, (None if jac is None else w * jac)
+    big = max(float(np.abs(r).max()), 0.0 if jac is None else float(np.abs(jac).max()))
+    if big > ROW_LIMIT:  # (the search squares the rows: beyond this they overflow)
+        raise InvalidArgumentError(
+            f"{goal.describe()}: its weighted rows reach {big:.3g} at q = "
+            f"{np.round(state.q, 6).tolist()}; the search squares them, so each value of "
+            f"weight·residual(state) and weight·jacobian(state) must stay within {ROW_LIMIT:g} "
+            "(scale the goal's rows down)"
+        )
+    return r, jac
+
+
+ROW_LIMIT = 1e100
+"""Largest magnitude of a Python goal's weighted residual and Jacobian entries
+(:func:`search_rows`): the search forms ``JᵀJ`` and ``rᵀr``, which overflowed float64 at
+rows of 1e160 (a NaN step, and the goal blamed for NaN at a NaN ``q``)."""
 
 
 SLACK_SHARE = 0.9
