@@ -61,7 +61,15 @@ import numpy as np
 from numpy.typing import NDArray
 
 from swarm_ik._types import BoolArray, FloatArray, IntArray
-from swarm_ik._validate import check_seed, count, floats_or, keywords_checked, user_stacklevel
+from swarm_ik._validate import (
+    check_output_path,
+    check_seed,
+    count,
+    float_array,
+    floats_or,
+    keywords_checked,
+    user_stacklevel,
+)
 from swarm_ik.api import unreachable_targets
 from swarm_ik.errors import InvalidArgumentError, InvalidTargetError, SwarmIKError
 from swarm_ik.goals import AvoidCollisions, Goal, Pose, Position, State, kernel_slot, kernels
@@ -533,18 +541,19 @@ class BatchGoals:
         rc = self.problem.robot.collision_model()
         return rc.collides_many(qs, gl.scene, gl.margin, bool(gl.self_collision))
 
-    def free_table(self, bc: BatchChain, seed: int) -> tuple[FloatArray, FloatArray]:
+    def free_table(self, bc: BatchChain) -> tuple[FloatArray, FloatArray]:
         """The scene's table of collision-free configurations: of :data:`FREE_TABLE_DRAWS`
-        draws of :func:`_window_table` from ``seed``, those coal finds free, with their poses
-        of the first goal frame: ``(q (K, nq), poses (K, 4, 4))``.  Made once per scene,
-        collision settings, bounds and seed in each process (kept on the robot for the next
-        batch); the same in every process, so a target's answer does not depend on the
-        chunking."""
+        draws of :func:`_window_table` (from a fixed seed), those coal finds free, with their
+        poses of the first goal frame: ``(q (K, nq), poses (K, 4, 4))``.  Made once per scene,
+        collision settings and bounds in each process (kept on the robot for the next batch,
+        whatever its seed: a table drawn from each batch's seed was made again, 2,048 checks,
+        in each timed call with a new seed, and a 5 ms limit took 55 ms); the same in every
+        process, so a target's answer does not depend on the chunking."""
         gl = self.collision
         tables = self.problem.robot._cache.setdefault("free_tables", {})
         key = (
             gl.scene if gl is not None else None, None if gl is None else gl.margin,
-            None if gl is None else bool(gl.self_collision), int(seed),
+            None if gl is None else bool(gl.self_collision),
             bc.bounds.lower.tobytes(), bc.bounds.upper.tobytes(),
         )  # fmt: skip
         hit = tables.get(key)
@@ -552,7 +561,7 @@ class BatchGoals:
             if len(tables) >= 8:
                 tables.clear()
             hit = tables[key] = _window_table(
-                bc, seed, 0xF2EE, FREE_TABLE_DRAWS, lambda qs: ~self.in_contact(qs)
+                bc, 0, 0xF2EE, FREE_TABLE_DRAWS, lambda qs: ~self.in_contact(qs)
             )
         return hit  # type: ignore[no-any-return]
 
@@ -656,7 +665,7 @@ class BatchResult(_Rows, FrozenArrays):
         position_error: ‖p − p_target‖ [m], ``(N,)``; NaN for a target the time limit left
             unstarted (not measured).
         rotation_error: Geodesic angle between reached and target orientation [rad], ``(N,)``
-            (NaN likewise).
+            (NaN likewise, and NaN in a position-only batch: no target orientation).
         success: Both errors within tolerance (rotation ignored when position-only) and ``q``
             within the limits, ``(N,)``.
         n_evals: FK + Jacobian evaluations spent per target, ``(N,)``.
@@ -785,15 +794,20 @@ class BatchResult(_Rows, FrozenArrays):
         target.
 
         Raises:
-            InvalidArgumentError: the suffix is neither ``.npz`` nor ``.csv``.
+            InvalidArgumentError: the suffix is neither ``.npz`` nor ``.csv``, or the file
+                cannot be written (:func:`swarm_ik._validate.check_output_path`).
+            InvalidTargetError: ``targets`` are not one pose per row (``(N, 4, 4)`` or
+                ``(N, 7)`` rows ``x y z qx qy qz qw``, as :func:`check_targets` takes them).
         """
-        p = Path(path)
+        p = check_output_path(path, "cannot write results to", (".csv", ".npz"))
         suffix = p.suffix.lower()
-        if suffix not in (".npz", ".csv"):
-            raise InvalidArgumentError(
-                f"cannot write results to {str(p)!r}: unknown suffix {p.suffix!r}; "
-                "valid suffixes: .csv, .npz"
-            )
+        if targets is not None:  # (written beside the rows: one checked pose per row)
+            targets = check_targets(targets, positions=self.settings.position_only)
+            if targets.shape[0] != self.q.shape[0]:
+                raise InvalidTargetError(
+                    f"targets hold {targets.shape[0]} poses for {self.q.shape[0]} results: "
+                    "give the targets that were solved"
+                )
         with written_in_place_of(p) as part:  # (never a partial file)
             self._write(part, suffix, targets, compress)
         return p
@@ -814,7 +828,7 @@ class BatchResult(_Rows, FrozenArrays):
                 "seed": self.settings.seed,
             }
             if targets is not None:
-                arrays["targets"] = np.asarray(targets, dtype=float)
+                arrays["targets"] = targets
             if self.goals_met is not None:
                 arrays["goal_labels"] = np.array(self.goal_labels, dtype=str)
                 arrays["goals_met"] = self.goals_met
@@ -876,7 +890,7 @@ def check_targets(targets: Any, orth_tol: float = 1e-6, positions: bool = False)
     """
     if np.iscomplexobj(targets):
         raise InvalidTargetError("targets must be real numbers, got complex values")
-    arr = np.asarray(targets, dtype=float)
+    arr = float_array(targets)  # (text, None, ragged nesting: refused by name)
     if arr.ndim >= 1 and arr.shape[0] > MAX_TARGETS:
         raise InvalidTargetError(
             f"{arr.shape[0]} targets; at most {MAX_TARGETS} per call "
@@ -1285,7 +1299,7 @@ def solve_chunk(
         one_start = dataclasses.replace(_restarts(later), max_starts=1)  # (one start each)
         near = np.empty((redo.size, 0), dtype=np.int64)
         if redo.size and FREE_TABLE_RETRIES:
-            table_q, table_poses = bg.free_table(bc, settings.seed)
+            table_q, table_poses = bg.free_table(bc)
             near = _nearest_poses(table_poses, targets[redo], FREE_TABLE_RETRIES, settings)
         for k in range(FREE_RETRIES_PER_START * settings.max_starts):  # another branch: from
             # the table's free configurations
@@ -1333,7 +1347,9 @@ def solve_chunk(
         dp[ran], dr[ran] = pose_errors(bc.tree, q[ran], targets[ran])
     within = np.all((q >= bc.bounds.lower - 1e-12) & (q <= bc.bounds.upper + 1e-12), axis=1)
     ok = within & (dp <= settings.tol_pos)
-    if not settings.position_only:
+    if settings.position_only:  # (no target orientation: no rotation error, not the angle
+        dr[:] = np.nan  # from the world frame that an unrotated target would give)
+    else:
         ok &= dr <= settings.tol_rot
     met = None
     if bg is not None:
@@ -1375,7 +1391,7 @@ took a fifth of the batch's time among 40 boxes; with 16, 4,000 targets among 60
 from 4,420 to 5,830 poses/s per core for one more target unsolved (99.90 % solved)."""
 
 FREE_TABLE_DRAWS = 2048
-"""Joint vectors drawn (uniformly within the limits, from the batch's seed) for a collision
+"""Joint vectors drawn (uniformly within the limits, from a fixed seed) for a collision
 goal's table of configurations coal finds free (:meth:`BatchGoals.free_table`; about half of
 them among 40 boxes, built in 0.07 s once per scene and process)."""
 
@@ -1571,11 +1587,14 @@ def _with_deadline(
     if poses.shape[0]:  # (the kernels are loaded already: _load_kernels)
         bg = bc.goals
         if bg is not None and bg.collision is not None:
-            probe = np.repeat(seeds[:1], 8, axis=0)
+            # (8 distinct configurations: coal answers a configuration it has just checked
+            # in 2.5 µs, a new one in 40-60 µs among 120 boxes; timed on one repeated, the
+            # reserve was a twentieth of the verdicts' time, and a 0.3 s limit took 0.55 s)
+            probe = _window_table(bc, settings.seed, 0x9E0BE, 9)[0]
             bg.in_contact(probe[:1])  # (the checker made for the scene: not timed)
             t_probe = time.perf_counter()
-            bg.in_contact(probe)
-            reserve += 2.0 * (time.perf_counter() - t_probe) / probe.shape[0]
+            bg.in_contact(probe[1:])
+            reserve += 2.0 * (time.perf_counter() - t_probe) / (probe.shape[0] - 1)
         if bg is not None and len(bg.primary):  # the goals' own check of a solved target
             # (Pinocchio: tens of µs with a centre of mass; timed after a first call)
             args = (seeds[0], seeds[0], settings.tol_pos, settings.tol_rot, False)
@@ -1750,6 +1769,8 @@ def solve_batch(
         bgoals = BatchGoals(robot, goals, settings.position_only, first)
         bc = dataclasses.replace(bc, goals=bgoals)
         labels = bgoals.labels
+        if time_limit is not None and bgoals.collision is not None and n:
+            bgoals.free_table(bc)  # (its retries' table too: made once per scene, 0.05-0.1 s)
         loading_s += time.perf_counter() - t_goals  # (a scene's sphere model and checker)
     if chunk_size is not None and (
         isinstance(chunk_size, bool)

@@ -225,6 +225,7 @@ def main(argv: Sequence[str] | None = None) -> int:
     anything unexpected 3 and one line (``SWARM_IK_DEBUG=1`` re-raises it), Ctrl-C 130.
     """
     script = argv is None  # the console script: this process is ours to tune
+    console = script
     if sys.stdout is None:  # (started with standard output closed, `>&-`: what it prints
         sys.stdout = open(os.devnull, "w")  # noqa: SIM115  # goes nowhere, as with >/dev/null)
     argv = list(sys.argv[1:] if argv is None else argv)
@@ -270,6 +271,10 @@ def main(argv: Sequence[str] | None = None) -> int:
     finally:
         if script:  # shutdown then skips the ~10^6 objects numba made (~0.25 s): a short
             gc.freeze()  # command only (extensions that report leaks at exit stay quiet)
+        if console:  # the exit code is decided: a Ctrl-C during the interpreter's shutdown
+            # (its exit handlers take 0.1-0.3 s after a batch) no longer kills the process by
+            # the signal (status -2 to a caller, no line), the code stands
+            signal.signal(signal.SIGINT, signal.SIG_IGN)
 
 
 _FULL_ERRNOS = (errno.ENOSPC, errno.EFBIG, errno.EDQUOT)

@@ -196,7 +196,10 @@ def run(args: argparse.Namespace) -> int:
             kept = "no chunk had finished; nothing written"
         print(f"swarm-ik: interrupted; {kept}", file=sys.stderr, flush=True)
         if res.n:
-            res.save(args.out, targets=targets[: res.n], compress=False)
+            try:
+                res.save(args.out, targets=targets[: res.n], compress=False)
+            except KeyboardInterrupt:  # (a second Ctrl-C: the write given up, the file as it was)
+                print(f"swarm-ik: interrupted again; {args.out} not written", file=sys.stderr)
         return EXIT_INTERRUPTED
     res.save(args.out, targets=targets)
     n_ok = int(res.success.sum())

@@ -1,0 +1,65 @@
+"""Held-out reviews 125 and 126 (batches, budgets, Ctrl-C): what they found, pinned as
+behaviour."""
+
+from __future__ import annotations
+
+import subprocess
+import sys
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+import swarm_ik
+from swarm_ik.errors import InvalidArgumentError, InvalidTargetError
+
+
+@pytest.fixture(scope="module")
+def ur5() -> swarm_ik.RobotModel:
+    return swarm_ik.load_robot("ur5")
+
+
+def test_a_position_only_batch_reports_no_rotation_error(ur5: swarm_ik.RobotModel) -> None:
+    """Points have no target orientation: the rows said 2.5-3.1 rad (the tool's angle from
+    the world frame, the unrotated target's) beside ``success``."""
+    points = ur5.fk(ur5.random_q(np.random.default_rng(0), 5))[:, :3, 3]
+    res = swarm_ik.solve_batch(ur5, points, position_only=True)
+    assert res.success.all()
+    assert np.isnan(res.rotation_error).all()
+    assert (res.position_error <= 1e-5).all()
+
+
+def test_saved_targets_are_checked_poses_one_per_row(
+    ur5: swarm_ik.RobotModel, tmp_path: Path
+) -> None:
+    """``BatchResult.save(targets=…)`` wrote ``(N, 7)`` rows as they were, three poses beside
+    six rows, and met text or a missing folder with numpy's or Python's bare errors."""
+    poses = ur5.fk(ur5.random_q(np.random.default_rng(1), 6))
+    res = swarm_ik.solve_batch(ur5, poses)
+    rows = np.hstack([poses[:, :3, 3], np.tile([0.0, 0.0, 0.0, 1.0], (6, 1))])
+    res.save(tmp_path / "a.npz", targets=rows)  # (N, 7): written as poses
+    assert np.load(tmp_path / "a.npz")["targets"].shape == (6, 4, 4)
+    with pytest.raises(InvalidTargetError, match="targets hold 3 poses for 6 results"):
+        res.save(tmp_path / "b.npz", targets=poses[:3])
+    with pytest.raises(InvalidTargetError):
+        res.save(tmp_path / "c.npz", targets="abc")
+    with pytest.raises(InvalidArgumentError, match="does not exist"):
+        res.save(tmp_path / "missing" / "d.npz")
+    assert not (tmp_path / "b.npz").exists() and not (tmp_path / "c.npz").exists()
+
+
+def test_a_ctrl_c_after_the_command_ended_keeps_its_exit_code() -> None:
+    """A Ctrl-C during the interpreter's shutdown (0.1-0.3 s after a batch) killed the
+    process by the signal: status -2 to a caller, no line, where the command had decided on
+    its code.  The console script ignores Ctrl-C once ``main`` returned."""
+    code = (
+        "import os, signal, sys\n"
+        "from swarm_ik.cli import main\n"
+        "code = main()\n"
+        "os.kill(os.getpid(), signal.SIGINT)\n"  # (a Ctrl-C after main: during the exit)
+        "sys.exit(code)\n"
+    )
+    out = subprocess.run(
+        [sys.executable, "-c", code, "robots"], capture_output=True, text=True, timeout=120
+    )
+    assert out.returncode == 0, out.stderr
