@@ -42,7 +42,7 @@ import pinocchio as pin
 from numpy.typing import NDArray
 
 from swarm_ik._validate import check_seed, count, keywords_checked, positive_float
-from swarm_ik.api import Route, prepare_q0, proven_failure, warm_up
+from swarm_ik.api import DEFAULT_SOLVER, prepare_q0, proven_failure, route_for, warm_up
 from swarm_ik.branches import (
     BRANCH_TOL,
     ROUNDOFF_TOL,
@@ -444,14 +444,17 @@ def solve_many(
 
     def loaded() -> float | None:
         """The compiled kernels loaded (a first call's compile or cache load), and the time
-        limit left for the search: less the loading, up to half of it (as :func:`solve`
-        charges a first call's loading)."""
-        t_load = time.perf_counter()
-        warm_up(Route(problem))
+        limit left for the search: less all the call spent so far (the checks before any
+        search, the loading), up to half of it (as :func:`solve` charges a first call's
+        loading; the loading alone was charged, and a Panda call among obstacles took
+        1.4-1.8 ms of a 1 ms limit).  The kernels are those of the problem's route, shared by
+        the robot's problems of the same goal types (:func:`swarm_ik.api.route_for`: one made
+        per call cost 0.25 ms)."""
+        warm_up(route_for(problem, DEFAULT_SOLVER, {}))
         _warm_up()
         if time_limit is None:
             return None
-        return max(time_limit - (time.perf_counter() - t_load), 0.5 * time_limit)
+        return max(time_limit - (time.perf_counter() - t_call), 0.5 * time_limit)
 
     def judged(
         found: list[Result], ended: str, evals: int, closest: FloatArray | None = None
@@ -1025,7 +1028,13 @@ def _numerical(
         deadline = t0 + time_limit - min(reserve, 0.5 * time_limit)
     n_starts = 0
     since_new = 0
-    sec_per_eval = 3e-6
+    # seconds per evaluation, for the cap of a round under a time limit: this robot's last
+    # measure for problems of this kind (3 µs, a Panda pose, at first: among obstacles an
+    # evaluation takes several times that, and a first round capped at 3 µs each overran a
+    # 1 ms limit by half of it, every call)
+    per_eval = robot._cache.setdefault("many_eval_s", {})
+    kind = (problem.collision_goal is not None, bool(problem.python_goals))
+    sec_per_eval = per_eval.get(kind, 3e-6)
     round_s = 0.0  # a round's own time besides its compiled call [s] (measured)
     ended = "converged"  # (n found, or no new branch in its patience)
     closest: FloatArray | None = None  # the failed start nearest to meeting the goals
@@ -1072,7 +1081,7 @@ def _numerical(
         out = pol.polish(starts, cap, stop_first=False, deadline=deadline)
         polish_s = time.perf_counter() - t1
         if out.used > 16:
-            sec_per_eval = 0.5 * sec_per_eval + 0.5 * polish_s / out.used
+            sec_per_eval = per_eval[kind] = 0.5 * sec_per_eval + 0.5 * polish_s / out.used
         used += out.used
         ran = int(np.count_nonzero(out.status))
         n_starts += ran
