@@ -66,7 +66,9 @@ def run(
     * eq. 4: fly ``i`` at ``X_i = X_b + step*U[-1, 1]``, ``Y_i = Y_b + step*U[-1, 1]``
       (independent draws per component; [FOA]'s ``RandomValue = 2*rand() - 1``);
     * eq. 5: ``Dist_i = sqrt(X_i² + Y_i²)`` (elementwise);
-    * eq. 6: ``S_ij = 1/Dist_ij``, clipped to the bounds (the joint vector in rad / m).
+    * eq. 6: ``S_ij = 1/Dist_ij``, clipped to the bounds (the joint vector in rad / m; the
+      clip is ours: [HLFOA]'s eqs. 5–6 have none, and an ``S`` beyond a joint's limit would
+      be no configuration of the arm).
       With ``axis_scale`` (registered as ``foa-scaled``, a variant not in [FOA] or [HLFOA])
       the axes are measured in units of ``1/s_j``, ``s_j = max(|l_j|, |u_j|)``: ``S_ij =
       s_j / Dist_ij``, so that ``Dist = 1`` lands on the largest bound magnitude.  That is an

@@ -87,7 +87,8 @@ def run(
         v = w·v + c1·r1·(pbest - x) + c2·r2·(gbest - x);   x = x + v        (eq. 6)
 
     then the whole swarm is evaluated in one batch and ``pbest``/``gbest`` replaced when
-    strictly better.  [PSO-IK] clips out-of-bound positions to the bound; it says nothing of
+    strictly better.  [PSO-IK] clips out-of-bound positions to the bound (here a continuous
+    joint, without bounds, is wrapped to ``[-π, π)`` instead: our choice); it says nothing of
     velocities: here each velocity component is clamped to ``±v_max·(u_j - l_j)`` (the usual
     clamp; paper silent) and set to zero where the position was clipped (absorbing wall; our
     choice, so a particle does not keep pushing against the bound).
