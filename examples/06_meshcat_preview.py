@@ -87,7 +87,7 @@ def run(out_dir: Path | None) -> None:
         return
     print("YuMi, HLFOA vs DLS (animated):", scene.url)
     print(f"{robot.name}, three solutions:", many.url)
-    print(viz.served(scene, many))
+    print(viz.served(scene, many, hint="--html DIR writes the two pages"))
 
 
 if __name__ == "__main__":

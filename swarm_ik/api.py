@@ -365,9 +365,13 @@ def prepare_q0(problem: IKProblem, q0: Any) -> np.ndarray | None:
     if problem.within_bounds(q, 0.0):
         return q
     fixed = np.clip(q, problem.lower, problem.upper)
-    names = [problem.robot.joint_names[i] for i in np.flatnonzero(fixed != q)]
+    off = np.flatnonzero(fixed != q)
+    names = [problem.robot.joint_names[i] for i in off]
+    # (an angle beyond a full turn: most likely degrees, as target_q says of a target's q)
+    turns = bool(np.any(np.abs(q[off]) > 2 * np.pi))
+    hint = " (radians and metres are expected: degrees?)" if turns else ""
     warnings.warn(
-        f"q0 lies outside the joint limits at {names}; clipped into them",
+        f"q0 lies outside the joint limits at {names}{hint}; clipped into them",
         stacklevel=user_stacklevel(),
     )
     return fixed
@@ -391,7 +395,10 @@ def warm_up(route: Route) -> None:
     with kernels.announced():
         problem = route.problem
         q = np.ascontiguousarray(problem.robot.mid_q()).clip(problem.lower, problem.upper)
-        problem.within_bounds(q)  # (the judge's bounds test, compiled)
+        problem.within_bounds(q)  # (the bounds test of a start, compiled)
+        frozen = q.copy()
+        frozen.setflags(write=False)  # (the judge's: the search's answer is read-only, another
+        problem.within_bounds(frozen)  # type to numba, loaded at a first judge: 3-5 ms)
         # the search's clock: its objmode block compiles at its first call in each process
         # (40-80 ms), here rather than inside a solve's time limit
         search.now()

@@ -341,7 +341,8 @@ def solve_path(
             The reason says which of these happened.  Waypoint 0 always gets one solve, and the
             poses are validated and the answers checked in any case (about 45 µs per waypoint;
             among obstacles coal's check adds 0.25–0.5 ms per waypoint), so a limit shorter than
-            these is overrun (2,000 Panda waypoints among two obstacles: 0.1 s took 0.2 s).  What a call loads the first time is loaded before
+            these is overrun (2,000 Panda waypoints among two obstacles: 0.1 s took 0.2 s).
+            What a call loads the first time is loaded before
             the clock: the first timed path of a robot in a process loads its kernels (0.7–1 s from
             numba's cache, with an untimed path of two waypoints); a path with goals beyond the pose
             loads their kernels (tens of milliseconds, no solve run) and, with a scene, its sphere

@@ -216,6 +216,8 @@ def _locked_values(
         lim = outside(jid, v)
         if lim is not None:
             hint = f"; give the value to hold: locked={{{name!r}: v}}" if value is None else ""
+            if value is not None and abs(v) > 2 * math.pi:
+                hint = " (radians and metres are expected: degrees?)"
             raise InvalidArgumentError(
                 f"locked joint {name!r}: {what} is outside its limits {lim}" + hint
             )
@@ -274,9 +276,16 @@ def _reduce(
         parent = full.frames[fid].parentJoint
         path_ids = [int(j) for j in full.supports[parent] if j != 0]
         if not path_ids:
+            hint = (  # (one frame: the robot may be a free flyer; among others: a frame fixed
+                # to the root, which no joint moves and no goal on it could change)
+                "a free-flying robot? load it with floating_base=True, --floating-base on "
+                "the command line"
+                if len(frames) == 1
+                else "no joint moves it: leave it out of the goal frames, or load a free-flying "
+                "robot with floating_base=True"
+            )
             raise RobotModelError(
-                f"{p}: no movable joint between the root and frame {f!r} (a free-flying "
-                "robot? load it with floating_base=True, --floating-base on the command line)"
+                f"{p}: no movable joint between the root and frame {f!r} ({hint})"
             )
         keep.update(path_ids)
     keep -= set(held)
@@ -330,8 +339,14 @@ def _reduce(
     for follower, (driver, a, b) in mimic.items():  # an off-path follower follows its driver
         if follower in jid and driver in jid and jid[follower] in locked:
             jf, jd = full.joints[jid[follower]], full.joints[jid[driver]]
-            if jf.nq == 1 and jd.nq == 1 and jid[follower] not in held:
-                q_ref[jf.idx_q] = a * q_ref[jd.idx_q] + b
+            if jid[follower] not in held:  # (a continuous joint, nq = 2, as (cos, sin))
+                i, k = jd.idx_q, jf.idx_q
+                x = math.atan2(q_ref[i + 1], q_ref[i]) if jd.nq == 2 else q_ref[i]
+                v = a * x + b
+                if jf.nq == 2:
+                    q_ref[k : k + 2] = (math.cos(v), math.sin(v))
+                else:
+                    q_ref[k] = v
     for j, v in held.items():
         jm = full.joints[j]
         if jm.nq == 2:

@@ -510,13 +510,14 @@ def viewer_for(html: str | os.PathLike[str] | None) -> bool:
     return True
 
 
-def served(*scenes: Scene) -> str:
+def served(*scenes: Scene, hint: str = "--html FILE writes a page") -> str:
     """Keep the live viewers of ``scenes`` up until Enter is pressed on a terminal (at once
-    without one, or with ``SWARM_IK_NO_WAIT=1``), then close them; returns the line to print."""
+    without one, or with ``SWARM_IK_NO_WAIT=1``), then close them; returns the line to print
+    (``hint``: how the caller writes pages instead, said when no terminal waits)."""
     no_wait = os.environ.get("SWARM_IK_NO_WAIT", "") not in ("", "0")
     try:
         if no_wait or sys.stdin is None or not sys.stdin.isatty():
-            return "no terminal to wait on: the viewer closes (--html FILE writes a page)"
+            return f"no terminal to wait on: the viewer closes ({hint})"
         input("open it in a browser; press Enter to quit ")
         return "viewer closed"
     finally:
