@@ -628,7 +628,10 @@ class RobotModel:
         if not p.is_file():
             if p.exists():  # (a folder, a device, a pipe: reading it would fail or hang)
                 raise RobotModelError(f"URDF path {str(p)!r} is not a regular file")
-            raise RobotFileNotFoundError(f"URDF file not found: {str(p)!r}")
+            hint = ""
+            if p.stem in BUNDLED or p.stem in EXAMPLE_ROBOTS:  # ("panda.urdf" for "panda")
+                hint = f"; {p.stem!r} is a robot loadable by name (--robot {p.stem})"
+            raise RobotFileNotFoundError(f"URDF file not found: {str(p)!r}{hint}")
         if not isinstance(floating_base, (bool, np.bool_)):
             raise InvalidArgumentError(
                 f"floating_base must be true or false, got {floating_base!r}"

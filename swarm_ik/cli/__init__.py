@@ -29,6 +29,7 @@ import _thread
 import argparse
 import errno
 import gc
+import importlib.metadata
 import json
 import os
 import re
@@ -167,6 +168,7 @@ def build_parser(command: str | None = None) -> argparse.ArgumentParser:
         description="Inverse kinematics for URDF robots with swarm optimisers and Pinocchio.",
         epilog=EPILOG,
     )
+    parser.add_argument("--version", action="version", version=f"swarm-ik {_version()}")
     sub = parser.add_subparsers(dest="command", required=True, metavar="COMMAND")
     for module in COMMANDS.values():
         if module is bench:
@@ -174,6 +176,14 @@ def build_parser(command: str | None = None) -> argparse.ArgumentParser:
         else:
             module.add_parser(sub)
     return parser
+
+
+def _version() -> str:
+    """The installed package's version (``swarm-ik --version``)."""
+    try:
+        return importlib.metadata.version("swarm_ik")
+    except importlib.metadata.PackageNotFoundError:  # (run from a source tree, not installed)
+        return "(not installed)"
 
 
 def _fail(message: str, code: int, as_json: bool, kind: str) -> int:

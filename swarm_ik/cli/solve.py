@@ -313,7 +313,8 @@ def _measured(res: Any, field: str) -> bool:
 def _why_not(problem: Any, res: Any, kwargs: dict[str, Any]) -> str | None:
     """What a solve that ended ``unreachable`` or ``conflicting_goals`` found: the goal
     beyond reach (or the goal's own reason, e.g. a centre-of-mass margin deeper than its
-    support polygon allows), or the two goals no pose meets together; None otherwise."""
+    support polygon allows), or the two goals no pose meets together; for a full pose an arm
+    of fewer than six joints missed, that it meets few of them; None otherwise."""
     from swarm_ik import api
 
     tol = (kwargs.get("tol_pos", 1e-5), kwargs.get("tol_rot", 1e-5))
@@ -322,6 +323,13 @@ def _why_not(problem: Any, res: Any, kwargs: dict[str, Any]) -> str | None:
     if res.reason == "conflicting_goals":
         found = api.conflicting_goals(problem, *tol)
         return None if found is None else f"{found} cannot be met together"
+    if not res.success and problem.single_pose and not problem.position_only:
+        movable = problem.robot.nq - (6 if problem.robot.floating_base else 0)
+        if movable < 6:  # (a pose is six numbers: such an arm meets few of them)
+            return (
+                f"an arm of {movable} joints meets few full poses (a pose fixes 6 numbers); "
+                "--position-only solves the position alone"
+            )
     return None
 
 
