@@ -707,7 +707,7 @@ def test_bench_many_checks_its_out_folder_as_the_other_benchmarks(
     assert many.main(["--out", str(afile)]) == 2  # (one line, as `swarm-ik bench many`)
     assert "is a file; give a folder" in capsys.readouterr().err
     quick = tmp_path / "quick"
-    common.write_run_info(quick, "ik", True)
+    common.write_run_info(quick, "many", True)
     assert many.main(["--out", str(quick)]) == 2
     assert "holds a quick run" in capsys.readouterr().err
     assert sorted(p.name for p in quick.iterdir()) == [common.RUN_INFO]

@@ -238,3 +238,37 @@ def test_a_target_is_the_same_whatever_block_it_is_drawn_in() -> None:
     for i in (0, 7, ik.TARGET_BLOCK - 1, ik.TARGET_BLOCK):
         expected = common.fk_targets(robot, i + 1, 3)[i]
         np.testing.assert_array_equal(ik._target("ur5", i, 3), expected)
+
+
+def test_a_folder_of_another_benchmark_is_refused(tmp_path: Path) -> None:
+    """``bench goals --out`` a ``bench ik`` folder replaced its summary and run record
+    (review 130)."""
+    out = tmp_path / "ik"
+    common.write_run_info(out, "ik", quick=False)
+    with pytest.raises(InvalidArgumentError, match="holds a run of `bench ik`"):
+        common.resolve_out(out, "goals", quick=False)
+
+
+def test_the_summary_holds_only_the_rows_of_its_plan(tmp_path: Path) -> None:
+    """A run with ``--n 2`` into a folder of a 3-target run reported N = 3 under a header
+    saying 2 (and another seed pooled both seeds' rows)."""
+    out = tmp_path / "r"
+    assert ik.run(_args(*QUICK, "--peers", "swarm", "--out", str(out))) == 0
+    assert ik.run(_args(*QUICK, "--peers", "swarm", "--n", "2", "--out", str(out))) == 0
+    assert "| swarm | 2 |" in (out / "summary.md").read_text()
+    assert ik.run(_args(*QUICK, "--peers", "swarm", "--seed", "1", "--out", str(out))) == 0
+    assert "| swarm | 3 |" in (out / "summary.md").read_text()
+
+
+def test_a_named_peer_that_cannot_run_here_is_refused(
+    tmp_path: Path, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    """Its rows were written as done with a note, and a later run with the package installed
+    kept them (review 130)."""
+    monkeypatch.setattr(peers, "_importable", lambda module: False)
+    out = tmp_path / "r"
+    with pytest.raises(
+        InvalidArgumentError, match=r"tracik-1e-5 cannot run here.*swarm_ik\[bench\]"
+    ):
+        ik.run(_args(*QUICK, "--peers", "swarm", "tracik-1e-5", "--out", str(out)))
+    assert not (out / "peers.csv").exists()

@@ -261,7 +261,8 @@ def resolve_out(out: str | os.PathLike[str] | None, command: str, quick: bool) -
         The folder (not created).
 
     Raises:
-        InvalidArgumentError: the path is a file, or the folder holds the other kind of run.
+        InvalidArgumentError: the path is a file, or the folder holds another command's run
+            or the other kind (quick or full) of this command's.
     """
     path = default_out(command, quick) if out is None else Path(out)
     if path.exists() and not path.is_dir():
@@ -272,6 +273,13 @@ def resolve_out(out: str | os.PathLike[str] | None, command: str, quick: bool) -
             prev = json.loads(info.read_text())
         except json.JSONDecodeError:
             prev = {}
+        was = prev.get("command")
+        if isinstance(was, str) and was != command:  # (its summary and plan replaced by
+            # another command's: a `bench goals` run into a `bench ik` folder, silently)
+            raise InvalidArgumentError(
+                f"--out {str(path)!r} holds a run of `bench {was}`; `bench {command}` may not "
+                "write there: choose another --out"
+            )
         was_quick = bool(prev.get("quick", False))
         if was_quick != quick:
             kind, other = ("quick", "full") if quick else ("full", "quick")

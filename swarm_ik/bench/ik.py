@@ -2,9 +2,12 @@
 
 Protocol: per robot, ``N`` joint vectors drawn uniformly within the limits (seeded); their
 FK are the targets (all reachable).  Each target is one task of :mod:`swarm_ik.bench.runner`:
-**every peer solves it in turn, in a seeded random order** (no peer always runs first, or
-always right after another), from the middle of the joint ranges, within the time budget
-where the peer has one.  Every process runs one thread per numeric library
+**every peer solves it in turn, in a seeded random order** (drawn uniformly among the orders
+in which ``swarm`` and ``ik-solver``, the same search, do not run one right after the other:
+with those two and one other peer, that peer runs between them every time; with more, each of
+the two runs first more often than another peer, in a third of the targets against a sixth
+with four peers), from the middle of the joint ranges, within the time budget where the peer
+has one.  Every process runs one thread per numeric library
 (:func:`swarm_ik.bench.common.single_thread`; TRAC-IK's Speed mode still runs its two solver
 threads, that is how it works).
 
@@ -248,11 +251,14 @@ def _table(stats: Sequence[dict[str, Any]], robot: str, budget: float) -> str:
 def write_summary(out: Path, plan: IKPlan, quick: bool, wall_s: float | None) -> Path:
     """``summary.md`` from ``peers.csv`` and the template ``templates/ik.md``."""
     order = {p: i for i, p in enumerate(plan.peers)}
+    # (the plan's own tasks only: rows of another --n, --seed, --tol, budget or peer set in
+    # the same folder were pooled under this plan's header)
+    planned = {task.key for task in plans.ik_tasks(plan)}
     rows = sorted(
         (
             r
             for r in runner.read_rows(runner.csv_path(out, "peers"), SCHEMA)
-            if r["robot"] in plan.robots and r["solver"] in order
+            if r["key"].rsplit("|", 1)[0] in planned and r["solver"] in order
         ),
         key=lambda r: order[r["solver"]],
     )
@@ -291,7 +297,9 @@ def write_summary(out: Path, plan: IKPlan, quick: bool, wall_s: float | None) ->
         skipped=skipped,
         tables="\n".join(sections) if sections else "_no rows yet_\n",
         machine=", ".join(f"{k} {v}" for k, v in info.items()),
-        wall="" if wall_s is None else f" This invocation took {wall_s:.0f} s of wall-clock time.",
+        wall=""
+        if wall_s is None
+        else f" This invocation took {wall_s:.{0 if wall_s >= 10 else 1}f} s of wall-clock time.",
         n_rows=len(rows),
     )
     path = out / "summary.md"
@@ -473,6 +481,13 @@ def run(args: argparse.Namespace) -> int:
         plan = recorded or plan
     else:  # (a .urdf path is only checked by loading it)
         common.check_robots([r for r in plan.robots if r.endswith(".urdf")])
+        absent = [p for p in plan.peers if not peers.get(p).available()]
+        if absent:  # (named by the caller: refused, not recorded as done without answers, a
+            # row that a later run with the package installed never replaced)
+            raise InvalidArgumentError(
+                f"peer(s) {', '.join(absent)} cannot run here (their packages do not import): "
+                f"{peers.EXTRA_HINT}, or leave them out of --peers"
+            )
         common.write_run_info(
             out,
             COMMAND,
@@ -483,7 +498,10 @@ def run(args: argparse.Namespace) -> int:
     common.single_thread()
     missing = [p for p in plans.IK_PEERS if not peers.get(p).available()]
     if missing and not args.peers:
-        print(f"not available here, skipped: {', '.join(missing)}", file=sys.stderr)
+        print(
+            f"not available here, skipped: {', '.join(missing)} ({peers.EXTRA_HINT})",
+            file=sys.stderr,
+        )
     wall = None
     interrupted = False
     if not args.report_only:

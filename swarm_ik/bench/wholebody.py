@@ -236,7 +236,8 @@ def summarize(rows: list[dict[str, Any]], args: argparse.Namespace, info: dict[s
         "Versions: " + "; ".join(f"{k}: {v}" for k, v in info["versions"].items()) + ".",
         f"Machine: {info['machine']}; load average at the start {info['load']}.",
         "",
-        "Per-target rows: [wholebody.csv](wholebody.csv); times: [times.png](times.png).",
+        "Per-target rows: [wholebody.csv](wholebody.csv)"
+        + ("." if getattr(args, "no_plots", False) else "; times: [times.png](times.png)."),
         "",
     ]
     return "\n".join(lines)
