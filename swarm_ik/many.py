@@ -167,11 +167,11 @@ class _Hops:
     def __init__(self, robot: Any) -> None:
         self.robot = robot
         model = robot.model
-        self.data = model.createData()
+        data = model.createData()
         q_pin = robot.to_pinocchio(np.zeros(robot.nq))
-        jac = np.asarray(pin.computeJointJacobians(model, self.data, q_pin)).reshape(6, model.nv)
+        jac = np.asarray(pin.computeJointJacobians(model, data, q_pin)).reshape(6, model.nv)
         axes = jac[3:].T
-        self.local = [np.array(self.data.oMi[j + 1].rotation).T @ axes[j] for j in range(robot.nq)]
+        self.local = [np.array(data.oMi[j + 1].rotation).T @ axes[j] for j in range(robot.nq)]
         self.revolute = revolute_mask(robot)
         n = robot.nq
         self.parallel: list[tuple[int, tuple[float, float, float]]] = []
@@ -184,7 +184,7 @@ class _Hops:
                 self.parallel.append((j, signs))  # type: ignore[arg-type]
         self._bound: int | None = None
         if n == 6 and self.revolute.all():
-            origins = np.array([self.data.oMi[j + 1].translation for j in range(n)])
+            origins = np.array([data.oMi[j + 1].translation for j in range(n)])
             spherical = any(through_one_point(origins[k : k + 3], axes[k : k + 3]) for k in (0, 3))
             self._bound = 8 if (self.parallel or spherical) else 16
         self._flips()
@@ -193,9 +193,13 @@ class _Hops:
         """Exact elbow mirrors of ``q`` (one per parallel triple)."""
         if not self.parallel:
             return []
-        pin.forwardKinematics(self.robot.model, self.data, self.robot.to_pinocchio(q))
+        # (the robot's Data of this thread: the object is shared by the robot's calls, and a
+        # Data of its own let two threads read each other's frames: answers differed in bits,
+        # order and evaluations from the same call made alone, review 132)
+        data = self.robot._data("hops")
+        pin.forwardKinematics(self.robot.model, data, self.robot.to_pinocchio(q))
         out = []
-        frames = self.data.oMi
+        frames = data.oMi
         for j, (s0, s1, s2) in self.parallel:
             h = frames[j + 1].rotation @ self.local[j]
             ok, phi1, phi2 = _mirror_angles(

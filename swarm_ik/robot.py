@@ -560,6 +560,10 @@ class RobotModel:
             (``"ball"``: the three rotation-vector entries of a floating base).
         lower: Lower limits (rad or m), shape ``(nq,)``; ``-π`` for continuous joints.
         upper: Upper limits (rad or m), shape ``(nq,)``; ``+π`` for continuous joints.
+            These arrays, like :attr:`tree`'s, are read once into what the robot's solves
+            keep (bounds, reach, tables): narrow a solve's range with an
+            :class:`~swarm_ik.IKProblem`'s ``lower``/``upper``, not by writing into them (answers
+            after such an edit differ from those of a robot loaded with it).
         tree: The arrays behind the batched FK and Jacobian of every goal frame.
         frame_ids: Ids of the goal frames in ``model``, shape ``(nf,)``.
         mimic: Mimic joints of ``model`` driven by a solved joint (on a goal path or off

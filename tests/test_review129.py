@@ -76,3 +76,43 @@ def test_an_off_path_mimic_follower_of_a_continuous_joint_follows_its_rule(
     expected = pin.centerOfMass(full, data, q)
     got = CenterOfMass(point=[0.0, 0.0, 0.0]).center(robot, np.array([0.7]))
     np.testing.assert_allclose(got, expected, atol=1e-12)
+
+
+def test_elbow_mirrors_of_several_threads_are_each_their_own() -> None:
+    """``solve_many``'s elbow mirrors of a robot came from one Pinocchio ``Data`` shared by
+    every thread: one thread read the frames another had just computed, and a threaded call
+    differed from the same call made alone (review 132).  Threads switching as often as
+    possible, each mirror is the serial one."""
+    import sys
+    import threading
+
+    from swarm_ik import many
+
+    robot = swarm_ik.load_robot("ur5")
+    hops = many._hops_for(robot)
+    assert hops is not None
+    qs = robot.random_q(np.random.default_rng(0), 64)
+    serial = [[m.copy() for m in hops.elbow(q)] for q in qs]
+    assert any(serial)
+    wrong: list[int] = []
+
+    def work(offset: int) -> None:
+        for k in range(400):
+            i = (k + offset) % len(qs)
+            got = hops.elbow(qs[i])
+            if len(got) != len(serial[i]) or any(
+                not np.array_equal(a, b) for a, b in zip(got, serial[i], strict=True)
+            ):
+                wrong.append(i)
+
+    interval = sys.getswitchinterval()
+    sys.setswitchinterval(1e-6)
+    try:
+        threads = [threading.Thread(target=work, args=(7 * t,)) for t in range(4)]
+        for t in threads:
+            t.start()
+        for t in threads:
+            t.join(timeout=120)
+    finally:
+        sys.setswitchinterval(interval)
+    assert not wrong, f"{len(wrong)} mirrors read another thread's frames"
