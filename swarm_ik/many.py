@@ -1013,7 +1013,9 @@ def _numerical(
     # a Python goal with its own tolerance is met within it, not within tol_pos
     own_tolerances = isinstance(problem.position_tolerances(tol_pos), np.ndarray)
     target_count = POOL_FACTOR * n if redundant else n
-    hops = None if redundant else _hops_for(robot)
+    # (the hops mirror a chain's joints: a robot that is a floating base alone, six numbers of
+    # one free-flyer joint, has none, and _Hops read past its frames, review 131)
+    hops = None if redundant or robot.floating_base else _hops_for(robot)
     bound = None
     if hops is not None and not problem.position_only and problem.single_pose:
         bound = hops.bound()

@@ -116,3 +116,19 @@ def test_elbow_mirrors_of_several_threads_are_each_their_own() -> None:
     finally:
         sys.setswitchinterval(interval)
     assert not wrong, f"{len(wrong)} mirrors read another thread's frames"
+
+
+def test_a_robot_that_is_a_floating_base_alone_gets_its_paths_and_solutions() -> None:
+    """``solve_path`` and ``solve_many`` of a drone (a free flyer, no joint) crashed with a
+    bare IndexError in the elbow mirrors, which read past its one joint's frames; the command
+    line said "internal error" (review 131)."""
+    robot = swarm_ik.load_robot("quadrotor_base", floating_base=True)
+    start = robot.fk(robot.mid_q())
+    poses = np.repeat(start[None], 2, axis=0)
+    poses[1, :3, 3] += [0.05, 0.0, 0.0]
+    res = swarm_ik.solve_path(robot, poses)
+    assert res.success and res.status == "converged"
+    for q, pose in zip(res.q, poses, strict=True):
+        np.testing.assert_allclose(robot.fk_pinocchio(q), pose, atol=1e-5)
+    many = swarm_ik.solve_many(swarm_ik.IKProblem(robot, poses[1]), n=2)
+    assert len(many) >= 1 and all(r.success for r in many)
