@@ -74,7 +74,14 @@ from swarm_ik.api import unreachable_targets
 from swarm_ik.errors import InvalidArgumentError, InvalidTargetError, SwarmIKError
 from swarm_ik.goals import AvoidCollisions, Goal, Pose, Position, State, kernel_slot, kernels
 from swarm_ik.goals import base as goals_base
-from swarm_ik.kernels import announced, lie, lm, loaded_despite_damage, raise_lost_ctrl_c
+from swarm_ik.kernels import (
+    announced,
+    ctrl_c_counted,
+    lie,
+    lm,
+    loaded_despite_damage,
+    raise_lost_ctrl_c,
+)
 from swarm_ik.kernels.fk import TreeArrays
 from swarm_ik.kernels.lm import CONVERGED, NOT_RUN
 from swarm_ik.kernels.search import sampling_window, splitmix64, uniform_in, uniforms, wall_clock
@@ -1834,6 +1841,7 @@ def solve_batch(
         items = [(s, poses[s : s + size], seeds[s : s + size]) for s in range(0, n, size)]
         func = functools.partial(_run_chunk, bc, settings)
         parts: list[ChunkResult] = []
+        stack.enter_context(ctrl_c_counted())  # (a Ctrl-C a kernel loses: raised after it)
         if not keep_on_interrupt:
             parts = distributed.map_chunks(
                 func, items, client=client, name="swarm-ik-batch", progress=progress,

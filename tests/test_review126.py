@@ -110,3 +110,25 @@ def test_an_ik_solver_searches_most_of_its_limit_from_its_second_call() -> None:
     calls = json.loads(out.stdout)[1:]  # (the first call's judge loads what it needs)
     assert all(reason == "time_limit" for reason, _ in calls), calls
     assert sum(time_s > 0.0035 for _, time_s in calls) >= 2, calls  # (one stall forgiven)
+
+
+def test_a_ctrl_c_a_kernel_loses_in_a_batch_is_raised_after_it() -> None:
+    """An API batch of far targets ran on for good after a Ctrl-C that a kernel's clock read
+    lost (still running 20 s after it, once on CI): a batch counts Ctrl-Cs with Python's own
+    handler, and the one swallowed inside is raised after the kernel call; afterwards the
+    handler and the count are as they were."""
+    import os
+    import signal
+
+    from swarm_ik import kernels
+
+    assert signal.getsignal(signal.SIGINT) is signal.default_int_handler
+    with pytest.raises(KeyboardInterrupt), kernels.ctrl_c_counted():
+        try:  # (a Ctrl-C swallowed where it landed, as in a kernel's clock read)
+            os.kill(os.getpid(), signal.SIGINT)
+            time.sleep(0.5)
+        except KeyboardInterrupt:
+            pass
+        kernels.raise_lost_ctrl_c()  # (what the batch calls after each kernel call)
+    assert signal.getsignal(signal.SIGINT) is signal.default_int_handler
+    kernels.raise_lost_ctrl_c()  # (the count put back: nothing raised)
