@@ -1040,7 +1040,8 @@ def _numerical(
     # 1 ms limit by half of it, every call)
     per_eval = robot._cache.setdefault("many_eval_s", {})
     kind = (problem.collision_goal is not None, bool(problem.python_goals))
-    sec_per_eval = per_eval.get(kind, 3e-6)
+    measured = kind != (False, False)  # (a plain pose's rounds start at 3 µs, as measured)
+    sec_per_eval = per_eval.get(kind, 3e-6) if measured else 3e-6
     round_s = 0.0  # a round's own time besides its compiled call [s] (measured)
     ended = "converged"  # (n found, or no new branch in its patience)
     closest: FloatArray | None = None  # the failed start nearest to meeting the goals
@@ -1087,7 +1088,9 @@ def _numerical(
         out = pol.polish(starts, cap, stop_first=False, deadline=deadline)
         polish_s = time.perf_counter() - t1
         if out.used > 16:
-            sec_per_eval = per_eval[kind] = 0.5 * sec_per_eval + 0.5 * polish_s / out.used
+            sec_per_eval = 0.5 * sec_per_eval + 0.5 * polish_s / out.used
+            if measured:
+                per_eval[kind] = sec_per_eval
         used += out.used
         ran = int(np.count_nonzero(out.status))
         n_starts += ran
