@@ -57,6 +57,11 @@ def keywords_checked(func: Callable[P, R]) -> Callable[P, R]:
     return checked
 
 
+DEGREES_HINT = "radians and metres are expected: degrees?"
+"""What a refusal or warning of joint values beyond their limits adds where they look like
+degrees (a target's ``q``, a ``q0`` or a locked value beyond a full turn)."""
+
+
 def one_line(text: object, limit: int | None = None) -> str:
     """``text`` on one line (whitespace runs, newlines included, become one space), cut at
     ``limit`` characters with an ellipsis at the end (the start of a message says most)."""

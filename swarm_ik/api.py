@@ -28,7 +28,14 @@ from typing import Any
 import numpy as np
 
 from swarm_ik import collision, kernels
-from swarm_ik._validate import check_seed, flag, keywords_checked, plain_number, user_stacklevel
+from swarm_ik._validate import (
+    DEGREES_HINT,
+    check_seed,
+    flag,
+    keywords_checked,
+    plain_number,
+    user_stacklevel,
+)
 from swarm_ik.argtypes import SEED_LIMIT
 from swarm_ik.errors import InvalidArgumentError, UnknownNameError, unknown
 from swarm_ik.goals import base as goals_base
@@ -369,7 +376,7 @@ def prepare_q0(problem: IKProblem, q0: Any) -> np.ndarray | None:
     names = [problem.robot.joint_names[i] for i in off]
     # (an angle beyond a full turn: most likely degrees, as target_q says of a target's q)
     turns = bool(np.any(np.abs(q[off]) > 2 * np.pi))
-    hint = " (radians and metres are expected: degrees?)" if turns else ""
+    hint = f" ({DEGREES_HINT})" if turns else ""
     warnings.warn(
         f"q0 lies outside the joint limits at {names}{hint}; clipped into them",
         stacklevel=user_stacklevel(),

@@ -24,7 +24,13 @@ from numpy.typing import NDArray
 
 from swarm_ik import urdf
 from swarm_ik._types import FloatArray
-from swarm_ik._validate import count, floats_or, keywords_checked, user_stacklevel
+from swarm_ik._validate import (
+    DEGREES_HINT,
+    count,
+    floats_or,
+    keywords_checked,
+    user_stacklevel,
+)
 from swarm_ik.errors import (
     InvalidArgumentError,
     RobotFileNotFoundError,
@@ -217,7 +223,7 @@ def _locked_values(
         if lim is not None:
             hint = f"; give the value to hold: locked={{{name!r}: v}}" if value is None else ""
             if value is not None and abs(v) > 2 * math.pi:
-                hint = " (radians and metres are expected: degrees?)"
+                hint = f" ({DEGREES_HINT})"
             raise InvalidArgumentError(
                 f"locked joint {name!r}: {what} is outside its limits {lim}" + hint
             )
@@ -1225,8 +1231,8 @@ class RobotModel:
         if outside.size:
             names = [self.joint_names[i] for i in outside]
             warnings.warn(
-                f"{what} lies outside the joint limits at {names} (radians and metres are "
-                "expected: degrees?); the target is its forward kinematics all the same",
+                f"{what} lies outside the joint limits at {names} ({DEGREES_HINT}); the "
+                "target is its forward kinematics all the same",
                 stacklevel=user_stacklevel(),
             )
         return q
