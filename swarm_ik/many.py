@@ -266,7 +266,12 @@ class _Hops:
 _HOPS: weakref.WeakKeyDictionary[Any, _Hops] = weakref.WeakKeyDictionary()
 
 
-def _hops_for(robot: Any) -> _Hops:
+def _hops_for(robot: Any) -> _Hops | None:
+    """The robot's :class:`_Hops` (made once), or None where its joint vector is not one joint
+    of the model per entry, as the hops read it (a floating base: its six entries are one
+    free-flyer joint, and a drone's hops read past its frames, review 131)."""
+    if robot.floating_base:
+        return None
     h = _HOPS.get(robot)
     if h is None:
         h = _HOPS[robot] = _Hops(robot)
@@ -1013,9 +1018,7 @@ def _numerical(
     # a Python goal with its own tolerance is met within it, not within tol_pos
     own_tolerances = isinstance(problem.position_tolerances(tol_pos), np.ndarray)
     target_count = POOL_FACTOR * n if redundant else n
-    # (the hops mirror a chain's joints: a robot that is a floating base alone, six numbers of
-    # one free-flyer joint, has none, and _Hops read past its frames, review 131)
-    hops = None if redundant or robot.floating_base else _hops_for(robot)
+    hops = None if redundant else _hops_for(robot)
     bound = None
     if hops is not None and not problem.position_only and problem.single_pose:
         bound = hops.bound()
