@@ -41,7 +41,7 @@ from swarm_ik._validate import floats_or, quoted_error
 from swarm_ik.errors import InvalidArgumentError, SwarmIKError, UnknownNameError
 from swarm_ik.kernels import loaded_despite_damage
 from swarm_ik.kernels.lm import GOAL_SIGNATURE, kernel_list
-from swarm_ik.pose import is_finite_nonneg, project_to_se3
+from swarm_ik.pose import FLOAT64, is_finite_nonneg, project_to_se3
 
 if TYPE_CHECKING:
     from swarm_ik.robot import RobotModel
@@ -532,7 +532,10 @@ _STATE_HOLDER = _Holders()
 def _read_only(q: Any) -> FloatArray:
     """A read-only view of ``q`` as float64: a goal reads the state's joint vectors, and one
     that wrote into them (a finite difference in place, say) changed the search's own
-    array, and so a Result's ``q`` after its errors were judged."""
+    array, and so a Result's ``q`` after its errors were judged.  One that is already a
+    read-only float64 array (the route's answer) is kept as it is."""
+    if type(q) is np.ndarray and q.dtype is FLOAT64 and not q.flags.writeable:
+        return q
     view = np.asarray(q, dtype=float).view()
     view.flags.writeable = False
     return view
