@@ -129,11 +129,13 @@ def goal_unreachable(problem: IKProblem, gl: Any, tol_pos: float, tol_rot: float
         return None
     point, slack = held.point, held.point_slack  # (a region reaches this much nearer)
     far = math.hypot(*(float(v) for v in point)) - slack  # (no overflow at 1e300 m)
+    own_tol = gl.own_tolerance()  # (a Python goal's own position tolerance, if it has one)
+    tol = tol_pos if own_tol is None else own_tol
     try:
         radius = problem.robot.reach_radius(held.frame)
     except UnknownNameError:  # (a frame of the model that no goal frame's path holds: a
         return None  # Python goal's; no bound on its reach is known here)
-    if far > reach_limit(radius):
+    if far > reach_limit(radius, tol):
         return (
             f"{gl.describe()} beyond its frame's reach (its point {far:.4g} m from the "
             f"world origin, the frame reaches {radius:.4g} m at most)"
@@ -141,7 +143,7 @@ def goal_unreachable(problem: IKProblem, gl: Any, tol_pos: float, tol_rot: float
     if problem.robot.floating_base:
         off = float(_from_base_box(problem, np.asarray(point, dtype=float)[None])[0]) - slack
         own = problem.robot.reach_radius(held.frame, base=False)
-        if off > reach_limit(own):
+        if off > reach_limit(own, tol):
             return (
                 f"{gl.describe()} beyond its frame's reach (its point {off:.4g} m from the "
                 f"floating base's box, the frame reaches {own:.4g} m from the base at most)"
@@ -180,10 +182,10 @@ def unreachable_targets(
         return np.full(n, n > 0)
     frame = str(problem.goals[0].frame_name())
     far = np.hypot(np.hypot(pts[:, 0], pts[:, 1]), pts[:, 2])  # (no overflow at 1e300 m)
-    out = far > reach_limit(problem.robot.reach_radius(frame))
+    out = far > reach_limit(problem.robot.reach_radius(frame), tol_pos)
     if problem.robot.floating_base:
         own = problem.robot.reach_radius(frame, base=False)
-        out |= _from_base_box(problem, pts) > reach_limit(own)
+        out |= _from_base_box(problem, pts) > reach_limit(own, tol_pos)
     avoid = problem.collision_goal
     if avoid is not None and len(avoid.scene) and _origin_in_body(problem.robot, frame):
         lo, hi = avoid.scene.boxes()
@@ -208,10 +210,13 @@ def _from_base_box(problem: IKProblem, points: np.ndarray) -> np.ndarray:
     return np.hypot(np.hypot(gap[:, 0], gap[:, 1]), gap[:, 2])
 
 
-def reach_limit(radius: float) -> float:
+def reach_limit(radius: float, tol_pos: float) -> float:
     """The distance from the world origin [m] past which a point is out of a frame's reach of
-    ``radius`` (:meth:`RobotModel.reach_radius`, with room for its round-off)."""
-    return radius * (1 + 1e-9)
+    ``radius`` (:meth:`RobotModel.reach_radius`, with room for its round-off), for a goal met
+    within ``tol_pos`` [m] of its point: a point ``tol_pos`` beyond the reach is met at full
+    stretch (review 134: a planar arm's point 9 µm beyond its 1 m reach was called unreachable
+    at ``tol_pos=1e-5``, and a larger budget met it)."""
+    return radius * (1 + 1e-9) + tol_pos
 
 
 ORIGIN_REACH = 1e-3

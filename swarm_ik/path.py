@@ -2105,7 +2105,7 @@ def _beyond_reach(ctx: _Context, i: int) -> str | None:
     (:func:`swarm_ik.api.unreachable_goal`: a point beyond its frame's reach, a goal's own
     ``infeasible``); else None."""
     if ctx.wps.poses is not None:
-        limit = reach_limit(ctx.robot.reach_radius(ctx.wps.frame))
+        limit = reach_limit(ctx.robot.reach_radius(ctx.wps.frame), ctx.tol_pos)
         if float(np.linalg.norm(ctx.wps.poses[i][:3, 3])) > limit:
             return "beyond the frame's reach"
     why = unreachable_goal(ctx.wps.problem(i), ctx.tol_pos, ctx.tol_rot)

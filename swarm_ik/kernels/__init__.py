@@ -58,8 +58,8 @@ def _notice(message: str) -> None:
 def settle_numba_cache() -> str | None:
     """Make sure numba has a writable folder for swarm_ik's compiled kernels.
 
-    numba writes them next to each module (``__pycache__``), else into
-    ``$NUMBA_CACHE_DIR``, else into the user's cache folder, and refuses to define a
+    numba writes them into ``$NUMBA_CACHE_DIR`` when it is set, else next to each module
+    (``__pycache__``), else into the user's cache folder, and refuses to define a
     ``cache=True`` function where none can be written (``cannot cache function …: no locator
     available``).  When ``$NUMBA_CACHE_DIR`` is not a writable folder and the package's
     ``__pycache__`` folders cannot be written, ``NUMBA_CACHE_DIR`` is set to
