@@ -192,6 +192,14 @@ def _locked_values(
     for given, value in items:
         name = (renamed or {}).get(given, given) if isinstance(given, str) else given
         if not isinstance(name, str) or name not in names:
+            if isinstance(name, str) and full.existJointName(name):  # (review 133: a hint of
+                # another joint misled) a joint of more than one degree of freedom
+                jm = full.joints[full.getJointId(name)]
+                base = " (the floating base: bound it with base_box=)" if jm.nv == 6 else ""
+                raise InvalidArgumentError(
+                    f"locked joint {name!r} moves in {jm.nv} degrees of freedom{base}; only "
+                    "joints of one degree of freedom can be locked"
+                )
             raise unknown("joint", given, names)
         if given_as.setdefault(name, given) != given:
             raise InvalidArgumentError(

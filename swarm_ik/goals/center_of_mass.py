@@ -10,6 +10,7 @@ from typing import TYPE_CHECKING, Any, ClassVar
 import numba
 import numpy as np
 import pinocchio as pin
+from numpy.typing import NDArray
 
 from swarm_ik._validate import floats_or
 from swarm_ik.errors import InvalidArgumentError
@@ -105,31 +106,50 @@ def center_of_mass_kernel(par, ipar, q, f_pos, f_rot, f_jac, want_jac, res, jac,
     err[1] = np.nan
 
 
-def _segments_cross(p1: FloatArray, p2: FloatArray, p3: FloatArray, p4: FloatArray) -> bool:
-    """Whether the closed segments p1p2 and p3p4 (2-D) intersect."""
+MAX_SUPPORT_VERTICES = 256
+"""Most vertices of a support polygon (:func:`support_polygon`): a polygon of feet or wheels
+has a few dozen; the goal's row measures the distance to every edge at each evaluation, and
+its checks pair every edge with every other (review 133: 2,000 vertices took 10 s to check)."""
 
-    def orient(a: FloatArray, b: FloatArray, c: FloatArray) -> float:
-        return float((b[0] - a[0]) * (c[1] - a[1]) - (b[1] - a[1]) * (c[0] - a[0]))
 
-    def on(a: FloatArray, b: FloatArray, c: FloatArray) -> bool:
-        return bool(min(a[0], b[0]) <= c[0] <= max(a[0], b[0]) and
-                    min(a[1], b[1]) <= c[1] <= max(a[1], b[1]))  # fmt: skip
+def _crossing_edges(poly: FloatArray) -> tuple[int, int] | None:
+    """The first pair ``(i, j)``, ``i < j``, of non-adjacent edges of the closed polygon
+    ``poly`` ``(k, 2)`` that intersect (edge ``i`` runs from vertex ``i`` to ``i + 1``), or
+    None: every pair at once, by the signs of the orientations (collinear overlaps count)."""
+    k = poly.shape[0]
+    a, b = poly, np.roll(poly, -1, axis=0)  # edge i: a[i] → b[i]
 
+    def orient(p: FloatArray, q: FloatArray, r: FloatArray) -> FloatArray:
+        return (q[..., 0] - p[..., 0]) * (r[..., 1] - p[..., 1]) - (q[..., 1] - p[..., 1]) * (
+            r[..., 0] - p[..., 0]
+        )
+
+    def on(p: FloatArray, q: FloatArray, r: FloatArray) -> NDArray[np.bool_]:
+        return (
+            (np.minimum(p[..., 0], q[..., 0]) <= r[..., 0])
+            & (r[..., 0] <= np.maximum(p[..., 0], q[..., 0]))
+            & (np.minimum(p[..., 1], q[..., 1]) <= r[..., 1])
+            & (r[..., 1] <= np.maximum(p[..., 1], q[..., 1]))
+        )
+
+    p1, p2 = a[:, None], b[:, None]  # edge i (rows)
+    p3, p4 = a[None, :], b[None, :]  # edge j (columns)
     d1, d2 = orient(p3, p4, p1), orient(p3, p4, p2)
     d3, d4 = orient(p1, p2, p3), orient(p1, p2, p4)
-    if ((d1 > 0) != (d2 > 0)) and ((d3 > 0) != (d4 > 0)) and d1 and d2 and d3 and d4:
-        return True
-    return (
-        (d1 == 0 and on(p3, p4, p1))
-        or (d2 == 0 and on(p3, p4, p2))
-        or (d3 == 0 and on(p1, p2, p3))
-        or (d4 == 0 and on(p1, p2, p4))
-    )
+    proper = ((d1 > 0) != (d2 > 0)) & ((d3 > 0) != (d4 > 0)) & (d1 != 0) & (d2 != 0)
+    proper &= (d3 != 0) & (d4 != 0)
+    touch = (d1 == 0) & on(p3, p4, p1) | (d2 == 0) & on(p3, p4, p2)
+    touch |= (d3 == 0) & on(p1, p2, p3) | (d4 == 0) & on(p1, p2, p4)
+    i, j = np.triu_indices(k, 1)
+    pairs = (j != i + 1) & ~((i == 0) & (j == k - 1))  # (adjacent edges share a vertex)
+    hit = np.flatnonzero((proper | touch)[i, j] & pairs)
+    return None if hit.size == 0 else (int(i[hit[0]]), int(j[hit[0]]))
 
 
 def support_polygon(value: Any) -> FloatArray:
-    """A support polygon as ``(k, 2)`` world (x, y) vertices [m], validated: at least 3
-    finite vertices, no repeated vertex, not self-intersecting, non-zero area.
+    """A support polygon as ``(k, 2)`` world (x, y) vertices [m], validated: 3 to
+    :data:`MAX_SUPPORT_VERTICES` finite vertices, no repeated vertex, not self-intersecting,
+    non-zero area.
 
     Raises:
         InvalidArgumentError: naming what is wrong.
@@ -141,23 +161,24 @@ def support_polygon(value: Any) -> FloatArray:
         raise InvalidArgumentError(
             f"CenterOfMass.support must be at least 3 (x, y) vertices, got shape {poly.shape}"
         )
+    if poly.shape[0] > MAX_SUPPORT_VERTICES:
+        raise InvalidArgumentError(
+            f"CenterOfMass.support has {poly.shape[0]} vertices, more than "
+            f"{MAX_SUPPORT_VERTICES}: give a simpler polygon (e.g. the convex hull of the "
+            "contacts, scipy.spatial.ConvexHull)"
+        )
     if not np.all(np.isfinite(poly)):
         raise InvalidArgumentError("CenterOfMass.support vertices must be finite")
-    k = poly.shape[0]
-    for i in range(k):
-        for j in range(i + 1, k):
-            if np.array_equal(poly[i], poly[j]):
-                raise InvalidArgumentError(
-                    f"CenterOfMass.support repeats vertex {poly[i].tolist()}"
-                )
-    for i in range(k):  # (first: a bow-tie's two halves can cancel to a zero area)
-        for j in range(i + 1, k):
-            if j == i + 1 or (i == 0 and j == k - 1):
-                continue  # adjacent edges share a vertex
-            if _segments_cross(poly[i], poly[(i + 1) % k], poly[j], poly[(j + 1) % k]):
-                raise InvalidArgumentError(
-                    f"CenterOfMass.support is self-intersecting (edges {i} and {j})"
-                )
+    _, first, counts = np.unique(poly, axis=0, return_index=True, return_counts=True)
+    if np.any(counts > 1):
+        repeated = poly[int(np.min(first[counts > 1]))]
+        raise InvalidArgumentError(f"CenterOfMass.support repeats vertex {repeated.tolist()}")
+    # (first: a bow-tie's two halves can cancel to a zero area)
+    crossing = _crossing_edges(poly)
+    if crossing is not None:
+        raise InvalidArgumentError(
+            f"CenterOfMass.support is self-intersecting (edges {crossing[0]} and {crossing[1]})"
+        )
     area = 0.5 * float(
         np.sum(poly[:, 0] * np.roll(poly[:, 1], -1) - np.roll(poly[:, 0], -1) * poly[:, 1])
     )
@@ -425,7 +446,7 @@ class CenterOfMass(Goal):
         return np.array(rows, dtype=float).reshape(len(rows), -1)
 
     def errors(self, state: State) -> tuple[float, float]:
-        return float(np.linalg.norm(self.residual(state))), float("nan")
+        return math.hypot(*self.residual(state).tolist()), float("nan")  # (no overflow)
 
     def center(self, robot: RobotModel, q: Any) -> FloatArray:
         """The centre of mass [m] at ``q`` through ``pinocchio.centerOfMass`` on the whole

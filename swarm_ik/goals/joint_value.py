@@ -59,6 +59,12 @@ class JointValue(JointGoal):
 
     def reference(self, robot: RobotModel, q0: FloatArray | None) -> tuple[FloatArray, FloatArray]:
         if self.joint not in robot.joint_names:
+            if self.joint in robot.locked_joints:  # (review 133: "unknown" misled)
+                raise InvalidArgumentError(
+                    f"JointValue({self.joint}): the joint is locked in this robot model (held "
+                    "by locked=, or off the paths from the root to the goal frames), so no goal "
+                    "can move it; load the robot without locking it"
+                )
             raise unknown("joint", self.joint, robot.joint_names)
         j = robot.joint_names.index(self.joint)
         ref = np.zeros(robot.nq)

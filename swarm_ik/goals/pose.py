@@ -155,7 +155,7 @@ class Pose(Goal):
         slack_p = slack_r = 0.0
         if self.tolerance is not None:
             t = np.asarray(self.tolerance, dtype=float)
-            slack_p = float(np.linalg.norm(t[:3]))
+            slack_p = math.hypot(*t[:3].tolist())  # (no overflow at 1e160 m)
             slack_r = min(float(np.linalg.norm(t[3:])), math.pi)
         return Pin(
             self.frame, point=self.target[:3, 3], point_slack=slack_p,
