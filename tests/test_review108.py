@@ -168,7 +168,7 @@ def test_only_the_waypoints_proven_unreachable_are_called_so() -> None:
     poses = np.repeat(a[None], 30, 0)
     poses[:, :3, 3] += np.linspace(0.0, 0.8, 30)[:, None] * a[:3, 3] / np.linalg.norm(a[:3, 3])
     res = swarm_ik.solve_path(robot, poses, seed=1)
-    limit = reach_limit(robot.reach_radius(robot.ee_frame))
+    limit = reach_limit(robot.reach_radius(robot.ee_frame), 1e-5)  # (the default tol_pos)
     far = [i for i in range(30) if np.linalg.norm(poses[i, :3, 3]) > limit]
     near_missed = [i for i in np.flatnonzero(~res.reached) if i not in far]
     assert far and near_missed, res.reason
