@@ -9,7 +9,8 @@ d5 and d6 telescope along one line, so only their sum matters.  Two targets:
 * the paper's own target, the FK of its ``x* = (45°, 30°, 45°, 0.8, 1.0, 1.0 m, 30°, −45°)``,
   which violates the paper's limits (θ3 ≤ 35.45°, d ≤ 0.5 m): no joint vector within the
   limits reaches it, so the solver reports ``success=False`` with the best pose it found.  The
-  long-stroke variant (``loading_manipulator_long``, d up to 1.5 m, θ3 up to 60°) reaches it.
+  long-stroke variant (``loading_manipulator_long``, d up to 1.5 m, the same angle limits)
+  reaches it.
 
 Run: ``python examples/02_loading_manipulator.py`` (``SWARM_IK_QUICK=1``: smaller budgets).
 """

@@ -13,7 +13,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from swarm_ik._types import FloatArray
-from swarm_ik._validate import floats_or
+from swarm_ik._validate import floats_or, one_line
 from swarm_ik.errors import InvalidArgumentError, InvalidTargetError
 
 
@@ -21,7 +21,9 @@ def _floats(value: Any, what: str) -> FloatArray:
     """``value`` as a float array, or :class:`InvalidTargetError` naming it (strings, ragged
     nesting, None...)."""
     return floats_or(
-        value, lambda: f"{what} must be numbers, got {reprlib.repr(value)}", InvalidTargetError
+        value,
+        lambda: f"{what} must be numbers, got {one_line(reprlib.repr(value))}",
+        InvalidTargetError,
     )
 
 
@@ -64,9 +66,10 @@ def quat_to_matrix(quat_xyzw: Any) -> FloatArray:
     """Rotation matrix of a quaternion.
 
     Args:
-        quat_xyzw: Quaternion ``(x, y, z, w)``, any finite norm of at least 1e-9 (it is
-            normalised: divided by its largest absolute component first, so that a norm
-            such as 1e200, whose square overflows, normalises exactly).
+        quat_xyzw: Quaternion ``(x, y, z, w)`` (or a ``pinocchio.Quaternion``: its
+            ``coeffs()``), any finite norm of at least 1e-9 (it is normalised: divided by its
+            largest absolute component first, so that a norm such as 1e200, whose square
+            overflows, normalises exactly).
 
     Returns:
         Rotation matrix, shape ``(3, 3)``.
@@ -74,6 +77,8 @@ def quat_to_matrix(quat_xyzw: Any) -> FloatArray:
     Raises:
         InvalidTargetError: not 4 finite numbers, or norm (almost) zero.
     """
+    if hasattr(quat_xyzw, "coeffs"):  # a pinocchio.Quaternion (Eigen's): its (x, y, z, w)
+        quat_xyzw = np.asarray(quat_xyzw.coeffs(), dtype=float)
     q = _floats(quat_xyzw, "quaternion").ravel()
     if q.shape != (4,) or not np.all(np.isfinite(q)):
         raise InvalidTargetError(

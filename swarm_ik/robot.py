@@ -405,9 +405,15 @@ def _reduce(
         try:
             kind, axis = _joint_kind_axis(jm)
         except RobotModelError as exc:
+            hint = ""  # (review 136: a URDF's own floating joint, with no way out named)
+            if jm.nv == 6:
+                hint = (
+                    "; a floating base is swarm_ik's own: remove the URDF's floating joint and "
+                    "load with floating_base=True (--floating-base)"
+                )
             raise RobotModelError(
                 f"{p}: joint {jname!r} on the {where}: {exc}; supported: revolute, "
-                "continuous, prismatic (and fixed)"
+                f"continuous, prismatic (and fixed){hint}"
             ) from None
         kinds.append(kind)
         axes.append(axis)

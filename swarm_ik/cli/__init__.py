@@ -27,6 +27,7 @@ from __future__ import annotations
 
 import _thread
 import argparse
+import difflib
 import errno
 import gc
 import importlib.metadata
@@ -138,8 +139,39 @@ class Parser(argparse.ArgumentParser):
         super().__init__(*args, **kwargs)
         self._negative_number_matcher = _NEGATIVE_NUMBER
 
+    _deepest: Parser | None = None
+    """The parser that parsed last (a command's, under the top one): the one whose options an
+    unknown one is compared with, and whose help is named."""
+
+    def parse_known_args(self, args: Any = None, namespace: Any = None) -> Any:
+        Parser._deepest = self
+        self._given = [str(a) for a in (sys.argv[1:] if args is None else args)]
+        return super().parse_known_args(args, namespace)
+
     def error(self, message: str) -> NoReturn:
-        raise UsageError(f"{self.prog}: error: {message} (see `{self.prog} --help`)")
+        # (review 136: `solve --target` said only that --pose or --goals is required, and an
+        # unknown flag pointed at `swarm-ik --help`, which lists no command's flags)
+        deepest = Parser._deepest or self
+        known = getattr(deepest, "_option_string_actions", {})  # (argparse's table of flags)
+        unknown = [
+            a.split("=", 1)[0]
+            for a in getattr(deepest, "_given", [])
+            if a.startswith("--") and a != "--" and a.split("=", 1)[0] not in known
+        ]
+        if unknown:
+            if "unrecognized arguments" not in message:
+                message = f"unrecognized arguments: {' '.join(unknown)}; {message}"
+            flag = unknown[0]
+            close = [k for k in known if k.startswith("--") and min(len(k), len(flag)) > 4
+                     and (flag.startswith(k) or k.startswith(flag))]  # fmt: skip
+            for k in difflib.get_close_matches(flag, list(known), n=2, cutoff=0.6):
+                if k not in close:
+                    close.append(k)
+            close = close[:2]
+            if close:
+                message += f"; did you mean {' or '.join(close)}?"
+        prog = deepest.prog
+        raise UsageError(f"{prog}: error: {message} (see `{prog} --help`)")
 
     def _print_message(self, message: str, file: Any = None) -> None:
         """The help, written and flushed; a write that fails (``--help > /dev/full``) raises
