@@ -4,40 +4,18 @@ near a tolerance is Pinocchio's."""
 
 from __future__ import annotations
 
-from pathlib import Path
-
 import numpy as np
-import pytest
 
 import swarm_ik
 from swarm_ik.api import unreachable_goal
 from swarm_ik.goals import Position
 
-PLANAR = """<?xml version="1.0"?>
-<robot name="planar2">
-  <link name="base"/><link name="l1"/><link name="l2"/><link name="tip"/>
-  <joint name="j1" type="revolute"><parent link="base"/><child link="l1"/>
-    <axis xyz="0 0 1"/><limit lower="-3" upper="3" effort="1" velocity="1"/></joint>
-  <joint name="j2" type="revolute"><parent link="l1"/><child link="l2"/>
-    <origin xyz="0.5 0 0"/><axis xyz="0 0 1"/>
-    <limit lower="-3" upper="3" effort="1" velocity="1"/></joint>
-  <joint name="jt" type="fixed"><parent link="l2"/><child link="tip"/>
-    <origin xyz="0.5 0 0"/></joint>
-</robot>
-"""
 
-
-@pytest.fixture(scope="module")
-def planar(tmp_path_factory: pytest.TempPathFactory) -> swarm_ik.RobotModel:
-    path = Path(tmp_path_factory.mktemp("planar")) / "planar.urdf"
-    path.write_text(PLANAR)
-    return swarm_ik.load_robot(str(path))
-
-
-def test_a_point_within_tol_pos_of_the_reach_is_not_unreachable(planar) -> None:
-    """A point 9 µm beyond the arm's exact 1 m reach is met at full stretch within 10 µm:
+def test_a_point_within_tol_pos_of_the_reach_is_not_unreachable(planar2_urdf) -> None:
+    """A point 9 µm beyond the arm's exact 1.8 m reach is met at full stretch within 10 µm:
     neither the proof nor a short budget's reason may call it unreachable; 11 µm beyond is."""
-    near = np.array([0.6, 0.8, 0.0]) * (1 + 9e-6)
+    planar = swarm_ik.load_robot(planar2_urdf)
+    near = np.array([0.6, 0.8, 0.0]) * (1.8 + 9e-6)
     problem = swarm_ik.IKProblem(planar, goals=[Position(planar.ee_frame, near)])
     stretched = np.array([np.arctan2(0.8, 0.6), 0.0])
     assert swarm_ik.verify(problem, stretched)[0].met
@@ -45,7 +23,8 @@ def test_a_point_within_tol_pos_of_the_reach_is_not_unreachable(planar) -> None:
     short = swarm_ik.solve(problem, seed=0, max_evals=20)
     assert short.reason != "unreachable"
     assert swarm_ik.solve(problem, seed=0, max_evals=200).success
-    far = swarm_ik.IKProblem(planar, goals=[Position(planar.ee_frame, near * (1 + 2e-6))])
+    far_point = np.array([0.6, 0.8, 0.0]) * (1.8 + 11e-6)
+    far = swarm_ik.IKProblem(planar, goals=[Position(planar.ee_frame, far_point)])
     assert unreachable_goal(far, 1e-5, 1e-5) is not None
     assert unreachable_goal(far, 1e-4, 1e-5) is None  # (a looser tolerance reaches it)
 

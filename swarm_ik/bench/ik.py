@@ -117,16 +117,18 @@ def check(robot: Any, target: np.ndarray, q: np.ndarray | None) -> tuple[float, 
     within limits)``; ``(inf, inf, False)`` without an answer.
 
     Pinocchio's FK of the frame (:meth:`RobotModel.fk_pinocchio`) and the angle of
-    ``R*ᵀR`` (:func:`swarm_ik.kernels.lie.angle_between`, the judge's own), not
-    ``swarm_ik.verify``: the check runs between peers' calls, and going through our route
-    warmed our next call (35 % off its median after a cold peer, review 117; rtb's 4 %)."""
-    from swarm_ik.kernels.lie import angle_between
+    ``R*ᵀR`` (:func:`swarm_ik.kernels.lie.relative_angles`: NumPy and libm, the bits of the
+    judge's own), not ``swarm_ik.verify`` nor a compiled call: the check runs between peers'
+    calls, and going through our route warmed our next call (35 % off its median after a
+    cold peer, review 117; rtb's 4 %)."""
+    from swarm_ik.kernels.lie import relative_angles
 
     if q is None or not np.all(np.isfinite(q)):
         return math.inf, math.inf, False
     pose = robot.fk_pinocchio(q)
     dp = float(np.linalg.norm(pose[:3, 3] - target[:3, 3]))
-    return dp, angle_between(target, pose), robot.within_limits(q, tol=1e-12)
+    angle = float(relative_angles(target[:3, :3], pose[:3, :3]))
+    return dp, angle, robot.within_limits(q, tol=1e-12)
 
 
 def run_task(task: IKTask) -> runner.Outcome:

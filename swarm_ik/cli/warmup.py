@@ -112,8 +112,12 @@ def run(args: argparse.Namespace) -> int:
 
 def _goal_kernels(robot: Any, target: Any) -> None:
     """Compile (or load) the kernel of every registered compiled goal type, and of the
-    bounded form of a pose (the other kernel a goal of the package names per instance)."""
+    bounded form of a pose (the other kernel a goal of the package names per instance), and
+    the judge's compiled rotation angle (an ``Orientation`` goal's errors)."""
     from swarm_ik import goals
+    from swarm_ik.kernels import lie
+
+    lie.angle_between(target, target)
 
     for cls in goals.GOALS.values():
         if cls.kernel is not None:

@@ -224,15 +224,18 @@ def relative_angles(r_a: FloatArray, r_b: FloatArray) -> FloatArray:
     return np.fromiter(theta, dtype=float, count=np.size(y)).reshape(np.shape(y))
 
 
-def angle_between(r_a: Any, r_b: Any) -> float:
-    """Rotation angle θ ∈ [0, π] of ``r_aᵀ r_b`` for two rotations ``(3, 3)``, or the
-    rotations of two poses ``(4, 4)``, as arrays or nested lists (rows): the scalar twin of
-    :func:`relative_angles` (the same operations in the same order, on Python floats: no NumPy
-    call but ``tolist``, for the per-answer check)."""
-    a = r_a.tolist() if isinstance(r_a, np.ndarray) else r_a
-    b = r_b.tolist() if isinstance(r_b, np.ndarray) else r_b
-    (a00, a01, a02, *_), (a10, a11, a12, *_), (a20, a21, a22, *_) = a[:3]
-    (b00, b01, b02, *_), (b10, b11, b12, *_), (b20, b21, b22, *_) = b[:3]
+@numba.njit(cache=True, inline="always")
+def _angle_of_blocks(a: FloatArray, b: FloatArray) -> float:  # pragma: no cover - compiled
+    """θ of ``aᵀb`` for the rotation blocks (the first three rows and columns) of ``a`` and
+    ``b``: the product's entries written out in :func:`relative_angles`' order, then libm's
+    ``sqrt`` and ``atan2`` (numba calls libm's and fuses no multiply-add by default), so the
+    bits are the batched check's (``tests/test_lie.py``)."""
+    a00, a01, a02 = a[0, 0], a[0, 1], a[0, 2]
+    a10, a11, a12 = a[1, 0], a[1, 1], a[1, 2]
+    a20, a21, a22 = a[2, 0], a[2, 1], a[2, 2]
+    b00, b01, b02 = b[0, 0], b[0, 1], b[0, 2]
+    b10, b11, b12 = b[1, 0], b[1, 1], b[1, 2]
+    b20, b21, b22 = b[2, 0], b[2, 1], b[2, 2]
     s0 = (a02 * b01 + a12 * b11 + a22 * b21) - (a01 * b02 + a11 * b12 + a21 * b22)
     s1 = (a00 * b02 + a10 * b12 + a20 * b22) - (a02 * b00 + a12 * b10 + a22 * b20)
     s2 = (a01 * b00 + a11 * b10 + a21 * b20) - (a00 * b01 + a10 * b11 + a20 * b21)
@@ -246,33 +249,34 @@ def angle_between(r_a: Any, r_b: Any) -> float:
 
 
 @numba.njit(cache=True)
+def _angle_between_nb(a: FloatArray, b: FloatArray) -> float:  # pragma: no cover - compiled
+    return _angle_of_blocks(a, b)
+
+
+def angle_between(r_a: Any, r_b: Any) -> float:
+    """Rotation angle θ ∈ [0, π] of ``r_aᵀ r_b`` for two rotations ``(3, 3)``, or the
+    rotations of two poses ``(4, 4)``, as arrays or nested lists (rows): the one-pair twin of
+    :func:`relative_angles`, with the same bits (one compiled call)."""
+    a = np.ascontiguousarray(r_a, dtype=float)
+    b = np.ascontiguousarray(r_b, dtype=float)
+    if a.ndim != 2 or b.ndim != 2 or min(a.shape + b.shape) < 3:
+        raise ValueError(
+            f"angle_between needs two (3, 3) or (4, 4) matrices, got {a.shape}, {b.shape}"
+        )
+    return float(_angle_between_nb(a, b))
+
+
+@numba.njit(cache=True)
 def pose_errors_one(pose: FloatArray, target: FloatArray) -> tuple[float, float]:
     """``(‖p − p*‖ [m], θ [rad])`` of one pose ``(4, 4)`` against a target ``(4, 4)``: the
-    judge's errors of an exact :class:`~swarm_ik.goals.Pose`, compiled.  The operations and
-    their order are :func:`angle_between`'s (θ of ``R*ᵀR``, libm's ``atan2`` and ``sqrt``; no
-    fused multiply-add, numba's default), so it gives the same bits as the Python floats and
-    as :func:`relative_angles` (``tests/test_lie.py``), in one call instead of two
-    ``tolist`` and 60 operations on Python floats (about 1 µs against 4 µs per answer)."""
+    judge's errors of an exact :class:`~swarm_ik.goals.Pose`, compiled (θ of ``R*ᵀR`` as
+    :func:`angle_between`; the offset's norm as the in-order sum of squares), in one call
+    instead of two ``tolist`` and 60 operations on Python floats (about 1 µs against 4 µs
+    per answer)."""
     d0 = pose[0, 3] - target[0, 3]
     d1 = pose[1, 3] - target[1, 3]
     d2 = pose[2, 3] - target[2, 3]
-    a00, a01, a02 = target[0, 0], target[0, 1], target[0, 2]
-    a10, a11, a12 = target[1, 0], target[1, 1], target[1, 2]
-    a20, a21, a22 = target[2, 0], target[2, 1], target[2, 2]
-    b00, b01, b02 = pose[0, 0], pose[0, 1], pose[0, 2]
-    b10, b11, b12 = pose[1, 0], pose[1, 1], pose[1, 2]
-    b20, b21, b22 = pose[2, 0], pose[2, 1], pose[2, 2]
-    s0 = (a02 * b01 + a12 * b11 + a22 * b21) - (a01 * b02 + a11 * b12 + a21 * b22)
-    s1 = (a00 * b02 + a10 * b12 + a20 * b22) - (a02 * b00 + a12 * b10 + a22 * b20)
-    s2 = (a01 * b00 + a11 * b10 + a21 * b20) - (a00 * b01 + a10 * b11 + a20 * b21)
-    c = (
-        (a00 * b00 + a10 * b10 + a20 * b20)
-        + (a01 * b01 + a11 * b11 + a21 * b21)
-        + (a02 * b02 + a12 * b12 + a22 * b22)
-        - 1.0
-    )
-    dp = math.sqrt(d0 * d0 + d1 * d1 + d2 * d2)
-    return dp, math.atan2(math.sqrt(s0 * s0 + s1 * s1 + s2 * s2), c)
+    return math.sqrt(d0 * d0 + d1 * d1 + d2 * d2), _angle_of_blocks(target, pose)
 
 
 def log3(rot: FloatArray) -> FloatArray:
