@@ -727,7 +727,10 @@ class Route:
             t0 = time.perf_counter()
             # the values of Python goals computed once per point, the answer's kept for the
             # judge (a slow goal's stop test, fitness and check read the search's evaluation)
-            with goals_base.reuse_goal_values(bool(problem.python_goals), park=True):
+            with (
+                goals_base.reuse_goal_values(bool(problem.python_goals), park=True),
+                kernels.ctrl_c_counted(raise_at_end=True),  # (a Ctrl-C a kernel lost: raised)
+            ):
                 self.spec.run(ev, make_rng(seed), **self.kwargs)
                 elapsed = time.perf_counter() - t0
                 q = ev.best_x.copy()

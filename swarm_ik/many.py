@@ -61,7 +61,7 @@ from swarm_ik.branches import (
 from swarm_ik.errors import InvalidArgumentError, unknown
 from swarm_ik.goals import base as goals_base
 from swarm_ik.goals.base import reuse_goal_values
-from swarm_ik.kernels import joints
+from swarm_ik.kernels import counts_ctrl_c, joints, raise_lost_ctrl_c
 from swarm_ik.optimize import check_budget, make_rng, rising_estimate
 from swarm_ik.problem import GoalError, IKProblem, largest_errors
 from swarm_ik.result import Result, Solutions
@@ -283,6 +283,7 @@ def _hops_for(robot: Any) -> _Hops | None:
     lambda *a, **kw: list((a[0] if a else kw["problem"]).compiled_goals)
 )
 @keywords_checked
+@counts_ctrl_c
 def solve_many(
     problem: IKProblem,
     n: int = 16,
@@ -1050,6 +1051,7 @@ def _numerical(
     closest: FloatArray | None = None  # the failed start nearest to meeting the goals
     closest_err = math.inf
     while len(kept) < target_count:
+        raise_lost_ctrl_c()  # (one a kernel lost, counted by solve_many: raised here)
         t_round = time.perf_counter()
         if max_evals is not None and used >= max_evals:
             ended = "budget"

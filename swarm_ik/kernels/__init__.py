@@ -21,6 +21,7 @@ fail to load on every run.  docs/robustness.md, "Real installs".
 from __future__ import annotations
 
 import contextlib
+import functools
 import hashlib
 import os
 import platform
@@ -30,12 +31,14 @@ import stat
 import sys
 import threading
 from collections.abc import Callable, Iterable, Iterator
-from typing import IO, Any, TypeVar
+from typing import IO, Any, ParamSpec, TypeVar
 
 from swarm_ik import paths
 from swarm_ik.errors import SwarmIKError
 
 T = TypeVar("T")
+P = ParamSpec("P")
+R = TypeVar("R")
 
 KERNEL_PACKAGES = ("", "goals", "kernels", "solvers")
 """The sub-packages of swarm_ik (``""``: the package itself) whose modules define
@@ -316,13 +319,16 @@ def counted_sigint(signum: int, frame: object) -> None:
 
 
 @contextlib.contextmanager
-def ctrl_c_counted() -> Iterator[None]:
+def ctrl_c_counted(raise_at_end: bool = False) -> Iterator[None]:
     """Python's own Ctrl-C handler counted (:func:`counted_sigint`) while the body runs, where
     it is the handler in place in the main thread (a program that set its own keeps it, and
     the command line counts already): a Ctrl-C that a kernel's clock read loses is then
     raised by :func:`raise_lost_ctrl_c` after that kernel call, where a batch of far targets
-    ran on for good (still running 20 s after the Ctrl-C, once on CI).  The count is the
-    body's: put back after it, so that a later call starts clean."""
+    ran on for good (still running 20 s after the Ctrl-C, once on CI), and, with
+    ``raise_at_end`` (a body that handles no Ctrl-C of its own), at the latest when the body
+    ends (review 135: a paper solver's run and ``solve_many`` returned a normal answer at the
+    end of their budget after 1 in 10 to 1 in 75 Ctrl-Cs).  The count is the body's: put back
+    after it, so that a later call starts clean."""
     if (
         threading.current_thread() is not threading.main_thread()
         or signal.getsignal(signal.SIGINT) is not signal.default_int_handler
@@ -333,9 +339,23 @@ def ctrl_c_counted() -> Iterator[None]:
     signal.signal(signal.SIGINT, counted_sigint)
     try:
         yield
+        if raise_at_end:  # (a Ctrl-C lost on the way: the body never returns normally)
+            raise_lost_ctrl_c()
     finally:
         signal.signal(signal.SIGINT, signal.default_int_handler)
         SIGINTS[0] = before
+
+
+def counts_ctrl_c(func: Callable[P, R]) -> Callable[P, R]:
+    """``func`` run inside :func:`ctrl_c_counted` (a call of the API whose loops raise a
+    Ctrl-C a kernel lost: :func:`raise_lost_ctrl_c`)."""
+
+    @functools.wraps(func)
+    def counted(*args: P.args, **kwargs: P.kwargs) -> R:
+        with ctrl_c_counted(raise_at_end=True):
+            return func(*args, **kwargs)
+
+    return counted
 
 
 def raise_lost_ctrl_c() -> None:
