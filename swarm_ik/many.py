@@ -282,8 +282,8 @@ def _hops_for(robot: Any) -> _Hops | None:
 @goals_base.names_kernel_errors(
     lambda *a, **kw: list((a[0] if a else kw["problem"]).compiled_goals)
 )
+@counts_ctrl_c  # (outside keywords_checked: a bad keyword is the call's own TypeError there)
 @keywords_checked
-@counts_ctrl_c
 def solve_many(
     problem: IKProblem,
     n: int = 16,
