@@ -62,6 +62,13 @@ DEGREES_HINT = "radians and metres are expected: degrees?"
 degrees (a target's ``q``, a ``q0`` or a locked value beyond a full turn)."""
 
 
+def degrees_hint(values: Any) -> str:
+    """`` (`` :data:`DEGREES_HINT` ``)`` where one of ``values`` (joint values beyond their
+    limits) lies beyond a full turn, as degrees given for radians do; else ``""``."""
+    beyond = np.abs(np.asarray(values, dtype=float)) > 2 * np.pi
+    return f" ({DEGREES_HINT})" if bool(np.any(beyond)) else ""
+
+
 def one_line(text: object, limit: int | None = None) -> str:
     """``text`` on one line (whitespace runs, newlines included, become one space), cut at
     ``limit`` characters with an ellipsis at the end (the start of a message says most)."""

@@ -29,8 +29,8 @@ import numpy as np
 
 from swarm_ik import collision, kernels
 from swarm_ik._validate import (
-    DEGREES_HINT,
     check_seed,
+    degrees_hint,
     flag,
     keywords_checked,
     plain_number,
@@ -379,11 +379,8 @@ def prepare_q0(problem: IKProblem, q0: Any) -> np.ndarray | None:
     fixed = np.clip(q, problem.lower, problem.upper)
     off = np.flatnonzero(fixed != q)
     names = [problem.robot.joint_names[i] for i in off]
-    # (an angle beyond a full turn: most likely degrees, as target_q says of a target's q)
-    turns = bool(np.any(np.abs(q[off]) > 2 * np.pi))
-    hint = f" ({DEGREES_HINT})" if turns else ""
-    warnings.warn(
-        f"q0 lies outside the joint limits at {names}{hint}; clipped into them",
+    warnings.warn(  # (an angle beyond a full turn: most likely degrees)
+        f"q0 lies outside the joint limits at {names}{degrees_hint(q[off])}; clipped into them",
         stacklevel=user_stacklevel(),
     )
     return fixed

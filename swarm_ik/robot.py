@@ -27,6 +27,7 @@ from swarm_ik._types import FloatArray
 from swarm_ik._validate import (
     DEGREES_HINT,
     count,
+    degrees_hint,
     floats_or,
     keywords_checked,
     user_stacklevel,
@@ -230,8 +231,8 @@ def _locked_values(
         lim = outside(jid, v)
         if lim is not None:
             hint = f"; give the value to hold: locked={{{name!r}: v}}" if value is None else ""
-            if value is not None and abs(v) > 2 * math.pi:
-                hint = f" ({DEGREES_HINT})"
+            if value is not None:
+                hint = degrees_hint(v)
             raise InvalidArgumentError(
                 f"locked joint {name!r}: {what} is outside its limits {lim}" + hint
             )

@@ -103,7 +103,7 @@ def run(args: argparse.Namespace) -> int:
 
     import swarm_ik
     from swarm_ik import viz
-    from swarm_ik._validate import DEGREES_HINT
+    from swarm_ik._validate import degrees_hint
     from swarm_ik.errors import InvalidArgumentError
 
     live = bool(args.show or not args.html)
@@ -141,8 +141,7 @@ def run(args: argparse.Namespace) -> int:
             outside = np.flatnonzero((q < robot.lower) | (q > robot.upper))
             if outside.size:
                 names = [robot.joint_names[i] for i in outside.tolist()]
-                turns = bool(np.any(np.abs(q[outside]) > 2 * np.pi))  # (review 136)
-                hint = f" ({DEGREES_HINT})" if turns else ""
+                hint = degrees_hint(q[outside])  # (review 136)
                 print(
                     f"swarm-ik: note: --q #{k + 1} lies outside the joint limits at {names}"
                     f"{hint}; drawn as given",

@@ -2,13 +2,12 @@
 
 from __future__ import annotations
 
-import math
 from dataclasses import dataclass, field
 from typing import TYPE_CHECKING
 
 import numpy as np
 
-from swarm_ik._validate import DEGREES_HINT
+from swarm_ik._validate import degrees_hint
 from swarm_ik.errors import InvalidArgumentError, unknown
 from swarm_ik.goals.base import FloatArray
 from swarm_ik.goals.joint import JointGoal
@@ -57,8 +56,7 @@ class JointValue(JointGoal):
         lo, hi = float(robot.lower[j]), float(robot.upper[j])
         if bool(robot.continuous_mask[j]) or lo - tol_pos <= self.value <= hi + tol_pos:
             return None
-        turns = abs(self.value) > 2 * math.pi  # (review 136: degrees, most likely)
-        hint = f" ({DEGREES_HINT})" if turns else ""
+        hint = degrees_hint(self.value)  # (review 136: degrees, most likely)
         return (
             f"JointValue({self.joint}) at {self.value:g} beyond the limits [{lo:g}, {hi:g}]{hint}"
         )

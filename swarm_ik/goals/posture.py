@@ -8,7 +8,7 @@ from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
-from swarm_ik._validate import DEGREES_HINT, user_stacklevel
+from swarm_ik._validate import degrees_hint, user_stacklevel
 from swarm_ik.errors import GoalWarning, InvalidArgumentError
 from swarm_ik.goals.base import WEIGHT_RANGE, FloatArray
 from swarm_ik.goals.joint import JointGoal
@@ -40,10 +40,11 @@ class Posture(JointGoal):
     def reference(self, robot: RobotModel, q0: FloatArray | None) -> tuple[FloatArray, FloatArray]:
         ref = robot.check_q(self.q_ref, "Posture.q_ref")
         beyond = ((ref < robot.lower) | (ref > robot.upper)) & ~robot.continuous_mask
-        if np.any(beyond & (np.abs(ref) > 2 * np.pi)):  # (review 136: solved silently)
+        hint = degrees_hint(ref[beyond])
+        if hint:  # (review 136: degrees were solved silently)
             names = [robot.joint_names[i] for i in np.flatnonzero(beyond)]
             warnings.warn(
-                f"Posture.q_ref lies outside the joint limits at {names} ({DEGREES_HINT})",
+                f"Posture.q_ref lies outside the joint limits at {names}{hint}",
                 GoalWarning,
                 stacklevel=user_stacklevel(),
             )

@@ -248,11 +248,6 @@ def _angle_of_blocks(a: FloatArray, b: FloatArray) -> float:  # pragma: no cover
     return math.atan2(math.sqrt(s0 * s0 + s1 * s1 + s2 * s2), c)
 
 
-@numba.njit(cache=True)
-def _angle_between_nb(a: FloatArray, b: FloatArray) -> float:  # pragma: no cover - compiled
-    return _angle_of_blocks(a, b)
-
-
 def angle_between(r_a: Any, r_b: Any) -> float:
     """Rotation angle θ ∈ [0, π] of ``r_aᵀ r_b`` for two rotations ``(3, 3)``, or the
     rotations of two poses ``(4, 4)``, as arrays or nested lists (rows): the one-pair twin of
@@ -263,7 +258,7 @@ def angle_between(r_a: Any, r_b: Any) -> float:
         raise ValueError(
             f"angle_between needs two (3, 3) or (4, 4) matrices, got {a.shape}, {b.shape}"
         )
-    return float(_angle_between_nb(a, b))
+    return float(_angle_of_blocks(a, b))  # (inlined where compiled code calls it)
 
 
 @numba.njit(cache=True)
